@@ -1,0 +1,321 @@
+r"""Problem 2: the TVMMP and the distribution of achievable velocities (eq. 31-35).
+
+For each REFS vertex :math:`w_k` and each non-zero RVDS vertex :math:`\hat r_l`,
+
+.. math:: \alpha_{kl} = \max \alpha \ \text{s.t.}\ \dot r = \alpha \hat r_l \in S_1\ (S_2
+          \text{ with S-points}),
+
+and TVMMP :math:`= \min_{kl} \alpha_{kl}` (eq. 32, 35). The constraints are assembled
+once per state (:func:`~mjtvm.assembly.assemble`); the LPs of the state differ only in
+the column of ``alpha`` (``A_twist @ r_l``) and the right-hand side of the balance rows
+(``-w_k``), so one HiGHS instance is modified and re-solved from its last basis.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .assembly import Assembly, BoxForm, assemble
+from .errors import SolverError
+from .solvers import DROP_TOL, SOLVERS, HighsSession, LinearProgram, LPSolution, solve_lp
+from .state import GraspState
+
+__all__ = ["PairStatus", "Timings", "TvmmpResult", "Witness", "tvmmp"]
+
+PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
+RESULT_SCHEMA = "mjtvm.result/1"
+ZERO_ALPHA = 1e-9  # |alpha| below this is reported as an exact 0 (solver tolerance 1e-9)
+
+
+@dataclass(frozen=True, eq=False)
+class Witness:
+    r"""A solution attaining :math:`\alpha_{kl}` (Supplement 1 scales it down to any speed).
+
+    Attributes
+    ----------
+    alpha
+        :math:`\alpha_{kl}`.
+    twist
+        ``(D,)`` object twist :math:`\alpha \hat r_l` = [v of p_O (m/s); omega (rad/s)].
+    forces
+        ``(L, d)`` contact forces on the object (N), world frame.
+    torques
+        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19).
+    speeds
+        ``(M,)`` joint speeds :math:`\dot q` (rad/s).
+    slip_speeds
+        Slip speeds :math:`\rho` of the S-points (m/s), one per S-point or one shared.
+    box
+        ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint.
+        With the eliminated form it is the smallest valid box
+        ``[min(tau, 0), max(tau, 0), min(qd, 0), max(qd, 0)]``.
+    """
+
+    alpha: float
+    twist: NDArray[np.float64]
+    forces: NDArray[np.float64]
+    torques: NDArray[np.float64]
+    speeds: NDArray[np.float64]
+    slip_speeds: NDArray[np.float64]
+    box: NDArray[np.float64]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {
+            "alpha": self.alpha,
+            "twist": self.twist.tolist(),
+            "forces": self.forces.tolist(),
+            "torques": self.torques.tolist(),
+            "speeds": self.speeds.tolist(),
+            "slip_speeds": self.slip_speeds.tolist(),
+            "box": self.box.tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall-clock seconds spent assembling and solving, and the number of LPs solved."""
+
+    assemble_s: float
+    solve_s: float
+    total_s: float
+    num_lps: int
+
+
+@dataclass(frozen=True, eq=False)
+class TvmmpResult:
+    r"""Result of Problem 2 for one state (the ``mjtvm.result/1`` document).
+
+    Attributes
+    ----------
+    alpha
+        ``(K, R)`` :math:`\alpha_{kl}`; NaN where the pair is not ``optimal``.
+    status
+        ``K`` tuples of ``R`` statuses: ``optimal``, ``infeasible``, ``unbounded`` or ``skipped``.
+    tvmmp
+        :math:`\min \alpha_{kl}` over the optimal pairs; ``None`` when a pair is
+        infeasible or no pair is optimal.
+    feasible
+        False when some REFS vertex cannot be balanced at all.
+    distribution
+        One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
+        ``None`` where no finite minimum exists; the origin is implied.
+    limiting
+        The (k, l) attaining the TVMMP, or ``None``.
+    witnesses
+        ``K`` tuples of ``R`` :class:`Witness` (``None`` where not optimal or not requested).
+    timings
+        :class:`Timings`.
+    solver, box
+        The backend and the operation-range form used.
+    """
+
+    alpha: NDArray[np.float64]
+    status: tuple[tuple[PairStatus, ...], ...]
+    tvmmp: float | None
+    feasible: bool
+    distribution: tuple[NDArray[np.float64] | None, ...]
+    limiting: tuple[int, int] | None
+    witnesses: tuple[tuple[Witness | None, ...], ...] = field(repr=False)
+    timings: Timings
+    solver: str
+    box: BoxForm
+
+    def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
+        """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
+        out: dict[str, Any] = {
+            "schema": RESULT_SCHEMA,
+            "tvmmp": self.tvmmp,
+            "feasible": self.feasible,
+            "alpha": [
+                [None if s != "optimal" else float(a) for a, s in zip(ar, sr)]
+                for ar, sr in zip(self.alpha, self.status)
+            ],
+            "status": [list(s) for s in self.status],
+            "distribution": [None if v is None else v.tolist() for v in self.distribution],
+            "limiting": None if self.limiting is None else list(self.limiting),
+            "solver": self.solver,
+            "box": self.box,
+            "timings": {
+                "assemble_s": self.timings.assemble_s,
+                "solve_s": self.timings.solve_s,
+                "total_s": self.timings.total_s,
+                "num_lps": self.timings.num_lps,
+            },
+        }
+        if witnesses:
+            out["witnesses"] = [[None if w is None else w.to_dict() for w in row] for row in self.witnesses]
+        return out
+
+
+def _witness(
+    asm: Assembly, state: GraspState, x: NDArray[np.float64], alpha: float, r: NDArray[np.float64]
+) -> Witness:
+    tau = x[asm.blocks["tau[0]"]]
+    qd = x[asm.blocks["qd"]]
+    if asm.box == "literal":
+        box = np.column_stack([x[asm.blocks[n]] for n in ("tau_min", "tau_max", "qd_min", "qd_max")])
+    else:
+        box = np.column_stack([np.minimum(tau, 0), np.maximum(tau, 0), np.minimum(qd, 0), np.maximum(qd, 0)])
+    forces = asm.forces(x) if state.contacts else np.zeros((0, state.dim))
+    return Witness(alpha, alpha * r, forces, tau.copy(), qd.copy(), x[asm.blocks["rho"]].copy(), box)
+
+
+class _Problem2:
+    """The LPs of one state: variables of the assembly, then ``alpha`` (last column)."""
+
+    def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
+        self.state, self.solver = state, solver
+        self.asm = asm = assemble(state, copies=1, box=box)
+        n = asm.num_variables
+        self.alpha_col = n
+        self.c = np.zeros(n + 1)
+        self.c[n] = -1.0  # maximise alpha
+        self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
+        self.col_upper = np.append(asm.col_upper, np.inf)
+        self.kin = asm.kinematic_rows
+        self.twist_rows = asm.A_twist.tocsr()[self.kin].toarray()
+        self.session: HighsSession | None = None
+
+    def lp(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
+    ) -> LinearProgram:
+        import scipy.sparse as sp
+
+        col = self.asm.A_twist @ r  # the alpha column: A_twist (alpha r_l)
+        col[np.abs(col) <= DROP_TOL] = 0.0
+        lower, upper = self.asm.statics_bounds(w)
+        cu = self.col_upper.copy()
+        cu[-1] = alpha_max
+        return LinearProgram(
+            self.c,
+            sp.hstack([self.asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csc"),
+            lower,
+            upper,
+            self.col_lower,
+            cu,
+        )
+
+    def solve(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
+    ) -> LPSolution:
+        if self.solver != "highs":
+            return solve_lp(self.lp(w, r, alpha_max=alpha_max), solver=self.solver)
+        if self.session is None:
+            self.session = HighsSession(self.lp(w, r, alpha_max=alpha_max))
+            return self.session.solve()
+        s = self.session
+        s.set_column(self.alpha_col, self.kin, self.twist_rows @ r)
+        rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in self.asm.wrench_rows])
+        s.set_row_bounds(rows, -w, -w)
+        s.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+        return s.solve()
+
+
+def tvmmp(
+    state: GraspState,
+    *,
+    solver: str = "highs",
+    box: BoxForm = "eliminated",
+    witnesses: bool = True,
+) -> TvmmpResult:
+    r"""Solve Problem 2 (eq. 31-35) for one grasp state.
+
+    Parameters
+    ----------
+    state
+        A grasp state with ``rvds`` (the RVDS vertices :math:`\hat r_l`).
+    solver
+        ``"highs"`` (default) or ``"clarabel"``.
+    box
+        ``"eliminated"`` (exact reduction of eq. 2, default) or ``"literal"``.
+    witnesses
+        Whether to keep the forces, torques, speeds and box of each optimal pair.
+
+    Returns
+    -------
+    TvmmpResult
+
+    Raises
+    ------
+    StateError
+        When the state has no RVDS.
+    SolverError
+        When a solver fails (the failing pair is named).
+    """
+    from .errors import StateError
+
+    if state.rvds is None:
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
+    if solver not in SOLVERS:
+        raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+    t0 = time.perf_counter()
+    problem = _Problem2(state, box, solver)
+    t1 = time.perf_counter()
+    refs, rvds = state.refs, state.rvds
+    n_k, n_l = refs.shape[0], rvds.shape[0]
+    alpha = np.full((n_k, n_l), np.nan)
+    status: list[list[PairStatus]] = [["skipped"] * n_l for _ in range(n_k)]
+    wit: list[list[Witness | None]] = [[None] * n_l for _ in range(n_k)]
+    nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]  # Supplement 3: skip the origin
+    feasible = True
+    num_lps = 0
+    for k in range(n_k):
+        # With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
+        # exactly when w_k cannot be balanced; then every l of this k is (no more LPs).
+        todo = nonzero if nonzero else [None]
+        for l in todo:
+            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+            try:
+                sol = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
+            except SolverError as e:
+                raise SolverError(e.solver, e.status, (k, -1 if l is None else l)) from e
+            num_lps += 1
+            if sol.status == "infeasible":
+                feasible = False
+                for ll in nonzero:
+                    status[k][ll] = "infeasible"
+                break
+            if l is None:
+                continue
+            status[k][l] = sol.status
+            if sol.status == "optimal" and sol.x is not None:
+                a = float(sol.x[problem.alpha_col])
+                a = 0.0 if abs(a) <= ZERO_ALPHA else a
+                alpha[k, l] = a
+                if witnesses:
+                    wit[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+    t2 = time.perf_counter()
+
+    optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
+    limiting = None
+    value = None
+    if feasible and optimal:
+        limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
+        value = float(alpha[limiting])
+    distribution: list[NDArray[np.float64] | None] = []
+    for l in range(n_l):
+        col = [status[k][l] for k in range(n_k)]
+        if all(s == "skipped" for s in col):
+            distribution.append(np.zeros(state.twist_dim))
+        elif "infeasible" in col or "optimal" not in col:
+            distribution.append(None)
+        else:
+            distribution.append(np.nanmin(alpha[:, l]) * rvds[l])
+    return TvmmpResult(
+        alpha=alpha,
+        status=tuple(tuple(s) for s in status),
+        tvmmp=value,
+        feasible=feasible,
+        distribution=tuple(distribution),
+        limiting=limiting,
+        witnesses=tuple(tuple(w) for w in wit),
+        timings=Timings(t1 - t0, t2 - t1, t2 - t0, num_lps),
+        solver=solver,
+        box=box,
+    )
