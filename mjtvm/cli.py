@@ -1,0 +1,85 @@
+r"""The ``mjtvm`` command line: thin wrappers over the library.
+
+Exit codes: 0 success, 2 invalid input (a :class:`~mjtvm.errors.StateError` or
+:class:`~mjtvm.errors.ModelError`, printed as ``error: <field>: <problem>``), 3 solver
+failure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from importlib import resources
+
+from .errors import ModelError, SolverError, StateError
+from .solvers import SOLVERS
+from .state import load_state
+from .tvmmp import tvmmp
+
+__all__ = ["main"]
+
+
+def example_path(name: str = "pinch.json") -> str:
+    """Path of a state shipped in ``mjtvm/data/examples``."""
+    return str(resources.files("mjtvm.data").joinpath("examples").joinpath(name))
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    source = args.state
+    if source == "-":
+        source = sys.stdin.read()
+        if not source.lstrip().startswith("{"):
+            raise StateError("", "standard input does not hold a JSON object")
+    elif source is None:
+        source = example_path()
+    state = load_state(source)
+    result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses)
+    print(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``mjtvm``."""
+    parser = argparse.ArgumentParser(
+        prog="mjtvm",
+        description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    solve = sub.add_parser(
+        "solve",
+        help="Problem 2: TVMMP of one mjtvm.state/1 grasp state (prints mjtvm.result/1)",
+        description="Solve Problem 2 (eq. 31-35) for STATE and print the mjtvm.result/1 JSON.",
+    )
+    solve.add_argument(
+        "state", nargs="?", default=None,
+        help="mjtvm.state/1 JSON file, or - for standard input (default: the shipped example pinch.json)",
+    )  # fmt: skip
+    solve.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend (default: highs)")
+    solve.add_argument(
+        "--box", choices=("eliminated", "literal"), default="eliminated",
+        help="operation-range form: exact reduction (default) or the paper's literal eq. 2 box",
+    )  # fmt: skip
+    solve.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
+    solve.add_argument("--indent", type=int, default=1, help="JSON indentation (default 1)")
+    solve.set_defaults(func=_cmd_solve)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mjtvm`` console script."""
+    args = build_parser().parse_args(argv)
+    try:
+        code: int = args.func(args)
+    except (StateError, ModelError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except SolverError as e:
+        print(f"solver error: {e}", file=sys.stderr)
+        return 3
+    return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,51 @@
+"""The command line: `mjtvm solve` output, exit codes and error messages."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from mjtvm import load_state, tvmmp
+from mjtvm.cli import example_path, main
+
+
+def test_solve_prints_the_result_schema(capsys):
+    assert main(["solve", example_path(), "--no-witnesses"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["schema"] == "mjtvm.result/1"
+    assert set(out) >= {"tvmmp", "feasible", "alpha", "status", "distribution"}
+    assert "witnesses" not in out
+    assert out["tvmmp"] == tvmmp(load_state(example_path())).tvmmp
+
+
+def test_solve_defaults_to_the_shipped_example_and_reads_stdin(capsys, monkeypatch):
+    assert main(["solve"]) == 0
+    default = json.loads(capsys.readouterr().out)
+    assert default["witnesses"][0][0]["torques"]
+    with open(example_path()) as f:
+        monkeypatch.setattr(sys, "stdin", f)
+        assert main(["solve", "-", "--solver", "clarabel", "--box", "literal"]) == 0
+    other = json.loads(capsys.readouterr().out)
+    assert other["tvmmp"] == pytest.approx(default["tvmmp"], rel=1e-7)
+
+
+def test_bad_state_exits_2_naming_the_field(tmp_path, capsys):
+    doc = json.loads(open(example_path()).read())
+    doc["contacts"][1]["normal"] = [0.0, 0.0, 2.0]
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc))
+    assert main(["solve", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: contacts[1].normal: expected a unit vector")
+
+
+def test_console_script_runs():
+    proc = subprocess.run(
+        [sys.executable, "-m", "mjtvm.cli", "solve", example_path(), "--no-witnesses", "--indent", "0"],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["feasible"] is True
