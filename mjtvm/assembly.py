@@ -71,6 +71,14 @@ class _Coo:
         self.cols.append(c + col0)
         self.vals.append(block[r, c])
 
+    def add_entries(
+        self, rows: NDArray[np.int64], cols: NDArray[np.int64], values: NDArray[np.float64]
+    ) -> None:
+        keep = np.abs(values) > DROP_TOL
+        self.rows.append(rows[keep])
+        self.cols.append(cols[keep])
+        self.vals.append(values[keep])
+
     def build(self, shape: tuple[int, int]) -> sp.csc_matrix:
         if not self.rows:
             return sp.csc_matrix(shape)
@@ -201,14 +209,16 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         col_upper[blocks["qd_min"]] = 0.0
 
     coo, coo_twist = _Coo(), _Coo()
-    lower: list[float] = []
-    upper: list[float] = []
+    lower: list[NDArray[np.float64]] = []
+    upper: list[NDArray[np.float64]] = []
     row = 0
 
     def rows(lo: NDArray[np.float64] | float, hi: NDArray[np.float64] | float, count: int) -> int:
         nonlocal row
-        lower.extend(np.broadcast_to(lo, (count,)).tolist())
-        upper.extend(np.broadcast_to(hi, (count,)).tolist())
+        bounds = np.empty((2, count))
+        bounds[0], bounds[1] = lo, hi
+        lower.append(bounds[0])
+        upper.append(bounds[1])
         start = row
         row += count
         return start
@@ -255,14 +265,18 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     kinematic_rows = np.arange(kin_start, row)
 
     # ---- operation ranges (eq. 2-3)
-    for j, op in enumerate(state.operation_ranges):
-        if box == "eliminated":
-            hp = op.mirrored_halfplanes
-            for i in range(copies):
-                r0 = rows(-np.inf, hp[:, 2], hp.shape[0])
-                coo.add(r0, blocks[f"tau[{i}]"].start + j, hp[:, :1])
-                coo.add(r0, qd0 + j, hp[:, 1:2])
-        else:
+    if box == "eliminated":
+        # Row h of joint j: c_tau tau_ij + c_qd qd_j <= b; all joints at once.
+        hps = [op.mirrored_halfplanes for op in state.operation_ranges]
+        joint_of_row = np.repeat(np.arange(m), [len(hp) for hp in hps])
+        hp_all = np.vstack(hps)
+        for i in range(copies):
+            r0 = rows(-np.inf, hp_all[:, 2], len(hp_all))
+            row_idx = r0 + np.arange(len(hp_all))
+            coo.add_entries(row_idx, blocks[f"tau[{i}]"].start + joint_of_row, hp_all[:, 0])
+            coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
+    else:  # the paper's literal box (eq. 2): four variables per joint
+        for j, op in enumerate(state.operation_ranges):
             tmax, tmin = blocks["tau_max"].start + j, blocks["tau_min"].start + j
             qmax, qmin = blocks["qd_max"].start + j, blocks["qd_min"].start + j
             for i in range(copies):  # tau_min <= tau_i <= tau_max
@@ -286,8 +300,8 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     return Assembly(
         A=coo.build(shape),
         A_twist=coo_twist.build((row, big_d)),
-        row_lower=np.array(lower),
-        row_upper=np.array(upper),
+        row_lower=np.concatenate(lower),
+        row_upper=np.concatenate(upper),
         col_lower=col_lower,
         col_upper=col_upper,
         blocks=blocks,

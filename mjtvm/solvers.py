@@ -79,6 +79,7 @@ class HighsSession:
         options = {
             "output_flag": False,
             "threads": 1,
+            "presolve": "off",  # the LPs are small and re-solved warm: presolve costs more than it saves
             "primal_feasibility_tolerance": FEASIBILITY_TOL,
             "dual_feasibility_tolerance": FEASIBILITY_TOL,
             # HiGHS drops smaller entries with a warning; the assembly drops the same ones.
@@ -132,11 +133,11 @@ class HighsSession:
         h.run()
         status = h.getModelStatus()
         if status == ms.kUnboundedOrInfeasible:
-            # Presolve cannot tell which; the simplex without presolve certifies it.
-            h.setOptionValue("presolve", "off")
+            # The dual simplex saw dual infeasibility; the primal simplex tells which.
+            h.setOptionValue("simplex_strategy", 4)
             h.run()
             status = h.getModelStatus()
-            h.setOptionValue("presolve", "choose")
+            h.setOptionValue("simplex_strategy", 1)
         if status == ms.kOptimal:
             x = np.array(h.getSolution().col_value)
             return LPSolution("optimal", x, float(h.getInfo().objective_function_value))
