@@ -286,3 +286,29 @@ def test_witness_satisfies_the_paper_equations(seed, box):
             assert qmin - 1e-9 <= w.speeds[j] <= qmax + 1e-9
             assert all(op.contains(t, q, tol=1e-7) for t in (tmin, tmax) for q in (qmin, qmax))  # eq. 2
         assert w.twist == pytest.approx(res.alpha[0, l] * state.rvds[l])
+
+
+def test_shared_slip_fixes_the_ratio_of_slip_speeds():
+    r"""Two S-points at (-+1, 0) under the object (n = (0, 1), slide direction +x with
+    lengths 1 and 2); joint i moves contact i along +x (J_1 = [[1, 0], [0, 0]],
+    J_2 = [[0, 1], [0, 0]]); no load (w = 0, g_f = 0, so n_f = 0 and tau = 0). Translating
+    the object along r = (1, 0, 0): slip of contact i (object relative to finger) is
+    alpha - qd_i (eq. 13).
+
+    * per_contact: alpha - qd_i = rho_i >= 0 holds for any alpha with qd = 0: unbounded.
+    * shared (eq. 34 literally): alpha - qd_1 = rho, alpha - qd_2 = 2 rho, so
+      alpha = 2 qd_1 - qd_2 <= 3 Q0 with |qd_i| <= Q0 (zero torque): alpha = 3 Q0.
+    """
+    contacts = tuple(
+        Contact(f"s{i}", "S", [x, 0.0], [0.0, 1.0], jac, mu=0.3, slide_direction=[length, 0.0])
+        for i, (x, jac, length) in enumerate(
+            [(-1.0, [[1.0, 0.0], [0.0, 0.0]], 1.0), (1.0, [[0.0, 1.0], [0.0, 0.0]], 2.0)]
+        )
+    )
+    state = GraspState(2, [0, 0.5], ("a", "b"), (OP, OP), [0.0, 0.0], contacts, [[0, 0, 0]], [[1, 0, 0]])
+    assert tvmmp(state).status == (("unbounded",),)
+    shared = tvmmp(state.with_(slip="shared"))
+    assert shared.alpha[0, 0] == pytest.approx(3 * Q_MAX, rel=1e-9)
+    w = shared.witnesses[0][0]
+    assert w.speeds == pytest.approx([Q_MAX, -Q_MAX], rel=1e-9)
+    assert w.slip_speeds == pytest.approx([2 * Q_MAX], rel=1e-9)
