@@ -32,6 +32,11 @@ RESULT_SCHEMA = "mjtvm.result/1"
 ZERO_ALPHA = 1e-9  # |alpha| below this is reported as an exact 0 (solver tolerance 1e-9)
 
 
+def _json(values: NDArray[np.float64]) -> Any:
+    """Nested lists of floats, with signed zeros printed as 0.0 (-0.0 + 0.0 == +0.0)."""
+    return (np.asarray(values, dtype=float) + 0.0).tolist()
+
+
 @dataclass(frozen=True, eq=False)
 class Witness:
     r"""A solution attaining :math:`\alpha_{kl}` (Supplement 1 scales it down to any speed).
@@ -68,12 +73,12 @@ class Witness:
         """JSON-ready form."""
         return {
             "alpha": self.alpha,
-            "twist": self.twist.tolist(),
-            "forces": self.forces.tolist(),
-            "torques": self.torques.tolist(),
-            "speeds": self.speeds.tolist(),
-            "slip_speeds": self.slip_speeds.tolist(),
-            "box": self.box.tolist(),
+            "twist": _json(self.twist),
+            "forces": _json(self.forces),
+            "torques": _json(self.torques),
+            "speeds": _json(self.speeds),
+            "slip_speeds": _json(self.slip_speeds),
+            "box": _json(self.box),
         }
 
 
@@ -137,7 +142,7 @@ class TvmmpResult:
                 for ar, sr in zip(self.alpha, self.status)
             ],
             "status": [list(s) for s in self.status],
-            "distribution": [None if v is None else v.tolist() for v in self.distribution],
+            "distribution": [None if v is None else _json(v) for v in self.distribution],
             "limiting": None if self.limiting is None else list(self.limiting),
             "solver": self.solver,
             "box": self.box,
