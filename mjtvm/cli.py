@@ -40,6 +40,16 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export_state(args: argparse.Namespace) -> int:
+    from .scenario import export_state  # MuJoCo is imported only by the coupling commands
+
+    options = {"variant": args.variant}
+    if args.mg is not None:
+        options["mg"] = args.mg
+    print(json.dumps(export_state(args.scenario, **options), indent=args.indent))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``mjtvm``."""
     parser = argparse.ArgumentParser(
@@ -64,6 +74,22 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
     solve.add_argument("--indent", type=int, default=1, help="JSON indentation (default 1)")
     solve.set_defaults(func=_cmd_solve)
+
+    export = sub.add_parser(
+        "export-state",
+        help="print the mjtvm.state/1 grasp state of a scenario, computed by MuJoCo",
+        description="Build a scenario's grasp state from the MuJoCo model (mj_forward) and print it.",
+    )
+    export.add_argument(
+        "--scenario", required=True,
+        help="scenario name (case1, case1-s, case2) or path of a scenario JSON file",
+    )  # fmt: skip
+    export.add_argument(
+        "--variant", default="default", help="hand variant: default or humanlike (default: default)"
+    )
+    export.add_argument("--mg", type=float, default=None, help="object weight (N); default: the scenario's")
+    export.add_argument("--indent", type=int, default=1, help="JSON indentation (default 1)")
+    export.set_defaults(func=_cmd_export_state)
     return parser
 
 

@@ -49,3 +49,22 @@ def test_console_script_runs():
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["feasible"] is True
+
+
+def test_export_state_round_trips_through_solve(tmp_path, capsys):
+    """The exported JSON is an ordinary mjtvm.state/1 file: solving it gives exactly the
+    alphas of the state built in memory from MuJoCo."""
+    from mjtvm.scenario import load_scenario
+
+    assert main(["export-state", "--scenario", "case2"]) == 0
+    path = tmp_path / "case2.json"
+    path.write_text(capsys.readouterr().out)
+    direct = tvmmp(load_scenario("case2").state())
+    assert main(["solve", str(path), "--no-witnesses"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["alpha"] == direct.alpha.tolist()
+
+
+def test_export_state_unknown_scenario_exits_2(capsys):
+    assert main(["export-state", "--scenario", "case9"]) == 2
+    assert "case9" in capsys.readouterr().err
