@@ -57,7 +57,7 @@ class DetectedContact:
     distance: float
 
 
-def _id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: str) -> int:
+def model_id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: str) -> int:
     i = mujoco.mj_name2id(model, kind, name)
     if i < 0:
         raise ModelError(f"{label} {name!r}", "not in the model")
@@ -106,7 +106,7 @@ def detected_contacts(
     ModelError
         Unknown body, or an unnamed geom touching the object.
     """
-    ob = _id(model, _OBJ.mjOBJ_BODY, object_body, "body")
+    ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
     inside = _subtree(model, ob)
     found: list[tuple[int, int, DetectedContact]] = []
     for i in range(data.ncon):
@@ -149,7 +149,7 @@ def object_weight(
     Each body contributes ``(1 - gravcomp) * mass * gravity`` at its centre of mass
     (``data.xipos``; call ``mj_kinematics`` or ``mj_forward`` first). World frame.
     """
-    ob = _id(model, _OBJ.mjOBJ_BODY, object_body, "body")
+    ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
     origin = np.array(data.xpos[ob], dtype=float)
     wrench = np.zeros(6)
     for b in sorted(_subtree(model, ob)):
@@ -180,7 +180,7 @@ def _state_joints(model: mujoco.MjModel, joints: Sequence[str] | None, inside: s
         return ids
     ids = []
     for name in joints:
-        j = _id(model, _OBJ.mjOBJ_JOINT, name, "joint")
+        j = model_id(model, _OBJ.mjOBJ_JOINT, name, "joint")
         if int(model.jnt_type[j]) not in scalar:
             raise ModelError(f"joint {name!r}", "is not a hinge or slide joint")
         if int(model.jnt_bodyid[j]) in inside:
@@ -273,7 +273,7 @@ def grasp_state(
         a single ``<dcmotor>``, a touching geom without type, an F/S contact without mu, an
         S contact without slide direction, or no contact between the object and a finger.
     """
-    ob = _id(model, _OBJ.mjOBJ_BODY, object_body, "body")
+    ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
     inside = _subtree(model, ob)
     joint_ids = _state_joints(model, joints, inside)
     names = [mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j) for j in joint_ids]
@@ -288,7 +288,7 @@ def grasp_state(
     _check_geoms(model, slide_directions, "slide_directions")
     overrides = dict(operation_ranges or {})
     for key in overrides:
-        _id(model, _OBJ.mjOBJ_JOINT, key, "joint")
+        model_id(model, _OBJ.mjOBJ_JOINT, key, "joint")
 
     work = copy.copy(data)
     work.qvel[:] = 0.0

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import ModelError
+from .grasp import model_id
 
 __all__ = ["IkResult", "IkTarget", "geom_contact_target", "ik_residual", "solve_ik"]
 
@@ -110,13 +111,6 @@ class IkResult:
     converged: bool
 
 
-def _id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: str) -> int:
-    i = mujoco.mj_name2id(model, kind, name)
-    if i < 0:
-        raise ModelError(f"{label} {name!r}", "not in the model")
-    return int(i)
-
-
 def geom_contact_target(
     model: mujoco.MjModel,
     geom: str,
@@ -161,7 +155,7 @@ def geom_contact_target(
         Unknown geom, a geom of another type, a missing or out-of-range ``along``, or
         ``contact`` at the centre.
     """
-    g = _id(model, _OBJ.mjOBJ_GEOM, geom, "geom")
+    g = model_id(model, _OBJ.mjOBJ_GEOM, geom, "geom")
     gtype = int(model.geom_type[g])
     body = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, int(model.geom_bodyid[g]))
     p, c = _vec3(contact, f"geom {geom!r} contact"), _vec3(centre, "centre")
@@ -193,7 +187,7 @@ def geom_contact_target(
 
 
 def _bodies(model: mujoco.MjModel, targets: Sequence[IkTarget]) -> list[int]:
-    return [_id(model, _OBJ.mjOBJ_BODY, t.body, "body") for t in targets]
+    return [model_id(model, _OBJ.mjOBJ_BODY, t.body, "body") for t in targets]
 
 
 def ik_residual(
@@ -303,7 +297,7 @@ def solve_ik(
     if joints is None:
         ids = [j for j in _chain_joints(model, _bodies(model, targets)) if int(model.jnt_type[j]) in scalar]
     else:
-        ids = [_id(model, _OBJ.mjOBJ_JOINT, name, "joint") for name in joints]
+        ids = [model_id(model, _OBJ.mjOBJ_JOINT, name, "joint") for name in joints]
         for j, name in zip(ids, joints, strict=True):
             if int(model.jnt_type[j]) not in scalar:
                 raise ModelError(f"joint {name!r}", "is not a hinge or slide joint")
@@ -315,7 +309,7 @@ def solve_ik(
     hi = np.array([model.jnt_range[j, 1] if model.jnt_limited[j] else np.inf for j in ids])
     for name, (b_lo, b_hi) in (bounds or {}).items():
         if name not in names:
-            _id(model, _OBJ.mjOBJ_JOINT, name, "joint")
+            model_id(model, _OBJ.mjOBJ_JOINT, name, "joint")
             raise ModelError(f"joint {name!r}", "has a bound but is not among the joints solved for")
         k = names.index(name)
         lo[k], hi[k] = max(lo[k], float(b_lo)), min(hi[k], float(b_hi))
