@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from .errors import SolverError
 
 DROP_TOL = 1e-12  # coefficients at or below this are round-off (see assembly._Coo.add)
+_HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
 
 __all__ = ["SOLVERS", "HighsSession", "LPSolution", "LinearProgram", "solve_lp"]
 
@@ -132,12 +133,21 @@ class HighsSession:
         h, ms = self.highs, self._hs.HighsModelStatus
         h.run()
         status = h.getModelStatus()
-        if status == ms.kUnboundedOrInfeasible:
-            # The dual simplex saw dual infeasibility; the primal simplex tells which.
-            h.setOptionValue("simplex_strategy", 4)
+        # A warm-started dual simplex can stop without a verdict: dual infeasibility
+        # (unbounded or infeasible) or, seen on infeasible lift states, "Unknown" with a stuck
+        # basis. Settle it from cold starts: dual simplex, primal simplex, interior point (each
+        # failed alone on some lift LP that the next one certified); otherwise raise.
+        retries: tuple[dict[str, object], ...] = ({}, {"simplex_strategy": 4}, {"solver": "ipm"})
+        for options in retries:
+            if status not in (ms.kUnboundedOrInfeasible, ms.kUnknown, ms.kSolveError):
+                break
+            h.clearSolver()
+            for name, value in options.items():
+                h.setOptionValue(name, value)
             h.run()
             status = h.getModelStatus()
-            h.setOptionValue("simplex_strategy", 1)
+            for name in options:
+                h.setOptionValue(name, _HIGHS_DEFAULTS[name])
         if status == ms.kOptimal:
             x = np.array(h.getSolution().col_value)
             return LPSolution("optimal", x, float(h.getInfo().objective_function_value))
