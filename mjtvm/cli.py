@@ -50,6 +50,22 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from .replay import run_replay  # MuJoCo and matplotlib are imported only by the coupling commands
+
+    readings = ("physical", "literal") if args.reading == "both" else (args.reading,)
+    out = run_replay(
+        scenario=args.scenario, hand=args.variant, mu=args.mu, mg=args.mg, num_states=args.states,
+        variants=tuple(v.strip() for v in args.variants.split(",")), readings=readings, out=args.out,
+        plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
+    )  # fmt: skip
+    lift = out.lift
+    print(f"lift: {lift.num_states} states, z = {lift.z[0]:.4f} .. {lift.z[-1]:.4f} m ({lift.limit})")
+    for name, path in out.files.items():
+        print(f"wrote {name}: {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``mjtvm``."""
     parser = argparse.ArgumentParser(
@@ -90,6 +106,34 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("--mg", type=float, default=None, help="object weight (N); default: the scenario's")
     export.add_argument("--indent", type=int, default=1, help="JSON indentation (default 1)")
     export.set_defaults(func=_cmd_export_state)
+
+    replay = sub.add_parser(
+        "replay",
+        help="TVMMP along the scripted lift of Case 2 (Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
+        description="Lift the object along +z to the fingers' reach, solve Problem 2 at every state with "
+        "fingers 2 and 4 as L- and S-points, sweep mu and mg (Fig. 9), write lift.csv, lift.json, "
+        "lift-sweeps.csv and fig8/fig9a/fig9b.png to --out.",
+    )
+    replay.add_argument("--scenario", default="case2", help="scenario name or JSON path (default: case2)")
+    replay.add_argument(
+        "--variant", default="default", help="hand variant: default or humanlike (default: default)"
+    )
+    replay.add_argument("--mu", type=float, default=0.3, help="friction coefficient (default 0.3)")
+    replay.add_argument("--mg", type=float, default=1.0, help="object weight in N (default 1.0)")
+    replay.add_argument("--states", type=int, default=30, help="number of states along the lift (default 30)")
+    replay.add_argument(
+        "--variants", default="L,S", help="contact types of fingers 2 and 4, comma-separated (default: L,S)"
+    )
+    replay.add_argument(
+        "--reading", choices=("physical", "literal", "both"), default="physical",
+        help="S-point slide direction: the slip of the min-norm motion (physical, default) or the "
+        "paper's printed vector, its reverse (literal); both runs both",
+    )  # fmt: skip
+    replay.add_argument("--out", default="results", help="output directory (default: results)")
+    replay.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
+    replay.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
+    replay.add_argument("--quiet", action="store_true", help="no progress bars")
+    replay.set_defaults(func=_cmd_replay)
     return parser
 
 
