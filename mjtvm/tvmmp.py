@@ -18,10 +18,11 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .assembly import Assembly, BoxForm, assemble
-from .errors import SolverError
+from .errors import SolverError, StateError
 from .solvers import DROP_TOL, SOLVERS, HighsSession, LinearProgram, LPSolution, solve_lp
 from .state import GraspState
 
@@ -185,12 +186,12 @@ class _Problem2:
         self.col_upper = np.append(asm.col_upper, np.inf)
         self.kin = asm.kinematic_rows
         self.twist_rows = asm.A_twist.tocsr()[self.kin].toarray()
+        self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
         self.session: HighsSession | None = None
 
     def lp(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
     ) -> LinearProgram:
-        import scipy.sparse as sp
 
         col = self.asm.A_twist @ r  # the alpha column: A_twist (alpha r_l)
         col[np.abs(col) <= DROP_TOL] = 0.0
@@ -216,8 +217,7 @@ class _Problem2:
             return self.session.solve()
         s = self.session
         s.set_column(self.alpha_col, self.kin, self.twist_rows @ r)
-        rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in self.asm.wrench_rows])
-        s.set_row_bounds(rows, -w, -w)
+        s.set_row_bounds(self.wrench_rows, -w, -w)
         s.set_col_bounds(self.alpha_col, 0.0, alpha_max)
         return s.solve()
 
@@ -253,8 +253,6 @@ def tvmmp(
     SolverError
         When a solver fails (the failing pair is named).
     """
-    from .errors import StateError
-
     if state.rvds is None:
         raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     if solver not in SOLVERS:
