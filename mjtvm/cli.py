@@ -12,6 +12,7 @@ import json
 import sys
 from collections.abc import Sequence
 from importlib import resources
+from pathlib import Path
 
 from .errors import ModelError, SolverError, StateError
 from .solvers import SOLVERS
@@ -63,6 +64,12 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     print(f"lift: {lift.num_states} states, z = {lift.z[0]:.4f} .. {lift.z[-1]:.4f} m ({lift.limit})")
     for name, path in out.files.items():
         print(f"wrote {name}: {path}")
+    if args.rrd is not None or args.spawn:
+        from .viz import record_replay  # rerun is imported only here
+
+        info = record_replay(out, args.rrd, spawn=args.spawn, tvms_every=args.tvms_every)
+        if args.rrd is not None:
+            print(f"wrote {Path(args.rrd).name}: {args.rrd} ({info['seconds']:.2f} s)")
     return 0
 
 
@@ -133,6 +140,18 @@ def build_parser() -> argparse.ArgumentParser:
     replay.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     replay.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
     replay.add_argument("--quiet", action="store_true", help="no progress bars")
+    replay.add_argument(
+        "--rrd", metavar="FILE", default=None,
+        help="also write a rerun recording of the lift (scene, contacts, velocity polytopes, TVMMP, "
+        "joint operation points); open it with `rerun FILE`",
+    )  # fmt: skip
+    replay.add_argument(
+        "--spawn", action="store_true", help="also stream the recording to a newly spawned rerun viewer"
+    )
+    replay.add_argument(
+        "--tvms-every", type=int, default=5, metavar="N",
+        help="TVMS (Problem 1) in the recording at every N-th state and the last; 0: never (default 5)",
+    )  # fmt: skip
     replay.set_defaults(func=_cmd_replay)
     return parser
 
