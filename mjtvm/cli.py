@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .errors import ModelError, SolverError, StateError
 from .solvers import SOLVERS
-from .state import load_state
+from .state import GraspState, load_state
 from .tvmmp import tvmmp
 
 __all__ = ["main"]
@@ -70,6 +70,69 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         info = record_replay(out, args.rrd, spawn=args.spawn, tvms_every=args.tvms_every)
         if args.rrd is not None:
             print(f"wrote {Path(args.rrd).name}: {args.rrd} ({info['seconds']:.2f} s)")
+    return 0
+
+
+def _load_state_or_scenario(args: argparse.Namespace) -> GraspState:
+    if args.scenario is not None:
+        from .scenario import load_scenario  # MuJoCo only for scenario shortcuts
+
+        return load_scenario(args.scenario, variant=args.variant).state()
+    if args.state is None:
+        raise StateError("state", "give a mjtvm.state/1 file (or -) or --scenario NAME")
+    source = sys.stdin.read() if args.state == "-" else args.state
+    return load_state(source)
+
+
+def _cmd_tvms(args: argparse.Namespace) -> int:
+    from .tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
+
+    state = _load_state_or_scenario(args)
+    if args.no_rvds:
+        state = state.with_(rvds=None)
+    result = tvms(state, method=args.method, time_limit=args.time_limit)
+    print(json.dumps(result.to_dict(), indent=args.indent))
+    return 0
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from .verify import add_arguments, run  # MuJoCo rollouts: imported only when used
+
+    parser = argparse.ArgumentParser(
+        prog="mjtvm verify",
+        description="alpha_sim (MuJoCo rollouts, bisection on the speed factor) against alpha_kl.",
+    )
+    add_arguments(parser)
+    return run(parser.parse_args(args.options))
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from .sweep import grid, run_sweep
+
+    def floats(text: str, name: str) -> tuple[float, ...]:
+        try:
+            return tuple(float(v) for v in text.split(","))
+        except ValueError as e:
+            raise StateError(name, f"expected comma-separated numbers, got {text!r}") from e
+
+    states = (
+        None if args.state_indices is None else tuple(int(v) for v in floats(args.state_indices, "states"))
+    )
+    points = grid(
+        scenarios=tuple(args.scenario.split(",")),
+        hands=tuple(args.hand.split(",")),
+        variants=tuple(args.variants.split(",")),
+        readings=tuple(args.readings.split(",")),
+        mus=floats(args.mu, "mu"),
+        mgs=floats(args.mg, "mg"),
+        states=states,
+        num_states=args.num_states,
+    )
+    rows = run_sweep(points, jobs=args.jobs, cluster=args.cluster, progress=not args.quiet)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(rows, indent=1))
+    print(f"wrote {len(rows)} rows: {out}")
     return 0
 
 
@@ -153,12 +216,56 @@ def build_parser() -> argparse.ArgumentParser:
         help="TVMS (Problem 1) in the recording at every N-th state and the last; 0: never (default 5)",
     )  # fmt: skip
     replay.set_defaults(func=_cmd_replay)
+
+    tv = sub.add_parser(
+        "tvms",
+        help="Problem 1: the exact TVMS polytope and its volume (prints mjtvm.tvms/1)",
+        description="Solve Problem 1 (eq. 26-29, 34) for STATE or a scenario and print mjtvm.tvms/1.",
+    )
+    tv.add_argument("state", nargs="?", default=None, help="mjtvm.state/1 JSON file, or - for standard input")
+    tv.add_argument("--scenario", default=None, help="a scenario instead of a file: case1, case1-s, case2")
+    tv.add_argument("--variant", default="default", help="hand variant of --scenario (default or humanlike)")
+    tv.add_argument("--no-rvds", action="store_true", help="ignore the state's RVDS (no cone restriction)")
+    tv.add_argument("--method", choices=("lp", "cdd"), default="lp", help="LP projection (default) or cdd")
+    tv.add_argument("--time-limit", type=float, default=120.0, help="cap of the cdd baseline (s)")
+    tv.add_argument("--indent", type=int, default=1, help="JSON indentation (default 1)")
+    tv.set_defaults(func=_cmd_tvms)
+
+    verify = sub.add_parser(
+        "verify",
+        help="check TVMMP along the lift against MuJoCo rollouts with the dcmotor actuators",
+        add_help=False,  # its options (and --help) are parsed by mjtvm.verify's own parser
+    )
+    verify.set_defaults(func=_cmd_verify)  # main() hands its words to mjtvm.verify's parser
+
+    sweep = sub.add_parser(
+        "sweep",
+        help="Problem 2 over a grid of lift states and conditions (process pool or Dask)",
+        description="TVMMP over the product of the given values; rows written as JSON.",
+    )
+    sweep.add_argument("--scenario", default="case2", help="comma-separated scenarios (default case2)")
+    sweep.add_argument("--hand", default="default", help="comma-separated hands: default, humanlike")
+    sweep.add_argument("--variants", default="L", help="comma-separated: L, S (default L)")
+    sweep.add_argument("--readings", default="physical", help="comma-separated: physical, literal")
+    sweep.add_argument("--mu", default="0.3", help="comma-separated friction coefficients")
+    sweep.add_argument("--mg", default="1.0", help="comma-separated weights (N)")
+    sweep.add_argument("--states", dest="state_indices", default=None, help="comma-separated state indices")
+    sweep.add_argument("--num-states", type=int, default=30, help="states of the lift (default 30)")
+    sweep.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
+    sweep.add_argument("--cluster", default=None, help="Dask scheduler address (tcp://host:8786)")
+    sweep.add_argument("--out", default="results/sweep.json", help="output JSON (default results/sweep.json)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(func=_cmd_sweep)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mjtvm`` console script."""
-    args = build_parser().parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words[:1] == ["verify"]:  # its own parser (imports MuJoCo only when used)
+        args = argparse.Namespace(func=_cmd_verify, options=words[1:])
+    else:
+        args = build_parser().parse_args(words)
     try:
         code: int = args.func(args)
     except (StateError, ModelError) as e:

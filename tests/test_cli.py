@@ -68,3 +68,35 @@ def test_export_state_round_trips_through_solve(tmp_path, capsys):
 def test_export_state_unknown_scenario_exits_2(capsys):
     assert main(["export-state", "--scenario", "case9"]) == 2
     assert "case9" in capsys.readouterr().err
+
+
+def test_tvms_prints_the_schema_for_a_file_and_a_scenario(tmp_path, capsys):
+    """`mjtvm tvms` on the exported Case 1 file equals the scenario shortcut (dimension 4)."""
+    assert main(["export-state", "--scenario", "case1"]) == 0
+    path = tmp_path / "case1.json"
+    path.write_text(capsys.readouterr().out)
+    assert main(["tvms", str(path), "--indent", "0"]) == 0
+    from_file = json.loads(capsys.readouterr().out)
+    assert main(["tvms", "--scenario", "case1", "--indent", "0"]) == 0
+    from_scenario = json.loads(capsys.readouterr().out)
+    assert from_file["schema"] == "mjtvm.tvms/1" and from_file["dimension"] == 4
+    assert from_file["vertices"] == from_scenario["vertices"]
+    assert main(["tvms"]) == 2
+    assert "give a mjtvm.state/1 file" in capsys.readouterr().err
+
+
+def test_sweep_writes_rows_and_rejects_bad_numbers(tmp_path, capsys):
+    out = tmp_path / "sweep.json"
+    args = ["sweep", "--mu", "0.1,0.5", "--states", "0", "--num-states", "4", "--out", str(out), "--quiet"]
+    assert main(args) == 0
+    rows = json.loads(out.read_text())
+    assert [r["mu"] for r in rows] == [0.1, 0.5] and all(r["feasible"] for r in rows)
+    assert main(["sweep", "--mu", "lots", "--out", str(out)]) == 2
+    assert "mu: expected comma-separated numbers" in capsys.readouterr().err
+
+
+def test_verify_has_its_own_options(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["verify", "--help"])
+    assert e.value.code == 0
+    assert "--armature-scale" in capsys.readouterr().out
