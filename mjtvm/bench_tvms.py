@@ -30,9 +30,9 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy.spatial.distance import cdist
 
 from .bench import highs_run_timer, machine_info
+from .hull import hausdorff
 from .state import GraspState
 from .tvms import TvmsResult, tvms
 
@@ -51,9 +51,8 @@ def _hausdorff(a: TvmsResult, b: TvmsResult) -> float | None:
     """Hausdorff distance of two vertex sets relative to the extent (``None`` if either is empty)."""
     if not len(a.vertices) or not len(b.vertices):
         return None
-    d = cdist(a.vertices * a.scale, b.vertices * b.scale)
     extent = float(np.max(np.abs(a.vertices * a.scale)))
-    return float(max(d.min(axis=0).max(), d.min(axis=1).max())) / max(extent, 1e-300)
+    return hausdorff(a.vertices * a.scale, b.vertices * b.scale) / max(extent, 1e-300)
 
 
 def _summary(r: TvmsResult) -> dict[str, Any]:

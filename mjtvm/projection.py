@@ -31,9 +31,9 @@ Two exact projections:
   added and the hull rebuilt (Bretl and Lall's projection, generalised to any
   dimension <= 6). The cost grows with the output: the Case 2 hand's 6-D TVMS has about
   2000 vertices and 250 000 simplicial facets, and the rebuilt hulls dominate.
-* :func:`~mjtvm.tvms.project_cdd` (the paper's way, the baseline): vertex enumeration
-  of the lifted polytope with cddlib, projection of its vertices, convex hull
-  (:func:`reduce_points`).
+* :func:`~mjtvm.enumeration.project_cdd` (the paper's way, the baseline): vertex
+  enumeration of the lifted polytope with cddlib, projection of its vertices, convex hull
+  (:func:`~mjtvm.hull.reduce_points`).
 
 Both work in scaled coordinates ``s = metric * rdot`` (the vertex set does not depend on
 the metric, the tolerances do) and return the vertices in twist coordinates.
@@ -48,10 +48,10 @@ from typing import Any, Literal
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .assembly import Assembly, BoxForm, assemble
 from .errors import SolverError
+from .hull import ZERO_TOL, PlaneCache, distinct, span, triangulate, vertex_mask
 from .solvers import HighsSession, LinearProgram, LPSolution
 from .state import GraspState
 
@@ -62,15 +62,11 @@ __all__ = [
     "ProjectionStatus",
     "lifted_polytope",
     "project_lp",
-    "reduce_points",
 ]
 
 ProjectionStatus = Literal["bounded", "unbounded", "empty", "timeout"]
 REL_TOL = 1e-9  #: tolerance relative to the extent of S_ov (LP tolerances are 1e-9)
-ZERO_TOL = 1e-9  #: an S_ov within this distance of the origin (scaled units) is {0}
-SLIVER = 1e-8  #: simplices flatter than this (singular-value ratio) span no facet
 TIE_BREAK = 1e-6  #: tilt of the objective that picks a vertex from an optimal face
-CDD_REL_TOL = 1e-9  #: round-off of float cddlib relative to the extent
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,177 +200,6 @@ class Projection:
     lifted_vertices: int | None = None
 
 
-# ------------------------------------------------------------------ geometry
-def _triangulate(
-    local: NDArray[np.float64],
-) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
-    r"""Simplicial facets of the hull of ``(n, k)`` full-dimensional points, k >= 2.
-
-    Qhull on joggled points ("QJ"): it never fails on the degenerate point sets a TVMS
-    gives (many points on one facet, where Qhull's facet merging gives up). Returns the
-    ``(F, k)`` point indices of each simplex, Qhull's ``(F, k)`` outward normals (of the
-    joggled simplices) and the indices of the hull's points.
-    """
-    try:
-        hull = ConvexHull(local, qhull_options="QJ")
-    except QhullError as e:
-        raise SolverError("qhull", str(e).splitlines()[0] if str(e) else "QhullError") from e
-    return np.asarray(hull.simplices), hull.equations[:, :-1], np.asarray(hull.vertices)
-
-
-def _fit_planes(
-    local: NDArray[np.float64], simp: NDArray[np.int64], normals: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    r"""Rows ``[a, b, c]``: the plane ``a^T t = b`` (``|a| = 1``, oriented like ``normals``)
-    through each simplex's unperturbed points, which removes the joggle's tilt, and the
-    ratio ``c`` of the smallest to the largest singular value of its edge vectors.
-    Simplices with ``c <=`` :data:`SLIVER` are slivers: their points span less than a
-    hyperplane (they fill lower-dimensional faces in the joggled triangulation), and no
-    facet of the hull is made of slivers only."""
-    x = local[simp]
-    _, sv, vt = np.linalg.svd(x[:, 1:] - x[:, :1])
-    a = vt[:, -1] * np.sign(np.einsum("fk,fk->f", vt[:, -1], normals))[:, None]
-    return np.column_stack([a, np.einsum("fk,fk->f", a, x[:, 0]), sv[:, -1] / sv[:, 0]])
-
-
-class _Planes:
-    r"""The facet planes met so far, with a flag for those confirmed by an LP.
-
-    Cached by the points spanning a simplex (a 64-bit hash of their sorted ids) and by
-    the plane's coefficients (rounded: normal to 1e-8, offset to ``tol``), so that a
-    plane is fitted and solved once however often the hull is rebuilt.
-    """
-
-    def __init__(self, k: int, tol: float) -> None:
-        self.k, self.tol = k, tol
-        self.rows = np.zeros((0, k + 2))
-        self.confirmed = np.zeros(0, dtype=bool)
-        rng = np.random.default_rng(12345)
-        self._mult = rng.integers(1, 2**62, size=k + 1, dtype=np.uint64) * np.uint64(2) + np.uint64(1)
-        self._by_points = (np.zeros(0, dtype=np.uint64), np.zeros(0, dtype=np.int64))
-        self._by_coeffs = (np.zeros(0, dtype=np.uint64), np.zeros(0, dtype=np.int64))
-
-    def _hash(self, keys: NDArray[np.int64]) -> NDArray[np.uint64]:
-        with np.errstate(over="ignore"):
-            return np.sum(keys.astype(np.uint64) * self._mult[: keys.shape[1]], axis=1, dtype=np.uint64)
-
-    @staticmethod
-    def _find(
-        table: tuple[NDArray[np.uint64], NDArray[np.int64]], keys: NDArray[np.uint64]
-    ) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
-        pos = np.minimum(np.searchsorted(table[0], keys), max(len(table[0]) - 1, 0))
-        found = (table[0][pos] == keys) if len(table[0]) else np.zeros(len(keys), dtype=bool)
-        return found, np.where(found, table[1][pos] if len(table[1]) else 0, -1)
-
-    @staticmethod
-    def _insert(
-        table: tuple[NDArray[np.uint64], NDArray[np.int64]],
-        keys: NDArray[np.uint64],
-        values: NDArray[np.int64],
-    ) -> tuple[NDArray[np.uint64], NDArray[np.int64]]:
-        k, v = np.concatenate([table[0], keys]), np.concatenate([table[1], values])
-        order = np.argsort(k, kind="stable")
-        return k[order], v[order]
-
-    def of(
-        self,
-        local: NDArray[np.float64],
-        ids: NDArray[np.int64],
-        simp: NDArray[np.int64],
-        normals: NDArray[np.float64],
-    ) -> NDArray[np.int64]:
-        """The plane index of each simplex (fitting and registering the new ones)."""
-        point_keys = self._hash(np.sort(ids[simp], axis=1))
-        found, plane = self._find(self._by_points, point_keys)
-        miss = np.flatnonzero(~found)
-        if len(miss):
-            fitted = _fit_planes(local, simp[miss], normals[miss])
-            rounded = np.round(np.column_stack([fitted[:, : self.k] * 1e8, fitted[:, self.k] / self.tol]))
-            coeff_keys = self._hash(rounded.astype(np.int64))
-            known, j = self._find(self._by_coeffs, coeff_keys)
-            fresh, first, inverse = np.unique(coeff_keys[~known], return_index=True, return_inverse=True)
-            index = len(self.rows) + np.arange(len(fresh))
-            rows = fitted[~known][first]
-            self.rows = np.vstack([self.rows, rows])
-            self.confirmed = np.concatenate([self.confirmed, rows[:, -1] <= SLIVER])  # slivers need no LP
-            j[~known] = index[inverse.ravel()]
-            self._by_coeffs = self._insert(self._by_coeffs, fresh, index)
-            self._by_points = self._insert(self._by_points, point_keys[miss], j)
-            plane[miss] = j
-        return plane
-
-
-def _vertex_mask(
-    local: NDArray[np.float64], simp: NDArray[np.int64], candidates: NDArray[np.int64], tol: float
-) -> NDArray[np.bool_]:
-    r"""Which ``candidates`` (indices of ``local``) are vertices of the hull triangulated by ``simp``.
-
-    A point inside a face of dimension >= 1 lies in the convex hull of its neighbours
-    in the triangulation (its star covers a neighbourhood of it in the face), a vertex
-    does not; the distance is measured by non-negative least squares on
-    ``[Q - p; 1] mu = [0; 1]``, ``mu >= 0``, and distances up to ``10 tol`` are round-off.
-    """
-    from scipy.optimize import nnls
-
-    scale = float(np.max(np.abs(local)))
-    owner = simp.ravel()
-    order = np.argsort(owner, kind="stable")
-    starts = np.searchsorted(owner[order], np.arange(len(local) + 1))
-    facet = np.repeat(np.arange(len(simp)), simp.shape[1])[order]
-    mask = np.zeros(len(candidates), dtype=bool)
-    for n, i in enumerate(candidates):
-        near = np.setdiff1d(simp[facet[starts[i] : starts[i + 1]]], [i])
-        y = np.vstack([((local[near] - local[i]) / scale).T, np.ones(len(near))])
-        mask[n] = len(near) == 0 or nnls(y, np.append(np.zeros(local.shape[1]), 1.0))[1] > 10 * tol / scale
-    return mask
-
-
-def _distinct(points: NDArray[np.float64], radius: float) -> NDArray[np.float64]:
-    """One point of each cluster of ``points`` closer than ``radius`` (the first one)."""
-    near = cKDTree(points).query_ball_point(points, radius)
-    return points[[i for i, group in enumerate(near) if min(group) == i]]
-
-
-def _span(points: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
-    """``(k, D)`` orthonormal basis of the linear span of ``(n, D)`` points (round-off ``tol``)."""
-    _, sv, vt = np.linalg.svd(points, full_matrices=False)
-    return vt[: int(np.sum(sv > tol * np.sqrt(len(points))))]
-
-
-def reduce_points(
-    points: NDArray[np.float64], *, rel_tol: float = CDD_REL_TOL
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    r"""Linear hull and vertices of the convex hull of ``(n, D)`` points and the origin.
-
-    Parameters
-    ----------
-    points
-        Points in (scaled) twist coordinates, e.g. the projected lifted vertices.
-    rel_tol
-        Distances below ``rel_tol`` x extent are round-off.
-
-    Returns
-    -------
-    vertices, basis
-        ``(v, D)`` the vertices, projected onto the span, and the ``(k, D)``
-        orthonormal basis of that span.
-    """
-    big_d = points.shape[1]
-    pts = np.vstack([np.zeros((1, big_d)), points])
-    extent = float(np.max(np.abs(pts)))
-    if extent <= ZERO_TOL:
-        return np.zeros((1, big_d)), np.zeros((0, big_d))
-    tol = rel_tol * extent
-    basis = _span(pts, tol)
-    local = _distinct(pts @ basis.T, tol)
-    if basis.shape[0] == 1:
-        ends = local[[np.argmin(local[:, 0]), np.argmax(local[:, 0])]]
-        return ends @ basis, basis
-    simp, _, idx = _triangulate(local)
-    verts = local[idx[_vertex_mask(local, simp, idx, tol)]]
-    return _distinct(verts, 10 * tol) @ basis, basis
-
-
 # ------------------------------------------------------------------ LP projection
 class _Support:
     r"""Support function of :math:`S_{ov}` by LPs on one HiGHS session.
@@ -439,7 +264,7 @@ def _linear_hull(
     tol = rel_tol * max(extent, 1.0) if ray is not None else rel_tol * extent
     if extent <= ZERO_TOL:
         return [], np.zeros((0, big_d)), tol, None
-    basis = _span(np.array(points), tol)
+    basis = span(np.array(points), tol)
     normal_dirs = np.zeros((0, big_d))
     while basis.shape[0] + normal_dirs.shape[0] < big_d:
         known = np.vstack([basis, normal_dirs])
@@ -449,7 +274,7 @@ def _linear_hull(
             ray = s if status == "unbounded" else ray
             if sign * (u @ s) > tol:
                 points.append(s)
-                basis = _span(np.array(points), tol)
+                basis = span(np.array(points), tol)
                 break
         else:
             normal_dirs = np.vstack([normal_dirs, u])
@@ -498,7 +323,7 @@ def project_lp(
     if k == 1:
         ends = np.array([support(sign * basis[0])[1] @ basis[0] for sign in (1.0, -1.0)])
         return result("bounded", np.outer(np.unique(ends), basis[0]), basis)
-    return _refine(support, _distinct(local, tol), basis, tol, result)
+    return _refine(support, distinct(local, tol), basis, tol, result)
 
 
 def _refine(
@@ -510,24 +335,24 @@ def _refine(
 ) -> Projection:
     r"""Incremental hull inside the linear hull (``local``: points in its coordinates).
 
-    Each round triangulates the points found (:func:`_triangulate`) and solves one LP per
-    facet plane not yet confirmed (:class:`_Planes`; slivers need none). A plane is
+    Each round triangulates the points found (:func:`triangulate`) and solves one LP per
+    facet plane not yet confirmed (:class:`PlaneCache`; slivers need none). A plane is
     confirmed when the support of :math:`S_{ov}` along its normal exceeds that of the
     points by at most ``tol``; otherwise a slightly tilted objective (:data:`TIE_BREAK`)
     picks a vertex of the optimal face, and the round's new points are added before the
     next round (one Qhull run costs as much as thousands of LPs, so every unconfirmed
     plane of a round gets its LP). When a round adds nothing, every facet of the points'
     hull supports :math:`S_{ov}`: the hull is :math:`S_{ov}`, and its vertices are
-    sorted out by :func:`_vertex_mask`.
+    sorted out by :func:`vertex_mask`.
     """
     k = basis.shape[0]
     big_d = basis.shape[1]
     tie = np.random.default_rng(0).normal(size=k)
     tie *= TIE_BREAK / np.linalg.norm(tie)
     ids = np.arange(len(local))
-    planes = _Planes(k, tol)
+    planes = PlaneCache(k, tol)
     while True:
-        simp, normals, hull_idx = _triangulate(local)
+        simp, normals, hull_idx = triangulate(local)
         todo = np.unique(planes.of(local, ids, simp, normals))
         new = np.zeros((0, k))
         for j in todo[~planes.confirmed[todo]]:
@@ -544,7 +369,7 @@ def _refine(
             if not len(new) or np.min(np.max(np.abs(new - t), axis=1)) > tol:
                 new = np.vstack([new, t])
         if not len(new):
-            verts = _distinct(local[hull_idx[_vertex_mask(local, simp, hull_idx, tol)]], 10 * tol)
+            verts = distinct(local[hull_idx[vertex_mask(local, simp, hull_idx, tol)]], 10 * tol)
             return result("bounded", verts @ basis, basis)
         local = np.vstack([local[hull_idx], new])
         ids = np.concatenate([ids[hull_idx], ids.max() + 1 + np.arange(len(new))])

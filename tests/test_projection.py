@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.spatial.distance import cdist
 
 from mjtvm import Contact, GraspState, assemble, default_operation_range
+from mjtvm.enumeration import force_form, project_cdd
+from mjtvm.hull import hausdorff
 from mjtvm.projection import lifted_polytope, project_lp
 from mjtvm.synthetic import random_state
-from mjtvm.tvms import force_form, project_cdd, tvms
+from mjtvm.tvms import tvms
 
 from .helpers import T_MAX, max_speed
 
@@ -41,11 +42,6 @@ def gripper(jac, refs, *, g_f=G_F, types=("F", "F"), mu=0.5, base=False) -> Gras
         tuple(contacts),
         np.array(refs, float),
     )
-
-
-def hausdorff(a: np.ndarray, b: np.ndarray) -> float:
-    d = cdist(a, b)
-    return float(max(d.min(axis=0).max(), d.min(axis=1).max()))
 
 
 def assert_same_vertices(actual: np.ndarray, expected: np.ndarray, rel: float = 1e-7) -> None:
@@ -202,3 +198,26 @@ def test_full_dimensional_planar_volumes_agree(types):
     assert lp.dimension == cdd.dimension == 3
     assert lp.volume > 0 and lp.volume == pytest.approx(cdd.volume, rel=1e-9)
     assert_same_vertices(lp.vertices, cdd.vertices)
+
+
+def test_a_sliver_never_confirms_a_real_facet():
+    r"""Regression: a sliver simplex (its points span less than a hyperplane) gets an arbitrary
+    plane and needs no LP. That plane was once registered under its coefficients, so a real
+    facet whose plane rounded to the same key counted as confirmed without its support LP,
+    and the projection dropped a vertex (random_state(4, space=3, fingers=3,
+    joints_per_finger=3, num_refs=2, friction_edges=8): 701 vertices instead of 702).
+    Here the collinear triangle [p0, p1, p2] is a sliver fitted to z = 0 (numpy's null-space
+    choice, oriented by the hint), exactly the plane of the real facet [p0, p1, p3]: the facet
+    must stay unconfirmed."""
+    from mjtvm.hull import PlaneCache
+
+    local = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    ids = np.arange(5)
+    cache = PlaneCache(3, 1e-9)
+    down = np.array([[0.0, 0.0, -1.0]])
+    sliver = cache.of(local, ids, np.array([[0, 1, 2]]), down)
+    assert cache.confirmed[sliver[0]]  # a sliver needs no LP
+    facet = cache.of(local, ids, np.array([[0, 1, 3]]), down)
+    np.testing.assert_allclose(cache.rows[facet[0], :4], cache.rows[sliver[0], :4], atol=1e-12)  # same plane
+    assert facet[0] != sliver[0]
+    assert not cache.confirmed[facet[0]]
