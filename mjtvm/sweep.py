@@ -117,19 +117,12 @@ def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
     rows = []
     for i in states:
         state = lift_state(lift, i, variant=variant, reading=reading, mu=mu, mg=mg)  # type: ignore[arg-type]
-        result = tvmmp(state, witnesses=False)
+        doc = tvmmp(state, witnesses=False).to_dict(witnesses=False)
         rows.append(
             {
                 **asdict(SweepPoint(scenario, hand, variant, reading, mu, mg, i, num_states)),
                 "z": float(lift.z[i]),
-                "tvmmp": result.tvmmp,
-                "feasible": result.feasible,
-                "alpha": [
-                    [None if s != "optimal" else float(a) for a, s in zip(ar, sr)]
-                    for ar, sr in zip(result.alpha, result.status)
-                ],
-                "status": [list(s) for s in result.status],
-                "limiting": None if result.limiting is None else list(result.limiting),
+                **{key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")},
             }
         )
     return rows
