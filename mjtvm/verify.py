@@ -313,6 +313,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="results")
     p.add_argument("--name", default="verify", help="file stem of the CSV and PNG")
     p.add_argument("--no-plot", action="store_true")
+    p.add_argument("--rrd", default=None, help="also write a rerun recording of the results to this file")
     p.add_argument("--quiet", action="store_true")
 
 
@@ -334,6 +335,11 @@ def run(args: argparse.Namespace) -> int:
             + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
         )
     print(f"wall time {wall:.1f} s ({args.jobs} job(s)); rows in {Path(args.out) / (args.name + '.csv')}")
+    if args.rrd is not None:
+        from .viz import record_verify  # rerun is imported only here
+
+        record_verify(rows, args.rrd)
+        print(f"wrote {args.rrd}")
     if args.slide_check:
         lift = _lift(args.scenario, args.states)
         idx = sorted({*range(0, args.states, max(args.stride, 1)), args.states - 1})

@@ -33,7 +33,7 @@ import os
 import shutil
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -53,7 +53,7 @@ from .tvms import tvms
 
 __all__ = [
     "APPLICATION_ID", "FORCE_SCALE", "TVMS_EVERY", "TYPE_COLORS", "VELOCITY_SCALE", "Z_UNIT",
-    "blueprint", "hull_mesh", "record_replay", "translational_tvms",
+    "blueprint", "hull_mesh", "record_replay", "record_verify", "translational_tvms",
 ]  # fmt: skip
 
 APPLICATION_ID = "mjtvm_replay"
@@ -389,3 +389,51 @@ def record_replay(
     rec.flush()
     rec.disconnect()
     return {"seconds": time.perf_counter() - t0, **info}
+
+
+def record_verify(
+    rows: Sequence[Mapping[str, Any]], path: str | Path, *, recording_id: str | None = None
+) -> dict[str, Any]:
+    r"""Record the physics check of ``mjtvm verify`` (:func:`~mjtvm.verify.verify_lift` rows).
+
+    On the ``state`` and ``lift_z`` timelines of :func:`record_replay`, per run (``L``,
+    ``S_literal``, ...): ``verify/<run>/tvmmp`` (min over l of the LP's alpha_kl),
+    ``verify/<run>/alpha_sim`` (min over l of the simulated alpha_sim), one
+    ``verify/<run>/ratio/l<l>`` per RVDS vertex (alpha_sim / alpha_kl), and the rollouts'
+    failure reasons as a text log ``verify/<run>/failures``.
+
+    Returns
+    -------
+    dict
+        ``seconds`` (wall time) and ``runs`` (the run names logged).
+    """
+    t0 = time.perf_counter()
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id)
+    rec.set_sinks(rr.FileSink(str(path)))
+    runs = list(dict.fromkeys(str(r["run"]) for r in rows))
+    for n, run in enumerate(runs):
+        color = _RUN_COLORS[n % len(_RUN_COLORS)]
+        rec.log(f"verify/{run}/tvmmp", rr.SeriesLines(colors=color, names=f"TVMMP (LP) {run}"), static=True)
+        rec.log(
+            f"verify/{run}/alpha_sim",
+            rr.SeriesPoints(colors=color, names=f"min alpha_sim {run}"),
+            static=True,
+        )
+    by_state: dict[tuple[str, int], list[Mapping[str, Any]]] = {}
+    for r in rows:
+        by_state.setdefault((str(r["run"]), int(r["state"])), []).append(r)
+    for (run, i), group in sorted(by_state.items(), key=lambda kv: (runs.index(kv[0][0]), kv[0][1])):
+        rec.set_time("state", sequence=i)
+        rec.set_time("lift_z", sequence=round(float(group[0]["z"]) / Z_UNIT))
+        optimal = [r for r in group if r["status"] == "optimal"]
+        if optimal:
+            rec.log(f"verify/{run}/tvmmp", rr.Scalars(min(float(r["alpha_lp"]) for r in optimal)))
+            rec.log(f"verify/{run}/alpha_sim", rr.Scalars(min(float(r["alpha_sim"]) for r in optimal)))
+        for r in optimal:
+            rec.log(f"verify/{run}/ratio/l{int(r['l'])}", rr.Scalars(float(r["ratio"])))
+        reasons = [f"l{int(r['l'])}: {r['fail_reason']}" for r in optimal if r.get("fail_reason")]
+        if reasons:
+            rec.log(f"verify/{run}/failures", rr.TextLog("; ".join(reasons)))
+    rec.flush()
+    rec.disconnect()
+    return {"seconds": time.perf_counter() - t0, "runs": runs}

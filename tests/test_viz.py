@@ -201,3 +201,28 @@ def test_cli_writes_a_recording(
     assert "/scene/S/contacts:Points3D:positions" not in frame.columns
     tvms_col = "/scene/L/tvms:Mesh3D:vertex_positions"
     assert tvms_col not in frame.columns or all(_cell(frame, tvms_col, i) is None for i in (0, 1))
+
+
+def test_verify_results_read_back_from_a_recording(tmp_path: Path) -> None:
+    """`mjtvm verify --rrd`: per run and state the LP's TVMMP (min alpha_lp), the simulated
+    minimum and each direction's ratio, on the same timelines as the replay."""
+    from mjtvm.viz import record_verify
+
+    rows = [
+        {"run": run, "state": i, "z": 0.1 + 0.01 * i, "l": l, "status": "optimal",
+         "alpha_lp": 1.0 + i + l, "alpha_sim": 0.5 + i + 0.1 * l, "ratio": (0.5 + i + 0.1 * l) / (1.0 + i + l),
+         "fail_reason": "torque saturated" if l == 0 else ""}
+        for run in ("L", "S_literal") for i in range(3) for l in range(2)
+    ]  # fmt: skip
+    path = tmp_path / "verify.rrd"
+    assert record_verify(rows, path)["runs"] == ["L", "S_literal"]
+    frame = _read(path, "state")
+    assert len(frame) == 3
+    for run in ("L", "S_literal"):
+        tvmmp = [float(np.ravel(v)[0]) for v in frame[f"/verify/{run}/tvmmp:Scalars:scalars"]]
+        sim = [float(np.ravel(v)[0]) for v in frame[f"/verify/{run}/alpha_sim:Scalars:scalars"]]
+        ratio1 = [float(np.ravel(v)[0]) for v in frame[f"/verify/{run}/ratio/l1:Scalars:scalars"]]
+        assert tvmmp == pytest.approx([1.0, 2.0, 3.0])
+        assert sim == pytest.approx([0.5, 1.5, 2.5])
+        assert ratio1 == pytest.approx([(0.6 + i) / (2.0 + i) for i in range(3)])
+    assert len(_read(path, "lift_z")) == 3
