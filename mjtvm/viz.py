@@ -44,6 +44,7 @@ import rerun.blueprint as rrb
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
+from .contacts import slide_unit
 from .grasp import grasp_state
 from .operation_range import OperationRange
 from .replay import Record, ReplayOutput
@@ -220,7 +221,7 @@ def _log_run(
     slides = [c for c in contacts if c.type == "S" and c.slide_direction is not None]
     if slides:
         rec.log(f"scene/{name}/slides", rr.Arrows3D(
-            vectors=[SLIDE_LENGTH * np.asarray(c.slide_direction) for c in slides],
+            vectors=[SLIDE_LENGTH * slide_unit(c) for c in slides],  # the tangential unit direction the LP uses
             origins=[c.position for c in slides], colors=TYPE_COLORS["S"], radii=0.0015,
         ))  # fmt: skip
     k, l = res.limiting if res.limiting is not None else (-1, -1)
