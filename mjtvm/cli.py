@@ -136,6 +136,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from .bench_report import run_from_args  # cvxpy, MuJoCo and the pool: imported only when used
+
+    return run_from_args(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``mjtvm``."""
     parser = argparse.ArgumentParser(
@@ -256,6 +262,18 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--out", default="results/sweep.json", help="output JSON (default results/sweep.json)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=_cmd_sweep)
+
+    from .bench_report import add_arguments as bench_arguments  # numpy only at import
+
+    bench = sub.add_parser(
+        "bench",
+        help="the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling",
+        description="Time the paper's cases (Problem 1 and 2) against the cvxpy and cdd baselines, the full "
+        "lift, the Fig. 9 sweeps on 1 and 2 processes and synthetic hands of 2-16 fingers; write "
+        "results/bench.json and results/bench.md.",
+    )
+    bench_arguments(bench)
+    bench.set_defaults(func=_cmd_bench)
     return parser
 
 
