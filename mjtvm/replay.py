@@ -24,7 +24,7 @@ import statistics
 import tempfile
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -79,6 +79,8 @@ class Record:
     saturated
         Joints whose (torque, speed) in the limiting pair's witness lies on the edge of their
         operation range (one optimal vertex; other optima may differ).
+    state
+        The :class:`~mjtvm.state.GraspState` that was solved (kept for the recording).
     """
 
     variant: str
@@ -90,6 +92,7 @@ class Record:
     result: TvmmpResult
     solver: str
     saturated: tuple[str, ...]
+    state: GraspState = field(repr=False, compare=False)
 
     def row(self) -> dict[str, Any]:
         """The CSV row (``scenario`` and ``hand`` are added by the writer)."""
@@ -146,7 +149,9 @@ def _record(
 ) -> Record:
     state = lift_state(lift, i, variant=variant, reading=reading or "physical", mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
     result, solver = solve_state(state)
-    return Record(variant, reading, mu, mg, i, float(lift.z[i]), result, solver, _saturated(state, result))
+    return Record(
+        variant, reading, mu, mg, i, float(lift.z[i]), result, solver, _saturated(state, result), state
+    )
 
 
 def _check(variants: Sequence[str], readings: Sequence[str], mu: float, mg: float) -> None:

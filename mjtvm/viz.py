@@ -45,11 +45,10 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
 from .contacts import slide_unit
-from .grasp import grasp_state
 from .operation_range import OperationRange
 from .replay import Record, ReplayOutput
 from .state import GraspState
-from .trajectory import Lift, lift_state
+from .trajectory import Lift
 from .tvms import tvms
 
 __all__ = [
@@ -285,19 +284,6 @@ def _run_names(keys: Sequence[_Run]) -> dict[_Run, str]:
     return {(v, rd): f"{v}_{rd}" if v == "S" and many else v for v, rd in keys}
 
 
-def _bases(lift: Lift) -> list[GraspState]:
-    """A base state per state for :func:`~mjtvm.trajectory.lift_state`, operation ranges read once."""
-    first, sc = lift_state(lift, 0), lift.scenario
-    ranges = dict(zip(first.joint_names, first.operation_ranges, strict=True))
-    types = {g: "D" for g in (*lift.base, *sc.ignored_geoms)} | {g: "L" for g in lift.geoms}
-    data, out = mujoco.MjData(sc.model), [first]
-    for i in range(1, lift.num_states):
-        data.qpos[:] = lift.qpos[i]
-        out.append(grasp_state(sc.model, data, contact_types=types, mu=1.0, rvds=sc.rvds, refs=np.zeros((1, 6)),
-                               object_body=sc.object_body, joints=sc.joints, operation_ranges=ranges))  # fmt: skip
-    return out
-
-
 def _spawn(rec: rr.RecordingStream) -> rr.GrpcSink | None:
     """Spawn a viewer (the ``rerun`` beside Python or on PATH) if there is a display."""
     beside = Path(sys.executable).with_name("rerun")
@@ -350,13 +336,13 @@ def record_replay(
     info: dict[str, Any] = {"tvms_seconds": 0.0, "tvms_states": [], "spawned": viewer is not None}
     if not sinks:
         return {"seconds": time.perf_counter() - t0, **info}
-    bases = _bases(lift)
-    joints = bases[0].joint_names
+    first = records[0].state
+    joints = first.joint_names
     rec.set_sinks(*sinks, default_blueprint=blueprint(joints, list(names.values())))
     scene = _Scene(lift)
     scene.static(rec)
     axes = [[[-1.1, 0.0], [1.1, 0.0]], [[0.0, -1.1], [0.0, 1.1]]]
-    for j, rng in zip(joints, bases[0].operation_ranges, strict=True):
+    for j, rng in zip(joints, first.operation_ranges, strict=True):
         rec.log(f"joints/{j}/axes", rr.LineStrips2D(axes, colors=(90, 90, 90), radii=-0.75), static=True)
         rec.log(f"joints/{j}/range", rr.LineStrips2D(
             [_panel(rng, _mirrored(rng))], colors=(200, 200, 200), radii=-1.5, show_labels=False,
@@ -380,8 +366,7 @@ def record_replay(
         centre = scene.log(rec, lift.qpos[i])
         for key, name in names.items():
             r = by_state[(key[0], key[1], i)]
-            state = lift_state(lift, i, variant=r.variant, reading=r.reading or "physical",  # type: ignore[arg-type]
-                               mu=r.mu, mg=r.mg, base=bases[i])  # fmt: skip
+            state = r.state  # the state the replay solved
             t1 = time.perf_counter()
             points = translational_tvms(state) if i in info["tvms_states"] else None
             info["tvms_seconds"] += time.perf_counter() - t1
