@@ -6,8 +6,10 @@ import csv
 from pathlib import Path
 from typing import Any
 
+import datafusion  # noqa: F401  # the rerun-sdk[catalog] extra (part of .[test]); read-back needs it
 import numpy as np
 import pytest
+from rerun.server import Server
 from scipy.spatial import ConvexHull
 
 from mjtvm.cli import main
@@ -15,9 +17,6 @@ from mjtvm.replay import ReplayOutput, run_replay
 from mjtvm.trajectory import lift_state
 from mjtvm.tvms import tvms
 from mjtvm.viz import Z_UNIT, hull_mesh, record_replay
-
-pytest.importorskip("datafusion", reason="reading a recording back needs the rerun-sdk[catalog] extra")
-from rerun.server import Server
 
 STATES = 4
 RUNS = ("L", "S_physical", "S_literal")  # S_physical: no solution at any of the 4 states (README)
