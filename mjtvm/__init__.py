@@ -1,7 +1,9 @@
 r"""mjtvm: joint torque-velocity pair based manipulability (Watanabe) on top of MuJoCo.
 
 The core (this namespace) needs neither MuJoCo nor rerun: grasp states, operation
-ranges, contacts, and Problem 2 (TVMMP). The MuJoCo coupling lives in its own modules.
+ranges, contacts, Problem 2 (TVMMP, :func:`tvmmp`) and Problem 1 (TVMS, :func:`tvms`). The
+MuJoCo coupling (``hand``, ``grasp``, ``ik``, ``scenario``, ``trajectory``, ``replay``,
+``simulate``, ``verify``) and the rerun recording (``viz``) live in their own modules.
 """
 
 from .assembly import Assembly, assemble
@@ -10,6 +12,7 @@ from .errors import MjtvmError, ModelError, SolverError, StateError
 from .operation_range import OperationRange, default_operation_range, load_motor_data
 from .state import GraspState, dump_state, load_state, parse_state, state_to_dict
 from .tvmmp import Timings, TvmmpResult, Witness, tvmmp
+from .tvms import TvmsResult, tvms
 
 __version__ = "0.1.0"
 
@@ -25,6 +28,7 @@ __all__ = [
     "StateError",
     "Timings",
     "TvmmpResult",
+    "TvmsResult",
     "Witness",
     "assemble",
     "default_operation_range",
@@ -36,4 +40,5 @@ __all__ = [
     "state_to_dict",
     "tangent_basis",
     "tvmmp",
+    "tvms",
 ]
