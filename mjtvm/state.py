@@ -22,7 +22,7 @@ from .contacts import Contact
 from .errors import StateError
 from .operation_range import OperationRange
 
-__all__ = ["SCHEMA", "GraspState", "dump_state", "load_state", "parse_state", "state_to_dict"]
+__all__ = ["SCHEMA", "GraspState", "dump_state", "json_floats", "load_state", "parse_state", "state_to_dict"]
 
 SCHEMA = "mjtvm.state/1"
 SlipMode = Literal["per_contact", "shared"]
@@ -262,6 +262,11 @@ def load_state(source: str | Path | Mapping[str, Any]) -> GraspState:
     except json.JSONDecodeError as e:
         raise StateError("", f"malformed JSON at line {e.lineno} column {e.colno}: {e.msg}") from e
     return parse_state(data)
+
+
+def json_floats(values: Any) -> Any:
+    """Nested lists of floats for JSON, with signed zeros printed as 0.0 (-0.0 + 0.0 == +0.0)."""
+    return (np.asarray(values, dtype=float) + 0.0).tolist()
 
 
 def state_to_dict(state: GraspState) -> dict[str, Any]:

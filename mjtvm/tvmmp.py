@@ -24,18 +24,13 @@ from numpy.typing import NDArray
 from .assembly import Assembly, BoxForm, assemble
 from .errors import SolverError, StateError
 from .solvers import DROP_TOL, SOLVERS, HighsSession, LinearProgram, LPSolution, solve_lp
-from .state import GraspState
+from .state import GraspState, json_floats
 
 __all__ = ["PairStatus", "Timings", "TvmmpResult", "Witness", "tvmmp"]
 
 PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
 RESULT_SCHEMA = "mjtvm.result/1"
 ZERO_ALPHA = 1e-9  # |alpha| below this is reported as an exact 0 (solver tolerance 1e-9)
-
-
-def _json(values: NDArray[np.float64]) -> Any:
-    """Nested lists of floats, with signed zeros printed as 0.0 (-0.0 + 0.0 == +0.0)."""
-    return (np.asarray(values, dtype=float) + 0.0).tolist()
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,12 +69,12 @@ class Witness:
         """JSON-ready form."""
         return {
             "alpha": self.alpha,
-            "twist": _json(self.twist),
-            "forces": _json(self.forces),
-            "torques": _json(self.torques),
-            "speeds": _json(self.speeds),
-            "slip_speeds": _json(self.slip_speeds),
-            "box": _json(self.box),
+            "twist": json_floats(self.twist),
+            "forces": json_floats(self.forces),
+            "torques": json_floats(self.torques),
+            "speeds": json_floats(self.speeds),
+            "slip_speeds": json_floats(self.slip_speeds),
+            "box": json_floats(self.box),
         }
 
 
@@ -143,7 +138,7 @@ class TvmmpResult:
                 for ar, sr in zip(self.alpha, self.status)
             ],
             "status": [list(s) for s in self.status],
-            "distribution": [None if v is None else _json(v) for v in self.distribution],
+            "distribution": [None if v is None else json_floats(v) for v in self.distribution],
             "limiting": None if self.limiting is None else list(self.limiting),
             "solver": self.solver,
             "box": self.box,

@@ -25,7 +25,7 @@ from .enumeration import project_cdd
 from .errors import StateError
 from .hull import hull_volume
 from .projection import ProjectionStatus, lifted_polytope, project_lp
-from .state import GraspState
+from .state import GraspState, json_floats
 
 __all__ = [
     "CHARACTERISTIC_LENGTH",
@@ -39,11 +39,6 @@ __all__ = [
 TVMS_SCHEMA = "mjtvm.tvms/1"
 CHARACTERISTIC_LENGTH = 0.1  #: m: the paper's object radius; linear twist parts are divided by it
 Method = Literal["lp", "cdd"]
-
-
-def _json(values: Any) -> Any:
-    """Nested lists of floats, with signed zeros printed as 0.0."""
-    return (np.asarray(values, dtype=float) + 0.0).tolist()
 
 
 # ------------------------------------------------------------------ result and volumes
@@ -111,15 +106,15 @@ class TvmsResult:
             "schema": TVMS_SCHEMA,
             "bounded": self.bounded,
             "dimension": self.dimension,
-            "vertices": _json(self.vertices),
+            "vertices": json_floats(self.vertices),
             "volume": self.volume,
-            "scale": _json(self.scale),
+            "scale": json_floats(self.scale),
             "affine_volume": self.affine_volume,
             "status": self.status,
             "feasible": self.status != "empty",
             "unbounded_direction": None
             if self.unbounded_direction is None
-            else _json(self.unbounded_direction),
+            else json_floats(self.unbounded_direction),
             "method": self.method,
             "rvds_cone": self.rvds_cone,
             "lifted_vertices": self.lifted_vertices,
