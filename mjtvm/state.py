@@ -36,12 +36,12 @@ _CONTACT_KEYS = {"name", "type", "position", "normal", "mu", "jacobian", "tangen
 _REQUIRED_CONTACT = ("name", "type", "position", "normal", "jacobian")
 
 
-def _matrix(value: Any, field: str, cols: int, *, allow_empty: bool = False) -> NDArray[np.float64]:
+def _matrix(value: Any, field: str, cols: int) -> NDArray[np.float64]:
     try:
         m = np.array(value, dtype=float)
     except (TypeError, ValueError) as e:
         raise StateError(field, f"expected a list of vectors of {cols} numbers", value) from e
-    if m.ndim != 2 or m.shape[1] != cols or (m.shape[0] == 0 and not allow_empty):
+    if m.ndim != 2 or m.shape[1] != cols or m.shape[0] == 0:
         raise StateError(
             field, f"expected a non-empty list of vectors of {cols} numbers, got shape {m.shape}", value
         )
