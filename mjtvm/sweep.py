@@ -3,8 +3,9 @@ r"""Parameter sweeps of Problem 2 over lifts: a grid, a local process pool or a 
 A sweep is a list of :class:`SweepPoint` (scenario, hand, contact variant, slide reading,
 mu, mg, lift state). Points that share a lift configuration are solved together by one
 task, which builds the scripted lift once per worker process (the lift depends only on the
-scenario, the hand and the number of states: mu and mg change the statics, not the motion)
-and solves each requested state with :func:`~mjtvm.tvmmp.tvmmp`. The same tasks run
+scenario, the hand and the number of states: mu and mg change the statics, not the motion),
+reads each state's MuJoCo grasp once per worker, and solves each requested state with
+:func:`~mjtvm.tvmmp.tvmmp`. The same tasks run
 
 * serially (``jobs=1``),
 * on a local process pool (``jobs > 1``, the ``forkserver`` start method: MuJoCo and
@@ -31,6 +32,7 @@ import numpy as np
 from tqdm import tqdm
 
 from .errors import StateError
+from .state import GraspState
 from .trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
 from .tvmmp import tvmmp
 
@@ -107,6 +109,13 @@ def _lift(scenario: str, hand: str, num_states: int) -> Lift:
     return scripted_lift(scenario, variant=hand, num_states=num_states)
 
 
+@lru_cache(maxsize=512)
+def _base(scenario: str, hand: str, num_states: int, index: int) -> GraspState:
+    """The MuJoCo grasp of one lift state, shared by every (variant, reading, mu, mg) in this
+    worker: only its contact types, friction and REFS differ (``lift_state``'s ``base``)."""
+    return lift_state(_lift(scenario, hand, num_states), index)
+
+
 _Key = tuple[str, str, int, str, str, float, float]
 
 
@@ -116,7 +125,8 @@ def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
     lift = _lift(scenario, hand, num_states)
     rows = []
     for i in states:
-        state = lift_state(lift, i, variant=variant, reading=reading, mu=mu, mg=mg)  # type: ignore[arg-type]
+        base = _base(scenario, hand, num_states, i)
+        state = lift_state(lift, i, variant=variant, reading=reading, mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
         doc = tvmmp(state, witnesses=False).to_dict(witnesses=False)
         rows.append(
             {
