@@ -8,7 +8,7 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
   (omega_x), +-e_6 (omega_z; the paper's e_5 is a typo) and +-beta, where beta is computed
   from the model as the one in-plane (x, z, omega_y) object motion that finger 3's two
   contacts leave (:func:`case1_beta`, unscaled unit vector; paper 0.26 s);
-* **Case 2's initial state**: Problem 1 without RVDS (paper 129 s; ~47 s here, so run once)
+* **Case 2's initial state**: Problem 1 without RVDS (paper 129 s; run once, as cdd is capped)
   and Problem 2 with its 4 RVDS vertices (paper 0.20 s);
 * the **full lift** with both contact variants (:func:`~mjtvm.replay.time_replay`: no plots,
   no sweeps; imports excluded; target <= 1 s);
@@ -462,7 +462,7 @@ def run_suite(
         report["cases"]["case1_p2"]["beta"] = case1_beta(case1).tolist()
         case2 = load_scenario("case2").state()
         if not quick:
-            say("case 2, problem 1 without RVDS (once, ~50 s; then cdd capped)")
+            say("case 2, problem 1 without RVDS (once, a few s; then cdd capped)")
             report["cases"]["case2_p1"] = bench_problem1(
                 case2.with_(rvds=None),
                 repeats=1,

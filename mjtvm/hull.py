@@ -1,16 +1,18 @@
 r"""Convex hulls of point sets that may span a subspace: the geometry under Problem 1.
 
+* :func:`polar_vertices`: vertex enumeration of a bounded polytope given by inequalities
+  (Qhull on the polar points); :func:`polish_vertices`: its facets and exact vertices;
 * :func:`triangulate`: simplicial facets of a full-dimensional point set (Qhull, joggled);
-  :func:`fit_planes` refits each simplex's plane on the unperturbed points, and
-  :class:`PlaneCache` keeps the distinct planes met across rebuilt hulls;
 * :func:`vertex_mask`, :func:`distinct`, :func:`span`: vertices of a triangulated hull,
   clusters of round-off, linear hulls;
 * :func:`reduce_points`: linear hull and vertices of the hull of points and the origin
   (the last step of the cdd baseline);
-* :func:`hull_volume` and :func:`hausdorff`: measures.
+* :func:`hull_volume`, :func:`facet_volume` and :func:`hausdorff`: measures.
 """
 
 from __future__ import annotations
+
+from collections.abc import Iterator
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,13 +23,14 @@ from .errors import SolverError
 
 __all__ = [
     "CDD_REL_TOL",
-    "SLIVER",
+    "FLAT",
     "ZERO_TOL",
-    "PlaneCache",
     "distinct",
-    "fit_planes",
+    "facet_volume",
     "hausdorff",
     "hull_volume",
+    "polar_vertices",
+    "polish_vertices",
     "reduce_points",
     "span",
     "triangulate",
@@ -35,8 +38,10 @@ __all__ = [
 ]
 
 ZERO_TOL = 1e-9  #: an S_ov within this distance of the origin (scaled units) is {0}
-SLIVER = 1e-8  #: simplices flatter than this (singular-value ratio) span no facet
 CDD_REL_TOL = 1e-9  #: round-off of float cddlib relative to the extent
+FLAT = 1e-11  #: Hadamard ratio below which a simplex of the polar hull is flat
+JOGGLE = 1e-9  #: relative perturbation of the polar points before Qhull
+WELL_APART = 0.05  #: facets through a point whose normals' smallest singular value exceeds this
 
 
 def triangulate(
@@ -56,90 +61,144 @@ def triangulate(
     return np.asarray(hull.simplices), hull.equations[:, :-1], np.asarray(hull.vertices)
 
 
-def fit_planes(
-    local: NDArray[np.float64], simp: NDArray[np.int64], normals: NDArray[np.float64]
+def polar_vertices(
+    normals: NDArray[np.float64], offsets: NDArray[np.float64], center: NDArray[np.float64], tol: float
 ) -> NDArray[np.float64]:
-    r"""Rows ``[a, b, c]``: the plane ``a^T t = b`` (``|a| = 1``, oriented like ``normals``)
-    through each simplex's unperturbed points, which removes the joggle's tilt, and the
-    ratio ``c`` of the smallest to the largest singular value of its edge vectors.
-    Simplices with ``c <=`` :data:`SLIVER` are slivers: their points span less than a
-    hyperplane (they fill lower-dimensional faces in the joggled triangulation), and no
-    facet of the hull is made of slivers only."""
-    x = local[simp]
-    _, sv, vt = np.linalg.svd(x[:, 1:] - x[:, :1])
-    a = vt[:, -1] * np.sign(np.einsum("fk,fk->f", vt[:, -1], normals))[:, None]
-    return np.column_stack([a, np.einsum("fk,fk->f", a, x[:, 0]), sv[:, -1] / sv[:, 0]])
+    r"""Vertices of the bounded polytope :math:`O = \{u : a_j^T u \le b_j\}` around an interior point.
 
+    Vertex enumeration by duality: with ``c`` = ``center`` inside O, the polar points
+    :math:`y_j = a_j / (b_j - a_j^T c)` have a hull whose facets :math:`\{y : w^T y = 1\}`
+    are O's vertices :math:`c + w`. Qhull on joggled points (:data:`JOGGLE`, so that the
+    many coplanar polar points of a degenerate O never stop it) gives the simplices; each
+    simplex's ``k`` inequalities are then solved exactly on the unperturbed rows (flat
+    simplices, see :data:`FLAT`, skipped), and solutions that break some inequality by
+    more than ``tol`` are dropped. Every vertex of O is found: its polar facet is covered
+    by the triangulation's simplices, at least one of them full-dimensional in it.
 
-class PlaneCache:
-    r"""The facet planes met so far, with a flag for those confirmed by an LP.
+    Parameters
+    ----------
+    normals, offsets
+        ``(m, k)`` and ``(m,)``: the inequalities, ``m >= k + 1``, O bounded.
+    center
+        ``(k,)`` a point with :math:`a_j^T c < b_j` for all ``j``.
+    tol
+        Round-off of the inequalities (absolute, in the units of ``u``).
 
-    Cached by the points spanning a simplex (a 64-bit hash of their sorted ids) and by
-    the plane's coefficients (rounded: normal to 1e-8, offset to ``tol``), so that a
-    plane is fitted and solved once however often the hull is rebuilt.
+    Returns
+    -------
+    ``(n, k)`` the vertices, clusters closer than ``10 tol`` merged (near-parallel rows
+    can leave spurious points on O's boundary: :func:`polish_vertices` sorts them out).
     """
+    k = normals.shape[1]
+    polar = normals / (offsets - normals @ center)[:, None]
+    # Our own joggle (seeded, JOGGLE x the extent) spares Qhull its "QJ" retries; "QJ" is
+    # the fallback. Only the triangulation comes from the joggled points.
+    jitter = np.random.default_rng(0).uniform(-1.0, 1.0, polar.shape) * JOGGLE * np.max(np.abs(polar))
+    try:
+        try:
+            simp = np.asarray(ConvexHull(polar + jitter).simplices)
+        except QhullError:
+            simp = np.asarray(ConvexHull(polar, qhull_options="QJ").simplices)
+    except QhullError as e:
+        raise SolverError("qhull", str(e).splitlines()[0] if str(e) else "QhullError") from e
+    rows = polar[simp]
+    # Flat simplices (rows dependent up to the joggle) fill lower-dimensional faces of the
+    # polar hull and stand for no vertex: their |det| / product of row norms is <= 1e-12,
+    # that of the others >= 1e-9 on the TVMSs met (a Hadamard ratio, cheaper than SVDs).
+    hadamard = np.abs(np.linalg.det(rows)) / np.prod(np.linalg.norm(rows, axis=2), axis=1)
+    rows = rows[hadamard > FLAT]
+    w = np.linalg.solve(rows, np.ones((len(rows), k, 1)))[..., 0]
+    # Where rows are nearly dependent (facets at tiny angles) a vertex is ill-conditioned and
+    # the joggled simplex's solution may break a neighbouring row: pull it back along the
+    # ray from the centre onto O's boundary rather than lose that corner.
+    w = w[np.all(np.isfinite(w), axis=1)]
+    reach = w @ normals.T
+    slack = (offsets - normals @ center)[None, :]
+    scale = np.min(np.where(reach > slack, slack / np.where(reach > 0, reach, 1.0), 1.0), axis=1)
+    u = center + w * scale[:, None]
+    # Rounding shrinks the many copies (one per simplex) cheaply; distinct() merges the rest.
+    u = u[np.unique(np.round(u / (10 * tol)), axis=0, return_index=True)[1]]
+    return distinct(u, 10 * tol)
 
-    def __init__(self, k: int, tol: float) -> None:
-        self.k, self.tol = k, tol
-        self.rows = np.zeros((0, k + 2))
-        self.confirmed = np.zeros(0, dtype=bool)
-        rng = np.random.default_rng(12345)
-        self._mult = rng.integers(1, 2**62, size=k + 1, dtype=np.uint64) * np.uint64(2) + np.uint64(1)
-        self._by_points = (np.zeros(0, dtype=np.uint64), np.zeros(0, dtype=np.int64))
-        self._by_coeffs = (np.zeros(0, dtype=np.uint64), np.zeros(0, dtype=np.int64))
 
-    def _hash(self, keys: NDArray[np.int64]) -> NDArray[np.uint64]:
-        with np.errstate(over="ignore"):
-            return np.sum(keys.astype(np.uint64) * self._mult[: keys.shape[1]], axis=1, dtype=np.uint64)
+def _distinct_columns(
+    incident: NDArray[np.bool_], least: int, *, proper: bool = False
+) -> Iterator[tuple[int, NDArray[np.bool_]]]:
+    """``(j, column j)`` of a ``(points, rows)`` incidence matrix, once per distinct column
+    with at least ``least`` points (and, if ``proper``, not all of them)."""
+    count = incident.sum(axis=0)
+    seen: set[bytes] = set()
+    for j in np.flatnonzero((count >= least) & ((count < len(incident)) | (not proper))):
+        key = np.packbits(incident[:, j]).tobytes()
+        if key not in seen:
+            seen.add(key)
+            yield int(j), incident[:, j]
 
-    @staticmethod
-    def _find(
-        table: tuple[NDArray[np.uint64], NDArray[np.int64]], keys: NDArray[np.uint64]
-    ) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
-        pos = np.minimum(np.searchsorted(table[0], keys), max(len(table[0]) - 1, 0))
-        found = (table[0][pos] == keys) if len(table[0]) else np.zeros(len(keys), dtype=bool)
-        return found, np.where(found, table[1][pos] if len(table[1]) else 0, -1)
 
-    @staticmethod
-    def _insert(
-        table: tuple[NDArray[np.uint64], NDArray[np.int64]],
-        keys: NDArray[np.uint64],
-        values: NDArray[np.int64],
-    ) -> tuple[NDArray[np.uint64], NDArray[np.int64]]:
-        k, v = np.concatenate([table[0], keys]), np.concatenate([table[1], values])
-        order = np.argsort(k, kind="stable")
-        return k[order], v[order]
+def polish_vertices(
+    points: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.float64], tol: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    r"""Vertices and facets of a full-dimensional polytope given as ``conv(points)`` and
+    as :math:`\{u : a_j^T u \le b_j\}` (the same set up to ``tol``).
 
-    def of(
-        self,
-        local: NDArray[np.float64],
-        ids: NDArray[np.int64],
-        simp: NDArray[np.int64],
-        normals: NDArray[np.float64],
-    ) -> NDArray[np.int64]:
-        """The plane index of each simplex (fitting and registering the new ones)."""
-        point_keys = self._hash(np.sort(ids[simp], axis=1))
-        found, plane = self._find(self._by_points, point_keys)
-        miss = np.flatnonzero(~found)
-        if len(miss):
-            fitted = fit_planes(local, simp[miss], normals[miss])
-            rounded = np.round(np.column_stack([fitted[:, : self.k] * 1e8, fitted[:, self.k] / self.tol]))
-            coeff_keys = self._hash(rounded.astype(np.int64))
-            # A sliver's plane is arbitrary (its points span less than a hyperplane): keyed by its
-            # points, so that it never stands for (and confirms) a real facet's plane.
-            sliver = fitted[:, -1] <= SLIVER
-            coeff_keys[sliver] = ~point_keys[miss][sliver]
-            known, j = self._find(self._by_coeffs, coeff_keys)
-            fresh, first, inverse = np.unique(coeff_keys[~known], return_index=True, return_inverse=True)
-            index = len(self.rows) + np.arange(len(fresh))
-            rows = fitted[~known][first]
-            self.rows = np.vstack([self.rows, rows])
-            self.confirmed = np.concatenate([self.confirmed, rows[:, -1] <= SLIVER])  # slivers need no LP
-            j[~known] = index[inverse.ravel()]
-            self._by_coeffs = self._insert(self._by_coeffs, fresh, index)
-            self._by_points = self._insert(self._by_points, point_keys[miss], j)
-            plane[miss] = j
-        return plane
+    The inequalities (some not facet-defining, some near copies of one another) are
+    refitted: a row whose points (those within ``10 tol`` of it) span a hyperplane becomes
+    the least-squares plane through them, rows with the same points are one facet, the
+    other rows (lower-dimensional faces) are dropped. Points on the same facets, of rank
+    ``k``, are one candidate (their mean: this merges the near copies that nearly parallel
+    rows leave behind, and would also average a stray point in, were it within ``10 tol``
+    of exactly the vertex's facets); a candidate is a vertex unless it lies, to ``10 tol``,
+    in the hull of the other candidates on its facets.
+
+    Returns
+    -------
+    vertices, facet_normals, facet_offsets
+        ``(n, k)``, ``(f, k)`` unit outward normals and ``(f,)`` offsets.
+    """
+    k = points.shape[1]
+    incident = np.abs(points @ normals.T - offsets) <= 10 * tol
+    fit_n, fit_b = [], []
+    for j, on in _distinct_columns(incident, k):
+        q = points[on]
+        mean = q.mean(axis=0)
+        _, sv, vt = np.linalg.svd(q - mean, full_matrices=True)
+        flat = 10 * tol * np.sqrt(len(q))
+        if sv[k - 2] <= flat or (len(sv) == k and sv[k - 1] > flat):
+            continue  # a lower-dimensional face, or points off any plane
+        a = vt[k - 1] * np.sign(vt[k - 1] @ normals[j])
+        fit_n.append(a)
+        fit_b.append(float(a @ mean))
+    facet_n, facet_b = np.array(fit_n).reshape(-1, k), np.array(fit_b)
+    on_facet = np.abs(points @ facet_n.T - facet_b) <= 10 * tol
+    groups: dict[bytes, list[int]] = {}
+    for i, active in enumerate(on_facet):
+        if np.count_nonzero(active) >= k and np.linalg.matrix_rank(facet_n[active], tol=1e-8) == k:
+            groups.setdefault(np.packbits(active).tobytes(), []).append(i)
+    # Points on the same facets are one candidate (their mean): the near copies of a vertex
+    # that nearly parallel rows leave behind.
+    reps = np.array([points[g].mean(axis=0) for g in groups.values()]).reshape(-1, k)
+    active = on_facet[[g[0] for g in groups.values()]]
+    # Facets meeting at a tiny angle leave points within tolerance of both far from their
+    # intersection: such a point lies (to 10 tol) in the hull of the other points on its
+    # facets, a vertex does not (non-negative least squares on [Q - p; 1] mu = [0; 1]).
+    keep = np.ones(len(reps), dtype=bool)
+    for i, act in enumerate(active):
+        if np.linalg.svd(facet_n[act], compute_uv=False)[k - 1] > WELL_APART:
+            continue  # no two facets through it nearly parallel: its facets pin it down
+        shared = np.count_nonzero(active[:, act], axis=1)
+        shared[i] = 0
+        # Its neighbours on a common edge (k - 1 shared facets), then on a common 2-face
+        # (k - 2): where nearly parallel facets meet others, a stray point sits on such faces.
+        for least in sorted({max(k - 1, 1), max(k - 2, 1)}, reverse=True):
+            near = np.flatnonzero(shared >= least)
+            if len(near):
+                from scipy.optimize import nnls  # imported when needed: 0.1 s
+
+                y = np.vstack([(reps[near] - reps[i]).T, np.ones(len(near))])
+                if nnls(y, np.append(np.zeros(k), 1.0))[1] <= 10 * tol:
+                    keep[i] = False
+                    break
+    return distinct(reps[keep], 10 * tol), facet_n, facet_b
 
 
 def vertex_mask(
@@ -214,11 +273,74 @@ def reduce_points(
 
 
 def hull_volume(points: NDArray[np.float64]) -> float:
-    """Volume of the hull of ``(n, k)`` full-dimensional points, k >= 2 (joggled if Qhull needs it)."""
+    """Volume of the hull of ``(n, k)`` full-dimensional points, k >= 2.
+
+    Where Qhull gives up on degenerate points, they are joggled by :data:`JOGGLE` x their
+    extent (a relative volume error of that order), and only then by Qhull's "QJ", whose
+    retries can joggle by up to 1e-6 relative and more.
+    """
     try:
         return float(ConvexHull(points).volume)
     except QhullError:
+        pass
+    jitter = np.random.default_rng(0).uniform(-1.0, 1.0, points.shape) * JOGGLE * np.max(np.abs(points))
+    try:
+        return float(ConvexHull(points + jitter).volume)
+    except QhullError:
         return float(ConvexHull(points, qhull_options="QJ").volume)
+
+
+def facet_volume(
+    points: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.float64], tol: float
+) -> float:
+    r"""Volume of the full-dimensional polytope with vertices ``(n, k)`` and facets
+    :math:`a_j^T u \le b_j` (:func:`polish_vertices`), k >= 2, as pyramids over its faces.
+
+    With ``c`` the mean of the vertices, :math:`V = \sum_j (b_j - a_j^T c)\, A_j / k`, where
+    :math:`A_j` is the (k-1)-volume of facet j, the hull of its vertices (those within
+    ``10 tol``) in the facet's plane, by Qhull. Where Qhull gives up on a face's degenerate
+    points, the face is split the same way into pyramids over its own facets (its
+    intersections with the other facets that span one dimension less), down to segments:
+    no joggle, whose error grows as a face gets thin (1e-6 relative on Case 2's TVMS).
+    Qhull works on a few dozen points per face instead of triangulating the whole polytope,
+    which degenerate facets make slow (Case 2: 250 000 simplices); the facets are measured
+    on two threads (Qhull releases the GIL).
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    k = points.shape[1]
+    on = np.abs(points @ normals.T - offsets) <= 10 * tol
+
+    def face(idx: NDArray[np.int64], j: int) -> float:
+        q = points[idx]
+        x = q - q.mean(axis=0)
+        x = x @ np.linalg.svd(x, full_matrices=False)[2][:j].T  # coordinates in the face
+        if j == 1:
+            return float(np.ptp(x))
+        try:
+            return float(ConvexHull(x).volume)
+        except QhullError:
+            pass
+        total = 0.0
+        for _, m in _distinct_columns(on[idx], j, proper=True):
+            xs = x[m]
+            _, sv, vt = np.linalg.svd(xs - xs.mean(axis=0), full_matrices=True)
+            if np.count_nonzero(sv > 100 * tol * np.sqrt(len(xs))) != j - 1:
+                continue  # a lower-dimensional face of this face
+            total += abs(vt[j - 1] @ xs.mean(axis=0)) * face(idx[m], j - 1) / j
+        return total
+
+    def area(j: int) -> float:
+        idx = np.flatnonzero(on[:, j])
+        return face(idx, k - 1) if len(idx) >= k else 0.0
+
+    if len(normals) > 64:
+        with ThreadPoolExecutor(2) as pool:
+            areas = np.array(list(pool.map(area, range(len(normals)))))
+    else:
+        areas = np.array([area(j) for j in range(len(normals))])
+    center = points.mean(axis=0)
+    return float(np.sum((offsets - normals @ center) * areas) / k)
 
 
 def hausdorff(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:

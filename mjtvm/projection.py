@@ -22,15 +22,19 @@ projection of the lifted one (obtained from the same rows with zero bounds).
 
 Two exact projections:
 
-* :func:`project_lp` (fast, output-sensitive): support LPs in twist space on one HiGHS
-  session (only the cost of ``z`` changes between LPs). First the linear hull: LPs along
-  :math:`\pm e_i`, then along directions orthogonal to the points found until each is
-  either extended or proved orthogonal to :math:`S_{ov}` (max = min = 0). Inside it, an
-  incremental convex hull (Qhull) whose facets are each checked by one LP in the facet's
-  normal direction: support = offset makes the facet final, otherwise the LP's point is
-  added and the hull rebuilt (Bretl and Lall's projection, generalised to any
-  dimension <= 6). The cost grows with the output: the Case 2 hand's 6-D TVMS has about
-  2000 vertices and 250 000 simplicial facets, and the rebuilt hulls dominate.
+* :func:`project_lp` (fast, output-sensitive): LPs in twist space
+  (:mod:`~mjtvm.oracles`). First the linear hull: support LPs along :math:`\pm e_i`,
+  then along directions orthogonal to the points found until each is either extended or
+  proved orthogonal to :math:`S_{ov}` (max = min = 0). Inside it, an outer approximation
+  refined by cutting planes (the dual of Bretl and Lall's inner one, in any dimension
+  <= 6): a polytope O given by support inequalities, so O contains :math:`S_{ov}`; its
+  vertices come from a convex hull of the polar points (Qhull,
+  :func:`~mjtvm.hull.polar_vertices`); a ray-shooting LP either certifies a vertex as a
+  point of :math:`S_{ov}` or yields a supporting hyperplane that cuts it off. When every
+  vertex of O is certified, O is :math:`S_{ov}`. The LPs number about vertices +
+  facets, and Qhull works on the facets (a few hundred on the Case 2 hand, whose 6-D
+  TVMS has 2044 vertices: triangulating those takes 250 000 simplices, which made the
+  earlier inner approximation take 47 s).
 * :func:`~mjtvm.enumeration.project_cdd` (the paper's way, the baseline): vertex
   enumeration of the lifted polytope with cddlib, projection of its vertices, convex hull
   (:func:`~mjtvm.hull.reduce_points`).
@@ -48,11 +52,12 @@ from typing import Any, Literal
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from .assembly import Assembly, BoxForm, assemble
 from .errors import SolverError
-from .hull import ZERO_TOL, PlaneCache, distinct, span, triangulate, vertex_mask
-from .solvers import HighsSession, LinearProgram, LPSolution
+from .hull import ZERO_TOL, distinct, polar_vertices, polish_vertices, span
+from .oracles import DistanceOracle, RayShooter, SupportOracle
 from .state import GraspState
 
 __all__ = [
@@ -66,7 +71,6 @@ __all__ = [
 
 ProjectionStatus = Literal["bounded", "unbounded", "empty", "timeout"]
 REL_TOL = 1e-9  #: tolerance relative to the extent of S_ov (LP tolerances are 1e-9)
-TIE_BREAK = 1e-6  #: tilt of the objective that picks a vertex from an optimal face
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,6 +190,10 @@ class Projection:
         LPs solved, wall time, ``"lp"`` or ``"cdd"``.
     lifted_vertices
         ``cdd`` only: number of vertices of the lifted polytope.
+    facets
+        ``lp`` only, when ``dimension >= 2``: ``(normals, offsets)``, ``(f, D)`` unit rows and
+        ``(f,)``, the facets :math:`n^T \dot r \le o` of :math:`S_{ov}` inside its linear hull
+        (which ``basis`` spans in scaled coordinates).
     """
 
     status: ProjectionStatus
@@ -198,55 +206,11 @@ class Projection:
     seconds: float
     method: str
     lifted_vertices: int | None = None
-
-
-# ------------------------------------------------------------------ LP projection
-class _Support:
-    r"""Support function of :math:`S_{ov}` by LPs on one HiGHS session.
-
-    Only the costs of ``z`` change between LPs, and the primal simplex re-solves from the
-    previous optimal basis (which stays primal feasible). An unbounded LP is followed by
-    one on the recession cone (:meth:`LiftedPolytope.recession`) for a ray.
-    """
-
-    def __init__(self, poly: LiftedPolytope, metric: NDArray[np.float64]) -> None:
-        self.poly, self.metric = poly, metric
-        self.session = self._session(poly)
-        n = poly.A.shape[1]
-        self.cols = np.arange(n, dtype=np.int32)[poly.twist_cols]
-        self.ray_session: HighsSession | None = None
-        self.num_lps = 0
-
-    @staticmethod
-    def _session(p: LiftedPolytope) -> HighsSession:
-        lp = LinearProgram(np.zeros(p.A.shape[1]), p.A, p.row_lower, p.row_upper, p.col_lower, p.col_upper)
-        return HighsSession(lp)
-
-    def _solve(self, session: HighsSession, h: NDArray[np.float64]) -> LPSolution:
-        cost = -(self.poly.generators.T @ (self.metric * h))  # max h^T (metric * rdot)
-        session.highs.changeColsCost(len(self.cols), self.cols, np.ascontiguousarray(cost))
-        session.highs.setOptionValue("simplex_strategy", 4)  # primal: only the costs changed
-        self.num_lps += 1
-        return session.solve()
-
-    def __call__(self, h: NDArray[np.float64]) -> tuple[str, NDArray[np.float64]]:
-        """Maximise ``h^T s``: ``("optimal", s*)``, ``("unbounded", unit ray)`` or ``("infeasible", 0)``."""
-        sol = self._solve(self.session, h)
-        if sol.status == "optimal" and sol.x is not None:
-            return "optimal", self.metric * self.poly.twist(sol.x)
-        if sol.status == "infeasible":
-            return "infeasible", np.zeros_like(h)
-        if self.ray_session is None:
-            self.ray_session = self._session(self.poly.recession())
-        ray = self._solve(self.ray_session, h)
-        s = self.metric * self.poly.twist(ray.x) if ray.x is not None else np.zeros_like(h)
-        if ray.status != "optimal" or h @ s <= 1e-7 * np.linalg.norm(h):
-            raise SolverError("highs", f"unbounded support LP without a recession ray ({ray.status})")
-        return "unbounded", s / np.linalg.norm(s)
+    facets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
 
 def _linear_hull(
-    support: _Support, big_d: int, rel_tol: float
+    support: SupportOracle, big_d: int, rel_tol: float
 ) -> tuple[list[NDArray[np.float64]], NDArray[np.float64], float, NDArray[np.float64] | None]:
     r"""Points of :math:`S_{ov}` spanning its linear hull, that hull's basis, the tolerance and a ray.
 
@@ -298,18 +262,27 @@ def project_lp(
     t0 = time.perf_counter()
     big_d = poly.twist_dim
     w = np.ones(big_d) if metric is None else np.asarray(metric, dtype=float)
-    support = _Support(poly, w)
+    support = SupportOracle(poly, w)
 
     def result(
         status: ProjectionStatus,
         verts: NDArray[np.float64],
         basis: NDArray[np.float64] | None,
         ray: NDArray[np.float64] | None = None,
+        facets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     ) -> Projection:
         k = -1 if basis is None else basis.shape[0]
         ray_r = None if ray is None else (ray / w) / np.linalg.norm(ray / w)
+        twist_facets = None
+        if facets is not None and basis is not None:
+            # a^T u <= b with u = basis (w * rdot): rows (basis^T a) * w over rdot, made unit.
+            rows = (facets[0] @ basis) * w
+            norm = np.linalg.norm(rows, axis=1)
+            twist_facets = (rows / norm[:, None], facets[1] / norm)
         seconds = time.perf_counter() - t0
-        return Projection(status, verts / w, k, basis, w, ray_r, support.num_lps, seconds, "lp")
+        return Projection(
+            status, verts / w, k, basis, w, ray_r, support.num_lps, seconds, "lp", None, twist_facets
+        )
 
     if support(np.zeros(big_d))[0] == "infeasible":
         return result("empty", np.zeros((0, big_d)), None)
@@ -327,49 +300,74 @@ def project_lp(
 
 
 def _refine(
-    support: _Support,
+    support: SupportOracle,
     local: NDArray[np.float64],
     basis: NDArray[np.float64],
     tol: float,
     result: Any,
 ) -> Projection:
-    r"""Incremental hull inside the linear hull (``local``: points in its coordinates).
+    r"""Outer approximation refined by cutting planes inside the linear hull (module docstring).
 
-    Each round triangulates the points found (:func:`triangulate`) and solves one LP per
-    facet plane not yet confirmed (:class:`PlaneCache`; slivers need none). A plane is
-    confirmed when the support of :math:`S_{ov}` along its normal exceeds that of the
-    points by at most ``tol``; otherwise a slightly tilted objective (:data:`TIE_BREAK`)
-    picks a vertex of the optimal face, and the round's new points are added before the
-    next round (one Qhull run costs as much as thousands of LPs, so every unconfirmed
-    plane of a round gets its LP). When a round adds nothing, every facet of the points'
-    hull supports :math:`S_{ov}`: the hull is :math:`S_{ov}`, and its vertices are
-    sorted out by :func:`vertex_mask`.
+    ``local``: points of :math:`S_{ov}` spanning its linear hull, in its coordinates ``u``.
+    ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as the box of the support LPs along
+    :math:`\pm e_i`; every row is a support LP's value, so :math:`O \supseteq S_{ov}`.
+    Each round enumerates O's vertices (:func:`polar_vertices`) and shoots a ray from the
+    centre ``c`` of the points to each vertex not yet certified (:class:`RayShooter`): a
+    ray that reaches it (to ``10 tol``) certifies the vertex as a point of :math:`S_{ov}`,
+    hence one of its vertices; otherwise the duals give the normal ``a`` of a hyperplane
+    supporting :math:`S_{ov}` where the ray leaves it, and the support LP along ``a`` adds
+    the row :math:`a^T u \le h(a)`, which cuts the vertex off. A vertex within ``tol`` of
+    that row is settled by its distance to :math:`S_{ov}` (:class:`DistanceOracle`): within
+    ``tol``, certified; otherwise cut off by the dual's separating hyperplane. When a round
+    certifies every vertex, O = :math:`S_{ov}` (to ``10 tol``); :func:`polish_vertices`
+    then refits the facets and sorts out the vertices.
     """
     k = basis.shape[0]
-    big_d = basis.shape[1]
-    tie = np.random.default_rng(0).normal(size=k)
-    tie *= TIE_BREAK / np.linalg.norm(tie)
-    ids = np.arange(len(local))
-    planes = PlaneCache(k, tol)
+    poly, metric = support.poly, support.metric
+    center = local.mean(axis=0)
+    rows = basis @ (metric[:, None] * poly.generators)
+    shoot, nearest = RayShooter(poly, rows, center), None  # the distance LP only when needed
+
+    def cut(a: NDArray[np.float64]) -> float:
+        status, s = support(basis.T @ a)
+        if status != "optimal":  # bounded after _linear_hull: a solver fault
+            raise SolverError("highs", f"support LP inside a bounded TVMS: {status}")
+        return float(a @ (basis @ s))
+
+    normals = np.vstack([np.eye(k), -np.eye(k)])
+    offsets = np.array([cut(a) for a in normals])
+    certified = np.zeros((0, k))
     while True:
-        simp, normals, hull_idx = triangulate(local)
-        todo = np.unique(planes.of(local, ids, simp, normals))
-        new = np.zeros((0, k))
-        for j in todo[~planes.confirmed[todo]]:
-            a = planes.rows[j, :k]
-            status, s = support(basis.T @ a)
-            if status == "unbounded":
-                return result("unbounded", np.zeros((0, big_d)), basis, s)
-            t, known = basis @ s, float(np.max(local @ a))
-            if a @ t <= known + tol:
-                planes.confirmed[j] = True
+        verts = polar_vertices(normals, offsets, center, tol)
+        if len(certified):
+            verts = verts[cKDTree(certified).query(verts)[0] > 10 * tol]
+        new_n: list[NDArray[np.float64]] = []
+        new_b: list[float] = []
+        for v in verts:
+            if new_n and np.any(np.array(new_n) @ v - np.array(new_b) > tol):
+                continue  # cut off by a row of this round already
+            t, a = shoot(v - center)
+            if (1.0 - t) * np.linalg.norm(v - center) <= 10 * tol:  # as close as distinct() merges
+                certified = np.vstack([certified, v])
                 continue
-            t_vertex = basis @ support(basis.T @ (a + tie))[1]
-            t = t_vertex if a @ t_vertex > known + tol else t
-            if not len(new) or np.min(np.max(np.abs(new - t), axis=1)) > tol:
-                new = np.vstack([new, t])
-        if not len(new):
-            verts = distinct(local[hull_idx[vertex_mask(local, simp, hull_idx, tol)]], 10 * tol)
-            return result("bounded", verts @ basis, basis)
-        local = np.vstack([local[hull_idx], new])
-        ids = np.concatenate([ids[hull_idx], ids.max() + 1 + np.arange(len(new))])
+            b = cut(a)
+            if a @ v <= b + tol:
+                # The ray left S_ov far from v, but v lies within tol of that hyperplane (a ray
+                # nearly along a facet, or duals picked at a lower-dimensional face): measure the
+                # distance itself and cut with the dual's hyperplane.
+                nearest = nearest or DistanceOracle(poly, rows)
+                delta, a = nearest(v)
+                if delta <= tol:
+                    certified = np.vstack([certified, v])
+                    continue
+                b = cut(a)
+                if a @ v <= b + tol:
+                    raise SolverError("highs", "no cutting plane separates a vertex outside the TVMS")
+            new_n.append(a)
+            new_b.append(b)
+        if not new_n:
+            break
+        normals, offsets = np.vstack([normals, new_n]), np.concatenate([offsets, new_b])
+    support.num_lps += shoot.num_lps + (nearest.num_lps if nearest else 0)
+    verts, facet_n, facet_b = polish_vertices(certified, normals, offsets, tol)
+    return result("bounded", verts @ basis, basis, facets=(facet_n, facet_b))

@@ -23,8 +23,8 @@ from numpy.typing import ArrayLike, NDArray
 from .assembly import BoxForm
 from .enumeration import project_cdd
 from .errors import StateError
-from .hull import hull_volume
-from .projection import ProjectionStatus, lifted_polytope, project_lp
+from .hull import facet_volume, hull_volume
+from .projection import REL_TOL, ProjectionStatus, lifted_polytope, project_lp
 from .state import GraspState, json_floats
 
 __all__ = [
@@ -146,19 +146,36 @@ def _check_scale(scale: ArrayLike, big_d: int) -> NDArray[np.float64]:
 
 
 def _volumes(
-    vertices: NDArray[np.float64], dimension: int, scale: NDArray[np.float64]
+    vertices: NDArray[np.float64],
+    dimension: int,
+    scale: NDArray[np.float64],
+    facets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[float, float]:
-    """The D-dimensional volume and the scaled volume inside the affine hull (eq. 28-29)."""
+    """The D-dimensional volume and the scaled volume inside the affine hull (eq. 28-29).
+
+    Both come from one measurement in the scaled coordinates: the D-volume is the scaled
+    one divided by the product of ``scale`` when the TVMS is full-dimensional, else 0.
+    With the projection's ``facets`` it is a sum of pyramids (:func:`facet_volume`),
+    otherwise one Qhull hull of the vertices (:func:`hull_volume`).
+    """
     big_d = vertices.shape[1]
     if dimension <= 0:
         return 0.0, 0.0
-    volume = hull_volume(vertices) if dimension == big_d else 0.0
     scaled = vertices * scale
     basis = np.linalg.svd(scaled - scaled.mean(axis=0), full_matrices=False)[2][:dimension]
     local = scaled @ basis.T
     if dimension == 1:
-        return volume, float(np.ptp(local))
-    return volume, hull_volume(local)
+        affine = float(np.ptp(local))
+    elif facets is not None:
+        rows = (facets[0] / scale) @ basis.T  # n^T rdot <= o  ->  (basis (n / scale))^T u <= o
+        norm = np.linalg.norm(rows, axis=1)
+        # The basis spans the TVMS's linear hull (it contains the origin), so u = local.
+        tol = REL_TOL * float(np.max(np.abs(local)))
+        affine = facet_volume(local, rows / norm[:, None], facets[1] / norm, tol)
+    else:
+        affine = hull_volume(local)
+    volume = affine / float(np.prod(scale)) if dimension == big_d else 0.0
+    return volume, affine
 
 
 def tvms(
@@ -216,7 +233,7 @@ def tvms(
     if proj.status == "empty":
         volume, affine = 0.0, 0.0
     elif proj.status == "bounded" and proj.dimension is not None:
-        volume, affine = _volumes(proj.vertices, proj.dimension, weights)
+        volume, affine = _volumes(proj.vertices, proj.dimension, weights, proj.facets)
     t3 = time.perf_counter()
     return TvmsResult(
         status=proj.status,

@@ -78,6 +78,19 @@ def test_parallelogram_derived_by_hand():
     for proj in (lp, cdd):
         assert proj.status == "bounded" and proj.dimension == 2
         assert_same_vertices(proj.vertices, expected)
+    # The facets (LP method): the parallelogram's four edges |qd_j| <= s_j, i.e. the rows of
+    # +-J^{-T} e_j over (v_x, v_y), with offsets s_j after normalising.
+    normals, offsets = lp.facets
+    jinv = np.linalg.inv(J)
+    rows = np.array([sign * np.append(jinv[j], 0.0) for j in (0, 1) for sign in (1.0, -1.0)])
+    limits = np.array([s1, s1, s2, s2]) / np.linalg.norm(rows, axis=1)
+    rows /= np.linalg.norm(rows, axis=1)[:, None]
+    assert len(normals) == 4
+    for row, limit in zip(rows, limits):
+        j = np.argmax(normals @ row)
+        np.testing.assert_allclose(normals[j], row, atol=1e-9)
+        assert offsets[j] == pytest.approx(limit, rel=1e-9)
+    assert np.all(expected @ normals.T <= offsets + 1e-9)
     result = tvms(state)
     area = abs(np.linalg.det(J)) * 4 * s1 * s2
     assert result.volume == 0.0
@@ -198,26 +211,3 @@ def test_full_dimensional_planar_volumes_agree(types):
     assert lp.dimension == cdd.dimension == 3
     assert lp.volume > 0 and lp.volume == pytest.approx(cdd.volume, rel=1e-9)
     assert_same_vertices(lp.vertices, cdd.vertices)
-
-
-def test_a_sliver_never_confirms_a_real_facet():
-    r"""Regression: a sliver simplex (its points span less than a hyperplane) gets an arbitrary
-    plane and needs no LP. That plane was once registered under its coefficients, so a real
-    facet whose plane rounded to the same key counted as confirmed without its support LP,
-    and the projection dropped a vertex (random_state(4, space=3, fingers=3,
-    joints_per_finger=3, num_refs=2, friction_edges=8): 701 vertices instead of 702).
-    Here the collinear triangle [p0, p1, p2] is a sliver fitted to z = 0 (numpy's null-space
-    choice, oriented by the hint), exactly the plane of the real facet [p0, p1, p3]: the facet
-    must stay unconfirmed."""
-    from mjtvm.hull import PlaneCache
-
-    local = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 1.0]])
-    ids = np.arange(5)
-    cache = PlaneCache(3, 1e-9)
-    down = np.array([[0.0, 0.0, -1.0]])
-    sliver = cache.of(local, ids, np.array([[0, 1, 2]]), down)
-    assert cache.confirmed[sliver[0]]  # a sliver needs no LP
-    facet = cache.of(local, ids, np.array([[0, 1, 3]]), down)
-    np.testing.assert_allclose(cache.rows[facet[0], :4], cache.rows[sliver[0], :4], atol=1e-12)  # same plane
-    assert facet[0] != sliver[0]
-    assert not cache.confirmed[facet[0]]

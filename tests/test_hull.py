@@ -1,0 +1,101 @@
+"""Geometry under Problem 1: polar vertex enumeration, facet refitting, volumes by facets."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from mjtvm.hull import facet_volume, hausdorff, polar_vertices, polish_vertices
+
+TOL = 1e-9
+
+
+def cube_rows(k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The cube [-1, 1]^k as a u <= b."""
+    return np.vstack([np.eye(k), -np.eye(k)]), np.ones(2 * k)
+
+
+def cube_vertices(k: int) -> np.ndarray:
+    return np.array(list(itertools.product((-1.0, 1.0), repeat=k)))
+
+
+@pytest.mark.parametrize("k", [2, 3, 4, 6])
+def test_polar_vertices_of_a_cube(k):
+    a, b = cube_rows(k)
+    rng = np.random.default_rng(k)
+    # Redundant rows (a shifted copy of each facet, rows through vertices only) change nothing.
+    corner = np.ones(k) / math.sqrt(k)
+    a = np.vstack([a, a, corner])
+    b = np.concatenate([b, b + 0.5, [math.sqrt(k)]])
+    verts = polar_vertices(a, b, 0.1 * rng.uniform(-1, 1, k), TOL)
+    assert len(verts) == 2**k
+    assert hausdorff(verts, cube_vertices(k)) <= 1e-12
+
+
+def test_polar_vertices_of_a_degenerate_pyramid():
+    """The square pyramid over [-1, 1]^2 x {0} with apex (0, 0, 1): four facets meet at
+    the apex (a non-simple vertex, whose polar facet Qhull must triangulate)."""
+    s = 1.0 / math.sqrt(2.0)
+    a = np.array([[0, 0, -1.0], [s, 0, s], [-s, 0, s], [0, s, s], [0, -s, s]])
+    b = np.array([0.0, s, s, s, s])
+    verts = polar_vertices(a, b, np.array([0.0, 0.0, 0.2]), TOL)
+    expected = np.array([[1, 1, 0], [1, -1, 0], [-1, 1, 0], [-1, -1, 0], [0, 0, 1.0]])
+    assert len(verts) == 5 and hausdorff(verts, expected) <= 1e-12
+
+
+def test_polish_drops_a_point_on_an_edge_and_a_row_through_a_vertex():
+    """Points of the unit square plus a point in the middle of an edge and one inside;
+    rows: its four facets, a near copy of one facet, and a row touching one corner only."""
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
+    points = np.vstack([square, [[0.5, 0.0]]])
+    a = np.array([[1, 0], [-1, 0], [0, 1], [0, -1], [1e-3, -1], [1, 1]], dtype=float)
+    a /= np.linalg.norm(a, axis=1)[:, None]
+    b = np.max(points @ a.T, axis=0)  # every row supports the points
+    verts, normals, offsets = polish_vertices(points, a, b, TOL)
+    assert len(verts) == 4 and hausdorff(verts, square) <= 1e-12
+    # Four facets: the corner row spans no edge; the near copy of y >= 0 touches (1, 0) only.
+    assert len(normals) == 4
+    np.testing.assert_allclose(np.sort(offsets), [0.0, 0.0, 1.0, 1.0], atol=1e-12)
+
+
+def test_polish_merges_near_copies_and_drops_a_stray_point_on_an_edge():
+    """A triangle whose corner (1, 0) comes twice (1e-9 apart, as two nearly parallel rows
+    leave it) and a stray point 1e-3 along the edge from it, within 10 tol of that edge only
+    (tol = 1e-7): one vertex per corner, the stray point is inside the hull."""
+    triangle = np.array([[0, 0], [1, 0], [0, 1.0]])
+    points = np.vstack([triangle, [[1 + 1e-9, 0.0], [0.999, 0.001]]])
+    a = np.array([[0, -1], [-1, 0], [1, 1], [1e-9, -1]], dtype=float)
+    a /= np.linalg.norm(a, axis=1)[:, None]
+    b = np.max(points @ a.T, axis=0)
+    verts, normals, _ = polish_vertices(points, a, b, 1e-7)
+    assert len(verts) == 3 and hausdorff(verts, triangle) <= 1e-8
+    assert len(normals) == 3  # the near copy of y >= 0 has the same points: one facet
+
+
+@pytest.mark.parametrize("k", [2, 3, 4, 5])
+def test_facet_volume_of_a_cube_and_a_simplex(k):
+    a, b = cube_rows(k)
+    assert facet_volume(cube_vertices(k), a, b, TOL) == pytest.approx(2.0**k, rel=1e-12)
+    simplex = np.vstack([np.zeros(k), np.eye(k)])
+    rows = np.vstack([-np.eye(k), np.ones(k) / math.sqrt(k)])
+    offsets = np.append(np.zeros(k), 1 / math.sqrt(k))
+    assert facet_volume(simplex, rows, offsets, TOL) == pytest.approx(1 / math.factorial(k), rel=1e-12)
+
+
+def test_facet_volume_of_a_degenerate_polytope_matches_the_closed_form():
+    """A prism over a regular 40-gon times a square, in 4-D (many coplanar points per facet,
+    where Qhull needs its face-by-face fallback): area(40-gon) x 4."""
+    angles = 2 * np.pi * np.arange(40) / 40
+    polygon = np.column_stack([np.cos(angles), np.sin(angles)])
+    points = np.array([[*p, x, y] for p in polygon for x in (-1.0, 1.0) for y in (-1.0, 1.0)])
+    mid = angles + np.pi / 40
+    rows = [np.array([np.cos(t), np.sin(t), 0, 0]) for t in mid] + [
+        s * e for e in np.eye(4)[2:] for s in (1.0, -1.0)
+    ]
+    offsets = [math.cos(math.pi / 40)] * 40 + [1.0] * 4
+    area = 0.5 * 40 * math.sin(2 * math.pi / 40)
+    volume = facet_volume(points, np.array(rows), np.array(offsets), TOL)
+    assert volume == pytest.approx(4 * area, rel=1e-10)
