@@ -71,9 +71,10 @@ def polar_vertices(
     are O's vertices :math:`c + w`. Qhull on joggled points (:data:`JOGGLE`, so that the
     many coplanar polar points of a degenerate O never stop it) gives the simplices; each
     simplex's ``k`` inequalities are then solved exactly on the unperturbed rows (flat
-    simplices, see :data:`FLAT`, skipped), and solutions that break some inequality by
-    more than ``tol`` are dropped. Every vertex of O is found: its polar facet is covered
-    by the triangulation's simplices, at least one of them full-dimensional in it.
+    simplices, see :data:`FLAT`, skipped); a solution that breaks some inequality (an
+    ill-conditioned corner) is pulled back along the ray from ``c`` onto O's boundary.
+    Every vertex of O is found: its polar facet is covered by the triangulation's
+    simplices, at least one of them full-dimensional in it.
 
     Parameters
     ----------
