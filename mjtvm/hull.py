@@ -44,6 +44,21 @@ JOGGLE = 1e-9  #: relative perturbation of the polar points before Qhull
 WELL_APART = 0.05  #: facets through a point whose normals' smallest singular value exceeds this
 
 
+def _joggled(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``points`` moved by a seeded uniform perturbation of :data:`JOGGLE` x their extent."""
+    rng = np.random.default_rng(0)
+    return points + rng.uniform(-1.0, 1.0, points.shape) * JOGGLE * np.max(np.abs(points))
+
+
+def _hull_residual(point: NDArray[np.float64], others: NDArray[np.float64], scale: float) -> float:
+    """Non-negative least squares on ``[(Q - p) / scale; 1] mu = [0; 1]``, ``mu >= 0``: the
+    residual is about the distance from ``p`` to the hull of the rows of ``Q``, over ``scale``."""
+    from scipy.optimize import nnls  # imported when needed: 0.1 s
+
+    y = np.vstack([((others - point) / scale).T, np.ones(len(others))])
+    return float(nnls(y, np.append(np.zeros(len(point)), 1.0))[1])
+
+
 def triangulate(
     local: NDArray[np.float64],
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
@@ -94,10 +109,9 @@ def polar_vertices(
     polar = normals / (offsets - normals @ center)[:, None]
     # Our own joggle (seeded, JOGGLE x the extent) spares Qhull its "QJ" retries; "QJ" is
     # the fallback. Only the triangulation comes from the joggled points.
-    jitter = np.random.default_rng(0).uniform(-1.0, 1.0, polar.shape) * JOGGLE * np.max(np.abs(polar))
     try:
         try:
-            simp = np.asarray(ConvexHull(polar + jitter).simplices)
+            simp = np.asarray(ConvexHull(_joggled(polar)).simplices)
         except QhullError:
             simp = np.asarray(ConvexHull(polar, qhull_options="QJ").simplices)
     except QhullError as e:
@@ -193,10 +207,7 @@ def polish_vertices(
         for least in sorted({max(k - 1, 1), max(k - 2, 1)}, reverse=True):
             near = np.flatnonzero(shared >= least)
             if len(near):
-                from scipy.optimize import nnls  # imported when needed: 0.1 s
-
-                y = np.vstack([(reps[near] - reps[i]).T, np.ones(len(near))])
-                if nnls(y, np.append(np.zeros(k), 1.0))[1] <= 10 * tol:
+                if _hull_residual(reps[i], reps[near], 1.0) <= 10 * tol:
                     keep[i] = False
                     break
     return distinct(reps[keep], 10 * tol), facet_n, facet_b
@@ -212,8 +223,6 @@ def vertex_mask(
     does not; the distance is measured by non-negative least squares on
     ``[Q - p; 1] mu = [0; 1]``, ``mu >= 0``, and distances up to ``10 tol`` are round-off.
     """
-    from scipy.optimize import nnls
-
     scale = float(np.max(np.abs(local)))
     owner = simp.ravel()
     order = np.argsort(owner, kind="stable")
@@ -222,8 +231,7 @@ def vertex_mask(
     mask = np.zeros(len(candidates), dtype=bool)
     for n, i in enumerate(candidates):
         near = np.setdiff1d(simp[facet[starts[i] : starts[i + 1]]], [i])
-        y = np.vstack([((local[near] - local[i]) / scale).T, np.ones(len(near))])
-        mask[n] = len(near) == 0 or nnls(y, np.append(np.zeros(local.shape[1]), 1.0))[1] > 10 * tol / scale
+        mask[n] = len(near) == 0 or _hull_residual(local[i], local[near], scale) > 10 * tol / scale
     return mask
 
 
@@ -284,9 +292,8 @@ def hull_volume(points: NDArray[np.float64]) -> float:
         return float(ConvexHull(points).volume)
     except QhullError:
         pass
-    jitter = np.random.default_rng(0).uniform(-1.0, 1.0, points.shape) * JOGGLE * np.max(np.abs(points))
     try:
-        return float(ConvexHull(points + jitter).volume)
+        return float(ConvexHull(_joggled(points)).volume)
     except QhullError:
         return float(ConvexHull(points, qhull_options="QJ").volume)
 
