@@ -87,7 +87,7 @@ def test_facet_volume_of_a_cube_and_a_simplex(k):
 
 def test_facet_volume_of_a_degenerate_polytope_matches_the_closed_form():
     """A prism over a regular 40-gon times a square, in 4-D (many coplanar points per facet,
-    where Qhull needs its face-by-face fallback): area(40-gon) x 4."""
+    which Qhull cannot merge unjoggled): area(40-gon) x 4."""
     angles = 2 * np.pi * np.arange(40) / 40
     polygon = np.column_stack([np.cos(angles), np.sin(angles)])
     points = np.array([[*p, x, y] for p in polygon for x in (-1.0, 1.0) for y in (-1.0, 1.0)])
@@ -99,3 +99,24 @@ def test_facet_volume_of_a_degenerate_polytope_matches_the_closed_form():
     area = 0.5 * 40 * math.sin(2 * math.pi / 40)
     volume = facet_volume(points, np.array(rows), np.array(offsets), TOL)
     assert volume == pytest.approx(4 * area, rel=1e-10)
+
+
+def test_facet_volume_counts_a_sliver_between_nearly_coplanar_facets_once():
+    """The unit cube with a roof of height 3 tol over its top: the roof's four triangles are
+    facets at a tiny angle, each within 10 tol of all five top points. Summing their
+    pyramids would count the top four times (volume ~1.5); measured as one facet the
+    error is the sliver, <= 10 tol. Closed form: 1 + (3 tol) / 3."""
+    delta = 3 * TOL
+    bottom = np.array([[x, y, 0.0] for x, y in itertools.product((0.0, 1.0), repeat=2)])
+    top = bottom + np.array([0.0, 0.0, 1.0])
+    apex = np.array([0.5, 0.5, 1.0 + delta])
+    points = np.vstack([bottom, top, apex])
+    rows = [-np.eye(3)[2], np.eye(3)[0], -np.eye(3)[0], np.eye(3)[1], -np.eye(3)[1]]
+    offsets = [0.0, 1.0, 0.0, 1.0, 0.0]
+    for i, j in [(0, 1), (1, 3), (3, 2), (2, 0)]:  # roof triangles over the top edges
+        n = np.cross(top[j] - top[i], apex - top[i])
+        n = n / np.linalg.norm(n) * np.sign(n[2])
+        rows.append(n)
+        offsets.append(float(n @ apex))
+    volume = facet_volume(points, np.array(rows), np.array(offsets), TOL)
+    assert volume == pytest.approx(1.0 + delta / 3, abs=10 * TOL)
