@@ -1,6 +1,6 @@
 r"""Convex hulls of point sets that may span a subspace: the geometry under Problem 1.
 
-* :func:`polar_vertices`: vertex enumeration of a bounded polytope given by inequalities
+* :class:`PolarHull`, :func:`polar_vertices`: vertex enumeration of a bounded polytope given by inequalities
   (Qhull on the polar points); :func:`polish_vertices`: its facets and exact vertices;
 * :func:`triangulate`: simplicial facets of a full-dimensional point set (Qhull, joggled);
 * :func:`vertex_mask`, :func:`distinct`, :func:`span`: vertices of a triangulated hull,
@@ -26,6 +26,7 @@ __all__ = [
     "CDD_REL_TOL",
     "FLAT",
     "ZERO_TOL",
+    "PolarHull",
     "distinct",
     "facet_volume",
     "hausdorff",
@@ -77,20 +78,21 @@ def triangulate(
     return np.asarray(hull.simplices), hull.equations[:, :-1], np.asarray(hull.vertices)
 
 
-def polar_vertices(
-    normals: NDArray[np.float64], offsets: NDArray[np.float64], center: NDArray[np.float64], tol: float
-) -> NDArray[np.float64]:
-    r"""Vertices of the bounded polytope :math:`O = \{u : a_j^T u \le b_j\}` around an interior point.
+class PolarHull:
+    r"""Vertices of the bounded polytope :math:`O = \{u : a_j^T u \le b_j\}` around an
+    interior point, as rows are added (the cutting planes of Problem 1).
 
     Vertex enumeration by duality: with ``c`` = ``center`` inside O, the polar points
     :math:`y_j = a_j / (b_j - a_j^T c)` have a hull whose facets :math:`\{y : w^T y = 1\}`
-    are O's vertices :math:`c + w`. Qhull on joggled points (:data:`JOGGLE`, so that the
-    many coplanar polar points of a degenerate O never stop it) gives the simplices; each
-    simplex's ``k`` inequalities are then solved exactly on the unperturbed rows (flat
-    simplices, see :data:`FLAT`, skipped); a solution that breaks some inequality (an
-    ill-conditioned corner) is pulled back along the ray from ``c`` onto O's boundary.
-    Every vertex of O is found: its polar facet is covered by the triangulation's
-    simplices, at least one of them full-dimensional in it.
+    are O's vertices :math:`c + w`. Qhull on joggled points (each moved by :data:`JOGGLE`
+    x its size, seeded, so that the many coplanar polar points of a degenerate O never stop
+    it) gives the simplices, and keeps its hull between calls: added rows are added points
+    ("QJ" on all points from scratch where that fails). Each simplex's ``k`` inequalities
+    are then solved exactly on the unperturbed rows (flat simplices, see :data:`FLAT`,
+    skipped); a solution that breaks some inequality (an ill-conditioned corner) is pulled
+    back along the ray from ``c`` onto O's boundary. Every vertex of O is found: its polar
+    facet is covered by the triangulation's simplices, at least one of them
+    full-dimensional in it.
 
     Parameters
     ----------
@@ -100,41 +102,101 @@ def polar_vertices(
         ``(k,)`` a point with :math:`a_j^T c < b_j` for all ``j``.
     tol
         Round-off of the inequalities (absolute, in the units of ``u``).
-
-    Returns
-    -------
-    ``(n, k)`` the vertices, clusters closer than ``10 tol`` merged (near-parallel rows
-    can leave spurious points on O's boundary: :func:`polish_vertices` sorts them out).
     """
-    k = normals.shape[1]
-    polar = normals / (offsets - normals @ center)[:, None]
-    # Our own joggle (seeded, JOGGLE x the extent) spares Qhull its "QJ" retries; "QJ" is
-    # the fallback. Only the triangulation comes from the joggled points.
-    try:
+
+    def __init__(
+        self,
+        normals: NDArray[np.float64],
+        offsets: NDArray[np.float64],
+        center: NDArray[np.float64],
+        tol: float,
+    ) -> None:
+        self.center, self.tol = np.asarray(center, dtype=float), tol
+        self.normals = np.zeros((0, len(self.center)))
+        self.offsets = np.zeros(0)
+        self._polar = np.zeros((0, len(self.center)))
+        self._joggled = np.zeros((0, len(self.center)))
+        self._rng = np.random.default_rng(0)
+        self._hull: ConvexHull | None = None
+        self._added = 0  # rows already in self._hull
+        self._seen = np.zeros(0, dtype=np.int64)  # keys of the simplices already solved
+        self.add(normals, offsets)
+
+    def add(self, normals: NDArray[np.float64], offsets: NDArray[np.float64]) -> None:
+        r"""Add the rows :math:`a^T u \le b` (``(m, k)``, ``(m,)``; ``c`` strictly inside)."""
+        normals, offsets = np.atleast_2d(normals), np.atleast_1d(offsets)
+        polar = normals / (offsets - normals @ self.center)[:, None]
+        size = np.max(np.abs(polar), axis=1, keepdims=True)
+        self.normals = np.vstack([self.normals, normals])
+        self.offsets = np.concatenate([self.offsets, offsets])
+        self._polar = np.vstack([self._polar, polar])
+        self._joggled = np.vstack(
+            [self._joggled, polar + self._rng.uniform(-1.0, 1.0, polar.shape) * JOGGLE * size]
+        )
+
+    def _simplices(self) -> NDArray[np.int64]:
+        # Our own joggle spares Qhull its "QJ" retries and lets it add points to its hull;
+        # "QJ" from scratch is the fallback. Only the triangulation comes from the joggle.
         try:
-            simp = np.asarray(ConvexHull(_joggled(polar)).simplices)
+            if self._hull is None:
+                self._hull = ConvexHull(self._joggled, incremental=True)
+            elif self._added < len(self._joggled):
+                self._hull.add_points(self._joggled[self._added :])
+            self._added = len(self._joggled)
+            return np.asarray(self._hull.simplices)
         except QhullError:
-            simp = np.asarray(ConvexHull(polar, qhull_options="QJ").simplices)
-    except QhullError as e:
-        raise SolverError("qhull", str(e).splitlines()[0] if str(e) else "QhullError") from e
-    rows = polar[simp]
-    # Flat simplices (rows dependent up to the joggle) fill lower-dimensional faces of the
-    # polar hull and stand for no vertex: their |det| / product of row norms is <= 1e-12,
-    # that of the others >= 1e-9 on the TVMSs met (a Hadamard ratio, cheaper than SVDs).
-    hadamard = np.abs(np.linalg.det(rows)) / np.prod(np.linalg.norm(rows, axis=2), axis=1)
-    rows = rows[hadamard > FLAT]
-    w = np.linalg.solve(rows, np.ones((len(rows), k, 1)))[..., 0]
-    # Where rows are nearly dependent (facets at tiny angles) a vertex is ill-conditioned and
-    # the joggled simplex's solution may break a neighbouring row: pull it back along the
-    # ray from the centre onto O's boundary rather than lose that corner.
-    w = w[np.all(np.isfinite(w), axis=1)]
-    reach = w @ normals.T
-    slack = (offsets - normals @ center)[None, :]
-    scale = np.min(np.where(reach > slack, slack / np.where(reach > 0, reach, 1.0), 1.0), axis=1)
-    u = center + w * scale[:, None]
-    # Rounding shrinks the many copies (one per simplex) cheaply; distinct() merges the rest.
-    u = u[np.unique(np.round(u / (10 * tol)), axis=0, return_index=True)[1]]
-    return distinct(u, 10 * tol)
+            self._hull, self._added = None, 0
+        try:
+            return np.asarray(ConvexHull(self._polar, qhull_options="QJ").simplices)
+        except QhullError as e:
+            raise SolverError("qhull", str(e).splitlines()[0] if str(e) else "QhullError") from e
+
+    def vertices(self) -> NDArray[np.float64]:
+        """``(n, k)`` the vertices of O, clusters closer than ``10 tol`` merged (near-parallel
+        rows can leave spurious points on O's boundary: :func:`polish_vertices` sorts them out)."""
+        return self._solve(self._simplices())
+
+    def new_vertices(self) -> NDArray[np.float64]:
+        """The vertices of O as :meth:`vertices`, less those of simplices of Qhull's hull that
+        an earlier call solved already (the vertices that survived the rows added since)."""
+        simp = self._simplices()
+        k, base = simp.shape[1], 2 ** (62 // simp.shape[1])
+        if len(self._polar) <= base:  # sorted indices as one integer in that base
+            keys = np.sort(simp, axis=1) @ (base ** np.arange(k, dtype=np.int64))
+            simp = simp[~np.isin(keys, self._seen)]
+            self._seen = np.union1d(self._seen, keys)
+        return self._solve(simp)
+
+    def _solve(self, simp: NDArray[np.int64]) -> NDArray[np.float64]:
+        k, normals, offsets, center = len(self.center), self.normals, self.offsets, self.center
+        rows = self._polar[simp]
+        # Flat simplices (rows dependent up to the joggle) fill lower-dimensional faces of the
+        # polar hull and stand for no vertex: their |det| / product of row norms is <= 1e-12,
+        # that of the others >= 1e-9 on the TVMSs met (a Hadamard ratio, cheaper than SVDs).
+        hadamard = np.abs(np.linalg.det(rows)) / np.prod(np.linalg.norm(rows, axis=2), axis=1)
+        rows = rows[hadamard > FLAT]
+        w = np.linalg.solve(rows, np.ones((len(rows), k, 1)))[..., 0]
+        u = center + w[np.all(np.isfinite(w), axis=1)]
+        # Rounding shrinks the many copies (one per simplex) cheaply; distinct() merges the rest.
+        u = u[np.unique(np.round(u / (10 * self.tol)), axis=0, return_index=True)[1]]
+        # Where rows are nearly dependent (facets at tiny angles) a vertex is ill-conditioned and
+        # the joggled simplex's solution may break a neighbouring row (by more than tol): pull
+        # it back along the ray from the centre onto O's boundary rather than lose that corner.
+        slack = offsets - normals @ center
+        reach = (u - center) @ normals.T
+        broken = np.flatnonzero(np.any(reach > slack + self.tol, axis=1))
+        if len(broken):
+            over = reach[broken] > slack
+            ratio = np.where(over, slack / np.where(over, reach[broken], 1.0), 1.0)
+            u[broken] = center + (u[broken] - center) * np.min(ratio, axis=1)[:, None]
+        return distinct(u, 10 * self.tol)
+
+
+def polar_vertices(
+    normals: NDArray[np.float64], offsets: NDArray[np.float64], center: NDArray[np.float64], tol: float
+) -> NDArray[np.float64]:
+    r"""The vertices of :math:`\{u : a_j^T u \le b_j\}` at once (:class:`PolarHull`)."""
+    return PolarHull(normals, offsets, center, tol).vertices()
 
 
 def _distinct_columns(incident: NDArray[np.bool_], least: int) -> Iterator[tuple[int, NDArray[np.bool_]]]:
@@ -184,31 +246,41 @@ def polish_vertices(
         fit_b.append(float(a @ mean))
     facet_n, facet_b = np.array(fit_n).reshape(-1, k), np.array(fit_b)
     on_facet = np.abs(points @ facet_n.T - facet_b) <= 10 * tol
-    groups: dict[bytes, list[int]] = {}
-    for i, active in enumerate(on_facet):
-        if np.count_nonzero(active) >= k and np.linalg.matrix_rank(facet_n[active], tol=1e-8) == k:
-            groups.setdefault(np.packbits(active).tobytes(), []).append(i)
+    # The smallest singular value of each point's facet normals, from the Gram matrices
+    # (accurate to ~1e-7 absolute: an SVD settles the rank where it is below 1e-4).
+    gram = (on_facet.astype(float) @ np.einsum("fi,fj->fij", facet_n, facet_n).reshape(-1, k * k)).reshape(
+        -1, k, k
+    )
+    least_sv = np.sqrt(np.clip(np.linalg.eigvalsh(gram)[:, 0], 0.0, None))
+    for i in np.flatnonzero(least_sv <= 1e-4):
+        act = on_facet[i]
+        least_sv[i] = (
+            np.linalg.svd(facet_n[act], compute_uv=False)[k - 1] if np.count_nonzero(act) >= k else 0.0
+        )
+    is_vertex = least_sv > 1e-8  # facets of rank k through it
     # Points on the same facets are one candidate (their mean): the near copies of a vertex
     # that nearly parallel rows leave behind.
-    reps = np.array([points[g].mean(axis=0) for g in groups.values()]).reshape(-1, k)
-    active = on_facet[[g[0] for g in groups.values()]]
+    _, first, group = np.unique(
+        np.packbits(on_facet[is_vertex], axis=1), axis=0, return_index=True, return_inverse=True
+    )
+    group = group.reshape(-1)
+    reps = np.zeros((len(first), k))
+    np.add.at(reps, group, points[is_vertex])
+    reps /= np.bincount(group, minlength=len(first))[:, None]
+    active, apart = on_facet[is_vertex][first], least_sv[is_vertex][first] > WELL_APART
     # Facets meeting at a tiny angle leave points within tolerance of both far from their
     # intersection: such a point lies (to 10 tol) in the hull of the other points on its
     # facets, a vertex does not (non-negative least squares on [Q - p; 1] mu = [0; 1]).
+    # Where no two facets through a point are nearly parallel, its facets pin it down.
     keep = np.ones(len(reps), dtype=bool)
-    for i, act in enumerate(active):
-        if np.linalg.svd(facet_n[act], compute_uv=False)[k - 1] > WELL_APART:
-            continue  # no two facets through it nearly parallel: its facets pin it down
-        shared = np.count_nonzero(active[:, act], axis=1)
+    for i in np.flatnonzero(~apart):
+        shared = np.count_nonzero(active[:, active[i]], axis=1)
         shared[i] = 0
-        # Its neighbours on a common edge (k - 1 shared facets), then on a common 2-face
-        # (k - 2): where nearly parallel facets meet others, a stray point sits on such faces.
-        for least in sorted({max(k - 1, 1), max(k - 2, 1)}, reverse=True):
-            near = np.flatnonzero(shared >= least)
-            if len(near):
-                if _hull_residual(reps[i], reps[near], 1.0) <= 10 * tol:
-                    keep[i] = False
-                    break
+        # Its neighbours on a common 2-face (k - 2 shared facets; edges among them): where
+        # nearly parallel facets meet others, a stray point sits on such faces.
+        near = np.flatnonzero(shared >= max(k - 2, 1))
+        if len(near) and _hull_residual(reps[i], reps[near], 1.0) <= 10 * tol:
+            keep[i] = False
     return distinct(reps[keep], 10 * tol), facet_n, facet_b
 
 

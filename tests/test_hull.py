@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from mjtvm.hull import facet_volume, hausdorff, polar_vertices, polish_vertices
+from mjtvm.hull import PolarHull, facet_volume, hausdorff, polar_vertices, polish_vertices
 
 TOL = 1e-9
 
@@ -33,6 +33,27 @@ def test_polar_vertices_of_a_cube(k):
     verts = polar_vertices(a, b, 0.1 * rng.uniform(-1, 1, k), TOL)
     assert len(verts) == 2**k
     assert hausdorff(verts, cube_vertices(k)) <= 1e-12
+
+
+@pytest.mark.parametrize("k", [3, 6])
+def test_polar_hull_adds_cuts_and_returns_only_new_vertices(k):
+    """Cutting the corner (1, ..., 1) off [-1, 1]^k by sum(u) <= k - 1 leaves the other
+    2^k - 1 corners and adds the k points where the cut meets the corner's edges; a second
+    cut through the opposite corner the same way. new_vertices() gives only the new ones."""
+    a, b = cube_rows(k)
+    hull = PolarHull(a, b, np.full(k, -0.01), TOL)
+    assert len(hull.new_vertices()) == 2**k
+    assert len(hull.new_vertices()) == 0  # nothing added
+    hull.add(np.ones((1, k)) / math.sqrt(k), np.array([(k - 1) / math.sqrt(k)]))
+    new = hull.new_vertices()
+    assert hausdorff(new, np.ones(k) - np.eye(k)) <= 1e-12  # (1, .., 1, 0, 1, .., 1)
+    hull.add(-np.ones((1, k)) / math.sqrt(k), np.array([(k - 1) / math.sqrt(k)]))
+    assert hausdorff(hull.new_vertices(), -np.ones(k) + np.eye(k)) <= 1e-12
+    corners = cube_vertices(k)
+    kept = corners[np.abs(corners.sum(axis=1)) < k]
+    expected = np.vstack([kept, np.ones(k) - np.eye(k), -np.ones(k) + np.eye(k)])
+    assert len(hull.vertices()) == len(expected)
+    assert hausdorff(hull.vertices(), expected) <= 1e-12
 
 
 def test_polar_vertices_of_a_degenerate_pyramid():
