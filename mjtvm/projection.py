@@ -296,7 +296,16 @@ def project_lp(
     if k == 1:
         ends = np.array([support(sign * basis[0])[1] @ basis[0] for sign in (1.0, -1.0)])
         return result("bounded", np.outer(np.unique(ends), basis[0]), basis)
-    return _refine(support, distinct(local, tol), basis, tol, result)
+    # The support LPs along +-e_i bound S_ov: e_i^T s <= h(e_i) reads basis[:, i]^T u <= h(e_i)
+    # inside the linear hull, a first outer approximation at no further cost.
+    ext = np.array(points[: 2 * big_d])
+    rows = np.vstack([basis.T, -basis.T])
+    norm = np.linalg.norm(rows, axis=1)
+    offsets = np.concatenate([np.diag(ext[:big_d]), -np.diag(ext[big_d:])]) / np.maximum(norm, 1e-300)
+    keep = norm > 1e-6  # directions nearly orthogonal to the linear hull say little
+    return _refine(
+        support, distinct(local, tol), basis, tol, result, (rows[keep] / norm[keep, None], offsets[keep])
+    )
 
 
 class _Cutter:
@@ -378,12 +387,15 @@ def _refine(
     basis: NDArray[np.float64],
     tol: float,
     result: Any,
+    bounds: tuple[NDArray[np.float64], NDArray[np.float64]],
 ) -> Projection:
     r"""Outer approximation refined by cutting planes inside the linear hull (module docstring).
 
     ``local``: points of :math:`S_{ov}` spanning its linear hull, in its coordinates ``u``.
-    ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as the box of the support LPs along
-    :math:`\pm e_i`; every row is a support LP's value, so :math:`O \supseteq S_{ov}`.
+    ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as ``bounds`` (the support LPs along
+    :math:`\pm e_i` of the twist, in these coordinates) or, where they leave O unbounded, as
+    the box of support LPs along :math:`\pm e_i` of ``u``; every row is a support LP's value,
+    so :math:`O \supseteq S_{ov}`.
     Each round enumerates O's vertices (:class:`PolarHull`, which keeps Qhull's hull of the
     polar points between rounds) and shoots a ray from the centre ``c`` of the points to
     each vertex not yet certified (:class:`RayShooter`): a ray that reaches it (to ``10 tol``)
@@ -400,8 +412,10 @@ def _refine(
     k = basis.shape[0]
     center = local.mean(axis=0)
     cutter = _Cutter(support, basis, center, tol)
-    normals = np.vstack([np.eye(k), -np.eye(k)])
-    offsets = np.array([cutter.cut(a) for a in normals])
+    normals, offsets = bounds
+    if np.linalg.matrix_rank(normals) < k:  # O would be unbounded (not met: basis rows span)
+        normals = np.vstack([np.eye(k), -np.eye(k)])
+        offsets = np.array([cutter.cut(a) for a in normals])
     certified: list[NDArray[np.float64]] = []
     polar = PolarHull(normals, offsets, center, tol)
     while True:

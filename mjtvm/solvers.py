@@ -150,7 +150,7 @@ class HighsSession:
                 h.setOptionValue(name, _HIGHS_DEFAULTS[name])
         if status == ms.kOptimal:
             x = np.array(h.getSolution().col_value)
-            return LPSolution("optimal", x, float(h.getInfo().objective_function_value))
+            return LPSolution("optimal", x, float(h.getObjectiveValue()))
         if status == ms.kInfeasible:
             return LPSolution("infeasible", None, None)
         if status == ms.kUnbounded:

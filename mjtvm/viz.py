@@ -46,10 +46,11 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .contacts import slide_unit
 from .operation_range import OperationRange
+from .projection import lifted_polytope, project_lp
 from .replay import Record, ReplayOutput
 from .state import GraspState
 from .trajectory import Lift
-from .tvms import tvms
+from .tvms import default_scale
 
 __all__ = [
     "APPLICATION_ID", "FORCE_SCALE", "TVMS_EVERY", "TYPE_COLORS", "VELOCITY_SCALE", "Z_UNIT",
@@ -100,14 +101,16 @@ def hull_mesh(points: NDArray[np.float64], *, tol: float = 1e-9) -> tuple[NDArra
 
 
 def translational_tvms(state: GraspState) -> NDArray[np.float64] | None:
-    r"""The TVMS of Problem 1 (:func:`~mjtvm.tvms.tvms`) projected onto the translational velocity.
+    r"""The TVMS of Problem 1 projected onto the translational velocity.
 
-    Returns its vertices' ``(V, 3)`` linear parts (m/s), or ``None`` unless it is bounded.
+    The projection of :func:`~mjtvm.tvms.tvms` (the same call, without the volume, which
+    the recording does not show). Returns its vertices' ``(V, 3)`` linear parts (m/s), or
+    ``None`` unless it is bounded.
     """
-    result = tvms(state)
-    if result.status != "bounded" or len(result.vertices) == 0:
+    proj = project_lp(lifted_polytope(state), metric=default_scale(state))
+    if proj.status != "bounded" or len(proj.vertices) == 0:
         return None
-    return np.asarray(result.vertices, dtype=float)[:, : state.dim]
+    return np.asarray(proj.vertices, dtype=float)[:, : state.dim]
 
 
 def _rgb(rgba: NDArray[np.float32]) -> tuple[int, ...]:
