@@ -20,22 +20,11 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .errors import SolverError
-from .hull import CDD_REL_TOL, reduce_points
+from .hull import CDD_REL_TOL, cone_facets, reduce_points
 from .projection import LiftedPolytope, Projection, ProjectionStatus
 from .solvers import DROP_TOL
 
 __all__ = ["force_form", "project_cdd"]
-
-
-def _cone_facets(gens: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(h, d)`` unit rows ``a`` with cone(gens) = {f : a f >= 0} (cddlib, V- to H-form)."""
-    import cdd
-
-    rays = np.column_stack([np.zeros(gens.shape[1]), gens.T]).tolist()
-    mat = cdd.matrix_from_array(rays, rep_type=cdd.RepType.GENERATOR)
-    ineq = cdd.copy_inequalities(cdd.polyhedron_from_matrix(mat))
-    rows = np.array(ineq.array, dtype=float).reshape(-1, gens.shape[0] + 1)[:, 1:]
-    return rows / np.linalg.norm(rows, axis=1, keepdims=True)
 
 
 def force_form(poly: LiftedPolytope) -> LiftedPolytope:
@@ -63,7 +52,7 @@ def force_form(poly: LiftedPolytope) -> LiftedPolytope:
             cols = np.arange(lam0 + sl.start, lam0 + sl.stop)
             keep[cols] = False
             f_cols.append(a[:, cols] @ np.linalg.pinv(gens))
-            cones.append(_cone_facets(gens))
+            cones.append(cone_facets(gens))
     if not f_cols:
         return poly
     n_f = sum(c.shape[1] for c in f_cols)

@@ -27,6 +27,7 @@ __all__ = [
     "FLAT",
     "ZERO_TOL",
     "PolarHull",
+    "cone_facets",
     "distinct",
     "facet_volume",
     "hausdorff",
@@ -279,7 +280,16 @@ def polish_vertices(
         # Its neighbours on a common 2-face (k - 2 shared facets; edges among them): where
         # nearly parallel facets meet others, a stray point sits on such faces.
         near = np.flatnonzero(shared >= max(k - 2, 1))
-        if len(near) and _hull_residual(reps[i], reps[near], 1.0) <= 10 * tol:
+        if not len(near):
+            continue
+        # Cheap certificate first: a direction along which the point beats them all by
+        # more than 20 tol keeps the NNLS residual above 10 tol (a vertex, no NNLS). The sum
+        # of its facets' normals: every point of the polytope is at most level with it there.
+        d = facet_n[active[i]].sum(axis=0)
+        norm = float(np.linalg.norm(d))
+        if norm > 0.0 and (d @ reps[i] - np.max(reps[near] @ d)) > 20 * tol * norm:
+            continue
+        if _hull_residual(reps[i], reps[near], 1.0) <= 10 * tol:
             keep[i] = False
     return distinct(reps[keep], 10 * tol), facet_n, facet_b
 
@@ -304,6 +314,19 @@ def vertex_mask(
         near = np.setdiff1d(simp[facet[starts[i] : starts[i + 1]]], [i])
         mask[n] = len(near) == 0 or _hull_residual(local[i], local[near], scale) > 10 * tol / scale
     return mask
+
+
+def cone_facets(gens: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(h, d)`` unit rows ``a`` with cone(gens) = {f : a f >= 0}, for ``(d, m)`` generators
+    (cddlib, V- to H-form; a lower-dimensional cone's equalities come as rows too)."""
+    import cdd
+
+    rays = np.column_stack([np.zeros(gens.shape[1]), gens.T]).tolist()
+    mat = cdd.matrix_from_array(rays, rep_type=cdd.RepType.GENERATOR)
+    ineq = cdd.copy_inequalities(cdd.polyhedron_from_matrix(mat))
+    rows = np.array(ineq.array, dtype=float).reshape(-1, gens.shape[0] + 1)[:, 1:]
+    norm = np.linalg.norm(rows, axis=1, keepdims=True)
+    return rows[norm[:, 0] > 0.0] / norm[norm[:, 0] > 0.0]
 
 
 def distinct(points: NDArray[np.float64], radius: float) -> NDArray[np.float64]:

@@ -56,7 +56,7 @@ from scipy.spatial import cKDTree
 
 from .assembly import Assembly, BoxForm, assemble
 from .errors import SolverError
-from .hull import ZERO_TOL, PolarHull, distinct, polish_vertices, span
+from .hull import ZERO_TOL, PolarHull, cone_facets, distinct, polish_vertices, span
 from .oracles import DistanceOracle, RayShooter, SupportOracle
 from .state import GraspState
 
@@ -303,9 +303,14 @@ def project_lp(
     norm = np.linalg.norm(rows, axis=1)
     offsets = np.concatenate([np.diag(ext[:big_d]), -np.diag(ext[big_d:])]) / np.maximum(norm, 1e-300)
     keep = norm > 1e-6  # directions nearly orthogonal to the linear hull say little
-    return _refine(
-        support, distinct(local, tol), basis, tol, result, (rows[keep] / norm[keep, None], offsets[keep])
-    )
+    rows, offsets = rows[keep] / norm[keep, None], offsets[keep]
+    if poly.cone:
+        # Inside the RVDS cone: its facets a^T s >= 0 hold for S_ov, (basis a)^T u >= 0 here.
+        cone = -cone_facets(w[:, None] * poly.generators) @ basis.T
+        norm = np.linalg.norm(cone, axis=1)
+        cone = cone[norm > 1e-6] / norm[norm > 1e-6, None]
+        rows, offsets = np.vstack([rows, cone]), np.concatenate([offsets, np.zeros(len(cone))])
+    return _refine(support, distinct(local, tol), basis, tol, result, (rows, offsets))
 
 
 class _Cutter:

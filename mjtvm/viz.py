@@ -85,10 +85,9 @@ def hull_mesh(points: NDArray[np.float64], *, tol: float = 1e-9) -> tuple[NDArra
         if rank == 3:
             hull = ConvexHull(pts)
             keep, tris = hull.vertices, hull.simplices.copy()
-            for t, eq in zip(tris, hull.equations, strict=True):
-                a, b, c = pts[t]
-                if float(np.cross(b - a, c - a) @ eq[:3]) < 0:
-                    t[[1, 2]] = t[[2, 1]]
+            a, b, c = pts[tris[:, 0]], pts[tris[:, 1]], pts[tris[:, 2]]
+            inward = np.einsum("ij,ij->i", np.cross(b - a, c - a), hull.equations[:, :3]) < 0
+            tris[inward] = tris[inward][:, [0, 2, 1]]
         elif rank == 2:
             keep = ConvexHull((pts - centre) @ vt[:2].T).vertices  # counter-clockwise in the plane
             tris = np.array([[keep[0], keep[i], keep[i + 1]] for i in range(1, len(keep) - 1)])
@@ -96,8 +95,9 @@ def hull_mesh(points: NDArray[np.float64], *, tol: float = 1e-9) -> tuple[NDArra
             return None
     except QhullError:
         return None
-    index = {int(v): i for i, v in enumerate(keep)}
-    return pts[keep], np.vectorize(index.__getitem__)(tris).astype(np.uint32).reshape(-1, 3)
+    index = np.zeros(len(pts), dtype=np.uint32)
+    index[keep] = np.arange(len(keep), dtype=np.uint32)
+    return pts[keep], index[np.asarray(tris, dtype=np.int64)].reshape(-1, 3)
 
 
 def translational_tvms(state: GraspState) -> NDArray[np.float64] | None:
@@ -144,8 +144,23 @@ class _Scene:
         self.planes = [g for g in kind if kind[g] == mujoco.mjtGeom.mjGEOM_PLANE]
 
     def static(self, rec: rr.RecordingStream) -> None:
-        m, planes = self.model, self.planes
+        m, planes, links = self.model, self.planes, self.links
         rec.log("scene", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        if links:
+            rec.log("scene/links", rr.Capsules3D.from_fields(
+                lengths=2 * m.geom_size[links, 1], radii=m.geom_size[links, 0],
+                colors=[_rgb(m.geom_rgba[g]) for g in links], fill_mode="solid",
+            ), static=True)  # fmt: skip
+        wire = rr.components.FillMode.MajorWireframe  # the object: see the velocity polytopes inside
+        for path, geoms, fill in (
+            ("scene/tips", self.tips, rr.components.FillMode.Solid),
+            ("scene/object", self.object, wire),
+        ):
+            if geoms:
+                rec.log(path, rr.Ellipsoids3D.from_fields(
+                    half_sizes=np.repeat(m.geom_size[geoms, :1], 3, axis=1),
+                    colors=[_rgb(m.geom_rgba[g]) for g in geoms], fill_mode=fill,
+                ), static=True)  # fmt: skip
         if planes:
             rec.log("scene/palm", rr.Boxes3D(
                 half_sizes=[[m.geom_size[g, 0], m.geom_size[g, 1], 5e-4] for g in planes],
@@ -154,28 +169,23 @@ class _Scene:
                 labels=[mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or "palm" for g in planes],
             ), static=True)  # fmt: skip
 
-    def log(self, rec: rr.RecordingStream, qpos: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Log the geoms at ``qpos``; returns the object's centre."""
+    def log(self, cols: _Columns, qpos: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Add the geoms' poses at ``qpos`` (their sizes and colours are static); returns the
+        object's centre."""
         m, d, links = self.model, self.data, self.links
         d.qpos[:] = qpos
         mujoco.mj_kinematics(m, d)
-        quats = np.zeros((len(links), 4))
-        for q, g in zip(quats, links, strict=True):
-            mujoco.mju_mat2Quat(q, d.geom_xmat[g])
-        rec.log("scene/links", rr.Capsules3D(  # MuJoCo: centre, axis z; rerun: from one end along z
-            lengths=2 * m.geom_size[links, 1], radii=m.geom_size[links, 0],
-            translations=d.geom_xpos[links] - d.geom_xmat[links][:, [2, 5, 8]] * m.geom_size[links, 1:2],
-            quaternions=quats[:, [1, 2, 3, 0]], colors=[_rgb(m.geom_rgba[g]) for g in links], fill_mode="solid",
-        ))  # fmt: skip
-        wire = rr.components.FillMode.MajorWireframe  # the object: see the velocity polytopes inside
-        for path, geoms, fill in (
-            ("scene/tips", self.tips, rr.components.FillMode.Solid),
-            ("scene/object", self.object, wire),
-        ):
-            rec.log(path, rr.Ellipsoids3D(
-                half_sizes=np.repeat(m.geom_size[geoms, :1], 3, axis=1), centers=d.geom_xpos[geoms],
-                colors=[_rgb(m.geom_rgba[g]) for g in geoms], fill_mode=fill,
-            ))  # fmt: skip
+        if links:
+            quats = np.zeros((len(links), 4))
+            for q, g in zip(quats, links, strict=True):
+                mujoco.mju_mat2Quat(q, d.geom_xmat[g])
+            # MuJoCo: a capsule's centre and axis z; rerun: from one end along z
+            ends = d.geom_xpos[links] - d.geom_xmat[links][:, [2, 5, 8]] * m.geom_size[links, 1:2]
+            cols.add("scene/links", rr.Capsules3D, len(links), translations=list(ends),
+                     quaternions=list(quats[:, [1, 2, 3, 0]]))  # fmt: skip
+        for path, geoms in (("scene/tips", self.tips), ("scene/object", self.object)):
+            if geoms:
+                cols.add(path, rr.Ellipsoids3D, len(geoms), centers=list(d.geom_xpos[geoms]))
         return np.array(d.geom_xpos[self.object[0]] if self.object else np.zeros(3))
 
 
@@ -366,7 +376,7 @@ def record_replay(
     for i in range(n):
         rec.set_time("state", sequence=i)
         rec.set_time("lift_z", sequence=z_steps[i])
-        centre = scene.log(rec, lift.qpos[i])
+        centre = scene.log(cols, lift.qpos[i])
         for key, name in names.items():
             r = by_state[(key[0], key[1], i)]
             state = r.state  # the state the replay solved

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from mjtvm.hull import PolarHull, facet_volume, hausdorff, polar_vertices, polish_vertices
+from mjtvm.hull import PolarHull, cone_facets, facet_volume, hausdorff, polar_vertices, polish_vertices
 
 TOL = 1e-9
 
@@ -141,3 +141,17 @@ def test_facet_volume_counts_a_sliver_between_nearly_coplanar_facets_once():
         offsets.append(float(n @ apex))
     volume = facet_volume(points, np.array(rows), np.array(offsets), TOL)
     assert volume == pytest.approx(1.0 + delta / 3, abs=10 * TOL)
+
+
+def test_cone_facets_of_an_orthant_a_wedge_and_a_square_pyramid():
+    """cone(e1, e2, e3) = {f >= 0}; cone((1, 1), (-1, 1)) = {y >= |x|}; the cone over a square
+    {|x| <= z, |y| <= z} has the four facets (+-1, 0, 1)/sqrt(2), (0, +-1, 1)/sqrt(2)."""
+    rows = cone_facets(np.eye(3))
+    assert sorted(map(tuple, np.round(rows, 12))) == sorted(map(tuple, np.eye(3)))
+    rows = cone_facets(np.array([[1.0, -1.0], [1.0, 1.0]]))
+    want = np.array([[1.0, 1.0], [-1.0, 1.0]]) / math.sqrt(2)
+    assert hausdorff(rows, want) <= 1e-12 and len(rows) == 2
+    square = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [-1.0, 1.0, 1.0], [-1.0, -1.0, 1.0]]).T
+    rows = cone_facets(square)
+    want = np.array([[1, 0, 1], [-1, 0, 1], [0, 1, 1], [0, -1, 1]]) / math.sqrt(2)
+    assert len(rows) == 4 and hausdorff(rows, want) <= 1e-12
