@@ -120,7 +120,7 @@ class PolarHull:
         self._rng = np.random.default_rng(0)
         self._hull: ConvexHull | None = None
         self._added = 0  # rows already in self._hull
-        self._seen = np.zeros(0, dtype=np.int64)  # keys of the simplices already solved
+        self._seen = np.zeros(0, dtype=np.int64)  # keys of the simplices solved last time
         self.add(normals, offsets)
 
     def add(self, normals: NDArray[np.float64], offsets: NDArray[np.float64]) -> None:
@@ -164,8 +164,10 @@ class PolarHull:
         k, base = simp.shape[1], 2 ** (62 // simp.shape[1])
         if len(self._polar) <= base:  # sorted indices as one integer in that base
             keys = np.sort(simp, axis=1) @ (base ** np.arange(k, dtype=np.int64))
-            simp = simp[~np.isin(keys, self._seen)]
-            self._seen = np.union1d(self._seen, keys)
+            simp = simp[~np.isin(keys, self._seen, assume_unique=True)]
+            # A simplex that left the hull never comes back (added points only grow it):
+            # the last call's keys are all there is to compare with.
+            self._seen = keys
         return self._solve(simp)
 
     def _solve(self, simp: NDArray[np.int64]) -> NDArray[np.float64]:

@@ -47,12 +47,13 @@ class SupportOracle:
     @staticmethod
     def _session(p: LiftedPolytope) -> HighsSession:
         lp = LinearProgram(np.zeros(p.A.shape[1]), p.A, p.row_lower, p.row_upper, p.col_lower, p.col_upper)
-        return HighsSession(lp)
+        session = HighsSession(lp)
+        session.set_option("simplex_strategy", 4)  # primal: only the costs change
+        return session
 
     def _solve(self, session: HighsSession, h: NDArray[np.float64]) -> LPSolution:
         cost = -(self.poly.generators.T @ (self.metric * h))  # max h^T (metric * rdot)
         session.highs.changeColsCost(len(self.cols), self.cols, np.ascontiguousarray(cost))
-        session.highs.setOptionValue("simplex_strategy", 4)  # primal: only the costs changed
         self.num_lps += 1
         return session.solve()
 
@@ -104,7 +105,7 @@ class RayShooter:
         self.session = HighsSession(lp)
         # Primal simplex from the previous basis: 3-5 iterations against the dual's 7-8 on
         # Case 2's rays (160 vs 220 us per LP).
-        self.session.highs.setOptionValue("simplex_strategy", 4)
+        self.session.set_option("simplex_strategy", 4)
         self.rows = np.arange(m, m + k)
         self.num_lps = 0
 
@@ -112,12 +113,12 @@ class RayShooter:
         """``t*`` and the unit outward normal of a hyperplane supporting :math:`S_{ov}` at ``c + t* d``."""
         self.session.set_column(self.session.num_col - 1, self.rows, -d)
         self.num_lps += 1
-        sol = self.session.solve()
-        if sol.status != "optimal" or sol.x is None:
+        sol = self.session.solve(duals=True)
+        if sol.status != "optimal" or sol.x is None or sol.row_dual is None:
             raise SolverError("highs", f"ray-shooting LP: {sol.status}")
-        y = np.asarray(self.session.highs.getSolution().row_dual)[self.rows]
+        y = sol.row_dual[self.rows]
         h = -y if -y @ d > 0 else y
-        norm = np.linalg.norm(h)
+        norm = float(np.sqrt(h @ h))
         return float(sol.x[-1]), h / norm if norm > 0 else h
 
 
@@ -160,10 +161,10 @@ class DistanceOracle:
         self.session.set_row_bounds(self.upper, -inf, v)
         self.session.set_row_bounds(self.lower, v, inf)
         self.num_lps += 1
-        sol = self.session.solve()
-        if sol.status != "optimal" or sol.x is None:
+        sol = self.session.solve(duals=True)
+        if sol.status != "optimal" or sol.x is None or sol.row_dual is None:
             raise SolverError("highs", f"distance LP: {sol.status}")
-        y = np.asarray(self.session.highs.getSolution().row_dual)
+        y = sol.row_dual
         g = np.abs(y[self.lower]) - np.abs(y[self.upper])
         norm = np.linalg.norm(g)
         return float(sol.x[-1]), g / norm if norm > 0 else g

@@ -55,6 +55,7 @@ class LPSolution:
     status: LPStatus
     x: NDArray[np.float64] | None
     objective: float | None
+    row_dual: NDArray[np.float64] | None = None  #: HiGHS' row duals, when asked for
 
 
 # ----------------------------------------------------------------------- HiGHS
@@ -111,12 +112,19 @@ class HighsSession:
             raise SolverError("highs", f"passModel: {status}")
         self.highs = h
         self.num_col = n
+        self._options = dict(_HIGHS_DEFAULTS)  # what the retries in solve() restore
+
+    def set_option(self, name: str, value: object) -> None:
+        """Set a HiGHS option for this session's solves (kept after :meth:`solve`'s retries)."""
+        if self.highs.setOptionValue(name, value) != self._hs.HighsStatus.kOk:
+            raise SolverError("highs", f"option {name}={value!r} rejected")
+        self._options[name] = value
 
     def set_column(self, col: int, rows: NDArray[np.int64], values: NDArray[np.float64]) -> None:
         """Overwrite ``A[rows, col]`` (entries outside ``rows`` are left as they are)."""
-        values = np.where(np.abs(values) > DROP_TOL, values, 0.0)
+        change = self.highs.changeCoeff
         for r, v in zip(rows.tolist(), values.tolist()):
-            self.highs.changeCoeff(r, col, v)
+            change(r, col, v if abs(v) > DROP_TOL else 0.0)
 
     def set_row_bounds(
         self, rows: NDArray[np.int64], lower: NDArray[np.float64], upper: NDArray[np.float64]
@@ -128,8 +136,9 @@ class HighsSession:
         """Change one variable's bounds."""
         self.highs.changeColBounds(col, lower, upper)
 
-    def solve(self) -> LPSolution:
-        """Run HiGHS from the current basis and classify the outcome."""
+    def solve(self, *, duals: bool = False) -> LPSolution:
+        """Run HiGHS from the current basis and classify the outcome (with the row duals if
+        ``duals`` and optimal)."""
         h, ms = self.highs, self._hs.HighsModelStatus
         h.run()
         status = h.getModelStatus()
@@ -147,10 +156,11 @@ class HighsSession:
             h.run()
             status = h.getModelStatus()
             for name in options:
-                h.setOptionValue(name, _HIGHS_DEFAULTS[name])
+                h.setOptionValue(name, self._options[name])
         if status == ms.kOptimal:
-            x = np.array(h.getSolution().col_value)
-            return LPSolution("optimal", x, float(h.getObjectiveValue()))
+            sol = h.getSolution()
+            y = np.array(sol.row_dual) if duals else None
+            return LPSolution("optimal", np.array(sol.col_value), float(h.getObjectiveValue()), y)
         if status == ms.kInfeasible:
             return LPSolution("infeasible", None, None)
         if status == ms.kUnbounded:
