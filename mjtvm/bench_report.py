@@ -24,11 +24,11 @@ def auto_notes(report: dict[str, Any]) -> list[str]:
     if t.get("case2_p1") is False:
         lp = c["case2_p1"]["lp"]
         notes.append(
-            f"Case 2 Problem 1 misses 2 s: {lp['median_s']:.1f} s for {lp['num_lps']} LPs, of which "
-            f"{lp['highs_run_s']:.1f} s inside HiGHS; the rest (profile): Qhull on the polar points every "
-            "round ~1 s, the facet volumes ~1.4 s (Qhull per facet), Python per LP. To close: the volume "
-            "from the facets without Qhull, updating the polar hull instead of rebuilding it, the "
-            "ray-shooting LPs of a round on both cores (HiGHS releases the GIL: x1.7 measured)."
+            f"Case 2 Problem 1 misses 2 s: {lp['median_s']:.2f} s (median) for {lp['num_lps']} LPs: the "
+            f"projection {lp['project_s']:.2f} s, of which {lp['highs_run_s']:.2f} s inside HiGHS and the "
+            f"rest mostly Qhull on the polar points (~0.4 s in a profile), and the volume "
+            f"{lp['volume_s']:.2f} s (Qhull per facet, on two threads). Two HiGHS sessions on two "
+            "threads were tried for the rays and gave nothing end to end on this machine."
         )
     sw = report.get("sweeps")
     if sw and t.get("sweep_speedup_2") is False:
@@ -181,7 +181,7 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
         "",
         "medians over repeats; P2 = tvmmp(state, witnesses=False) (HiGHS, eliminated box), baseline = cvxpy",
         "rebuilt per pair; P1 = tvms(state) by support LPs, baseline = cdd vertex enumeration (child process,",
-        f"capped at {report['settings']['cdd_time_limit_s']:.0f} s); Case 2 Problem 1 runs once. The 2-process sweep times include",
+        f"capped at {report['settings']['cdd_time_limit_s']:.0f} s); Case 2 Problem 1: median of 3 after a warm-up. The 2-process sweep times include",
         "the pool's start-up (forkserver, worker imports, each worker building the lift).",
         *notes,
         f"machine: {m['cpu']}, {m['logical_cpus']} logical CPUs ({m['usable_cpus']} usable), {m['platform']}, "

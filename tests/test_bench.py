@@ -77,6 +77,15 @@ def test_table_and_notes(report: dict[str, Any]) -> None:
     assert all(isinstance(n, str) for n in bench_report.auto_notes(report))
 
 
+def test_case2_note_reports_the_measured_split() -> None:
+    """A missed Case 2 target is explained with that run's own numbers."""
+    lp = {"median_s": 2.04, "num_lps": 2661, "project_s": 1.38, "highs_run_s": 0.61, "volume_s": 0.66}
+    report = {"targets": {"case2_p1": False}, "cases": {"case2_p1": {"lp": lp}}}
+    (note,) = bench_report.auto_notes(report)
+    for text in ("2.04 s (median) for 2661 LPs", "projection 1.38 s", "0.61 s inside HiGHS", "volume 0.66 s"):
+        assert text in note
+
+
 def test_case1_rvds_holds_beta_from_the_model() -> None:
     state = load_scenario("case1").state()
     rvds = bench_suite.case1_rvds(state)
