@@ -180,18 +180,19 @@ class PolarHull:
         rows = rows[hadamard > FLAT]
         w = np.linalg.solve(rows, np.ones((len(rows), k, 1)))[..., 0]
         u = center + w[np.all(np.isfinite(w), axis=1)]
-        # Rounding shrinks the many copies (one per simplex) cheaply; distinct() merges the rest.
-        u = u[np.unique(np.round(u / (10 * self.tol)), axis=0, return_index=True)[1]]
         # Where rows are nearly dependent (facets at tiny angles) a vertex is ill-conditioned and
         # the joggled simplex's solution may break a neighbouring row (by more than tol): pull
         # it back along the ray from the centre onto O's boundary rather than lose that corner.
+        # (Before merging copies: a broken copy must not stand in for a good one.)
         slack = offsets - normals @ center
-        reach = (u - center) @ normals.T
+        reach = np.ascontiguousarray(u - center) @ normals.T
         broken = np.flatnonzero(np.any(reach > slack + self.tol, axis=1))
         if len(broken):
             over = reach[broken] > slack
             ratio = np.where(over, slack / np.where(over, reach[broken], 1.0), 1.0)
             u[broken] = center + (u[broken] - center) * np.min(ratio, axis=1)[:, None]
+        # Rounding shrinks the many copies (one per simplex) cheaply; distinct() merges the rest.
+        u = u[np.unique(np.round(u / (10 * self.tol)), axis=0, return_index=True)[1]]
         return distinct(u, 10 * self.tol)
 
 
@@ -263,14 +264,15 @@ def polish_vertices(
     is_vertex = least_sv > 1e-8  # facets of rank k through it
     # Points on the same facets are one candidate (their mean): the near copies of a vertex
     # that nearly parallel rows leave behind.
+    cand, sv = points[is_vertex], least_sv[is_vertex]
     _, first, group = np.unique(
         np.packbits(on_facet[is_vertex], axis=1), axis=0, return_index=True, return_inverse=True
     )
     group = group.reshape(-1)
     reps = np.zeros((len(first), k))
-    np.add.at(reps, group, points[is_vertex])
+    np.add.at(reps, group, cand)
     reps /= np.bincount(group, minlength=len(first))[:, None]
-    active, apart = on_facet[is_vertex][first], least_sv[is_vertex][first] > WELL_APART
+    active, apart = on_facet[is_vertex][first], sv[first] > WELL_APART
     # Facets meeting at a tiny angle leave points within tolerance of both far from their
     # intersection: such a point lies (to 10 tol) in the hull of the other points on its
     # facets, a vertex does not (non-negative least squares on [Q - p; 1] mu = [0; 1]).
@@ -281,7 +283,9 @@ def polish_vertices(
         shared[i] = 0
         # Its neighbours on a common 2-face (k - 2 shared facets; edges among them): where
         # nearly parallel facets meet others, a stray point sits on such faces.
-        near = np.flatnonzero(shared >= max(k - 2, 1))
+        # Only candidates still kept: a point dropped for lying in the hull of others must
+        # not in turn make one of those others look redundant (both would be lost).
+        near = np.flatnonzero((shared >= max(k - 2, 1)) & keep)
         if not len(near):
             continue
         # Cheap certificate first: a direction along which the point beats them all by

@@ -155,3 +155,30 @@ def test_cone_facets_of_an_orthant_a_wedge_and_a_square_pyramid():
     rows = cone_facets(square)
     want = np.array([[1, 0, 1], [-1, 0, 1], [0, 1, 1], [0, -1, 1]]) / math.sqrt(2)
     assert len(rows) == 4 and hausdorff(rows, want) <= 1e-12
+
+
+def test_polish_vertices_never_drops_two_points_that_cover_each_other():
+    """A boundary bulging by 15 tol over A=(0,0) .. B=(3,0) through p=(1, h), q=(2, h): p is
+    7.5 tol from the segment A-q and q from p-B, so each alone is redundant to 10 tol, but
+    dropping both loses 15 tol. One of them must stay, and every point must lie within
+    10 tol of the hull of what is kept."""
+    tol = 1e-6
+    h = 15 * tol
+    a, p, q, b = (0.0, 0.0), (1.0, h), (2.0, h), (3.0, 0.0)
+    points = np.array([a, p, q, b, (3.0, -1.0), (0.0, -1.0)])
+
+    def edge(u, v):  # outward normal (the polygon is clockwise) and offset of the line u-v
+        n = np.array([v[1] - u[1], u[0] - v[0]])
+        n = -n / np.linalg.norm(n)
+        return n, float(n @ np.array(u))
+
+    rows = [edge(a, p), edge(p, q), edge(q, b), ((1.0, 0.0), 3.0), ((0.0, -1.0), 1.0), ((-1.0, 0.0), 0.0)]
+    normals = np.array([r[0] for r in rows], dtype=float)
+    offsets = np.array([r[1] for r in rows])
+    assert np.all(points @ normals.T - offsets <= 1e-12)  # the rows hold for the polygon
+    verts, _, _ = polish_vertices(points, normals, offsets, tol)
+    assert any(np.allclose(v, p) or np.allclose(v, q) for v in verts)
+    for x in points:  # within 10 tol of the kept hull: distance to the chord through kept points
+        kept_top = sorted([tuple(v) for v in verts if v[1] > -0.5])
+        xs, ys = zip(*kept_top, strict=True)
+        assert x[1] <= np.interp(x[0], xs, ys) + 10 * tol
