@@ -27,7 +27,8 @@ Two exact projections:
   then along directions orthogonal to the points found until each is either extended or
   proved orthogonal to :math:`S_{ov}` (max = min = 0). Inside it, an outer approximation
   refined by cutting planes (the dual of Bretl and Lall's inner one, in any dimension
-  <= 6): a polytope O given by support inequalities, so O contains :math:`S_{ov}`; its
+  <= 6): a polytope O given by valid inequalities (support LPs' values, and the RVDS
+  cone's facets when :math:`\dot r` is restricted to it), so O contains :math:`S_{ov}`; its
   vertices come from a convex hull of the polar points (Qhull,
   :class:`~mjtvm.hull.PolarHull`); a ray-shooting LP either certifies a vertex as a
   point of :math:`S_{ov}` or yields a supporting hyperplane that cuts it off. When every
