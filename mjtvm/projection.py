@@ -399,10 +399,10 @@ def _refine(
 
     ``local``: points of :math:`S_{ov}` spanning its linear hull, in its coordinates ``u``.
     ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as ``bounds`` (the support LPs along
-    :math:`\pm e_i` of the twist, in these coordinates) or, where they leave O unbounded, as
-    the box of support LPs along :math:`\pm e_i` of ``u``; every row is a support LP's value,
-    so :math:`O \supseteq S_{ov}`.
-    Each round enumerates O's vertices (:class:`PolarHull`, which keeps Qhull's hull of the
+    :math:`\pm e_i` of the twist and the RVDS cone's facets, in these coordinates) or, where
+    they leave O unbounded, as the box of support LPs along :math:`\pm e_i` of ``u``; every
+    row is a support LP's value or a facet of a cone that holds :math:`S_{ov}`, so
+    :math:`O \supseteq S_{ov}`. Each round enumerates O's vertices (:class:`PolarHull`, which keeps Qhull's hull of the
     polar points between rounds) and shoots a ray from the centre ``c`` of the points to
     each vertex not yet certified (:class:`RayShooter`): a ray that reaches it (to ``10 tol``)
     certifies the vertex as a point of :math:`S_{ov}`, hence one of its vertices; otherwise
