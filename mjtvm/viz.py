@@ -381,7 +381,9 @@ def record_replay(
             r = by_state[(key[0], key[1], i)]
             state = r.state  # the state the replay solved
             t1 = time.perf_counter()
-            points = translational_tvms(state) if i in info["tvms_states"] else None
+            # Problem 2 infeasible: some REFS vertex cannot be balanced, so S_ov is empty.
+            wanted = i in info["tvms_states"] and r.result.feasible
+            points = translational_tvms(state) if wanted else None
             info["tvms_seconds"] += time.perf_counter() - t1
             _log_run(rec, cols, name, r, state, centre, points, colors[key])
     cols.send(rec, [rr.TimeColumn("state", sequence=range(n)), rr.TimeColumn("lift_z", sequence=z_steps)])
