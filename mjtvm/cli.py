@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
 
-from .errors import ModelError, SolverError, StateError
+from .errors import MjtvmError, ModelError, SolverError, StateError
 from .solvers import SOLVERS
 from .state import GraspState, load_state
 from .tvmmp import tvmmp
@@ -52,22 +52,32 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from .replay import run_replay  # MuJoCo and matplotlib are imported only by the coupling commands
+    from .recording import RecordingJob, start_recording
+    from .replay import ReplayOutput, run_replay  # MuJoCo and matplotlib: only the coupling commands
 
     readings = ("physical", "literal") if args.reading == "both" else (args.reading,)
-    out = run_replay(
-        scenario=args.scenario, hand=args.variant, mu=args.mu, mg=args.mg, num_states=args.states,
-        variants=tuple(v.strip() for v in args.variants.split(",")), readings=readings, out=args.out,
-        plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
-    )  # fmt: skip
+    jobs: list[RecordingJob] = []
+
+    def record(replayed: ReplayOutput) -> None:  # rerun: only in the recording's process
+        jobs.append(start_recording(replayed, args.rrd, spawn=args.spawn, tvms_every=args.tvms_every))
+
+    try:
+        out = run_replay(
+            scenario=args.scenario, hand=args.variant, mu=args.mu, mg=args.mg, num_states=args.states,
+            variants=tuple(v.strip() for v in args.variants.split(",")), readings=readings, out=args.out,
+            plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
+            on_replay=record if args.rrd is not None or args.spawn else None,
+        )  # fmt: skip
+    except BaseException:
+        for job in jobs:
+            job.cancel()
+        raise
     lift = out.lift
     print(f"lift: {lift.num_states} states, z = {lift.z[0]:.4f} .. {lift.z[-1]:.4f} m ({lift.limit})")
     for name, path in out.files.items():
         print(f"wrote {name}: {path}")
-    if args.rrd is not None or args.spawn:
-        from .viz import record_replay  # rerun is imported only here
-
-        info = record_replay(out, args.rrd, spawn=args.spawn, tvms_every=args.tvms_every)
+    for job in jobs:
+        info = job.result()
         if args.rrd is not None:
             print(f"wrote {Path(args.rrd).name}: {args.rrd} ({info['seconds']:.2f} s)")
     return 0
@@ -292,6 +302,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SolverError as e:
         print(f"solver error: {e}", file=sys.stderr)
         return 3
+    except MjtvmError as e:  # e.g. a RecordingError
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     return code
 
 

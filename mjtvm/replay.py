@@ -23,7 +23,7 @@ import math
 import statistics
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -337,8 +337,13 @@ def run_replay(
     plots: bool = True,
     sweeps: bool = True,
     progress: bool = False,
+    on_replay: Callable[[ReplayOutput], None] | None = None,
 ) -> ReplayOutput:
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
+
+    ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
+    ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
+    plots: the CLI starts the rerun recording there (:func:`~mjtvm.recording.start_recording`).
 
     Raises
     ------
@@ -361,6 +366,8 @@ def run_replay(
         lift, variants=variants, readings=readings, mu=mu, mg=mg, progress=progress, bases=bases
     )
     times["replay_s"], t0 = time.perf_counter() - t0, time.perf_counter()
+    if on_replay is not None:
+        on_replay(ReplayOutput(lift, records, None, {}, {}))
     swept = sweep_lift(lift, progress=progress, bases=bases) if sweeps else None
     times["sweeps_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     meta = {"scenario": lift.scenario.name, "hand": hand}
