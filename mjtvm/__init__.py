@@ -3,7 +3,8 @@ r"""mjtvm: joint torque-velocity pair based manipulability (Watanabe) on top of 
 The core (this namespace) needs neither MuJoCo nor rerun: grasp states, operation
 ranges, contacts, Problem 2 (TVMMP, :func:`tvmmp`) and Problem 1 (TVMS, :func:`tvms`). The
 MuJoCo coupling (``hand``, ``grasp``, ``ik``, ``scenario``, ``trajectory``, ``replay``,
-``simulate``, ``verify``) and the rerun recording (``viz``) live in their own modules.
+``simulate``, ``verify``) and the rerun recording (``viz``, run beside the job by ``recording``)
+live in their own modules.
 """
 
 from .assembly import Assembly, assemble

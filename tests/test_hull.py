@@ -125,7 +125,7 @@ def test_facet_volume_of_a_degenerate_polytope_matches_the_closed_form():
 def test_facet_volume_counts_a_sliver_between_nearly_coplanar_facets_once():
     """The unit cube with a roof of height 3 tol over its top: the roof's four triangles are
     facets at a tiny angle, each within 10 tol of all five top points. Summing their
-    pyramids would count the top four times (volume ~1.5); measured as one facet the
+    pyramids would count the top four times (volume 1.44); measured as one facet the
     error is the sliver, <= 10 tol. Closed form: 1 + (3 tol) / 3."""
     delta = 3 * TOL
     bottom = np.array([[x, y, 0.0] for x, y in itertools.product((0.0, 1.0), repeat=2)])
