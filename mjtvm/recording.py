@@ -21,6 +21,7 @@ from __future__ import annotations
 import multiprocessing
 import sys
 import traceback
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -89,7 +90,11 @@ class RecordingJob:
             ctx = multiprocessing.get_context("fork")
             self._conn, send = ctx.Pipe(duplex=False)
             self._process = ctx.Process(target=_child, args=(send, *self._args), daemon=True)
-            self._process.start()
+            with warnings.catch_warnings():
+                # Python >= 3.12 warns about fork() beside other threads; ours are fork-safe
+                # (module docstring), and rerun's, which are not, rule the fork out.
+                warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
+                self._process.start()
             send.close()
 
     def result(self) -> dict[str, Any]:
