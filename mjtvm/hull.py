@@ -1,12 +1,12 @@
 r"""Convex hulls of point sets that may span a subspace: the geometry under Problem 1.
 
-* :class:`PolarHull`, :func:`polar_vertices`: vertex enumeration of a bounded polytope given by inequalities
-  (Qhull on the polar points); :func:`polish_vertices`: its facets and exact vertices;
+* :class:`PolarHull`, :func:`polar_vertices`: vertex enumeration of a bounded polytope given by
+  inequalities (Qhull on the polar points); :func:`polish_vertices`: its facets and exact vertices;
 * :func:`triangulate`: simplicial facets of a full-dimensional point set (Qhull, joggled);
 * :func:`vertex_mask`, :func:`distinct`, :func:`span`: vertices of a triangulated hull,
   clusters of round-off, linear hulls;
 * :func:`reduce_points`: linear hull and vertices of the hull of points and the origin
-  (the last step of the cdd baseline);
+  (the last step of the cdd baseline); :func:`cone_facets`: a cone's facets (cddlib);
 * :func:`hull_volume`, :func:`facet_volume` and :func:`hausdorff`: measures.
 """
 
@@ -43,7 +43,7 @@ __all__ = [
 ZERO_TOL = 1e-9  #: an S_ov within this distance of the origin (scaled units) is {0}
 CDD_REL_TOL = 1e-9  #: round-off of float cddlib relative to the extent
 FLAT = 1e-11  #: Hadamard ratio below which a simplex of the polar hull is flat
-JOGGLE = 1e-9  #: relative perturbation of the polar points before Qhull
+JOGGLE = 1e-9  #: relative perturbation of points before Qhull (polar points, a facet's points)
 WELL_APART = 0.05  #: facets through a point whose normals' smallest singular value exceeds this
 
 
