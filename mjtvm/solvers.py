@@ -17,6 +17,9 @@ raises :class:`~mjtvm.errors.SolverError`.
 
 from __future__ import annotations
 
+import os
+import sys
+import threading
 from dataclasses import dataclass
 from typing import Literal
 
@@ -29,7 +32,7 @@ from .errors import SolverError
 DROP_TOL = 1e-12  # coefficients at or below this are round-off (see assembly._Coo.add)
 _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
 
-__all__ = ["SOLVERS", "HighsSession", "LPSolution", "LinearProgram", "solve_lp"]
+__all__ = ["SOLVERS", "HighsSession", "new_highs", "LPSolution", "LinearProgram", "solve_lp"]
 
 SOLVERS = ("highs", "clarabel")
 LPStatus = Literal["optimal", "infeasible", "unbounded"]
@@ -65,6 +68,40 @@ def _highs():  # type: ignore[no-untyped-def]
     return highspy
 
 
+_FD_LOCK = threading.Lock()
+
+
+def new_highs():  # type: ignore[no-untyped-def]
+    """A new ``highspy.Highs`` whose start-up banner does not reach standard output.
+
+    highspy >= 1.16 writes "Running HiGHS ..." to file descriptor 1 from C++ when the first
+    ``Highs`` of a process is constructed, before any option (``output_flag``) can be set;
+    that breaks every JSON consumer of ``mjtvm solve``. File descriptor 1 is pointed at
+    ``/dev/null`` for the construction only (Python's own buffered output is flushed first,
+    so nothing of ours is lost); where descriptors cannot be duplicated it is left alone.
+    """
+    highspy = _highs()
+    with _FD_LOCK:
+        try:
+            sys.stdout.flush()
+        except (OSError, ValueError):  # closed or broken stdout: nothing of ours to keep
+            pass
+        try:
+            saved = os.dup(1)
+        except OSError:  # no descriptor 1 at all: nothing to protect
+            return highspy.Highs()
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(devnull, 1)
+            finally:
+                os.close(devnull)
+            return highspy.Highs()
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
 class HighsSession:
     r"""A HiGHS instance holding one LP, re-solved after small modifications.
 
@@ -77,7 +114,7 @@ class HighsSession:
     def __init__(self, lp: LinearProgram) -> None:
         highspy = _highs()
         self._hs = highspy
-        h = highspy.Highs()
+        h = new_highs()
         options = {
             "output_flag": False,
             "threads": 1,
