@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .contacts import force_generators, slide_unit, tangent_basis
-from .solvers import DROP_TOL
+from .solvers import DROP_REL
 from .state import GraspState
 
 __all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
@@ -54,6 +54,16 @@ def grasp_map_transpose(
     return np.hstack([np.eye(3), -skew])
 
 
+def _product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a @ b`` with the round-off of exact cancellations set to 0: an entry at most
+    :data:`~mjtvm.solvers.DROP_REL` times the sum of the magnitudes of its terms
+    (``|a| @ |b|``), e.g. ``n . (r x n)``. Relative to the terms, so a state written in
+    any unit system keeps every genuine coefficient, however small."""
+    out = a @ b
+    out[np.abs(out) <= DROP_REL * (np.abs(a) @ np.abs(b))] = 0.0
+    return out
+
+
 class _Coo:
     """Accumulates (row, col, value) triplets block by block."""
 
@@ -64,9 +74,9 @@ class _Coo:
 
     def add(self, row0: int, col0: int, block: NDArray[np.float64]) -> None:
         block = np.atleast_2d(block)
-        # Entries below DROP_TOL are round-off of exact cancellations (e.g. n . (r x n));
-        # every genuine coefficient (Jacobians, lever arms, generators) is far larger.
-        r, c = np.nonzero(np.abs(block) > DROP_TOL)
+        # Only exact zeros are left out: which tiny entries are round-off depends on the
+        # scale of their row and column, decided after equilibration (solvers.drop_roundoff).
+        r, c = np.nonzero(block)
         self.rows.append(r + row0)
         self.cols.append(c + col0)
         self.vals.append(block[r, c])
@@ -74,7 +84,7 @@ class _Coo:
     def add_entries(
         self, rows: NDArray[np.int64], cols: NDArray[np.int64], values: NDArray[np.float64]
     ) -> None:
-        keep = np.abs(values) > DROP_TOL
+        keep = values != 0.0
         self.rows.append(rows[keep])
         self.cols.append(cols[keep])
         self.vals.append(values[keep])
@@ -226,10 +236,14 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     # ---- statics, per copy (eq. 19-20 with f = E lam)
     gt = [grasp_map_transpose(c.position, state.object_position) for c in contacts]
     wrench_map = (
-        np.hstack([gt[i].T @ gens[i] for i in range(len(contacts))]) if contacts else np.zeros((big_d, 0))
+        np.hstack([_product(gt[i].T, gens[i]) for i in range(len(contacts))])
+        if contacts
+        else np.zeros((big_d, 0))
     )
     torque_map = (
-        np.hstack([c.jacobian.T @ g for c, g in zip(contacts, gens)]) if contacts else np.zeros((m, 0))
+        np.hstack([_product(c.jacobian.T, g) for c, g in zip(contacts, gens)])
+        if contacts
+        else np.zeros((m, 0))
     )
     wrench_rows = []
     for i in range(copies):
@@ -249,13 +263,13 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         else:
             sel = c.normal.reshape(1, -1)
         r0 = rows(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0])
-        coo.add(r0, qd0, sel @ c.jacobian)
-        coo_twist.add(r0, 0, -sel @ gt[ci])
+        coo.add(r0, qd0, _product(sel, c.jacobian))
+        coo_twist.add(r0, 0, -_product(sel, gt[ci]))
         if c.type == "S":  # tangential: T (J qd - G^T rdot) = -rho T s (eq. 13)
             tb = tangent_basis(c.normal)
             r0 = rows(0.0, 0.0, d - 1)
-            coo.add(r0, qd0, tb @ c.jacobian)
-            coo_twist.add(r0, 0, -tb @ gt[ci])
+            coo.add(r0, qd0, _product(tb, c.jacobian))
+            coo_twist.add(r0, 0, -_product(tb, gt[ci]))
             k = s_contacts.index(ci)
             if state.slip == "shared":  # one rho; the slide vectors' lengths set the ratios
                 s = c.slide_direction - (c.slide_direction @ c.normal) * c.normal  # type: ignore[operator]

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from .errors import SolverError
 from .hull import CDD_REL_TOL, cone_facets, reduce_points
 from .projection import LiftedPolytope, Projection, ProjectionStatus
-from .solvers import DROP_TOL
+from .solvers import DROP_REL
 
 __all__ = ["force_form", "project_cdd"]
 
@@ -51,14 +51,26 @@ def force_form(poly: LiftedPolytope) -> LiftedPolytope:
                 continue
             cols = np.arange(lam0 + sl.start, lam0 + sl.stop)
             keep[cols] = False
-            f_cols.append(a[:, cols] @ np.linalg.pinv(gens))
+            pinv = np.linalg.pinv(gens)
+            f = a[:, cols] @ pinv
+            # round-off of the pseudo-inverse: relative to the terms of each entry
+            f[np.abs(f) <= DROP_REL * (np.abs(a[:, cols]) @ np.abs(pinv))] = 0.0
+            f_cols.append(f)
             cones.append(cone_facets(gens))
     if not f_cols:
         return poly
     n_f = sum(c.shape[1] for c in f_cols)
+    top = np.hstack([a[:, np.flatnonzero(keep[:n_x])], *f_cols, a[:, poly.twist_cols]])
+    # Float cddlib mis-enumerates with round-off kept (Case 1-S: 34 lifted vertices instead
+    # of 68): an entry at most DROP_REL times the largest of its row (a half-space, which
+    # cddlib normalises) or of its column (a variable, whatever its unit) is dropped, e.g.
+    # the 1e-16 of a unit normal or a generator's cos(pi/2). Unit-invariant, unlike the
+    # former absolute 1e-12.
+    mag = np.abs(top)
+    row_max = np.max(mag, axis=1, keepdims=True, initial=0.0)
+    col_max = np.max(mag, axis=0, keepdims=True, initial=0.0)
+    top[mag <= DROP_REL * np.maximum(row_max, col_max)] = 0.0
     x_keep = np.flatnonzero(keep[:n_x])
-    top = np.hstack([a[:, x_keep], *f_cols, a[:, poly.twist_cols]])
-    top[np.abs(top) <= DROP_TOL] = 0.0  # round-off of the pseudo-inverse
     facets = sp.block_diag(cones).toarray()
     n_k, n_z = len(x_keep), a.shape[1] - n_x
     bottom = np.hstack([np.zeros((len(facets), n_k)), facets, np.zeros((len(facets), n_z))])

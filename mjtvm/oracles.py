@@ -53,7 +53,7 @@ class SupportOracle:
 
     def _solve(self, session: HighsSession, h: NDArray[np.float64]) -> LPSolution:
         cost = -(self.poly.generators.T @ (self.metric * h))  # max h^T (metric * rdot)
-        session.highs.changeColsCost(len(self.cols), self.cols, np.ascontiguousarray(cost))
+        session.set_costs(self.cols, cost)
         self.num_lps += 1
         return session.solve()
 
@@ -113,7 +113,8 @@ class RayShooter:
 
     def __call__(self, d: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
         """``t*`` and the unit outward normal of a hyperplane supporting :math:`S_{ov}` at ``c + t* d``."""
-        self.session.set_column(self.session.num_col - 1, self.rows, -d)
+        # rescale: the t column holds only these rows; a long d is scaled like a short one
+        self.session.set_column(self.session.num_col - 1, self.rows, -d, rescale=True)
         self.num_lps += 1
         sol = self.session.solve(duals=True)
         if sol.status != "optimal" or sol.x is None or sol.row_dual is None:

@@ -1,4 +1,4 @@
-r"""Linear-program backends called through their direct APIs.
+r"""Linear-program backends called through their direct APIs, on equilibrated LPs.
 
 A :class:`LinearProgram` is ``min c^T x`` s.t. ``row_lower <= A x <= row_upper``,
 ``col_lower <= x <= col_upper`` with a sparse CSC ``A``. Two backends:
@@ -9,10 +9,22 @@ A :class:`LinearProgram` is ``min c^T x`` s.t. ``row_lower <= A x <= row_upper``
   one column and some row bounds from the previous basis (the LPs of one state differ
   only there).
 * ``"clarabel"``: the Clarabel interior-point solver, used as an independent
-  cross-check.
+  cross-check and as the fallback when HiGHS cannot settle an LP.
 
-Statuses are ``"optimal"``, ``"infeasible"`` or ``"unbounded"``; anything else
-raises :class:`~mjtvm.errors.SolverError`.
+Scaling (a documented decision, issue 12): both backends see the LP after
+:func:`equilibrate` -- rows and columns multiplied by powers of 2 (so the scaling itself
+is exact) chosen by Ruiz passes over ``|[A | b]|``, the right-hand sides
+taking part so that a change of force or length unit, which multiplies the solution,
+is undone too. The solvers' absolute tolerances (1e-9) then mean the same thing in
+every unit system; solutions, objectives and duals are unscaled before they are
+returned. Coefficients are dropped only when they are round-off: at most
+:data:`DROP_REL` times the largest entry of both their row and their column, after
+equilibration (:func:`drop_roundoff`).
+
+HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from
+any call raises :class:`~mjtvm.errors.SolverError`. LP statuses are ``"optimal"``,
+``"infeasible"`` or ``"unbounded"``; anything else raises
+:class:`~mjtvm.errors.SolverError`.
 """
 
 from __future__ import annotations
@@ -20,8 +32,8 @@ from __future__ import annotations
 import os
 import sys
 import threading
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, replace
+from typing import Any, Literal
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,10 +41,27 @@ from numpy.typing import NDArray
 
 from .errors import SolverError
 
-DROP_TOL = 1e-12  # coefficients at or below this are round-off (see assembly._Coo.add)
+#: A coefficient at most DROP_REL times the largest (equilibrated) entry of its row and of
+#: its column is round-off of an exact cancellation (e.g. n . (r x n)) and is dropped.
+DROP_REL = 1e-12
+_HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
+_HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
 _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
+_PASSES = 12  # Ruiz passes; each halves the remaining log2 spread
 
-__all__ = ["SOLVERS", "HighsSession", "new_highs", "LPSolution", "LinearProgram", "solve_lp"]
+__all__ = [
+    "DROP_REL",
+    "SOLVERS",
+    "HighsSession",
+    "LPSolution",
+    "LinearProgram",
+    "Scaling",
+    "drop_roundoff",
+    "equilibrate",
+    "new_highs",
+    "solve_lp",
+    "solve_settled",
+]
 
 SOLVERS = ("highs", "clarabel")
 LPStatus = Literal["optimal", "infeasible", "unbounded"]
@@ -53,12 +82,167 @@ class LinearProgram:
 
 @dataclass(frozen=True, eq=False)
 class LPSolution:
-    """Status, primal solution (``None`` unless optimal) and objective of an LP."""
+    """Status, primal solution (``None`` unless optimal) and objective of an LP.
+
+    ``x``, ``objective`` and ``row_dual`` are in the LP's own (unscaled) units.
+    """
 
     status: LPStatus
     x: NDArray[np.float64] | None
     objective: float | None
     row_dual: NDArray[np.float64] | None = None  #: HiGHS' row duals, when asked for
+
+
+# ----------------------------------------------------------------- equilibration
+@dataclass(frozen=True, eq=False)
+class Scaling:
+    r"""Powers of 2 that equilibrate an LP: ``A_s = diag(row) A diag(col)``, ``x = col * x_s``.
+
+    Attributes
+    ----------
+    row
+        ``(m,)`` row factors (row bounds are multiplied by them).
+    col
+        ``(n,)`` column factors (column bounds are divided by them).
+    cost
+        The factor ``g`` of the scaled costs ``g * col * c``.
+    """
+
+    row: NDArray[np.float64]
+    col: NDArray[np.float64]
+    cost: float = 1.0
+
+
+def _pow2(x: NDArray[np.float64] | float) -> Any:
+    return np.exp2(np.round(np.log2(x)))
+
+
+def _extremes(indptr: NDArray[np.int64], data: NDArray[np.float64], size: int) -> tuple[Any, Any, Any]:
+    """Per compressed row (or column): min and max of ``data`` and whether it has entries."""
+    has = np.diff(indptr) > 0
+    lo, hi = np.zeros(size), np.zeros(size)
+    if data.size:
+        starts = indptr[:-1][has]
+        lo[has] = np.minimum.reduceat(data, starts)
+        hi[has] = np.maximum.reduceat(data, starts)
+    return lo, hi, has
+
+
+def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passes: int = _PASSES) -> Scaling:
+    r"""Row and column powers of 2 bringing the largest magnitude of every row and column of
+    ``|[A | rhs]|`` close to 1 (Ruiz equilibration).
+
+    Each pass divides every row, then every column, by the square root of its largest
+    magnitude (in log2, so that any magnitude within floating point is fine). ``rhs``
+    (``(m,)``, the magnitudes of the row bounds; infinite or zero entries ignored) then sets
+    one common factor of the variables bringing the largest scaled right-hand side to about
+    1: an LP whose bounds are all multiplied by 1e6 gets the same scaled LP.
+
+    Parameters
+    ----------
+    a
+        ``(m, n)`` constraint matrix.
+    rhs
+        ``(m,)`` magnitudes of the right-hand sides, or ``None``.
+
+    Returns
+    -------
+    Scaling
+        With ``cost = 1`` (see :func:`cost_scale`).
+    """
+    m, n = a.shape
+    coo = sp.coo_matrix(a)
+    keep = coo.data != 0.0
+    logs = np.log2(np.abs(coo.data[keep]))
+    csr = sp.csr_matrix((logs, (coo.row[keep], coo.col[keep])), shape=(m, n))
+    csr.sort_indices()
+    csc = csr.tocsc()
+    csc.sort_indices()
+    rho, kappa = np.zeros(m), np.zeros(n)
+    for _ in range(passes):
+        # Ruiz: divide every row, then every column, by the square root of its largest
+        # magnitude (in log2); the largest entry of every row and column tends to 1. Robust
+        # to tiny data entries (a 1e-12 normal component from the simulator), which a
+        # geometric mean would pull towards 1 at the expense of every other entry.
+        _, hi, has = _extremes(csr.indptr, csr.data + kappa[csr.indices], m)
+        step = np.where(has, (hi + rho) / 2, 0.0)
+        rho = rho - step
+        _, hi, has = _extremes(csc.indptr, csc.data + rho[csc.indices], n)
+        cstep = np.where(has, (hi + kappa) / 2, 0.0)
+        kappa = kappa - cstep
+        if max(np.max(np.abs(step), initial=0.0), np.max(np.abs(cstep), initial=0.0)) < 0.125:
+            break
+    rho, kappa = np.round(rho), np.round(kappa)  # powers of 2: the scaling is exact
+    # One common factor 2^k_b of the variables brings the largest scaled right-hand side to
+    # about 1 (x = 2^(kappa + k_b) x_s, rows 2^(rho - k_b)); rows are not scaled by their own
+    # right-hand side, so a row without coefficients (0 = 1e-17 of round-off) stays as small.
+    k_b = 0.0
+    if rhs is not None:
+        b = np.abs(np.asarray(rhs, dtype=float)) * np.exp2(rho)
+        b = b[np.isfinite(b) & (b > 0.0)]
+        if b.size:
+            k_b = float(np.round(np.log2(b.max())))
+    return Scaling(np.exp2(rho - k_b), np.exp2(kappa + k_b), 1.0)
+
+
+def cost_scale(c: NDArray[np.float64], col: NDArray[np.float64]) -> float:
+    """The power of 2 bringing the largest scaled cost ``|col * c|`` to about 1 (1 when c = 0)."""
+    big = float(np.max(np.abs(col * c), initial=0.0))
+    return float(_pow2(1.0 / big)) if big > 0.0 and np.isfinite(big) else 1.0
+
+
+def lp_scaling(lp: LinearProgram) -> Scaling:
+    """:func:`equilibrate` on ``lp`` (its finite row bounds as the right-hand side), with the cost factor."""
+    rhs = np.fmax(np.where(np.isfinite(lp.row_lower), np.abs(lp.row_lower), 0.0),
+                  np.where(np.isfinite(lp.row_upper), np.abs(lp.row_upper), 0.0))  # fmt: skip
+    s = equilibrate(lp.A, rhs=rhs)
+    return replace(s, cost=cost_scale(lp.c, s.col))
+
+
+def drop_roundoff(a: sp.spmatrix, *, rel: float = DROP_REL) -> sp.csc_matrix:
+    """``a`` (scaled or not) without the entries that are at most ``rel`` times the largest
+    magnitude of both their row and their column, after equilibration (module docstring)."""
+    s = equilibrate(a)
+    coo = sp.coo_matrix(a)
+    scaled = np.abs(coo.data) * s.row[coo.row] * s.col[coo.col]
+    row_max = np.zeros(a.shape[0])
+    col_max = np.zeros(a.shape[1])
+    np.maximum.at(row_max, coo.row, scaled)
+    np.maximum.at(col_max, coo.col, scaled)
+    keep = (scaled > rel * np.minimum(row_max[coo.row], col_max[coo.col])) & (coo.data != 0.0)
+    return sp.csc_matrix((coo.data[keep], (coo.row[keep], coo.col[keep])), shape=a.shape)
+
+
+def scale_lp(lp: LinearProgram, s: Scaling) -> LinearProgram:
+    """The equilibrated LP ``(g col c, diag(row) A diag(col), row * bounds, bounds / col)``,
+    round-off dropped (:func:`drop_roundoff` rule on the scaled matrix)."""
+    a = sp.csc_matrix(sp.diags(s.row) @ sp.csc_matrix(lp.A) @ sp.diags(s.col))
+    coo = a.tocoo()
+    mag = np.abs(coo.data)
+    row_max, col_max = np.zeros(a.shape[0]), np.zeros(a.shape[1])
+    np.maximum.at(row_max, coo.row, mag)
+    np.maximum.at(col_max, coo.col, mag)
+    keep = (mag > DROP_REL * np.minimum(row_max[coo.row], col_max[coo.col])) & (coo.data != 0.0)
+    a = sp.csc_matrix((coo.data[keep], (coo.row[keep], coo.col[keep])), shape=a.shape)
+    with np.errstate(invalid="ignore"):  # inf * positive stays inf
+        return LinearProgram(
+            s.cost * s.col * np.asarray(lp.c, dtype=float),
+            a,
+            s.row * lp.row_lower,
+            s.row * lp.row_upper,
+            lp.col_lower / s.col,
+            lp.col_upper / s.col,
+        )
+
+
+def unscale(sol: LPSolution, s: Scaling) -> LPSolution:
+    r"""The solution of the original LP from that of :func:`scale_lp`'s: ``x = col x_s``,
+    objective ``/ g`` and row duals ``row y_s / g`` (from ``g col c = col A^T row y_s``)."""
+    if sol.status != "optimal" or sol.x is None:
+        return sol
+    y = None if sol.row_dual is None else s.row * sol.row_dual / s.cost
+    obj = None if sol.objective is None else sol.objective / s.cost
+    return LPSolution("optimal", s.col * sol.x, obj, y)
 
 
 # ----------------------------------------------------------------------- HiGHS
@@ -103,101 +287,198 @@ def new_highs():  # type: ignore[no-untyped-def]
 
 
 class HighsSession:
-    r"""A HiGHS instance holding one LP, re-solved after small modifications.
+    r"""A HiGHS instance holding one equilibrated LP, re-solved after small modifications.
+
+    Every method takes and returns the LP's own (unscaled) values; the session scales
+    them with its :class:`Scaling`. Every HiGHS call's status is checked: ``kWarning`` is
+    accepted, ``kError`` raises :class:`~mjtvm.errors.SolverError` naming the call.
 
     Parameters
     ----------
     lp
         The initial LP.
+    scaling
+        Precomputed factors (e.g. once per state for Problem 2); default
+        :func:`lp_scaling` of ``lp``.
     """
 
-    def __init__(self, lp: LinearProgram) -> None:
+    def __init__(self, lp: LinearProgram, *, scaling: Scaling | None = None) -> None:
         highspy = _highs()
         self._hs = highspy
+        s = lp_scaling(lp) if scaling is None else scaling
+        self.scaling = s
+        self._col = np.array(s.col, dtype=float)  # per-column factors (set_column may change one)
+        self._cost = np.array(lp.c, dtype=float)  # unscaled costs, bounds: re-scaled on change
+        self._col_lower = np.array(lp.col_lower, dtype=float)
+        self._col_upper = np.array(lp.col_upper, dtype=float)
+        slp = scale_lp(lp, s)
         h = new_highs()
+        self.highs = h
         options = {
             "output_flag": False,
             "threads": 1,
             "presolve": "off",  # the LPs are small and re-solved warm: presolve costs more than it saves
             "primal_feasibility_tolerance": FEASIBILITY_TOL,
             "dual_feasibility_tolerance": FEASIBILITY_TOL,
-            # HiGHS drops smaller entries with a warning; the assembly drops the same ones.
-            "small_matrix_value": DROP_TOL,
+            # Round-off is dropped by scale_lp; HiGHS must keep every other entry.
+            "small_matrix_value": _HIGHS_SMALL,
         }
         for name, value in options.items():
-            if h.setOptionValue(name, value) != highspy.HighsStatus.kOk:
-                raise SolverError("highs", f"option {name}={value!r} rejected")
+            self._check(h.setOptionValue(name, value), f"option {name}={value!r} rejected")
+        a = slp.A
+        self._check_magnitudes(a.data, "passModel")
         model = highspy.HighsLp()
-        n = lp.A.shape[1]
+        n = a.shape[1]
         model.num_col_ = n
-        model.num_row_ = lp.A.shape[0]
+        model.num_row_ = a.shape[0]
         inf = highspy.kHighsInf
-        model.col_cost_ = np.asarray(lp.c, dtype=float)
-        model.col_lower_ = np.where(np.isfinite(lp.col_lower), lp.col_lower, -inf)
-        model.col_upper_ = np.where(np.isfinite(lp.col_upper), lp.col_upper, inf)
-        model.row_lower_ = np.where(np.isfinite(lp.row_lower), lp.row_lower, -inf)
-        model.row_upper_ = np.where(np.isfinite(lp.row_upper), lp.row_upper, inf)
-        a = sp.csc_matrix(lp.A)
+        model.col_cost_ = np.asarray(slp.c, dtype=float)
+        model.col_lower_ = np.where(np.isfinite(slp.col_lower), slp.col_lower, -inf)
+        model.col_upper_ = np.where(np.isfinite(slp.col_upper), slp.col_upper, inf)
+        model.row_lower_ = np.where(np.isfinite(slp.row_lower), slp.row_lower, -inf)
+        model.row_upper_ = np.where(np.isfinite(slp.row_upper), slp.row_upper, inf)
         model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
         model.a_matrix_.start_ = a.indptr
         model.a_matrix_.index_ = a.indices
         model.a_matrix_.value_ = a.data
         model.a_matrix_.num_col_ = n
         model.a_matrix_.num_row_ = a.shape[0]
-        status = h.passModel(model)
-        if status != highspy.HighsStatus.kOk:
-            raise SolverError("highs", f"passModel: {status}")
-        self.highs = h
+        self._check(h.passModel(model), "passModel")
+        # Largest scaled magnitude per row: the reference of set_column's round-off drop.
+        self._row_max = np.zeros(a.shape[0])
+        if a.nnz:
+            np.maximum.at(self._row_max, a.indices, np.abs(a.data))
         self.num_col = n
         self._options = dict(_HIGHS_DEFAULTS)  # what the retries in solve() restore
 
+    def _check(self, status: Any, what: str) -> None:
+        """kOk and kWarning pass (a warning is HiGHS informing, e.g. of a dropped tiny
+        value, which scale_lp has made impossible for data); kError raises."""
+        if status == self._hs.HighsStatus.kError:
+            raise SolverError("highs", f"{what}: {status}")
+
+    @staticmethod
+    def _check_magnitudes(values: NDArray[np.float64], what: str) -> None:
+        """HiGHS drops scaled entries below 1e-12 with only a warning (a silent wrong
+        answer) and refuses those above 1e15; after equilibration either means data
+        spanning more than ~27 orders of magnitude, which is reported instead."""
+        mag = np.abs(values[values != 0.0])
+        if mag.size and (mag.min() <= _HIGHS_SMALL or mag.max() >= _HIGHS_LARGE):
+            raise SolverError(
+                "highs",
+                f"{what}: an equilibrated coefficient is outside [1e-12, 1e15] "
+                f"({mag.min():.3g} .. {mag.max():.3g}): the data span too many orders of magnitude",
+            )
+
+    def column_scale(self, col: int) -> float:
+        """The factor of column ``col`` (its equilibrated value is ``x[col] / factor``)."""
+        return float(self._col[col])
+
     def set_option(self, name: str, value: object) -> None:
         """Set a HiGHS option for this session's solves (kept after :meth:`solve`'s retries)."""
-        if self.highs.setOptionValue(name, value) != self._hs.HighsStatus.kOk:
-            raise SolverError("highs", f"option {name}={value!r} rejected")
+        self._check(self.highs.setOptionValue(name, value), f"option {name}={value!r} rejected")
         self._options[name] = value
 
-    def set_column(self, col: int, rows: NDArray[np.int64], values: NDArray[np.float64]) -> None:
-        """Overwrite ``A[rows, col]`` (entries outside ``rows`` are left as they are)."""
-        change = self.highs.changeCoeff
-        for r, v in zip(rows.tolist(), values.tolist()):
-            change(r, col, v if abs(v) > DROP_TOL else 0.0)
+    def set_column(
+        self, col: int, rows: NDArray[np.int64], values: NDArray[np.float64], *, rescale: bool = False
+    ) -> None:
+        """Overwrite ``A[rows, col]`` (entries outside ``rows`` are left as they are).
+
+        With ``rescale``, ``rows`` must hold every non-zero of the column: its factor is
+        chosen again from ``values`` (and its bounds and cost re-scaled), so that a column
+        1e15 times larger than the first one is as well conditioned.
+        """
+        rows = np.asarray(rows, dtype=np.int64)
+        v = self.scaling.row[rows] * np.asarray(values, dtype=float)
+        if rescale:
+            nz = np.abs(v[v != 0.0])
+            factor = float(_pow2(1.0 / np.sqrt(nz.min() * nz.max()))) if nz.size else 1.0
+            if factor != self._col[col]:
+                self._col[col] = factor
+                self._push_col_bounds(col)
+                self._push_costs()
+        v = v * self._col[col]
+        mag = np.abs(v)
+        ref = np.minimum(self._row_max[rows], float(mag.max(initial=0.0)))
+        v[mag <= DROP_REL * ref] = 0.0  # round-off, as in scale_lp
+        self._check_magnitudes(v, "changeCoeff")
+        change, check = self.highs.changeCoeff, self._check
+        for r, x in zip(rows.tolist(), v.tolist()):
+            check(change(r, col, x), "changeCoeff")
 
     def set_row_bounds(
         self, rows: NDArray[np.int64], lower: NDArray[np.float64], upper: NDArray[np.float64]
     ) -> None:
         """Change the bounds of some rows."""
-        self.highs.changeRowsBounds(len(rows), np.asarray(rows, dtype=np.int32), lower, upper)
+        f = self.scaling.row[rows]
+        lo, up = f * np.asarray(lower, dtype=float), f * np.asarray(upper, dtype=float)
+        inf = self._hs.kHighsInf
+        lo = np.where(np.isfinite(lo), lo, -inf)
+        up = np.where(np.isfinite(up), up, inf)
+        status = self.highs.changeRowsBounds(len(rows), np.asarray(rows, dtype=np.int32), lo, up)
+        self._check(status, "changeRowsBounds")
+
+    def _push_col_bounds(self, col: int) -> None:
+        inf = self._hs.kHighsInf
+        lo, up = self._col_lower[col] / self._col[col], self._col_upper[col] / self._col[col]
+        lo = lo if np.isfinite(lo) else -inf
+        up = up if np.isfinite(up) else inf
+        self._check(self.highs.changeColBounds(col, lo, up), "changeColBounds")
+
+    def _push_costs(self) -> None:
+        g = cost_scale(self._cost, self._col)
+        self.scaling = replace(self.scaling, cost=g)
+        n = len(self._cost)
+        cost = np.ascontiguousarray(g * self._col * self._cost)
+        self._check(self.highs.changeColsCost(n, np.arange(n, dtype=np.int32), cost), "changeColsCost")
 
     def set_col_bounds(self, col: int, lower: float, upper: float) -> None:
         """Change one variable's bounds."""
-        self.highs.changeColBounds(col, lower, upper)
+        self._col_lower[col], self._col_upper[col] = lower, upper
+        self._push_col_bounds(col)
+
+    def set_costs(self, cols: NDArray[np.int32], values: NDArray[np.float64]) -> None:
+        """Change some costs (the cost factor is chosen again from all of them)."""
+        self._cost[np.asarray(cols)] = values
+        self._push_costs()
+
+    def _run(self) -> Any:
+        """``run`` and the model status; a kError run counts as a solve error (retried)."""
+        h, ms = self.highs, self._hs.HighsModelStatus
+        if h.run() == self._hs.HighsStatus.kError:
+            return ms.kSolveError
+        return h.getModelStatus()
 
     def solve(self, *, duals: bool = False) -> LPSolution:
         """Run HiGHS from the current basis and classify the outcome (with the row duals if
-        ``duals`` and optimal)."""
+        ``duals`` and optimal), in the LP's own units."""
         h, ms = self.highs, self._hs.HighsModelStatus
-        h.run()
-        status = h.getModelStatus()
+        status = self._run()
         # A warm-started dual simplex can stop without a verdict: dual infeasibility
         # (unbounded or infeasible) or, seen on infeasible lift states, "Unknown" with a stuck
         # basis. Settle it from cold starts: dual simplex, primal simplex, interior point (each
-        # failed alone on some lift LP that the next one certified); otherwise raise.
+        # failed alone on some lift LP that the next one certified); otherwise raise (the
+        # callers that can fall back to Clarabel do: solve_settled, tvmmp).
         retries: tuple[dict[str, object], ...] = ({}, {"simplex_strategy": 4}, {"solver": "ipm"})
         for options in retries:
             if status not in (ms.kUnboundedOrInfeasible, ms.kUnknown, ms.kSolveError):
                 break
-            h.clearSolver()
+            self._check(h.clearSolver(), "clearSolver")
             for name, value in options.items():
-                h.setOptionValue(name, value)
-            h.run()
-            status = h.getModelStatus()
+                self._check(h.setOptionValue(name, value), f"option {name}={value!r} rejected")
+            status = self._run()
             for name in options:
-                h.setOptionValue(name, self._options[name])
+                self._check(h.setOptionValue(name, self._options[name]), f"option {name} restore")
         if status == ms.kOptimal:
             sol = h.getSolution()
             y = np.array(sol.row_dual) if duals else None
-            return LPSolution("optimal", np.array(sol.col_value), float(h.getObjectiveValue()), y)
+            g = self.scaling.cost
+            return LPSolution(
+                "optimal",
+                self._col * np.array(sol.col_value),
+                float(h.getObjectiveValue()) / g,
+                None if y is None else self.scaling.row * y / g,
+            )
         if status == ms.kInfeasible:
             return LPSolution("infeasible", None, None)
         if status == ms.kUnbounded:
@@ -210,6 +491,7 @@ _CLARABEL_OK = {"Solved": "optimal", "PrimalInfeasible": "infeasible", "DualInfe
 
 
 def _solve_clarabel(lp: LinearProgram) -> LPSolution:
+    """Clarabel on ``lp`` as given (callers pass it equilibrated)."""
     import clarabel
 
     a = sp.csc_matrix(lp.A)
@@ -255,10 +537,112 @@ def _solve_clarabel(lp: LinearProgram) -> LPSolution:
     return LPSolution("optimal", np.array(result.x), float(result.obj_val))
 
 
-def solve_lp(lp: LinearProgram, *, solver: str = "highs") -> LPSolution:
-    """Solve one LP with the named backend (``"highs"`` or ``"clarabel"``)."""
+def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSolution:
+    """Clarabel on the equilibrated ``lp`` (:func:`lp_scaling` unless ``scaling``), unscaled."""
+    s = lp_scaling(lp) if scaling is None else scaling
+    try:
+        return unscale(_solve_clarabel(scale_lp(lp, s)), s)
+    except SolverError as e:
+        # Clarabel equilibrates again inside; on a few infeasible lift LPs it stalls
+        # (MaxIterations) on our scaled form and certifies the LP as given. Retry that once.
+        try:
+            return _solve_clarabel(lp)
+        except SolverError:
+            raise e from None
+
+
+def solve_lp(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling | None = None) -> LPSolution:
+    """Solve one LP with the named backend (``"highs"`` or ``"clarabel"``), equilibrated."""
     if solver == "highs":
-        return HighsSession(lp).solve()
+        return HighsSession(lp, scaling=scaling).solve()
     if solver == "clarabel":
-        return _solve_clarabel(lp)
+        return solve_clarabel(lp, scaling=scaling)
     raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Settled:
+    """An LP's solution, the backend whose verdict it is, and a note when the backends
+    disagreed or one of them failed (``None`` otherwise)."""
+
+    solution: LPSolution
+    solver: str
+    note: str | None = None
+
+
+def _feasible_clarabel(lp: LinearProgram, s: Scaling) -> bool:
+    """Whether Clarabel finds ``lp``'s constraints feasible (zero cost: no unbounded ray to
+    confuse with infeasibility)."""
+    zero = replace(lp, c=np.zeros_like(np.asarray(lp.c, dtype=float)))
+    return solve_clarabel(zero, scaling=replace(s, cost=1.0)).status == "optimal"
+
+
+def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Settled:
+    """Clarabel, with a verdict of ``infeasible`` or ``unbounded`` cross-checked before it is
+    reported: an interior-point method can mistake one for the other on badly scaled data,
+    so a cold HiGHS solve must agree; otherwise a Clarabel feasibility re-solve decides
+    between them (and the disagreement is noted); if nothing settles it, SolverError."""
+    s = lp_scaling(lp) if scaling is None else scaling
+    try:
+        sol = solve_clarabel(lp, scaling=s)
+    except SolverError as e:  # Clarabel could not settle it: HiGHS, noted
+        try:
+            rescue = HighsSession(lp, scaling=s).solve()
+        except SolverError as e2:
+            raise SolverError("clarabel", f"{e.status}; fallback highs: {e2.status}") from e
+        return Settled(rescue, "highs", f"clarabel: {e.status}; settled by highs: {rescue.status}")
+    if sol.status == "optimal":
+        return Settled(sol, "clarabel")
+    checked: LPSolution | None = None
+    try:
+        checked = HighsSession(lp, scaling=s).solve()
+    except SolverError as e:
+        err = e
+    other = checked
+    if other is not None and other.status == sol.status:
+        return Settled(sol, "clarabel")
+    feasible = _feasible_clarabel(lp, s)
+    if other is None:
+        if feasible == (sol.status == "unbounded"):
+            return Settled(
+                sol, "clarabel", f"highs failed ({err.status}); clarabel's feasibility re-solve agrees"
+            )
+        raise SolverError(
+            "clarabel", f"{sol.status}, contradicted by its feasibility re-solve; highs: {err.status}"
+        ) from err
+    if feasible == (other.status != "infeasible"):
+        return Settled(
+            other,
+            "highs",
+            f"clarabel said {sol.status}; highs and clarabel's feasibility re-solve: {other.status}",
+        )
+    raise SolverError("clarabel", f"{sol.status}; highs: {other.status}; feasibility re-solve: {feasible}")
+
+
+def solve_settled(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling | None = None) -> Settled:
+    """One LP settled as :func:`clarabel_checked` (``"clarabel"``) or by HiGHS with its cold
+    retries and then Clarabel as the fallback (``"highs"``); SolverError, chained to
+    HiGHS' own, only when neither settles it."""
+    if solver == "clarabel":
+        return clarabel_checked(lp, scaling=scaling)
+    if solver != "highs":
+        raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+    try:
+        return Settled(HighsSession(lp, scaling=scaling).solve(), "highs")
+    except SolverError as e:
+        return fallback(lp, e, scaling=scaling)
+
+
+def fallback(lp: LinearProgram, error: SolverError, *, scaling: Scaling | None = None) -> Settled:
+    """After HiGHS failed with ``error``: Clarabel's checked verdict, noted; SolverError
+    (chained to ``error``) when Clarabel fails too."""
+    s = lp_scaling(lp) if scaling is None else scaling
+    try:
+        sol = solve_clarabel(lp, scaling=s)
+        if sol.status != "optimal":  # an interior-point verdict alone is not enough: re-solve
+            feasible = _feasible_clarabel(lp, s)
+            if feasible != (sol.status == "unbounded"):
+                raise SolverError("clarabel", f"{sol.status}, contradicted by its feasibility re-solve")
+    except SolverError as e2:
+        raise SolverError("highs", f"{error.status}; fallback clarabel: {e2.status}") from error
+    return Settled(sol, "clarabel", f"highs: {error.status}; settled by clarabel: {sol.status}")

@@ -23,7 +23,18 @@ from numpy.typing import NDArray
 
 from .assembly import Assembly, BoxForm, assemble
 from .errors import SolverError, StateError
-from .solvers import DROP_TOL, SOLVERS, HighsSession, LinearProgram, LPSolution, solve_lp
+from .solvers import (
+    DROP_REL,
+    SOLVERS,
+    HighsSession,
+    LinearProgram,
+    Scaling,
+    Settled,
+    clarabel_checked,
+    cost_scale,
+    equilibrate,
+    fallback,
+)
 from .state import GraspState, json_floats
 
 __all__ = ["PairStatus", "Timings", "TvmmpResult", "Witness", "tvmmp"]
@@ -113,7 +124,15 @@ class TvmmpResult:
     timings
         :class:`Timings`.
     solver, box
-        The backend and the operation-range form used.
+        The backend asked for and the operation-range form used.
+    settled_by
+        ``K`` tuples of ``R``: the backend whose verdict each pair reports (``"highs"`` or
+        ``"clarabel"``; ``None`` where skipped). It differs from ``solver`` where HiGHS
+        could not settle an LP and Clarabel did, or where Clarabel's infeasible/unbounded
+        verdict was overruled by HiGHS and a feasibility re-solve.
+    notes
+        ``((k, l), message)`` for every LP on which a backend failed or the backends
+        disagreed (``l = -1``: the balance-only LP of a state without non-zero RVDS vertex).
     """
 
     alpha: NDArray[np.float64]
@@ -126,6 +145,8 @@ class TvmmpResult:
     timings: Timings
     solver: str
     box: BoxForm
+    settled_by: tuple[tuple[str | None, ...], ...] = ()
+    notes: tuple[tuple[tuple[int, int], str], ...] = ()
 
     def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
         """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
@@ -141,6 +162,8 @@ class TvmmpResult:
             "distribution": [None if v is None else json_floats(v) for v in self.distribution],
             "limiting": None if self.limiting is None else list(self.limiting),
             "solver": self.solver,
+            "settled_by": [list(b) for b in self.settled_by],
+            "notes": [{"pair": list(p), "message": m} for p, m in self.notes],
             "box": self.box,
             "timings": {
                 "assemble_s": self.timings.assemble_s,
@@ -168,7 +191,12 @@ def _witness(
 
 
 class _Problem2:
-    """The LPs of one state: variables of the assembly, then ``alpha`` (last column)."""
+    """The LPs of one state: variables of the assembly, then ``alpha`` (last column).
+
+    The equilibration (:func:`~mjtvm.solvers.equilibrate`) is computed once per state, on
+    ``[A | A_twist]`` with the largest REFS magnitudes as right-hand side; only the factor of
+    the alpha column is chosen per RVDS vertex (its entries are ``A_twist r_l``).
+    """
 
     def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
         self.state, self.solver = state, solver
@@ -181,19 +209,35 @@ class _Problem2:
         self.col_upper = np.append(asm.col_upper, np.inf)
         self.kin = asm.kinematic_rows
         self.twist_rows = asm.A_twist.tocsr()[self.kin].toarray()
+        self.abs_twist_rows = np.abs(self.twist_rows)
         self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
+        lower, upper = asm.statics_bounds(np.max(np.abs(state.refs), axis=0))
+        rhs = np.fmax(
+            np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
+        )
+        s = equilibrate(sp.hstack([asm.A, asm.A_twist], format="csc"), rhs=rhs)
+        self.row_scale, self.col_scale = s.row, s.col[:n]
         self.session: HighsSession | None = None
+
+    def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without the
+        round-off of exact cancellations: entries at most DROP_REL times the sum of the
+        magnitudes they were computed from."""
+        col = self.twist_rows @ r
+        col[np.abs(col) <= DROP_REL * (self.abs_twist_rows @ np.abs(r))] = 0.0
+        return col
 
     def lp(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
-    ) -> LinearProgram:
-
-        col = self.asm.A_twist @ r  # the alpha column: A_twist (alpha r_l)
-        col[np.abs(col) <= DROP_TOL] = 0.0
+    ) -> tuple[LinearProgram, Scaling]:
+        """The LP of pair (w, r) and its scaling (the alpha factor from its column)."""
+        kin_col = self.column(r)
+        col = np.zeros(self.asm.A.shape[0])
+        col[self.kin] = kin_col
         lower, upper = self.asm.statics_bounds(w)
         cu = self.col_upper.copy()
         cu[-1] = alpha_max
-        return LinearProgram(
+        lp = LinearProgram(
             self.c,
             sp.hstack([self.asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csc"),
             lower,
@@ -201,20 +245,34 @@ class _Problem2:
             self.col_lower,
             cu,
         )
+        nz = np.abs(self.row_scale[self.kin] * kin_col)
+        nz = nz[nz > 0.0]
+        factor = float(np.exp2(np.round(-np.log2(np.sqrt(nz.min() * nz.max()))))) if nz.size else 1.0
+        col_s = np.append(self.col_scale, factor)
+        return lp, Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
 
     def solve(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
-    ) -> LPSolution:
+    ) -> tuple[Settled, float]:
+        """The settled LP of (w, r) and the alpha column's factor (alpha / factor is the
+        equilibrated alpha, compared with ZERO_ALPHA)."""
         if self.solver != "highs":
-            return solve_lp(self.lp(w, r, alpha_max=alpha_max), solver=self.solver)
-        if self.session is None:
-            self.session = HighsSession(self.lp(w, r, alpha_max=alpha_max))
-            return self.session.solve()
-        s = self.session
-        s.set_column(self.alpha_col, self.kin, self.twist_rows @ r)
-        s.set_row_bounds(self.wrench_rows, -w, -w)
-        s.set_col_bounds(self.alpha_col, 0.0, alpha_max)
-        return s.solve()
+            lp, s = self.lp(w, r, alpha_max=alpha_max)
+            return clarabel_checked(lp, scaling=s), float(s.col[-1])
+        try:
+            if self.session is None:
+                lp, s = self.lp(w, r, alpha_max=alpha_max)
+                self.session = HighsSession(lp, scaling=s)
+            else:
+                ses = self.session
+                ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
+                ses.set_row_bounds(self.wrench_rows, -w, -w)
+                ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+            return Settled(self.session.solve(), "highs"), self.session.column_scale(self.alpha_col)
+        except SolverError as e:
+            self.session = None  # its basis may be what went wrong: the next LP starts afresh
+            lp, s = self.lp(w, r, alpha_max=alpha_max)
+            return fallback(lp, e, scaling=s), float(s.col[-1])
 
 
 def tvmmp(
@@ -260,6 +318,8 @@ def tvmmp(
     alpha = np.full((n_k, n_l), np.nan)
     status: list[list[PairStatus]] = [["skipped"] * n_l for _ in range(n_k)]
     wit: list[list[Witness | None]] = [[None] * n_l for _ in range(n_k)]
+    by: list[list[str | None]] = [[None] * n_l for _ in range(n_k)]
+    notes: list[tuple[tuple[int, int], str]] = []
     nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]  # Supplement 3: skip the origin
     feasible = True
     num_lps = 0
@@ -269,22 +329,30 @@ def tvmmp(
         todo = nonzero if nonzero else [None]
         for l in todo:
             r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+            pair = (k, -1 if l is None else l)
             try:
-                sol = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
+                settled, factor = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
             except SolverError as e:
-                raise SolverError(e.solver, e.status, (k, -1 if l is None else l)) from e
+                raise SolverError(e.solver, e.status, pair) from e
+            sol = settled.solution
             num_lps += 1
+            if settled.note is not None:
+                notes.append((pair, settled.note))
             if sol.status == "infeasible":
                 feasible = False
                 for ll in nonzero:
                     status[k][ll] = "infeasible"
+                    by[k][ll] = settled.solver
                 break
             if l is None:
                 continue
             status[k][l] = sol.status
+            by[k][l] = settled.solver
             if sol.status == "optimal" and sol.x is not None:
                 a = float(sol.x[problem.alpha_col])
-                a = 0.0 if abs(a) <= ZERO_ALPHA else a
+                # ZERO_ALPHA applies to the equilibrated alpha (the solver's tolerance is
+                # there), so that the rounding to 0 does not depend on the unit system.
+                a = 0.0 if abs(a) <= ZERO_ALPHA * factor else a
                 alpha[k, l] = a
                 if witnesses:
                     wit[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
@@ -316,4 +384,6 @@ def tvmmp(
         timings=Timings(t1 - t0, t2 - t1, t2 - t0, num_lps),
         solver=solver,
         box=box,
+        settled_by=tuple(tuple(b) for b in by),
+        notes=tuple(notes),
     )
