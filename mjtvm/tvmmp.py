@@ -13,6 +13,7 @@ the column of ``alpha`` (``A_twist @ r_l``) and the right-hand side of the balan
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -31,17 +32,40 @@ from .solvers import (
     Scaling,
     Settled,
     clarabel_checked,
+    column_factor,
     cost_scale,
     equilibrate,
     fallback,
 )
-from .state import GraspState, json_floats
+from .state import GraspState
 
 __all__ = ["PairStatus", "Timings", "TvmmpResult", "Witness", "tvmmp"]
 
 PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
 RESULT_SCHEMA = "mjtvm.result/1"
-ZERO_ALPHA = 1e-9  # |alpha| below this is reported as an exact 0 (solver tolerance 1e-9)
+ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
+
+
+def finite_floats(values: Any) -> Any:
+    """Nested lists of floats for JSON with every NaN or infinity as ``None`` (JSON has
+    neither; ``json.dumps(..., allow_nan=False)`` holds on every document), signed zeros as
+    0.0. An overflow (e.g. ``alpha * r`` for an RVDS entry near 1e308) becomes ``None``."""
+    a = np.asarray(values, dtype=float) + 0.0
+    if a.ndim == 0:
+        return float(a) if np.isfinite(a) else None
+    out = a.tolist()
+    return out if np.all(np.isfinite(a)) else _none_nan(out)
+
+
+def _none_nan(x: Any) -> Any:
+    if isinstance(x, list):
+        return [_none_nan(v) for v in x]
+    return x if math.isfinite(x) else None
+
+
+def finite_or_none(x: float | None) -> float | None:
+    """``x`` when finite, else ``None`` (JSON has no NaN or infinity)."""
+    return None if x is None or not math.isfinite(x) else float(x)
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,13 +103,13 @@ class Witness:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
         return {
-            "alpha": self.alpha,
-            "twist": json_floats(self.twist),
-            "forces": json_floats(self.forces),
-            "torques": json_floats(self.torques),
-            "speeds": json_floats(self.speeds),
-            "slip_speeds": json_floats(self.slip_speeds),
-            "box": json_floats(self.box),
+            "alpha": finite_or_none(self.alpha),
+            "twist": finite_floats(self.twist),
+            "forces": finite_floats(self.forces),
+            "torques": finite_floats(self.torques),
+            "speeds": finite_floats(self.speeds),
+            "slip_speeds": finite_floats(self.slip_speeds),
+            "box": finite_floats(self.box),
         }
 
 
@@ -152,14 +176,14 @@ class TvmmpResult:
         """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
         out: dict[str, Any] = {
             "schema": RESULT_SCHEMA,
-            "tvmmp": self.tvmmp,
+            "tvmmp": finite_or_none(self.tvmmp),
             "feasible": self.feasible,
             "alpha": [
-                [None if s != "optimal" else float(a) for a, s in zip(ar, sr)]
+                [None if s != "optimal" else finite_or_none(a) for a, s in zip(ar, sr)]
                 for ar, sr in zip(self.alpha, self.status)
             ],
             "status": [list(s) for s in self.status],
-            "distribution": [None if v is None else json_floats(v) for v in self.distribution],
+            "distribution": [None if v is None else finite_floats(v) for v in self.distribution],
             "limiting": None if self.limiting is None else list(self.limiting),
             "solver": self.solver,
             "settled_by": [list(b) for b in self.settled_by],
@@ -216,7 +240,7 @@ class _Problem2:
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
         s = equilibrate(sp.hstack([asm.A, asm.A_twist], format="csc"), rhs=rhs)
-        self.row_scale, self.col_scale = s.row, s.col[:n]
+        self.row_scale, self.col_scale, self.twist_scale = s.row, s.col[:n], s.col[n:]
         self.session: HighsSession | None = None
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -226,6 +250,14 @@ class _Problem2:
         col = self.twist_rows @ r
         col[np.abs(col) <= DROP_REL * (self.abs_twist_rows @ np.abs(r))] = 0.0
         return col
+
+    def zero_alpha(self, r: NDArray[np.float64]) -> float:
+        """The alpha below which the twist alpha r_l is within ZERO_ALPHA (the solver's
+        tolerance) of 0 in the equilibrated twist variables (the columns of ``A_twist``,
+        whose factors follow the units of the state): such an alpha is reported as 0, the
+        same in every unit system."""
+        big = float(np.max(np.abs(r) / self.twist_scale, initial=0.0))
+        return ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA
 
     def lp(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
@@ -245,20 +277,15 @@ class _Problem2:
             self.col_lower,
             cu,
         )
-        nz = np.abs(self.row_scale[self.kin] * kin_col)
-        nz = nz[nz > 0.0]
-        factor = float(np.exp2(np.round(-np.log2(np.sqrt(nz.min() * nz.max()))))) if nz.size else 1.0
+        factor = column_factor(self.row_scale[self.kin] * kin_col)
         col_s = np.append(self.col_scale, factor)
         return lp, Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
 
-    def solve(
-        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
-    ) -> tuple[Settled, float]:
-        """The settled LP of (w, r) and the alpha column's factor (alpha / factor is the
-        equilibrated alpha, compared with ZERO_ALPHA)."""
+    def solve(self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf) -> Settled:
+        """The settled LP of (w, r): HiGHS warm, Clarabel on failure; or Clarabel checked."""
         if self.solver != "highs":
             lp, s = self.lp(w, r, alpha_max=alpha_max)
-            return clarabel_checked(lp, scaling=s), float(s.col[-1])
+            return clarabel_checked(lp, scaling=s)
         try:
             if self.session is None:
                 lp, s = self.lp(w, r, alpha_max=alpha_max)
@@ -268,11 +295,11 @@ class _Problem2:
                 ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
                 ses.set_row_bounds(self.wrench_rows, -w, -w)
                 ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
-            return Settled(self.session.solve(), "highs"), self.session.column_scale(self.alpha_col)
+            return Settled(self.session.solve(), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
             lp, s = self.lp(w, r, alpha_max=alpha_max)
-            return fallback(lp, e, scaling=s), float(s.col[-1])
+            return fallback(lp, e, scaling=s)
 
 
 def tvmmp(
@@ -331,7 +358,7 @@ def tvmmp(
             r = rvds[l] if l is not None else np.zeros(state.twist_dim)
             pair = (k, -1 if l is None else l)
             try:
-                settled, factor = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
+                settled = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
             except SolverError as e:
                 raise SolverError(e.solver, e.status, pair) from e
             sol = settled.solution
@@ -350,9 +377,9 @@ def tvmmp(
             by[k][l] = settled.solver
             if sol.status == "optimal" and sol.x is not None:
                 a = float(sol.x[problem.alpha_col])
-                # ZERO_ALPHA applies to the equilibrated alpha (the solver's tolerance is
+                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
                 # there), so that the rounding to 0 does not depend on the unit system.
-                a = 0.0 if abs(a) <= ZERO_ALPHA * factor else a
+                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
                 alpha[k, l] = a
                 if witnesses:
                     wit[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])

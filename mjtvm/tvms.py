@@ -25,7 +25,8 @@ from .enumeration import project_cdd
 from .errors import StateError
 from .hull import facet_volume, hull_volume
 from .projection import REL_TOL, ProjectionStatus, lifted_polytope, project_lp
-from .state import GraspState, json_floats
+from .state import GraspState
+from .tvmmp import finite_floats, finite_or_none
 
 __all__ = [
     "CHARACTERISTIC_LENGTH",
@@ -106,15 +107,15 @@ class TvmsResult:
             "schema": TVMS_SCHEMA,
             "bounded": self.bounded,
             "dimension": self.dimension,
-            "vertices": json_floats(self.vertices),
-            "volume": self.volume,
-            "scale": json_floats(self.scale),
-            "affine_volume": self.affine_volume,
+            "vertices": finite_floats(self.vertices),
+            "volume": finite_or_none(self.volume),
+            "scale": finite_floats(self.scale),
+            "affine_volume": finite_or_none(self.affine_volume),
             "status": self.status,
             "feasible": self.status != "empty",
             "unbounded_direction": None
             if self.unbounded_direction is None
-            else json_floats(self.unbounded_direction),
+            else finite_floats(self.unbounded_direction),
             "method": self.method,
             "rvds_cone": self.rvds_cone,
             "lifted_vertices": self.lifted_vertices,
