@@ -75,7 +75,7 @@ class _Coo:
     def add(self, row0: int, col0: int, block: NDArray[np.float64]) -> None:
         block = np.atleast_2d(block)
         # Only exact zeros are left out: which tiny entries are round-off depends on the
-        # scale of their row and column, decided after equilibration (solvers.drop_roundoff).
+        # scale of their row and column, decided after equilibration (solvers.scale_lp).
         r, c = np.nonzero(block)
         self.rows.append(r + row0)
         self.cols.append(c + col0)

@@ -17,9 +17,8 @@ is exact) chosen by Ruiz passes over ``|[A | b]|``, the right-hand sides
 taking part so that a change of force or length unit, which multiplies the solution,
 is undone too. The solvers' absolute tolerances (1e-9) then mean the same thing in
 every unit system; solutions, objectives and duals are unscaled before they are
-returned. Coefficients are dropped only when they are round-off: at most
-:data:`DROP_REL` times the largest entry of both their row and their column, after
-equilibration (:func:`drop_roundoff`).
+returned. Coefficients are dropped only when they are round-off: in the equilibrated LP,
+at most :data:`DROP_REL` times the largest entry of their row, of their column, or 1.
 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from
 any call raises :class:`~mjtvm.errors.SolverError`. LP statuses are ``"optimal"``,
@@ -41,12 +40,14 @@ from numpy.typing import NDArray
 
 from .errors import SolverError
 
-#: A coefficient at most DROP_REL times the largest (equilibrated) entry of its row and of
-#: its column is round-off of an exact cancellation (e.g. n . (r x n)) and is dropped.
+#: Round-off: a product's entry at most DROP_REL times the sum of its terms' magnitudes
+#: (assembly), or an equilibrated entry at most DROP_REL times the largest of its row, of its
+#: column, or 1 (scale_lp) is dropped.
 DROP_REL = 1e-12
 _HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
 _HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
 _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
+_MEAN_PASSES = 8  # mean-of-logs passes before Ruiz's
 _PASSES = 64  # Ruiz passes at most; each halves the remaining log2 imbalance (1e12 ~ 2^40)
 
 __all__ = [
@@ -56,7 +57,6 @@ __all__ = [
     "LPSolution",
     "LinearProgram",
     "Scaling",
-    "drop_roundoff",
     "equilibrate",
     "new_highs",
     "solve_lp",
@@ -179,6 +179,17 @@ def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passe
     csc = csr.tocsc()
     csc.sort_indices()
     rho, kappa = np.zeros(m), np.zeros(n_aug)
+    # Start from the mean of the logs (Curtis-Reid's least squares, by alternating passes):
+    # Ruiz only ever lowers a row's or column's largest entry, so a row [1, 1e-12, ...] whose
+    # variable of coefficient 1 is itself ~1e-12 (torque rows in units of 1e-12 N m) is a
+    # Ruiz fixed point; the mean balances them first.
+    r_of, c_of, logs = csr.tocoo().row, csr.tocoo().col, csr.tocoo().data
+    r_cnt = np.maximum(np.bincount(r_of, minlength=m), 1)
+    c_cnt = np.maximum(np.bincount(c_of, minlength=n_aug), 1)
+    for _ in range(_MEAN_PASSES):
+        rho = -np.bincount(r_of, logs + kappa[c_of], minlength=m) / r_cnt
+        kappa = -np.bincount(c_of, logs + rho[r_of], minlength=n_aug) / c_cnt
+        kappa[n] = 0.0
     for _ in range(passes):
         # Ruiz: divide every row, then every column, by the square root of its largest
         # magnitude (in log2); the largest entry of every row and column tends to 1. Robust
@@ -220,30 +231,20 @@ def lp_scaling(lp: LinearProgram) -> Scaling:
     return replace(s, cost=cost_scale(lp.c, s.col))
 
 
-def drop_roundoff(a: sp.spmatrix, *, rel: float = DROP_REL) -> sp.csc_matrix:
-    """``a`` (scaled or not) without the entries that are at most ``rel`` times the largest
-    magnitude of both their row and their column, after equilibration (module docstring)."""
-    s = equilibrate(a)
-    coo = sp.coo_matrix(a)
-    scaled = np.abs(coo.data) * s.row[coo.row] * s.col[coo.col]
-    row_max = np.zeros(a.shape[0])
-    col_max = np.zeros(a.shape[1])
-    np.maximum.at(row_max, coo.row, scaled)
-    np.maximum.at(col_max, coo.col, scaled)
-    keep = (scaled > rel * np.minimum(row_max[coo.row], col_max[coo.col])) & (coo.data != 0.0)
-    return sp.csc_matrix((coo.data[keep], (coo.row[keep], coo.col[keep])), shape=a.shape)
-
-
 def scale_lp(lp: LinearProgram, s: Scaling) -> LinearProgram:
     """The equilibrated LP ``(g col c, diag(row) A diag(col), row * bounds, bounds / col)``,
-    round-off dropped (:func:`drop_roundoff` rule on the scaled matrix)."""
+    round-off dropped (module docstring)."""
     a = sp.csc_matrix(sp.diags(s.row) @ sp.csc_matrix(lp.A) @ sp.diags(s.col))
     coo = a.tocoo()
     mag = np.abs(coo.data)
     row_max, col_max = np.zeros(a.shape[0]), np.zeros(a.shape[1])
     np.maximum.at(row_max, coo.row, mag)
     np.maximum.at(col_max, coo.col, mag)
-    keep = (mag > DROP_REL * np.minimum(row_max[coo.row], col_max[coo.col])) & (coo.data != 0.0)
+    # In the equilibrated LP (rows, columns and solution ~1) an entry at most DROP_REL times
+    # the largest of its row or of its column, or than 1, changes no row by more than
+    # round-off; HiGHS could not hold it anyway (its smallest value is 1e-12).
+    ref = np.maximum(np.maximum(row_max[coo.row], col_max[coo.col]), 1.0)
+    keep = (mag > DROP_REL * ref) & (coo.data != 0.0)
     a = sp.csc_matrix((coo.data[keep], (coo.row[keep], coo.col[keep])), shape=a.shape)
     with np.errstate(invalid="ignore"):  # inf * positive stays inf
         return LinearProgram(
@@ -420,7 +421,7 @@ class HighsSession:
                 self._push_costs()
         v = v * self._col[col]
         mag = np.abs(v)
-        ref = np.minimum(self._row_max[rows], float(mag.max(initial=0.0)))
+        ref = np.maximum(np.maximum(self._row_max[rows], float(mag.max(initial=0.0))), 1.0)
         v[mag <= DROP_REL * ref] = 0.0  # round-off, as in scale_lp
         self._check_magnitudes(v, "changeCoeff")
         change, check = self.highs.changeCoeff, self._check
@@ -579,12 +580,29 @@ def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSo
         row_max > 0, _pow2(np.where(row_max > 0, 1.0 / np.where(row_max > 0, row_max, 1.0), 1.0)), 1.0
     )
     s2 = Scaling(row, col, cost_scale(np.asarray(lp.c, dtype=float), col))
-    sol = _solve_clarabel(scale_lp(lp, s2))
+    slp = scale_lp(lp, s2)
+    sol = _solve_clarabel(slp)
     obj = 0.0 if sol.objective is None else abs(sol.objective)
     if sol.status == "optimal" and 0.0 < obj < 0.0625:
         s2 = replace(s2, cost=s2.cost * float(_pow2(1.0 / obj)))
-        sol = _solve_clarabel(scale_lp(lp, s2))
+        slp = scale_lp(lp, s2)
+        sol = _solve_clarabel(slp)
+    if sol.status == "optimal" and sol.x is not None:
+        # An interior point's "Solved" is not a certificate: on Case 1 in odd units it
+        # returned alphas 27 times too large. Every row and bound of the scaled LP (entries
+        # and solution ~1) must hold to 1e-7, or it is an error (callers fall back to HiGHS).
+        viol = _violation(slp, sol.x)
+        if viol > 1e-7:
+            raise SolverError("clarabel", f"Solved, but its solution violates the LP by {viol:.1e}")
     return unscale(sol, s2)
+
+
+def _violation(lp: LinearProgram, x: NDArray[np.float64]) -> float:
+    """Largest violation of ``lp``'s rows and bounds by ``x``."""
+    ax = lp.A @ x
+    with np.errstate(invalid="ignore"):
+        parts = [lp.row_lower - ax, ax - lp.row_upper, lp.col_lower - x, x - lp.col_upper]
+    return float(max(np.max(np.nan_to_num(p, nan=0.0, neginf=0.0), initial=0.0) for p in parts))
 
 
 def solve_lp(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling | None = None) -> LPSolution:
@@ -637,7 +655,18 @@ def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Se
     other = checked
     if other is not None and other.status == sol.status:
         return Settled(sol, "clarabel")
-    feasible = _feasible_clarabel(lp, s)
+    try:
+        feasible = _feasible_clarabel(lp, s)
+    except SolverError as e3:
+        if other is None:
+            raise SolverError(
+                "clarabel", f"{sol.status}; highs: {err.status}; feasibility re-solve: {e3.status}"
+            ) from e3
+        return Settled(
+            other,
+            "highs",
+            f"clarabel said {sol.status}, its feasibility re-solve failed ({e3.status}); highs: {other.status}",
+        )
     if other is None:
         if feasible == (sol.status == "unbounded"):
             return Settled(

@@ -239,8 +239,18 @@ class _Problem2:
         rhs = np.fmax(
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
-        s = equilibrate(sp.hstack([asm.A, asm.A_twist], format="csc"), rhs=rhs)
-        self.row_scale, self.col_scale, self.twist_scale = s.row, s.col[:n], s.col[n:]
+        s = equilibrate(asm.A, rhs=rhs)
+        self.row_scale, self.col_scale = s.row, s.col
+        # The twist columns are scaled after the rows, each so that its largest entry is 1:
+        # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
+        # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
+        # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
+        # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
+        tw = sp.csc_matrix(abs(sp.diags(s.row) @ asm.A_twist))
+        tw_max = tw.max(axis=0).toarray().ravel() if tw.shape[0] else np.zeros(tw.shape[1])
+        self.twist_scale = np.where(
+            tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
+        )
         self.session: HighsSession | None = None
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
