@@ -2,11 +2,19 @@
 
 from __future__ import annotations
 
+import json
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from mjtvm import tvmmp
+from mjtvm.errors import SolverError
+from mjtvm.state import load_state
+from mjtvm.synthetic import random_state
 from mjtvm.trajectory import lift_state, scripted_lift
+from mjtvm.tvms import tvms
 
 
 @pytest.fixture(scope="module")
@@ -51,3 +59,169 @@ def test_session_options_are_checked_and_survive_the_retries():
     np.testing.assert_allclose(sol.x, [1.0, 1.0])
     assert sol.row_dual is not None and sol.row_dual.shape == (2,)
     assert session.highs.getOptionValue("simplex_strategy")[1] == 4
+
+
+# --------------------------------------------------------------- issue 12: solver handling
+EXAMPLE = Path(__file__).resolve().parents[1] / "mjtvm" / "data" / "examples" / "pinch.json"
+
+
+def mixed_scale(state, seed: int):  # type: ignore[no-untyped-def]
+    """``state`` with every Jacobian entry set to +-1e-8 or +-1e4 times its contact's largest
+    (at random) and a 1e7 N load: an impossible grasp (the torques cannot hold 1e7 N)."""
+    rng = np.random.default_rng(seed)
+    contacts = []
+    for c in state.contacts:
+        j = c.jacobian / np.abs(c.jacobian).max()
+        contacts.append(replace(c, jacobian=np.where(rng.random(j.shape) < 0.5, j * 1e-8, j * 1e4)))
+    refs = state.refs.copy()
+    refs[:, :3] *= 1e7 / np.linalg.norm(refs[0, :3])
+    return replace(state, contacts=tuple(contacts), refs=refs)
+
+
+def test_pinch_tvms_no_longer_fails_on_a_highs_warning():
+    """The ray-shooting LPs of the shipped example carry ~5e-14 round-off that HiGHS drops with
+    kWarning, which was fatal (exit 3). Now the round-off is dropped before (relative to the
+    equilibrated row and column) and a warning is not an error: the same 4 vertices as cdd."""
+    state = load_state(EXAMPLE)
+    lp, cdd = tvms(state), tvms(state, method="cdd")
+    assert lp.status == cdd.status == "bounded" and lp.dimension == cdd.dimension == 2
+    assert lp.affine_volume == pytest.approx(cdd.affine_volume, rel=1e-9)
+    np.testing.assert_allclose(
+        np.sort(np.abs(lp.vertices[:, 0])), np.sort(np.abs(cdd.vertices[:, 0])), atol=1e-9
+    )
+
+
+def test_random_states_through_the_ray_lps():
+    """A sample of random valid states (the full 300: see the issue's closing note) through
+    Problem 1's ray-shooting LPs (the TVMS in the RVDS cone) and Problem 2: no solver error,
+    no fallback, bounded TVMS, positive finite alphas (the states are feasible with room by
+    construction)."""
+    for seed in range(0, 300, 15):
+        state = random_state(seed)
+        hull = tvms(state)
+        res = tvmmp(state, witnesses=False)
+        assert hull.status == "bounded" and res.feasible and res.notes == ()
+        assert np.all(np.isfinite(res.alpha)) and np.all(res.alpha > 0)
+
+
+def test_every_highs_call_is_status_checked():
+    """changeCoeff/changeColBounds/changeRowsBounds/passModel/setOptionValue: kError raises a
+    SolverError naming the call (monkeypatched HiGHS answers kError), kWarning passes."""
+    import highspy
+    import scipy.sparse as sp
+
+    from mjtvm.solvers import HighsSession, LinearProgram
+
+    lp = LinearProgram(
+        np.array([-1.0, -1.0]), sp.csc_matrix(np.eye(2)), np.zeros(2), np.ones(2), np.zeros(2), np.ones(2)
+    )
+    session = HighsSession(lp)
+    h = session.highs
+
+    class Failing:
+        def __init__(self, status):  # type: ignore[no-untyped-def]
+            self.status = status
+
+        def __getattr__(self, name):  # type: ignore[no-untyped-def]
+            if name.startswith("change"):
+                return lambda *a: self.status
+            return getattr(h, name)
+
+    session.highs = Failing(highspy.HighsStatus.kError)
+    with pytest.raises(SolverError, match="changeCoeff"):
+        session.set_column(0, np.array([0]), np.array([2.0]))
+    with pytest.raises(SolverError, match="changeRowsBounds"):
+        session.set_row_bounds(np.array([0]), np.zeros(1), np.ones(1))
+    with pytest.raises(SolverError, match="changeColBounds"):
+        session.set_col_bounds(0, 0.0, 1.0)
+    session.highs = Failing(highspy.HighsStatus.kWarning)
+    session.set_column(0, np.array([0]), np.array([2.0]))  # a warning is information, not failure
+
+
+def test_a_coefficient_beyond_highs_range_is_an_error_not_a_silent_drop():
+    """A scaled coefficient HiGHS would refuse (>= 1e15) or drop (<= 1e-12) is a SolverError."""
+    import scipy.sparse as sp
+
+    from mjtvm.solvers import HighsSession, LinearProgram
+
+    lp = LinearProgram(
+        np.zeros(2), sp.csc_matrix(np.eye(2)), np.zeros(2), np.ones(2), np.zeros(2), np.ones(2)
+    )
+    session = HighsSession(lp)
+    with pytest.raises(SolverError, match="changeCoeff: an equilibrated coefficient is outside"):
+        session.set_column(1, np.array([0, 1]), np.array([1e20, 1.0]))
+
+
+def test_clarabel_no_longer_calls_an_impossible_grasp_feasible():
+    """Jacobians mixing 1e-8 and 1e4, a 1e7 N load: HiGHS certifies infeasible; Clarabel said
+    'unbounded' (feasible) on seeds 7, 13, 14, 16, 28 of this family before. Now its verdict is
+    cross-checked (HiGHS and a feasibility re-solve) and the disagreement is noted."""
+    state = load_state(EXAMPLE)
+    for seed in (7, 13, 14, 16, 28):
+        bad = mixed_scale(state, seed)
+        a, b = tvmmp(bad), tvmmp(bad, solver="clarabel")
+        assert not a.feasible and not b.feasible
+        assert all(s == "infeasible" for s in b.status[0])
+        assert b.tvmmp is None and b.to_dict()["feasible"] is False
+
+
+def test_highs_unknown_falls_back_to_clarabel(monkeypatch):
+    """HiGHS stuck at 'Unknown' after its cold retries: the pair is settled by Clarabel, with
+    the same alphas, and the result says so (settled_by, notes) instead of exit 3."""
+    from mjtvm import solvers
+
+    state = load_state(EXAMPLE)
+    ref = tvmmp(state)
+
+    def unknown(self, *, duals=False):  # type: ignore[no-untyped-def]
+        raise SolverError("highs", "Unknown")
+
+    monkeypatch.setattr(solvers.HighsSession, "solve", unknown)
+    res = tvmmp(state)
+    np.testing.assert_allclose(res.alpha, ref.alpha, rtol=1e-7)
+    assert all(s == "clarabel" for s in res.settled_by[0])
+    assert [p for p, _ in res.notes] == [(0, l) for l in range(4)]
+    assert all(m == "highs: Unknown; settled by clarabel: optimal" for _, m in res.notes)
+    doc = res.to_dict()
+    assert doc["settled_by"] == [["clarabel"] * 4] and doc["notes"][0]["pair"] == [0, 0]
+
+
+def test_solver_error_only_when_nothing_settles_it(monkeypatch):
+    """Both backends fail: SolverError naming the pair and both statuses, chained to HiGHS'."""
+    from mjtvm import solvers
+
+    def unknown(self, *, duals=False):  # type: ignore[no-untyped-def]
+        raise SolverError("highs", "Unknown")
+
+    def stalled(lp):  # type: ignore[no-untyped-def]
+        raise SolverError("clarabel", "MaxIterations")
+
+    monkeypatch.setattr(solvers.HighsSession, "solve", unknown)
+    monkeypatch.setattr(solvers, "_solve_clarabel", stalled)
+    with pytest.raises(SolverError, match=r"Unknown; fallback clarabel: MaxIterations.*\(0, 0\)") as info:
+        tvmmp(load_state(EXAMPLE))
+    assert info.value.pair == (0, 0)
+    assert isinstance(info.value.__cause__, SolverError)
+    assert isinstance(info.value.__cause__.__cause__, SolverError)  # HiGHS' own
+
+
+def test_documents_are_finite_json():
+    """-1e308 in an RVDS vertex printed -Infinity: every number of the documents is finite or
+    null now (json.dumps(allow_nan=False)), and the alpha of such a vertex is that of -e_x
+    divided by 1e308 (the loader will refuse the input; the writer must not break on it)."""
+    from mjtvm.tvmmp import finite_floats
+
+    assert finite_floats([1.0, -np.inf, np.nan, -0.0]) == [1.0, None, None, 0.0]
+    assert finite_floats([[np.inf], [2.0]]) == [[None], [2.0]]
+    state = load_state(EXAMPLE)
+    big = state.rvds.copy()
+    big[1] *= 1e300  # a long vertex: alpha 1e-300 of the unit one's, exactly
+    res = tvmmp(replace(state, rvds=big))
+    json.dumps(res.to_dict(), allow_nan=False)
+    assert res.alpha[0, 1] == pytest.approx(tvmmp(state).alpha[0, 1] * 1e-300, rel=1e-9)
+    mixed = state.rvds.copy()
+    mixed[1, 0] = -1e308  # [-1e308, 0, 1]: the 1 is round-off next to 1e308
+    doc = tvmmp(replace(state, rvds=mixed)).to_dict()
+    json.dumps(doc, allow_nan=False)
+    assert doc["alpha"][0][1] == pytest.approx(tvmmp(state).alpha[0, 2] * 1e-308, rel=1e-9)
+    json.dumps(tvms(state).to_dict(), allow_nan=False)
