@@ -562,38 +562,43 @@ def _solve_clarabel(lp: LinearProgram) -> LPSolution:
 def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSolution:
     """Clarabel on the equilibrated ``lp`` (:func:`lp_scaling` unless ``scaling``), unscaled."""
     s = (lp_scaling(lp) if scaling is None else scaling).without_common()
-    first = _solve_clarabel(scale_lp(lp, s))
+    slp1 = scale_lp(lp, s)
+    first = _solve_clarabel(slp1)
     if first.status != "optimal" or first.x is None:
         return first
-    # An interior point stops at tolerances relative to the whole LP: where the variables
-    # differ by 1e6 in size (a load in mN, speeds in rad/h) alpha was off by up to 1e-3.
-    # Solve again scaled by the first solution: every variable ~1 (floored at 2^-10 of the
-    # largest, for the ones at 0), every row's largest entry ~1, the objective ~1 (Clarabel's
-    # duality-gap test is absolute below 1). Measured on the unit-test states: within 3e-8
-    # of HiGHS, against 1e-3 for the first solve. (No retry on the unscaled LP: its
-    # "optimal" can be off by 1e-2; callers fall back to HiGHS on an error.)
+    # An interior point's "Solved" is not a certificate: on Case 1 in odd units it returned
+    # alphas 27 times too large. Every row and bound of the scaled LP must hold to 1e-7
+    # (entries ~1), or the answer is refused (callers fall back to HiGHS, noted).
+    viol1 = _violation(slp1, first.x)  # reported when the second solve fails
+    # It also stops at tolerances relative to the whole LP: where the variables differ by
+    # 1e6 in size (a load in mN, speeds in rad/h) alpha was off by up to 1e-3. Solve again
+    # scaled by the first solution: every variable ~1 (floored at 2^-10 of the largest, for
+    # the ones at 0), every row's largest entry ~1, the objective ~1 (Clarabel's
+    # duality-gap test is absolute below 1). Measured on the unit-test states: within 9e-8
+    # of HiGHS, against 1e-3 for the first solve. Where that second solve stalls (alpha = 0
+    # on a degenerate face, Case 1-S) it is an error. (No retry on the unscaled LP: its
+    # "optimal" can be off by 1e-2.)
     xs = np.abs(first.x)
     col = s.col * _pow2(np.maximum(xs, 2.0**-10 * max(float(xs.max()), 1e-300)))
     a = sp.csr_matrix(abs(sp.csr_matrix(lp.A) @ sp.diags(col)))
     row_max = a.max(axis=1).toarray().ravel() if a.shape[1] else np.zeros(a.shape[0])
-    row = np.where(
-        row_max > 0, _pow2(np.where(row_max > 0, 1.0 / np.where(row_max > 0, row_max, 1.0), 1.0)), 1.0
-    )
+    row = np.where(row_max > 0, _pow2(1.0 / np.where(row_max > 0, row_max, 1.0)), 1.0)
     s2 = Scaling(row, col, cost_scale(np.asarray(lp.c, dtype=float), col))
-    slp = scale_lp(lp, s2)
-    sol = _solve_clarabel(slp)
-    obj = 0.0 if sol.objective is None else abs(sol.objective)
-    if sol.status == "optimal" and 0.0 < obj < 0.0625:
-        s2 = replace(s2, cost=s2.cost * float(_pow2(1.0 / obj)))
+    try:
         slp = scale_lp(lp, s2)
         sol = _solve_clarabel(slp)
-    if sol.status == "optimal" and sol.x is not None:
-        # An interior point's "Solved" is not a certificate: on Case 1 in odd units it
-        # returned alphas 27 times too large. Every row and bound of the scaled LP (entries
-        # and solution ~1) must hold to 1e-7, or it is an error (callers fall back to HiGHS).
-        viol = _violation(slp, sol.x)
-        if viol > 1e-7:
-            raise SolverError("clarabel", f"Solved, but its solution violates the LP by {viol:.1e}")
+        obj = 0.0 if sol.objective is None else abs(sol.objective)
+        if sol.status == "optimal" and 0.0 < obj < 0.0625:
+            s2 = replace(s2, cost=s2.cost * float(_pow2(1.0 / obj)))
+            slp = scale_lp(lp, s2)
+            sol = _solve_clarabel(slp)
+        viol = _violation(slp, sol.x) if sol.status == "optimal" and sol.x is not None else 0.0
+        if sol.status != "optimal" or viol > 1e-7:
+            raise SolverError("clarabel", f"second solve: {sol.status}, violation {viol:.1e}")
+    except SolverError as e:
+        # The first answer alone can be 1e-2 off while feasible: not reported (callers
+        # fall back to HiGHS, noted).
+        raise SolverError("clarabel", f"{e.status}; first solve's violation {viol1:.1e}") from e
     return unscale(sol, s2)
 
 

@@ -165,6 +165,16 @@ def test_clarabel_no_longer_calls_an_impossible_grasp_feasible():
         assert b.tvmmp is None and b.to_dict()["feasible"] is False
 
 
+def test_a_state_highs_left_unknown_is_settled():
+    """Seed 6 of the mixed-scale family: HiGHS returned 'Unknown' after its cold retries before
+    (exit 3). On the equilibrated LP both backends certify it infeasible, without fallback."""
+    bad = mixed_scale(load_state(EXAMPLE), 6)
+    for solver in ("highs", "clarabel"):
+        res = tvmmp(bad, solver=solver)
+        assert not res.feasible and res.notes == ()
+        assert res.status == (("infeasible",) * 4,) and res.settled_by == ((solver,) * 4,)
+
+
 def test_highs_unknown_falls_back_to_clarabel(monkeypatch):
     """HiGHS stuck at 'Unknown' after its cold retries: the pair is settled by Clarabel, with
     the same alphas, and the result says so (settled_by, notes) instead of exit 3."""
