@@ -125,17 +125,6 @@ def _pow2(x: NDArray[np.float64] | float) -> Any:
     return np.exp2(np.round(np.log2(x)))
 
 
-def _extremes(indptr: NDArray[np.int64], data: NDArray[np.float64], size: int) -> tuple[Any, Any, Any]:
-    """Per compressed row (or column): min and max of ``data`` and whether it has entries."""
-    has = np.diff(indptr) > 0
-    lo, hi = np.zeros(size), np.zeros(size)
-    if data.size:
-        starts = indptr[:-1][has]
-        lo[has] = np.minimum.reduceat(data, starts)
-        hi[has] = np.maximum.reduceat(data, starts)
-    return lo, hi, has
-
-
 def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passes: int = _PASSES) -> Scaling:
     r"""Row and column powers of 2 bringing the largest magnitude of every row and column of
     ``|[A | rhs]|`` close to 1 (Ruiz equilibration).
@@ -159,9 +148,10 @@ def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passe
         With ``cost = 1`` (see :func:`cost_scale`).
     """
     m, n = a.shape
-    coo = sp.coo_matrix(a)
-    keep = coo.data != 0.0
-    rows, cols, vals = coo.row[keep], coo.col[keep], np.abs(coo.data[keep])
+    csc_in = sp.csc_matrix(a)
+    cols = np.repeat(np.arange(n), np.diff(csc_in.indptr))
+    keep = csc_in.data != 0.0
+    rows, cols, vals = csc_in.indices[keep], cols[keep], np.abs(csc_in.data[keep])
     has_entries = np.bincount(rows, minlength=m) > 0
     if rhs is not None:
         # The right-hand sides join as a column whose factor stays 1: a row's scale then
@@ -174,35 +164,43 @@ def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passe
         cols = np.concatenate([cols, np.full(int(ok.sum()), n)])
         vals = np.concatenate([vals, b[ok]])
     n_aug = n + 1
-    csr = sp.csr_matrix((np.log2(vals), (rows, cols)), shape=(m, n_aug))
-    csr.sort_indices()
-    csc = csr.tocsc()
-    csc.sort_indices()
+    logs = np.log2(vals)
+    # Column-major order already (CSC input, the right-hand side last); row-major by a
+    # stable sort. Plain arrays: scipy's constructors cost more than the passes here.
+    c_counts = np.bincount(cols, minlength=n_aug)
+    order = np.argsort(rows, kind="stable")
+    r_counts = np.bincount(rows, minlength=m)
+    r_idx, r_logs, c_idx = cols[order], logs[order], rows
+    r_indptr = np.concatenate([[0], np.cumsum(r_counts)])
+    c_indptr = np.concatenate([[0], np.cumsum(c_counts)])
     rho, kappa = np.zeros(m), np.zeros(n_aug)
     # Start from the mean of the logs (Curtis-Reid's least squares, by alternating passes):
     # Ruiz only ever lowers a row's or column's largest entry, so a row [1, 1e-12, ...] whose
     # variable of coefficient 1 is itself ~1e-12 (torque rows in units of 1e-12 N m) is a
     # Ruiz fixed point; the mean balances them first.
-    r_of, c_of, logs = csr.tocoo().row, csr.tocoo().col, csr.tocoo().data
-    r_cnt = np.maximum(np.bincount(r_of, minlength=m), 1)
-    c_cnt = np.maximum(np.bincount(c_of, minlength=n_aug), 1)
+    r_cnt, c_cnt = np.maximum(r_counts, 1), np.maximum(c_counts, 1)
     for _ in range(_MEAN_PASSES):
-        rho = -np.bincount(r_of, logs + kappa[c_of], minlength=m) / r_cnt
-        kappa = -np.bincount(c_of, logs + rho[r_of], minlength=n_aug) / c_cnt
+        rho = -np.bincount(rows, logs + kappa[cols], minlength=m) / r_cnt
+        kappa = -np.bincount(cols, logs + rho[rows], minlength=n_aug) / c_cnt
         kappa[n] = 0.0
+    r_has, c_has = r_counts > 0, c_counts > 0
+    r_starts, c_starts = r_indptr[:-1][r_has], c_indptr[:-1][c_has]
     for _ in range(passes):
         # Ruiz: divide every row, then every column, by the square root of its largest
         # magnitude (in log2); the largest entry of every row and column tends to 1. Robust
         # to tiny data entries (a 1e-12 normal component from the simulator), which a
         # geometric mean would pull towards 1 at the expense of every other entry.
-        _, hi, has = _extremes(csr.indptr, csr.data + kappa[csr.indices], m)
-        step = np.where(has, (hi + rho) / 2, 0.0)
+        step = np.zeros(m)
+        if r_starts.size:
+            step[r_has] = (np.maximum.reduceat(r_logs + kappa[r_idx], r_starts) + rho[r_has]) / 2
         rho = rho - step
-        _, hi, has = _extremes(csc.indptr, csc.data + rho[csc.indices], n_aug)
-        cstep = np.where(has, (hi + kappa) / 2, 0.0)
+        cstep = np.zeros(n_aug)
+        if c_starts.size:
+            cstep[c_has] = (np.maximum.reduceat(logs + rho[c_idx], c_starts) + kappa[c_has]) / 2
         cstep[n] = 0.0  # the right-hand side's factor is pinned at 1
         kappa = kappa - cstep
-        if max(np.max(np.abs(step), initial=0.0), np.max(np.abs(cstep), initial=0.0)) < 0.125:
+        # within a quarter of a power of 2 of the fixed point: the rounding below decides
+        if max(np.max(np.abs(step), initial=0.0), np.max(np.abs(cstep), initial=0.0)) < 0.25:
             break
     rho, kappa = np.round(rho), np.round(kappa)  # powers of 2: the scaling is exact
     return Scaling(np.exp2(rho), np.exp2(kappa[:n]), 1.0)
@@ -234,22 +232,29 @@ def lp_scaling(lp: LinearProgram) -> Scaling:
 def scale_lp(lp: LinearProgram, s: Scaling) -> LinearProgram:
     """The equilibrated LP ``(g col c, diag(row) A diag(col), row * bounds, bounds / col)``,
     round-off dropped (module docstring)."""
-    a = sp.csc_matrix(sp.diags(s.row) @ sp.csc_matrix(lp.A) @ sp.diags(s.col))
-    coo = a.tocoo()
-    mag = np.abs(coo.data)
-    row_max, col_max = np.zeros(a.shape[0]), np.zeros(a.shape[1])
-    np.maximum.at(row_max, coo.row, mag)
-    np.maximum.at(col_max, coo.col, mag)
+    a = sp.csc_matrix(lp.A)
+    a.sum_duplicates()
+    counts = np.diff(a.indptr)
+    cols = np.repeat(np.arange(a.shape[1]), counts)
+    data = a.data * s.row[a.indices] * s.col[cols]
+    mag = np.abs(data)
+    row_max = np.zeros(a.shape[0])
+    np.maximum.at(row_max, a.indices, mag)
+    col_max = np.zeros(a.shape[1])
+    np.maximum.at(col_max, cols, mag)
     # In the equilibrated LP (rows, columns and solution ~1) an entry at most DROP_REL times
     # the largest of its row or of its column, or than 1, changes no row by more than
     # round-off; HiGHS could not hold it anyway (its smallest value is 1e-12).
-    ref = np.maximum(np.maximum(row_max[coo.row], col_max[coo.col]), 1.0)
-    keep = (mag > DROP_REL * ref) & (coo.data != 0.0)
-    a = sp.csc_matrix((coo.data[keep], (coo.row[keep], coo.col[keep])), shape=a.shape)
+    ref = np.maximum(np.maximum(row_max[a.indices], col_max[cols]), 1.0)
+    keep = (mag > DROP_REL * ref) & (data != 0.0)
+    if keep.all():
+        scaled = sp.csc_matrix((data, a.indices.copy(), a.indptr.copy()), shape=a.shape)
+    else:
+        scaled = sp.csc_matrix((data[keep], (a.indices[keep], cols[keep])), shape=a.shape)
     with np.errstate(invalid="ignore"):  # inf * positive stays inf
         return LinearProgram(
             s.cost * s.col * np.asarray(lp.c, dtype=float),
-            a,
+            scaled,
             s.row * lp.row_lower,
             s.row * lp.row_upper,
             lp.col_lower / s.col,
@@ -418,7 +423,7 @@ class HighsSession:
             if factor != self._col[col]:
                 self._col[col] = factor
                 self._push_col_bounds(col)
-                self._push_costs()
+                self._push_costs(np.array([col], dtype=np.int32))
         v = v * self._col[col]
         mag = np.abs(v)
         ref = np.maximum(np.maximum(self._row_max[rows], float(mag.max(initial=0.0))), 1.0)
@@ -447,12 +452,16 @@ class HighsSession:
         up = up if np.isfinite(up) else inf
         self._check(self.highs.changeColBounds(col, lo, up), "changeColBounds")
 
-    def _push_costs(self) -> None:
+    def _push_costs(self, cols: NDArray[np.int32]) -> None:
+        """Send the scaled costs of ``cols`` (of every column when the cost factor changes:
+        a full cost change costs the warm start more)."""
         g = cost_scale(self._cost, self._col)
-        self.scaling = replace(self.scaling, cost=g)
-        n = len(self._cost)
-        cost = np.ascontiguousarray(g * self._col * self._cost)
-        self._check(self.highs.changeColsCost(n, np.arange(n, dtype=np.int32), cost), "changeColsCost")
+        if g != self.scaling.cost:
+            self.scaling = replace(self.scaling, cost=g)
+            cols = np.arange(len(self._cost), dtype=np.int32)
+        cols = np.asarray(cols, dtype=np.int32)
+        cost = np.ascontiguousarray(g * self._col[cols] * self._cost[cols])
+        self._check(self.highs.changeColsCost(len(cols), cols, cost), "changeColsCost")
 
     def set_col_bounds(self, col: int, lower: float, upper: float) -> None:
         """Change one variable's bounds."""
@@ -462,7 +471,7 @@ class HighsSession:
     def set_costs(self, cols: NDArray[np.int32], values: NDArray[np.float64]) -> None:
         """Change some costs (the cost factor is chosen again from all of them)."""
         self._cost[np.asarray(cols)] = values
-        self._push_costs()
+        self._push_costs(np.asarray(cols, dtype=np.int32))
 
     def _run(self) -> Any:
         """``run`` and the model status; a kError run counts as a solve error (retried)."""
@@ -651,6 +660,16 @@ def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Se
             raise SolverError("clarabel", f"{e.status}; fallback highs: {e2.status}") from e
         return Settled(rescue, "highs", f"clarabel: {e.status}; settled by highs: {rescue.status}")
     if sol.status == "optimal":
+        # Near a feasibility limit (a weight within 1e-7 of the largest a hand holds) the
+        # interior point can call feasible what the simplex certifies infeasible: a HiGHS
+        # solve checks every verdict, and a disagreement is noted (the answer stays
+        # Clarabel's, which was asked for).
+        try:
+            check = HighsSession(lp, scaling=s).solve()
+        except SolverError as e:
+            return Settled(sol, "clarabel", f"highs could not check it ({e.status})")
+        if check.status != "optimal":
+            return Settled(sol, "clarabel", f"clarabel: optimal; highs: {check.status}")
         return Settled(sol, "clarabel")
     checked: LPSolution | None = None
     try:

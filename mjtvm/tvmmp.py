@@ -246,8 +246,9 @@ class _Problem2:
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
         # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
         # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
-        tw = sp.csc_matrix(abs(sp.diags(s.row) @ asm.A_twist))
-        tw_max = tw.max(axis=0).toarray().ravel() if tw.shape[0] else np.zeros(tw.shape[1])
+        tw = asm.A_twist.tocoo()
+        tw_max = np.zeros(tw.shape[1])
+        np.maximum.at(tw_max, tw.col, np.abs(tw.data * s.row[tw.row]))
         self.twist_scale = np.where(
             tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
         )

@@ -235,3 +235,24 @@ def test_documents_are_finite_json():
     json.dumps(doc, allow_nan=False)
     assert doc["alpha"][0][1] == pytest.approx(tvmmp(state).alpha[0, 2] * 1e-308, rel=1e-9)
     json.dumps(tvms(state).to_dict(), allow_nan=False)
+
+
+def test_a_disagreement_at_the_weight_limit_is_reported():
+    """The 16-joint, four-fingertip hand (bench_suite.scaling_hand(4)) with its weight bisected
+    to within 1e-7 of the largest it holds (183.17864 x 1 N, found with HiGHS): just below,
+    both backends agree (feasible); 8e-8 above, HiGHS certifies infeasible while Clarabel's
+    interior point, within its tolerances, finds it feasible. The result says so per pair."""
+    from mjtvm.bench_suite import scaling_hand
+
+    state = scaling_hand(4)
+    below, above = (
+        state.with_(refs=state.refs * 183.1786346435547),
+        state.with_(refs=state.refs * 183.17864990234375),
+    )
+    for solver in ("highs", "clarabel"):
+        res = tvmmp(below, solver=solver, witnesses=False)
+        assert res.feasible and res.notes == () and res.tvmmp is not None and res.tvmmp > 0.0
+    assert not tvmmp(above, witnesses=False).feasible
+    res = tvmmp(above, solver="clarabel", witnesses=False)
+    assert [p for p, _ in res.notes] == [(0, l) for l in range(4)]
+    assert all(m == "clarabel: optimal; highs: infeasible" for _, m in res.notes)
