@@ -13,9 +13,9 @@ A :class:`LinearProgram` is ``min c^T x`` s.t. ``row_lower <= A x <= row_upper``
 
 Scaling (a documented decision, issue 12): both backends see the LP after
 :func:`equilibrate` -- rows and columns multiplied by powers of 2 (so the scaling itself
-is exact) chosen by Ruiz passes over ``|[A | b]|``, the right-hand sides
-taking part so that a change of force or length unit, which multiplies the solution,
-is undone too. The solvers' absolute tolerances (1e-9) then mean the same thing in
+is exact) chosen by mean-of-logs then Ruiz passes over ``|[A | b]|``, the right-hand
+sides taking part (their factor pinned at 1) so that a change of force or length unit,
+which multiplies the solution, is undone too. Problem 2 computes it once per state. The solvers' absolute tolerances (1e-9) then mean the same thing in
 every unit system; solutions, objectives and duals are unscaled before they are
 returned. Coefficients are dropped only when they are round-off: in the equilibrated LP,
 at most :data:`DROP_REL` times the largest entry of their row, of their column, or 1.
@@ -23,7 +23,10 @@ at most :data:`DROP_REL` times the largest entry of their row, of their column, 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from
 any call raises :class:`~mjtvm.errors.SolverError`. LP statuses are ``"optimal"``,
 ``"infeasible"`` or ``"unbounded"``; anything else raises
-:class:`~mjtvm.errors.SolverError`.
+:class:`~mjtvm.errors.SolverError`. :func:`solve_settled` / :func:`fallback` /
+:func:`clarabel_checked` settle an LP across both backends (HiGHS' cold retries, then
+Clarabel; Clarabel's verdicts checked by HiGHS and a feasibility re-solve) and return a
+:class:`Settled` with a note whenever a backend failed or they disagreed.
 """
 
 from __future__ import annotations
@@ -111,14 +114,6 @@ class Scaling:
     row: NDArray[np.float64]
     col: NDArray[np.float64]
     cost: float = 1.0
-    common: float = 1.0  #: the common factor of the variables set by the right-hand sides
-
-    def without_common(self) -> Scaling:
-        """The same scaling without :attr:`common` (for Clarabel, whose tolerances are
-        relative to the right-hand sides already: with it, variables that do not scale with
-        the load, such as alpha, become ~1e-7 and the interior point stalls)."""
-        col = self.col / self.common
-        return Scaling(self.row * self.common, col, self.cost * self.common, 1.0)
 
 
 def _pow2(x: NDArray[np.float64] | float) -> Any:
@@ -126,14 +121,17 @@ def _pow2(x: NDArray[np.float64] | float) -> Any:
 
 
 def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passes: int = _PASSES) -> Scaling:
-    r"""Row and column powers of 2 bringing the largest magnitude of every row and column of
-    ``|[A | rhs]|`` close to 1 (Ruiz equilibration).
+    r"""Row and column powers of 2 bringing the entries of ``|[A | rhs]|`` close to 1.
 
-    Each pass divides every row, then every column, by the square root of its largest
-    magnitude (in log2, so that any magnitude within floating point is fine). ``rhs``
-    (``(m,)``, the magnitudes of the row bounds; infinite or zero entries ignored) then sets
-    one common factor of the variables bringing the largest scaled right-hand side to about
-    1: an LP whose bounds are all multiplied by 1e6 gets the same scaled LP.
+    In log2 (any magnitude within floating point is fine): first ``_MEAN_PASSES``
+    alternating passes setting each row's and column's factor to minus the mean of its
+    logs (Curtis and Reid's least-squares scaling), then Ruiz passes, each dividing every
+    row, then every column, by the square root of its largest magnitude, until the factors
+    move by less than a quarter power of 2; then rounded to powers of 2 (exact). ``rhs``
+    (``(m,)``, the magnitudes of the row bounds; infinite or zero entries, and rows without
+    coefficients, ignored) takes part as one more column whose factor is pinned at 1, so
+    that the bounds, hence the solution, come out ~1 too: a state in mN and rad/h gets the
+    same scaled LP as in N and rad/s, up to the power-of-2 rounding.
 
     Parameters
     ----------
@@ -570,7 +568,7 @@ def _solve_clarabel(lp: LinearProgram) -> LPSolution:
 
 def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSolution:
     """Clarabel on the equilibrated ``lp`` (:func:`lp_scaling` unless ``scaling``), unscaled."""
-    s = (lp_scaling(lp) if scaling is None else scaling).without_common()
+    s = lp_scaling(lp) if scaling is None else scaling
     slp1 = scale_lp(lp, s)
     first = _solve_clarabel(slp1)
     if first.status != "optimal" or first.x is None:
