@@ -32,7 +32,7 @@ from .errors import SolverError
 DROP_TOL = 1e-12  # coefficients at or below this are round-off (see assembly._Coo.add)
 _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
 
-__all__ = ["SOLVERS", "HighsSession", "new_highs", "LPSolution", "LinearProgram", "solve_lp"]
+__all__ = ["SOLVERS", "HighsSession", "LPSolution", "LinearProgram", "new_highs", "solve_lp"]
 
 SOLVERS = ("highs", "clarabel")
 LPStatus = Literal["optimal", "infeasible", "unbounded"]
