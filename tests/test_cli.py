@@ -103,17 +103,28 @@ def test_tvms_prints_the_schema_for_a_file_and_a_scenario(tmp_path, capsys):
 
 
 def test_sweep_writes_rows_and_rejects_bad_numbers(tmp_path, capsys):
-    out = tmp_path / "sweep.json"
-    args = ["sweep", "--mu", "0.1,0.5", "--states", "0", "--num-states", "4", "--out", str(out), "--quiet"]
+    args = [
+        "sweep",
+        "--mu",
+        "0.1,0.5",
+        "--state-indices",
+        "0",
+        "--states",
+        "4",
+        "--out",
+        str(tmp_path),
+        "--quiet",
+    ]
     assert main(args) == 0
-    rows = json.loads(out.read_text())
+    rows = json.loads((tmp_path / "sweep.json").read_text())
     assert [r["mu"] for r in rows] == [0.1, 0.5] and all(r["feasible"] for r in rows)
-    assert main(["sweep", "--mu", "lots", "--out", str(out)]) == 2
-    assert "mu: expected comma-separated numbers" in capsys.readouterr().err
+    assert (tmp_path / "sweep.csv").read_text().count("\n") == 3
+    assert not (tmp_path / "sweep.partial.json").exists()
+    assert main(["sweep", "--mu", "lots", "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.startswith("error: --mu: expected comma-separated finite numbers >= 0")
 
 
 def test_verify_has_its_own_options(capsys):
-    with pytest.raises(SystemExit) as e:
-        main(["verify", "--help"])
-    assert e.value.code == 0
-    assert "--armature-scale" in capsys.readouterr().out
+    assert main(["verify", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "--armature-scale" in out and "(default: 1.0)" in out
