@@ -91,6 +91,9 @@ def test_sweeps_cover_fig9(output: ReplayOutput) -> None:
     assert all(r.variant == "L" for r in (*output.sweeps["mu"], *output.sweeps["mg"]))
     rows = _rows(output.files["lift-sweeps.csv"])
     assert len(rows) == (len(SWEEP_MUS) + len(SWEEP_MGS)) * STATES
+    # the (mu 0.3, mg 2) curve is in both sweeps: the `sweep` column tells the copies apart
+    both = [r["sweep"] for r in rows if (r["mu"], r["mg"]) == ("0.3", "2.0")]
+    assert sorted(both) == ["mg"] * STATES + ["mu"] * STATES
     # the (mu, mg) = (0.3, 1) sweep is the main run's L curve
     main_l = [r.result.tvmmp for r in output.records if r.variant == "L"]
     assert [r.result.tvmmp for r in output.sweeps["mg"] if r.mg == 1.0] == main_l
