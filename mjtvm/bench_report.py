@@ -195,7 +195,7 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
 # ------------------------------------------------------------------ command line
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``scripts/bench.py`` and ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
-    from .cli import folder, integer, number, stem
+    from .cli import folder, integer, number, removed_option, stem
 
     parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
     parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
@@ -207,6 +207,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=folder, default="results", metavar="DIR",
                         help="output folder of NAME.json (the report) and NAME.md (the table)")  # fmt: skip
     parser.add_argument("--name", type=stem, default="bench", help="file stem of the outputs in --out")
+    removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
     parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
                         help="text file whose lines are appended to the table's notes")  # fmt: skip
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -91,6 +91,23 @@ def deprecated_alias(parser: argparse.ArgumentParser, old: str, new: argparse.Ac
                         help=argparse.SUPPRESS, default=argparse.SUPPRESS, **kwargs)  # fmt: skip
 
 
+class _Removed(argparse.Action):
+    """A dropped spelling: a one-line error saying what replaced it."""
+
+    def __init__(self, option_strings: list[str], dest: str, *, hint: str, **kwargs: Any) -> None:
+        self.hint = hint
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
+        parser.error(f"{option_string}: no longer an option: {self.hint}")
+
+
+def removed_option(parser: argparse.ArgumentParser, old: str, hint: str) -> None:
+    """Refuse ``old`` (one value) with a hint, instead of argparse's bare "unrecognized"."""
+    parser.add_argument(old, action=_Removed, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
+
+
 # -------------------------------------------------------- value types (argparse)
 def integer(low: int, *, hint: str = "") -> Callable[[str], int]:
     """An argparse type: an integer >= ``low`` (``1.5``, ``nan`` and ``0,3`` are errors)."""

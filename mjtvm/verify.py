@@ -163,11 +163,18 @@ def verify_lift(
             rows += _task(t)
             bar.update()
     else:
+        from .sweep import _ignore_sigint, _stop  # Ctrl-C: the parent alone reports it
+
         ctx = multiprocessing.get_context(start_method)
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_ignore_sigint)
+        try:
             for fut in as_completed([pool.submit(_task, t) for t in tasks]):
                 rows += fut.result()
                 bar.update()
+        except BaseException:
+            _stop(pool)
+            raise
+        pool.shutdown()
     bar.close()
     rows.sort(key=lambda r: (RUNS.index(r["run"]), r["state"], r["l"]))
     if out is not None:
@@ -306,7 +313,7 @@ def _cos(a: np.ndarray, b: np.ndarray) -> float:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     from .cli import READINGS as readings
-    from .cli import choices, deprecated_alias, folder, integer, number, stem
+    from .cli import choices, deprecated_alias, folder, integer, number, removed_option, stem
 
     p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
     p.add_argument(
@@ -319,6 +326,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="contact types of fingers 2 and 4 to check")  # fmt: skip
     p.add_argument("--reading", type=choices(readings, every="both"), default="both", metavar="READING",
                    help="slide directions of the S-points: physical, literal or both")  # fmt: skip
+    removed_option(
+        p, "--runs", "use --contacts L,S and --reading (--runs S-literal is --contacts S --reading literal)"
+    )
     p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
     p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
     p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")

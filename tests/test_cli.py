@@ -173,6 +173,8 @@ def test_verify_has_its_own_options(capsys):
         (["bench", "--time-limit", "inf"], "error: --time-limit: expected a finite number > 0, got 'inf'"),
         (["frobnicate"], "error: COMMAND: invalid choice: 'frobnicate'"),
         (["sweep", "--bogus"], "error: unrecognized arguments: --bogus"),
+        (["verify", "--runs", "L"], "error: --runs: no longer an option: use --contacts L,S and --reading"),
+        (["bench", "--md", "x.md"], "error: --md: no longer an option: the table is NAME.md"),
     ],
 )
 def test_malformed_options_exit_2_with_one_line(words, line, tmp_path, monkeypatch, capsys):
@@ -349,3 +351,27 @@ def test_ctrl_c_during_a_sweep_is_one_line_and_leaves_no_partial_file(tmp_path):
     if "sweep.partial.json" in names:  # complete JSON: the finished rows
         doc = json.loads((tmp_path / "sweep.partial.json").read_text())
         assert doc["schema"] == "mjtvm.sweep-checkpoint/1"
+
+
+def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys):
+    assert main(["tvms", "--scenario", "case1", "--indent", "0"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["schema"] == "mjtvm.tvms/1" and " LP" in captured.err
+    assert main(["tvms", "--scenario", "case1", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+    from mjtvm import bench_report
+
+    def suite(**kwargs):
+        for step in ("case 1, problem 1", "case 1, problem 2", "scaling"):
+            kwargs["progress"](step)
+        return {"schema": "mjtvm.bench-suite/1"}
+
+    monkeypatch.setattr(bench_report, "run_suite", suite)
+    monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
+    monkeypatch.setattr(bench_report, "format_suite_table", lambda report, notes: "TABLE")
+    assert main(["bench", "--quick", "--out", str(tmp_path), "--name", "b"]) == 0
+    captured = capsys.readouterr()
+    assert "bench: scaling" in captured.err and captured.out.startswith("TABLE\n")
+    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench-suite/1"
+    assert (tmp_path / "b.md").read_text() == "```\nTABLE\n```\n"
