@@ -218,9 +218,11 @@ def _plot(rows: Sequence[dict[str, Any]], title: str) -> bytes:
         z, lp = _minima(rows, run, "alpha_lp")
         (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP), {run}")
         z, sim = _minima(rows, run, "alpha_sim")
-        ax.plot(z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{sim}}$, {run}")
+        ax.plot(
+            z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
+        )
     ax.set_xlabel("object height $z$ (m)")
-    ax.set_ylabel(r"TVMMP $\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)", fontsize=8)
+    ax.set_ylabel(r"$\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)", fontsize=8)
     ax.set_title(title, fontsize=9)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
