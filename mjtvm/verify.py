@@ -22,6 +22,7 @@ import io
 import math
 import multiprocessing
 import statistics
+import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -315,7 +316,7 @@ def _cos(a: np.ndarray, b: np.ndarray) -> float:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     from .cli import READINGS as readings
-    from .cli import choices, deprecated_alias, folder, integer, number, removed_option, stem
+    from .cli import choices, deprecated_alias, folder, integer, number, stem
 
     p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
     p.add_argument(
@@ -328,9 +329,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="contact types of fingers 2 and 4 to check")  # fmt: skip
     p.add_argument("--reading", type=choices(readings, every="both"), default="both", metavar="READING",
                    help="slide directions of the S-points: physical, literal or both")  # fmt: skip
-    removed_option(
-        p, "--runs", "use --contacts L,S and --reading (--runs S-literal is --contacts S --reading literal)"
-    )
+    p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
     p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
     p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
     p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")
@@ -355,6 +354,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     deprecated_alias(p, "--no-plot", new)
     p.add_argument("--rrd", default=None, metavar="FILE", help="also write a rerun recording of the results")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _runs(text: str) -> tuple[str, ...]:
+    runs = tuple(r.strip() for r in text.split(","))
+    if not text.strip() or len(set(runs)) != len(runs) or any(r not in RUNS for r in runs):
+        raise argparse.ArgumentTypeError(f"expected distinct values among {','.join(RUNS)}, got {text!r}")
+    return runs
+
+
+class _RunsAlias(argparse.Action):
+    """The old ``--runs L,S-literal``: deprecated, the same as ``--contacts L,S --reading literal``."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
+        print(f"mjtvm: {option_string} is deprecated, use --contacts and --reading", file=sys.stderr)
+        namespace.contacts = tuple(dict.fromkeys(r.split("-")[0] for r in values))
+        readings = tuple(r.split("-")[1] for r in values if "-" in r)
+        namespace.reading = readings or namespace.reading
 
 
 def runs_of(contacts: Sequence[str], readings: Sequence[str]) -> list[str]:

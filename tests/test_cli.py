@@ -173,7 +173,7 @@ def test_verify_has_its_own_options(capsys):
         (["bench", "--time-limit", "inf"], "error: --time-limit: expected a finite number > 0, got 'inf'"),
         (["frobnicate"], "error: COMMAND: invalid choice: 'frobnicate'"),
         (["sweep", "--bogus"], "error: unrecognized arguments: --bogus"),
-        (["verify", "--runs", "L"], "error: --runs: no longer an option: use --contacts L,S and --reading"),
+        (["verify", "--runs", "L,S"], "error: --runs: expected distinct values among L,S-physical,S-literal"),
         (["bench", "--md", "x.md"], "error: --md: no longer an option: the table is NAME.md"),
     ],
 )
@@ -375,3 +375,13 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert "bench: scaling" in captured.err and captured.out.startswith("TABLE\n")
     assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench-suite/1"
     assert (tmp_path / "b.md").read_text() == "```\nTABLE\n```\n"
+
+
+def test_verify_old_runs_spelling_maps_to_contacts_and_reading(capsys):
+    from mjtvm.cli import verify_parser
+    from mjtvm.verify import runs_of
+
+    for old, runs in (("L,S-literal", ["L", "S-literal"]), ("L", ["L"]), ("S-physical", ["S-physical"])):
+        args = verify_parser().parse_args(["--runs", old])
+        assert runs_of(args.contacts, args.reading) == runs
+    assert "--runs is deprecated" in capsys.readouterr().err
