@@ -97,7 +97,7 @@ CASES = [
     ),
     (("joints", 1, "name"), "f1_pitch0", r"^joints: joint names must be unique"),
     (("contacts", 1, "name"), "f1_tip", r"^contacts: contact names must be unique"),
-    (("friction_edges",), 2, r"^friction_edges: expected an integer >= 3"),
+    (("friction_edges",), 2, r"^friction_edges: expected an integer in \[3, 256\], got 2$"),
     (("slip",), "sometimes", r"^slip: expected 'per_contact' or 'shared'"),
     (("joints",), [], r"^joints: expected at least one joint"),
     (("contacts",), {"a": 1}, r"^contacts: expected a list"),
