@@ -89,7 +89,9 @@ def number(value: Any, field: str, *, index: tuple[int, ...] = ()) -> float:
         )
     if abs(value) > MAX_ABS:
         raise StateError(
-            field, f"expected numbers with |x| <= {MAX_ABS:g}, got {describe(value)}{_at(index)}", value
+            field,
+            f"expected |x| <= {MAX_ABS:g} (the format's bound), got {describe(value)}{_at(index)}",
+            value,
         )
     return float(value)
 

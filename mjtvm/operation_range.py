@@ -138,9 +138,12 @@ class OperationRange:
             offset = float(normal @ a)
             if offset <= _TOL:  # an axis edge through the origin: x >= 0 or y >= 0
                 continue
-            given = normal / scale
+            # (normal / scale) . v <= offset, multiplied by min(scale) first so that a
+            # scale of 1e-300 cannot overflow the row before it is normalised.
+            c = float(scale.min())
+            given = normal * (c / scale)
             size = float(np.linalg.norm(given))
-            rows.append([given[0] / size, given[1] / size, offset / size])
+            rows.append([given[0] / size, given[1] / size, offset * (c / size)])
         hp = np.array(rows, dtype=float)
         hp[:, :2][np.abs(hp[:, :2]) < 1e-15] = 0.0
         hp.setflags(write=False)

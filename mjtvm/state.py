@@ -351,8 +351,8 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
         raise StateError("", f"malformed JSON at line {e.lineno} column {e.colno}: {e.msg}") from e
     except RecursionError as e:
         raise StateError("", "malformed state: JSON nested too deep (a state needs at most 5 levels)") from e
-    except ValueError as e:  # e.g. an integer literal of more than 4300 digits
-        raise StateError("", f"malformed JSON: {e}") from e
+    except ValueError as e:  # an integer literal of more than 4300 digits (int_max_str_digits)
+        raise StateError("", f"malformed JSON: {str(e).split(':')[0]}") from e
     check_json_tree(data)
     return parse_state(data)
 
