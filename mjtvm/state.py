@@ -347,6 +347,8 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
     try:
         # NaN and Infinity decode to floats here so that the field checks name the field.
         data = json.loads(text, object_pairs_hook=_unique_keys)
+    except StateError:  # from _unique_keys
+        raise
     except json.JSONDecodeError as e:
         raise StateError("", f"malformed JSON at line {e.lineno} column {e.colno}: {e.msg}") from e
     except RecursionError as e:
