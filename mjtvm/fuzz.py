@@ -87,7 +87,10 @@ def _numbers(node: Any, f: Callable[[float], Any]) -> Any:
     if isinstance(node, dict):
         return {k: _numbers(v, f) for k, v in node.items()}
     if isinstance(node, (int, float)) and not isinstance(node, bool):
-        return f(node)
+        try:
+            return f(node)
+        except OverflowError:  # an integer beyond a float (an earlier mutation): keep it
+            return node
     return node
 
 

@@ -6,12 +6,13 @@ from __future__ import annotations
 import copy
 import json
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import jsonschema
 import pytest
 
-from mjtvm import StateError, load_state
+from mjtvm import StateError, load_state, tvmmp
 from mjtvm.scenario import export_state
 
 DATA = resources.files("mjtvm.data")
@@ -131,3 +132,18 @@ def test_schema_and_loader_agree_on_valid_edge_values(validator):
     assert list(validator.iter_errors(doc)) == []
     state = load_state(doc)
     assert (state.friction_edges, state.space, state.refs[0, 2]) == (16, 3, -1e12)
+
+
+def test_the_documented_example_is_valid(validator):
+    """The example in docs/state-format.md passes the schema, loads and solves."""
+    text = (Path(__file__).parents[1] / "docs" / "state-format.md").read_text(encoding="utf-8")
+    doc = json.loads(text.split("```json\n", 1)[1].split("```", 1)[0])
+    assert list(validator.iter_errors(doc)) == []
+    state = load_state(doc)
+    assert (state.num_joints, len(state.contacts), state.friction_edges) == (2, 2, 16)
+    result = tvmmp(state)
+    # The fingertips move only along z (their Jacobians): up and down are reachable, the
+    # sideways-and-up directions are not (alpha 0), so the TVMMP is 0.
+    assert result.status == (("optimal",) * 4,)
+    assert result.alpha[0, 0] > 1.0 and result.alpha[0, 3] > 1.0
+    assert result.alpha[0, 1] == 0.0 and result.alpha[0, 2] == 0.0 and result.tvmmp == 0.0
