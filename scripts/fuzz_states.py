@@ -10,7 +10,7 @@ A state that loads is solved with ``mjtvm.tvmmp``. Outcomes are counted:
 * ``solved``: loaded and solved, output JSON-clean (finite);
 * ``StateError <field>``: refused by the loader (indices shown as ``[i]``), or by
   ``tvmmp`` (a state without RVDS);
-* ``SolverError``: the solver failed (a package error: allowed);
+* ``SolverError <solver>: <status>``: the solver failed (a package error: allowed);
 * ``FAILURE``: any other exception, or non-finite output; its traceback is printed.
 
 Usage::
@@ -59,8 +59,8 @@ def outcome(source: Any) -> str:
         return f"StateError {field}"
     try:
         result = tvmmp(state, witnesses=False)
-    except SolverError:
-        return "SolverError"
+    except SolverError as e:
+        return f"SolverError {e.solver}: {e.status}"
     except StateError as e:
         return f"StateError from tvmmp: {e.field}"
     except MjtvmError as e:
