@@ -109,7 +109,10 @@ def _write_temp(target: Path, data: bytes, option: str) -> Path:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
-        os.chmod(tmp, 0o644)  # mkstemp's 0600 is meant for secrets, not results
+        # mkstemp's 0600 is meant for secrets, not results: give the mode open() would give.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
     except BaseException as e:
         with contextlib.suppress(OSError):
             os.unlink(tmp)

@@ -11,10 +11,8 @@ Schema, in ``mjtvm/data/schema/state.schema.json``.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -39,6 +37,7 @@ from .bounds import (
 )
 from .contacts import Contact
 from .errors import StateError
+from .files import atomic_write
 from .operation_range import OperationRange
 
 __all__ = ["SCHEMA", "GraspState", "dump_state", "json_floats", "load_state", "parse_state", "state_to_dict"]
@@ -425,28 +424,11 @@ def dump_state(
 
     Raises
     ------
-    OSError
-        When ``path`` cannot be written; the previous file, if any, is left as it was.
+    OutputError
+        When ``path`` cannot be written (its ``path`` attribute names it); the previous
+        file, if any, is left as it was.
     """
     text = json.dumps(state_to_dict(state), indent=indent, allow_nan=False)
     if path is not None:
-        _write_atomically(Path(path), text + "\n")
+        atomic_write(Path(path), text + "\n", option="path")
     return text
-
-
-def _write_atomically(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        # mkstemp creates the file private (0600); give it the mode open() would have.
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise

@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mjtvm import GraspState, StateError, dump_state, load_state, state_to_dict, tvmmp
+from mjtvm import GraspState, OutputError, StateError, dump_state, load_state, state_to_dict, tvmmp
 from mjtvm.cli import example_path
 
 
@@ -331,12 +331,13 @@ def test_dump_state_writes_a_file_atomically(doc, tmp_path):
 
 def test_dump_state_failure_leaves_the_old_file(doc, tmp_path):
     state = load_state(doc)
-    with pytest.raises(FileNotFoundError):
+    with pytest.raises(OutputError, match=r"^path: cannot write \(No such file or directory\): .*missing"):
         dump_state(state, tmp_path / "missing" / "state.json")
     target = tmp_path / "dir.json"
     target.mkdir()
-    with pytest.raises(IsADirectoryError):
+    with pytest.raises(OutputError, match=r"^path: cannot replace \(Is a directory\): .*dir\.json$") as err:
         dump_state(state, target)
+    assert err.value.path == str(target)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.json"]
 
 
