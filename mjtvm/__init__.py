@@ -9,7 +9,7 @@ live in their own modules.
 
 from .assembly import Assembly, assemble
 from .contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
-from .errors import MjtvmError, ModelError, SolverError, StateError
+from .errors import MjtvmError, ModelError, OutputError, SolverError, StateError
 from .operation_range import OperationRange, default_operation_range, load_motor_data
 from .state import GraspState, dump_state, load_state, parse_state, state_to_dict
 from .tvmmp import Timings, TvmmpResult, Witness, tvmmp
@@ -25,6 +25,7 @@ __all__ = [
     "MjtvmError",
     "ModelError",
     "OperationRange",
+    "OutputError",
     "SolverError",
     "StateError",
     "Timings",

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Sequence
+import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -193,45 +194,81 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
 
 # ------------------------------------------------------------------ command line
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``scripts/bench.py`` and ``mjtvm bench``."""
+    """The options of ``scripts/bench.py`` and ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
+    from .cli import folder, integer, number, removed_option, stem
+
     parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
-    parser.add_argument(
-        "--repeats", type=int, default=200, help="timed calls per Problem 2 state (default 200)"
-    )
-    parser.add_argument("--baseline-repeats", type=int, default=10, help="timed cvxpy calls (default 10)")
-    parser.add_argument(
-        "--time-limit", type=float, default=120.0, help="cap of the cdd baseline (s, default 120)"
-    )
-    parser.add_argument("--out", type=Path, default=Path("results/bench.json"), help="JSON report")
-    parser.add_argument("--md", type=Path, default=Path("results/bench.md"), help="plain-text table")
-    parser.add_argument("--notes", type=Path, default=None, help="text file appended to the table's notes")
+    parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
+                        help="timed calls per Problem 2 state")  # fmt: skip
+    parser.add_argument("--baseline-repeats", type=integer(1), default=10, metavar="N",
+                        help="timed cvxpy calls per state")  # fmt: skip
+    parser.add_argument("--time-limit", type=number(0.0, strict=True), default=120.0, metavar="S",
+                        help="cap of each cdd baseline run (s)")  # fmt: skip
+    parser.add_argument("--out", type=folder, default="results", metavar="DIR",
+                        help="output folder of NAME.json (the report) and NAME.md (the table)")  # fmt: skip
+    parser.add_argument("--name", type=stem, default="bench", help="file stem of the outputs in --out")
+    removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
+    parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
+                        help="text file whose lines are appended to the table's notes")  # fmt: skip
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def run_from_args(args: argparse.Namespace) -> int:
-    """Run the suite with parsed options, print the table, write the JSON and the table."""
-    if args.repeats < 1 or args.baseline_repeats < 1 or args.time_limit <= 0:
-        raise SystemExit("error: --repeats and --baseline-repeats must be >= 1, --time-limit > 0")
-    report = run_suite(
-        quick=args.quick,
-        repeats=args.repeats,
-        baseline_repeats=args.baseline_repeats,
-        time_limit=args.time_limit,
-    )
-    notes = auto_notes(report)
-    notes += args.notes.read_text(encoding="utf-8").rstrip().splitlines() if args.notes else []
-    table = format_suite_table(report, notes)
-    report["notes"] = notes
-    print(table)
-    for path in (args.out, args.md):
-        path.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=1) + "\n", encoding="utf-8")
-    args.md.write_text("```\n" + table + "\n```\n", encoding="utf-8")
-    print(f"wrote {args.out} and {args.md}")
+def _steps(quick: bool) -> int:
+    """How many ``say`` steps :func:`~mjtvm.bench_suite.run_suite` announces (the progress bar's total)."""
+    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
+
+
+def run_from_args(args: argparse.Namespace, *, emit: Callable[[str], None] = print) -> int:
+    """Run the suite with parsed options, print the table, write NAME.json and NAME.md atomically.
+
+    The output folder is checked and locked before the run (which takes minutes).
+
+    Raises
+    ------
+    OutputError
+        ``--out`` cannot be written or another run holds its lock.
+    StateError
+        The ``--notes`` file cannot be read.
+    """
+    from tqdm import tqdm
+
+    from .errors import StateError
+    from .files import check_output_dir, output_lock, write_files
+
+    outdir = check_output_dir(args.out)
+    try:
+        extra = args.notes.read_text(encoding="utf-8").rstrip().splitlines() if args.notes else []
+    except (OSError, UnicodeDecodeError) as e:
+        raise StateError("--notes", f"cannot read {args.notes} ({e})") from e
+    with output_lock(outdir):
+        bar = tqdm(total=_steps(args.quick), desc="bench", unit="step", disable=args.quiet)
+
+        started: list[str] = []
+
+        def step(text: str) -> None:  # a step's name is announced at its start: count the previous one
+            if started:
+                bar.update()
+            started.append(text)
+            bar.set_description_str(f"bench: {text}")
+
+        try:
+            report = run_suite(quick=args.quick, repeats=args.repeats, baseline_repeats=args.baseline_repeats,
+                               time_limit=args.time_limit, progress=step)  # fmt: skip
+            bar.update(bar.total - bar.n)
+        finally:
+            bar.close()
+        notes = auto_notes(report) + extra
+        table = format_suite_table(report, notes)
+        report["notes"] = notes
+        out_json, out_md = outdir / f"{args.name}.json", outdir / f"{args.name}.md"
+        write_files({out_json: json.dumps(report, indent=1) + "\n", out_md: "```\n" + table + "\n```\n"})
+    emit(table)
+    emit(f"wrote {out_json} and {out_md}")
     return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python scripts/bench.py`` (see the module docstring)."""
-    parser = argparse.ArgumentParser(description="mjtvm benchmark run: paper cases, lift, sweeps, scaling")
-    add_arguments(parser)
-    return run_from_args(parser.parse_args(argv))
+    from .cli import main as cli_main
+
+    return cli_main(["bench", *(sys.argv[1:] if argv is None else argv)])

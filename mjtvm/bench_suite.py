@@ -425,14 +425,20 @@ def run_suite(
     cases: bool = True,
     lift: bool = True,
     sweeps: bool = True,
-    progress: bool = True,
+    progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
-    """Every measurement of the module docstring; returns the JSON-ready report (times in s)."""
+    """Every measurement of the module docstring; returns the JSON-ready report (times in s).
+
+    ``progress``: print each step's name (True), call ``progress(name)`` at each step's start
+    (a progress bar: ``mjtvm bench``), or stay silent (False).
+    """
     from .bench import machine_info
     from .scenario import load_scenario
 
     def say(text: str) -> None:
-        if progress:
+        if callable(progress):
+            progress(text)
+        elif progress:
             print(f"[bench] {text}", flush=True)
 
     t_start = time.perf_counter()

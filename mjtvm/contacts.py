@@ -35,6 +35,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .bounds import MAX_JOINTS, describe, float_array, number
 from .errors import StateError
 
 __all__ = ["CONTACT_TYPES", "Contact", "force_generators", "slide_unit", "tangent_basis"]
@@ -45,16 +46,16 @@ UNIT_TOL = 1e-6  # accepted deviation of a normal's length from 1
 
 
 def _vector(value: ArrayLike, field: str, length: int) -> NDArray[np.float64]:
-    try:
-        v = np.array(value, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise StateError(field, f"expected a list of {length} numbers", value) from e
+    v = float_array(value, field, ndim=1, what=f"a list of {length} numbers")
     if v.shape != (length,):
-        raise StateError(field, f"expected {length} numbers, got shape {v.shape}", value)
-    if not np.all(np.isfinite(v)):
-        raise StateError(field, "expected finite numbers (no NaN or infinity)", value)
-    v.setflags(write=False)
+        raise StateError(field, f"expected {length} numbers, got {v.shape[0]}", value)
     return v
+
+
+def _direction_norm(v: NDArray[np.float64]) -> float:
+    """Euclidean norm without underflow or overflow (entries of 1e-200 or 1e200 squared)."""
+    big = float(np.max(np.abs(v))) if v.size else 0.0
+    return 0.0 if big == 0.0 else big * float(np.linalg.norm(v / big))
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,13 +96,15 @@ class Contact:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise StateError("name", "expected a non-empty string", self.name)
-        if self.type not in CONTACT_TYPES:
-            raise StateError("type", f"expected one of F, L, S, D, got {self.type!r}", self.type)
-        pos = np.asarray(self.position, dtype=float) if _is_numeric(self.position) else None
-        d = pos.shape[0] if pos is not None and pos.ndim == 1 else -1
+        if not isinstance(self.type, str) or self.type not in CONTACT_TYPES:
+            raise StateError("type", f"expected one of F, L, S, D, got {describe(self.type)}", self.type)
+        pos = float_array(self.position, "position", ndim=1, what="2 (planar) or 3 (spatial) numbers")
+        d = pos.shape[0]
         if d not in (2, 3):
-            raise StateError("position", "expected 2 (planar) or 3 (spatial) numbers", self.position)
-        object.__setattr__(self, "position", _vector(self.position, "position", d))
+            raise StateError(
+                "position", f"expected 2 (planar) or 3 (spatial) numbers, got {d}", self.position
+            )
+        object.__setattr__(self, "position", pos)
         normal = _vector(self.normal, "normal", d)
         norm = float(np.linalg.norm(normal))
         if abs(norm - 1.0) > UNIT_TOL:
@@ -113,33 +116,35 @@ class Contact:
         normal = normal / norm
         normal.setflags(write=False)
         object.__setattr__(self, "normal", normal)
-        try:
-            jac = np.array(self.jacobian, dtype=float)
-        except (TypeError, ValueError) as e:
-            raise StateError("jacobian", f"expected {d} rows of numbers", self.jacobian) from e
-        if jac.ndim != 2 or jac.shape[0] != d:
+        jac = float_array(
+            self.jacobian,
+            "jacobian",
+            ndim=2,
+            max_len=d,
+            max_width=MAX_JOINTS,
+            what=f"{d} rows (one per coordinate) of M numbers",
+        )
+        if jac.shape[0] != d or jac.shape[1] == 0:
             raise StateError(
                 "jacobian",
-                f"expected {d} rows (one per coordinate) of M numbers, got shape {jac.shape}",
+                f"expected {d} rows (one per coordinate) of M >= 1 numbers, got shape {jac.shape}",
                 self.jacobian,
             )
-        if not np.all(np.isfinite(jac)):
-            raise StateError("jacobian", "expected finite numbers (no NaN or infinity)", self.jacobian)
-        jac.setflags(write=False)
         object.__setattr__(self, "jacobian", jac)
         if self.type in ("F", "S"):
             if self.mu is None:
                 raise StateError("mu", f"required for a {self.type} contact")
         if self.mu is not None:
-            if isinstance(self.mu, bool) or not isinstance(self.mu, (int, float, np.floating)):
-                raise StateError("mu", f"expected a number, got {self.mu!r}", self.mu)
-            if not (np.isfinite(self.mu) and self.mu >= 0.0):
-                raise StateError("mu", f"expected a finite number >= 0, got {self.mu!r}", self.mu)
-            object.__setattr__(self, "mu", float(self.mu))
+            if isinstance(self.mu, (float, np.floating)) and np.isnan(self.mu):
+                raise StateError("mu", "expected a finite number >= 0, got nan", self.mu)
+            mu = number(self.mu, "mu")
+            if mu < 0.0:
+                raise StateError("mu", f"expected a finite number >= 0, got {mu!r}", self.mu)
+            object.__setattr__(self, "mu", mu)
         if self.tangent is not None:
             t = _vector(self.tangent, "tangent", d)
-            tn = float(np.linalg.norm(t))
-            if tn == 0.0 or abs(float(t @ normal)) > UNIT_TOL * tn:
+            tn = _direction_norm(t)
+            if tn == 0.0 or abs(float((t / tn) @ normal)) > UNIT_TOL:
                 raise StateError(
                     "tangent", "expected a non-zero direction orthogonal to the normal", self.tangent
                 )
@@ -148,8 +153,9 @@ class Contact:
             if self.slide_direction is None:
                 raise StateError("slide_direction", "required for an S contact (the slide direction)")
             s = _vector(self.slide_direction, "slide_direction", d)
-            st = s - (s @ normal) * normal
-            if np.linalg.norm(st) <= UNIT_TOL * max(1.0, float(np.linalg.norm(s))):
+            sn = _direction_norm(s)
+            st = s / sn - ((s / sn) @ normal) * normal if sn > 0.0 else s
+            if float(np.linalg.norm(st)) <= UNIT_TOL:
                 raise StateError(
                     "slide_direction",
                     "has no component in the tangent plane (it must not be parallel to the normal)",
@@ -170,14 +176,6 @@ class Contact:
         return int(self.jacobian.shape[1])
 
 
-def _is_numeric(value: object) -> bool:
-    try:
-        np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return False
-    return True
-
-
 def tangent_basis(
     normal: NDArray[np.float64], tangent: NDArray[np.float64] | None = None
 ) -> NDArray[np.float64]:
@@ -193,8 +191,9 @@ def tangent_basis(
         t1 = np.zeros(3)
         t1[axis] = 1.0
     else:
-        t1 = np.asarray(tangent, dtype=float).copy()
-    t1 -= (t1 @ n) * n
+        t1 = np.asarray(tangent, dtype=float)
+        t1 = t1 / _direction_norm(t1)  # validated non-zero; pre-scaled so a tiny or huge tangent is safe
+    t1 = t1 - (t1 @ n) * n
     t1 /= np.linalg.norm(t1)
     return np.vstack([t1, np.cross(n, t1)])
 
@@ -203,7 +202,8 @@ def slide_unit(contact: Contact) -> NDArray[np.float64]:
     """Unit tangential slide direction of an S contact (normal component removed)."""
     if contact.slide_direction is None:
         raise StateError("slide_direction", f"contact {contact.name!r} has none")
-    s = contact.slide_direction - (contact.slide_direction @ contact.normal) * contact.normal
+    s = contact.slide_direction / _direction_norm(contact.slide_direction)  # validated non-zero
+    s = s - (s @ contact.normal) * contact.normal
     return s / np.linalg.norm(s)
 
 

@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import multiprocessing
 import time
+import warnings
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
@@ -71,7 +73,7 @@ def force_form(poly: LiftedPolytope) -> LiftedPolytope:
     col_max = np.max(mag, axis=0, keepdims=True, initial=0.0)
     top[mag <= DROP_REL * np.maximum(row_max, col_max)] = 0.0
     x_keep = np.flatnonzero(keep[:n_x])
-    facets = sp.block_diag(cones).toarray()
+    facets = scipy.linalg.block_diag(*cones)  # dense: cdd takes a dense matrix anyway
     n_k, n_z = len(x_keep), a.shape[1] - n_x
     bottom = np.hstack([np.zeros((len(facets), n_k)), facets, np.zeros((len(facets), n_z))])
     free = np.full(n_f, np.inf)
@@ -127,8 +129,13 @@ def _cdd_worker(conn: Any, rows: NDArray[np.float64]) -> None:
 
         mat = cdd.matrix_from_array(rows.tolist(), rep_type=cdd.RepType.INEQUALITY)
         orders = (None, cdd.RowOrderType.MAX_INDEX, cdd.RowOrderType.RANDOM_ROW, cdd.RowOrderType.MIN_INDEX)
+        failures: list[str] = []
         for order in orders:
-            gen = cdd.copy_generators(cdd.polyhedron_from_matrix(mat, row_order=order))
+            try:
+                gen = cdd.copy_generators(cdd.polyhedron_from_matrix(mat, row_order=order))
+            except RuntimeError as e:  # "Numerical inconsistency is found": another order may not meet it
+                failures.append(str(e).strip())
+                continue
             out = np.array(gen.array, dtype=float).reshape(-1, rows.shape[1])
             # A "vertex" 1e10 times farther than its homogenising 1 is a ray gone astray.
             out[np.abs(out[:, 0]) <= 1e-10 * np.max(np.abs(out[:, 1:]), axis=1, initial=0.0), 0] = 0.0
@@ -140,8 +147,9 @@ def _cdd_worker(conn: Any, rows: NDArray[np.float64]) -> None:
             ) and np.all(rows[:, 1:] @ rays.T >= -1e-9):
                 conn.send(("ok", out))
                 break
+            failures.append("vertices that break the input rows")
         else:
-            conn.send(("error", "numerically inconsistent vertices for every row order"))
+            conn.send(("error", f"numerically inconsistent for every row order: {'; '.join(failures)}"))
     except Exception as e:  # reported to the parent as a SolverError
         conn.send(("error", str(e).strip()))
     conn.close()
@@ -153,7 +161,11 @@ def _run_cdd(rows: NDArray[np.float64], time_limit: float) -> NDArray[np.float64
     ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_cdd_worker, args=(send, rows), daemon=True)
-    proc.start()
+    with warnings.catch_warnings():
+        # Python >= 3.12 warns about fork() beside other threads (OpenBLAS', rerun's in a test
+        # session): the child touches none of their locks, only cddlib, numpy and its pipe.
+        warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
+        proc.start()
     send.close()
     try:
         if not recv.poll(time_limit):

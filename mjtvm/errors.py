@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MjtvmError", "ModelError", "SolverError", "StateError"]
+__all__ = ["MjtvmError", "ModelError", "OutputError", "SolverError", "StateError"]
 
 
 class MjtvmError(Exception):
@@ -79,3 +79,23 @@ class ModelError(MjtvmError, ValueError):
         self.what = what
         self.problem = problem
         super().__init__(f"{what}: {problem}")
+
+
+class OutputError(MjtvmError):
+    r"""An output file or folder that cannot be written (or is in use by another run).
+
+    Parameters
+    ----------
+    option
+        The command-line option (or argument name) that named the path, e.g. ``"--out"``.
+    path
+        The offending path.
+    problem
+        What went wrong, e.g. ``"not a directory"``.
+    """
+
+    def __init__(self, option: str, path: str, problem: str) -> None:
+        self.option = option
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{option}: {problem}: {path}" if option else f"{problem}: {path}")

@@ -20,12 +20,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .bounds import MAX_RANGE_VERTICES, float_array
 from .errors import StateError
 
 __all__ = ["OperationRange", "default_operation_range", "load_motor_data"]
 
 _RPM = 2.0 * np.pi / 60.0  # rad/s per rpm
-_TOL = 1e-9  # relative tolerance of the geometric checks
+_TOL = 1e-9  # tolerance of the geometric checks, relative to each axis's largest value
 
 
 def _cross(o: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
@@ -54,62 +55,63 @@ class OperationRange:
     _halfplanes: NDArray[np.float64] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        try:
-            v = np.array(self.vertices, dtype=float)
-        except (TypeError, ValueError) as e:
-            raise StateError("", "expected a list of [torque, speed] pairs", self.vertices) from e
-        if v.ndim != 2 or v.shape[1] != 2 or v.shape[0] < 3:
+        v = float_array(
+            self.vertices, "", ndim=2, max_len=MAX_RANGE_VERTICES, what="a list of [torque, speed] pairs"
+        )
+        if v.shape[1:] != (2,) or v.shape[0] < 3:
             raise StateError(
-                "", f"expected at least 3 [torque, speed] pairs, got shape {v.shape}", self.vertices
+                "",
+                f"expected at least 3 and at most {MAX_RANGE_VERTICES} [torque, speed] pairs, got shape {v.shape}",
+                self.vertices,
             )
-        if not np.all(np.isfinite(v)):
-            raise StateError("", "vertices must be finite numbers", self.vertices)
         if np.any(v < 0.0):
             raise StateError(
                 "",
                 "vertices must lie in the quadrant of absolute torque and absolute speed "
                 "(no negative coordinate)",
-                self.vertices,
+                v.tolist(),
             )
-        scale = np.maximum(v.max(axis=0), 1e-300)
-        if not np.any(np.all(np.abs(v) <= _TOL * scale, axis=1)):
-            raise StateError("", "the origin [0, 0] must be a vertex", self.vertices)
         t_max, s_max = v.max(axis=0)
         if t_max <= 0.0 or s_max <= 0.0:
             raise StateError(
-                "", "needs a vertex with positive torque and one with positive speed", self.vertices
+                "", "needs a vertex with positive torque and one with positive speed", v.tolist()
             )
-        self._check_convex(v)
+        # Torque and speed have unrelated units (1.5 N m beside 1.5e9 rad/s is a valid
+        # range), so every geometric check runs on u = v / (max torque, max speed), where
+        # both axes span [0, 1] and one absolute tolerance is scale-invariant per axis.
+        u = v / np.array([t_max, s_max])
+        if not np.any(np.all(u <= _TOL, axis=1)):
+            raise StateError("", "the origin [0, 0] must be a vertex", v.tolist())
+        self._check_convex(u, v)
         # Down-closed (given convexity and the origin): the largest torque is reached at
         # zero speed and the largest speed at zero torque; see the class docstring.
-        if not np.any((np.abs(v[:, 0] - t_max) <= _TOL * t_max) & (v[:, 1] <= _TOL * s_max)):
+        if not np.any((u[:, 0] >= 1.0 - _TOL) & (u[:, 1] <= _TOL)):
             raise StateError(
                 "",
                 f"not down-closed: the largest torque {t_max:g} must be reached at zero speed "
                 "(expected a vertex [max torque, 0] on the torque axis)",
-                self.vertices,
+                v.tolist(),
             )
-        if not np.any((np.abs(v[:, 1] - s_max) <= _TOL * s_max) & (v[:, 0] <= _TOL * t_max)):
+        if not np.any((u[:, 1] >= 1.0 - _TOL) & (u[:, 0] <= _TOL)):
             raise StateError(
                 "",
                 f"not down-closed: the largest speed {s_max:g} must be reached at zero torque "
                 "(expected a vertex [0, max speed] on the speed axis)",
-                self.vertices,
+                v.tolist(),
             )
-        v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
-        object.__setattr__(self, "_halfplanes", self._compute_halfplanes(v))
+        object.__setattr__(self, "_halfplanes", self._compute_halfplanes(u, np.array([t_max, s_max])))
 
     @staticmethod
-    def _check_convex(v: NDArray[np.float64]) -> None:
-        n = len(v)
-        scale = float(np.max(v)) ** 2
-        turns = np.array([_cross(v[i - 1], v[i], v[(i + 1) % n]) for i in range(n)])
-        if np.any(np.linalg.norm(v - np.roll(v, 1, axis=0), axis=1) <= _TOL * np.sqrt(scale)):
+    def _check_convex(u: NDArray[np.float64], v: NDArray[np.float64]) -> None:
+        # u: the vertices scaled into [0, 1]^2 (see __post_init__); v: as given, for messages.
+        n = len(u)
+        turns = np.array([_cross(u[i - 1], u[i], u[(i + 1) % n]) for i in range(n)])
+        if np.any(np.linalg.norm(u - np.roll(u, 1, axis=0), axis=1) <= _TOL):
             raise StateError("", "repeated vertex", v.tolist())
-        if np.all(turns >= -_TOL * scale) or np.all(turns <= _TOL * scale):
+        if np.all(turns >= -_TOL) or np.all(turns <= _TOL):
             # Same turn everywhere; rule out a polygon that winds twice around.
-            angles = np.arctan2(*(np.roll(v, -1, axis=0) - v).T[::-1])
+            angles = np.arctan2(*(np.roll(u, -1, axis=0) - u).T[::-1])
             total = np.sum(np.mod(np.diff(np.append(angles, angles[0])) + np.pi, 2 * np.pi) - np.pi)
             if abs(abs(total) - 2 * np.pi) < 1e-6:
                 return
@@ -118,26 +120,32 @@ class OperationRange:
         )
 
     @staticmethod
-    def _compute_halfplanes(v: NDArray[np.float64]) -> NDArray[np.float64]:
-        # Outward edge normals of the polygon; keep the edges that are not on an axis.
-        # For a down-closed polygon each such normal is non-negative (module docstring).
-        ccw = sum(_cross(v[0], v[i], v[i + 1]) for i in range(1, len(v) - 1)) > 0
+    def _compute_halfplanes(u: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
+        # Outward edge normals of the scaled polygon u = v / scale; keep the edges that are
+        # not on an axis. For a down-closed polygon each such normal is non-negative
+        # (module docstring). A row a . u <= b is (a / scale) . v <= b in the given units,
+        # normalised so that [a_tau, a_qd] has unit length.
+        ccw = sum(_cross(u[0], u[i], u[i + 1]) for i in range(1, len(u) - 1)) > 0
         rows = []
-        scale = float(np.max(v))
-        for i in range(len(v)):
-            a, b = v[i], v[(i + 1) % len(v)]
+        for i in range(len(u)):
+            a, b = u[i], u[(i + 1) % len(u)]
             edge = b - a
             normal = np.array([edge[1], -edge[0]]) if ccw else np.array([-edge[1], edge[0]])
             length = float(np.linalg.norm(normal))
-            if length <= _TOL * scale:
+            if length <= _TOL:
                 continue
             normal /= length
             offset = float(normal @ a)
-            if offset <= _TOL * scale:  # an axis edge through the origin: x >= 0 or y >= 0
+            if offset <= _TOL:  # an axis edge through the origin: x >= 0 or y >= 0
                 continue
-            rows.append([normal[0], normal[1], offset])
+            # (normal / scale) . v <= offset, multiplied by min(scale) first so that a
+            # scale of 1e-300 cannot overflow the row before it is normalised.
+            c = float(scale.min())
+            given = normal * (c / scale)
+            size = float(np.linalg.norm(given))
+            rows.append([given[0] / size, given[1] / size, offset * (c / size)])
         hp = np.array(rows, dtype=float)
-        hp[np.abs(hp) < 1e-15] = 0.0
+        hp[:, :2][np.abs(hp[:, :2]) < 1e-15] = 0.0
         hp.setflags(write=False)
         return hp
 

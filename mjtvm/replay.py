@@ -18,6 +18,7 @@ column says which backend produced a row.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import statistics
@@ -234,12 +235,17 @@ def _columns(records: Sequence[Record]) -> list[str]:
     return list(records[0].row()) if records else []
 
 
-def _write_csv(path: Path, records: Sequence[Record], meta: dict[str, Any]) -> None:
-    with path.open("w", newline="", encoding="utf-8") as f:
-        writer = csv.DictWriter(f, fieldnames=["scenario", "hand", *_columns(records)])
-        writer.writeheader()
-        for rec in records:
-            writer.writerow({"scenario": meta["scenario"], "hand": meta["hand"], **rec.row()})
+def _csv(records: Sequence[Record], meta: dict[str, Any], sweeps: Sequence[str] | None = None) -> str:
+    """CSV text; ``sweeps`` (one name per record) adds the ``sweep`` column that tells the Fig. 9
+    curves apart (the (mu 0.3, mg 2) curve belongs to both sweeps)."""
+    extra = ["sweep"] if sweeps is not None else []
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=[*extra, "scenario", "hand", *_columns(records)])
+    writer.writeheader()
+    for k, rec in enumerate(records):
+        tag = {"sweep": sweeps[k]} if sweeps is not None else {}
+        writer.writerow({**tag, "scenario": meta["scenario"], "hand": meta["hand"], **rec.row()})
+    return buf.getvalue()
 
 
 def _lift_dict(lift: Lift) -> dict[str, Any]:
@@ -261,7 +267,13 @@ def _lift_dict(lift: Lift) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def _plot(path: Path, curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> None:
+ALPHA_LABEL = r"TVMMP $\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)"
+"""The TVMMP axis: alpha multiplies the RVDS vertex r_l (eq. 30: object velocity in m/s, angular
+velocity in rad/s), so alpha = 1 is the vertex itself; the scenarios' vertices have linear
+components of +-1 m/s, so alpha reads as m/s per unit of the vertex."""
+
+
+def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> bytes:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -277,39 +289,39 @@ def _plot(path: Path, curves: Sequence[tuple[str, str, Sequence[Record]]], title
             ax.plot(
                 z[bad], np.zeros(int(bad.sum())), "x", color=line.get_color(), label=f"{label}: no solution"
             )
-    ax.set_xlabel("object z [m]")
-    ax.set_ylabel(r"TVMMP $\alpha$")
+    ax.set_xlabel("object height $z$ (m)")
+    ax.set_ylabel(ALPHA_LABEL, fontsize=8)
     ax.set_title(title, fontsize=9)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=120)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120)
+    return buf.getvalue()
 
 
 def _figures(
-    outdir: Path,
     lift: Lift,
     hand: str,
     records: Sequence[Record],
     swept: dict[str, tuple[Record, ...]] | None,
     mu: float,
     mg: float,
-) -> dict[str, Path]:
-    """Fig. 8 (solid L, dashed S) and, with the sweeps, Fig. 9a/9b: TVMMP vs z."""
-    tag, files = f"{lift.scenario.name}, {hand} hand", {"fig8.png": outdir / "fig8.png"}
+) -> dict[str, bytes]:
+    """Fig. 8 (solid L, dashed S) and, with the sweeps, Fig. 9a/9b: TVMMP vs z, as PNG bytes."""
+    tag = f"{lift.scenario.name}, {hand} hand"
     runs = list(dict.fromkeys((r.variant, r.reading) for r in records))
     curves = [
         (f"{v}-points" + (f" ({rd} reading)" if rd else ""), "-" if v == "L" else "--",
          [r for r in records if (r.variant, r.reading) == (v, rd)])
         for v, rd in runs
     ]  # fmt: skip
-    _plot(files["fig8.png"], curves, f"Fig. 8: {tag}, mu = {mu:g}, mg = {mg:g} N")
+    files = {"fig8.png": _plot(curves, f"Fig. 8: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N")}
     if swept is not None:
-        files["fig9a.png"], files["fig9b.png"] = outdir / "fig9a.png", outdir / "fig9b.png"
-        a = [(f"mu = {m:g}", "-", [r for r in swept["mu"] if r.mu == m]) for m in SWEEP_MUS]
-        _plot(files["fig9a.png"], a, f"Fig. 9a: {tag}, L-points, mg = {SWEEP_MU_MG:g} N")
-        b = [(f"mg = {g:g} N", "-", [r for r in swept["mg"] if r.mg == g]) for g in SWEEP_MGS]
-        _plot(files["fig9b.png"], b, f"Fig. 9b: {tag}, L-points, mu = {SWEEP_MG_MU:g}")
+        a = [(f"$\\mu$ = {m:g}", "-", [r for r in swept["mu"] if r.mu == m]) for m in SWEEP_MUS]
+        files["fig9a.png"] = _plot(a, f"Fig. 9a: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N")
+        b = [(f"$mg$ = {g:g} N", "-", [r for r in swept["mg"] if r.mg == g]) for g in SWEEP_MGS]
+        files["fig9b.png"] = _plot(b, f"Fig. 9b: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}")
     return files
 
 
@@ -345,21 +357,24 @@ def run_replay(
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
     plots: the CLI starts the rerun recording there (:func:`~mjtvm.recording.start_recording`).
 
+    The files are written as one set, atomically (:func:`mjtvm.files.write_files`), after
+    everything is computed; the output folder is checked before any work.
+
     Raises
     ------
     StateError
-        Bad options or an output directory that cannot be created.
+        Bad options.
+    OutputError
+        An output folder that cannot be created or written.
     ModelError
         Unknown scenario or hand, or a lift that cannot be made.
     """
+    from .files import check_output_dir, write_files
+
     _check(variants, readings, mu, mg)
+    outdir = check_output_dir(out, option="out")  # before any work
     times, t0 = {}, time.perf_counter()
     lift = scripted_lift(scenario, variant=hand, num_states=num_states)
-    outdir = Path(out)
-    try:
-        outdir.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise StateError("out", f"cannot create the output directory {str(outdir)!r}: {e}") from e
     bases = [lift_state(lift, i) for i in range(lift.num_states)]
     times["lift_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     records = replay_lift(
@@ -371,13 +386,13 @@ def run_replay(
     swept = sweep_lift(lift, progress=progress, bases=bases) if sweeps else None
     times["sweeps_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     meta = {"scenario": lift.scenario.name, "hand": hand}
-    files = {"lift.csv": outdir / "lift.csv", "lift.json": outdir / "lift.json"}
-    _write_csv(files["lift.csv"], records, meta)
+    # every file is rendered in memory first, then the set is written at once (mjtvm.files)
+    contents: dict[str, bytes | str] = {"lift.csv": _csv(records, meta)}
     if swept is not None:
-        files["lift-sweeps.csv"] = outdir / "lift-sweeps.csv"
-        _write_csv(files["lift-sweeps.csv"], [*swept["mu"], *swept["mg"]], meta)
+        tags = ["mu"] * len(swept["mu"]) + ["mg"] * len(swept["mg"])
+        contents["lift-sweeps.csv"] = _csv([*swept["mu"], *swept["mg"]], meta, tags)
     if plots:
-        files.update(_figures(outdir, lift, hand, records, swept, mu, mg))
+        contents.update(_figures(lift, hand, records, swept, mu, mg))
     times["output_s"] = time.perf_counter() - t0  # CSV and PNG (the JSON holds the timings)
     doc = {
         "schema": SCHEMA, **meta, "mu": mu, "mg": mg, "variants": list(variants), "readings": list(readings),
@@ -389,7 +404,10 @@ def run_replay(
         },
         "timings": times,
     }  # fmt: skip
-    files["lift.json"].write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    contents["lift.json"] = json.dumps(doc, indent=1) + "\n"
+    order = ["lift.csv", "lift.json", "lift-sweeps.csv", "fig8.png", "fig9a.png", "fig9b.png"]
+    files = {name: outdir / name for name in order if name in contents}
+    write_files({files[name]: contents[name] for name in files}, option="out")
     return ReplayOutput(lift, records, swept, files, times)
 
 

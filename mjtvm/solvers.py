@@ -200,7 +200,11 @@ def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passe
         # within a quarter of a power of 2 of the fixed point: the rounding below decides
         if max(np.max(np.abs(step), initial=0.0), np.max(np.abs(cstep), initial=0.0)) < 0.25:
             break
-    rho, kappa = np.round(rho), np.round(kappa)  # powers of 2: the scaling is exact
+    # Powers of 2: the scaling is exact. Clipped at 2^+-400 (a subnormal 1e-300 beside 1 in
+    # a fuzzed state drove factors past 2^1024, i.e. inf): what is still out of HiGHS' range
+    # after that is reported by the session (_check_magnitudes), never silently dropped.
+    rho = np.clip(np.round(rho), -400.0, 400.0)
+    kappa = np.clip(np.round(kappa), -400.0, 400.0)
     return Scaling(np.exp2(rho), np.exp2(kappa[:n]), 1.0)
 
 

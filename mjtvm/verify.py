@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import math
 import multiprocessing
 import statistics
+import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -145,6 +147,10 @@ def verify_lift(
         raise StateError("verify", f"expected stride >= 1, jobs >= 1, runs among {RUNS}")
     if start_method not in ("forkserver", "spawn"):
         raise StateError("start_method", f"expected 'forkserver' or 'spawn', got {start_method!r}")
+    if out is not None:  # before any work
+        from .files import check_output_dir
+
+        check_output_dir(out, option="out")
     st = settings or SimSettings()
     indices = sorted({*range(0, num_states, stride), num_states - 1})
     opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness}
@@ -158,29 +164,39 @@ def verify_lift(
             rows += _task(t)
             bar.update()
     else:
+        from .sweep import _ignore_sigint, _stop  # Ctrl-C: the parent alone reports it
+
         ctx = multiprocessing.get_context(start_method)
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_ignore_sigint)
+        try:
             for fut in as_completed([pool.submit(_task, t) for t in tasks]):
                 rows += fut.result()
                 bar.update()
+        except BaseException:
+            _stop(pool)
+            raise
+        pool.shutdown()
     bar.close()
     rows.sort(key=lambda r: (RUNS.index(r["run"]), r["state"], r["l"]))
     if out is not None:
-        outdir = Path(out)
-        outdir.mkdir(parents=True, exist_ok=True)
-        _write_csv(outdir / f"{name}.csv", rows)
+        from .files import check_output_dir, write_files
+
+        outdir = check_output_dir(out, option="out")
+        files: dict[Path, bytes | str] = {outdir / f"{name}.csv": _csv(rows)}
         if plot:
-            _plot(outdir / f"{name}.png", rows, f"{scenario}: mu = {mu}, mg = {mg} N")
+            files[outdir / f"{name}.png"] = _plot(rows, f"{scenario}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
+        write_files(files, option="out")
     return rows
 
 
-def _write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> None:
+def _csv(rows: Sequence[dict[str, Any]]) -> str:
     cols = list(dict.fromkeys(k for r in rows for k in r))
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=cols)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, fieldnames=cols)
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    return buf.getvalue()
 
 
 def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndarray, np.ndarray]:
@@ -192,7 +208,7 @@ def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndar
     return z, np.array([min(by[k]) if not any(math.isnan(v) for v in by[k]) else math.nan for k in z])
 
 
-def _plot(path: Path, rows: Sequence[dict[str, Any]], title: str) -> None:
+def _plot(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -203,14 +219,18 @@ def _plot(path: Path, rows: Sequence[dict[str, Any]], title: str) -> None:
         z, lp = _minima(rows, run, "alpha_lp")
         (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP), {run}")
         z, sim = _minima(rows, run, "alpha_sim")
-        ax.plot(z, sim, "o--", color=line.get_color(), ms=4, label=f"min alpha_sim, {run}")
-    ax.set_xlabel("object z [m]")
-    ax.set_ylabel(r"$\alpha$ [m/s per unit $\hat r$]")
+        ax.plot(
+            z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
+        )
+    ax.set_xlabel("object height $z$ (m)")
+    ax.set_ylabel(r"$\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)", fontsize=8)
     ax.set_title(title, fontsize=9)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    fig.savefig(path, dpi=120)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120)
+    return buf.getvalue()
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
@@ -294,63 +314,122 @@ def _cos(a: np.ndarray, b: np.ndarray) -> float:
 
 # ------------------------------------------------------------------- command
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of ``mjtvm verify`` (also ``scripts/verify.py``)."""
-    p.add_argument("--scenario", default="case2")
-    p.add_argument("--states", type=int, default=30, help="states of the lift (default 30)")
-    p.add_argument("--stride", type=int, default=1, help="check every n-th state")
-    p.add_argument("--runs", default=",".join(RUNS), help=f"comma-separated subset of {','.join(RUNS)}")
-    p.add_argument("--mu", type=float, default=0.3)
-    p.add_argument("--mg", type=float, default=1.0)
-    p.add_argument("--jobs", type=int, default=1, help="worker processes")
-    p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"))
-    p.add_argument("--witness", default="central", choices=("central", "vertex"))
-    p.add_argument("--armature-scale", type=float, default=1.0, help="ablation: scale the rotor inertia")
-    p.add_argument("--window", type=float, default=SimSettings.window, help="s")
-    p.add_argument("--startup", type=float, default=SimSettings.startup, help="s")
-    p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"))
-    p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints")
+    """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
+    from .cli import READINGS as readings
+    from .cli import choices, deprecated_alias, folder, integer, number, stem
+
+    p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
+    p.add_argument(
+        "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
+    )
+    p.add_argument(
+        "--stride", type=integer(1), default=1, metavar="N", help="check every N-th state (and the last)"
+    )
+    p.add_argument("--contacts", type=choices(("L", "S")), default="L,S", metavar="L,S",
+                   help="contact types of fingers 2 and 4 to check")  # fmt: skip
+    p.add_argument("--reading", type=choices(readings, every="both"), default="both", metavar="READING",
+                   help="slide directions of the S-points: physical, literal or both")  # fmt: skip
+    p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
+    p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
+    p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
+    p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")
+    p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
+                   help="how worker processes start")  # fmt: skip
+    p.add_argument("--witness", default="central", choices=("central", "vertex"),
+                   help="drive the central solution of the LP or the simplex vertex")  # fmt: skip
+    p.add_argument("--armature-scale", type=number(0.0, strict=True), default=1.0,
+                   help="ablation: scale the rotor inertia (armature)")  # fmt: skip
+    p.add_argument("--window", type=number(0.0, strict=True), default=SimSettings.window,
+                   help="measurement window of a rollout (s)")  # fmt: skip
+    p.add_argument("--startup", type=number(0.0), default=SimSettings.startup,
+                   help="settling time before the window (s)")  # fmt: skip
+    p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"),
+                   help="MuJoCo friction cone")  # fmt: skip
+    p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
     p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
-    p.add_argument("--out", default="results")
-    p.add_argument("--name", default="verify", help="file stem of the CSV and PNG")
-    p.add_argument("--no-plot", action="store_true")
-    p.add_argument("--rrd", default=None, help="also write a rerun recording of the results to this file")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--out", type=folder, default="results", metavar="DIR",
+                   help="output folder (created if missing; locked while the run writes)")  # fmt: skip
+    p.add_argument("--name", type=stem, default="verify", help="file stem of the CSV and PNG in --out")
+    new = p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
+    deprecated_alias(p, "--no-plot", new)
+    p.add_argument("--rrd", default=None, metavar="FILE", help="also write a rerun recording of the results")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _runs(text: str) -> tuple[str, ...]:
+    runs = tuple(r.strip() for r in text.split(","))
+    if not text.strip() or len(set(runs)) != len(runs) or any(r not in RUNS for r in runs):
+        raise argparse.ArgumentTypeError(f"expected distinct values among {','.join(RUNS)}, got {text!r}")
+    return runs
+
+
+class _RunsAlias(argparse.Action):
+    """The old ``--runs L,S-literal``: deprecated, the same as ``--contacts L,S --reading literal``."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
+        print(f"mjtvm: {option_string} is deprecated, use --contacts and --reading", file=sys.stderr)
+        namespace.contacts = tuple(dict.fromkeys(r.split("-")[0] for r in values))
+        readings = tuple(r.split("-")[1] for r in values if "-" in r)
+        namespace.reading = readings or namespace.reading
+
+
+def runs_of(contacts: Sequence[str], readings: Sequence[str]) -> list[str]:
+    """The :data:`RUNS` of ``--contacts`` and ``--reading``: L once, S once per reading."""
+    return [r for r in RUNS if r.split("-")[0] in contacts and (r == "L" or r.split("-")[1] in readings)]
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``mjtvm verify`` with parsed :func:`add_arguments` options; print the summary."""
+    """Run ``mjtvm verify`` with parsed :func:`add_arguments` options; print the summary.
+
+    The output folder is checked and locked before any work; the CSV, PNG and the slide
+    check's CSV are written together, atomically, at the end (:mod:`mjtvm.files`).
+    """
+    from .files import check_output_dir, output_lock, write_files
+
     settings = SimSettings(armature_scale=args.armature_scale, window=args.window, startup=args.startup,
                            cone=args.cone, track=not args.no_track)  # fmt: skip
-    t0 = time.perf_counter()
-    rows = verify_lift(
-        args.scenario, num_states=args.states, stride=args.stride, runs=[r for r in args.runs.split(",") if r],
-        mu=args.mu, mg=args.mg, settings=settings, witness=args.witness, jobs=args.jobs,
-        start_method=args.start_method, out=args.out, name=args.name, progress=not args.quiet,
-        plot=not args.no_plot,
-    )  # fmt: skip
-    wall = time.perf_counter() - t0
+    outdir = check_output_dir(args.out)
+    if args.rrd is not None:
+        check_output_dir(Path(args.rrd).parent, option="--rrd")
+    with output_lock(outdir):
+        t0 = time.perf_counter()
+        rows = verify_lift(
+            args.scenario, num_states=args.states, stride=args.stride, runs=runs_of(args.contacts, args.reading),
+            mu=args.mu, mg=args.mg, settings=settings, witness=args.witness, jobs=args.jobs,
+            start_method=args.start_method, out=None, progress=not args.quiet,
+        )  # fmt: skip
+        wall = time.perf_counter() - t0
+        files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": _csv(rows)}
+        if not args.no_plots:
+            files[outdir / f"{args.name}.png"] = _plot(
+                rows, f"{args.scenario}: $\\mu$ = {args.mu:g}, $mg$ = {args.mg:g} N"
+            )
+        srows: list[dict[str, Any]] = []
+        if args.slide_check:
+            lift = _lift(args.scenario, args.states)
+            idx = sorted({*range(0, args.states, args.stride), args.states - 1})
+            srows = slide_check(lift, idx, mu=args.mu, mg=args.mg, settings=settings)
+            files[outdir / "slide-check.csv"] = _csv(srows)
+        write_files(files)
     for run_name, s in summarize(rows).items():
         print(
             f"{run_name}: "
             + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
         )
-    print(f"wall time {wall:.1f} s ({args.jobs} job(s)); rows in {Path(args.out) / (args.name + '.csv')}")
-    if args.rrd is not None:
-        from .viz import record_verify  # rerun is imported only here
-
-        record_verify(rows, args.rrd)
-        print(f"wrote {args.rrd}")
+    print(f"wall time {wall:.1f} s ({args.jobs} job(s)); rows in {outdir / (args.name + '.csv')}")
     if args.slide_check:
-        lift = _lift(args.scenario, args.states)
-        idx = sorted({*range(0, args.states, max(args.stride, 1)), args.states - 1})
-        srows = slide_check(lift, idx, mu=args.mu, mg=args.mg, settings=settings)
-        _write_csv(Path(args.out) / "slide-check.csv", srows)
         for mode in ("physical", "literal", "frictionless"):
             sel = [r for r in srows if r["mode"] == mode]
             fc = [r["friction_cos_phys"] for r in sel if not math.isnan(r["friction_cos_phys"])]
             print(f"slide check {mode}: friction cos with physical slide direction: median "
                   f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
                   f"/{len(sel) // 2} states")  # fmt: skip
+    if args.rrd is not None:
+        from .viz import record_verify  # rerun is imported only here
+
+        record_verify(rows, args.rrd)
+        print(f"wrote {args.rrd}")
     return 0
 
 

@@ -1,13 +1,15 @@
-r"""The mjtvm benchmark run (issue 7, item 1); see :mod:`mjtvm.bench_suite` and :mod:`mjtvm.bench_report`.
+r"""The mjtvm benchmark run; see :mod:`mjtvm.bench_suite` and :mod:`mjtvm.bench_report`.
 
 Usage: ``python scripts/bench.py [--quick] [--repeats 200] [--baseline-repeats 10]
-[--time-limit 120] [--out results/bench.json] [--md results/bench.md] [--notes FILE]``
-(also ``mjtvm bench``). Prints a table and writes the JSON report and the table.
+[--time-limit 120] [--out results] [--name bench] [--notes FILE]``, the same as ``mjtvm bench``
+(``mjtvm bench --help``). Prints a table and writes ``OUT/NAME.json`` and ``OUT/NAME.md``.
 """
 
 from __future__ import annotations
 
-from mjtvm.bench_report import main
+import sys
+
+from mjtvm.cli import main
 
 if __name__ == "__main__":  # the guard matters: the 2-process sweep's workers re-import this file
-    raise SystemExit(main())
+    raise SystemExit(main(["bench", *sys.argv[1:]]))

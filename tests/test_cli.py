@@ -103,17 +103,285 @@ def test_tvms_prints_the_schema_for_a_file_and_a_scenario(tmp_path, capsys):
 
 
 def test_sweep_writes_rows_and_rejects_bad_numbers(tmp_path, capsys):
-    out = tmp_path / "sweep.json"
-    args = ["sweep", "--mu", "0.1,0.5", "--states", "0", "--num-states", "4", "--out", str(out), "--quiet"]
+    args = [
+        "sweep",
+        "--mu",
+        "0.1,0.5",
+        "--state-indices",
+        "0",
+        "--states",
+        "4",
+        "--out",
+        str(tmp_path),
+        "--quiet",
+    ]
     assert main(args) == 0
-    rows = json.loads(out.read_text())
+    rows = json.loads((tmp_path / "sweep.json").read_text())
     assert [r["mu"] for r in rows] == [0.1, 0.5] and all(r["feasible"] for r in rows)
-    assert main(["sweep", "--mu", "lots", "--out", str(out)]) == 2
-    assert "mu: expected comma-separated numbers" in capsys.readouterr().err
+    assert (tmp_path / "sweep.csv").read_text().count("\n") == 3
+    assert not (tmp_path / "sweep.partial.json").exists()
+    assert main(["sweep", "--mu", "lots", "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.startswith("error: --mu: expected comma-separated finite numbers >= 0")
 
 
 def test_verify_has_its_own_options(capsys):
-    with pytest.raises(SystemExit) as e:
-        main(["verify", "--help"])
-    assert e.value.code == 0
-    assert "--armature-scale" in capsys.readouterr().out
+    assert main(["verify", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "--armature-scale" in out and "(default: 1.0)" in out
+
+
+# ------------------------------------------------------- malformed calls (issue 12)
+@pytest.mark.parametrize(
+    ("words", "line"),
+    [
+        (["sweep", "--states", "1.5"], "error: --states: expected an integer >= 2, got '1.5'"),
+        (["sweep", "--states", "nan"], "error: --states: expected an integer >= 2, got 'nan'"),
+        (["sweep", "--states", "0"], "error: --states: expected an integer >= 2, got '0'"),
+        (["sweep", "--states", "-5"], "error: --states: expected an integer >= 2, got '-5'"),
+        (["sweep", "--num-states", "0"], "error: --num-states: expected an integer >= 2, got '0'"),
+        (["sweep", "--states", "0,3"], "error: --states: expected an integer >= 2, got '0,3' (state indices"),
+        (["sweep", "--mu", "inf"], "error: --mu: expected comma-separated finite numbers >= 0, got 'inf'"),
+        (["sweep", "--mg", "1,nan"], "error: --mg: expected comma-separated finite numbers >= 0"),
+        (
+            ["sweep", "--state-indices", "1.5"],
+            "error: --state-indices: expected comma-separated integers >= 0",
+        ),
+        (["sweep", "--state-indices", "30"], "error: --state-indices: expected indices below --states = 30"),
+        (["sweep", "--jobs", "0"], "error: --jobs: expected an integer >= 1, got '0'"),
+        (["sweep", "--cluster", "not an address"], "error: --cluster: expected a scheduler address"),
+        (["sweep", "--cluster", "tcp://host:99999"], "error: --cluster: expected a scheduler address"),
+        (["sweep", "--contacts", "X"], "error: --contacts: expected distinct values among L,S"),
+        (["sweep", "--out", "results/sweep.json"], "error: --out: expected a folder"),
+        (["tvms", "--time-limit", "-1"], "error: --time-limit: expected a finite number > 0, got '-1'"),
+        (["tvms", "--time-limit", "0"], "error: --time-limit: expected a finite number > 0, got '0'"),
+        (
+            ["tvms", "--method", "cdd", "--time-limit", "nan"],
+            "error: --time-limit: expected a finite number > 0",
+        ),
+        (["solve", "--indent", "-1"], "error: --indent: expected an integer >= 0, got '-1'"),
+        (["solve", "--solver", "gurobi"], "error: --solver: invalid choice: 'gurobi'"),
+        (["replay", "--tvms-every", "-1"], "error: --tvms-every: expected an integer >= 0, got '-1'"),
+        (
+            ["replay", "--reading", ""],
+            "error: --reading: expected distinct values among physical,literal or both",
+        ),
+        (["verify", "--name", "a/b/c"], "error: --name: expected a file stem"),
+        (["verify", "--contacts", ""], "error: --contacts: expected distinct values among L,S, got ''"),
+        (["verify", "--stride", "0"], "error: --stride: expected an integer >= 1, got '0'"),
+        (["verify", "--window", "nan"], "error: --window: expected a finite number > 0, got 'nan'"),
+        (["bench", "--repeats", "0"], "error: --repeats: expected an integer >= 1, got '0'"),
+        (["bench", "--time-limit", "inf"], "error: --time-limit: expected a finite number > 0, got 'inf'"),
+        (["frobnicate"], "error: COMMAND: invalid choice: 'frobnicate'"),
+        (["sweep", "--bogus"], "error: unrecognized arguments: --bogus"),
+        (["verify", "--runs", "L,S"], "error: --runs: expected distinct values among L,S-physical,S-literal"),
+        (["bench", "--md", "x.md"], "error: --md: no longer an option: the table is NAME.md"),
+    ],
+)
+def test_malformed_options_exit_2_with_one_line(words, line, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)  # nothing may be written, but if it were, not into the repository
+    assert main(words) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(line), captured.err
+    assert "Traceback" not in captured.err
+    assert not (tmp_path / "results").exists()
+
+
+def test_version_and_help_show_defaults(capsys):
+    assert main(["--version"]) == 0
+    assert (
+        capsys.readouterr().out.strip()
+        == f"mjtvm {__import__('importlib.metadata').metadata.version('mjtvm')}"
+    )
+    assert main(["sweep", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "(default: 30)" in out and "(default: results)" in out and "--state-indices" in out
+
+
+def test_deprecated_spellings_still_work_with_a_notice(tmp_path, capsys):
+    words = [
+        "sweep",
+        "--num-states",
+        "3",
+        "--state-indices",
+        "0",
+        "--variants",
+        "L",
+        "--readings",
+        "physical",
+    ]
+    assert main([*words, "--out", str(tmp_path), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "mjtvm: --num-states is deprecated, use --states" in err
+    assert "mjtvm: --variants is deprecated, use --contacts" in err
+    assert "mjtvm: --readings is deprecated, use --reading" in err
+    assert len(json.loads((tmp_path / "sweep.json").read_text())) == 1
+
+
+@pytest.mark.parametrize("command", [["sweep"], ["replay"], ["verify"], ["bench", "--quick"]])
+def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys, monkeypatch):
+    import mjtvm.sweep
+
+    def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
+        raise AssertionError("work started before --out was checked")
+
+    monkeypatch.setattr(mjtvm.sweep, "run_sweep", no_work)
+    monkeypatch.setattr("mjtvm.bench_report.run_suite", no_work)
+    monkeypatch.setattr("mjtvm.trajectory.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.replay.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.verify.verify_lift", no_work)
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    for out, problem in (
+        (blocker, "expected a folder, found a file"),
+        (blocker / "sub", "cannot create the folder"),
+    ):
+        assert main([*command, "--out", str(out), "--quiet"]) == 2
+        assert capsys.readouterr().err.startswith(f"error: --out: {problem}")
+    assert main([*command, "--out", "/proc/mjtvm-cannot-be-here", "--quiet"]) == 2
+    assert capsys.readouterr().err.startswith("error: --out: cannot create the folder")
+
+
+def test_a_second_run_into_a_locked_folder_is_refused(tmp_path, capsys):
+    """Two runs into one folder (two replays with different --mu) must not interleave rows."""
+    from mjtvm.files import output_lock
+
+    with output_lock(tmp_path):
+        assert main(["replay", "--out", str(tmp_path), "--states", "2", "--no-sweeps", "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert (
+            err
+            == f"error: --out: another mjtvm run is writing to this folder (its lock is held): {tmp_path}\n"
+        )
+    assert not (tmp_path / "lift.csv").exists()
+
+
+def test_write_failure_leaves_the_old_files_and_no_temporaries(tmp_path, monkeypatch):
+    """/dev/full-like failure at write time: an OutputError naming the file; the old set stays."""
+    import errno
+    import os
+
+    from mjtvm.errors import OutputError
+    from mjtvm.files import write_files
+
+    old = {tmp_path / "lift.csv": "old csv", tmp_path / "lift.json": "old json"}
+    write_files(old)
+    calls = []
+
+    def full(fd):
+        calls.append(fd)
+        if len(calls) == 2:  # the second file of the set
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(OutputError, match=r"--out: cannot write \(No space left on device\): .*lift.json"):
+        write_files({tmp_path / "lift.csv": "new csv", tmp_path / "lift.json": "new json"})
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == {
+        "lift.csv": "old csv",
+        "lift.json": "old json",
+    }
+
+
+def test_unreachable_cluster_is_one_line_after_the_timeout(tmp_path, monkeypatch, capsys):
+    import socket
+
+    import mjtvm.sweep
+
+    monkeypatch.setattr(mjtvm.sweep, "CONNECT_TIMEOUT_S", 1.0)
+    with socket.socket() as s:  # a port that nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    words = [
+        "sweep",
+        "--cluster",
+        f"tcp://127.0.0.1:{port}",
+        "--states",
+        "2",
+        "--out",
+        str(tmp_path),
+        "--quiet",
+    ]
+    assert main(words) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(
+        f"error: --cluster: cannot reach a Dask scheduler at tcp://127.0.0.1:{port} within 1 s"
+    )
+    assert len(err.splitlines()) == 1
+    assert not (tmp_path / "sweep.json").exists()
+
+
+# ------------------------------------------------- the installed script (subprocesses)
+def test_closed_stdout_is_quiet():
+    """`mjtvm solve | head -c 10` with head gone before the write: no BrokenPipeError trace."""
+    proc = subprocess.Popen([*_console_script(), "solve"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141
+    assert err == ""
+
+
+def test_full_stdout_is_one_line():
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([*_console_script(), "solve"], stdout=full, capture_output=False,
+                              stderr=subprocess.PIPE, text=True, check=False)  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stderr == "error: standard output: cannot write (No space left on device): <stdout>\n"
+
+
+def test_ctrl_c_during_a_sweep_is_one_line_and_leaves_no_partial_file(tmp_path):
+    import signal
+    import time
+
+    words = ["sweep", "--mu", "0.1,0.2,0.3,0.4", "--mg", "1,2", "--out", str(tmp_path), "--quiet"]
+    proc = subprocess.Popen(
+        [*_console_script(), *words], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 60
+    while not (tmp_path / ".mjtvm.lock").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.0)  # inside the lift or the LPs
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err == "mjtvm: interrupted\n"
+    names = {p.name for p in tmp_path.iterdir()}
+    assert names <= {".mjtvm.lock", "sweep.partial.json"}  # no result, no temporary file
+    if "sweep.partial.json" in names:  # complete JSON: the finished rows
+        doc = json.loads((tmp_path / "sweep.partial.json").read_text())
+        assert doc["schema"] == "mjtvm.sweep-checkpoint/1"
+
+
+def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys):
+    assert main(["tvms", "--scenario", "case1", "--indent", "0"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["schema"] == "mjtvm.tvms/1" and " LP" in captured.err
+    assert main(["tvms", "--scenario", "case1", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+    from mjtvm import bench_report
+
+    def suite(**kwargs):
+        for step in ("case 1, problem 1", "case 1, problem 2", "scaling"):
+            kwargs["progress"](step)
+        return {"schema": "mjtvm.bench-suite/1"}
+
+    monkeypatch.setattr(bench_report, "run_suite", suite)
+    monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
+    monkeypatch.setattr(bench_report, "format_suite_table", lambda report, notes: "TABLE")
+    assert main(["bench", "--quick", "--out", str(tmp_path), "--name", "b"]) == 0
+    captured = capsys.readouterr()
+    assert "bench: scaling" in captured.err and captured.out.startswith("TABLE\n")
+    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench-suite/1"
+    assert (tmp_path / "b.md").read_text() == "```\nTABLE\n```\n"
+
+
+def test_verify_old_runs_spelling_maps_to_contacts_and_reading(capsys):
+    from mjtvm.cli import verify_parser
+    from mjtvm.verify import runs_of
+
+    for old, runs in (("L,S-literal", ["L", "S-literal"]), ("L", ["L"]), ("S-physical", ["S-physical"])):
+        args = verify_parser().parse_args(["--runs", old])
+        assert runs_of(args.contacts, args.reading) == runs
+    assert "--runs is deprecated" in capsys.readouterr().err

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.optimize import linprog
 
 from mjtvm import Contact, GraspState, assemble, default_operation_range
 from mjtvm.enumeration import force_form, project_cdd
@@ -48,6 +49,39 @@ def assert_same_vertices(actual: np.ndarray, expected: np.ndarray, rel: float = 
     assert len(actual) == len(expected)
     scale = max(float(np.max(np.abs(expected))), 1e-300)
     assert hausdorff(actual, expected) <= rel * scale
+
+
+def distance_to_hull(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Max-norm distance of each point to the convex hull of ``vertices`` (one LP per point)."""
+    n, dim = vertices.shape
+    a_ub = np.block([[vertices.T, -np.ones((dim, 1))], [-vertices.T, -np.ones((dim, 1))]])
+    a_eq = np.r_[np.ones(n), 0.0][None]
+    out = []
+    for p in points:
+        res = linprog(np.r_[np.zeros(n), 1.0], A_ub=a_ub, b_ub=np.r_[p, -p], A_eq=a_eq, b_eq=[1.0])
+        out.append(res.fun)
+    return np.array(out)
+
+
+def assert_same_polytope(lp: np.ndarray, cdd: np.ndarray, rel: float = 1e-7) -> None:
+    """The LP projection and float cddlib give the same polytope: every cdd vertex is an LP
+    vertex (within ``rel``), and an LP vertex that cdd lacks lies within ``rel`` of cdd's hull.
+
+    Float cddlib can drop a vertex that stands out of the hull of its neighbours by less than
+    its own tolerance: on random_state(2, space=3, joints_per_finger=3, num_refs=2) with numpy
+    2.5 / scipy 1.18 (Python >= 3.12) one LP vertex lies 1.0e-8 relative outside the hull of
+    the others and 3.4e-5 from its nearest neighbour, and cdd returns 56 of the 57. A vertex
+    count cannot be decided below the tolerances; the polytope can.
+    """
+    scale = max(float(np.max(np.abs(cdd))), 1e-300)
+    from scipy.spatial.distance import cdist
+
+    nearest = cdist(lp, cdd).min(axis=0)
+    assert np.all(nearest <= rel * scale), "cdd has a vertex that the LP projection lacks"
+    unmatched = lp[cdist(lp, cdd).min(axis=1) > rel * scale]
+    assert len(unmatched) <= 1, f"{len(unmatched)} LP vertices not in cdd's answer"
+    if len(unmatched):
+        assert np.all(distance_to_hull(unmatched, cdd) <= rel * scale)
 
 
 def both(state: GraspState, **kw):
@@ -201,7 +235,7 @@ def test_lp_and_cdd_agree_on_random_states(space, joints, seed, refs):
     lp, cdd = both(state, rvds_cone=False)
     assert lp.status == cdd.status == "bounded"
     assert lp.dimension == cdd.dimension
-    assert_same_vertices(lp.vertices, cdd.vertices)
+    assert_same_polytope(lp.vertices, cdd.vertices)
 
 
 @pytest.mark.parametrize("types", [("F", "L"), ("F", "L", "D")])

@@ -91,6 +91,9 @@ def test_sweeps_cover_fig9(output: ReplayOutput) -> None:
     assert all(r.variant == "L" for r in (*output.sweeps["mu"], *output.sweeps["mg"]))
     rows = _rows(output.files["lift-sweeps.csv"])
     assert len(rows) == (len(SWEEP_MUS) + len(SWEEP_MGS)) * STATES
+    # the (mu 0.3, mg 2) curve is in both sweeps: the `sweep` column tells the copies apart
+    both = [r["sweep"] for r in rows if (r["mu"], r["mg"]) == ("0.3", "2.0")]
+    assert sorted(both) == ["mg"] * STATES + ["mu"] * STATES
     # the (mu, mg) = (0.3, 1) sweep is the main run's L curve
     main_l = [r.result.tvmmp for r in output.records if r.variant == "L"]
     assert [r.result.tvmmp for r in output.sweeps["mg"] if r.mg == 1.0] == main_l
@@ -98,9 +101,14 @@ def test_sweeps_cover_fig9(output: ReplayOutput) -> None:
 
 def test_cli_replay_writes_results(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     args = ["replay", "--out", str(tmp_path / "res"), "--states", "3", "--no-sweeps", "--quiet"]
-    assert main([*args, "--variants", "S", "--reading", "literal", "--mu", "0.4", "--mg", "2"]) == 0
+    assert main([*args, "--contacts", "S", "--reading", "literal", "--mu", "0.4", "--mg", "2"]) == 0
     assert "wrote lift.csv" in capsys.readouterr().out
-    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == ["fig8.png", "lift.csv", "lift.json"]
+    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == [
+        ".mjtvm.lock",
+        "fig8.png",
+        "lift.csv",
+        "lift.json",
+    ]
     rows = _rows(tmp_path / "res" / "lift.csv")
     assert {(r["variant"], r["reading"], r["mu"], r["mg"]) for r in rows} == {("S", "literal", "0.4", "2.0")}
     assert (
@@ -109,18 +117,20 @@ def test_cli_replay_writes_results(tmp_path: Path, capsys: pytest.CaptureFixture
         )
         == 0
     )
-    assert sorted(p.name for p in (tmp_path / "np").iterdir()) == ["lift.csv", "lift.json"]
+    assert sorted(p.name for p in (tmp_path / "np").iterdir()) == [".mjtvm.lock", "lift.csv", "lift.json"]
 
 
 @pytest.mark.parametrize(
     ("option", "message"),
     [
-        (["--states", "1"], "error: num_states: expected an integer >= 2"),
-        (["--variants", "L,X"], "error: variants: expected distinct values among L, S"),
-        (["--variants", "L,L"], "error: variants:"),
-        (["--mu", "-0.1"], "error: mu: expected a friction coefficient >= 0"),
-        (["--mg", "nan"], "error: mg:"),
-        (["--variant", "robot"], "no variant 'robot'"),
+        (["--states", "1"], "error: --states: expected an integer >= 2, got '1'"),
+        (["--contacts", "L,X"], "error: --contacts: expected distinct values among L,S"),
+        (["--contacts", "L,L"], "error: --contacts:"),
+        (["--variants", "L,L"], "error: --variants:"),  # the deprecated spelling, as typed
+        (["--mu", "-0.1"], "error: --mu: expected a finite number >= 0, got '-0.1'"),
+        (["--mg", "nan"], "error: --mg: expected a finite number >= 0, got 'nan'"),
+        (["--tvms-every", "-1"], "error: --tvms-every: expected an integer >= 0"),
+        (["--hand", "robot"], "no variant 'robot'"),
         (["--scenario", "case9"], "error: scenario 'case9': unknown"),
     ],
 )
@@ -136,10 +146,15 @@ def test_cli_replay_unwritable_out_and_argparse_errors(
 ) -> None:
     (tmp_path / "file").write_text("x")
     assert main(["replay", "--out", str(tmp_path / "file" / "sub"), "--quiet"]) == 2
-    assert "error: out: cannot create the output directory" in capsys.readouterr().err
-    with pytest.raises(SystemExit) as err:
-        main(["replay", "--reading", "sideways"])
-    assert err.value.code == 2
+    err = capsys.readouterr().err
+    assert err == f"error: --out: cannot create the folder (Not a directory): {tmp_path / 'file' / 'sub'}\n"
+    assert main(["replay", "--out", str(tmp_path / "file"), "--quiet"]) == 2
+    assert capsys.readouterr().err == f"error: --out: expected a folder, found a file: {tmp_path / 'file'}\n"
+    assert main(["replay", "--reading", "sideways"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "error: --reading: expected distinct values among physical,literal or both, got 'sideways' "
+        "(try 'mjtvm replay --help')"
+    ]
     with pytest.raises(StateError):
         run_replay(out=tmp_path, readings=())
 

@@ -216,24 +216,34 @@ def test_solver_error_only_when_nothing_settles_it(monkeypatch):
 
 
 def test_documents_are_finite_json():
-    """-1e308 in an RVDS vertex printed -Infinity: every number of the documents is finite or
-    null now (json.dumps(allow_nan=False)), and the alpha of such a vertex is that of -e_x
-    divided by 1e308 (the loader will refuse the input; the writer must not break on it)."""
+    """-1e308 in an RVDS vertex printed -Infinity: the loader now refuses it (|x| <= 1e12),
+    and the writers never emit NaN/Infinity whatever they hold: non-finite numbers are
+    null (json.dumps(allow_nan=False) holds)."""
+    from mjtvm.errors import StateError
     from mjtvm.tvmmp import finite_floats
 
     assert finite_floats([1.0, -np.inf, np.nan, -0.0]) == [1.0, None, None, 0.0]
     assert finite_floats([[np.inf], [2.0]]) == [[None], [2.0]]
     state = load_state(EXAMPLE)
-    big = state.rvds.copy()
-    big[1] *= 1e300  # a long vertex: alpha 1e-300 of the unit one's, exactly
-    res = tvmmp(replace(state, rvds=big))
-    json.dumps(res.to_dict(), allow_nan=False)
-    assert res.alpha[0, 1] == pytest.approx(tvmmp(state).alpha[0, 1] * 1e-300, rel=1e-9)
     mixed = state.rvds.copy()
-    mixed[1, 0] = -1e308  # [-1e308, 0, 1]: the 1 is round-off next to 1e308
-    doc = tvmmp(replace(state, rvds=mixed)).to_dict()
+    mixed[1, 0] = -1e308
+    with pytest.raises(StateError, match="rvds"):
+        replace(state, rvds=mixed)
+    res = tvmmp(state)
+    w = res.witnesses[0][1]
+    assert w is not None
+    broken = replace(
+        res,
+        alpha=np.array([[np.inf, res.alpha[0, 1], np.nan, res.alpha[0, 3]]]),
+        tvmmp=float("inf"),
+        distribution=(np.full(6, -np.inf), *res.distribution[1:]),
+        witnesses=((None, replace(w, twist=np.full(6, np.nan)), None, None),),
+    )
+    doc = broken.to_dict()
     json.dumps(doc, allow_nan=False)
-    assert doc["alpha"][0][1] == pytest.approx(tvmmp(state).alpha[0, 2] * 1e-308, rel=1e-9)
+    assert doc["tvmmp"] is None and doc["alpha"][0][0] is None and doc["alpha"][0][2] is None
+    assert doc["distribution"][0] == [None] * 6 and doc["witnesses"][0][1]["twist"] == [None] * 6
+    json.dumps(res.to_dict(), allow_nan=False)
     json.dumps(tvms(state).to_dict(), allow_nan=False)
 
 
