@@ -44,10 +44,10 @@ def _range(op: OperationRange, torque: float, speed: float) -> OperationRange:
     """``op`` with its torque axis times ``torque`` and its speed axis times ``speed``.
 
     Built from the exactly transformed half-planes (``a^T x <= b`` becomes
-    ``(a / D)^T x' <= b``, renormalised), not through ``OperationRange(vertices)``: its
-    checks and edge filter compare both axes with one tolerance today, so a valid range
-    with torques ~1e6 and speeds ~1e-6 is refused or loses edges (issue 12, the loader's
-    part). The solver's invariance is what this file tests.
+    ``(a / D)^T x' <= b``, renormalised), not through ``OperationRange(vertices)``: that
+    recomputes the half-planes from the scaled vertices and sets coefficients below 1e-15
+    to 0 (an absolute bound), which changes a range whose axes differ by ~1e18 (torque axis
+    times 1e-12, speed axis times 1e6). The solver's invariance is what this file tests.
     """
     v = op.vertices * np.array([torque, speed])
     hp = op.halfplanes.copy()
