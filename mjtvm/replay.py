@@ -9,10 +9,9 @@ take L-points at mu in :data:`SWEEP_MUS` (mg = :data:`SWEEP_MU_MG`) and mg in
 with metadata, the lift's bookkeeping and the sweeps) and, unless disabled, ``fig8.png``,
 ``fig9a.png`` and ``fig9b.png`` (TVMMP vs the object height z, m).
 
-HiGHS's dual simplex sometimes ends an infeasible Problem 2 LP of this hand with the model
-status ``Unknown`` (a :class:`~mjtvm.errors.SolverError`); such a state is solved again with
-Clarabel (and, should Clarabel fail too, by HiGHS on the literal box form); the ``solver``
-column says which backend produced a row.
+Where HiGHS cannot settle an LP (status ``Unknown`` after its cold restarts), :func:`~mjtvm.tvmmp.tvmmp`
+itself solves that pair with Clarabel and says so in ``settled_by``; the ``solver`` column names
+the backends that produced a row's alphas (``highs``, ``clarabel`` or ``highs+clarabel``).
 """
 
 from __future__ import annotations
@@ -138,11 +137,14 @@ def _saturated(state: GraspState, result: TvmmpResult) -> tuple[str, ...]:
 
 
 def solve_state(state: GraspState) -> tuple[TvmmpResult, str]:
-    """Problem 2 with the default backend; returns the result and the backend's name.
+    """Problem 2 with the default backend; returns the result and the backends that settled it.
 
-    A :class:`~mjtvm.errors.SolverError` propagates: solver trouble is reported, not hidden.
+    A :class:`~mjtvm.errors.SolverError` (neither solver settles a pair) propagates: solver
+    trouble is reported, not hidden.
     """
-    return tvmmp(state), "highs"
+    result = tvmmp(state)
+    used = sorted({b for row in result.settled_by for b in row if b is not None}) or ["highs"]
+    return result, "+".join(used)
 
 
 def _record(
