@@ -227,5 +227,10 @@ def force_generators(contact: Contact, friction_edges: int = 16) -> NDArray[np.f
         t = basis[0]
         return np.column_stack([n + mu * t, n - mu * t])
     theta = 2.0 * np.pi * np.arange(friction_edges) / friction_edges
-    edges = n[:, None] + mu * (np.outer(basis[0], np.cos(theta)) + np.outer(basis[1], np.sin(theta)))
+    cos, sin = np.cos(theta), np.sin(theta)
+    # cos(pi/2) = 6e-17 is an exact 0: left in, such round-off enters the LPs beside O(1)
+    # entries, where no scaling can tell it from data (|cos|, |sin| are 0 or >= sin(2 pi/256)).
+    cos[np.abs(cos) < 1e-12] = 0.0
+    sin[np.abs(sin) < 1e-12] = 0.0
+    edges = n[:, None] + mu * (np.outer(basis[0], cos) + np.outer(basis[1], sin))
     return np.asarray(edges)

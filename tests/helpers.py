@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import linprog
 
 RPM = 2 * np.pi / 60
 #: The RE25 20 W behind the 1/40 gear, from ../shared/data/maxon-re25-20w.md.
@@ -22,3 +23,15 @@ def rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     k = np.asarray(axis, float) / np.linalg.norm(axis)
     kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + np.sin(angle) * kx + (1 - np.cos(angle)) * kx @ kx
+
+
+def distance_to_hull(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Max-norm distance of each point to the convex hull of ``vertices`` (one LP per point)."""
+    n, dim = vertices.shape
+    a_ub = np.block([[vertices.T, -np.ones((dim, 1))], [-vertices.T, -np.ones((dim, 1))]])
+    a_eq = np.r_[np.ones(n), 0.0][None]
+    out = []
+    for p in points:
+        res = linprog(np.r_[np.zeros(n), 1.0], A_ub=a_ub, b_ub=np.r_[p, -p], A_eq=a_eq, b_eq=[1.0])
+        out.append(res.fun)
+    return np.array(out)

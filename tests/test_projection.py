@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.optimize import linprog
 
 from mjtvm import Contact, GraspState, assemble, default_operation_range
 from mjtvm.enumeration import force_form, project_cdd
@@ -13,7 +12,7 @@ from mjtvm.projection import lifted_polytope, project_lp
 from mjtvm.synthetic import random_state
 from mjtvm.tvms import tvms
 
-from .helpers import T_MAX, max_speed
+from .helpers import T_MAX, distance_to_hull, max_speed
 
 OP = default_operation_range()
 R = 0.05  # m: the contacts sit at (-R, 0) and (R, 0), the object's reference point at the origin
@@ -49,18 +48,6 @@ def assert_same_vertices(actual: np.ndarray, expected: np.ndarray, rel: float = 
     assert len(actual) == len(expected)
     scale = max(float(np.max(np.abs(expected))), 1e-300)
     assert hausdorff(actual, expected) <= rel * scale
-
-
-def distance_to_hull(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Max-norm distance of each point to the convex hull of ``vertices`` (one LP per point)."""
-    n, dim = vertices.shape
-    a_ub = np.block([[vertices.T, -np.ones((dim, 1))], [-vertices.T, -np.ones((dim, 1))]])
-    a_eq = np.r_[np.ones(n), 0.0][None]
-    out = []
-    for p in points:
-        res = linprog(np.r_[np.zeros(n), 1.0], A_ub=a_ub, b_ub=np.r_[p, -p], A_eq=a_eq, b_eq=[1.0])
-        out.append(res.fun)
-    return np.array(out)
 
 
 def assert_same_polytope(lp: np.ndarray, cdd: np.ndarray, rel: float = 1e-7) -> None:
