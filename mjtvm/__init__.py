@@ -7,13 +7,13 @@ MuJoCo coupling (``hand``, ``grasp``, ``ik``, ``scenario``, ``trajectory``, ``re
 live in their own modules.
 """
 
-from .assembly import Assembly, assemble
-from .contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
+from .core.assembly import Assembly, assemble
+from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
+from .core.operation_range import OperationRange, default_operation_range, load_motor_data
+from .core.state import GraspState, dump_state, load_state, parse_state, state_to_dict
+from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 from .errors import MjtvmError, ModelError, OutputError, SolverError, StateError
-from .operation_range import OperationRange, default_operation_range, load_motor_data
-from .state import GraspState, dump_state, load_state, parse_state, state_to_dict
-from .tvmmp import Timings, TvmmpResult, Witness, tvmmp
-from .tvms import TvmsResult, tvms
+from .polytopes.tvms import TvmsResult, tvms
 
 __version__ = "0.1.0"
 

@@ -36,10 +36,10 @@ from importlib import metadata, resources
 from pathlib import Path
 from typing import Any, NoReturn
 
+from .core.solvers import SOLVERS
+from .core.state import GraspState, load_state
+from .core.tvmmp import tvmmp
 from .errors import MjtvmError, ModelError, OutputError, SolverError, StateError
-from .solvers import SOLVERS
-from .state import GraspState, load_state
-from .tvmmp import tvmmp
 
 __all__ = ["main"]
 
@@ -302,7 +302,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
-    from .scenario import export_state  # MuJoCo is imported only by the coupling commands
+    from .sim.scenario import export_state  # MuJoCo is imported only by the coupling commands
 
     options = {"variant": args.hand}
     if args.mg is not None:
@@ -313,15 +313,15 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
 
 def _check_file_folder(path: str | None, option: str) -> None:
     if path is not None:
-        from .files import check_output_dir
+        from .core.files import check_output_dir
 
         check_output_dir(Path(path).parent if str(Path(path).parent) else ".", option=option)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from .files import check_output_dir, output_lock
-    from .recording import RecordingJob, start_recording
-    from .replay import ReplayOutput, run_replay  # MuJoCo and matplotlib: only the coupling commands
+    from .apps.replay import ReplayOutput, run_replay  # MuJoCo and matplotlib: only the coupling commands
+    from .core.files import check_output_dir, output_lock
+    from .viewer.recording import RecordingJob, start_recording
 
     outdir = check_output_dir(args.out)
     _check_file_folder(args.rrd, "--rrd")
@@ -355,7 +355,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 def _load_state_or_scenario(args: argparse.Namespace) -> GraspState:
     if args.scenario is not None:
-        from .scenario import load_scenario  # MuJoCo only for scenario shortcuts
+        from .sim.scenario import load_scenario  # MuJoCo only for scenario shortcuts
 
         return load_scenario(args.scenario, variant=args.hand).state()
     if args.state is None:
@@ -365,7 +365,7 @@ def _load_state_or_scenario(args: argparse.Namespace) -> GraspState:
 
 
 def _cmd_tvms(args: argparse.Namespace) -> int:
-    from .tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
+    from .polytopes.tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
 
     state = _load_state_or_scenario(args)
     if args.no_rvds:
@@ -377,13 +377,13 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
-    from .verify import run  # MuJoCo rollouts: imported only when used
+    from .physics.verify import run  # MuJoCo rollouts: imported only when used
 
     return run(args)
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import run_sweep_files
+    from .apps.sweep import run_sweep_files
 
     files = run_sweep_files(args, emit=emit)
     for path in files:
@@ -392,7 +392,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .bench_report import run_from_args  # cvxpy, MuJoCo and the pool: imported only when used
+    from .bench.report import run_from_args  # cvxpy, MuJoCo and the pool: imported only when used
 
     return run_from_args(args, emit=emit)
 
@@ -433,7 +433,7 @@ def _lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) ->
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``mjtvm`` (``verify``'s options: :func:`mjtvm.verify.add_arguments`)."""
+    """The argument parser of ``mjtvm`` (``verify``'s options: :func:`mjtvm.physics.verify.add_arguments`)."""
     parser = _Parser(
         prog="mjtvm", formatter_class=_Formatter,
         description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands. "
@@ -526,7 +526,7 @@ def build_parser() -> argparse.ArgumentParser:
     tv.set_defaults(func=_cmd_tvms)
 
     sub.add_parser(
-        "verify", add_help=False,  # its options come from mjtvm.verify (MuJoCo), parsed in main()
+        "verify", add_help=False,  # its options come from mjtvm.physics.verify (MuJoCo), parsed in main()
         help="check TVMMP along the lift against MuJoCo rollouts with the dcmotor actuators",
     )  # fmt: skip
 
@@ -560,7 +560,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=_cmd_sweep)
 
-    from .bench_report import add_arguments as bench_arguments  # numpy only at import
+    from .bench.report import add_arguments as bench_arguments  # numpy only at import
 
     bench = command(
         "bench", "the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling",
@@ -575,7 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def verify_parser() -> argparse.ArgumentParser:
     """The parser of ``mjtvm verify`` (imports MuJoCo: built only when that command runs)."""
-    from .verify import add_arguments
+    from .physics.verify import add_arguments
 
     parser = _Parser(
         prog="mjtvm verify", formatter_class=_Formatter,

@@ -2,7 +2,7 @@
 r"""Fuzz the state loader at scale: mutated shipped states and damaged bytes.
 
 Every shipped example (``mjtvm/data/examples/*.json``) and the states exported from the
-scenarios ``case1``, ``case1-s``, ``case2`` are mutated by :mod:`mjtvm.fuzz` (the same
+scenarios ``case1``, ``case1-s``, ``case2`` are mutated by :mod:`mjtvm.core.fuzz` (the same
 mutations as ``tests/test_fuzz.py``); a fraction of the runs feeds damaged bytes
 (truncated JSON, invalid UTF-8, deep brackets, huge literals) through ``load_state``.
 A state that loads is solved with ``mjtvm.tvmmp``. Outcomes are counted:
@@ -34,8 +34,8 @@ from importlib import resources
 from typing import Any
 
 from mjtvm import MjtvmError, SolverError, StateError, load_state, tvmmp
-from mjtvm.fuzz import mutate_bytes, mutate_document
-from mjtvm.scenario import export_state
+from mjtvm.core.fuzz import mutate_bytes, mutate_document
+from mjtvm.sim.scenario import export_state
 
 _INDEX = re.compile(r"\[\d+\]")
 

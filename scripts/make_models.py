@@ -1,4 +1,4 @@
-r"""Write the committed MJCF models (``models/*.xml``) from :func:`mjtvm.hand.model_files`.
+r"""Write the committed MJCF models (``models/*.xml``) from :func:`mjtvm.sim.hand.model_files`.
 
 Usage: ``python scripts/make_models.py [OUTPUT_DIR]`` (default: ``models/`` beside this
 script's parent). ``tests/test_hand.py`` checks that the committed files equal this output.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mjtvm.hand import model_files
+from mjtvm.sim.hand import model_files
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -3,7 +3,7 @@ r"""Rerun the IK of every shipped scenario and write ``mjtvm/data/scenarios/*.js
 Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
 ``mjtvm/data/scenarios``). Each file's scenario data is kept; each variant's ``solution``
 (joint angles, IK residuals, achieved contacts) is recomputed by
-:func:`mjtvm.scenario.make_documents`. ``tests/test_scenario.py`` checks that the committed
+:func:`mjtvm.sim.scenario.make_documents`. ``tests/test_scenario.py`` checks that the committed
 files equal this output.
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mjtvm.scenario import format_document, make_documents, scenario_path
+from mjtvm.sim.scenario import format_document, make_documents, scenario_path
 
 
 def main(argv: list[str] | None = None) -> int:

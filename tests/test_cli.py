@@ -71,7 +71,7 @@ def test_console_script_stdout_is_pure_json(words):
 def test_export_state_round_trips_through_solve(tmp_path, capsys):
     """The exported JSON is an ordinary mjtvm.state/1 file: solving it gives exactly the
     alphas of the state built in memory from MuJoCo."""
-    from mjtvm.scenario import load_scenario
+    from mjtvm.sim.scenario import load_scenario
 
     assert main(["export-state", "--scenario", "case2"]) == 0
     path = tmp_path / "case2.json"
@@ -221,16 +221,16 @@ def test_deprecated_spellings_still_work_with_a_notice(tmp_path, capsys):
 
 @pytest.mark.parametrize("command", [["sweep"], ["replay"], ["verify"], ["bench", "--quick"]])
 def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys, monkeypatch):
-    import mjtvm.sweep
+    import mjtvm.apps.sweep
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("work started before --out was checked")
 
-    monkeypatch.setattr(mjtvm.sweep, "run_sweep", no_work)
-    monkeypatch.setattr("mjtvm.bench_report.run_suite", no_work)
-    monkeypatch.setattr("mjtvm.trajectory.scripted_lift", no_work)
-    monkeypatch.setattr("mjtvm.replay.scripted_lift", no_work)
-    monkeypatch.setattr("mjtvm.verify.verify_lift", no_work)
+    monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep", no_work)
+    monkeypatch.setattr("mjtvm.bench.report.run_suite", no_work)
+    monkeypatch.setattr("mjtvm.sim.trajectory.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.apps.replay.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.physics.verify.verify_lift", no_work)
     blocker = tmp_path / "file"
     blocker.write_text("x")
     for out, problem in (
@@ -245,7 +245,7 @@ def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys
 
 def test_a_second_run_into_a_locked_folder_is_refused(tmp_path, capsys):
     """Two runs into one folder (two replays with different --mu) must not interleave rows."""
-    from mjtvm.files import output_lock
+    from mjtvm.core.files import output_lock
 
     with output_lock(tmp_path):
         assert main(["replay", "--out", str(tmp_path), "--states", "2", "--no-sweeps", "--quiet"]) == 2
@@ -262,8 +262,8 @@ def test_write_failure_leaves_the_old_files_and_no_temporaries(tmp_path, monkeyp
     import errno
     import os
 
+    from mjtvm.core.files import write_files
     from mjtvm.errors import OutputError
-    from mjtvm.files import write_files
 
     old = {tmp_path / "lift.csv": "old csv", tmp_path / "lift.json": "old json"}
     write_files(old)
@@ -286,9 +286,9 @@ def test_write_failure_leaves_the_old_files_and_no_temporaries(tmp_path, monkeyp
 def test_unreachable_cluster_is_one_line_after_the_timeout(tmp_path, monkeypatch, capsys):
     import socket
 
-    import mjtvm.sweep
+    import mjtvm.apps.sweep
 
-    monkeypatch.setattr(mjtvm.sweep, "CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(mjtvm.apps.sweep, "CONNECT_TIMEOUT_S", 1.0)
     with socket.socket() as s:  # a port that nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
@@ -350,7 +350,7 @@ def test_ctrl_c_during_a_sweep_is_one_line_and_leaves_no_partial_file(tmp_path):
     assert names <= {".mjtvm.lock", "sweep.partial.json"}  # no result, no temporary file
     if "sweep.partial.json" in names:  # complete JSON: the finished rows
         doc = json.loads((tmp_path / "sweep.partial.json").read_text())
-        assert doc["schema"] == "mjtvm.sweep-checkpoint/1"
+        assert doc["schema"] == "mjtvm.apps.sweep-checkpoint/1"
 
 
 def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys):
@@ -360,12 +360,12 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert main(["tvms", "--scenario", "case1", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
 
-    from mjtvm import bench_report
+    from mjtvm.bench import report as bench_report
 
     def suite(**kwargs):
         for step in ("case 1, problem 1", "case 1, problem 2", "scaling"):
             kwargs["progress"](step)
-        return {"schema": "mjtvm.bench-suite/1"}
+        return {"schema": "mjtvm.bench.timing-suite/1"}
 
     monkeypatch.setattr(bench_report, "run_suite", suite)
     monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
@@ -373,13 +373,13 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert main(["bench", "--quick", "--out", str(tmp_path), "--name", "b"]) == 0
     captured = capsys.readouterr()
     assert "bench: scaling" in captured.err and captured.out.startswith("TABLE\n")
-    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench-suite/1"
+    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench.timing-suite/1"
     assert (tmp_path / "b.md").read_text() == "```\nTABLE\n```\n"
 
 
 def test_verify_old_runs_spelling_maps_to_contacts_and_reading(capsys):
     from mjtvm.cli import verify_parser
-    from mjtvm.verify import runs_of
+    from mjtvm.physics.verify import runs_of
 
     for old, runs in (("L,S-literal", ["L", "S-literal"]), ("L", ["L"]), ("S-physical", ["S-physical"])):
         args = verify_parser().parse_args(["--runs", old])

@@ -1,0 +1,428 @@
+r"""Replay of the scripted lift: TVMMP along it (paper section 5, Fig. 8) and the Fig. 9 sweeps.
+
+For every state of a :class:`~mjtvm.sim.trajectory.Lift`, Problem 2 (eq. 31-35,
+:func:`~mjtvm.core.tvmmp.tvmmp`) is solved with fingers 2 and 4 as L-points and as S-points (slide
+directions of the chosen reading, :mod:`mjtvm.sim.trajectory`), at the given mu and mg; the sweeps
+take L-points at mu in :data:`SWEEP_MUS` (mg = :data:`SWEEP_MU_MG`) and mg in
+:data:`SWEEP_MGS` (mu = :data:`SWEEP_MG_MU`). Results go to ``lift.csv`` (one row per
+(variant, reading, state) of the main run), ``lift-sweeps.csv``, ``lift.json`` (the same
+with metadata, the lift's bookkeeping and the sweeps) and, unless disabled, ``fig8.png``,
+``fig9a.png`` and ``fig9b.png`` (TVMMP vs the object height z, m).
+
+Where HiGHS cannot settle an LP (status ``Unknown`` after its cold restarts), :func:`~mjtvm.core.tvmmp.tvmmp`
+itself solves that pair with Clarabel and says so in ``settled_by``; the ``solver`` column names
+the backends that produced a row's alphas (``highs``, ``clarabel`` or ``highs+clarabel``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import statistics
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from ..core.state import GraspState
+from ..core.tvmmp import TvmmpResult, tvmmp
+from ..errors import StateError
+from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
+
+__all__ = [
+    "SCHEMA",
+    "SWEEP_MGS",
+    "SWEEP_MG_MU",
+    "SWEEP_MUS",
+    "SWEEP_MU_MG",
+    "Record",
+    "ReplayOutput",
+    "replay_lift",
+    "run_replay",
+    "solve_state",
+    "sweep_lift",
+    "time_replay",
+]
+
+SCHEMA = "mjtvm.lift/1"
+SWEEP_MUS = (0.1, 0.2, 0.3, 0.4, 0.5)  # Fig. 9a
+SWEEP_MU_MG = 2.0  # N
+SWEEP_MGS = (0.0, 1.0, 2.0, 3.0)  # Fig. 9b (N)
+SWEEP_MG_MU = 0.3
+_EDGE_TOL = 1e-6  # relative: an operating point this close to its range's edge is saturated
+
+
+@dataclass(frozen=True, eq=False)
+class Record:
+    r"""Problem 2 at one state of the lift.
+
+    Attributes
+    ----------
+    variant, reading
+        Type of the L/S contacts (``"L"`` or ``"S"``) and the slide-direction reading
+        (``None`` for L-points, where it plays no part).
+    mu, mg
+        Friction coefficient and object weight (N).
+    index, z
+        State index and object centre height (m).
+    result
+        The :class:`~mjtvm.core.tvmmp.TvmmpResult` (alpha_kl, status, TVMMP, limiting pair, timings).
+    solver
+        The backend that produced ``result``.
+    saturated
+        Joints whose (torque, speed) in the limiting pair's witness lies on the edge of their
+        operation range (one optimal vertex; other optima may differ).
+    state
+        The :class:`~mjtvm.core.state.GraspState` that was solved (kept for the recording).
+    """
+
+    variant: str
+    reading: str | None
+    mu: float
+    mg: float
+    index: int
+    z: float
+    result: TvmmpResult
+    solver: str
+    saturated: tuple[str, ...]
+    state: GraspState = field(repr=False, compare=False)
+
+    def row(self) -> dict[str, Any]:
+        """The CSV row (``scenario`` and ``hand`` are added by the writer)."""
+        r = self.result
+        out: dict[str, Any] = {
+            "variant": self.variant, "reading": self.reading or "", "mu": self.mu, "mg": self.mg,
+            "state": self.index, "z": self.z, "tvmmp": "" if r.tvmmp is None else r.tvmmp,
+            "feasible": r.feasible,
+        }  # fmt: skip
+        for k, l in np.ndindex(*r.alpha.shape):
+            ok = r.status[k][l] == "optimal"
+            out[f"alpha_k{k}_l{l}"] = float(r.alpha[k, l]) if ok else ""
+            out[f"status_k{k}_l{l}"] = r.status[k][l]
+        out["limiting_k"], out["limiting_l"] = ("", "") if r.limiting is None else r.limiting
+        t = r.timings
+        out.update(saturated=";".join(self.saturated), solver=self.solver, assemble_s=t.assemble_s,
+                   solve_s=t.solve_s, total_s=t.total_s, num_lps=t.num_lps)  # fmt: skip
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: the row's identity plus the ``mjtvm.result/1`` document (no witnesses)."""
+        return {
+            "variant": self.variant, "reading": self.reading, "mu": self.mu, "mg": self.mg,
+            "state": self.index, "z": self.z, "solver": self.solver, "saturated": list(self.saturated),
+            **self.result.to_dict(witnesses=False),
+        }  # fmt: skip
+
+
+def _saturated(state: GraspState, result: TvmmpResult) -> tuple[str, ...]:
+    if result.limiting is None:
+        return ()
+    w = result.witnesses[result.limiting[0]][result.limiting[1]]
+    if w is None:
+        return ()
+    out = []
+    for name, rng, tau, qd in zip(
+        state.joint_names, state.operation_ranges, w.torques, w.speeds, strict=True
+    ):
+        if rng.max_speed_at(float(tau)) - abs(float(qd)) <= _EDGE_TOL * rng.max_speed:
+            out.append(name)
+    return tuple(out)
+
+
+def solve_state(state: GraspState) -> tuple[TvmmpResult, str]:
+    """Problem 2 with the default backend; returns the result and the backends that settled it.
+
+    A :class:`~mjtvm.errors.SolverError` (neither solver settles a pair) propagates: solver
+    trouble is reported, not hidden.
+    """
+    result = tvmmp(state)
+    used = sorted({b for row in result.settled_by for b in row if b is not None}) or ["highs"]
+    return result, "+".join(used)
+
+
+def _record(
+    lift: Lift, i: int, base: GraspState, variant: str, reading: str | None, mu: float, mg: float
+) -> Record:
+    state = lift_state(lift, i, variant=variant, reading=reading or "physical", mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
+    result, solver = solve_state(state)
+    return Record(
+        variant, reading, mu, mg, i, float(lift.z[i]), result, solver, _saturated(state, result), state
+    )
+
+
+def _check(variants: Sequence[str], readings: Sequence[str], mu: float, mg: float) -> None:
+    if not variants or len(set(variants)) != len(variants) or any(v not in VARIANTS for v in variants):
+        raise StateError(
+            "variants", f"expected distinct values among {', '.join(VARIANTS)}, got {list(variants)}"
+        )
+    if not readings or len(set(readings)) != len(readings) or any(r not in READINGS for r in readings):
+        raise StateError(
+            "reading", f"expected distinct values among {', '.join(READINGS)}, got {list(readings)}"
+        )
+    if not (math.isfinite(mu) and mu >= 0):
+        raise StateError("mu", f"expected a friction coefficient >= 0, got {mu!r}")
+    if not (math.isfinite(mg) and mg >= 0):
+        raise StateError("mg", f"expected a weight >= 0 (N), got {mg!r}")
+
+
+def replay_lift(
+    lift: Lift,
+    *,
+    variants: Sequence[str] = VARIANTS,
+    readings: Sequence[str] = ("physical",),
+    mu: float = 0.3,
+    mg: float = 1.0,
+    progress: bool = False,
+    bases: Sequence[GraspState] | None = None,
+) -> tuple[Record, ...]:
+    r"""TVMMP and every :math:`\alpha_{kl}` along the lift (Fig. 8).
+
+    One record per (variant, reading, state): L-points once (reading ``None``), S-points once
+    per reading. ``bases`` are :func:`~mjtvm.sim.trajectory.lift_state` of each state, reused.
+    """
+    _check(variants, readings, mu, mg)
+    runs = [(v, r) for v in variants for r in ((None,) if v == "L" else readings)]
+    out = []
+    bar = tqdm(total=len(runs) * lift.num_states, desc="replay", unit="state", disable=not progress)
+    for i in range(lift.num_states):
+        base = lift_state(lift, i) if bases is None else bases[i]
+        for v, r in runs:
+            out.append(_record(lift, i, base, v, r, float(mu), float(mg)))
+            bar.update()
+    bar.close()
+    order = {run: k for k, run in enumerate(runs)}
+    return tuple(sorted(out, key=lambda rec: (order[(rec.variant, rec.reading)], rec.index)))
+
+
+def sweep_lift(
+    lift: Lift,
+    *,
+    mus: Sequence[float] = SWEEP_MUS,
+    mu_mg: float = SWEEP_MU_MG,
+    mgs: Sequence[float] = SWEEP_MGS,
+    mg_mu: float = SWEEP_MG_MU,
+    progress: bool = False,
+    bases: Sequence[GraspState] | None = None,
+) -> dict[str, tuple[Record, ...]]:
+    r"""The Fig. 9 sweeps with L-points: ``"mu"`` (every mu at mg = ``mu_mg``) and ``"mg"``."""
+    for m in mus:
+        _check(("L",), ("physical",), float(m), mu_mg)
+    for g in mgs:
+        _check(("L",), ("physical",), mg_mu, float(g))
+    pairs = list(
+        dict.fromkeys([(float(m), float(mu_mg)) for m in mus] + [(float(mg_mu), float(g)) for g in mgs])
+    )
+    done: dict[tuple[float, float], list[Record]] = {p: [] for p in pairs}
+    bar = tqdm(total=len(pairs) * lift.num_states, desc="sweeps", unit="state", disable=not progress)
+    for i in range(lift.num_states):
+        base = lift_state(lift, i) if bases is None else bases[i]
+        for m, g in pairs:
+            done[(m, g)].append(_record(lift, i, base, "L", None, m, g))
+            bar.update()
+    bar.close()
+    return {
+        "mu": tuple(r for m in mus for r in done[(float(m), float(mu_mg))]),
+        "mg": tuple(r for g in mgs for r in done[(float(mg_mu), float(g))]),
+    }
+
+
+def _columns(records: Sequence[Record]) -> list[str]:
+    return list(records[0].row()) if records else []
+
+
+def _csv(records: Sequence[Record], meta: dict[str, Any], sweeps: Sequence[str] | None = None) -> str:
+    """CSV text; ``sweeps`` (one name per record) adds the ``sweep`` column that tells the Fig. 9
+    curves apart (the (mu 0.3, mg 2) curve belongs to both sweeps)."""
+    extra = ["sweep"] if sweeps is not None else []
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=[*extra, "scenario", "hand", *_columns(records)])
+    writer.writeheader()
+    for k, rec in enumerate(records):
+        tag = {"sweep": sweeps[k]} if sweeps is not None else {}
+        writer.writerow({**tag, "scenario": meta["scenario"], "hand": meta["hand"], **rec.row()})
+    return buf.getvalue()
+
+
+def _lift_dict(lift: Lift) -> dict[str, Any]:
+    slides = {
+        reading: [
+            {g: s.tolist() for g, s in slide_directions(lift, i, reading=reading).items()}  # type: ignore[arg-type]
+            for i in range(lift.num_states)
+        ]
+        for reading in READINGS
+    }
+    return {
+        "num_states": lift.num_states, "z": lift.z.tolist(), "limit": lift.limit,
+        "max_step": lift.max_step, "tolerance": lift.tolerance, "marched_steps": lift.marched,
+        "joints": list(lift.joints), "geoms": list(lift.geoms), "roles": list(lift.roles),
+        "drift": lift.drift.tolist(), "residual": lift.residual.tolist(),
+        "base": list(lift.base), "base_contact": lift.base_contact.tolist(),
+        "touching": [list(t) for t in lift.touching], "contact_points": lift.points.tolist(),
+        "qpos": lift.qpos.tolist(), "slide_directions": slides,
+    }  # fmt: skip
+
+
+ALPHA_LABEL = r"TVMMP $\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)"
+"""The TVMMP axis: alpha multiplies the RVDS vertex r_l (eq. 30: object velocity in m/s, angular
+velocity in rad/s), so alpha = 1 is the vertex itself; the scenarios' vertices have linear
+components of +-1 m/s, so alpha reads as m/s per unit of the vertex."""
+
+
+def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> bytes:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.0, 4.0), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for label, style, recs in curves:
+        z = np.array([r.z for r in recs])
+        a = np.array([np.nan if r.result.tvmmp is None else r.result.tvmmp for r in recs])
+        (line,) = ax.plot(z, a, style, label=label)
+        bad = np.isnan(a)
+        if bad.any():
+            ax.plot(
+                z[bad], np.zeros(int(bad.sum())), "x", color=line.get_color(), label=f"{label}: no solution"
+            )
+    ax.set_xlabel("object height $z$ (m)")
+    ax.set_ylabel(ALPHA_LABEL, fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.set_ylim(bottom=0.0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120)
+    return buf.getvalue()
+
+
+def _figures(
+    lift: Lift,
+    hand: str,
+    records: Sequence[Record],
+    swept: dict[str, tuple[Record, ...]] | None,
+    mu: float,
+    mg: float,
+) -> dict[str, bytes]:
+    """Fig. 8 (solid L, dashed S) and, with the sweeps, Fig. 9a/9b: TVMMP vs z, as PNG bytes."""
+    tag = f"{lift.scenario.name}, {hand} hand"
+    runs = list(dict.fromkeys((r.variant, r.reading) for r in records))
+    curves = [
+        (f"{v}-points" + (f" ({rd} reading)" if rd else ""), "-" if v == "L" else "--",
+         [r for r in records if (r.variant, r.reading) == (v, rd)])
+        for v, rd in runs
+    ]  # fmt: skip
+    files = {"fig8.png": _plot(curves, f"Fig. 8: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N")}
+    if swept is not None:
+        a = [(f"$\\mu$ = {m:g}", "-", [r for r in swept["mu"] if r.mu == m]) for m in SWEEP_MUS]
+        files["fig9a.png"] = _plot(a, f"Fig. 9a: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N")
+        b = [(f"$mg$ = {g:g} N", "-", [r for r in swept["mg"] if r.mg == g]) for g in SWEEP_MGS]
+        files["fig9b.png"] = _plot(b, f"Fig. 9b: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}")
+    return files
+
+
+@dataclass(frozen=True, eq=False)
+class ReplayOutput:
+    """What :func:`run_replay` computed and wrote (``files``: name -> path)."""
+
+    lift: Lift
+    records: tuple[Record, ...]
+    sweeps: dict[str, tuple[Record, ...]] | None
+    files: dict[str, Path]
+    timings: dict[str, float]
+
+
+def run_replay(
+    *,
+    scenario: str = "case2",
+    hand: str = "default",
+    mu: float = 0.3,
+    mg: float = 1.0,
+    num_states: int = 30,
+    variants: Sequence[str] = VARIANTS,
+    readings: Sequence[str] = ("physical",),
+    out: str | Path = "results",
+    plots: bool = True,
+    sweeps: bool = True,
+    progress: bool = False,
+    on_replay: Callable[[ReplayOutput], None] | None = None,
+) -> ReplayOutput:
+    r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
+
+    ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
+    ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
+    plots: the CLI starts the rerun recording there (:func:`~mjtvm.viewer.recording.start_recording`).
+
+    The files are written as one set, atomically (:func:`mjtvm.core.files.write_files`), after
+    everything is computed; the output folder is checked before any work.
+
+    Raises
+    ------
+    StateError
+        Bad options.
+    OutputError
+        An output folder that cannot be created or written.
+    ModelError
+        Unknown scenario or hand, or a lift that cannot be made.
+    """
+    from ..core.files import check_output_dir, write_files
+
+    _check(variants, readings, mu, mg)
+    outdir = check_output_dir(out, option="out")  # before any work
+    times, t0 = {}, time.perf_counter()
+    lift = scripted_lift(scenario, variant=hand, num_states=num_states)
+    bases = [lift_state(lift, i) for i in range(lift.num_states)]
+    times["lift_s"], t0 = time.perf_counter() - t0, time.perf_counter()
+    records = replay_lift(
+        lift, variants=variants, readings=readings, mu=mu, mg=mg, progress=progress, bases=bases
+    )
+    times["replay_s"], t0 = time.perf_counter() - t0, time.perf_counter()
+    if on_replay is not None:
+        on_replay(ReplayOutput(lift, records, None, {}, {}))
+    swept = sweep_lift(lift, progress=progress, bases=bases) if sweeps else None
+    times["sweeps_s"], t0 = time.perf_counter() - t0, time.perf_counter()
+    meta = {"scenario": lift.scenario.name, "hand": hand}
+    # every file is rendered in memory first, then the set is written at once (mjtvm.core.files)
+    contents: dict[str, bytes | str] = {"lift.csv": _csv(records, meta)}
+    if swept is not None:
+        tags = ["mu"] * len(swept["mu"]) + ["mg"] * len(swept["mg"])
+        contents["lift-sweeps.csv"] = _csv([*swept["mu"], *swept["mg"]], meta, tags)
+    if plots:
+        contents.update(_figures(lift, hand, records, swept, mu, mg))
+    times["output_s"] = time.perf_counter() - t0  # CSV and PNG (the JSON holds the timings)
+    doc = {
+        "schema": SCHEMA, **meta, "mu": mu, "mg": mg, "variants": list(variants), "readings": list(readings),
+        "refs": [[0.0, 0.0, -mg, 0.0, 0.0, 0.0]], "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
+        "lift": _lift_dict(lift), "records": [r.to_dict() for r in records],
+        "sweeps": None if swept is None else {
+            "mu": {"mg": SWEEP_MU_MG, "values": list(SWEEP_MUS), "records": [r.to_dict() for r in swept["mu"]]},
+            "mg": {"mu": SWEEP_MG_MU, "values": list(SWEEP_MGS), "records": [r.to_dict() for r in swept["mg"]]},
+        },
+        "timings": times,
+    }  # fmt: skip
+    contents["lift.json"] = json.dumps(doc, indent=1) + "\n"
+    order = ["lift.csv", "lift.json", "lift-sweeps.csv", "fig8.png", "fig9a.png", "fig9b.png"]
+    files = {name: outdir / name for name in order if name in contents}
+    write_files({files[name]: contents[name] for name in files}, option="out")
+    return ReplayOutput(lift, records, swept, files, times)
+
+
+def time_replay(*, repeats: int = 3, num_states: int = 30, hand: str = "default") -> dict[str, Any]:
+    r"""Wall time of the full replay without plots and sweeps (both variants, files written).
+
+    Returns ``{"runs_s": [...], "median_s": ..., "num_states": ..., "last": {phase: s}}``.
+    """
+    runs, last = [], {}
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            result = run_replay(hand=hand, num_states=num_states, out=tmp, plots=False, sweeps=False)
+            runs.append(time.perf_counter() - t0)
+            last = result.timings
+    return {"runs_s": runs, "median_s": statistics.median(runs), "num_states": num_states, "last": last}

@@ -1,0 +1,409 @@
+r"""Parameter sweeps of Problem 2 over lifts: a grid, a local process pool or a Dask cluster.
+
+A sweep is a list of :class:`SweepPoint` (scenario, hand, contact variant, slide reading,
+mu, mg, lift state). Points that share a lift configuration are solved together by one
+task, which builds the scripted lift once per worker process (the lift depends only on the
+scenario, the hand and the number of states: mu and mg change the statics, not the motion),
+reads each state's MuJoCo grasp once per worker, and solves each requested state with
+:func:`~mjtvm.core.tvmmp.tvmmp`. The same tasks run
+
+* serially (``jobs=1``),
+* on a local process pool (``jobs > 1``, the ``forkserver`` start method: MuJoCo and
+  HiGHS hold native state that should not be forked), or
+* on a Dask cluster (``cluster="tcp://host:8786"`` or a ``distributed.Client``), the
+  optional ``cluster`` extra. Dask was chosen over Ray because it installs as pure-Python
+  wheels from PyPI, its ``LocalCluster`` runs the same code in tests, and ``Client(address)``
+  attaches to any existing scheduler (including batch-queue clusters via dask-jobqueue).
+
+Every way returns the same rows in the order of the points (tested).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import itertools
+import json
+import multiprocessing
+import signal
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from ..core.state import GraspState
+from ..core.tvmmp import tvmmp
+from ..errors import StateError
+from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
+
+__all__ = ["SweepPoint", "grid", "run_sweep", "run_sweep_files"]
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One Problem 2 evaluation: a lift state under given contact conditions.
+
+    Parameters
+    ----------
+    scenario, hand
+        Scenario name (``case2``) and hand variant (``default`` or ``humanlike``).
+    variant
+        Contact type of fingers 2 and 4: ``"L"`` or ``"S"``.
+    reading
+        Slide-direction reading of S-points: ``"physical"`` or ``"literal"``.
+    mu, mg
+        Friction coefficient and object weight (N).
+    state
+        Index of the lift state (0 = the initial grasp).
+    num_states
+        Number of states of the lift the index refers to.
+    """
+
+    scenario: str = "case2"
+    hand: str = "default"
+    variant: str = "L"
+    reading: str = "physical"
+    mu: float = 0.3
+    mg: float = 1.0
+    state: int = 0
+    num_states: int = 30
+
+    def __post_init__(self) -> None:
+        if self.variant not in VARIANTS:
+            raise StateError("variant", f"expected one of {VARIANTS}, got {self.variant!r}")
+        if self.reading not in READINGS:
+            raise StateError("reading", f"expected one of {READINGS}, got {self.reading!r}")
+        if not (np.isfinite(self.mu) and self.mu >= 0):
+            raise StateError("mu", f"expected a friction coefficient >= 0, got {self.mu!r}")
+        if not (np.isfinite(self.mg) and self.mg >= 0):
+            raise StateError("mg", f"expected a weight >= 0 (N), got {self.mg!r}")
+        if not (0 <= self.state < self.num_states):
+            raise StateError(
+                "state", f"expected 0 <= state < num_states = {self.num_states}, got {self.state}"
+            )
+
+
+def grid(
+    *,
+    scenarios: Sequence[str] = ("case2",),
+    hands: Sequence[str] = ("default",),
+    variants: Sequence[str] = ("L",),
+    readings: Sequence[str] = ("physical",),
+    mus: Sequence[float] = (0.3,),
+    mgs: Sequence[float] = (1.0,),
+    states: Sequence[int] | None = None,
+    num_states: int = 30,
+) -> tuple[SweepPoint, ...]:
+    """The full product of the given values (every state of the lift when ``states`` is None)."""
+    chosen = range(num_states) if states is None else states
+    return tuple(
+        SweepPoint(sc, h, v, r, float(mu), float(mg), int(i), num_states)
+        for sc, h, v, r, mu, mg, i in itertools.product(
+            scenarios, hands, variants, readings, mus, mgs, chosen
+        )
+    )
+
+
+@lru_cache(maxsize=8)
+def _lift(scenario: str, hand: str, num_states: int) -> Lift:
+    return scripted_lift(scenario, variant=hand, num_states=num_states)
+
+
+@lru_cache(maxsize=512)
+def _base(scenario: str, hand: str, num_states: int, index: int) -> GraspState:
+    """The MuJoCo grasp of one lift state, shared by every (variant, reading, mu, mg) in this
+    worker: only its contact types, friction and REFS differ (``lift_state``'s ``base``)."""
+    return lift_state(_lift(scenario, hand, num_states), index)
+
+
+_Key = tuple[str, str, int, str, str, float, float]
+
+
+def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
+    """Solve the given states of one lift configuration (runs in a worker)."""
+    scenario, hand, num_states, variant, reading, mu, mg = key
+    lift = _lift(scenario, hand, num_states)
+    rows = []
+    for i in states:
+        base = _base(scenario, hand, num_states, i)
+        state = lift_state(lift, i, variant=variant, reading=reading, mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
+        doc = tvmmp(state, witnesses=False).to_dict(witnesses=False)
+        rows.append(
+            {
+                **asdict(SweepPoint(scenario, hand, variant, reading, mu, mg, i, num_states)),
+                "z": float(lift.z[i]),
+                **{key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")},
+            }
+        )
+    return rows
+
+
+def _groups(points: Sequence[SweepPoint], chunk: int) -> list[tuple[_Key, list[int]]]:
+    by_key: dict[_Key, list[int]] = {}
+    for p in points:
+        key = (p.scenario, p.hand, p.num_states, p.variant, p.reading, p.mu, p.mg)
+        by_key.setdefault(key, []).append(p.state)
+    tasks = []
+    for key, states in by_key.items():
+        unique = sorted(set(states))
+        tasks += [(key, unique[i : i + chunk]) for i in range(0, len(unique), chunk)]
+    return tasks
+
+
+def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
+    """The identity of a row or point: what a checkpointed row must match to be kept."""
+    if isinstance(r, SweepPoint):
+        return (r.scenario, r.hand, r.num_states, r.variant, r.reading, r.mu, r.mg, r.state)
+    return (
+        r["scenario"],
+        r["hand"],
+        r["num_states"],
+        r["variant"],
+        r["reading"],
+        r["mu"],
+        r["mg"],
+        r["state"],
+    )
+
+
+_RowKey = tuple[str, str, int, str, str, float, float, int]
+
+
+def _ignore_sigint() -> None:
+    """Pool workers leave Ctrl-C to the parent (a terminal sends SIGINT to the whole process
+    group; each worker would print its own KeyboardInterrupt traceback)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel the pending tasks and end the workers now (``shutdown(wait=True)``, what the
+    ``with`` statement does, would first run every queued task)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.terminate()
+
+
+def run_sweep(
+    points: Iterable[SweepPoint],
+    *,
+    jobs: int = 1,
+    cluster: Any = None,
+    chunk: int = 30,
+    progress: bool = True,
+    done: Mapping[_RowKey, dict[str, Any]] | None = None,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+) -> list[dict[str, Any]]:
+    r"""Solve Problem 2 at every point; rows come back in the order of ``points``.
+
+    Parameters
+    ----------
+    points
+        The sweep (e.g. from :func:`grid`).
+    jobs
+        Local worker processes (1 = in this process).
+    cluster
+        A Dask scheduler address (``"tcp://..."``) or a ``distributed.Client``; overrides
+        ``jobs``. Needs the ``cluster`` extra (``pip install "mjtvm[cluster]"``).
+    chunk
+        States per task (tasks of one lift configuration share the worker's lift). In this
+        process (``jobs=1``) every state is its own task: the lift is cached anyway, and
+        ``on_rows`` then sees every row as soon as it exists.
+    progress
+        Show a tqdm progress bar over the rows to compute.
+    done
+        Rows already computed (e.g. read from a checkpoint), keyed by their point: these
+        points are not solved again and their rows are returned as given.
+    on_rows
+        Called with the rows of every finished task, in this process (checkpointing).
+
+    Returns
+    -------
+    list of dict
+        One row per point: the point's fields, ``z`` (m), ``tvmmp``, ``feasible``, ``alpha``
+        (K x R, null where not optimal), ``status``, ``limiting``.
+
+    Raises
+    ------
+    StateError
+        ``jobs`` or ``chunk`` below 1, or a ``cluster`` that cannot be reached.
+    """
+    pts = list(points)
+    if jobs < 1:
+        raise StateError("jobs", f"expected a positive number of processes, got {jobs}")
+    if chunk < 1:
+        raise StateError("chunk", f"expected a positive number of states per task, got {chunk}")
+    table: dict[_RowKey, dict[str, Any]] = dict(done or {})
+    todo = [p for p in pts if _key(p) not in table]
+    serial = cluster is None and jobs == 1
+    tasks = _groups(todo, 1 if serial else chunk)
+    bar = tqdm(total=len(todo), desc="sweep", unit="row", disable=not progress)
+
+    def finished(rows: list[dict[str, Any]]) -> None:
+        table.update((_key(r), r) for r in rows)
+        if on_rows is not None:
+            on_rows(rows)
+        bar.update(len(rows))
+
+    try:
+        if cluster is not None:
+            _run_dask(tasks, cluster, finished)
+        elif serial:
+            for key, states in tasks:
+                finished(_solve_group(key, states))
+        else:
+            context = multiprocessing.get_context("forkserver")
+            pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_ignore_sigint)
+            try:
+                for f in [pool.submit(_solve_group, key, states) for key, states in tasks]:
+                    finished(f.result())
+            except BaseException:
+                _stop(pool)
+                raise
+            pool.shutdown()
+    finally:
+        bar.close()
+    return [table[_key(p)] for p in pts]
+
+
+CONNECT_TIMEOUT_S = 10.0
+"""How long :func:`run_sweep` waits for a Dask scheduler given by address."""
+
+
+def _run_dask(
+    tasks: list[tuple[_Key, list[int]]], cluster: Any, finished: Callable[[list[dict[str, Any]]], None]
+) -> None:
+    try:
+        from distributed import Client, as_completed
+    except ImportError as e:  # pragma: no cover - depends on the optional extra
+        raise StateError("cluster", 'Dask is not installed: pip install "mjtvm[cluster]"') from e
+    if isinstance(cluster, Client):
+        client = cluster
+    else:
+        try:
+            client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError, ValueError) as e:
+            raise StateError(
+                "--cluster",
+                f"cannot reach a Dask scheduler at {cluster} within {CONNECT_TIMEOUT_S:g} s ({e})",
+            ) from e
+    try:
+        futures = client.map(_solve_group, [k for k, _ in tasks], [s for _, s in tasks], pure=False)
+        for fut in as_completed(futures):
+            finished(fut.result())
+    finally:
+        if client is not cluster:
+            client.close()
+
+
+# ------------------------------------------------------------------ files (mjtvm sweep)
+CHECKPOINT_SCHEMA = "mjtvm.apps.sweep-checkpoint/1"
+CHECKPOINT_EVERY_S = 5.0
+"""At most this often (s) the checkpoint is rewritten while a sweep runs (and always on an
+interrupt or a failure, with every finished row)."""
+
+
+def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
+    """The rows as CSV: the point's fields, ``z``, ``tvmmp``, ``feasible``, ``limiting_k``,
+    ``limiting_l`` and ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` (empty where not optimal)."""
+    flat = []
+    for r in rows:
+        out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting")}
+        for k, (alphas, statuses) in enumerate(zip(r["alpha"], r["status"])):
+            for l, (a, st) in enumerate(zip(alphas, statuses)):
+                out[f"alpha_k{k}_l{l}"] = "" if a is None else a
+                out[f"status_k{k}_l{l}"] = st
+        out["limiting_k"], out["limiting_l"] = ("", "") if r["limiting"] is None else r["limiting"]
+        out["tvmmp"] = "" if r["tvmmp"] is None else r["tvmmp"]
+        flat.append(out)
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=list(dict.fromkeys(k for r in flat for k in r)), restval="")
+    writer.writeheader()
+    writer.writerows(flat)
+    return buf.getvalue()
+
+
+def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        rows = doc["rows"] if checkpoint else doc
+        if checkpoint and doc.get("schema") != CHECKPOINT_SCHEMA:
+            raise ValueError(f"schema {doc.get('schema')!r}, expected {CHECKPOINT_SCHEMA!r}")
+        [_key(r) for r in rows]
+    except (OSError, ValueError, TypeError, KeyError) as e:
+        raise StateError(
+            "--resume", f"cannot read the finished rows of {path} ({e}); rerun without --resume"
+        ) from e
+    return list(rows)
+
+
+def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[Path]:
+    r"""``mjtvm sweep``: check ``--out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
+
+    While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.apps.sweep-checkpoint/1``) holds
+    every finished row; it is rewritten atomically at most every :data:`CHECKPOINT_EVERY_S`
+    seconds and on an interrupt or failure, and removed once ``NAME.json`` and ``NAME.csv``
+    are written. With ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json``
+    whose point belongs to this grid are kept and only the other points are solved; the
+    result equals an uninterrupted run (tested).
+
+    Raises
+    ------
+    OutputError
+        ``--out`` cannot be written, or another run holds its lock.
+    StateError
+        A ``--state-indices`` value outside the lift, an unreadable checkpoint, an
+        unreachable ``--cluster``.
+    """
+    from ..core.files import check_output_dir, output_lock, write_files
+
+    bad = [i for i in (args.state_indices or ()) if i >= args.states]
+    if bad:
+        raise StateError("--state-indices", f"expected indices below --states = {args.states}, got {bad[0]}")
+    outdir = check_output_dir(args.out)
+    out_json, out_csv = outdir / f"{args.name}.json", outdir / f"{args.name}.csv"
+    checkpoint = outdir / f"{args.name}.partial.json"
+    with output_lock(outdir):
+        points = grid(
+            scenarios=args.scenario, hands=args.hand, variants=args.contacts, readings=args.reading,
+            mus=args.mu, mgs=args.mg, states=args.state_indices, num_states=args.states,
+        )  # fmt: skip
+        wanted = {_key(p) for p in points}
+        done: dict[_RowKey, dict[str, Any]] = {}
+        if args.resume:
+            for path, is_checkpoint in ((out_json, False), (checkpoint, True)):
+                if path.exists():
+                    done.update(
+                        (_key(r), r) for r in _read_rows(path, checkpoint=is_checkpoint) if _key(r) in wanted
+                    )
+            if not args.quiet:
+                emit(f"resume: {len(done)} of {len(wanted)} rows already finished")
+        finished = dict(done)
+        last = time.monotonic()
+
+        def save() -> None:
+            doc = {"schema": CHECKPOINT_SCHEMA, "rows": list(finished.values())}
+            write_files({checkpoint: json.dumps(doc, indent=1) + "\n"})
+
+        def on_rows(rows: list[dict[str, Any]]) -> None:
+            nonlocal last
+            finished.update((_key(r), r) for r in rows)
+            if time.monotonic() - last >= CHECKPOINT_EVERY_S:
+                save()
+                last = time.monotonic()
+
+        try:
+            rows = run_sweep(points, jobs=args.jobs, cluster=args.cluster, progress=not args.quiet,
+                             done=done, on_rows=on_rows)  # fmt: skip
+        except BaseException:
+            if len(finished) > len(done):  # no finished work is lost to an interrupt or a failure
+                save()
+            raise
+        written = write_files({out_json: json.dumps(rows, indent=1) + "\n", out_csv: rows_csv(rows)})
+        checkpoint.unlink(missing_ok=True)
+    return written

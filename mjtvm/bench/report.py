@@ -1,0 +1,274 @@
+r"""The report of :mod:`mjtvm.bench.suite`: targets, notes on misses, the table, the command line.
+
+Where a target is missed the notes say where the time goes and what would close it, from the
+measured figures of the run (nothing here is a fixed claim).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from .suite import TARGET_SWEEP_SPEEDUP, TARGETS_S, run_suite
+
+__all__ = ["add_arguments", "auto_notes", "format_suite_table", "main", "run_from_args"]
+
+
+def auto_notes(report: dict[str, Any]) -> list[str]:
+    """Where the time goes for the targets that are missed (measured numbers of this run)."""
+    notes: list[str] = []
+    t, c = report["targets"], report["cases"]
+    if t.get("case2_p1") is False:
+        lp = c["case2_p1"]["lp"]
+        notes.append(
+            f"Case 2 Problem 1 misses 2 s: {lp['median_s']:.2f} s (median) for {lp['num_lps']} LPs: the "
+            f"projection {lp['project_s']:.2f} s, of which {lp['highs_run_s']:.2f} s inside HiGHS and the "
+            f"rest mostly Qhull on the polar points (~0.4 s in a profile), and the volume "
+            f"{lp['volume_s']:.2f} s (Qhull per facet, on two threads). Two HiGHS sessions on two "
+            "threads were tried for the rays and gave nothing end to end on this machine."
+        )
+    sw = report.get("sweeps")
+    if sw and t.get("sweep_speedup_2") is False:
+        one = sw["per_jobs"]["1"]["median_s"]
+        start = sw["pool_startup_s"].get("2")
+        notes.append(
+            f"2-process sweep speed-up x{sw['speedup']['2']:.3f} < x{TARGET_SWEEP_SPEEDUP}: the serial run is only "
+            f"{one:.2f} s, and the pool's start-up with the workers' imports costs {start:.2f} s, after which "
+            f"each worker rebuilds the lift ({sw['lift_build_s']:.2f} s) that the serial run builds once. "
+            "Profile of the serial run: about half is lift_state/grasp_state per point (operation_range_from_"
+            "actuator re-validates every joint's range at every state), a third the LPs. To close: a "
+            "persistent pool (or forkserver preload of mjtvm.apps.sweep), caching the ranges per model, and "
+            "shipping the lift to the workers instead of rebuilding it."
+        )
+    lf = report.get("lift")
+    if lf and t.get("lift") is False:
+        last = lf.get("last", {})
+        notes.append(
+            f"Full lift {lf['median_s']:.2f} s > 1 s (runs "
+            + ", ".join(f"{x:.2f}" for x in lf["runs_s"])
+            + " s; last "
+            "run: "
+            + ", ".join(f"{k} {v:.2f} s" for k, v in last.items())
+            + "): building the lift (IK per state) "
+            "and the LPs; the spread of the runs shows how much the machine's load moves this figure."
+        )
+    sc = report.get("scaling")
+    if sc and not sc["p2_at_most_linear"]:
+        per = sc["per_fingers"]
+        notes.append(
+            "P2 per state is not linear in every doubling: HiGHS run() time per state "
+            + ", ".join(f"{f} fingers {1e3 * r['p2_highs_run_s']:.2f} ms" for f, r in per.items())
+            + "; Python "
+            + ", ".join(f"{1e3 * r['p2_python_s']:.2f}" for r in per.values())
+            + " ms: the simplex work (HiGHS) grows faster than the LP size at the largest hand; closing it "
+            "would need a warmer start across RVDS vertices or a smaller LP (fewer friction-cone edges)."
+        )
+    return notes
+
+
+# ------------------------------------------------------------------ the table
+def _ms(s: float | None) -> str:
+    return "-" if s is None else f"{1e3 * s:.2f} ms" if s < 1 else f"{s:.2f} s"
+
+
+def _met(flag: bool | None) -> str:
+    return "-" if flag is None else "met" if flag else "NOT met"
+
+
+def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str:
+    """A plain-text table of a :func:`run_suite` report (medians)."""
+    c, t = report["cases"], report["targets"]
+    paper = report["paper_s"]
+    head = (
+        f"{'measurement':<44} {'ours':>10} {'baseline':>24} {'ratio':>7} {'paper':>8} {'target':>9} {'':>7}"
+    )
+    lines = [head, "-" * len(head)]
+
+    def row(
+        name: str, ours: float | None, base: str, ratio: str, pap: float | None, target: str, met: str
+    ) -> None:
+        lines.append(f"{name:<44} {_ms(ours):>10} {base:>24} {ratio:>7} {_ms(pap):>8} {target:>9} {met:>7}")
+
+    for key, label in (
+        ("case1_p1", "Case 1, Problem 1 (no RVDS)"),
+        ("case2_p1", "Case 2 initial, Problem 1 (no RVDS)"),
+    ):
+        if key not in c:
+            continue
+        r = c[key]
+        cdd = r["cdd"]
+        if cdd is None:
+            base, ratio = "cdd skipped", "-"
+        elif cdd["finished"]:
+            base, ratio = f"cdd {_ms(cdd['wall_s'])}", f"{cdd['wall_s'] / r['lp']['median_s']:.1f}"
+        else:
+            base, ratio = (
+                f"cdd > {cdd['time_limit_s']:.0f} s (cap)",
+                f">{cdd['time_limit_s'] / r['lp']['median_s']:.1f}",
+            )
+        row(
+            label, r["lp"]["median_s"], base, ratio, paper[key], f"<= {_ms(TARGETS_S[key])}", _met(t.get(key))
+        )
+    for key, label in (
+        ("case1_p2", "Case 1, Problem 2 (8 RVDS vertices)"),
+        ("case2_p2", "Case 2 initial, Problem 2 (4 RVDS)"),
+    ):
+        if key not in c:
+            continue
+        r = c[key]
+        row(
+            label, r["ours"]["median_s"], f"cvxpy {_ms(r['baseline']['median_s'])}",
+            f"{r['ratio_baseline_over_ours']:.1f}", paper[key], f"<= {_ms(TARGETS_S['p2_state'])}", _met(t.get(key)),
+        )  # fmt: skip
+    if "lift" in report:
+        lf = report["lift"]
+        row(
+            f"Full lift, L + S ({lf['num_states']} states, no plots/sweeps)", lf["median_s"], "-", "-", None,
+            f"<= {_ms(TARGETS_S['lift'])}", _met(t.get("lift")),
+        )  # fmt: skip
+    if "sweeps" in report:
+        sw = report["sweeps"]
+        for j, r in sw["per_jobs"].items():
+            extra = " incl. pool start" if j != "1" else ""
+            label = f"Fig. 9 sweeps, {sw['points']} pts, {j} proc{extra}"
+            sp = sw.get("speedup", {}).get(j)
+            row(
+                label, r["median_s"], "-", "-" if sp is None else f"x{sp:.3f}", None,
+                f">= x{TARGET_SWEEP_SPEEDUP}" if j != "1" else "", _met(t.get("sweep_speedup_2")) if j == "2" else "",
+            )  # fmt: skip
+    if "sweeps" in report:
+        sw = report["sweeps"]
+        lines.append(
+            f"sweeps: {sw['combinations']} (mu, mg) combinations ({sw['distinct_combinations']} distinct) x "
+            f"{sw['num_states']} states; lift build {sw['lift_build_s']:.2f} s; empty 2-worker pool start-up "
+            f"{sw['pool_startup_s'].get('2', float('nan')):.2f} s; runs "
+            + "; ".join(
+                f"{j} proc: " + ", ".join(f"{x:.2f}" for x in r["runs_s"]) for j, r in sw["per_jobs"].items()
+            )
+            + " s"
+        )
+    if "scaling" in report:
+        sc = report["scaling"]
+        lines += ["", f"{'fingers':>7} {'joints':>6} {'LPs':>4} {'P2/state':>10} {'P1 (cone)':>10} {'P1 verts':>8} "
+                  f"{'traced P2':>10} {'traced P1':>10} {'maxrss':>8}"]  # fmt: skip
+        for f, r in sc["per_fingers"].items():
+            m = r["memory_mib"]
+            tp1 = "-" if m["tracemalloc_peak_p1"] is None else f"{m['tracemalloc_peak_p1']:.1f} MiB"
+            lines.append(
+                f"{f:>7} {r['joints']:>6} {r['num_lps']:>4} {_ms(r['p2']['median_s']):>10} {_ms(r['p1']['median_s']):>10} "
+                f"{'-' if r['p1_vertices'] is None else r['p1_vertices']:>8} {m['tracemalloc_peak_p2']:>6.2f} MiB "
+                f"{tp1:>10} {m['ru_maxrss']:>4.0f} MiB"
+            )
+        lines.append(
+            "ratios (time): "
+            + "; ".join(
+                f"{k} fingers: P2 x{r['p2_time']:.2f}, P1 x{r['p1_time']:.2f}"
+                for k, r in sc["ratios"].items()
+            )
+            + f" -> P2 at most linear in every doubling: {'yes' if sc['p2_at_most_linear'] else 'NO'}"
+            + (
+                ""
+                if sc["p2_loglog_exponent"] is None
+                else f" (log-log exponent over the sizes: {sc['p2_loglog_exponent']:.2f})"
+            )
+        )
+        lines.append(f"scaling hands: {sc['hand']}")
+    m = report["machine"]
+    lines += [
+        "",
+        "medians over repeats; P2 = tvmmp(state, witnesses=False) (HiGHS, eliminated box), baseline = cvxpy",
+        "rebuilt per pair; P1 = tvms(state) by support LPs, baseline = cdd vertex enumeration (child process,",
+        f"capped at {report['settings']['cdd_time_limit_s']:.0f} s); Case 2 Problem 1: median of 3 after a warm-up. The 2-process sweep times include",
+        "the pool's start-up (forkserver, worker imports, each worker building the lift).",
+        *notes,
+        f"machine: {m['cpu']}, {m['logical_cpus']} logical CPUs ({m['usable_cpus']} usable), {m['platform']}, "
+        f"Python {m['python']}, " + ", ".join(f"{k} {v}" for k, v in m["packages"].items()),
+        f"total wall time of the run: {report['total_wall_s']:.0f} s",
+    ]
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ command line
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``scripts/bench.py`` and ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
+    from ..cli import folder, integer, number, removed_option, stem
+
+    parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
+    parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
+                        help="timed calls per Problem 2 state")  # fmt: skip
+    parser.add_argument("--baseline-repeats", type=integer(1), default=10, metavar="N",
+                        help="timed cvxpy calls per state")  # fmt: skip
+    parser.add_argument("--time-limit", type=number(0.0, strict=True), default=120.0, metavar="S",
+                        help="cap of each cdd baseline run (s)")  # fmt: skip
+    parser.add_argument("--out", type=folder, default="results", metavar="DIR",
+                        help="output folder of NAME.json (the report) and NAME.md (the table)")  # fmt: skip
+    parser.add_argument("--name", type=stem, default="bench", help="file stem of the outputs in --out")
+    removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
+    parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
+                        help="text file whose lines are appended to the table's notes")  # fmt: skip
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _steps(quick: bool) -> int:
+    """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
+    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
+
+
+def run_from_args(args: argparse.Namespace, *, emit: Callable[[str], None] = print) -> int:
+    """Run the suite with parsed options, print the table, write NAME.json and NAME.md atomically.
+
+    The output folder is checked and locked before the run (which takes minutes).
+
+    Raises
+    ------
+    OutputError
+        ``--out`` cannot be written or another run holds its lock.
+    StateError
+        The ``--notes`` file cannot be read.
+    """
+    from tqdm import tqdm
+
+    from ..core.files import check_output_dir, output_lock, write_files
+    from ..errors import StateError
+
+    outdir = check_output_dir(args.out)
+    try:
+        extra = args.notes.read_text(encoding="utf-8").rstrip().splitlines() if args.notes else []
+    except (OSError, UnicodeDecodeError) as e:
+        raise StateError("--notes", f"cannot read {args.notes} ({e})") from e
+    with output_lock(outdir):
+        bar = tqdm(total=_steps(args.quick), desc="bench", unit="step", disable=args.quiet)
+
+        started: list[str] = []
+
+        def step(text: str) -> None:  # a step's name is announced at its start: count the previous one
+            if started:
+                bar.update()
+            started.append(text)
+            bar.set_description_str(f"bench: {text}")
+
+        try:
+            report = run_suite(quick=args.quick, repeats=args.repeats, baseline_repeats=args.baseline_repeats,
+                               time_limit=args.time_limit, progress=step)  # fmt: skip
+            bar.update(bar.total - bar.n)
+        finally:
+            bar.close()
+        notes = auto_notes(report) + extra
+        table = format_suite_table(report, notes)
+        report["notes"] = notes
+        out_json, out_md = outdir / f"{args.name}.json", outdir / f"{args.name}.md"
+        write_files({out_json: json.dumps(report, indent=1) + "\n", out_md: "```\n" + table + "\n```\n"})
+    emit(table)
+    emit(f"wrote {out_json} and {out_md}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python scripts/bench.py`` (see the module docstring)."""
+    from ..cli import main as cli_main
+
+    return cli_main(["bench", *(sys.argv[1:] if argv is None else argv)])

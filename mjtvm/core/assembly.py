@@ -1,0 +1,328 @@
+r"""Sparse assembly of the TVM constraint system, shared by Problems 1 and 2.
+
+One :class:`Assembly` holds, for one grasp state, every linear constraint of eq. (26)
+(eq. 34 with S-points) except the object twist, whose coefficients are kept apart in
+``A_twist`` so that Problem 2 can collapse the twist into ``alpha * r_l`` (eq. 31) and
+Problem 1 can keep it as D free variables. The rows are
+
+* statics, per REFS copy i (eq. 19-20, 25):
+  ``G E lam_i = -w_i`` (D rows) and ``tau_i - J^T E lam_i = g_f`` (M rows), where
+  the columns of ``E`` are the force generators of :func:`~mjtvm.core.contacts.force_generators`
+  and ``lam_i >= 0`` (eq. 24; D-points carry no force);
+* kinematics (eq. 11-13): ``H (J qd - G^T rdot) [+ rho T s] = 0`` for F (d rows), L and
+  S normal (1 row), S tangential (d - 1 rows); ``<= 0`` for D (eq. 12);
+* operation ranges (eq. 2-3): either the exact reduction
+  ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`), or
+  the paper's literal box with four variables per joint.
+
+Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, tau_max, tau_min,
+qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import pairwise
+from typing import Literal
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from .contacts import force_generators, slide_unit, tangent_basis
+from .solvers import DROP_REL
+from .state import GraspState
+
+__all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
+
+BoxForm = Literal["eliminated", "literal"]
+
+
+def grasp_map_transpose(
+    position: NDArray[np.float64], object_position: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    r"""``(d, D)`` :math:`G_{ij}^T`: velocity of the object point at ``position`` (eq. 6).
+
+    In space :math:`G^T = [I, -[r\times]]` with :math:`r = p_C - p_O`, so
+    :math:`G^T \dot r = v + \omega \times r`; in the plane
+    :math:`G^T \dot r = [v_x - \omega r_y, v_y + \omega r_x]`.
+    """
+    r = np.asarray(position, dtype=float) - np.asarray(object_position, dtype=float)
+    if r.shape[0] == 2:
+        return np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
+    skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    return np.hstack([np.eye(3), -skew])
+
+
+def _product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a @ b`` with the round-off of exact cancellations set to 0: an entry at most
+    :data:`~mjtvm.core.solvers.DROP_REL` times the sum of the magnitudes of its terms
+    (``|a| @ |b|``), e.g. ``n . (r x n)``. Relative to the terms, so a state written in
+    any unit system keeps every genuine coefficient, however small."""
+    out = a @ b
+    out[np.abs(out) <= DROP_REL * (np.abs(a) @ np.abs(b))] = 0.0
+    return out
+
+
+class _Coo:
+    """Accumulates (row, col, value) triplets block by block."""
+
+    def __init__(self) -> None:
+        self.rows: list[NDArray[np.int64]] = []
+        self.cols: list[NDArray[np.int64]] = []
+        self.vals: list[NDArray[np.float64]] = []
+
+    def add(self, row0: int, col0: int, block: NDArray[np.float64]) -> None:
+        block = np.atleast_2d(block)
+        # Only exact zeros are left out: which tiny entries are round-off depends on the
+        # scale of their row and column, decided after equilibration (solvers.scale_lp).
+        r, c = np.nonzero(block)
+        self.rows.append(r + row0)
+        self.cols.append(c + col0)
+        self.vals.append(block[r, c])
+
+    def add_entries(
+        self, rows: NDArray[np.int64], cols: NDArray[np.int64], values: NDArray[np.float64]
+    ) -> None:
+        keep = values != 0.0
+        self.rows.append(rows[keep])
+        self.cols.append(cols[keep])
+        self.vals.append(values[keep])
+
+    def build(self, shape: tuple[int, int]) -> sp.csc_matrix:
+        if not self.rows:
+            return sp.csc_matrix(shape)
+        return sp.csc_matrix(
+            (np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))), shape=shape
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Assembly:
+    r"""The constraint system ``row_lower <= A x + A_twist rdot <= row_upper`` of one state.
+
+    Attributes
+    ----------
+    A
+        ``(m, n)`` CSC matrix over the variables listed in the module docstring.
+    A_twist
+        ``(m, D)`` CSC matrix: the coefficients of the object twist ``rdot``.
+    row_lower, row_upper
+        ``(m,)`` row bounds; the statics rows of copy i hold ``-w`` once
+        :meth:`statics_bounds` is applied.
+    col_lower, col_upper
+        ``(n,)`` variable bounds.
+    blocks
+        Name -> ``slice`` of variables: ``lam[i]``, ``tau[i]`` per copy, ``qd``, ``rho``
+        and, in the literal form, ``tau_max``, ``tau_min``, ``qd_max``, ``qd_min``.
+    wrench_rows
+        One ``slice`` of D rows per copy: the force-moment balance (eq. 20).
+    generators
+        Per contact, its ``(d, g)`` force generators (``E`` restricted to it).
+    generator_slices
+        Per contact, the slice of its generators inside ``lam[i]``.
+    kinematic_rows
+        The rows whose ``A_twist`` coefficients are non-zero (eq. 11-13).
+    """
+
+    A: sp.csc_matrix
+    A_twist: sp.csc_matrix
+    row_lower: NDArray[np.float64]
+    row_upper: NDArray[np.float64]
+    col_lower: NDArray[np.float64]
+    col_upper: NDArray[np.float64]
+    blocks: dict[str, slice]
+    wrench_rows: tuple[slice, ...]
+    generators: tuple[NDArray[np.float64], ...]
+    generator_slices: tuple[slice, ...]
+    kinematic_rows: NDArray[np.int64]
+    copies: int
+    box: BoxForm
+
+    @property
+    def num_variables(self) -> int:
+        """n, the number of variables before the twist."""
+        return int(self.A.shape[1])
+
+    def statics_bounds(
+        self, wrenches: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Row bounds with ``-wrenches[i]`` on the balance rows of copy i (eq. 20)."""
+        lower, upper = self.row_lower.copy(), self.row_upper.copy()
+        for rows, w in zip(self.wrench_rows, np.atleast_2d(wrenches)):
+            lower[rows] = -w
+            upper[rows] = -w
+        return lower, upper
+
+    def forces(self, x: NDArray[np.float64], copy: int = 0) -> NDArray[np.float64]:
+        """``(L, d)`` contact forces on the object, from a solution vector ``x``."""
+        lam = x[self.blocks[f"lam[{copy}]"]]
+        return np.array([g @ lam[s] for g, s in zip(self.generators, self.generator_slices)])
+
+
+def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated") -> Assembly:
+    r"""Build the sparse constraint system of ``state`` (see the module docstring).
+
+    Parameters
+    ----------
+    state
+        The grasp state.
+    copies
+        Number of statics copies (one per REFS vertex balanced at once): 1 for
+        Problem 2 (eq. 31), K for Problem 1 (eq. 26).
+    box
+        ``"eliminated"`` (exact reduction, default) or ``"literal"`` (eq. 2's box).
+
+    Returns
+    -------
+    Assembly
+    """
+    if box not in ("eliminated", "literal"):
+        raise ValueError(f"box: expected 'eliminated' or 'literal', got {box!r}")
+    d, big_d, m = state.dim, state.twist_dim, state.num_joints
+    contacts = state.contacts
+    gens = tuple(force_generators(c, state.friction_edges) for c in contacts)
+    offsets = np.cumsum([0] + [g.shape[1] for g in gens])
+    gen_slices = tuple(slice(int(a), int(b)) for a, b in pairwise(offsets))
+    n_gen = int(offsets[-1])
+    s_contacts = [i for i, c in enumerate(contacts) if c.type == "S"]
+    n_rho = (1 if s_contacts else 0) if state.slip == "shared" else len(s_contacts)
+
+    # ---- variable layout
+    blocks: dict[str, slice] = {}
+    col = 0
+
+    def take(name: str, size: int) -> slice:
+        nonlocal col
+        blocks[name] = slice(col, col + size)
+        col += size
+        return blocks[name]
+
+    for i in range(copies):
+        take(f"lam[{i}]", n_gen)
+        take(f"tau[{i}]", m)
+    take("qd", m)
+    take("rho", n_rho)
+    if box == "literal":
+        for name in ("tau_max", "tau_min", "qd_max", "qd_min"):
+            take(name, m)
+    n = col
+    col_lower = np.full(n, -np.inf)
+    col_upper = np.full(n, np.inf)
+    for i in range(copies):
+        col_lower[blocks[f"lam[{i}]"]] = 0.0  # eq. 24 (generator form), eq. 22
+    col_lower[blocks["rho"]] = 0.0  # slip speeds rho >= 0 (eq. 13, 34)
+    if box == "literal":  # appendix A: tau_max, qd_max >= 0 >= tau_min, qd_min
+        col_lower[blocks["tau_max"]] = 0.0
+        col_lower[blocks["qd_max"]] = 0.0
+        col_upper[blocks["tau_min"]] = 0.0
+        col_upper[blocks["qd_min"]] = 0.0
+
+    coo, coo_twist = _Coo(), _Coo()
+    lower: list[NDArray[np.float64]] = []
+    upper: list[NDArray[np.float64]] = []
+    row = 0
+
+    def rows(lo: NDArray[np.float64] | float, hi: NDArray[np.float64] | float, count: int) -> int:
+        nonlocal row
+        bounds = np.empty((2, count))
+        bounds[0], bounds[1] = lo, hi
+        lower.append(bounds[0])
+        upper.append(bounds[1])
+        start = row
+        row += count
+        return start
+
+    # ---- statics, per copy (eq. 19-20 with f = E lam)
+    gt = [grasp_map_transpose(c.position, state.object_position) for c in contacts]
+    wrench_map = (
+        np.hstack([_product(gt[i].T, gens[i]) for i in range(len(contacts))])
+        if contacts
+        else np.zeros((big_d, 0))
+    )
+    torque_map = (
+        np.hstack([_product(c.jacobian.T, g) for c, g in zip(contacts, gens)])
+        if contacts
+        else np.zeros((m, 0))
+    )
+    wrench_rows = []
+    for i in range(copies):
+        r0 = rows(0.0, 0.0, big_d)  # G E lam = -w, bounds set by statics_bounds()
+        wrench_rows.append(slice(r0, r0 + big_d))
+        coo.add(r0, blocks[f"lam[{i}]"].start, wrench_map)
+        r0 = rows(state.gravity_torque, state.gravity_torque, m)  # tau - J^T E lam = g_f
+        coo.add(r0, blocks[f"tau[{i}]"].start, np.eye(m))
+        coo.add(r0, blocks[f"lam[{i}]"].start, -torque_map)
+
+    # ---- kinematics (eq. 7-13): H (J qd - G^T rdot) [+ rho T s] (=, <=) 0
+    kin_start = row
+    qd0, rho0 = blocks["qd"].start, blocks["rho"].start
+    for ci, c in enumerate(contacts):
+        if c.type == "F":
+            sel = np.eye(d)
+        else:
+            sel = c.normal.reshape(1, -1)
+        r0 = rows(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0])
+        coo.add(r0, qd0, _product(sel, c.jacobian))
+        coo_twist.add(r0, 0, -_product(sel, gt[ci]))
+        if c.type == "S":  # tangential: T (J qd - G^T rdot) = -rho T s (eq. 13)
+            tb = tangent_basis(c.normal)
+            r0 = rows(0.0, 0.0, d - 1)
+            coo.add(r0, qd0, _product(tb, c.jacobian))
+            coo_twist.add(r0, 0, -_product(tb, gt[ci]))
+            k = s_contacts.index(ci)
+            if state.slip == "shared":  # one rho; the slide vectors' lengths set the ratios
+                s = c.slide_direction - (c.slide_direction @ c.normal) * c.normal  # type: ignore[operator]
+                coo.add(r0, rho0, (tb @ s).reshape(-1, 1))
+            else:
+                coo.add(r0, rho0 + k, (tb @ slide_unit(c)).reshape(-1, 1))
+    kinematic_rows = np.arange(kin_start, row)
+
+    # ---- operation ranges (eq. 2-3)
+    if box == "eliminated":
+        # Row h of joint j: c_tau tau_ij + c_qd qd_j <= b; all joints at once.
+        hps = [op.mirrored_halfplanes for op in state.operation_ranges]
+        joint_of_row = np.repeat(np.arange(m), [len(hp) for hp in hps])
+        hp_all = np.vstack(hps)
+        for i in range(copies):
+            r0 = rows(-np.inf, hp_all[:, 2], len(hp_all))
+            row_idx = r0 + np.arange(len(hp_all))
+            coo.add_entries(row_idx, blocks[f"tau[{i}]"].start + joint_of_row, hp_all[:, 0])
+            coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
+    else:  # the paper's literal box (eq. 2): four variables per joint
+        for j, op in enumerate(state.operation_ranges):
+            tmax, tmin = blocks["tau_max"].start + j, blocks["tau_min"].start + j
+            qmax, qmin = blocks["qd_max"].start + j, blocks["qd_min"].start + j
+            for i in range(copies):  # tau_min <= tau_i <= tau_max
+                tau = blocks[f"tau[{i}]"].start + j
+                r0 = rows(-np.inf, 0.0, 2)
+                coo.add(r0, tau, np.array([[1.0], [-1.0]]))
+                coo.add(r0, tmax, np.array([[-1.0], [0.0]]))
+                coo.add(r0, tmin, np.array([[0.0], [1.0]]))
+            r0 = rows(-np.inf, 0.0, 2)  # qd_min <= qd <= qd_max
+            coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
+            coo.add(r0, qmax, np.array([[-1.0], [0.0]]))
+            coo.add(r0, qmin, np.array([[0.0], [1.0]]))
+            for a_t, a_q, b in op.halfplanes:  # the four corners in their mirrored copies
+                for t_col, st in ((tmax, 1.0), (tmin, -1.0)):
+                    for q_col, sq in ((qmax, 1.0), (qmin, -1.0)):
+                        r0 = rows(-np.inf, b, 1)
+                        coo.add(r0, t_col, np.array([[st * a_t]]))
+                        coo.add(r0, q_col, np.array([[sq * a_q]]))
+
+    shape = (row, n)
+    return Assembly(
+        A=coo.build(shape),
+        A_twist=coo_twist.build((row, big_d)),
+        row_lower=np.concatenate(lower),
+        row_upper=np.concatenate(upper),
+        col_lower=col_lower,
+        col_upper=col_upper,
+        blocks=blocks,
+        wrench_rows=tuple(wrench_rows),
+        generators=gens,
+        generator_slices=gen_slices,
+        kinematic_rows=kinematic_rows,
+        copies=copies,
+        box=box,
+    )

@@ -1,0 +1,337 @@
+r"""Operation ranges: the joint torque-velocity pair set (TVS) of one joint, eq. (1)-(3).
+
+An operation range is a convex polygon :math:`P` in the quadrant of absolute joint
+torque and absolute joint speed, :math:`(|\tau|, |\dot q|)` in (N m, rad/s), with a
+vertex at the origin and one on each axis (paper, eq. 1). mjtvm additionally
+requires :math:`P` to be *down-closed* (if :math:`(a, b) \in P` then every
+:math:`(a', b')` with :math:`0 \le a' \le a`, :math:`0 \le b' \le b` is too), which
+holds for every motor operation range: only then is the box of eq. (2) exactly the
+operation range (see :func:`mirrored_halfplanes`).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import cached_property
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import StateError
+from .bounds import MAX_RANGE_VERTICES, float_array
+
+__all__ = ["OperationRange", "default_operation_range", "load_motor_data"]
+
+_RPM = 2.0 * np.pi / 60.0  # rad/s per rpm
+_TOL = 1e-9  # tolerance of the geometric checks, relative to each axis's largest value
+
+
+def _cross(o: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+
+@dataclass(frozen=True, eq=False)
+class OperationRange:
+    r"""A validated operation range :math:`P` of one joint (paper, eq. 1).
+
+    Parameters
+    ----------
+    vertices
+        ``(n, 2)`` polygon vertices ``[|tau| (N m), |qdot| (rad/s)]`` in boundary order
+        (either orientation). Must be finite, non-negative, convex, contain the origin
+        as a vertex, have a vertex on each axis and be down-closed: the largest torque
+        is reached at zero speed and the largest speed at zero torque.
+
+    Raises
+    ------
+    StateError
+        Naming the problem (field ``""``; callers prefix the field path).
+    """
+
+    vertices: NDArray[np.float64]
+    _halfplanes: NDArray[np.float64] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        v = float_array(
+            self.vertices, "", ndim=2, max_len=MAX_RANGE_VERTICES, what="a list of [torque, speed] pairs"
+        )
+        if v.shape[1:] != (2,) or v.shape[0] < 3:
+            raise StateError(
+                "",
+                f"expected at least 3 and at most {MAX_RANGE_VERTICES} [torque, speed] pairs, got shape {v.shape}",
+                self.vertices,
+            )
+        if np.any(v < 0.0):
+            raise StateError(
+                "",
+                "vertices must lie in the quadrant of absolute torque and absolute speed "
+                "(no negative coordinate)",
+                v.tolist(),
+            )
+        t_max, s_max = v.max(axis=0)
+        if t_max <= 0.0 or s_max <= 0.0:
+            raise StateError(
+                "", "needs a vertex with positive torque and one with positive speed", v.tolist()
+            )
+        # Torque and speed have unrelated units (1.5 N m beside 1.5e9 rad/s is a valid
+        # range), so every geometric check runs on u = v / (max torque, max speed), where
+        # both axes span [0, 1] and one absolute tolerance is scale-invariant per axis.
+        u = v / np.array([t_max, s_max])
+        if not np.any(np.all(u <= _TOL, axis=1)):
+            raise StateError("", "the origin [0, 0] must be a vertex", v.tolist())
+        self._check_convex(u, v)
+        # Down-closed (given convexity and the origin): the largest torque is reached at
+        # zero speed and the largest speed at zero torque; see the class docstring.
+        if not np.any((u[:, 0] >= 1.0 - _TOL) & (u[:, 1] <= _TOL)):
+            raise StateError(
+                "",
+                f"not down-closed: the largest torque {t_max:g} must be reached at zero speed "
+                "(expected a vertex [max torque, 0] on the torque axis)",
+                v.tolist(),
+            )
+        if not np.any((u[:, 1] >= 1.0 - _TOL) & (u[:, 0] <= _TOL)):
+            raise StateError(
+                "",
+                f"not down-closed: the largest speed {s_max:g} must be reached at zero torque "
+                "(expected a vertex [0, max speed] on the speed axis)",
+                v.tolist(),
+            )
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "_halfplanes", self._compute_halfplanes(u, np.array([t_max, s_max])))
+
+    @staticmethod
+    def _check_convex(u: NDArray[np.float64], v: NDArray[np.float64]) -> None:
+        # u: the vertices scaled into [0, 1]^2 (see __post_init__); v: as given, for messages.
+        n = len(u)
+        turns = np.array([_cross(u[i - 1], u[i], u[(i + 1) % n]) for i in range(n)])
+        if np.any(np.linalg.norm(u - np.roll(u, 1, axis=0), axis=1) <= _TOL):
+            raise StateError("", "repeated vertex", v.tolist())
+        if np.all(turns >= -_TOL) or np.all(turns <= _TOL):
+            # Same turn everywhere; rule out a polygon that winds twice around.
+            angles = np.arctan2(*(np.roll(u, -1, axis=0) - u).T[::-1])
+            total = np.sum(np.mod(np.diff(np.append(angles, angles[0])) + np.pi, 2 * np.pi) - np.pi)
+            if abs(abs(total) - 2 * np.pi) < 1e-6:
+                return
+        raise StateError(
+            "", "not convex: the vertices, in the order given, must bound a convex polygon", v.tolist()
+        )
+
+    @staticmethod
+    def _compute_halfplanes(u: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
+        # Outward edge normals of the scaled polygon u = v / scale; keep the edges that are
+        # not on an axis. For a down-closed polygon each such normal is non-negative
+        # (module docstring). A row a . u <= b is (a / scale) . v <= b in the given units,
+        # normalised so that [a_tau, a_qd] has unit length.
+        ccw = sum(_cross(u[0], u[i], u[i + 1]) for i in range(1, len(u) - 1)) > 0
+        rows = []
+        for i in range(len(u)):
+            a, b = u[i], u[(i + 1) % len(u)]
+            edge = b - a
+            normal = np.array([edge[1], -edge[0]]) if ccw else np.array([-edge[1], edge[0]])
+            length = float(np.linalg.norm(normal))
+            if length <= _TOL:
+                continue
+            normal /= length
+            offset = float(normal @ a)
+            if offset <= _TOL:  # an axis edge through the origin: x >= 0 or y >= 0
+                continue
+            # (normal / scale) . v <= offset, multiplied by min(scale) first so that a
+            # scale of 1e-300 cannot overflow the row before it is normalised.
+            c = float(scale.min())
+            given = normal * (c / scale)
+            size = float(np.linalg.norm(given))
+            rows.append([given[0] / size, given[1] / size, offset * (c / size)])
+        hp = np.array(rows, dtype=float)
+        hp[:, :2][np.abs(hp[:, :2]) < 1e-15] = 0.0
+        hp.setflags(write=False)
+        return hp
+
+    # ------------------------------------------------------------------ views
+    @property
+    def max_torque(self) -> float:
+        """Largest absolute torque (N m), reached at zero speed."""
+        return float(self.vertices[:, 0].max())
+
+    @property
+    def max_speed(self) -> float:
+        """Largest absolute speed (rad/s), reached at zero torque."""
+        return float(self.vertices[:, 1].max())
+
+    @property
+    def halfplanes(self) -> NDArray[np.float64]:
+        r"""``(h, 3)`` rows ``[a_tau, a_qd, b]``: :math:`P = \{x \ge 0 : a^T x \le b\}`.
+
+        Only the edges off the axes are listed (the axis edges are :math:`x \ge 0`);
+        every ``a`` is non-negative and every ``b`` positive because :math:`P` is
+        down-closed.
+        """
+        return self._halfplanes
+
+    @cached_property
+    def mirrored_halfplanes(self) -> NDArray[np.float64]:
+        r"""``(h', 3)`` rows ``[c_tau, c_qd, b]`` with :math:`(\tau, \dot q)` feasible iff
+        :math:`c_\tau \tau + c_{qd} \dot q \le b` for every row.
+
+        This is the exact elimination of the four box variables of eq. (2).
+
+        **Claim.** For a convex, down-closed :math:`P`, a signed pair
+        :math:`(\tau, \dot q)` admits a box
+        :math:`\tau_{min} \le \tau \le \tau_{max}`, :math:`\dot q_{min} \le \dot q \le
+        \dot q_{max}` whose four corners lie in the copies of :math:`P` mirrored into
+        their quadrants (eq. 2) if and only if :math:`(|\tau|, |\dot q|) \in P`, i.e. iff
+        :math:`s_1 a_\tau \tau + s_2 a_{qd} \dot q \le b` for every edge
+        :math:`a^T x \le b` of :math:`P` off the axes and every
+        :math:`s_1, s_2 \in \{-1, 1\}`.
+
+        **Proof.** (if) Take :math:`\tau_{max} = \max(\tau, 0)`,
+        :math:`\tau_{min} = \min(\tau, 0)` and likewise for :math:`\dot q`. Each corner's
+        absolute value is componentwise at most :math:`(|\tau|, |\dot q|) \in P`, so it
+        lies in :math:`P` by down-closure. (only if) The corner of the box in the
+        quadrant of :math:`(\tau, \dot q)` dominates :math:`(|\tau|, |\dot q|)`
+        componentwise and lies in :math:`P` (mirrored back); down-closure puts
+        :math:`(|\tau|, |\dot q|)` in :math:`P`. Finally, :math:`x \in \mathbb{R}^2_{\ge 0}`
+        lies in :math:`P` iff :math:`a^T x \le b` on its off-axis edges, and as every
+        :math:`a \ge 0`, :math:`a^T |x| \le b` is equivalent to the four sign
+        combinations, all linear. With several REFS vertices sharing one box
+        (eq. 26) the same argument gives :math:`(|\tau_i|, |\dot q|) \in P` for every
+        vertex i. QED.
+        """
+        rows: list[list[float]] = []
+        for a_t, a_q, b in self._halfplanes:
+            for s1 in (1.0, -1.0) if a_t != 0.0 else (1.0,):
+                for s2 in (1.0, -1.0) if a_q != 0.0 else (1.0,):
+                    rows.append([s1 * a_t, s2 * a_q, b])
+        out = np.array(rows, dtype=float)
+        out.setflags(write=False)
+        return out
+
+    def contains(self, torque: float, speed: float, *, tol: float = 1e-9) -> bool:
+        r"""Whether :math:`(|\tau|, |\dot q|)` lies in :math:`P` (with slack ``tol``)."""
+        x = np.array([abs(torque), abs(speed)])
+        return bool(np.all(self._halfplanes[:, :2] @ x <= self._halfplanes[:, 2] + tol))
+
+    def max_speed_at(self, torque: float) -> float:
+        r"""Largest :math:`|\dot q|` available at torque :math:`|\tau|` (rad/s); ``-inf``
+        when :math:`|\tau|` exceeds the maximum torque."""
+        t = abs(torque)
+        if t > self.max_torque * (1 + 1e-12):
+            return float("-inf")
+        best = self.max_speed
+        for a_t, a_q, b in self._halfplanes:
+            if a_q > 0.0:
+                best = min(best, (b - a_t * t) / a_q)
+        return float(best)
+
+    def scaled(self, *, torque: float = 1.0, speed: float = 1.0) -> OperationRange:
+        """A copy with torque and speed coordinates multiplied by positive factors."""
+        return OperationRange(self.vertices * np.array([torque, speed]))
+
+    def to_list(self) -> list[list[float]]:
+        """The vertices as a JSON-ready list."""
+        return [[float(a), float(b)] for a, b in self.vertices]
+
+    # ------------------------------------------------------------ constructors
+    @classmethod
+    def from_datasheet(
+        cls,
+        *,
+        no_load_speed_rpm: float,
+        nominal_speed_rpm: float,
+        nominal_torque_mNm: float,
+        max_permissible_speed_rpm: float,
+        gear_ratio: float = 1.0,
+        gear_efficiency: float = 1.0,
+    ) -> OperationRange:
+        r"""Continuous-operation range of a DC motor behind a gear, at the joint.
+
+        maxon's operating-range diagram: the region under the speed-torque line at
+        nominal voltage (through the no-load point and the nominal point), left of the
+        max continuous torque (the nominal torque, a thermal limit) and below the max
+        permissible speed. The joint sees torque x ``gear_ratio`` x ``gear_efficiency``
+        and speed / ``gear_ratio``.
+
+        Parameters
+        ----------
+        no_load_speed_rpm, nominal_speed_rpm
+            Motor speeds (rpm) at zero torque and at the nominal torque.
+        nominal_torque_mNm
+            Max continuous torque of the motor (mN m).
+        max_permissible_speed_rpm
+            Mechanical speed limit of the motor (rpm).
+        gear_ratio
+            Motor turns per joint turn (40 for the paper's 1/40 gear).
+        gear_efficiency
+            In (0, 1]; scales the torque coordinates only.
+
+        Returns
+        -------
+        OperationRange
+            Vertices in (N m, rad/s) at the joint.
+        """
+        figures = {
+            "no_load_speed_rpm": no_load_speed_rpm,
+            "nominal_speed_rpm": nominal_speed_rpm,
+            "nominal_torque_mNm": nominal_torque_mNm,
+            "max_permissible_speed_rpm": max_permissible_speed_rpm,
+            "gear_ratio": gear_ratio,
+        }
+        for name, value in figures.items():
+            if not (np.isfinite(value) and value > 0):
+                raise StateError(name, f"expected a positive finite number, got {value!r}", value)
+        if not (0.0 < gear_efficiency <= 1.0):
+            raise StateError("gear_efficiency", f"expected a number in (0, 1], got {gear_efficiency!r}")
+        if nominal_speed_rpm >= no_load_speed_rpm:
+            raise StateError(
+                "nominal_speed_rpm",
+                f"must be below the no-load speed {no_load_speed_rpm} rpm, got {nominal_speed_rpm}",
+            )
+        slope = (no_load_speed_rpm - nominal_speed_rpm) / nominal_torque_mNm  # rpm per mNm
+        torque = nominal_torque_mNm * 1e-3 * gear_ratio * gear_efficiency  # N m at the joint
+        to_joint = _RPM / gear_ratio
+        verts = [[0.0, 0.0], [torque, 0.0]]
+        if max_permissible_speed_rpm <= nominal_speed_rpm:
+            verts += [[torque, max_permissible_speed_rpm * to_joint]]
+            verts += [[0.0, max_permissible_speed_rpm * to_joint]]
+        else:
+            verts += [[torque, nominal_speed_rpm * to_joint]]
+            if max_permissible_speed_rpm < no_load_speed_rpm:
+                knee = (no_load_speed_rpm - max_permissible_speed_rpm) / slope  # mNm
+                scale = torque / nominal_torque_mNm
+                verts += [[knee * scale, max_permissible_speed_rpm * to_joint]]
+                verts += [[0.0, max_permissible_speed_rpm * to_joint]]
+            else:
+                verts += [[0.0, no_load_speed_rpm * to_joint]]
+        return cls(np.array(verts))
+
+
+def load_motor_data(name: str = "maxon_re25_20w") -> dict[str, Any]:
+    """The datasheet figures shipped in ``mjtvm/data/<name>.json`` (with their source)."""
+    text = resources.files("mjtvm.data").joinpath(f"{name}.json").read_text(encoding="utf-8")
+    data: dict[str, Any] = json.loads(text)
+    return data
+
+
+def default_operation_range(*, gear_efficiency: float | None = None) -> OperationRange:
+    r"""The paper's actuator: maxon RE25 20 W behind a 1/40 gear (Fig. 1).
+
+    With the shipped figures this is the polygon (0, 0), (1.052, 0), (1.052, 21.81),
+    (0, 25.03) in (N m, rad/s): the max permissible speed (14000 rpm) lies above the
+    no-load speed, so it does not cut the polygon.
+    """
+    m = load_motor_data()
+    return OperationRange.from_datasheet(
+        no_load_speed_rpm=m["no_load_speed_rpm"],
+        nominal_speed_rpm=m["nominal_speed_rpm"],
+        nominal_torque_mNm=m["nominal_torque_mNm"],
+        max_permissible_speed_rpm=m["max_permissible_speed_rpm"],
+        gear_ratio=m["gear_ratio"],
+        gear_efficiency=m["gear_efficiency"] if gear_efficiency is None else gear_efficiency,
+    )
+
+
+def as_operation_range(value: OperationRange | ArrayLike) -> OperationRange:
+    """Coerce vertices (or an existing range) to an :class:`OperationRange`."""
+    return value if isinstance(value, OperationRange) else OperationRange(np.asarray(value))

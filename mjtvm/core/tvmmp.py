@@ -1,0 +1,427 @@
+r"""Problem 2: the TVMMP and the distribution of achievable velocities (eq. 31-35).
+
+For each REFS vertex :math:`w_k` and each non-zero RVDS vertex :math:`\hat r_l`,
+
+.. math:: \alpha_{kl} = \max \alpha \ \text{s.t.}\ \dot r = \alpha \hat r_l \in S_1\ (S_2
+          \text{ with S-points}),
+
+and TVMMP :math:`= \min_{kl} \alpha_{kl}` (eq. 32, 35). The constraints are assembled
+once per state (:func:`~mjtvm.core.assembly.assemble`); the LPs of the state differ only in
+the column of ``alpha`` (``A_twist @ r_l``) and the right-hand side of the balance rows
+(``-w_k``), so one HiGHS instance is modified and re-solved from its last basis.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from ..errors import SolverError, StateError
+from .assembly import Assembly, BoxForm, assemble
+from .solvers import (
+    DROP_REL,
+    SOLVERS,
+    HighsSession,
+    LinearProgram,
+    Scaling,
+    Settled,
+    clarabel_checked,
+    column_factor,
+    cost_scale,
+    equilibrate,
+    fallback,
+)
+from .state import GraspState
+
+__all__ = ["PairStatus", "Timings", "TvmmpResult", "Witness", "tvmmp"]
+
+PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
+RESULT_SCHEMA = "mjtvm.result/1"
+ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
+
+
+def finite_floats(values: Any) -> Any:
+    """Nested lists of floats for JSON with every NaN or infinity as ``None`` (JSON has
+    neither; ``json.dumps(..., allow_nan=False)`` holds on every document), signed zeros as
+    0.0. An overflow (e.g. ``alpha * r`` for an RVDS entry near 1e308) becomes ``None``."""
+    a = np.asarray(values, dtype=float) + 0.0
+    if a.ndim == 0:
+        return float(a) if np.isfinite(a) else None
+    out = a.tolist()
+    return out if np.all(np.isfinite(a)) else _none_nan(out)
+
+
+def _none_nan(x: Any) -> Any:
+    if isinstance(x, list):
+        return [_none_nan(v) for v in x]
+    return x if math.isfinite(x) else None
+
+
+def finite_or_none(x: float | None) -> float | None:
+    """``x`` when finite, else ``None`` (JSON has no NaN or infinity)."""
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+@dataclass(frozen=True, eq=False)
+class Witness:
+    r"""A solution attaining :math:`\alpha_{kl}` (Supplement 1 scales it down to any speed).
+
+    Attributes
+    ----------
+    alpha
+        :math:`\alpha_{kl}`.
+    twist
+        ``(D,)`` object twist :math:`\alpha \hat r_l` = [v of p_O (m/s); omega (rad/s)].
+    forces
+        ``(L, d)`` contact forces on the object (N), world frame.
+    torques
+        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19).
+    speeds
+        ``(M,)`` joint speeds :math:`\dot q` (rad/s).
+    slip_speeds
+        Slip speeds :math:`\rho` of the S-points (m/s), one per S-point or one shared.
+    box
+        ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint.
+        With the eliminated form it is the smallest valid box
+        ``[min(tau, 0), max(tau, 0), min(qd, 0), max(qd, 0)]``.
+    """
+
+    alpha: float
+    twist: NDArray[np.float64]
+    forces: NDArray[np.float64]
+    torques: NDArray[np.float64]
+    speeds: NDArray[np.float64]
+    slip_speeds: NDArray[np.float64]
+    box: NDArray[np.float64]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {
+            "alpha": finite_or_none(self.alpha),
+            "twist": finite_floats(self.twist),
+            "forces": finite_floats(self.forces),
+            "torques": finite_floats(self.torques),
+            "speeds": finite_floats(self.speeds),
+            "slip_speeds": finite_floats(self.slip_speeds),
+            "box": finite_floats(self.box),
+        }
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall-clock seconds spent assembling and solving, and the number of LPs solved."""
+
+    assemble_s: float
+    solve_s: float
+    total_s: float
+    num_lps: int
+
+
+@dataclass(frozen=True, eq=False)
+class TvmmpResult:
+    r"""Result of Problem 2 for one state (the ``mjtvm.result/1`` document).
+
+    Attributes
+    ----------
+    alpha
+        ``(K, R)`` :math:`\alpha_{kl}`; NaN where the pair is not ``optimal``.
+    status
+        ``K`` tuples of ``R`` statuses: ``optimal``, ``infeasible``, ``unbounded`` or ``skipped``.
+    tvmmp
+        :math:`\min \alpha_{kl}` over the optimal pairs; ``None`` when a pair is
+        infeasible or no pair is optimal.
+    feasible
+        False when some REFS vertex cannot be balanced at all.
+    distribution
+        One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
+        ``None`` where no finite minimum exists; the origin is implied.
+    limiting
+        The (k, l) attaining the TVMMP, or ``None``.
+    witnesses
+        ``K`` tuples of ``R`` :class:`Witness` (``None`` where not optimal or not requested).
+    timings
+        :class:`Timings`.
+    solver, box
+        The backend asked for and the operation-range form used.
+    settled_by
+        ``K`` tuples of ``R``: the backend whose verdict each pair reports (``"highs"`` or
+        ``"clarabel"``; ``None`` where skipped). It differs from ``solver`` where HiGHS
+        could not settle an LP and Clarabel did, or where Clarabel's infeasible/unbounded
+        verdict was overruled by HiGHS and a feasibility re-solve.
+    notes
+        ``((k, l), message)`` for every LP on which a backend failed or the backends
+        disagreed (``l = -1``: the balance-only LP of a state without non-zero RVDS vertex).
+    """
+
+    alpha: NDArray[np.float64]
+    status: tuple[tuple[PairStatus, ...], ...]
+    tvmmp: float | None
+    feasible: bool
+    distribution: tuple[NDArray[np.float64] | None, ...]
+    limiting: tuple[int, int] | None
+    witnesses: tuple[tuple[Witness | None, ...], ...] = field(repr=False)
+    timings: Timings
+    solver: str
+    box: BoxForm
+    settled_by: tuple[tuple[str | None, ...], ...] = ()
+    notes: tuple[tuple[tuple[int, int], str], ...] = ()
+
+    def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
+        """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
+        out: dict[str, Any] = {
+            "schema": RESULT_SCHEMA,
+            "tvmmp": finite_or_none(self.tvmmp),
+            "feasible": self.feasible,
+            "alpha": [
+                [None if s != "optimal" else finite_or_none(a) for a, s in zip(ar, sr)]
+                for ar, sr in zip(self.alpha, self.status)
+            ],
+            "status": [list(s) for s in self.status],
+            "distribution": [None if v is None else finite_floats(v) for v in self.distribution],
+            "limiting": None if self.limiting is None else list(self.limiting),
+            "solver": self.solver,
+            "settled_by": [list(b) for b in self.settled_by],
+            "notes": [{"pair": list(p), "message": m} for p, m in self.notes],
+            "box": self.box,
+            "timings": {
+                "assemble_s": self.timings.assemble_s,
+                "solve_s": self.timings.solve_s,
+                "total_s": self.timings.total_s,
+                "num_lps": self.timings.num_lps,
+            },
+        }
+        if witnesses:
+            out["witnesses"] = [[None if w is None else w.to_dict() for w in row] for row in self.witnesses]
+        return out
+
+
+def _witness(
+    asm: Assembly, state: GraspState, x: NDArray[np.float64], alpha: float, r: NDArray[np.float64]
+) -> Witness:
+    tau = x[asm.blocks["tau[0]"]]
+    qd = x[asm.blocks["qd"]]
+    if asm.box == "literal":
+        box = np.column_stack([x[asm.blocks[n]] for n in ("tau_min", "tau_max", "qd_min", "qd_max")])
+    else:
+        box = np.column_stack([np.minimum(tau, 0), np.maximum(tau, 0), np.minimum(qd, 0), np.maximum(qd, 0)])
+    forces = asm.forces(x) if state.contacts else np.zeros((0, state.dim))
+    return Witness(alpha, alpha * r, forces, tau.copy(), qd.copy(), x[asm.blocks["rho"]].copy(), box)
+
+
+class _Problem2:
+    """The LPs of one state: variables of the assembly, then ``alpha`` (last column).
+
+    The equilibration (:func:`~mjtvm.core.solvers.equilibrate`) is computed once per state, on
+    ``[A | A_twist]`` with the largest REFS magnitudes as right-hand side; only the factor of
+    the alpha column is chosen per RVDS vertex (its entries are ``A_twist r_l``).
+    """
+
+    def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
+        self.state, self.solver = state, solver
+        self.asm = asm = assemble(state, copies=1, box=box)
+        n = asm.num_variables
+        self.alpha_col = n
+        self.c = np.zeros(n + 1)
+        self.c[n] = -1.0  # maximise alpha
+        self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
+        self.col_upper = np.append(asm.col_upper, np.inf)
+        self.kin = asm.kinematic_rows
+        self.twist_rows = asm.A_twist.tocsr()[self.kin].toarray()
+        self.abs_twist_rows = np.abs(self.twist_rows)
+        self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
+        lower, upper = asm.statics_bounds(np.max(np.abs(state.refs), axis=0))
+        rhs = np.fmax(
+            np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
+        )
+        s = equilibrate(asm.A, rhs=rhs)
+        self.row_scale, self.col_scale = s.row, s.col
+        # The twist columns are scaled after the rows, each so that its largest entry is 1:
+        # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
+        # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
+        # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
+        # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
+        tw = asm.A_twist.tocoo()
+        tw_max = np.zeros(tw.shape[1])
+        np.maximum.at(tw_max, tw.col, np.abs(tw.data * s.row[tw.row]))
+        self.twist_scale = np.where(
+            tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
+        )
+        self.session: HighsSession | None = None
+
+    def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without the
+        round-off of exact cancellations: entries at most DROP_REL times the sum of the
+        magnitudes they were computed from."""
+        col = self.twist_rows @ r
+        col[np.abs(col) <= DROP_REL * (self.abs_twist_rows @ np.abs(r))] = 0.0
+        return col
+
+    def zero_alpha(self, r: NDArray[np.float64]) -> float:
+        """The alpha below which the twist alpha r_l is within ZERO_ALPHA (the solver's
+        tolerance) of 0 in the equilibrated twist variables (the columns of ``A_twist``,
+        whose factors follow the units of the state): such an alpha is reported as 0, the
+        same in every unit system."""
+        big = float(np.max(np.abs(r) / self.twist_scale, initial=0.0))
+        return ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA
+
+    def lp(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
+    ) -> tuple[LinearProgram, Scaling]:
+        """The LP of pair (w, r) and its scaling (the alpha factor from its column)."""
+        kin_col = self.column(r)
+        col = np.zeros(self.asm.A.shape[0])
+        col[self.kin] = kin_col
+        lower, upper = self.asm.statics_bounds(w)
+        cu = self.col_upper.copy()
+        cu[-1] = alpha_max
+        lp = LinearProgram(
+            self.c,
+            sp.hstack([self.asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csc"),
+            lower,
+            upper,
+            self.col_lower,
+            cu,
+        )
+        factor = column_factor(self.row_scale[self.kin] * kin_col)
+        col_s = np.append(self.col_scale, factor)
+        return lp, Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
+
+    def solve(self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf) -> Settled:
+        """The settled LP of (w, r): HiGHS warm, Clarabel on failure; or Clarabel checked."""
+        if self.solver != "highs":
+            lp, s = self.lp(w, r, alpha_max=alpha_max)
+            return clarabel_checked(lp, scaling=s)
+        try:
+            if self.session is None:
+                lp, s = self.lp(w, r, alpha_max=alpha_max)
+                self.session = HighsSession(lp, scaling=s)
+            else:
+                ses = self.session
+                ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
+                ses.set_row_bounds(self.wrench_rows, -w, -w)
+                ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+            return Settled(self.session.solve(), "highs")
+        except SolverError as e:
+            self.session = None  # its basis may be what went wrong: the next LP starts afresh
+            lp, s = self.lp(w, r, alpha_max=alpha_max)
+            return fallback(lp, e, scaling=s)
+
+
+def tvmmp(
+    state: GraspState,
+    *,
+    solver: str = "highs",
+    box: BoxForm = "eliminated",
+    witnesses: bool = True,
+) -> TvmmpResult:
+    r"""Solve Problem 2 (eq. 31-35) for one grasp state.
+
+    Parameters
+    ----------
+    state
+        A grasp state with ``rvds`` (the RVDS vertices :math:`\hat r_l`).
+    solver
+        ``"highs"`` (default) or ``"clarabel"``.
+    box
+        ``"eliminated"`` (exact reduction of eq. 2, default) or ``"literal"``.
+    witnesses
+        Whether to keep the forces, torques, speeds and box of each optimal pair.
+
+    Returns
+    -------
+    TvmmpResult
+
+    Raises
+    ------
+    StateError
+        When the state has no RVDS.
+    SolverError
+        When a solver fails (the failing pair is named).
+    """
+    if state.rvds is None:
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
+    if solver not in SOLVERS:
+        raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+    t0 = time.perf_counter()
+    problem = _Problem2(state, box, solver)
+    t1 = time.perf_counter()
+    refs, rvds = state.refs, state.rvds
+    n_k, n_l = refs.shape[0], rvds.shape[0]
+    alpha = np.full((n_k, n_l), np.nan)
+    status: list[list[PairStatus]] = [["skipped"] * n_l for _ in range(n_k)]
+    wit: list[list[Witness | None]] = [[None] * n_l for _ in range(n_k)]
+    by: list[list[str | None]] = [[None] * n_l for _ in range(n_k)]
+    notes: list[tuple[tuple[int, int], str]] = []
+    nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]  # Supplement 3: skip the origin
+    feasible = True
+    num_lps = 0
+    for k in range(n_k):
+        # With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
+        # exactly when w_k cannot be balanced; then every l of this k is (no more LPs).
+        todo = nonzero if nonzero else [None]
+        for l in todo:
+            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+            pair = (k, -1 if l is None else l)
+            try:
+                settled = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
+            except SolverError as e:
+                raise SolverError(e.solver, e.status, pair) from e
+            sol = settled.solution
+            num_lps += 1
+            if settled.note is not None:
+                notes.append((pair, settled.note))
+            if sol.status == "infeasible":
+                feasible = False
+                for ll in nonzero:
+                    status[k][ll] = "infeasible"
+                    by[k][ll] = settled.solver
+                break
+            if l is None:
+                continue
+            status[k][l] = sol.status
+            by[k][l] = settled.solver
+            if sol.status == "optimal" and sol.x is not None:
+                a = float(sol.x[problem.alpha_col])
+                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
+                # there), so that the rounding to 0 does not depend on the unit system.
+                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
+                alpha[k, l] = a
+                if witnesses:
+                    wit[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+    t2 = time.perf_counter()
+
+    optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
+    limiting = None
+    value = None
+    if feasible and optimal:
+        limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
+        value = float(alpha[limiting])
+    distribution: list[NDArray[np.float64] | None] = []
+    for l in range(n_l):
+        col = [status[k][l] for k in range(n_k)]
+        if all(s == "skipped" for s in col):
+            distribution.append(np.zeros(state.twist_dim))
+        elif "infeasible" in col or "optimal" not in col:
+            distribution.append(None)
+        else:
+            distribution.append(np.nanmin(alpha[:, l]) * rvds[l])
+    return TvmmpResult(
+        alpha=alpha,
+        status=tuple(tuple(s) for s in status),
+        tvmmp=value,
+        feasible=feasible,
+        distribution=tuple(distribution),
+        limiting=limiting,
+        witnesses=tuple(tuple(w) for w in wit),
+        timings=Timings(t1 - t0, t2 - t1, t2 - t0, num_lps),
+        solver=solver,
+        box=box,
+        settled_by=tuple(tuple(b) for b in by),
+        notes=tuple(notes),
+    )

@@ -1,0 +1,458 @@
+r"""MuJoCo rollouts of TVMMP witnesses: is :math:`s\,\alpha_{kl}\hat r_l` physically achievable?
+
+A rollout drives the hand with MuJoCo's own ``<dcmotor>`` actuators (``input="vel ff"``:
+velocity setpoint in actuator-length units, i.e. joint speed x gear, plus a torque
+feedforward; drive voltage clamped at Vmax; motor torque clamped at the continuous torque),
+so the speed-torque line, the torque saturation and the rotor inertia are MuJoCo's motor
+physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
+
+1. *Model* (:func:`sim_model`): a copy of the lift's model with elliptic friction cones,
+   contact ``solref = (2 ms, 1)``, ``impratio = 10``, a 0.25 ms step; finger geoms take
+   priority in contact mixing: F- and S-geoms get friction ``mu`` (condim 3), L-geoms and the
+   base D-geom are frictionless (condim 1), other finger geoms keep ``mu``.
+2. *Drive* (:func:`witness_drive`): the witness of pair (k, l) at speed factor ``s``: joint
+   speeds :math:`s\,\dot q^*`, feedforward torques :math:`\tau^*` (eq. 19), object twist
+   :math:`s\alpha_{kl}\hat r_l`. The ``"central"`` witness (default) re-solves the
+   constraints of eq. (31) at :math:`\alpha = \min(s, 1)\alpha_{kl}` minimising
+   :math:`\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2` (least joint motion,
+   forces inside the pyramids); above 1 its speeds are scaled. ``"vertex"`` scales the
+   simplex witness of :func:`~mjtvm.core.tvmmp.tvmmp` (Supplement 1).
+3. *Settle* (``settle`` s): setpoints 0, feedforward :math:`\tau^*`, from the lift state's
+   ``qpos`` at rest: the fingers hold the object with the witness forces.
+4. *Start* (impulsive): joint and object velocities are set to the drive's (they satisfy
+   eq. 7-13), since accelerating the reflected rotor inertia (gear^2 x rotor) to TVMMP
+   speeds takes about 0.1 s and several cm of travel with the torque left over.
+5. *Run* (``startup + window`` s): with ``track`` the speed setpoints are corrected every
+   step by the least-norm change that keeps each finger's contact velocity consistent with
+   the drive's twist at the current configuration (eq. 7 rows for F, the normal row of eq. 8
+   for L, eq. 7 minus the witness slip for S), so that the kinematic drift of constant joint
+   speeds in a moving configuration is not mistaken for a motor limit.
+
+Failure (:class:`RolloutResult`), at any step of the window: the twist
+:math:`[v; R\omega]` (R the object radius) off :math:`s\alpha\hat r_l` by more than
+``speed_tol`` in magnitude or ``angle_tol`` degrees in direction; an F-point's accumulated
+tangential slip above ``slip_tol`` x the object's travel (+ ``slip_floor``); a finger geom
+more than ``lost_gap`` from the object; a motor torque at its saturation.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ModelError, StateError
+from .witness import Drive
+
+__all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "sim_model"]
+
+_F64 = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    r"""Simulation and pass/fail settings (module docstring; SI units, angles in degrees).
+
+    ``armature_scale`` scales the actuators' rotor inertia and ``inertial_ff`` adds the
+    computed inertial and Coriolis torques of the tracked setpoints to the feedforward:
+    both are ablations of the quasi-static assumption, off by default.
+    """
+
+    timestep: float = 2.5e-4
+    cone: Literal["elliptic", "pyramidal"] = "elliptic"
+    solref: tuple[float, float] = (0.002, 1.0)
+    solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
+    impratio: float = 10.0
+    settle: float = 0.03
+    startup: float = 0.002
+    window: float = 0.005
+    track: bool = True
+    inertial_ff: bool = False
+    armature_scale: float = 1.0
+    speed_tol: float = 0.10
+    angle_tol: float = 10.0
+    slip_tol: float = 0.05
+    slip_floor: float = 1e-5
+    lost_gap: float = 5e-4
+
+    def __post_init__(self) -> None:
+        for name in ("timestep", "settle", "startup", "window", "speed_tol", "angle_tol", "slip_tol",
+                     "slip_floor", "lost_gap", "impratio", "armature_scale"):  # fmt: skip
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0) or (name in ("timestep", "window") and value == 0):
+                raise StateError(f"SimSettings.{name}", f"expected a finite number >= 0, got {value!r}")
+        if self.cone not in ("elliptic", "pyramidal"):
+            raise StateError("SimSettings.cone", f"expected 'elliptic' or 'pyramidal', got {self.cone!r}")
+
+    def steps(self, seconds: float) -> int:
+        return round(seconds / self.timestep)
+
+
+def sim_model(
+    model: mujoco.MjModel,
+    contact_types: Mapping[str, str],
+    *,
+    mu: float,
+    mg: float | None = None,
+    object_body: str = "object",
+    settings: SimSettings | None = None,
+) -> mujoco.MjModel:
+    r"""A copy of ``model`` set up for rollouts (step 1 of the module docstring).
+
+    Parameters
+    ----------
+    contact_types
+        Geom name -> ``"F"``, ``"L"``, ``"S"`` or ``"D"`` (a state's contacts).
+    mu
+        Coulomb coefficient of the F- and S-geoms (and of finger geoms not listed).
+    mg
+        Object weight (N); the object's mass and inertia are scaled to it. Default: as is.
+    """
+    st = settings or SimSettings()
+    m = copy.deepcopy(model)
+    m.opt.timestep = st.timestep
+    m.opt.cone = int(
+        mujoco.mjtCone.mjCONE_ELLIPTIC if st.cone == "elliptic" else mujoco.mjtCone.mjCONE_PYRAMIDAL
+    )
+    m.opt.impratio = st.impratio
+    m.actuator_armature[:] *= st.armature_scale
+    ob = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, object_body)
+    if ob < 0:
+        raise ModelError(f"body {object_body!r}", "not in the model")
+    if mg is not None:
+        if not (math.isfinite(mg) and mg > 0):
+            raise StateError("mg", f"expected a positive weight (N), got {mg!r}")
+        scale = mg / (float(m.body_mass[ob]) * -float(m.opt.gravity[2]))
+        m.body_mass[ob] *= scale
+        m.body_inertia[ob] *= scale
+    for g in range(m.ngeom):
+        m.geom_solref[g] = st.solref
+        m.geom_solimp[g] = st.solimp
+        if int(m.geom_bodyid[g]) == ob:
+            continue
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
+        kind = contact_types.get(name, "D" if int(m.geom_bodyid[g]) == 0 else "F")
+        m.geom_priority[g] = 1  # the finger's (palm's) parameters decide the contact
+        m.geom_condim[g] = 3 if kind in ("F", "S") else 1
+        m.geom_friction[g] = (mu, 0.005, 0.0001)
+    return m
+
+
+# ------------------------------------------------------------------ witnesses
+@dataclass(frozen=True, eq=False)
+class RolloutResult:
+    r"""Outcome of one rollout (maxima over the window).
+
+    Attributes
+    ----------
+    passed, reason
+        Whether every criterion held; the first violation (``""`` when passed).
+    speed_error, angle_error
+        Largest :math:`|\,|\dot r|/|\dot r^*| - 1|` and direction error (deg) of [v; R omega].
+    slip_ratio
+        Largest F-point slip over the window divided by its tolerance (1 = at tolerance).
+    gap
+        Largest finger-object distance (m; negative = penetration throughout).
+    saturated
+        Joints whose motor reached its torque saturation.
+    clamp_fraction
+        Fraction of (step, joint) pairs with the drive voltage at Vmax (speed-torque line).
+    settle_drift
+        Object displacement during the settle phase (m).
+    friction
+        Per L/S geom: its mean tangential force on the object (N) and the mean slip of the
+        object's contact point relative to the finger's (m/s) over the window, world frame.
+    joints
+        The driven joints (the column order of the trace's ``qvel`` and ``torque``).
+    trace
+        Per-step arrays when requested (:func:`rerun_data`), else empty.
+    """
+
+    passed: bool
+    reason: str
+    speed_error: float
+    angle_error: float
+    slip_ratio: float
+    gap: float
+    saturated: tuple[str, ...]
+    clamp_fraction: float
+    settle_drift: float
+    friction: Mapping[str, tuple[_F64, _F64]]
+    joints: tuple[str, ...] = ()
+    trace: Mapping[str, _F64] = field(default_factory=dict, repr=False)
+
+
+class _Rig:
+    """Indices of one model and drive, reused by every step."""
+
+    def __init__(self, model: mujoco.MjModel, drive: Drive, object_body: str) -> None:
+        m = self.m = model
+        self.ob = model.body(object_body).id
+        self.og = next(g for g in range(m.ngeom) if int(m.geom_bodyid[g]) == self.ob)
+        self.radius = float(m.geom_size[self.og, 0])
+        self.fadr = int(m.jnt_dofadr[m.body_jntadr[self.ob]])
+        self.dofs = np.array([int(m.joint(j).dofadr[0]) for j in drive.joints])
+        self.acts = np.array([int(m.actuator(j).id) for j in drive.joints])
+        self.gear = m.actuator_gear[self.acts, 0].copy()
+        self.cadr = m.actuator_ctrladr[self.acts].copy()
+        self.fmax = m.actuator_forcerange[self.acts, 1].copy()
+        self.r_k, self.kd, self.vmax = (m.actuator_gainprm[self.acts, i].copy() for i in (0, 6, 7))
+        self.kt = m.actuator_gainprm[self.acts, 1].copy()
+        self.fingers = []
+        jbody = {j: int(m.jnt_bodyid[m.joint(j).id]) for j in drive.joints}
+        for geom, kind in drive.contacts:
+            g = m.geom(geom).id
+            chain: set[int] = set()
+            b = int(m.geom_bodyid[g])
+            while b > 0:
+                chain, b = chain | {b}, int(m.body_parentid[b])
+            cols = np.array([i for i, j in enumerate(drive.joints) if jbody[j] in chain], dtype=int)
+            self.fingers.append((geom, g, int(m.geom_bodyid[g]), cols, kind, float(m.geom_size[g, 0])))
+        self.jac = np.zeros((3, m.nv))
+        self.jac2 = np.zeros((3, m.nv))
+
+    def setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
+        """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5)."""
+        q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
+        for geom, g, body, cols, kind, rad in self.fingers:
+            tip = d.geom_xpos[g]
+            n = (c - tip) / np.linalg.norm(c - tip)
+            p = tip + rad * n
+            mujoco.mj_jac(self.m, d, self.jac, None, p, body)
+            jm = self.jac[:, self.dofs[cols]]
+            want = v + np.cross(w, p - c)
+            if kind == "L":
+                jn = n @ jm
+                q[cols] += jn * (n @ want - jn @ q[cols]) / max(float(jn @ jn), 1e-12)
+            else:
+                if kind == "S" and geom in drive.slips:
+                    rho, hat = drive.slips[geom]
+                    tang = hat - (hat @ n) * n
+                    want = want - rho * tang / max(float(np.linalg.norm(tang)), 1e-12)
+                q[cols] += np.linalg.lstsq(jm, want - jm @ q[cols], rcond=None)[0]
+        return q
+
+
+def _unit(x: _F64) -> _F64:
+    nrm = float(np.linalg.norm(x))
+    return x / nrm if nrm > 1e-12 else np.zeros_like(x)
+
+
+def rollout(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    drive: Drive,
+    *,
+    settings: SimSettings | None = None,
+    object_body: str = "object",
+    record: bool = False,
+) -> RolloutResult:
+    r"""Settle, start and run one drive from ``qpos`` (module docstring, steps 3-5).
+
+    ``model`` comes from :func:`sim_model`. ``record`` keeps per-step arrays (``trace``).
+    """
+    st = settings or SimSettings()
+    rig, m = _Rig(model, drive, object_body), model
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    d.ctrl[rig.cadr] = 0.0
+    d.ctrl[rig.cadr + 1] = drive.torques / rig.gear
+    mujoco.mj_forward(m, d)
+    p0 = d.xpos[rig.ob].copy()
+    if st.steps(st.settle):
+        mujoco.mj_step(m, d, nstep=st.steps(st.settle))
+    drift = float(np.linalg.norm(d.xpos[rig.ob] - p0))
+    fa, tw = rig.fadr, drive.twist
+    d.qvel[:] = 0.0
+    d.qvel[fa : fa + 3] = tw[:3]
+    d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ tw[3:]
+    d.qvel[rig.dofs] = rig.setpoints(d, drive) if st.track else drive.speeds
+    target = np.r_[tw[:3], rig.radius * tw[3:]]
+    tnorm = float(np.linalg.norm(target))
+    n0, n1 = st.steps(st.startup), st.steps(st.startup) + st.steps(st.window)
+    travel = tnorm * st.steps(st.window) * st.timestep
+    slip_tol = st.slip_tol * travel + st.slip_floor
+    slip = dict.fromkeys((f[0] for f in rig.fingers if f[4] == "F"), 0.0)
+    fsum = {f[0]: np.zeros(3) for f in rig.fingers if f[4] != "F"}
+    ssum = {f[0]: np.zeros(3) for f in rig.fingers if f[4] != "F"}
+    worst = {"speed": 0.0, "angle": 0.0, "gap": -np.inf}
+    saturated: set[str] = set()
+    clamped, reason, gap_geom = 0, "", ""
+    trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
+    fromto, f6, pred = np.zeros(6), np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
+    for step in range(n1):
+        qset = rig.setpoints(d, drive) if st.track else drive.speeds
+        ff = drive.torques.copy()
+        if st.inertial_ff and pred is not None:
+            ff += _inertial(m, d, pred, rig, drive, qset)
+        d.ctrl[rig.cadr] = qset * rig.gear
+        d.ctrl[rig.cadr + 1] = ff / rig.gear
+        mujoco.mj_step(m, d)
+        if step < n0:
+            continue
+        lvel = d.actuator_velocity[rig.acts]
+        tau_cmd = rig.kd * (qset * rig.gear - lvel) + ff / rig.gear
+        clamped += int(np.sum(np.abs(rig.r_k / rig.kt * tau_cmd + rig.kt * lvel) > rig.vmax * (1 + 1e-9)))
+        force = d.actuator_force[rig.acts]
+        for j in np.nonzero(np.abs(force) >= rig.fmax * (1 - 1e-9))[0]:
+            saturated.add(drive.joints[j])
+        v = d.qvel[fa : fa + 3]
+        om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
+        now = np.r_[v, rig.radius * om]
+        if tnorm > 0:
+            worst["speed"] = max(worst["speed"], abs(float(np.linalg.norm(now)) / tnorm - 1.0))
+            cosang = float(now @ target) / max(float(np.linalg.norm(now)) * tnorm, 1e-300)
+            worst["angle"] = max(worst["angle"], math.degrees(math.acos(max(-1.0, min(1.0, cosang)))))
+        else:
+            worst["speed"] = max(worst["speed"], float(np.linalg.norm(now)))
+        gaps = []
+        for geom, g, body, _cols, kind, _rad in rig.fingers:
+            dist = mujoco.mj_geomDistance(m, d, g, rig.og, 0.01, fromto)
+            gaps.append(dist)
+            p = 0.5 * (fromto[:3] + fromto[3:])
+            n = _unit(d.xpos[rig.ob] - p)
+            mujoco.mj_jac(m, d, rig.jac, None, p, rig.ob)
+            mujoco.mj_jac(m, d, rig.jac2, None, p, body)
+            rel = (rig.jac - rig.jac2) @ d.qvel  # object point relative to finger point
+            rel_t = rel - (rel @ n) * n
+            if kind == "F":
+                slip[geom] += float(np.linalg.norm(rel_t)) * st.timestep
+            else:
+                ssum[geom] += rel_t
+                fsum[geom] += _geom_force(m, d, g, rig.og, f6, n)
+        if max(gaps) > worst["gap"]:
+            worst["gap"], gap_geom = max(gaps), rig.fingers[int(np.argmax(gaps))][0]
+        if record:
+            for key, val in (("time", d.time), ("object_pos", d.xpos[rig.ob].copy()), ("twist", now.copy()),
+                             ("qvel", d.qvel[rig.dofs].copy()), ("torque", force * rig.gear), ("gap", gaps)):  # fmt: skip
+                trace[key].append(val)
+        if not reason:
+            reason = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom)
+            if reason:
+                reason = f"{reason} at t = {1e3 * (step + 1 - n0) * st.timestep:.2f} ms"
+    nwin = max(1, n1 - n0)
+    friction = {g: (fsum[g] / nwin, ssum[g] / nwin) for g in fsum}
+    return RolloutResult(
+        passed=not reason, reason=reason, speed_error=worst["speed"], angle_error=worst["angle"],
+        slip_ratio=max(slip.values(), default=0.0) / slip_tol, gap=float(worst["gap"]),
+        saturated=tuple(sorted(saturated)), clamp_fraction=clamped / max(1, (n1 - n0) * len(rig.acts)),
+        settle_drift=drift, friction=friction, joints=drive.joints,
+        trace={k: np.array(v, dtype=float) for k, v in trace.items()} if record else {},
+    )  # fmt: skip
+
+
+def _violation(st: SimSettings, worst: dict[str, float], slip: dict[str, float], slip_tol: float,
+               saturated: set[str], tnorm: float, gap_geom: str) -> str:  # fmt: skip
+    if tnorm > 0 and worst["speed"] > st.speed_tol:
+        return f"twist magnitude off by {100 * worst['speed']:.1f} %"
+    if tnorm == 0 and worst["speed"] > st.slip_floor / max(st.window, 1e-12):
+        return f"object moves at {worst['speed']:.3g} m/s"
+    if worst["angle"] > st.angle_tol:
+        return f"twist direction off by {worst['angle']:.1f} deg"
+    for geom, dist in slip.items():
+        if dist > slip_tol:
+            return f"{geom} slips {1e3 * dist:.3f} mm"
+    if worst["gap"] > st.lost_gap:
+        return f"contact lost ({gap_geom} {1e3 * worst['gap']:.2f} mm)"
+    if saturated:
+        return f"torque saturated ({', '.join(sorted(saturated))})"
+    return ""
+
+
+def _geom_force(m: mujoco.MjModel, d: mujoco.MjData, g: int, og: int, f6: _F64, n: _F64) -> _F64:
+    """Tangential force (world) of geom ``g`` on the object, summed over their active contacts."""
+    total = np.zeros(3)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        if c.exclude or {int(c.geom1), int(c.geom2)} != {g, og}:
+            continue
+        mujoco.mj_contactForce(m, d, i, f6)
+        f = c.frame.reshape(3, 3).T @ f6[:3]  # on geom2
+        total += f if int(c.geom2) == og else -f
+    return total - (total @ n) * n
+
+
+def _inertial(m: mujoco.MjModel, d: mujoco.MjData, pred: mujoco.MjData, rig: _Rig, drive: Drive,
+              qset: _F64) -> _F64:  # fmt: skip
+    """Computed torque of the tracked setpoints: M qdd (one-step prediction) + Coriolis (ablation)."""
+    pred.qpos[:] = d.qpos
+    mujoco.mj_integratePos(m, pred.qpos, d.qvel, m.opt.timestep)
+    mujoco.mj_kinematics(m, pred)
+    mujoco.mj_comPos(m, pred)
+    acc = np.zeros(m.nv)
+    acc[rig.dofs] = (rig.setpoints(pred, drive) - qset) / m.opt.timestep
+    out = np.zeros(m.nv)
+    mujoco.mj_mulM(m, d, out, acc)
+    return np.asarray((out + d.qfrc_bias - _gravity(m, pred, d.qpos))[rig.dofs], dtype=float)
+
+
+def _gravity(m: mujoco.MjModel, scratch: mujoco.MjData, qpos: _F64) -> _F64:
+    """Gravity part of ``qfrc_bias`` at ``qpos`` (RNE at zero velocity, on ``scratch``)."""
+    scratch.qpos[:] = qpos
+    scratch.qvel[:] = 0.0
+    mujoco.mj_kinematics(m, scratch)
+    mujoco.mj_comPos(m, scratch)
+    mujoco.mj_comVel(m, scratch)
+    out = np.zeros(m.nv)
+    mujoco.mj_rne(m, scratch, 0, out)
+    return out
+
+
+def inertial_demand(
+    model: mujoco.MjModel, qpos: _F64, drive: Drive, *, duration: float = 0.005, object_body: str = "object"
+) -> _F64:
+    r"""``(M,)`` largest joint torque (N m) that inertia and Coriolis forces add along the ideal motion.
+
+    The drive's motion (tracked setpoints, object at the drive's twist) is integrated
+    kinematically for ``duration``; the torque is :math:`M(q)\ddot q + c(q, \dot q)` on the
+    driven joints (rotor inertia included, object excluded): what the quasi-static TVMMP
+    (eq. 19) leaves out.
+    """
+    m, d, scratch = model, mujoco.MjData(model), mujoco.MjData(model)
+    rig = _Rig(m, drive, object_body)
+    d.qpos[:] = qpos
+    dt, fa, worst = m.opt.timestep, rig.fadr, np.zeros(len(drive.joints))
+    mujoco.mj_forward(m, d)
+    qset = rig.setpoints(d, drive)
+    for _ in range(max(2, round(duration / dt))):
+        d.qvel[:] = 0.0
+        d.qvel[rig.dofs] = qset
+        d.qvel[fa : fa + 3] = drive.twist[:3]
+        d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ drive.twist[3:]
+        mujoco.mj_forward(m, d)
+        grav = _gravity(m, scratch, d.qpos)
+        mujoco.mj_integratePos(m, d.qpos, d.qvel, dt)
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        nxt = rig.setpoints(d, drive)
+        acc, out = np.zeros(m.nv), np.zeros(m.nv)
+        acc[rig.dofs] = (nxt - qset) / dt
+        mujoco.mj_mulM(m, d, out, acc)
+        worst = np.maximum(worst, np.abs((out + d.qfrc_bias - grav)[rig.dofs]))
+        qset = nxt
+    return worst
+
+
+def rerun_data(result: RolloutResult, *, prefix: str = "rollout") -> dict[str, dict[str, _F64]]:
+    r"""Entity path -> named arrays to log (no rerun import here): a recorded rollout's trace.
+
+    ``time`` (s) is the timeline of every entity; ``object/position`` (N, 3) for
+    ``Points3D``/``LineStrips3D``; scalars per step for ``Scalars``.
+    """
+    tr = result.trace
+    if not tr:
+        raise StateError("trace", "the rollout was not recorded (record=True)")
+    t = tr["time"]
+    out = {f"{prefix}/object/position": {"time": t, "positions": tr["object_pos"]},
+           f"{prefix}/object/speed": {"time": t, "scalars": np.linalg.norm(tr["twist"], axis=1)},
+           f"{prefix}/contacts/max_gap": {"time": t, "scalars": np.max(tr["gap"], axis=1)}}  # fmt: skip
+    for j, name in enumerate(result.joints):
+        out[f"{prefix}/joints/{name}/speed"] = {"time": t, "scalars": tr["qvel"][:, j]}
+        out[f"{prefix}/joints/{name}/torque"] = {"time": t, "scalars": tr["torque"][:, j]}
+    return out

@@ -1,0 +1,141 @@
+r"""Witnesses to drive in a rollout: the motion and forces attaining alpha_kl (Supplement 1).
+
+The simplex witness of :func:`~mjtvm.core.tvmmp.tvmmp` sits at a vertex of the feasible set
+(redundant joints at their speed limits, friction on the pyramid's edges); a rollout drives a
+more central one: the same constraints (eq. 31, assembled by :func:`~mjtvm.core.assembly.assemble`)
+at a given alpha, with the least joint motion and the forces inside the pyramids.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import clarabel
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from ..core.assembly import assemble
+from ..core.state import GraspState
+from ..errors import SolverError, StateError
+
+__all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
+
+WitnessKind = Literal["central", "vertex"]
+_F64 = NDArray[np.float64]
+
+
+def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str, _F64]:
+    r"""The least-motion, force-centred solution of eq. (31) at a fixed ``alpha`` (Clarabel QP).
+
+    Minimises :math:`\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2` over the
+    constraints of :func:`~mjtvm.core.assembly.assemble` with :math:`\dot r = \alpha \hat r_l`;
+    returns ``speeds``, ``torques``, ``forces`` and ``slip_speeds``.
+
+    Raises
+    ------
+    SolverError
+        The QP is not solved (e.g. ``alpha`` above :math:`\alpha_{kl}`).
+    """
+    if state.rvds is None:
+        raise StateError("rvds", "the state has no RVDS")
+    asm = assemble(state)
+    w, r = state.refs[k], state.rvds[l]
+    n = asm.num_variables
+    a = sp.hstack([asm.A, sp.csc_matrix((asm.A_twist @ r).reshape(-1, 1))], format="csr")
+    lo, hi = asm.statics_bounds(w)
+    cl, cu = np.append(asm.col_lower, alpha), np.append(asm.col_upper, alpha)
+    eq = np.isfinite(lo) & (lo == hi)
+    up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
+    ceq = cl == cu
+    cup, cdn = np.isfinite(cu) & ~ceq, np.isfinite(cl) & ~ceq
+    eye = sp.identity(n + 1, format="csr")
+    big = sp.vstack([a[eq], eye[ceq], a[up], -a[dn], eye[cup], -eye[cdn]], format="csc")
+    b = np.concatenate([hi[eq], cu[ceq], hi[up], -lo[dn], cu[cup], -cl[cdn]])
+    weight = np.zeros(n + 1)
+    w0 = np.array([rng.max_speed for rng in state.operation_ranges])
+    weight[asm.blocks["qd"]] = 1.0 / w0**2
+    weight[asm.blocks["lam[0]"]] = 1.0 / max(float(np.linalg.norm(w)), 1e-3) ** 2
+    cones = [clarabel.ZeroConeT(int(eq.sum() + ceq.sum())),
+             clarabel.NonnegativeConeT(int(up.sum() + dn.sum() + cup.sum() + cdn.sum()))]  # fmt: skip
+    opts = clarabel.DefaultSettings()
+    opts.verbose = False
+    res = clarabel.DefaultSolver(sp.diags(2 * weight).tocsc(), np.zeros(n + 1), big, b, cones, opts).solve()
+    status = str(res.status).split(".")[-1]
+    if status not in ("Solved", "AlmostSolved"):
+        raise SolverError("clarabel", status, (k, l))
+    x = np.array(res.x)
+    return {"speeds": x[asm.blocks["qd"]], "torques": x[asm.blocks["tau[0]"]],
+            "forces": asm.forces(x), "slip_speeds": x[asm.blocks["rho"]]}  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class Drive:
+    r"""What one rollout commands: joint speeds and feedforward torques, the object twist.
+
+    Attributes
+    ----------
+    joints
+        The M driven joints (actuators of the same names).
+    speeds, torques
+        ``(M,)`` joint speed setpoints (rad/s) and feedforward torques (N m, joint side).
+    twist
+        ``(6,)`` the object twist to produce, [v of the object origin; omega] (m/s, rad/s).
+    contacts
+        ``(geom, type)`` of each finger contact (F, L, S); D-contacts are left out.
+    slips
+        S geom -> (slip speed rho (m/s), unit slide direction (3,)) of eq. (13).
+    """
+
+    joints: tuple[str, ...]
+    speeds: _F64
+    torques: _F64
+    twist: _F64
+    contacts: tuple[tuple[str, str], ...]
+    slips: Mapping[str, tuple[float, _F64]] = field(default_factory=dict)
+
+
+def witness_drive(
+    state: GraspState,
+    k: int,
+    l: int,
+    alpha: float,
+    s: float,
+    *,
+    witness: WitnessKind = "central",
+    vertex: Any = None,
+) -> Drive:
+    r"""The drive of pair (k, l) at speed factor ``s`` (module docstring, step 2).
+
+    ``vertex``: the :class:`~mjtvm.core.tvmmp.Witness` of the pair, required for ``"vertex"``.
+    """
+    if state.rvds is None:
+        raise StateError("rvds", "the state has no RVDS")
+    if witness == "central":
+        frac = min(s, 1.0)
+        sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7))
+        gain = s / frac if frac > 0 else 0.0
+        speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
+    elif witness == "vertex":
+        if vertex is None:
+            raise StateError("vertex", "the 'vertex' drive needs the pair's Witness")
+        speeds, torques, rho = vertex.speeds * s, vertex.torques, vertex.slip_speeds * s
+    else:
+        raise StateError("witness", f"expected 'central' or 'vertex', got {witness!r}")
+    contacts, slips, i_s = [], {}, 0
+    for c in state.contacts:
+        if c.type == "D":
+            continue
+        geom = c.name.split("#")[0]
+        contacts.append((geom, c.type))
+        if c.type == "S" and c.slide_direction is not None:
+            rate = float(rho[min(i_s, len(rho) - 1)]) if len(rho) else 0.0
+            slips[geom] = (rate, np.asarray(c.slide_direction, dtype=float))
+            i_s += 1
+    return Drive(state.joint_names, np.asarray(speeds, float), np.asarray(torques, float),
+                 s * alpha * np.asarray(state.rvds[l], float), tuple(contacts), slips)  # fmt: skip
+
+
+# ------------------------------------------------------------------- rollouts

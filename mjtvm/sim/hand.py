@@ -1,0 +1,420 @@
+r"""The paper's four-finger hand and its sphere as a MuJoCo model (MJCF), section 5, Fig. 4.
+
+:func:`hand_mjcf` writes the model; ``models/*.xml`` are its committed output
+(``scripts/make_models.py``). :func:`operation_range_from_actuator` reads a joint's
+operation range back from the compiled ``<dcmotor>``: the MJCF is the single source of truth.
+
+Geometry (world frame, m). Palm: the plane z = 0 (geom ``palm``). Finger i (``f1`` ... ``f4``)
+starts at ``FINGER_BASES[i]``, its base frame turned by ``FINGER_HEADINGS[i]`` about +z; at
+zero joint angles it lies straight on the palm along that frame's +x. Each link is a capsule
+along its body's +x; a fingertip sphere ``f<i>_tip`` ends the last link. Joint axes in the link
+frames: ``yaw`` +z, ``pitch`` -y (a positive pitch lifts the link: flexion), ``roll`` +x. Joints
+at one site apply in the order listed, so in ``("pitch", "yaw")`` the yaw axis turns with the
+pitch and stays perpendicular to link 2.
+
+Headings. Fingers 2-4 point to +x: in Case 1 finger 3's link 1 lies on the palm from x = 0.05
+to 0.15 and its contact [0.171 0 0.072] lies beyond, on the sphere's +x side, reached with the
+second pitch at atan2(0.072, 0.021) = 73.7 deg and every other joint at 0. Finger 1 opposes
+them (its contacts are on the sphere's -x side), so it is turned by 180 deg and points to -x.
+Flexion then turns every finger's palmar side (+z of the straight link) towards the object,
+and the paper's contacts need pitches up to about 180 deg and yaws within +-90 deg.
+
+Actuators: one ``<dcmotor>`` per joint, named like it (:class:`DCMotor`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import mujoco
+import numpy as np
+
+from ..core.operation_range import OperationRange, load_motor_data
+from ..errors import ModelError
+
+__all__ = [
+    "DEFAULT_FINGER_JOINTS",
+    "FINGER_BASES",
+    "FINGER_HEADINGS",
+    "GRAVITY",
+    "HUMANLIKE_FINGER_JOINTS",
+    "JOINT_AXES",
+    "JOINT_RANGES",
+    "DCMotor",
+    "finger_joint_names",
+    "hand_mjcf",
+    "model_files",
+    "operation_range_from_actuator",
+]
+
+FingerJoints = Sequence[Sequence[str]]
+DEFAULT_FINGER_JOINTS: tuple[tuple[str, ...], ...] = (("yaw", "pitch"), ("pitch", "yaw"))
+"""2-DOF joints [yaw, pitch] at the finger base and [pitch, yaw] at the end of link 1; two links."""
+HUMANLIKE_FINGER_JOINTS: tuple[tuple[str, ...], ...] = (("yaw", "pitch"), ("pitch",), ("pitch",))
+"""Yaw + pitch at the base, then two pitches; three links."""
+FINGER_BASES = ((-0.1, -0.05, 0.0), (0.05, 0.1, 0.0), (0.05, 0.0, 0.0), (0.05, -0.1, 0.0))
+FINGER_HEADINGS: tuple[float, ...] = (math.pi, 0.0, 0.0, 0.0)
+"""Rotation of each finger's base frame about +z (rad): finger 1 points to -x, the others to +x."""
+JOINT_AXES: dict[str, tuple[float, float, float]] = {"yaw": (0, 0, 1), "pitch": (0, -1, 0), "roll": (1, 0, 0)}
+JOINT_RANGES: dict[str, tuple[float, float]] = {
+    "yaw": (-math.pi / 2, math.pi / 2),
+    "pitch": (-math.pi / 2, math.pi),
+    "roll": (-math.pi, math.pi),
+}
+GRAVITY = 9.81  # m/s^2
+_RPM = 2.0 * math.pi / 60.0
+
+
+def _fmt(*values: float) -> str:
+    return " ".join(f"{(0.0 if abs(float(v)) < 1e-12 else float(v)) + 0.0:.10g}" for v in values)
+
+
+@dataclass(frozen=True)
+class DCMotor:
+    r"""A DC motor behind an ideal gear, as MuJoCo's ``<dcmotor>`` takes it.
+
+    Parameters
+    ----------
+    voltage
+        Supply voltage (V); also the controller's Vmax.
+    stall_torque
+        Motor-side torque at zero speed on the speed-torque line at ``voltage`` (N m).
+    no_load_speed
+        Motor-side speed at zero torque (rad/s).
+    max_continuous_torque
+        Motor-side thermal limit (N m), MuJoCo's ``saturation``.
+    gear
+        Motor turns per joint turn (40 for the paper's 1/40 gear).
+    rotor_inertia
+        Motor-side rotor inertia (kg m^2), MuJoCo's actuator ``armature`` (reflected by gear^2).
+    velocity_gain
+        ``kd`` of the on-board controller (N m s/rad, motor side, torque space).
+    """
+
+    voltage: float
+    stall_torque: float
+    no_load_speed: float
+    max_continuous_torque: float
+    gear: float
+    rotor_inertia: float = 0.0
+    velocity_gain: float = 5e-4
+
+    def __post_init__(self) -> None:
+        for name in ("voltage", "stall_torque", "no_load_speed", "max_continuous_torque", "gear"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ModelError(f"DCMotor.{name}", f"expected a positive finite number, got {value!r}")
+        for name in ("rotor_inertia", "velocity_gain"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ModelError(f"DCMotor.{name}", f"expected a finite number >= 0, got {value!r}")
+
+    @classmethod
+    def from_datasheet(
+        cls, data: Mapping[str, Any] | None = None, *, line: Literal["nominal", "stall"] = "nominal"
+    ) -> DCMotor:
+        r"""The motor of a datasheet (default: :func:`~mjtvm.core.operation_range.load_motor_data`).
+
+        Parameters
+        ----------
+        data
+            Datasheet figures with the keys of ``mjtvm/data/maxon_re25_20w.json``.
+        line
+            Which speed-torque line the ``nominal`` attribute encodes. ``"nominal"``
+            (default): the line through the no-load point and the nominal point (max
+            continuous torque at nominal speed), i.e. the stall torque
+            ``T_N n_0 / (n_0 - n_N)`` (204.4 mN m for the RE25): the actuator's continuous
+            range then equals :func:`~mjtvm.core.operation_range.default_operation_range`.
+            ``"stall"``: the catalogue stall torque (243 mN m); that line passes 2.3 % above
+            the catalogue nominal point (8525 rpm instead of 8330 rpm at 26.3 mN m).
+        """
+        d = load_motor_data() if data is None else data
+        if float(d.get("gear_efficiency", 1.0)) != 1.0:
+            raise ModelError("gear_efficiency", "MuJoCo's <dcmotor> gear is ideal; expected 1")
+        n0 = float(d["no_load_speed_rpm"]) * _RPM
+        n_nom = float(d["nominal_speed_rpm"]) * _RPM
+        t_nom = float(d["nominal_torque_mNm"]) * 1e-3
+        if float(d["max_permissible_speed_rpm"]) * _RPM < n0:
+            raise ModelError("max_permissible_speed_rpm", "below the no-load speed: <dcmotor> has no cap")
+        if line == "nominal":
+            if n_nom >= n0:
+                raise ModelError("nominal_speed_rpm", "must be below the no-load speed")
+            stall = t_nom * n0 / (n0 - n_nom)
+        elif line == "stall":
+            stall = float(d["stall_torque_mNm"]) * 1e-3
+        else:
+            raise ModelError("line", f"expected 'nominal' or 'stall', got {line!r}")
+        return cls(
+            voltage=float(d["nominal_voltage_V"]),
+            stall_torque=stall,
+            no_load_speed=n0,
+            max_continuous_torque=t_nom,
+            gear=float(d["gear_ratio"]),
+            rotor_inertia=float(d.get("rotor_inertia_gcm2", 0.0)) * 1e-7,
+        )
+
+    def mjcf(self, name: str, joint: str) -> str:
+        """The ``<dcmotor>`` element driving ``joint``."""
+        return (
+            f'<dcmotor name="{name}" joint="{joint}" gear="{_fmt(self.gear)}" '
+            f'nominal="{_fmt(self.voltage, self.stall_torque, self.no_load_speed)}" '
+            f'saturation="{_fmt(self.max_continuous_torque)} 0 0" armature="{_fmt(self.rotor_inertia)}" '
+            f'input="vel ff" controller="0 0 {_fmt(self.velocity_gain)} 0 0 {_fmt(self.voltage)}"/>'
+        )
+
+
+def _check_finger_joints(finger_joints: FingerJoints) -> tuple[tuple[str, ...], ...]:
+    sites = tuple(tuple(site) for site in finger_joints)
+    if not sites or any(not site for site in sites):
+        raise ModelError("finger_joints", "expected one non-empty joint sequence per link")
+    for k, site in enumerate(sites):
+        for kind in site:
+            if kind not in JOINT_AXES:
+                raise ModelError(
+                    "finger_joints", f"unknown joint kind {kind!r} (known: {', '.join(JOINT_AXES)})"
+                )
+        if len(set(site)) != len(site):
+            raise ModelError("finger_joints", f"a joint kind repeats at site {k}: {site}")
+    return sites
+
+
+def finger_joint_names(finger: int, finger_joints: FingerJoints = DEFAULT_FINGER_JOINTS) -> list[str]:
+    """Joint names of finger ``finger`` (1-based), base first: ``f1_yaw0``, ``f1_pitch0``, ..."""
+    sites = _check_finger_joints(finger_joints)
+    return [f"f{finger}_{kind}{k}" for k, site in enumerate(sites) for kind in site]
+
+
+def hand_mjcf(
+    *,
+    finger_joints: FingerJoints = DEFAULT_FINGER_JOINTS,
+    link_length: float = 0.1,
+    link_mass: float = 0.051,
+    capsule_radius: float = 0.004,
+    tip_radius: float = 0.005,
+    finger_bases: Sequence[Sequence[float]] = FINGER_BASES,
+    finger_headings: Sequence[float] = FINGER_HEADINGS,
+    object_radius: float = 0.1,
+    mg: float = 1.0,
+    object_position: Sequence[float] = (0.0, 0.0, 0.1),
+    friction: float = 0.3,
+    contact_gap: float = 0.001,
+    motor: DCMotor | None = None,
+    model_name: str = "four_finger_hand",
+) -> str:
+    r"""MJCF text of the hand, the palm and a free sphere.
+
+    Parameters
+    ----------
+    finger_joints
+        Per link, the joint kinds (``"yaw"``, ``"pitch"``, ``"roll"``) at its start, in order;
+        the number of links is its length. Joints are named ``f<i>_<kind><link index>``.
+    link_length, link_mass
+        Every link (m, kg); centre of mass at mid-link, thin-rod inertia.
+    capsule_radius, tip_radius
+        Radii of the link capsules and of the fingertip spheres (m). The tip is slightly
+        larger than the capsule so that contacts near the finger end are the tip's.
+    finger_bases, finger_headings
+        ``(F, 3)`` base positions (m) and ``(F,)`` base rotations about +z (rad).
+    object_radius
+        Sphere radius (m).
+    mg
+        Object weight (N, g = 9.81): mass ``mg / g``. With ``mg = 0`` the sphere keeps a
+        mass of 1/g kg and full gravity compensation (``gravcomp="1"``), so it weighs nothing.
+    object_position
+        ``(3,)`` initial sphere centre (m).
+    friction
+        Sliding friction coefficient of every geom (simulation only; the TVM takes its own mu).
+    contact_gap
+        MuJoCo 4 ``gap`` of the sphere (m): contacts up to this separation are reported in
+        ``mjData.contact`` as inactive (no contact force), so that touching geoms are found.
+    motor
+        The actuator of every joint (default :meth:`DCMotor.from_datasheet`).
+    model_name
+        ``<mujoco model=...>``.
+
+    Returns
+    -------
+    str
+        The MJCF document.
+    """
+    sites = _check_finger_joints(finger_joints)
+    bases = np.asarray(finger_bases, dtype=float)
+    headings = np.asarray(finger_headings, dtype=float)
+    if bases.ndim != 2 or bases.shape[1] != 3 or headings.shape != (bases.shape[0],):
+        raise ModelError("finger_bases", "expected (F, 3) positions and F headings")
+    for name, value in (
+        ("link_length", link_length), ("link_mass", link_mass), ("capsule_radius", capsule_radius),
+        ("tip_radius", tip_radius), ("object_radius", object_radius),
+    ):  # fmt: skip
+        if not (math.isfinite(value) and value > 0):
+            raise ModelError(name, f"expected a positive finite number, got {value!r}")
+    if not (math.isfinite(mg) and mg >= 0):
+        raise ModelError("mg", f"expected a finite weight >= 0 (N), got {mg!r}")
+    motor = DCMotor.from_datasheet() if motor is None else motor
+    length, m = float(link_length), float(link_mass)
+    i_axial = 0.5 * m * capsule_radius**2
+    i_trans = m * (3 * capsule_radius**2 + length**2) / 12.0
+    out = [
+        f'<mujoco model="{model_name}">',
+        "  <!-- Generated by mjtvm.sim.hand.hand_mjcf (scripts/make_models.py); do not edit by hand. -->",
+        f"  <!-- Actuators: <dcmotor> {_fmt(motor.voltage)} V, stall {_fmt(motor.stall_torque)} N m, "
+        f"no-load {_fmt(motor.no_load_speed)} rad/s, continuous {_fmt(motor.max_continuous_torque)} N m, "
+        f"gear {_fmt(motor.gear)} (motor side). -->",
+        '  <compiler angle="radian" autolimits="true"/>',
+        f'  <option timestep="0.001" gravity="0 0 {_fmt(-GRAVITY)}" integrator="implicitfast"/>',
+        "  <default>",
+        f'    <geom contype="2" conaffinity="0" friction="{_fmt(friction)} 0.005 0.0001"/>',
+        "  </default>",
+        "  <worldbody>",
+        '    <light pos="0 0 1.5" dir="0 0 -1" directional="true"/>',
+        '    <geom name="palm" type="plane" size="0.4 0.4 0.01" rgba="0.75 0.75 0.7 1"/>',
+    ]
+    actuators: list[str] = []
+    for f, (base, heading) in enumerate(zip(bases, headings, strict=True), start=1):
+        indent = "    "
+        quat = _fmt(math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2))
+        for k, site in enumerate(sites):
+            pos = _fmt(*base) if k == 0 else _fmt(length, 0, 0)
+            orient = f' quat="{quat}"' if k == 0 else ""
+            out.append(f'{indent}<body name="f{f}_link{k + 1}" pos="{pos}"{orient}>')
+            indent += "  "
+            for kind in site:
+                name = f"f{f}_{kind}{k}"
+                lo, hi = JOINT_RANGES[kind]
+                axis = _fmt(*JOINT_AXES[kind])
+                out.append(
+                    f'{indent}<joint name="{name}" type="hinge" axis="{axis}" range="{_fmt(lo, hi)}"/>'
+                )
+                actuators.append("    " + motor.mjcf(name, name))
+            out.append(
+                f'{indent}<inertial pos="{_fmt(length / 2, 0, 0)}" mass="{_fmt(m)}" '
+                f'diaginertia="{_fmt(i_axial, i_trans, i_trans)}"/>'
+            )
+            out.append(
+                f'{indent}<geom name="f{f}_link{k + 1}" type="capsule" fromto="0 0 0 {_fmt(length)} 0 0" '
+                f'size="{_fmt(capsule_radius)}" rgba="0.3 0.45 0.8 1"/>'
+            )
+        out.append(
+            f'{indent}<geom name="f{f}_tip" type="sphere" pos="{_fmt(length, 0, 0)}" '
+            f'size="{_fmt(tip_radius)}" rgba="0.9 0.5 0.2 1"/>'
+        )
+        for _ in sites:
+            indent = indent[:-2]
+            out.append(f"{indent}</body>")
+    mass = mg / GRAVITY if mg > 0 else 1.0 / GRAVITY
+    gravcomp = "" if mg > 0 else ' gravcomp="1"'
+    out += [
+        f'    <body name="object" pos="{_fmt(*object_position)}"{gravcomp}>',
+        '      <freejoint name="object"/>',
+        f'      <geom name="object" type="sphere" size="{_fmt(object_radius)}" mass="{_fmt(mass)}" '
+        f'contype="1" conaffinity="2" gap="{_fmt(contact_gap)}" '
+        'rgba="0.85 0.2 0.2 0.5"/>',
+        "    </body>",
+        "  </worldbody>",
+        "  <actuator>",
+        *actuators,
+        "  </actuator>",
+        "</mujoco>",
+        "",
+    ]
+    return "\n".join(out)
+
+
+def model_files() -> dict[str, str]:
+    """File name -> MJCF of the committed models in ``models/`` (default and human-like hands)."""
+    return {
+        "four_finger_hand.xml": hand_mjcf(),
+        "four_finger_hand_humanlike.xml": hand_mjcf(
+            finger_joints=HUMANLIKE_FINGER_JOINTS, model_name="four_finger_hand_humanlike"
+        ),
+    }
+
+
+# ------------------------------------------------------------ actuator -> range
+def _actuator_id(model: mujoco.MjModel, actuator: int | str) -> int:
+    if isinstance(actuator, str):
+        aid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
+        if aid < 0:
+            raise ModelError(f"actuator {actuator!r}", "not in the model")
+        return int(aid)
+    if not 0 <= int(actuator) < model.nactuator:
+        raise ModelError(f"actuator #{actuator}", f"no such actuator (the model has {model.nactuator})")
+    return int(actuator)
+
+
+def operation_range_from_actuator(model: mujoco.MjModel, actuator_id: int | str) -> OperationRange:
+    r"""Continuous operation range at the joint of a compiled ``<dcmotor>`` actuator.
+
+    MuJoCo 4 stores the compiled motor in ``actuator_gainprm`` (``[0]`` terminal resistance
+    R in Ohm, ``[1]`` motor constant K in N m/A = V s/rad, ``[2:4]`` thermal coefficient
+    and reference temperature, ``[4:7]`` controller kp ki kd, ``[7]`` controller Vmax in V),
+    the continuous-torque ``saturation`` in ``actuator_forcerange`` (motor side, with
+    ``actuator_forcelimited``) and the gear in ``actuator_gear[:, 0]``. From the
+    ``nominal`` attribute the compiler sets K = V / no_load_speed and R = K V / stall_torque,
+    so the speed-torque line at the supply voltage V is recovered exactly:
+    no-load speed V / K, stall torque K V / R (motor side).
+
+    The supply voltage is Vmax, or, for a voltage-commanded motor without Vmax, the bound
+    of its voltage control's ``ctrlrange``. The polygon in (|joint torque| N m,
+    |joint speed| rad/s), with torque x gear and speed / gear, is (0, 0), (T_c, 0),
+    (T_c, w_c), (0, w_0): T_c the continuous torque (also capped by the joint's
+    ``actuatorfrcrange``), w_c the speed on the line at T_c; a triangle when T_c reaches the
+    stall torque. The resistance is taken at its reference temperature; the max
+    permissible speed is not part of the MJCF (it does not cut the RE25's range).
+
+    Parameters
+    ----------
+    model
+        Compiled model.
+    actuator_id
+        Actuator index or name.
+
+    Raises
+    ------
+    ModelError
+        Not a ``<dcmotor>``, not a joint transmission, no supply voltage, or cogging,
+        LuGre friction or actuator damping present (they would change the range).
+    """
+    a = _actuator_id(model, actuator_id)
+    label = f"actuator {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or '#' + str(a)!r}"
+    if int(model.actuator_gaintype[a]) != int(mujoco.mjtGain.mjGAIN_DCMOTOR):
+        raise ModelError(label, "is not a <dcmotor> actuator")
+    if int(model.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT):
+        raise ModelError(label, "does not drive a joint directly (transmission must be a joint)")
+    damped = np.any(model.actuator_damping[a] != 0) or np.any(model.actuator_dampingpoly[a] != 0)
+    if np.any(model.actuator_biasprm[a, :6] != 0) or damped:
+        raise ModelError(label, "has cogging, LuGre friction or damping, which the operation range ignores")
+    r_ohm, k = float(model.actuator_gainprm[a, 0]), float(model.actuator_gainprm[a, 1])
+    if not (r_ohm > 0 and k > 0):
+        raise ModelError(label, f"needs positive resistance and motor constant, got R={r_ohm}, K={k}")
+    volts = float(model.actuator_gainprm[a, 7])
+    spec = int(model.actuator_ctrlspec[a])
+    if volts <= 0 and spec & int(mujoco.mjtCtrlInput.mjINPUT_VOLTAGE):
+        c = int(model.actuator_ctrladr[a] + model.actuator_ctrlnum[a] - 1)
+        if model.actuator_ctrllimited[c]:
+            volts = float(np.max(np.abs(model.actuator_ctrlrange[c])))
+    if not volts > 0:
+        raise ModelError(label, "has no supply voltage (set the controller's Vmax or a voltage ctrlrange)")
+    gear = float(model.actuator_gear[a, 0])
+    if not gear > 0:
+        raise ModelError(label, f"needs a positive gear, got {gear}")
+    stall = k * volts / r_ohm  # motor side, N m
+    torque = stall
+    if model.actuator_forcelimited[a]:
+        lo, hi = model.actuator_forcerange[a]
+        torque = min(torque, -float(lo), float(hi))
+    joint_torque = gear * torque
+    j = int(model.actuator_trnid[a, 0])
+    if model.jnt_actfrclimited[j]:
+        lo, hi = model.jnt_actfrcrange[j]
+        joint_torque = min(joint_torque, -float(lo), float(hi))
+    if not joint_torque > 0:
+        raise ModelError(label, "has no positive torque limit")
+    w0 = volts / k / gear  # joint side, rad/s
+    w_at = (volts - r_ohm * (joint_torque / gear) / k) / k / gear
+    if w_at <= w0 * 1e-12:
+        return OperationRange(np.array([[0.0, 0.0], [gear * stall, 0.0], [0.0, w0]]))
+    return OperationRange(np.array([[0.0, 0.0], [joint_torque, 0.0], [joint_torque, w_at], [0.0, w0]]))

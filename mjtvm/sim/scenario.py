@@ -1,0 +1,417 @@
+r"""The paper's grasp scenarios (section 5, Cases 1 and 2) as data, and their grasp states.
+
+A scenario is a JSON document (``mjtvm/data/scenarios/<name>.json``, schema
+``mjtvm.scenario/1``): the object (centre, radius, weight mg), the friction coefficient,
+the fingers whose joints make the state, the paper's contact points with how each finger
+geom reaches it, contact types by geom name, slide directions of S-points, REFS, RVDS,
+geoms whose contacts are modelling artefacts (``ignored_geoms``), and per model variant
+(``default``: [yaw, pitch] + [pitch, yaw] fingers; ``humanlike``: yaw + three pitches) the
+finger joints, the IK start and bounds, and the ``solution`` written by
+``scripts/make_scenarios.py`` (:func:`make_documents`): joint angles, IK residuals and the
+achieved contacts. Loading (:func:`load_scenario`) rebuilds the model with
+:func:`~mjtvm.sim.hand.hand_mjcf` and sets the stored angles; it does not rerun the IK.
+
+Contact placement (:func:`solve_variant`). Each paper point ``p`` is projected radially onto
+the sphere, ``p_s = c + R (p - c) / |p - c|``, and the geom is placed by
+:func:`~mjtvm.sim.ik.geom_contact_target` (tip sphere: surfaces touching at ``p_s``; capsule: the
+point ``along`` its axis at ``p_s - offset n``, axis tangent). The solution is accepted only
+if the contacts MuJoCo then detects (one per body, ignored geoms aside) are exactly the
+scenario's, each within 3 mm of its ``p_s``, and no link goes below the palm (z < 0).
+
+World frame, SI units.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.state import GraspState, state_to_dict
+from ..errors import ModelError
+from .grasp import detected_contacts, grasp_state
+from .hand import finger_joint_names, hand_mjcf
+from .ik import IkTarget, geom_contact_target, solve_ik
+
+__all__ = [
+    "CONTACT_TOLERANCE",
+    "SCENARIOS",
+    "SCHEMA",
+    "Scenario",
+    "export_state",
+    "format_document",
+    "load_scenario",
+    "make_documents",
+    "read_scenario",
+    "scenario_path",
+    "solve_variant",
+]
+
+SCHEMA = "mjtvm.scenario/1"
+SCENARIOS = ("case1", "case1-s", "case2")
+CONTACT_TOLERANCE = 3e-3  # m: largest accepted distance of a contact from the paper's point
+_OBJ = mujoco.mjtObj
+_REQUIRED = (
+    "schema", "name", "object_body", "object_position", "object_radius", "mg", "mu", "fingers",
+    "contact_types", "slide_directions", "ignored_geoms", "refs", "rvds", "contacts", "variants",
+)  # fmt: skip
+
+
+def scenario_path(name: str) -> Path:
+    """Path of the shipped scenario ``name`` (one of :data:`SCENARIOS`)."""
+    if name not in SCENARIOS:
+        raise ModelError(f"scenario {name!r}", f"unknown (shipped: {', '.join(SCENARIOS)})")
+    return Path(str(resources.files("mjtvm.data").joinpath("scenarios").joinpath(f"{name}.json")))
+
+
+def read_scenario(source: str | Path | Mapping[str, Any]) -> dict[str, Any]:
+    """The scenario document of a shipped name, a JSON file path or a mapping (copied)."""
+    if isinstance(source, Mapping):
+        doc: Any = copy.deepcopy(dict(source))
+    else:
+        path = Path(source) if isinstance(source, Path) or str(source).endswith(".json") else None
+        path = path or scenario_path(str(source))
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError) as e:
+            raise ModelError(f"scenario file {str(path)!r}", f"cannot be read: {e}") from e
+    if not isinstance(doc, dict) or doc.get("schema") != SCHEMA:
+        raise ModelError("scenario", f"expected a JSON object with schema {SCHEMA!r}")
+    missing = [k for k in _REQUIRED if k not in doc]
+    if missing:
+        raise ModelError(f"scenario {doc.get('name')!r}", f"missing keys: {', '.join(missing)}")
+    return doc
+
+
+def _variant(doc: Mapping[str, Any], variant: str) -> Mapping[str, Any]:
+    if variant not in doc["variants"]:
+        raise ModelError(
+            f"scenario {doc['name']!r}", f"no variant {variant!r} (has: {', '.join(doc['variants'])})"
+        )
+    v: Mapping[str, Any] = doc["variants"][variant]
+    return v
+
+
+def _check_name(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: str, where: str) -> None:
+    if mujoco.mj_name2id(model, kind, name) < 0:
+        raise ModelError(f"{label} {name!r}", f"named in the scenario's {where} but not in the model")
+
+
+def _build(doc: Mapping[str, Any], variant: str, mg: float) -> mujoco.MjModel:
+    """The variant's model, every name the scenario uses checked against it."""
+    v = _variant(doc, variant)
+    model = mujoco.MjModel.from_xml_string(
+        hand_mjcf(
+            finger_joints=v["finger_joints"],
+            object_position=doc["object_position"],
+            object_radius=float(doc["object_radius"]),
+            mg=mg,
+        )
+    )
+    _check_name(model, _OBJ.mjOBJ_BODY, doc["object_body"], "body", "object_body")
+    geoms = [
+        *((g, "contact_types") for g in doc["contact_types"]),
+        *((g, "slide_directions") for g in doc["slide_directions"]),
+        *((g, "ignored_geoms") for g in [*doc["ignored_geoms"], *v.get("ignored_geoms", [])]),
+        *((c["geom"], "contacts") for c in doc["contacts"]),
+    ]
+    for g, where in geoms:
+        _check_name(model, _OBJ.mjOBJ_GEOM, g, "geom", where)
+    for where in ("start", "bounds"):
+        for j in v.get(where, {}):
+            _check_name(model, _OBJ.mjOBJ_JOINT, j, "joint", where)
+    for j in v.get("solution", {}).get("qpos", {}):
+        _check_name(model, _OBJ.mjOBJ_JOINT, j, "joint", "solution")
+    return model
+
+
+def _on_sphere(doc: Mapping[str, Any], point: ArrayLike) -> NDArray[np.float64]:
+    """Radial projection of ``point`` onto the object sphere."""
+    c, p = np.asarray(doc["object_position"], dtype=float), np.asarray(point, dtype=float)
+    return c + float(doc["object_radius"]) * (p - c) / np.linalg.norm(p - c)
+
+
+def _hand_joints(model: mujoco.MjModel) -> list[int]:
+    scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    return [j for j in range(model.njnt) if int(model.jnt_type[j]) in scalar]
+
+
+def _data(model: mujoco.MjModel, doc: Mapping[str, Any], qpos: Mapping[str, float]) -> mujoco.MjData:
+    data = mujoco.MjData(model)
+    for name, value in qpos.items():
+        data.qpos[model.joint(name).qposadr[0]] = float(value)
+    ob = model.body(doc["object_body"]).id
+    free = [j for j in range(model.njnt) if int(model.jnt_bodyid[j]) == ob]
+    if free:
+        adr = int(model.jnt_qposadr[free[0]])
+        data.qpos[adr : adr + 7] = [*doc["object_position"], 1.0, 0.0, 0.0, 0.0]
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _check_pose(model: mujoco.MjModel, data: mujoco.MjData, doc: Mapping[str, Any], variant: str) -> dict:
+    """Achieved contacts vs the paper's; raises when the pose is not the scenario's."""
+    ignored = {*doc["ignored_geoms"], *_variant(doc, variant).get("ignored_geoms", [])}
+    found = {
+        c.geom: c
+        for c in detected_contacts(model, data, object_body=doc["object_body"])
+        if c.geom not in ignored
+    }
+    wanted = {c["geom"]: c["paper"] for c in doc["contacts"]}
+    for g, c in found.items():
+        if g not in wanted:
+            raise ModelError(f"geom {g!r}", f"touches the object (distance {c.distance:.3g} m) unexpectedly")
+    out = {}
+    for g, paper in wanted.items():
+        if g not in found:
+            raise ModelError(f"geom {g!r}", "does not touch the object (or a deeper contact hides it)")
+        target = _on_sphere(doc, paper)
+        error = float(np.linalg.norm(found[g].position - target))
+        if error > CONTACT_TOLERANCE:
+            raise ModelError(f"geom {g!r}", f"contact {1e3 * error:.2f} mm from the paper's point (> 3 mm)")
+        out[g] = {
+            "paper": [float(x) for x in paper],
+            "on_sphere": target.tolist(),
+            "achieved": found[g].position.tolist(),
+            "distance": found[g].distance,
+            "error_mm": 1e3 * error,
+        }
+    for k in range(model.ngeom):
+        if int(model.geom_type[k]) == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
+            axis = data.geom_xmat[k].reshape(3, 3)[:, 2] * model.geom_size[k, 1]
+            low = min(data.geom_xpos[k][2] + axis[2], data.geom_xpos[k][2] - axis[2])
+            if low < -1e-9:
+                name = mujoco.mj_id2name(model, _OBJ.mjOBJ_GEOM, k)
+                raise ModelError(f"geom {name!r}", f"goes below the palm (z = {low:.4g} m)")
+    return out
+
+
+def _targets(model: mujoco.MjModel, doc: Mapping[str, Any]) -> list[IkTarget]:
+    targets = []
+    for c in doc["contacts"]:
+        if int(model.geom_bodyid[model.geom(c["geom"]).id]) == 0:
+            continue  # the palm: nothing to move
+        targets.append(
+            geom_contact_target(
+                model, c["geom"], _on_sphere(doc, c["paper"]), doc["object_position"],
+                along=c.get("along"), offset=c.get("offset"),
+            )
+        )  # fmt: skip
+    return targets
+
+
+def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e-10) -> dict[str, Any]:
+    r"""Rerun the IK of one variant; return its ``solution`` section.
+
+    Starts from the variant's ``start`` angles (0 for the others), solves every finger
+    contact at once (:func:`~mjtvm.sim.ik.solve_ik`, within the variant's ``bounds``), and
+    checks the pose (module docstring).
+
+    Returns
+    -------
+    dict
+        ``qpos`` (joint name -> rad, every hand joint), ``ik`` (iterations, residual per
+        target in m) and ``contacts`` (geom -> paper point, its projection on the sphere,
+        MuJoCo's contact point, surface distance in m, error in mm).
+
+    Raises
+    ------
+    ModelError
+        Unknown names, an unreachable target (named, with its residual), or a pose
+        that fails the checks.
+    """
+    v = _variant(doc, variant)
+    model = _build(doc, variant, float(doc["mg"]))
+    data = _data(model, doc, v.get("start", {}))
+    bounds = {k: (float(lo), float(hi)) for k, (lo, hi) in v.get("bounds", {}).items()}
+    targets = _targets(model, doc)
+    result = solve_ik(model, data, targets, bounds=bounds, tolerance=tolerance)
+    qpos = {
+        mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j): float(result.qpos[model.jnt_qposadr[j]])
+        for j in _hand_joints(model)
+    }
+    contacts = _check_pose(model, _data(model, doc, qpos), doc, variant)
+    residuals = {t.name: float(r) for t, r in zip(targets, result.residuals, strict=True)}
+    return {
+        "qpos": qpos,
+        "ik": {"iterations": result.iterations, "tolerance": tolerance, "residuals": residuals},
+        "contacts": contacts,
+    }
+
+
+def make_documents(names: Sequence[str] = SCENARIOS) -> dict[str, dict[str, Any]]:
+    """Every shipped scenario with each variant's ``solution`` recomputed (the generator's output)."""
+    docs = {}
+    for name in names:
+        doc = read_scenario(name)
+        for variant in doc["variants"]:
+            doc["variants"][variant].pop("solution", None)
+            doc["variants"][variant]["solution"] = solve_variant(doc, variant)
+        docs[name] = doc
+    return docs
+
+
+def format_document(doc: Any, indent: int = 0) -> str:
+    """JSON text; a list or object of scalars and flat lists fitting in 100 columns stays on one line."""
+    text = json.dumps(doc)  # floats as repr: exact round trip
+    if not isinstance(doc, (dict, list)):
+        return text
+    items = list(doc.values()) if isinstance(doc, dict) else doc
+    flat = all(
+        not isinstance(x, dict) and not any(isinstance(y, (dict, list)) for y in x)
+        if isinstance(x, list)
+        else not isinstance(x, dict)
+        for x in items
+    )
+    if len(text) + indent <= 100 and flat:
+        return text
+    pad = " " * (indent + 1)
+    if isinstance(doc, dict):
+        rows = [f"{pad}{json.dumps(k)}: {format_document(v, indent + 1)}" for k, v in doc.items()]
+        return "{\n" + ",\n".join(rows) + "\n" + " " * indent + "}"
+    rows = [f"{pad}{format_document(x, indent + 1)}" for x in doc]
+    return "[\n" + ",\n".join(rows) + "\n" + " " * indent + "]"
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    r"""A scenario at its configuration.
+
+    Attributes
+    ----------
+    name, variant
+        The scenario and model variant.
+    model, data
+        The compiled hand and sphere, and ``mjData`` after ``mj_forward`` at the stored
+        joint angles with the object at ``object_position``.
+    joints
+        The state's joints (those of the scenario's fingers), in model order.
+    contact_types, mu, slide_directions, refs, rvds, object_body
+        As :func:`~mjtvm.sim.grasp.grasp_state` takes them; ``refs`` ``(K, 6)`` [N; N m],
+        ``rvds`` ``(R, 6)`` or ``None``.
+    ignored_geoms
+        Geoms whose contacts with the object are dropped from the state.
+    document
+        The scenario document.
+    """
+
+    name: str
+    variant: str
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    joints: tuple[str, ...]
+    contact_types: Mapping[str, str]
+    mu: float | Mapping[str, float]
+    slide_directions: Mapping[str, Sequence[float]]
+    refs: NDArray[np.float64]
+    rvds: NDArray[np.float64] | None
+    ignored_geoms: tuple[str, ...]
+    object_body: str
+    document: Mapping[str, Any]
+
+    def state(
+        self,
+        *,
+        contact_types: Mapping[str, str] | None = None,
+        slide_directions: Mapping[str, ArrayLike] | None = None,
+        refs: ArrayLike | None = None,
+        rvds: ArrayLike | None = None,
+        **options: Any,
+    ) -> GraspState:
+        r"""The grasp state (:func:`~mjtvm.sim.grasp.grasp_state`) with the ignored contacts dropped.
+
+        ``contact_types`` and ``slide_directions`` update the scenario's; ``refs`` and
+        ``rvds`` replace them; further keywords (``friction_edges``, ``slip``, ...) go to
+        :func:`~mjtvm.sim.grasp.grasp_state`.
+        """
+        types = {**{g: "D" for g in self.ignored_geoms}, **self.contact_types, **(contact_types or {})}
+        state = grasp_state(
+            self.model, self.data, contact_types=types, mu=self.mu,
+            refs=self.refs if refs is None else refs, rvds=self.rvds if rvds is None else rvds,
+            slide_directions={**self.slide_directions, **(slide_directions or {})},
+            object_body=self.object_body, joints=self.joints, **options,
+        )  # fmt: skip
+        kept = tuple(c for c in state.contacts if c.name.split("#")[0] not in self.ignored_geoms)
+        if not any(np.any(c.jacobian) for c in kept):
+            raise ModelError(f"scenario {self.name!r}", "no contact between the object and the fingers")
+        return state.with_(contacts=kept)
+
+
+def load_scenario(
+    source: str | Path | Mapping[str, Any],
+    *,
+    variant: str = "default",
+    mg: float | None = None,
+    mu: float | Mapping[str, float] | None = None,
+) -> Scenario:
+    r"""A scenario at its stored configuration (no IK).
+
+    Parameters
+    ----------
+    source
+        A shipped name (:data:`SCENARIOS`), a JSON file path or a document.
+    variant
+        Model variant: ``"default"`` or ``"humanlike"`` (see the document's ``variants``).
+    mg
+        Object weight (N) instead of the scenario's; the REFS, when it is the scenario's
+        weight ``[[0, 0, -mg, 0, 0, 0]]``, follows.
+    mu
+        Friction coefficient (or geom -> coefficient) instead of the scenario's.
+
+    Raises
+    ------
+    ModelError
+        Unknown scenario or variant, names not in the model, no stored solution, or an
+        ``mg`` override with a REFS that is not the weight.
+    """
+    doc = read_scenario(source)
+    v = _variant(doc, variant)
+    if "solution" not in v:
+        raise ModelError(
+            f"scenario {doc['name']!r}", f"variant {variant!r} has no solution: run the generator"
+        )
+    refs = np.array(doc["refs"], dtype=float)
+    rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
+    weight = float(doc["mg"])
+    if mg is not None:
+        if refs.shape != (1, 6) or not np.allclose(refs, [[0, 0, -weight, 0, 0, 0]]):
+            raise ModelError("mg", "the scenario's REFS is not its weight; pass refs to state() instead")
+        weight, refs = float(mg), np.array([[0.0, 0.0, -float(mg), 0.0, 0.0, 0.0]])
+    for array in (refs, rvds):
+        if array is not None:
+            array.setflags(write=False)
+    model = _build(doc, variant, weight)
+    data = _data(model, doc, v["solution"]["qpos"])
+    joints = tuple(n for i in doc["fingers"] for n in finger_joint_names(int(i), v["finger_joints"]))
+    for j in joints:
+        _check_name(model, _OBJ.mjOBJ_JOINT, j, "joint", "fingers")
+    friction = doc["mu"] if mu is None else mu
+    return Scenario(
+        name=str(doc["name"]),
+        variant=variant,
+        model=model,
+        data=data,
+        joints=joints,
+        contact_types=MappingProxyType(dict(doc["contact_types"])),
+        mu=MappingProxyType(dict(friction)) if isinstance(friction, Mapping) else float(friction),
+        slide_directions=MappingProxyType({k: tuple(s) for k, s in doc["slide_directions"].items()}),
+        refs=refs,
+        rvds=rvds,
+        ignored_geoms=(*doc["ignored_geoms"], *v.get("ignored_geoms", [])),
+        object_body=str(doc["object_body"]),
+        document=MappingProxyType(doc),
+    )
+
+
+def export_state(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
+    """The ``mjtvm.state/1`` document of a scenario's state (``options`` go to :func:`load_scenario`)."""
+    return state_to_dict(load_scenario(name, **options).state())

@@ -1,0 +1,165 @@
+"""The replay of the lift (mjtvm.apps.replay) and `mjtvm replay`: files, consistency, options."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mjtvm.apps.replay import SWEEP_MGS, SWEEP_MUS, ReplayOutput, run_replay, solve_state, time_replay
+from mjtvm.cli import main
+from mjtvm.errors import StateError
+from mjtvm.sim.trajectory import lift_state, slide_directions
+
+STATES = 4
+
+
+@pytest.fixture(scope="module")
+def output(tmp_path_factory: pytest.TempPathFactory) -> ReplayOutput:
+    out = tmp_path_factory.mktemp("replay")
+    return run_replay(out=out, num_states=STATES, readings=("physical", "literal"))
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+def _value(text: str) -> float | None:
+    return None if text == "" else float(text)
+
+
+def test_replay_writes_every_file(output: ReplayOutput) -> None:
+    names = {"lift.csv", "lift.json", "lift-sweeps.csv", "fig8.png", "fig9a.png", "fig9b.png"}
+    assert set(output.files) == names
+    for path in output.files.values():
+        assert path.stat().st_size > 0
+        if path.suffix == ".png":
+            assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_csv_json_and_a_fresh_solve_agree(output: ReplayOutput) -> None:
+    rows = _rows(output.files["lift.csv"])
+    doc = json.loads(output.files["lift.json"].read_text(encoding="utf-8"))
+    # one row per (variant, reading, state): L once, S under each reading
+    runs = [("L", ""), ("S", "physical"), ("S", "literal")]
+    assert [(r["variant"], r["reading"], int(r["state"])) for r in rows] == [
+        (v, rd, i) for v, rd in runs for i in range(STATES)
+    ]
+    assert len(doc["records"]) == len(rows)
+    assert doc["schema"] == "mjtvm.lift/1" and doc["scenario"] == "case2" and doc["hand"] == "default"
+    assert doc["mu"] == 0.3 and doc["mg"] == 1.0 and doc["readings"] == ["physical", "literal"]
+    assert len(doc["lift"]["residual"]) == STATES and max(map(max, doc["lift"]["residual"])) < 1e-6
+    lift = output.lift
+    for row, rec in zip(rows, doc["records"], strict=True):
+        assert rec["state"] == int(row["state"]) and rec["z"] == float(row["z"])
+        assert rec["tvmmp"] == _value(row["tvmmp"])
+        assert rec["feasible"] == (row["feasible"] == "True")
+        for l, alpha in enumerate(rec["alpha"][0]):
+            assert alpha == _value(row[f"alpha_k0_l{l}"])
+            assert rec["status"][0][l] == row[f"status_k0_l{l}"]
+        reading = row["reading"] or "physical"
+        state = lift_state(lift, int(row["state"]), variant=row["variant"], reading=reading, mu=0.3, mg=1.0)
+        fresh, _ = solve_state(state)
+        if fresh.tvmmp is None:
+            assert rec["tvmmp"] is None
+        else:
+            assert rec["tvmmp"] == pytest.approx(fresh.tvmmp, rel=1e-9)
+        if rec["limiting"] is not None:
+            assert [int(row["limiting_k"]), int(row["limiting_l"])] == rec["limiting"]
+            assert rec["tvmmp"] == min(a for a in rec["alpha"][0] if a is not None)
+
+
+def test_slide_directions_in_the_json_are_opposite(output: ReplayOutput) -> None:
+    slides = json.loads(output.files["lift.json"].read_text(encoding="utf-8"))["lift"]["slide_directions"]
+    for i, (phys, lit) in enumerate(zip(slides["physical"], slides["literal"], strict=True)):
+        assert set(phys) == {"f2_tip", "f4_tip"}
+        for geom in phys:
+            assert np.allclose(lit[geom], -np.array(phys[geom]), atol=0.0)
+            assert np.allclose(phys[geom], slide_directions(output.lift, i)[geom])
+
+
+def test_sweeps_cover_fig9(output: ReplayOutput) -> None:
+    assert output.sweeps is not None
+    mus = {(r.mu, r.mg) for r in output.sweeps["mu"]}
+    mgs = {(r.mu, r.mg) for r in output.sweeps["mg"]}
+    assert mus == {(m, 2.0) for m in SWEEP_MUS} and mgs == {(0.3, g) for g in SWEEP_MGS}
+    assert all(r.variant == "L" for r in (*output.sweeps["mu"], *output.sweeps["mg"]))
+    rows = _rows(output.files["lift-sweeps.csv"])
+    assert len(rows) == (len(SWEEP_MUS) + len(SWEEP_MGS)) * STATES
+    # the (mu 0.3, mg 2) curve is in both sweeps: the `sweep` column tells the copies apart
+    both = [r["sweep"] for r in rows if (r["mu"], r["mg"]) == ("0.3", "2.0")]
+    assert sorted(both) == ["mg"] * STATES + ["mu"] * STATES
+    # the (mu, mg) = (0.3, 1) sweep is the main run's L curve
+    main_l = [r.result.tvmmp for r in output.records if r.variant == "L"]
+    assert [r.result.tvmmp for r in output.sweeps["mg"] if r.mg == 1.0] == main_l
+
+
+def test_cli_replay_writes_results(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    args = ["replay", "--out", str(tmp_path / "res"), "--states", "3", "--no-sweeps", "--quiet"]
+    assert main([*args, "--contacts", "S", "--reading", "literal", "--mu", "0.4", "--mg", "2"]) == 0
+    assert "wrote lift.csv" in capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == [
+        ".mjtvm.lock",
+        "fig8.png",
+        "lift.csv",
+        "lift.json",
+    ]
+    rows = _rows(tmp_path / "res" / "lift.csv")
+    assert {(r["variant"], r["reading"], r["mu"], r["mg"]) for r in rows} == {("S", "literal", "0.4", "2.0")}
+    assert (
+        main(
+            ["replay", "--out", str(tmp_path / "np"), "--states", "2", "--no-sweeps", "--no-plots", "--quiet"]
+        )
+        == 0
+    )
+    assert sorted(p.name for p in (tmp_path / "np").iterdir()) == [".mjtvm.lock", "lift.csv", "lift.json"]
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--states", "1"], "error: --states: expected an integer >= 2, got '1'"),
+        (["--contacts", "L,X"], "error: --contacts: expected distinct values among L,S"),
+        (["--contacts", "L,L"], "error: --contacts:"),
+        (["--variants", "L,L"], "error: --variants:"),  # the deprecated spelling, as typed
+        (["--mu", "-0.1"], "error: --mu: expected a finite number >= 0, got '-0.1'"),
+        (["--mg", "nan"], "error: --mg: expected a finite number >= 0, got 'nan'"),
+        (["--tvms-every", "-1"], "error: --tvms-every: expected an integer >= 0"),
+        (["--hand", "robot"], "no variant 'robot'"),
+        (["--scenario", "case9"], "error: scenario 'case9': unknown"),
+    ],
+)
+def test_cli_replay_bad_options_exit_2(
+    option: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["replay", "--out", str(tmp_path), "--quiet", *option]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_cli_replay_unwritable_out_and_argparse_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "file").write_text("x")
+    assert main(["replay", "--out", str(tmp_path / "file" / "sub"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err == f"error: --out: cannot create the folder (Not a directory): {tmp_path / 'file' / 'sub'}\n"
+    assert main(["replay", "--out", str(tmp_path / "file"), "--quiet"]) == 2
+    assert capsys.readouterr().err == f"error: --out: expected a folder, found a file: {tmp_path / 'file'}\n"
+    assert main(["replay", "--reading", "sideways"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "error: --reading: expected distinct values among physical,literal or both, got 'sideways' "
+        "(try 'mjtvm replay --help')"
+    ]
+    with pytest.raises(StateError):
+        run_replay(out=tmp_path, readings=())
+
+
+def test_time_replay_reports_runs(tmp_path: Path) -> None:
+    report = time_replay(repeats=1, num_states=2)
+    assert len(report["runs_s"]) == 1 and math.isfinite(report["median_s"]) and report["median_s"] > 0
+    assert set(report["last"]) == {"lift_s", "replay_s", "sweeps_s", "output_s"}

@@ -1,0 +1,109 @@
+"""The benchmark run's pieces on tiny inputs: JSON structure and positive timings (no timed assertions)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mjtvm.bench import report as bench_report
+from mjtvm.bench import suite as bench_suite
+from mjtvm.cli import build_parser
+from mjtvm.sim.scenario import load_scenario
+
+
+def _timings(doc: Any, path: str = "") -> list[tuple[str, float]]:
+    """Every timing in a report: values of keys ending in ``_s`` (numbers or lists of numbers)."""
+    out: list[tuple[str, float]] = []
+    if isinstance(doc, dict):
+        for key, value in doc.items():
+            where = f"{path}.{key}"
+            if key.endswith("_s") and key not in ("paper_s", "targets_s", "time_limit_s", "cdd_time_limit_s"):
+                values = (
+                    value
+                    if isinstance(value, list)
+                    else value.values()
+                    if isinstance(value, dict)
+                    else [value]
+                )
+                out += [(where, v) for v in values if v is not None]
+            else:
+                out += _timings(value, where)
+    elif isinstance(doc, list):
+        for k, value in enumerate(doc):
+            out += _timings(value, f"{path}[{k}]")
+    return out
+
+
+@pytest.fixture(scope="module")
+def report() -> dict[str, Any]:
+    doc = bench_suite.run_suite(
+        quick=True, repeats=1, baseline_repeats=1, p1_repeats=1, lift=False, sweeps=False,
+        scaling_fingers=(2, 4), progress=False,
+    )  # fmt: skip
+    doc["lift"] = bench_suite.bench_lift(repeats=1, num_states=3)
+    doc["sweeps"] = bench_suite.bench_sweeps(jobs=(1, 2), repeats=1, num_states=2)
+    doc["targets"] = bench_suite._targets(doc)
+    return doc
+
+
+def test_report_structure_and_positive_timings(report: dict[str, Any]) -> None:
+    doc = json.loads(json.dumps(report))  # JSON-ready
+    assert doc["schema"] == bench_suite.SCHEMA
+    assert set(doc["cases"]) == {"case1_p1", "case1_p2", "case2_p2"}  # quick: no Case 2 Problem 1
+    assert doc["cases"]["case1_p1"]["cdd"] is None  # quick: no cdd
+    assert doc["cases"]["case1_p1"]["lp"]["dimension"] == 4
+    assert doc["cases"]["case1_p2"]["num_lps"] == 8 and doc["cases"]["case2_p2"]["num_lps"] == 4
+    assert set(doc["sweeps"]["per_jobs"]) == {"1", "2"} and doc["sweeps"]["speedup"]["2"] > 0
+    assert doc["sweeps"]["combinations"] == 9 and doc["sweeps"]["points"] == 9 * 2
+    scaling = doc["scaling"]["per_fingers"]
+    assert [scaling[f]["joints"] for f in ("2", "4")] == [8, 16]
+    assert [scaling[f]["contacts"] for f in ("2", "4")] == [2, 4]
+    assert set(doc["scaling"]["ratios"]) == {"4/2"}
+    assert set(doc["targets"]) >= {"case1_p1", "case1_p2", "case2_p2", "lift", "sweep_speedup_2"}
+    assert {"cpu", "python", "packages"} <= set(doc["machine"])
+    times = _timings(doc)
+    assert len(times) > 30
+    bad = [(k, v) for k, v in times if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0)]
+    assert not bad
+
+
+def test_table_and_notes(report: dict[str, Any]) -> None:
+    table = bench_report.format_suite_table(report, ["a note"])
+    for text in ("Case 1, Problem 1", "Case 1, Problem 2", "Case 2 initial, Problem 2", "Full lift",
+                 "2 proc incl. pool start", "a note", "machine:", "ratios (time)"):  # fmt: skip
+        assert text in table
+    assert all(isinstance(n, str) for n in bench_report.auto_notes(report))
+
+
+def test_case2_note_reports_the_measured_split() -> None:
+    """A missed Case 2 target is explained with that run's own numbers."""
+    lp = {"median_s": 2.04, "num_lps": 2661, "project_s": 1.38, "highs_run_s": 0.61, "volume_s": 0.66}
+    report = {"targets": {"case2_p1": False}, "cases": {"case2_p1": {"lp": lp}}}
+    (note,) = bench_report.auto_notes(report)
+    for text in ("2.04 s (median) for 2661 LPs", "projection 1.38 s", "0.61 s inside HiGHS", "volume 0.66 s"):
+        assert text in note
+
+
+def test_case1_rvds_holds_beta_from_the_model() -> None:
+    state = load_scenario("case1").state()
+    rvds = bench_suite.case1_rvds(state)
+    assert rvds.shape == (8, 6)
+    beta = rvds[6]
+    assert np.linalg.norm(beta) == pytest.approx(1.0) and beta[[1, 3, 5]].tolist() == [0, 0, 0]
+    paper = np.array([0.697, 0, -0.174, 0, 0.697, 0])  # scaled by diag(10, 10, 10, 1, 1, 1)
+    scaled = np.diag([10.0, 10, 10, 1, 1, 1]) @ beta
+    assert scaled @ paper / np.linalg.norm(scaled) / np.linalg.norm(paper) > np.cos(np.radians(2))
+
+
+def test_scaling_hand_has_one_tip_contact_per_finger() -> None:
+    state = bench_suite.scaling_hand(3)
+    assert [c.name for c in state.contacts] == ["f1_tip", "f2_tip", "f3_tip"]
+    assert state.num_joints == 12 and state.rvds is not None and len(state.rvds) == 4
+
+
+def test_cli_has_bench() -> None:
+    args = build_parser().parse_args(["bench", "--quick", "--repeats", "3"])
+    assert args.quick and args.repeats == 3 and args.func.__name__ == "_cmd_bench"

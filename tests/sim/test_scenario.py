@@ -1,0 +1,343 @@
+"""The paper's scenarios (mjtvm.sim.scenario): data files, contacts, and Case 1's claims (DIGEST section 6)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mjtvm.core.assembly import grasp_map_transpose
+from mjtvm.core.contacts import slide_unit
+from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.tvmmp import tvmmp
+from mjtvm.errors import ModelError
+from mjtvm.sim.hand import hand_mjcf, model_files
+from mjtvm.sim.scenario import (
+    SCENARIOS,
+    format_document,
+    load_scenario,
+    make_documents,
+    read_scenario,
+    scenario_path,
+    solve_variant,
+)
+from mjtvm.sim.scenario import export_state as export
+
+ROOT = Path(__file__).resolve().parents[2]
+RANK_TOL = 1e-9  # singular values below this count as zero (the others are > 0.5, the zeros < 1e-14)
+BETA = np.array([0.697, 0, -0.174, 0, 0.697, 0])  # the paper's, scaled by diag(10, 10, 10, 1, 1, 1)
+SCALE = np.diag([10.0, 10, 10, 1, 1, 1])
+VARIANTS = ("default", "humanlike")
+
+
+@pytest.fixture(scope="module")
+def generated() -> dict[str, dict[str, Any]]:
+    return make_documents()
+
+
+def _state(name: str, variant: str = "default") -> GraspState:
+    """The state as a client sees it: through the exported mjtvm.state/1 document."""
+    return load_state(json.loads(json.dumps(export(name, variant=variant))))
+
+
+# ------------------------------------------------------------- kinematics helpers
+def _stack(state: GraspState, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked J_c (3L x M) and G_c^T (3L x 6) of the named contacts."""
+    by_name = {c.name: c for c in state.contacts}
+    jac = np.vstack([by_name[n].jacobian for n in names])
+    gt = np.vstack([grasp_map_transpose(by_name[n].position, state.object_position) for n in names])
+    return jac, gt
+
+
+def _reachable(state: GraspState, names: list[str], basis: np.ndarray | None = None) -> np.ndarray:
+    r"""Orthonormal basis (columns) of {rdot in range(basis) : exists qd, J_c qd = G_c^T rdot} (eq. 7).
+
+    rdot = E z is reachable iff G_c^T E z lies in range(J_c), i.e. (I - U U^T) G_c^T E z = 0
+    with U an orthonormal basis of range(J_c): a null space, taken by SVD with RANK_TOL.
+    """
+    e = np.eye(6) if basis is None else basis
+    jac, gt = _stack(state, names)
+    u, s, _ = np.linalg.svd(jac)
+    u = u[:, : int((s > RANK_TOL * s[0]).sum())]
+    k = (gt - u @ (u.T @ gt)) @ e
+    _, sk, vt = np.linalg.svd(k)
+    sk = np.r_[sk, np.zeros(e.shape[1] - len(sk))]
+    assert np.all((sk < 1e-12) | (sk > 0.5)), f"no clear rank gap: {sk}"
+    return e @ vt[int((sk > RANK_TOL).sum()) :].T
+
+
+def _slide_translations(state: GraspState) -> tuple[np.ndarray, np.ndarray]:
+    r"""Translations (omega = 0) allowed by the equalities with rho >= 0 (eq. 7, 13).
+
+    Unknowns x = [qd (M); v (3); rho]: F rows J qd - G^T v = 0; S rows J qd - G^T v + rho s = 0
+    (s the unit tangential slide direction: normal part 0, tangential part -rho s). Returns
+    (basis of the translations with rho = 0, the translation at rho = 1 with its rho = 0 part
+    removed): the allowed set is span(first) + {t * second, t >= 0}.
+    """
+    m = state.num_joints
+    rows = []
+    for c in state.contacts:
+        assert c.type in ("F", "S")
+        block = np.hstack(
+            [c.jacobian, -grasp_map_transpose(c.position, state.object_position)[:, :3], np.zeros((3, 1))]
+        )
+        if c.type == "S":
+            block[:, -1] = slide_unit(c)
+        rows.append(block)
+    a = np.vstack(rows)
+    fixed = np.vstack([a, np.eye(m + 4)[-1]])  # rho = 0
+    _, s, vt = np.linalg.svd(fixed)
+    null = vt[int((s > RANK_TOL).sum()) :].T
+    u, sv, _ = np.linalg.svd(null[m : m + 3])
+    free = u[:, : int((sv > RANK_TOL).sum())]
+    x = np.linalg.lstsq(fixed, np.r_[np.zeros(a.shape[0]), 1.0], rcond=None)[0]
+    assert np.abs(a @ x).max() < 1e-12 and x[-1] == pytest.approx(1.0)
+    v = x[m : m + 3]
+    return free, v - free @ (free.T @ v)
+
+
+# ------------------------------------------------------------------- the files
+def _assert_close(a: Any, b: Any, where: str = "") -> None:
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and list(a) == list(b), where
+        for k in a:
+            _assert_close(a[k], b[k], f"{where}.{k}")
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            _assert_close(x, y, f"{where}[{i}]")
+    elif isinstance(a, (int, float)) and not isinstance(a, bool):
+        assert isinstance(b, (int, float)) and abs(a - b) <= 1e-9, f"{where}: {a} != {b}"
+    else:
+        assert a == b, where
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_files_equal_generator_output(generated: dict, name: str) -> None:
+    committed = json.loads(scenario_path(name).read_text(encoding="utf-8"))
+    _assert_close(committed, generated[name], name)
+
+
+def test_make_scenarios_script(tmp_path: Path, generated: dict) -> None:
+    spec = importlib.util.spec_from_file_location("make_scenarios", ROOT / "scripts" / "make_scenarios.py")
+    module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+    spec.loader.exec_module(module)  # type: ignore[union-attr]
+    assert module.main([str(tmp_path)]) == 0
+    for name in SCENARIOS:
+        text = (tmp_path / f"{name}.json").read_text(encoding="utf-8")
+        assert json.loads(text) == json.loads(format_document(generated[name]))
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_variant_models_are_the_committed_ones(name: str, variant: str) -> None:
+    v = read_scenario(name)["variants"][variant]
+    assert (
+        hand_mjcf(finger_joints=v["finger_joints"], model_name=Path(v["model"]).stem)
+        == model_files()[v["model"]]
+    )
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_contacts_within_3_mm_of_the_paper(name: str, variant: str) -> None:
+    doc = read_scenario(name)
+    state = _state(name, variant)
+    assert {c.name: c.type for c in state.contacts} == doc["contact_types"]
+    centre, radius = np.array(doc["object_position"]), doc["object_radius"]
+    np.testing.assert_allclose(state.object_position, centre)
+    for c in state.contacts:
+        (paper,) = [x["paper"] for x in doc["contacts"] if x["geom"] == c.name]
+        on_sphere = centre + radius * (np.array(paper) - centre) / np.linalg.norm(np.array(paper) - centre)
+        assert np.linalg.norm(c.position - on_sphere) <= 3e-3
+        assert doc["variants"][variant]["solution"]["contacts"][c.name]["error_mm"] <= 3.0
+        np.testing.assert_allclose(
+            c.normal, (centre - c.position) / np.linalg.norm(centre - c.position), atol=1e-9
+        )
+    assert max(doc["variants"][variant]["solution"]["ik"]["residuals"].values()) <= 1e-10
+
+
+def test_scenario_configuration_and_options() -> None:
+    sc = load_scenario("case1")
+    qpos = read_scenario("case1")["variants"]["default"]["solution"]["qpos"]
+    for name, value in qpos.items():
+        assert sc.data.qpos[sc.model.joint(name).qposadr[0]] == value
+    assert sc.joints == tuple(f"f{i}_{j}" for i in (1, 3) for j in ("yaw0", "pitch0", "pitch1", "yaw1"))
+    assert "palm" not in [c.name for c in sc.state().contacts]  # ignored: thin-link idealisation
+    np.testing.assert_allclose(sc.state().refs, [[0, 0, -1, 0, 0, 0]])
+    heavy = load_scenario("case2", mg=3.0, mu=0.5)
+    assert heavy.model.body("object").mass[0] * 9.81 == pytest.approx(3.0)
+    state = heavy.state()
+    np.testing.assert_allclose(state.refs, [[0, 0, -3, 0, 0, 0]])
+    assert {c.mu for c in state.contacts if c.type == "F"} == {0.5}
+    s_state = heavy.state(contact_types={"f2_tip": "S"}, slide_directions={"f2_tip": [0, 0, -1]})
+    assert [c.type for c in s_state.contacts] == ["D", "F", "S", "F", "L"]
+    with pytest.raises(ModelError, match="no variant 'robotic'"):
+        load_scenario("case1", variant="robotic")
+    with pytest.raises(ModelError, match="scenario 'case9': unknown"):
+        load_scenario("case9")
+
+
+# ------------------------------------------------------------- Case 1 claims
+def test_case1_beta_is_the_one_in_plane_motion_of_finger_3() -> None:
+    state = _state("case1")
+    plane = np.eye(6)[:, [0, 2, 4]]  # xdot, zdot, omega_y
+    motion = _reachable(state, ["f3_link1", "f3_link2"], plane)
+    assert motion.shape == (6, 1)
+    scaled = SCALE @ motion[:, 0]
+    cos = abs(scaled @ BETA) / np.linalg.norm(scaled) / np.linalg.norm(BETA)
+    assert np.degrees(np.arccos(min(cos, 1.0))) < 2.0  # 0.014 deg on the default model
+
+
+def test_case1_tvms_spans_four_dimensions_and_translates_along_y_only() -> None:
+    state = _state("case1")
+    contacts = ["f1_tip", "f3_link1", "f3_link2"]
+    assert [c.type for c in state.contacts] == ["F", "F", "F"]
+    assert _reachable(state, contacts).shape[1] == 4
+    translations = _reachable(state, contacts, np.eye(6)[:, :3])
+    assert translations.shape == (6, 1)
+    np.testing.assert_allclose(np.abs(translations[:, 0]), [0, 1, 0, 0, 0, 0], atol=1e-12)
+
+
+def test_case1_s_translations_need_positive_xdot_and_zdot() -> None:
+    """Kinematics: allowed translations = span(e_y) + {t d, t >= 0} with d_x, d_z > 0."""
+    state = _state("case1-s")
+    assert [c.type for c in state.contacts] == ["F", "S", "F"]
+    free, d = _slide_translations(state)
+    assert free.shape == (3, 1)
+    np.testing.assert_allclose(np.abs(free[:, 0]), [0, 1, 0], atol=1e-12)
+    assert d[0] > 0 and d[2] > 0 and abs(d[1]) < 1e-12
+
+
+def _s_alphas(state: GraspState, d: np.ndarray) -> dict[str, float]:
+    dh = d / np.linalg.norm(d)
+    directions = {
+        "d": dh, "d+y": dh + np.array([0, 1, 0]), "+y": [0, 1, 0], "-y": [0, -1, 0], "-d": -dh,
+        "xdot<0": [-dh[0], 0, dh[2]], "zdot<0": [dh[0], 0, -dh[2]], "+x": [1, 0, 0], "+z": [0, 0, 1],
+        "-x": [-1, 0, 0], "-z": [0, 0, -1], "x+z": [1, 0, 1],
+    }  # fmt: skip
+    rvds = np.array([np.r_[v, 0, 0, 0] for v in directions.values()], dtype=float)
+    result = tvmmp(state.with_(rvds=rvds))
+    assert result.feasible and set(result.status[0]) == {"optimal"}
+    return dict(zip(directions, result.alpha[0]))
+
+
+def test_case1_s_tvmmp_moves_only_with_positive_xdot_and_zdot() -> None:
+    state = _state("case1-s")
+    np.testing.assert_allclose(state.rvds, np.kron(np.eye(6)[:3], [[1], [-1]]))
+    _, d = _slide_translations(state)
+    alpha = _s_alphas(state, d)
+    for key in ("-d", "xdot<0", "zdot<0", "+x", "+z", "-x", "-z", "x+z"):
+        assert alpha[key] == 0.0, key
+    assert alpha["d"] > 0 and alpha["d+y"] > 0
+    # finger 1 and finger 3 lie in the x-z plane, so the grasp is symmetric under y -> -y
+    assert alpha["+y"] > 0 and alpha["-y"] == pytest.approx(alpha["+y"], rel=1e-7)
+
+
+def test_case1_humanlike_documented_behaviour() -> None:
+    """Yaw + three pitches (digest): the same beta, but a 3-D TVMS and no pure translation at all."""
+    state = _state("case1", "humanlike")
+    contacts = ["f1_tip", "f3_link1", "f3_link2"]
+    motion = _reachable(state, ["f3_link1", "f3_link2"], np.eye(6)[:, [0, 2, 4]])
+    scaled = SCALE @ motion[:, 0]
+    assert (
+        np.degrees(np.arccos(min(1.0, abs(scaled @ BETA) / np.linalg.norm(scaled) / np.linalg.norm(BETA))))
+        < 2
+    )
+    assert _reachable(state, contacts).shape[1] == 3
+    assert _reachable(state, contacts, np.eye(6)[:, :3]).shape[1] == 0
+    sliding = _state("case1-s", "humanlike")  # with the S-point: only the ray t d, t >= 0 (no y)
+    free, d = _slide_translations(sliding)
+    assert free.shape == (3, 0) and d[0] > 0 and d[2] > 0
+    alpha = _s_alphas(sliding, d)
+    assert alpha["d"] > 0
+    assert alpha["+y"] == alpha["-y"] == alpha["d+y"] == alpha["-d"] == 0.0
+
+
+def test_case2_initial_state_is_a_feasible_grasp_that_can_lift() -> None:
+    """Case 2's initial state (L-points for fingers 2 and 4, base D-point) balances the weight
+    and moves the object along every upward RVDS vertex of eq. 37 (all alphas positive)."""
+    for variant in ("default", "humanlike"):
+        state = _state("case2", variant)
+        assert [c.type for c in state.contacts] == ["D", "F", "L", "F", "L"]
+        result = tvmmp(state)
+        assert result.feasible and set(result.status[0]) == {"optimal"}
+        assert np.all(result.alpha > 0)
+
+
+# -------------------------------------------------------- malformed scenarios
+def _doc(**changes: Any) -> dict[str, Any]:
+    doc = read_scenario("case1")
+    for key, value in changes.items():
+        doc[key] = value
+    return doc
+
+
+@pytest.mark.parametrize(
+    ("doc", "match"),
+    [
+        (_doc(contact_types={"f1_tip": "F", "f3_nail": "F"}),
+         "geom 'f3_nail': named in the scenario's contact_types but not in the model"),
+        (_doc(ignored_geoms=["table"]), "geom 'table': named in the scenario's ignored_geoms"),
+        (_doc(slide_directions={"f3_pad": [1, 0, 0]}), "geom 'f3_pad': named in the scenario's slide_directions"),
+        (_doc(object_body="cup"), "body 'cup': named in the scenario's object_body but not in the model"),
+        (_doc(fingers=[1, 5]), "joint 'f5_yaw0': named in the scenario's fingers"),
+        (_doc(schema="mjtvm.state/1"), "expected a JSON object with schema 'mjtvm.scenario/1'"),
+        ({"schema": "mjtvm.scenario/1", "name": "bare"}, "scenario 'bare': missing keys: object_body"),
+    ],
+)  # fmt: skip
+def test_malformed_scenarios(doc: dict, match: str) -> None:
+    with pytest.raises(ModelError, match=match):
+        load_scenario(doc)
+
+
+def test_unknown_joint_in_solution() -> None:
+    doc = read_scenario("case1")
+    doc["variants"]["default"]["solution"]["qpos"]["f3_knuckle"] = 0.1
+    with pytest.raises(ModelError, match="joint 'f3_knuckle': named in the scenario's solution"):
+        load_scenario(doc)
+    doc["variants"]["default"].pop("solution")
+    with pytest.raises(ModelError, match="variant 'default' has no solution"):
+        load_scenario(doc)
+
+
+def test_no_contact_between_object_and_fingers() -> None:
+    with pytest.raises(
+        ModelError, match=r"no contact between the object and the fingers \(touching: nothing\)"
+    ):
+        load_scenario(_doc(object_position=[0.075, 0.0, 0.5])).state()
+    with pytest.raises(ModelError, match="no contact between the object and the fingers"):
+        load_scenario(_doc(ignored_geoms=["palm", "f1_tip", "f3_link1", "f3_link2"])).state()
+
+
+def test_unreachable_target_and_bad_poses() -> None:
+    far = _doc()
+    far["contacts"][0]["paper"] = [0.175, 0.0, 0.1]  # finger 1 (0.2 m long, from x = -0.1) cannot get there
+    with pytest.raises(
+        ModelError, match=r"IK target 'f1_tip': unreachable: residual 0\.\d+ m above the tolerance"
+    ):
+        solve_variant(far, "default")
+    with pytest.raises(ModelError, match="geom 'palm': touches the object"):
+        solve_variant(_doc(ignored_geoms=[]), "default")
+    deep = _doc()
+    deep["contacts"][0]["offset"] = -0.002  # tip centre 2 mm inside: 7 mm deep, contact 3.5 mm inside
+    with pytest.raises(
+        ModelError, match=r"geom 'f1_tip': contact 3\.50 mm from the paper's point \(> 3 mm\)"
+    ):
+        solve_variant(deep, "default")
+    with pytest.raises(ModelError, match="mg"):
+        load_scenario(_doc(refs=[[0, 0, -1, 0, 0, 0], [0, 0, -2, 0, 0, 0]]), mg=2.0)
+
+
+def test_case2_finger3_in_plane_would_go_below_the_palm() -> None:
+    """Without the out-of-plane start and the pitch0 >= 0 bound, finger 3's elbow dips 15 mm into the palm."""
+    doc = read_scenario("case2")
+    v = doc["variants"]["default"]
+    v["start"].update({"f3_yaw0": 0.0, "f3_yaw1": 0.0, "f3_pitch0": -0.1})
+    v["bounds"].pop("f3_pitch0")
+    with pytest.raises(ModelError, match=r"geom 'f3_link1': goes below the palm \(z = -0\.015"):
+        solve_variant(doc, "default")
