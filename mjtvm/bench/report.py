@@ -1,4 +1,5 @@
-r"""The report of :mod:`mjtvm.bench.suite`: targets, notes on misses, the table, the command line.
+r"""The report of :mod:`mjtvm.bench.suite`: targets, notes on misses, the table (the command
+line that runs the suite and writes them: :mod:`mjtvm.cli.bench`).
 
 Where a target is missed the notes say where the time goes and what would close it, from the
 measured figures of the run (nothing here is a fixed claim).
@@ -6,16 +7,12 @@ measured figures of the run (nothing here is a fixed claim).
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
-from collections.abc import Callable, Sequence
-from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
-from .suite import TARGET_SWEEP_SPEEDUP, TARGETS_S, run_suite
+from .suite import TARGET_SWEEP_SPEEDUP, TARGETS_S
 
-__all__ = ["add_arguments", "auto_notes", "format_suite_table", "main", "run_from_args"]
+__all__ = ["auto_notes", "format_suite_table"]
 
 
 def auto_notes(report: dict[str, Any]) -> list[str]:
@@ -190,85 +187,3 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
         f"total wall time of the run: {report['total_wall_s']:.0f} s",
     ]
     return "\n".join(lines)
-
-
-# ------------------------------------------------------------------ command line
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``scripts/bench.py`` and ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
-    from ..cli import folder, integer, number, removed_option, stem
-
-    parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
-    parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
-                        help="timed calls per Problem 2 state")  # fmt: skip
-    parser.add_argument("--baseline-repeats", type=integer(1), default=10, metavar="N",
-                        help="timed cvxpy calls per state")  # fmt: skip
-    parser.add_argument("--time-limit", type=number(0.0, strict=True), default=120.0, metavar="S",
-                        help="cap of each cdd baseline run (s)")  # fmt: skip
-    parser.add_argument("--out", type=folder, default="results", metavar="DIR",
-                        help="output folder of NAME.json (the report) and NAME.md (the table)")  # fmt: skip
-    parser.add_argument("--name", type=stem, default="bench", help="file stem of the outputs in --out")
-    removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
-    parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
-                        help="text file whose lines are appended to the table's notes")  # fmt: skip
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-
-
-def _steps(quick: bool) -> int:
-    """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
-    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
-
-
-def run_from_args(args: argparse.Namespace, *, emit: Callable[[str], None] = print) -> int:
-    """Run the suite with parsed options, print the table, write NAME.json and NAME.md atomically.
-
-    The output folder is checked and locked before the run (which takes minutes).
-
-    Raises
-    ------
-    OutputError
-        ``--out`` cannot be written or another run holds its lock.
-    StateError
-        The ``--notes`` file cannot be read.
-    """
-    from tqdm import tqdm
-
-    from ..core.files import check_output_dir, output_lock, write_files
-    from ..errors import StateError
-
-    outdir = check_output_dir(args.out)
-    try:
-        extra = args.notes.read_text(encoding="utf-8").rstrip().splitlines() if args.notes else []
-    except (OSError, UnicodeDecodeError) as e:
-        raise StateError("--notes", f"cannot read {args.notes} ({e})") from e
-    with output_lock(outdir):
-        bar = tqdm(total=_steps(args.quick), desc="bench", unit="step", disable=args.quiet)
-
-        started: list[str] = []
-
-        def step(text: str) -> None:  # a step's name is announced at its start: count the previous one
-            if started:
-                bar.update()
-            started.append(text)
-            bar.set_description_str(f"bench: {text}")
-
-        try:
-            report = run_suite(quick=args.quick, repeats=args.repeats, baseline_repeats=args.baseline_repeats,
-                               time_limit=args.time_limit, progress=step)  # fmt: skip
-            bar.update(bar.total - bar.n)
-        finally:
-            bar.close()
-        notes = auto_notes(report) + extra
-        table = format_suite_table(report, notes)
-        report["notes"] = notes
-        out_json, out_md = outdir / f"{args.name}.json", outdir / f"{args.name}.md"
-        write_files({out_json: json.dumps(report, indent=1) + "\n", out_md: "```\n" + table + "\n```\n"})
-    emit(table)
-    emit(f"wrote {out_json} and {out_md}")
-    return 0
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python scripts/bench.py`` (see the module docstring)."""
-    from ..cli import main as cli_main
-
-    return cli_main(["bench", *(sys.argv[1:] if argv is None else argv)])
