@@ -18,14 +18,17 @@ from .values import integer, number
 __all__ = ["add_arguments", "add_bench"]
 
 
+_HELP = "the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling"
+_DESCRIPTION = (
+    "Time the paper's cases (Problem 1 and 2) against the cvxpy and cdd baselines, the full lift, "
+    "the Fig. 9 sweeps on 1 and 2 processes and synthetic hands of 2-16 fingers; write NAME.json "
+    "and NAME.md to --out."
+)
+
+
 def add_bench(sub: Subparsers) -> None:
     """The ``bench`` subcommand (cvxpy, MuJoCo and the pool are imported only when it runs)."""
-    p = command(
-        sub, "bench", "the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling",
-        "Time the paper's cases (Problem 1 and 2) against the cvxpy and cdd baselines, the full lift, "
-        "the Fig. 9 sweeps on 1 and 2 processes and synthetic hands of 2-16 fingers; write NAME.json "
-        "and NAME.md to --out.",
-    )  # fmt: skip
+    p = command(sub, "bench", _HELP, _DESCRIPTION)
     add_arguments(p)
     p.set_defaults(func=_cmd_bench)
 

@@ -12,15 +12,27 @@ from .values import CONTACTS, READINGS, choices, cluster_address, integer, integ
 __all__ = ["add_replay", "add_sweep"]
 
 
-# ------------------------------------------------------------------ replay
-def add_replay(sub: Subparsers) -> None:
-    """``mjtvm replay``: the lift's CSV, JSON and plots, optionally a rerun recording."""
-    p = command(
-        sub, "replay", "TVMMP along the scripted lift of Case 2 (Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
+_TEXTS: dict[str, tuple[str, str]] = {
+    # command: (help in the list of commands, description of its --help)
+    "replay": (
+        "TVMMP along the scripted lift of Case 2 (Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
         "Lift the object along +z to the fingers' reach, solve Problem 2 at every state with fingers 2 "
         "and 4 as L- and S-points, sweep mu and mg (Fig. 9), and write lift.csv, lift.json, "
         "lift-sweeps.csv and fig8/fig9a/fig9b.png to --out, as one set, atomically.",
-    )  # fmt: skip
+    ),
+    "sweep": (
+        "Problem 2 over a grid of lift states and conditions (process pool or Dask)",
+        "TVMMP over the product of the given values (every list is comma-separated); rows written "
+        "to NAME.json and NAME.csv in --out, atomically, with a checkpoint NAME.partial.json of the "
+        "finished rows while it runs (--resume continues from it).",
+    ),
+}
+
+
+# ------------------------------------------------------------------ replay
+def add_replay(sub: Subparsers) -> None:
+    """``mjtvm replay``: the lift's CSV, JSON and plots, optionally a rerun recording."""
+    p = command(sub, "replay", *_TEXTS["replay"])
     lift_options(p, contacts="L,S", reading="physical")
     out_options(p, name=None)
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
@@ -85,12 +97,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------ sweep
 def add_sweep(sub: Subparsers) -> None:
     """``mjtvm sweep``: Problem 2 over a grid, rows to NAME.json and NAME.csv."""
-    p = command(
-        sub, "sweep", "Problem 2 over a grid of lift states and conditions (process pool or Dask)",
-        "TVMMP over the product of the given values (every list is comma-separated); rows written "
-        "to NAME.json and NAME.csv in --out, atomically, with a checkpoint NAME.partial.json of the "
-        "finished rows while it runs (--resume continues from it).",
-    )  # fmt: skip
+    p = command(sub, "sweep", *_TEXTS["sweep"])
     _sweep_grid(p)
     p.add_argument("--jobs", type=integer(1), default=1, help="local worker processes")
     p.add_argument("--cluster", type=cluster_address, default=None, metavar="tcp://HOST:PORT",

@@ -24,7 +24,12 @@ __all__ = [
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse with one-line errors: ``error: --states: expected ... (try 'mjtvm sweep --help')``."""
+    """argparse with one-line errors: ``error: --states: expected ... (try 'mjtvm sweep --help')``,
+    and help that shows the defaults (:class:`Formatter`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", Formatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         message = message.removeprefix("argument ")  # "argument --states: ..." names the option
@@ -47,46 +52,40 @@ class Formatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action) or ""
 
 
-class _Deprecated(argparse.Action):
-    """A hidden old spelling: stores into the new option's destination, with a notice on stderr."""
+class _OldSpelling(argparse.Action):
+    """A hidden old spelling of an option. Deprecated (``use`` the new option): stores into the
+    new option's destination, with a notice on stderr. Removed (``hint``): a one-line error."""
 
-    def __init__(self, option_strings: list[str], dest: str, *, new: str, **kwargs: Any) -> None:
-        self.new = new
+    def __init__(self, option_strings: list[str], dest: str, *, use: str = "", hint: str = "",
+                 **kwargs: Any) -> None:  # fmt: skip
+        self.use, self.hint = use, hint
         super().__init__(option_strings, dest, **kwargs)
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
                  values: Any, option_string: str | None = None) -> None:  # fmt: skip
-        print(f"mjtvm: {option_string} is deprecated, use {self.new}", file=sys.stderr)
+        if self.hint:
+            parser.error(f"{option_string}: no longer an option: {self.hint}")
+        print(f"mjtvm: {option_string} is deprecated, use {self.use}", file=sys.stderr)
         setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
 
 
 def deprecated_alias(parser: argparse.ArgumentParser, old: str, new: argparse.Action) -> None:
     """Accept ``old`` as a hidden alias of the option ``new`` (same type), with a notice."""
     kwargs: dict[str, Any] = {"nargs": 0, "const": new.const} if new.nargs == 0 else {"type": new.type}
-    parser.add_argument(old, dest=new.dest, action=_Deprecated, new=new.option_strings[0],
+    parser.add_argument(old, dest=new.dest, action=_OldSpelling, use=new.option_strings[0],
                         help=argparse.SUPPRESS, default=argparse.SUPPRESS, **kwargs)  # fmt: skip
-
-
-class _Removed(argparse.Action):
-    """A dropped spelling: a one-line error saying what replaced it."""
-
-    def __init__(self, option_strings: list[str], dest: str, *, hint: str, **kwargs: Any) -> None:
-        self.hint = hint
-        super().__init__(option_strings, dest, **kwargs)
-
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
-                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
-        parser.error(f"{option_string}: no longer an option: {self.hint}")
 
 
 def removed_option(parser: argparse.ArgumentParser, old: str, hint: str) -> None:
     """Refuse ``old`` (one value) with a hint, instead of argparse's bare "unrecognized"."""
-    parser.add_argument(old, action=_Removed, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
+    parser.add_argument(
+        old, action=_OldSpelling, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS
+    )
 
 
 def command(sub: Subparsers, name: str, help: str, description: str) -> argparse.ArgumentParser:
-    """A subcommand's parser, with this module's help formatter."""
-    return sub.add_parser(name, help=help, description=description, formatter_class=Formatter)
+    """A subcommand's parser (a :class:`Parser`, like its parent)."""
+    return sub.add_parser(name, help=help, description=description)  # a Parser, with the Formatter
 
 
 # ------------------------------------------------------------ shared option groups

@@ -10,7 +10,7 @@ from importlib import metadata
 from ..errors import MjtvmError, ModelError, OutputError, SolverError, StateError
 from .bench import add_bench
 from .lift import add_replay, add_sweep
-from .options import Formatter, Parser
+from .options import Parser
 from .output import EXIT_FAILURE, EXIT_INPUT, EXIT_INTERRUPTED, EXIT_PIPE, EXIT_SOLVER, stdout_to_devnull
 from .solve import add_export_state, add_solve, add_tvms
 from .verify import verify_parser
@@ -28,7 +28,7 @@ def _version() -> str:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``mjtvm`` (``verify``'s options: :func:`mjtvm.cli.verify.add_arguments`)."""
     parser = Parser(
-        prog="mjtvm", formatter_class=Formatter,
+        prog="mjtvm",
         description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands. "
         "Exit codes: 0 ok, 2 bad input, 3 solver trouble, 130 interrupted (docs/cli.md).",
     )  # fmt: skip

@@ -18,6 +18,23 @@ from .values import integer, number
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path"]
 
 
+_TEXTS: dict[str, tuple[str, str]] = {
+    # command: (help in the list of commands, description of its --help)
+    "solve": (
+        "Problem 2: TVMMP of one mjtvm.state/1 grasp state (prints mjtvm.result/1)",
+        "Solve Problem 2 (eq. 31-35) for STATE and print the mjtvm.result/1 JSON.",
+    ),
+    "export-state": (
+        "print the mjtvm.state/1 grasp state of a scenario, computed by MuJoCo",
+        "Build a scenario's grasp state from the MuJoCo model (mj_forward) and print it.",
+    ),
+    "tvms": (
+        "Problem 1: the exact TVMS polytope and its volume (prints mjtvm.tvms/1)",
+        "Solve Problem 1 (eq. 26-29, 34) for STATE or a scenario and print mjtvm.tvms/1.",
+    ),
+}
+
+
 def example_path(name: str = "pinch.json") -> str:
     """Path of a state shipped in ``mjtvm/data/examples``."""
     return str(resources.files("mjtvm.data").joinpath("examples").joinpath(name))
@@ -30,10 +47,7 @@ def _indent_option(p: argparse.ArgumentParser) -> None:
 # ------------------------------------------------------------------ solve
 def add_solve(sub: Subparsers) -> None:
     """``mjtvm solve [STATE|-]``: prints mjtvm.result/1."""
-    p = command(
-        sub, "solve", "Problem 2: TVMMP of one mjtvm.state/1 grasp state (prints mjtvm.result/1)",
-        "Solve Problem 2 (eq. 31-35) for STATE and print the mjtvm.result/1 JSON.",
-    )  # fmt: skip
+    p = command(sub, "solve", *_TEXTS["solve"])
     p.add_argument(
         "state", nargs="?", default=None,
         help="mjtvm.state/1 JSON file, or - for standard input (default: the shipped example pinch.json)",
@@ -65,10 +79,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------ export-state
 def add_export_state(sub: Subparsers) -> None:
     """``mjtvm export-state --scenario NAME``: prints the scenario's mjtvm.state/1."""
-    p = command(
-        sub, "export-state", "print the mjtvm.state/1 grasp state of a scenario, computed by MuJoCo",
-        "Build a scenario's grasp state from the MuJoCo model (mj_forward) and print it.",
-    )  # fmt: skip
+    p = command(sub, "export-state", *_TEXTS["export-state"])
     p.add_argument(
         "--scenario",
         required=True,
@@ -93,10 +104,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------ tvms
 def add_tvms(sub: Subparsers) -> None:
     """``mjtvm tvms [STATE|-|--scenario NAME]``: prints mjtvm.tvms/1."""
-    p = command(
-        sub, "tvms", "Problem 1: the exact TVMS polytope and its volume (prints mjtvm.tvms/1)",
-        "Solve Problem 1 (eq. 26-29, 34) for STATE or a scenario and print mjtvm.tvms/1.",
-    )  # fmt: skip
+    p = command(sub, "tvms", *_TEXTS["tvms"])
     p.add_argument("state", nargs="?", default=None, help="mjtvm.state/1 JSON file, or - for standard input")
     p.add_argument("--scenario", default=None, help="a scenario instead of a file: case1, case1-s, case2")
     hand_option(p, help="hand model of --scenario: default or humanlike")

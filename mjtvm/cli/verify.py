@@ -15,20 +15,21 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Formatter, Parser, deprecated_alias, out_options
+from .options import Parser, deprecated_alias, out_options
 from .output import EXIT_OK
 from .values import CONTACTS, READINGS, choices, integer, number
 
 __all__ = ["add_arguments", "verify_parser"]
 
+_DESCRIPTION = (
+    "alpha_sim (MuJoCo rollouts, bisection on the speed factor) against alpha_kl along "
+    "the lift; writes NAME.csv and NAME.png (and slide-check.csv) to --out, atomically."
+)
+
 
 def verify_parser() -> argparse.ArgumentParser:
     """The parser of ``mjtvm verify`` (imports MuJoCo: built only when that command runs)."""
-    parser = Parser(
-        prog="mjtvm verify", formatter_class=Formatter,
-        description="alpha_sim (MuJoCo rollouts, bisection on the speed factor) against alpha_kl along "
-        "the lift; writes NAME.csv and NAME.png (and slide-check.csv) to --out, atomically.",
-    )  # fmt: skip
+    parser = Parser(prog="mjtvm verify", description=_DESCRIPTION)
     add_arguments(parser)
     parser.set_defaults(func=_cmd_verify)
     return parser
