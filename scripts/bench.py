@@ -1,4 +1,4 @@
-r"""The mjtvm benchmark run; see :mod:`mjtvm.bench.suite` and :mod:`mjtvm.bench.report`.
+r"""The mjtvm benchmark run; see :mod:`mjtvm.bench.suite`, :mod:`mjtvm.bench.report` and :mod:`mjtvm.cli.bench`.
 
 Usage: ``python scripts/bench.py [--quick] [--repeats 200] [--baseline-repeats 10]
 [--time-limit 120] [--out results] [--name bench] [--notes FILE]``, the same as ``mjtvm bench``

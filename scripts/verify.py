@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Physics check of the TVMMP along the lift: ``python scripts/verify.py --help``.
 
-The same as ``mjtvm verify`` (the options are :func:`mjtvm.physics.verify.add_arguments`; errors,
+The same as ``mjtvm verify`` (the options are :func:`mjtvm.cli.verify.add_arguments`; errors,
 exit codes and interrupts are handled by :func:`mjtvm.cli.main`).
 """
 

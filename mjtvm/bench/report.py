@@ -1,4 +1,5 @@
-r"""The report of :mod:`mjtvm.bench.suite`: targets, notes on misses, the table, the command line.
+r"""The report of :mod:`mjtvm.bench.suite`: targets, notes on misses, the table (the command
+line that runs the suite and writes them: :mod:`mjtvm.cli.bench`).
 
 Where a target is missed the notes say where the time goes and what would close it, from the
 measured figures of the run (nothing here is a fixed claim).
@@ -6,16 +7,12 @@ measured figures of the run (nothing here is a fixed claim).
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
-from collections.abc import Callable, Sequence
-from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
-from .suite import TARGET_SWEEP_SPEEDUP, TARGETS_S, run_suite
+from .suite import TARGET_SWEEP_SPEEDUP, TARGETS_S
 
-__all__ = ["add_arguments", "auto_notes", "format_suite_table", "main", "run_from_args"]
+__all__ = ["auto_notes", "format_suite_table"]
 
 
 def auto_notes(report: dict[str, Any]) -> list[str]:
@@ -79,106 +76,120 @@ def _met(flag: bool | None) -> str:
     return "-" if flag is None else "met" if flag else "NOT met"
 
 
-def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str:
-    """A plain-text table of a :func:`run_suite` report (medians)."""
-    c, t = report["cases"], report["targets"]
-    paper = report["paper_s"]
-    head = (
-        f"{'measurement':<44} {'ours':>10} {'baseline':>24} {'ratio':>7} {'paper':>8} {'target':>9} {'':>7}"
-    )
-    lines = [head, "-" * len(head)]
+_HEAD = f"{'measurement':<44} {'ours':>10} {'baseline':>24} {'ratio':>7} {'paper':>8} {'target':>9} {'':>7}"
 
-    def row(
-        name: str, ours: float | None, base: str, ratio: str, pap: float | None, target: str, met: str
-    ) -> None:
-        lines.append(f"{name:<44} {_ms(ours):>10} {base:>24} {ratio:>7} {_ms(pap):>8} {target:>9} {met:>7}")
 
+def _row(
+    name: str, ours: float | None, base: str, ratio: str, pap: float | None, target: str, met: str
+) -> str:
+    """One line of the main table."""
+    return f"{name:<44} {_ms(ours):>10} {base:>24} {ratio:>7} {_ms(pap):>8} {target:>9} {met:>7}"
+
+
+def _cdd_baseline(r: dict[str, Any]) -> tuple[str, str]:
+    """Problem 1's baseline column and ratio: cdd's wall time, its cap, or skipped."""
+    cdd = r["cdd"]
+    if cdd is None:
+        return "cdd skipped", "-"
+    if cdd["finished"]:
+        return f"cdd {_ms(cdd['wall_s'])}", f"{cdd['wall_s'] / r['lp']['median_s']:.1f}"
+    return f"cdd > {cdd['time_limit_s']:.0f} s (cap)", f">{cdd['time_limit_s'] / r['lp']['median_s']:.1f}"
+
+
+def _case_rows(report: dict[str, Any]) -> list[str]:
+    """The paper's cases: Problem 1 against cdd, Problem 2 against cvxpy."""
+    c, t, paper = report["cases"], report["targets"], report["paper_s"]
+    lines = []
     for key, label in (
         ("case1_p1", "Case 1, Problem 1 (no RVDS)"),
         ("case2_p1", "Case 2 initial, Problem 1 (no RVDS)"),
     ):
-        if key not in c:
-            continue
-        r = c[key]
-        cdd = r["cdd"]
-        if cdd is None:
-            base, ratio = "cdd skipped", "-"
-        elif cdd["finished"]:
-            base, ratio = f"cdd {_ms(cdd['wall_s'])}", f"{cdd['wall_s'] / r['lp']['median_s']:.1f}"
-        else:
-            base, ratio = (
-                f"cdd > {cdd['time_limit_s']:.0f} s (cap)",
-                f">{cdd['time_limit_s'] / r['lp']['median_s']:.1f}",
+        if key in c:
+            base, ratio = _cdd_baseline(c[key])
+            target = f"<= {_ms(TARGETS_S[key])}"
+            lines.append(
+                _row(label, c[key]["lp"]["median_s"], base, ratio, paper[key], target, _met(t.get(key)))
             )
-        row(
-            label, r["lp"]["median_s"], base, ratio, paper[key], f"<= {_ms(TARGETS_S[key])}", _met(t.get(key))
-        )
     for key, label in (
         ("case1_p2", "Case 1, Problem 2 (8 RVDS vertices)"),
         ("case2_p2", "Case 2 initial, Problem 2 (4 RVDS)"),
     ):
-        if key not in c:
-            continue
-        r = c[key]
-        row(
-            label, r["ours"]["median_s"], f"cvxpy {_ms(r['baseline']['median_s'])}",
-            f"{r['ratio_baseline_over_ours']:.1f}", paper[key], f"<= {_ms(TARGETS_S['p2_state'])}", _met(t.get(key)),
-        )  # fmt: skip
-    if "lift" in report:
-        lf = report["lift"]
-        row(
-            f"Full lift, L + S ({lf['num_states']} states, no plots/sweeps)", lf["median_s"], "-", "-", None,
-            f"<= {_ms(TARGETS_S['lift'])}", _met(t.get("lift")),
-        )  # fmt: skip
-    if "sweeps" in report:
-        sw = report["sweeps"]
-        for j, r in sw["per_jobs"].items():
-            extra = " incl. pool start" if j != "1" else ""
-            label = f"Fig. 9 sweeps, {sw['points']} pts, {j} proc{extra}"
-            sp = sw.get("speedup", {}).get(j)
-            row(
-                label, r["median_s"], "-", "-" if sp is None else f"x{sp:.3f}", None,
-                f">= x{TARGET_SWEEP_SPEEDUP}" if j != "1" else "", _met(t.get("sweep_speedup_2")) if j == "2" else "",
-            )  # fmt: skip
-    if "sweeps" in report:
-        sw = report["sweeps"]
+        if key in c:
+            r = c[key]
+            lines.append(_row(
+                label, r["ours"]["median_s"], f"cvxpy {_ms(r['baseline']['median_s'])}",
+                f"{r['ratio_baseline_over_ours']:.1f}", paper[key], f"<= {_ms(TARGETS_S['p2_state'])}", _met(t.get(key)),
+            ))  # fmt: skip
+    return lines
+
+
+def _lift_rows(report: dict[str, Any]) -> list[str]:
+    """The full lift (L and S), against its target."""
+    if "lift" not in report:
+        return []
+    lf = report["lift"]
+    return [_row(
+        f"Full lift, L + S ({lf['num_states']} states, no plots/sweeps)", lf["median_s"], "-", "-", None,
+        f"<= {_ms(TARGETS_S['lift'])}", _met(report["targets"].get("lift")),
+    )]  # fmt: skip
+
+
+def _sweep_rows(report: dict[str, Any]) -> list[str]:
+    """The Fig. 9 sweeps per process count (speed-up against its target), then their runs."""
+    if "sweeps" not in report:
+        return []
+    sw, met = report["sweeps"], _met(report["targets"].get("sweep_speedup_2"))
+    lines = []
+    for j, r in sw["per_jobs"].items():
+        extra = " incl. pool start" if j != "1" else ""
+        sp = sw.get("speedup", {}).get(j)
+        lines.append(_row(
+            f"Fig. 9 sweeps, {sw['points']} pts, {j} proc{extra}", r["median_s"], "-",
+            "-" if sp is None else f"x{sp:.3f}", None,
+            f">= x{TARGET_SWEEP_SPEEDUP}" if j != "1" else "", met if j == "2" else "",
+        ))  # fmt: skip
+    runs = "; ".join(
+        f"{j} proc: " + ", ".join(f"{x:.2f}" for x in r["runs_s"]) for j, r in sw["per_jobs"].items()
+    )
+    lines.append(
+        f"sweeps: {sw['combinations']} (mu, mg) combinations ({sw['distinct_combinations']} distinct) x "
+        f"{sw['num_states']} states; lift build {sw['lift_build_s']:.2f} s; empty 2-worker pool start-up "
+        f"{sw['pool_startup_s'].get('2', float('nan')):.2f} s; runs {runs} s"
+    )
+    return lines
+
+
+def _scaling_rows(report: dict[str, Any]) -> list[str]:
+    """The synthetic hands: time and memory per finger count, the ratios per doubling."""
+    if "scaling" not in report:
+        return []
+    sc = report["scaling"]
+    lines = ["", f"{'fingers':>7} {'joints':>6} {'LPs':>4} {'P2/state':>10} {'P1 (cone)':>10} {'P1 verts':>8} "
+             f"{'traced P2':>10} {'traced P1':>10} {'maxrss':>8}"]  # fmt: skip
+    for f, r in sc["per_fingers"].items():
+        m = r["memory_mib"]
+        tp1 = "-" if m["tracemalloc_peak_p1"] is None else f"{m['tracemalloc_peak_p1']:.1f} MiB"
         lines.append(
-            f"sweeps: {sw['combinations']} (mu, mg) combinations ({sw['distinct_combinations']} distinct) x "
-            f"{sw['num_states']} states; lift build {sw['lift_build_s']:.2f} s; empty 2-worker pool start-up "
-            f"{sw['pool_startup_s'].get('2', float('nan')):.2f} s; runs "
-            + "; ".join(
-                f"{j} proc: " + ", ".join(f"{x:.2f}" for x in r["runs_s"]) for j, r in sw["per_jobs"].items()
-            )
-            + " s"
+            f"{f:>7} {r['joints']:>6} {r['num_lps']:>4} {_ms(r['p2']['median_s']):>10} {_ms(r['p1']['median_s']):>10} "
+            f"{'-' if r['p1_vertices'] is None else r['p1_vertices']:>8} {m['tracemalloc_peak_p2']:>6.2f} MiB "
+            f"{tp1:>10} {m['ru_maxrss']:>4.0f} MiB"
         )
-    if "scaling" in report:
-        sc = report["scaling"]
-        lines += ["", f"{'fingers':>7} {'joints':>6} {'LPs':>4} {'P2/state':>10} {'P1 (cone)':>10} {'P1 verts':>8} "
-                  f"{'traced P2':>10} {'traced P1':>10} {'maxrss':>8}"]  # fmt: skip
-        for f, r in sc["per_fingers"].items():
-            m = r["memory_mib"]
-            tp1 = "-" if m["tracemalloc_peak_p1"] is None else f"{m['tracemalloc_peak_p1']:.1f} MiB"
-            lines.append(
-                f"{f:>7} {r['joints']:>6} {r['num_lps']:>4} {_ms(r['p2']['median_s']):>10} {_ms(r['p1']['median_s']):>10} "
-                f"{'-' if r['p1_vertices'] is None else r['p1_vertices']:>8} {m['tracemalloc_peak_p2']:>6.2f} MiB "
-                f"{tp1:>10} {m['ru_maxrss']:>4.0f} MiB"
-            )
-        lines.append(
-            "ratios (time): "
-            + "; ".join(
-                f"{k} fingers: P2 x{r['p2_time']:.2f}, P1 x{r['p1_time']:.2f}"
-                for k, r in sc["ratios"].items()
-            )
-            + f" -> P2 at most linear in every doubling: {'yes' if sc['p2_at_most_linear'] else 'NO'}"
-            + (
-                ""
-                if sc["p2_loglog_exponent"] is None
-                else f" (log-log exponent over the sizes: {sc['p2_loglog_exponent']:.2f})"
-            )
-        )
-        lines.append(f"scaling hands: {sc['hand']}")
+    ratios = "; ".join(
+        f"{k} fingers: P2 x{r['p2_time']:.2f}, P1 x{r['p1_time']:.2f}" for k, r in sc["ratios"].items()
+    )
+    exponent = sc["p2_loglog_exponent"]
+    lines.append(
+        f"ratios (time): {ratios} -> P2 at most linear in every doubling: {'yes' if sc['p2_at_most_linear'] else 'NO'}"
+        + ("" if exponent is None else f" (log-log exponent over the sizes: {exponent:.2f})")
+    )
+    lines.append(f"scaling hands: {sc['hand']}")
+    return lines
+
+
+def _footer(report: dict[str, Any], notes: Sequence[str]) -> list[str]:
+    """What the figures are, the notes, the machine and the run's wall time."""
     m = report["machine"]
-    lines += [
+    return [
         "",
         "medians over repeats; P2 = tvmmp(state, witnesses=False) (HiGHS, eliminated box), baseline = cvxpy",
         "rebuilt per pair; P1 = tvms(state) by support LPs, baseline = cdd vertex enumeration (child process,",
@@ -189,86 +200,11 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
         f"Python {m['python']}, " + ", ".join(f"{k} {v}" for k, v in m["packages"].items()),
         f"total wall time of the run: {report['total_wall_s']:.0f} s",
     ]
-    return "\n".join(lines)
 
 
-# ------------------------------------------------------------------ command line
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``scripts/bench.py`` and ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
-    from ..cli import folder, integer, number, removed_option, stem
-
-    parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
-    parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
-                        help="timed calls per Problem 2 state")  # fmt: skip
-    parser.add_argument("--baseline-repeats", type=integer(1), default=10, metavar="N",
-                        help="timed cvxpy calls per state")  # fmt: skip
-    parser.add_argument("--time-limit", type=number(0.0, strict=True), default=120.0, metavar="S",
-                        help="cap of each cdd baseline run (s)")  # fmt: skip
-    parser.add_argument("--out", type=folder, default="results", metavar="DIR",
-                        help="output folder of NAME.json (the report) and NAME.md (the table)")  # fmt: skip
-    parser.add_argument("--name", type=stem, default="bench", help="file stem of the outputs in --out")
-    removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
-    parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
-                        help="text file whose lines are appended to the table's notes")  # fmt: skip
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-
-
-def _steps(quick: bool) -> int:
-    """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
-    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
-
-
-def run_from_args(args: argparse.Namespace, *, emit: Callable[[str], None] = print) -> int:
-    """Run the suite with parsed options, print the table, write NAME.json and NAME.md atomically.
-
-    The output folder is checked and locked before the run (which takes minutes).
-
-    Raises
-    ------
-    OutputError
-        ``--out`` cannot be written or another run holds its lock.
-    StateError
-        The ``--notes`` file cannot be read.
-    """
-    from tqdm import tqdm
-
-    from ..core.files import check_output_dir, output_lock, write_files
-    from ..errors import StateError
-
-    outdir = check_output_dir(args.out)
-    try:
-        extra = args.notes.read_text(encoding="utf-8").rstrip().splitlines() if args.notes else []
-    except (OSError, UnicodeDecodeError) as e:
-        raise StateError("--notes", f"cannot read {args.notes} ({e})") from e
-    with output_lock(outdir):
-        bar = tqdm(total=_steps(args.quick), desc="bench", unit="step", disable=args.quiet)
-
-        started: list[str] = []
-
-        def step(text: str) -> None:  # a step's name is announced at its start: count the previous one
-            if started:
-                bar.update()
-            started.append(text)
-            bar.set_description_str(f"bench: {text}")
-
-        try:
-            report = run_suite(quick=args.quick, repeats=args.repeats, baseline_repeats=args.baseline_repeats,
-                               time_limit=args.time_limit, progress=step)  # fmt: skip
-            bar.update(bar.total - bar.n)
-        finally:
-            bar.close()
-        notes = auto_notes(report) + extra
-        table = format_suite_table(report, notes)
-        report["notes"] = notes
-        out_json, out_md = outdir / f"{args.name}.json", outdir / f"{args.name}.md"
-        write_files({out_json: json.dumps(report, indent=1) + "\n", out_md: "```\n" + table + "\n```\n"})
-    emit(table)
-    emit(f"wrote {out_json} and {out_md}")
-    return 0
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python scripts/bench.py`` (see the module docstring)."""
-    from ..cli import main as cli_main
-
-    return cli_main(["bench", *(sys.argv[1:] if argv is None else argv)])
+def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str:
+    """A plain-text table of a :func:`~mjtvm.bench.suite.run_suite` report (medians): the paper's
+    cases, the lift, the sweeps, the scaling hands, then the notes and the machine."""
+    lines = [_HEAD, "-" * len(_HEAD)]
+    lines += _case_rows(report) + _lift_rows(report) + _sweep_rows(report) + _scaling_rows(report)
+    return "\n".join(lines + _footer(report, notes))

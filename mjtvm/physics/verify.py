@@ -16,14 +16,11 @@ or left frictionless (control); it reports the direction of MuJoCo's friction fo
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import math
 import multiprocessing
 import statistics
-import sys
-import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, replace
@@ -44,14 +41,28 @@ from .witness import WitnessKind, witness_drive
 
 _F64 = NDArray[np.float64]
 
-__all__ = ["RUNS", "add_arguments", "run", "slide_check", "summarize", "verify_lift", "verify_state"]
+__all__ = [
+    "RUNS",
+    "alpha_sim",
+    "bisect",
+    "cached_lift",
+    "plot_alpha",
+    "rows_csv",
+    "runs_of",
+    "slide_check",
+    "state_indices",
+    "summarize",
+    "verify_lift",
+    "verify_state",
+]
 
 RUNS = ("L", "S-physical", "S-literal")
 """Hand variants checked: fingers 2 and 4 as L-points, or as S-points of either reading."""
 _LIFTS: dict[tuple[str, int], Lift] = {}
 
 
-def _lift(scenario: str, num_states: int) -> Lift:
+def cached_lift(scenario: str, num_states: int) -> Lift:
+    """The scripted lift of ``scenario`` with ``num_states`` states, built once per process."""
     key = (scenario, num_states)
     if key not in _LIFTS:
         _LIFTS[key] = scripted_lift(scenario, num_states=num_states)
@@ -110,7 +121,7 @@ def _task(args: tuple[str, int, int, str, dict[str, Any]]) -> list[dict[str, Any
     scenario, num_states, index, run, opts = args
     opts = dict(opts)
     opts["settings"] = SimSettings(**opts["settings"])
-    return verify_state(_lift(scenario, num_states), index, run, **opts)
+    return verify_state(cached_lift(scenario, num_states), index, run, **opts)
 
 
 def verify_lift(
@@ -152,7 +163,7 @@ def verify_lift(
 
         check_output_dir(out, option="out")
     st = settings or SimSettings()
-    indices = sorted({*range(0, num_states, stride), num_states - 1})
+    indices = state_indices(num_states, stride)
     opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness}
     tasks = [(scenario, num_states, i, r, opts) for r in runs for i in indices]
     rows: list[dict[str, Any]] = []
@@ -182,14 +193,20 @@ def verify_lift(
         from ..core.files import check_output_dir, write_files
 
         outdir = check_output_dir(out, option="out")
-        files: dict[Path, bytes | str] = {outdir / f"{name}.csv": _csv(rows)}
+        files: dict[Path, bytes | str] = {outdir / f"{name}.csv": rows_csv(rows)}
         if plot:
-            files[outdir / f"{name}.png"] = _plot(rows, f"{scenario}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
+            files[outdir / f"{name}.png"] = plot_alpha(rows, f"{scenario}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
         write_files(files, option="out")
     return rows
 
 
-def _csv(rows: Sequence[dict[str, Any]]) -> str:
+def state_indices(num_states: int, stride: int) -> list[int]:
+    """Every ``stride``-th state of the lift, and the last."""
+    return sorted({*range(0, num_states, stride), num_states - 1})
+
+
+def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
+    """The rows as CSV (columns in order of first appearance, floats to 6 significant digits)."""
     cols = list(dict.fromkeys(k for r in rows for k in r))
     buf = io.StringIO(newline="")
     w = csv.DictWriter(buf, fieldnames=cols)
@@ -208,7 +225,8 @@ def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndar
     return z, np.array([min(by[k]) if not any(math.isnan(v) for v in by[k]) else math.nan for k in z])
 
 
-def _plot(rows: Sequence[dict[str, Any]], title: str) -> bytes:
+def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
+    """PNG of the TVMMP (LP) and the minimum alpha_sim over the RVDS vertices along z, per run."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -312,125 +330,9 @@ def _cos(a: np.ndarray, b: np.ndarray) -> float:
     return float(a @ b) / na if na > 1e-9 else math.nan
 
 
-# ------------------------------------------------------------------- command
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
-    from ..cli import READINGS as readings
-    from ..cli import choices, deprecated_alias, folder, integer, number, stem
-
-    p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
-    p.add_argument(
-        "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
-    )
-    p.add_argument(
-        "--stride", type=integer(1), default=1, metavar="N", help="check every N-th state (and the last)"
-    )
-    p.add_argument("--contacts", type=choices(("L", "S")), default="L,S", metavar="L,S",
-                   help="contact types of fingers 2 and 4 to check")  # fmt: skip
-    p.add_argument("--reading", type=choices(readings, every="both"), default="both", metavar="READING",
-                   help="slide directions of the S-points: physical, literal or both")  # fmt: skip
-    p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
-    p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
-    p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
-    p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")
-    p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
-                   help="how worker processes start")  # fmt: skip
-    p.add_argument("--witness", default="central", choices=("central", "vertex"),
-                   help="drive the central solution of the LP or the simplex vertex")  # fmt: skip
-    p.add_argument("--armature-scale", type=number(0.0, strict=True), default=1.0,
-                   help="ablation: scale the rotor inertia (armature)")  # fmt: skip
-    p.add_argument("--window", type=number(0.0, strict=True), default=SimSettings.window,
-                   help="measurement window of a rollout (s)")  # fmt: skip
-    p.add_argument("--startup", type=number(0.0), default=SimSettings.startup,
-                   help="settling time before the window (s)")  # fmt: skip
-    p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"),
-                   help="MuJoCo friction cone")  # fmt: skip
-    p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
-    p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
-    p.add_argument("--out", type=folder, default="results", metavar="DIR",
-                   help="output folder (created if missing; locked while the run writes)")  # fmt: skip
-    p.add_argument("--name", type=stem, default="verify", help="file stem of the CSV and PNG in --out")
-    new = p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
-    deprecated_alias(p, "--no-plot", new)
-    p.add_argument("--rrd", default=None, metavar="FILE", help="also write a rerun recording of the results")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-
-
-def _runs(text: str) -> tuple[str, ...]:
-    runs = tuple(r.strip() for r in text.split(","))
-    if not text.strip() or len(set(runs)) != len(runs) or any(r not in RUNS for r in runs):
-        raise argparse.ArgumentTypeError(f"expected distinct values among {','.join(RUNS)}, got {text!r}")
-    return runs
-
-
-class _RunsAlias(argparse.Action):
-    """The old ``--runs L,S-literal``: deprecated, the same as ``--contacts L,S --reading literal``."""
-
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
-                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
-        print(f"mjtvm: {option_string} is deprecated, use --contacts and --reading", file=sys.stderr)
-        namespace.contacts = tuple(dict.fromkeys(r.split("-")[0] for r in values))
-        readings = tuple(r.split("-")[1] for r in values if "-" in r)
-        namespace.reading = readings or namespace.reading
-
-
 def runs_of(contacts: Sequence[str], readings: Sequence[str]) -> list[str]:
-    """The :data:`RUNS` of ``--contacts`` and ``--reading``: L once, S once per reading."""
+    """The :data:`RUNS` of contact types (``L``, ``S``) and readings: L once, S once per reading."""
     return [r for r in RUNS if r.split("-")[0] in contacts and (r == "L" or r.split("-")[1] in readings)]
-
-
-def run(args: argparse.Namespace) -> int:
-    """Run ``mjtvm verify`` with parsed :func:`add_arguments` options; print the summary.
-
-    The output folder is checked and locked before any work; the CSV, PNG and the slide
-    check's CSV are written together, atomically, at the end (:mod:`mjtvm.core.files`).
-    """
-    from ..core.files import check_output_dir, output_lock, write_files
-
-    settings = SimSettings(armature_scale=args.armature_scale, window=args.window, startup=args.startup,
-                           cone=args.cone, track=not args.no_track)  # fmt: skip
-    outdir = check_output_dir(args.out)
-    if args.rrd is not None:
-        check_output_dir(Path(args.rrd).parent, option="--rrd")
-    with output_lock(outdir):
-        t0 = time.perf_counter()
-        rows = verify_lift(
-            args.scenario, num_states=args.states, stride=args.stride, runs=runs_of(args.contacts, args.reading),
-            mu=args.mu, mg=args.mg, settings=settings, witness=args.witness, jobs=args.jobs,
-            start_method=args.start_method, out=None, progress=not args.quiet,
-        )  # fmt: skip
-        wall = time.perf_counter() - t0
-        files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": _csv(rows)}
-        if not args.no_plots:
-            files[outdir / f"{args.name}.png"] = _plot(
-                rows, f"{args.scenario}: $\\mu$ = {args.mu:g}, $mg$ = {args.mg:g} N"
-            )
-        srows: list[dict[str, Any]] = []
-        if args.slide_check:
-            lift = _lift(args.scenario, args.states)
-            idx = sorted({*range(0, args.states, args.stride), args.states - 1})
-            srows = slide_check(lift, idx, mu=args.mu, mg=args.mg, settings=settings)
-            files[outdir / "slide-check.csv"] = _csv(srows)
-        write_files(files)
-    for run_name, s in summarize(rows).items():
-        print(
-            f"{run_name}: "
-            + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
-        )
-    print(f"wall time {wall:.1f} s ({args.jobs} job(s)); rows in {outdir / (args.name + '.csv')}")
-    if args.slide_check:
-        for mode in ("physical", "literal", "frictionless"):
-            sel = [r for r in srows if r["mode"] == mode]
-            fc = [r["friction_cos_phys"] for r in sel if not math.isnan(r["friction_cos_phys"])]
-            print(f"slide check {mode}: friction cos with physical slide direction: median "
-                  f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
-                  f"/{len(sel) // 2} states")  # fmt: skip
-    if args.rrd is not None:
-        from ..viewer.viz import record_verify  # rerun is imported only here
-
-        record_verify(rows, args.rrd)
-        print(f"wrote {args.rrd}")
-    return 0
 
 
 # ----------------------------------------------------------------- bisection

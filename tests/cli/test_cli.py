@@ -221,13 +221,16 @@ def test_deprecated_spellings_still_work_with_a_notice(tmp_path, capsys):
 
 @pytest.mark.parametrize("command", [["sweep"], ["replay"], ["verify"], ["bench", "--quick"]])
 def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys, monkeypatch):
+    import mjtvm.apps.replay  # imported before the patches below: they must not bind the stubs
     import mjtvm.apps.sweep
+    import mjtvm.bench.suite
+    import mjtvm.physics.verify
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("work started before --out was checked")
 
     monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep", no_work)
-    monkeypatch.setattr("mjtvm.bench.report.run_suite", no_work)
+    monkeypatch.setattr("mjtvm.bench.suite.run_suite", no_work)
     monkeypatch.setattr("mjtvm.sim.trajectory.scripted_lift", no_work)
     monkeypatch.setattr("mjtvm.apps.replay.scripted_lift", no_work)
     monkeypatch.setattr("mjtvm.physics.verify.verify_lift", no_work)
@@ -361,13 +364,14 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert capsys.readouterr().err == ""
 
     from mjtvm.bench import report as bench_report
+    from mjtvm.bench import suite as bench_suite
 
     def suite(**kwargs):
         for step in ("case 1, problem 1", "case 1, problem 2", "scaling"):
             kwargs["progress"](step)
         return {"schema": "mjtvm.bench.timing-suite/1"}
 
-    monkeypatch.setattr(bench_report, "run_suite", suite)
+    monkeypatch.setattr(bench_suite, "run_suite", suite)
     monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
     monkeypatch.setattr(bench_report, "format_suite_table", lambda report, notes: "TABLE")
     assert main(["bench", "--quick", "--out", str(tmp_path), "--name", "b"]) == 0

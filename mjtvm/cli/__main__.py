@@ -1,0 +1,9 @@
+"""``python -m mjtvm.cli``: the ``mjtvm`` command."""
+
+from __future__ import annotations
+
+import sys
+
+from .parser import main
+
+sys.exit(main())

@@ -1,0 +1,119 @@
+"""``mjtvm bench`` (and ``scripts/bench.py``): the suite of :mod:`mjtvm.bench.suite`, its report
+(:mod:`mjtvm.bench.report`) printed and written to NAME.json and NAME.md."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from ..errors import StateError
+from .options import Subparsers, command, out_options, removed_option
+from .output import EXIT_OK, emit
+from .values import integer, number
+
+__all__ = ["add_arguments", "add_bench"]
+
+
+_HELP = "the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling"
+_DESCRIPTION = (
+    "Time the paper's cases (Problem 1 and 2) against the cvxpy and cdd baselines, the full lift, "
+    "the Fig. 9 sweeps on 1 and 2 processes and synthetic hands of 2-16 fingers; write NAME.json "
+    "and NAME.md to --out."
+)
+
+
+def add_bench(sub: Subparsers) -> None:
+    """The ``bench`` subcommand (cvxpy, MuJoCo and the pool are imported only when it runs)."""
+    p = command(sub, "bench", _HELP, _DESCRIPTION)
+    add_arguments(p)
+    p.set_defaults(func=_cmd_bench)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
+    parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
+    parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
+                        help="timed calls per Problem 2 state")  # fmt: skip
+    parser.add_argument("--baseline-repeats", type=integer(1), default=10, metavar="N",
+                        help="timed cvxpy calls per state")  # fmt: skip
+    parser.add_argument("--time-limit", type=number(0.0, strict=True), default=120.0, metavar="S",
+                        help="cap of each cdd baseline run (s)")  # fmt: skip
+    out_options(
+        parser, name="bench", out_help="output folder of NAME.json (the report) and NAME.md (the table)"
+    )
+    removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
+    parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
+                        help="text file whose lines are appended to the table's notes")  # fmt: skip
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _steps(quick: bool) -> int:
+    """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
+    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
+
+
+def _read_notes(path: Path | None) -> list[str]:
+    """The lines of the ``--notes`` file (none without one)."""
+    try:
+        return path.read_text(encoding="utf-8").rstrip().splitlines() if path else []
+    except (OSError, UnicodeDecodeError) as e:
+        raise StateError("--notes", f"cannot read {path} ({e})") from e
+
+
+@contextlib.contextmanager
+def _step_bar(total: int, quiet: bool) -> Iterator[Callable[[str], None]]:
+    """A progress bar on stderr, advanced as the suite announces its next step; full on success."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, desc="bench", unit="step", disable=quiet)
+    started: list[str] = []
+
+    def step(text: str) -> None:  # a step's name is announced at its start: count the previous one
+        if started:
+            bar.update()
+        started.append(text)
+        bar.set_description_str(f"bench: {text}")
+
+    try:
+        yield step
+        bar.update(bar.total - bar.n)
+    finally:
+        bar.close()
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    """Run the suite with parsed options, print the table, write NAME.json and NAME.md atomically.
+
+    The output folder is checked and locked before the run (which takes minutes).
+
+    Raises
+    ------
+    OutputError
+        ``--out`` cannot be written or another run holds its lock.
+    StateError
+        The ``--notes`` file cannot be read.
+    """
+    from ..bench import report as bench_report
+    from ..bench import suite
+    from ..core.files import check_output_dir, output_lock, write_files
+
+    outdir = check_output_dir(args.out)
+    extra = _read_notes(args.notes)
+    with output_lock(outdir):
+        with _step_bar(_steps(args.quick), args.quiet) as step:
+            report: dict[str, Any] = suite.run_suite(
+                quick=args.quick, repeats=args.repeats, baseline_repeats=args.baseline_repeats,
+                time_limit=args.time_limit, progress=step,
+            )  # fmt: skip
+        notes = bench_report.auto_notes(report) + extra
+        table = bench_report.format_suite_table(report, notes)
+        report["notes"] = notes
+        out_json, out_md = outdir / f"{args.name}.json", outdir / f"{args.name}.md"
+        write_files({out_json: json.dumps(report, indent=1) + "\n", out_md: "```\n" + table + "\n```\n"})
+    emit(table)
+    emit(f"wrote {out_json} and {out_md}")
+    return EXIT_OK

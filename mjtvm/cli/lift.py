@@ -1,0 +1,137 @@
+"""The commands along the scripted lift: ``replay`` (Fig. 8 and 9, recording) and ``sweep`` (a grid)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .options import Subparsers, command, deprecated_alias, lift_options, out_options
+from .output import EXIT_OK, emit
+from .values import CONTACTS, READINGS, choices, cluster_address, integer, integers, names, numbers
+
+__all__ = ["add_replay", "add_sweep"]
+
+
+_TEXTS: dict[str, tuple[str, str]] = {
+    # command: (help in the list of commands, description of its --help)
+    "replay": (
+        "TVMMP along the scripted lift of Case 2 (Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
+        "Lift the object along +z to the fingers' reach, solve Problem 2 at every state with fingers 2 "
+        "and 4 as L- and S-points, sweep mu and mg (Fig. 9), and write lift.csv, lift.json, "
+        "lift-sweeps.csv and fig8/fig9a/fig9b.png to --out, as one set, atomically.",
+    ),
+    "sweep": (
+        "Problem 2 over a grid of lift states and conditions (process pool or Dask)",
+        "TVMMP over the product of the given values (every list is comma-separated); rows written "
+        "to NAME.json and NAME.csv in --out, atomically, with a checkpoint NAME.partial.json of the "
+        "finished rows while it runs (--resume continues from it).",
+    ),
+}
+
+
+# ------------------------------------------------------------------ replay
+def add_replay(sub: Subparsers) -> None:
+    """``mjtvm replay``: the lift's CSV, JSON and plots, optionally a rerun recording."""
+    p = command(sub, "replay", *_TEXTS["replay"])
+    lift_options(p, contacts="L,S", reading="physical")
+    out_options(p, name=None)
+    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
+    p.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument(
+        "--rrd", metavar="FILE", default=None,
+        help="also write a rerun recording of the lift (scene, contacts, velocity polytopes, TVMMP, "
+        "joint operation points); open it with `rerun FILE`",
+    )  # fmt: skip
+    p.add_argument("--spawn", action="store_true", help="also stream the recording to a new rerun viewer")
+    p.add_argument(
+        "--tvms-every", type=integer(0), default=5, metavar="N",
+        help="TVMS (Problem 1) in the recording at every N-th state and the last; 0: never",
+    )  # fmt: skip
+    p.set_defaults(func=_cmd_replay)
+
+
+def check_file_folder(path: str | None, option: str) -> None:
+    """Check, before any work, that the folder of an output file (``--rrd``) can be written."""
+    if path is not None:
+        from ..core.files import check_output_dir
+
+        check_output_dir(Path(path).parent if str(Path(path).parent) else ".", option=option)
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from ..apps.replay import ReplayOutput, run_replay  # MuJoCo and matplotlib: only the coupling commands
+    from ..core.files import check_output_dir, output_lock
+    from ..viewer.recording import RecordingJob, start_recording
+
+    outdir = check_output_dir(args.out)
+    check_file_folder(args.rrd, "--rrd")
+    jobs: list[RecordingJob] = []
+
+    def record(replayed: ReplayOutput) -> None:  # rerun: only in the recording's process
+        jobs.append(start_recording(replayed, args.rrd, spawn=args.spawn, tvms_every=args.tvms_every))
+
+    with output_lock(outdir):
+        try:
+            out = run_replay(
+                scenario=args.scenario, hand=args.hand, mu=args.mu, mg=args.mg, num_states=args.states,
+                variants=args.contacts, readings=args.reading, out=outdir,
+                plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
+                on_replay=record if args.rrd is not None or args.spawn else None,
+            )  # fmt: skip
+        except BaseException:
+            for job in jobs:
+                job.cancel()
+            raise
+        infos = [job.result() for job in jobs]
+    lift = out.lift
+    emit(f"lift: {lift.num_states} states, z = {lift.z[0]:.4f} .. {lift.z[-1]:.4f} m ({lift.limit})")
+    for name, path in out.files.items():
+        emit(f"wrote {name}: {path}")
+    for info in infos:
+        if args.rrd is not None:
+            emit(f"wrote {Path(args.rrd).name}: {args.rrd} ({info['seconds']:.2f} s)")
+    return EXIT_OK
+
+
+# ------------------------------------------------------------------ sweep
+def add_sweep(sub: Subparsers) -> None:
+    """``mjtvm sweep``: Problem 2 over a grid, rows to NAME.json and NAME.csv."""
+    p = command(sub, "sweep", *_TEXTS["sweep"])
+    _sweep_grid(p)
+    p.add_argument("--jobs", type=integer(1), default=1, help="local worker processes")
+    p.add_argument("--cluster", type=cluster_address, default=None, metavar="tcp://HOST:PORT",
+                   help="Dask scheduler address (overrides --jobs; connection timeout 10 s)")  # fmt: skip
+    out_options(p, name="sweep")
+    p.add_argument("--resume", action="store_true",
+                   help="keep the finished rows of NAME.partial.json / NAME.json that belong to this grid")  # fmt: skip
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_sweep)
+
+
+def _sweep_grid(p: argparse.ArgumentParser) -> None:
+    """The grid's axes: scenarios, hands, contacts, readings, mu, mg and the lift's states."""
+    p.add_argument("--scenario", type=names, default="case2", help="scenarios")
+    p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
+    new = p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
+                         help="contact types of fingers 2 and 4")  # fmt: skip
+    deprecated_alias(p, "--variants", new)
+    new = p.add_argument("--reading", type=choices(READINGS, every="both"), default="physical",
+                         metavar="READING", help="slide directions of S-points: physical, literal or both")  # fmt: skip
+    deprecated_alias(p, "--readings", new)
+    p.add_argument("--mu", type=numbers(0.0), default="0.3", help="friction coefficients")
+    p.add_argument("--mg", type=numbers(0.0), default="1.0", help="object weights (N)")
+    new = p.add_argument("--states", type=integer(2, hint="state indices are --state-indices"),
+                         default=30, metavar="N", help="number of states along the lift")  # fmt: skip
+    deprecated_alias(p, "--num-states", new)
+    p.add_argument("--state-indices", type=integers(0), default=None, metavar="I,J",
+                   help="solve only these states of the lift (default: all)")  # fmt: skip
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from ..apps.sweep import run_sweep_files
+
+    files = run_sweep_files(args, emit=emit)
+    for path in files:
+        emit(f"wrote {path}")
+    return EXIT_OK

@@ -1,0 +1,127 @@
+"""The parser and help formatter, old spellings (deprecated or removed), and option groups that
+several commands share (the vocabulary of ``docs/cli.md``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING, Any, NoReturn
+
+from .output import EXIT_INPUT
+from .values import CONTACTS, READINGS, choices, folder, integer, number, stem
+
+__all__ = [
+    "Formatter",
+    "Parser",
+    "Subparsers",
+    "command",
+    "deprecated_alias",
+    "hand_option",
+    "lift_options",
+    "out_options",
+    "removed_option",
+]
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``error: --states: expected ... (try 'mjtvm sweep --help')``,
+    and help that shows the defaults (:class:`Formatter`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", Formatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        message = message.removeprefix("argument ")  # "argument --states: ..." names the option
+        self.exit(EXIT_INPUT, f"error: {message} (try '{self.prog} --help')\n")
+
+
+if TYPE_CHECKING:
+    Subparsers = argparse._SubParsersAction[Parser]
+else:
+    Subparsers = argparse._SubParsersAction
+"""The subcommands of ``mjtvm`` (``parser.add_subparsers()``)."""
+
+
+class Formatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Show every option's default, except for flags (off) and options without one."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        if action.default is None or isinstance(action.default, bool) or action.default is argparse.SUPPRESS:
+            return action.help or ""
+        return super()._get_help_string(action) or ""
+
+
+class _OldSpelling(argparse.Action):
+    """A hidden old spelling of an option. Deprecated (``use`` the new option): stores into the
+    new option's destination, with a notice on stderr. Removed (``hint``): a one-line error."""
+
+    def __init__(self, option_strings: list[str], dest: str, *, use: str = "", hint: str = "",
+                 **kwargs: Any) -> None:  # fmt: skip
+        self.use, self.hint = use, hint
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
+        if self.hint:
+            parser.error(f"{option_string}: no longer an option: {self.hint}")
+        print(f"mjtvm: {option_string} is deprecated, use {self.use}", file=sys.stderr)
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+
+
+def deprecated_alias(parser: argparse.ArgumentParser, old: str, new: argparse.Action) -> None:
+    """Accept ``old`` as a hidden alias of the option ``new`` (same type), with a notice."""
+    kwargs: dict[str, Any] = {"nargs": 0, "const": new.const} if new.nargs == 0 else {"type": new.type}
+    parser.add_argument(old, dest=new.dest, action=_OldSpelling, use=new.option_strings[0],
+                        help=argparse.SUPPRESS, default=argparse.SUPPRESS, **kwargs)  # fmt: skip
+
+
+def removed_option(parser: argparse.ArgumentParser, old: str, hint: str) -> None:
+    """Refuse ``old`` (one value) with a hint, instead of argparse's bare "unrecognized"."""
+    parser.add_argument(
+        old, action=_OldSpelling, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS
+    )
+
+
+def command(sub: Subparsers, name: str, help: str, description: str) -> argparse.ArgumentParser:
+    """A subcommand's parser (a :class:`Parser`, like its parent)."""
+    return sub.add_parser(name, help=help, description=description)  # a Parser, with the Formatter
+
+
+# ------------------------------------------------------------ shared option groups
+_OUT_HELP = "output folder (created if missing; locked while the run writes)"
+
+
+def out_options(p: argparse.ArgumentParser, *, name: str | None, out_help: str = _OUT_HELP,
+                name_help: str = "file stem of the outputs in --out") -> None:  # fmt: skip
+    """``--out DIR`` and (unless ``name`` is None) ``--name STEM`` with the default ``name``."""
+    p.add_argument("--out", type=folder, default="results", metavar="DIR", help=out_help)
+    if name is not None:
+        p.add_argument("--name", type=stem, default=name, help=name_help)
+
+
+def hand_option(p: argparse.ArgumentParser, help: str = "hand model: default or humanlike") -> None:
+    """``--hand`` (the old ``--variant`` too)."""
+    new = p.add_argument("--hand", default="default", help=help)
+    deprecated_alias(p, "--variant", new)
+
+
+def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> None:
+    """The scripted lift of ``replay``: scenario, hand, friction, weight, states, contacts, reading."""
+    p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
+    hand_option(p)
+    p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
+    p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
+    p.add_argument(
+        "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
+    )
+    new = p.add_argument(
+        "--contacts", type=choices(CONTACTS), default=contacts, metavar="L,S",
+        help="contact types of fingers 2 and 4 (L: line/rolling, S: sliding), comma-separated",
+    )  # fmt: skip
+    deprecated_alias(p, "--variants", new)
+    p.add_argument(
+        "--reading", type=choices(READINGS, every="both"), default=reading, metavar="READING",
+        help="slide direction of S-points: physical (the slip of the min-norm motion), literal "
+        "(the paper's printed vector), a comma list, or both",
+    )  # fmt: skip

@@ -1,0 +1,77 @@
+"""Exit codes, standard output (flushed per line; a closed pipe ends quietly) and the LP spinner."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
+from typing import Any
+
+from ..errors import OutputError
+
+__all__ = [
+    "EXIT_FAILURE",
+    "EXIT_INPUT",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "EXIT_PIPE",
+    "EXIT_SOLVER",
+    "emit",
+    "lp_progress",
+    "stdout_to_devnull",
+]
+
+EXIT_OK, EXIT_FAILURE, EXIT_INPUT, EXIT_SOLVER, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 130, 141
+
+
+def stdout_to_devnull() -> None:
+    """Point file descriptor 1 at /dev/null so that the interpreter's final flush is silent
+    (the recipe of Python's signal documentation for SIGPIPE)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # captured in-process: nothing to redirect
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
+def emit(text: str) -> None:
+    """Print a line to stdout and flush, so that a full or closed stdout is reported here."""
+    try:
+        sys.stdout.write(text + "\n")
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise
+    except OSError as e:
+        stdout_to_devnull()
+        raise OutputError("standard output", getattr(sys.stdout, "name", "<stdout>"),
+                          f"cannot write ({e.strerror or e})") from e  # fmt: skip
+
+
+@contextlib.contextmanager
+def lp_progress(enabled: bool, desc: str) -> Iterator[None]:
+    """A spinner on stderr counting the HiGHS solves (Problem 1 does not know their number
+    in advance: the projection adds facets until the polytope closes)."""
+    if not enabled:
+        yield
+        return
+    import highspy
+    from tqdm import tqdm
+
+    bar = tqdm(desc=desc, unit=" LP", file=sys.stderr, mininterval=0.25, leave=False)
+    original = highspy.Highs.run
+
+    def run(self: Any) -> Any:
+        try:
+            return original(self)
+        finally:
+            bar.update()
+
+    highspy.Highs.run = run  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        highspy.Highs.run = original  # type: ignore[method-assign]
+        bar.close()

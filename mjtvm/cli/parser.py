@@ -1,0 +1,81 @@
+"""The ``mjtvm`` parser (one builder per command group) and :func:`main`: errors to exit codes."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from importlib import metadata
+
+from ..errors import MjtvmError, ModelError, OutputError, SolverError, StateError
+from .bench import add_bench
+from .lift import add_replay, add_sweep
+from .options import Parser
+from .output import EXIT_FAILURE, EXIT_INPUT, EXIT_INTERRUPTED, EXIT_PIPE, EXIT_SOLVER, stdout_to_devnull
+from .solve import add_export_state, add_solve, add_tvms
+from .verify import verify_parser
+
+__all__ = ["build_parser", "main"]
+
+
+def _version() -> str:
+    try:
+        return metadata.version("mjtvm")
+    except metadata.PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``mjtvm`` (``verify``'s options: :func:`mjtvm.cli.verify.add_arguments`)."""
+    parser = Parser(
+        prog="mjtvm",
+        description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands. "
+        "Exit codes: 0 ok, 2 bad input, 3 solver trouble, 130 interrupted (docs/cli.md).",
+    )  # fmt: skip
+    parser.add_argument("--version", action="version", version=f"mjtvm {_version()}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    add_solve(sub)
+    add_export_state(sub)
+    add_replay(sub)
+    add_tvms(sub)
+    sub.add_parser(
+        "verify", add_help=False,  # its options import MuJoCo: parsed by verify_parser() in main()
+        help="check TVMMP along the lift against MuJoCo rollouts with the dcmotor actuators",
+    )  # fmt: skip
+    add_sweep(sub)
+    add_bench(sub)
+    return parser
+
+
+def _parse(words: list[str]) -> argparse.Namespace:
+    if words[:1] == ["verify"]:
+        return verify_parser().parse_args(words[1:])
+    return build_parser().parse_args(words)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mjtvm`` console script; returns the exit code (:mod:`mjtvm.cli`)."""
+    words = list(sys.argv[1:] if argv is None else argv)
+    try:
+        try:
+            args = _parse(words)
+        except SystemExit as e:  # --help, --version and argparse's (one-line) errors
+            return e.code if isinstance(e.code, int) else EXIT_INPUT
+        code: int = args.func(args)
+        sys.stdout.flush()  # a closed or full stdout is reported here, not at interpreter exit
+        return code
+    except KeyboardInterrupt:
+        print("mjtvm: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        stdout_to_devnull()
+        return EXIT_PIPE
+    except (StateError, ModelError, OutputError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except SolverError as e:
+        print(f"solver error: {e}", file=sys.stderr)
+        return EXIT_SOLVER
+    except MjtvmError as e:  # e.g. a RecordingError
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_FAILURE

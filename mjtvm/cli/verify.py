@@ -1,0 +1,164 @@
+"""``mjtvm verify``: the physics check of :mod:`mjtvm.physics.verify` on the command line.
+
+Its parser is built only when the command runs (the options' defaults come from
+:class:`~mjtvm.physics.simulate.SimSettings`, which imports MuJoCo).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from .options import Parser, deprecated_alias, out_options
+from .output import EXIT_OK
+from .values import CONTACTS, READINGS, choices, integer, number
+
+__all__ = ["add_arguments", "verify_parser"]
+
+_DESCRIPTION = (
+    "alpha_sim (MuJoCo rollouts, bisection on the speed factor) against alpha_kl along "
+    "the lift; writes NAME.csv and NAME.png (and slide-check.csv) to --out, atomically."
+)
+
+
+def verify_parser() -> argparse.ArgumentParser:
+    """The parser of ``mjtvm verify`` (imports MuJoCo: built only when that command runs)."""
+    parser = Parser(prog="mjtvm verify", description=_DESCRIPTION)
+    add_arguments(parser)
+    parser.set_defaults(func=_cmd_verify)
+    return parser
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
+    p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
+    p.add_argument(
+        "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
+    )
+    p.add_argument(
+        "--stride", type=integer(1), default=1, metavar="N", help="check every N-th state (and the last)"
+    )
+    p.add_argument("--contacts", type=choices(CONTACTS), default="L,S", metavar="L,S",
+                   help="contact types of fingers 2 and 4 to check")  # fmt: skip
+    p.add_argument("--reading", type=choices(READINGS, every="both"), default="both", metavar="READING",
+                   help="slide directions of the S-points: physical, literal or both")  # fmt: skip
+    p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
+    p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
+    p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
+    p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")
+    p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
+                   help="how worker processes start")  # fmt: skip
+    p.add_argument("--witness", default="central", choices=("central", "vertex"),
+                   help="drive the central solution of the LP or the simplex vertex")  # fmt: skip
+    _simulation_options(p)
+    p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
+    out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
+    new = p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
+    deprecated_alias(p, "--no-plot", new)
+    p.add_argument("--rrd", default=None, metavar="FILE", help="also write a rerun recording of the results")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _simulation_options(p: argparse.ArgumentParser) -> None:
+    """The rollouts' :class:`~mjtvm.physics.simulate.SimSettings` (ablations)."""
+    from ..physics.simulate import SimSettings  # MuJoCo
+
+    p.add_argument("--armature-scale", type=number(0.0, strict=True), default=1.0,
+                   help="ablation: scale the rotor inertia (armature)")  # fmt: skip
+    p.add_argument("--window", type=number(0.0, strict=True), default=SimSettings.window,
+                   help="measurement window of a rollout (s)")  # fmt: skip
+    p.add_argument("--startup", type=number(0.0), default=SimSettings.startup,
+                   help="settling time before the window (s)")  # fmt: skip
+    p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"),
+                   help="MuJoCo friction cone")  # fmt: skip
+    p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
+
+
+def _runs(text: str) -> tuple[str, ...]:
+    from ..physics.verify import RUNS  # the parser of verify imports MuJoCo anyway
+
+    runs = tuple(r.strip() for r in text.split(","))
+    if not text.strip() or len(set(runs)) != len(runs) or any(r not in RUNS for r in runs):
+        raise argparse.ArgumentTypeError(f"expected distinct values among {','.join(RUNS)}, got {text!r}")
+    return runs
+
+
+class _RunsAlias(argparse.Action):
+    """The old ``--runs L,S-literal``: deprecated, the same as ``--contacts L,S --reading literal``."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
+        print(f"mjtvm: {option_string} is deprecated, use --contacts and --reading", file=sys.stderr)
+        namespace.contacts = tuple(dict.fromkeys(r.split("-")[0] for r in values))
+        readings = tuple(r.split("-")[1] for r in values if "-" in r)
+        namespace.reading = readings or namespace.reading
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    """Run ``mjtvm verify`` with parsed :func:`add_arguments` options; print the summary.
+
+    The output folder is checked and locked before any work; the CSV, PNG and the slide
+    check's CSV are written together, atomically, at the end (:mod:`mjtvm.core.files`).
+    """
+    from ..core.files import check_output_dir, output_lock, write_files
+    from ..physics import verify
+    from ..physics.simulate import SimSettings
+
+    settings = SimSettings(armature_scale=args.armature_scale, window=args.window, startup=args.startup,
+                           cone=args.cone, track=not args.no_track)  # fmt: skip
+    outdir = check_output_dir(args.out)
+    if args.rrd is not None:
+        check_output_dir(Path(args.rrd).parent, option="--rrd")
+    with output_lock(outdir):
+        t0 = time.perf_counter()
+        rows = verify.verify_lift(
+            args.scenario, num_states=args.states, stride=args.stride,
+            runs=verify.runs_of(args.contacts, args.reading), mu=args.mu, mg=args.mg, settings=settings,
+            witness=args.witness, jobs=args.jobs, start_method=args.start_method, out=None,
+            progress=not args.quiet,
+        )  # fmt: skip
+        wall = time.perf_counter() - t0
+        files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": verify.rows_csv(rows)}
+        if not args.no_plots:
+            title = f"{args.scenario}: $\\mu$ = {args.mu:g}, $mg$ = {args.mg:g} N"
+            files[outdir / f"{args.name}.png"] = verify.plot_alpha(rows, title)
+        srows: list[dict[str, Any]] = []
+        if args.slide_check:
+            lift = verify.cached_lift(args.scenario, args.states)
+            indices = verify.state_indices(args.states, args.stride)
+            srows = verify.slide_check(lift, indices, mu=args.mu, mg=args.mg, settings=settings)
+            files[outdir / "slide-check.csv"] = verify.rows_csv(srows)
+        write_files(files)
+    _print_summary(verify.summarize(rows), wall, args.jobs, outdir / (args.name + ".csv"))
+    if args.slide_check:
+        _print_slide_check(srows)
+    if args.rrd is not None:
+        from ..viewer.viz import record_verify  # rerun is imported only here
+
+        record_verify(rows, args.rrd)
+        print(f"wrote {args.rrd}")
+    return EXIT_OK
+
+
+def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, csv_path: Path) -> None:
+    for run_name, s in summary.items():
+        print(
+            f"{run_name}: "
+            + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
+        )
+    print(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
+
+
+def _print_slide_check(srows: Sequence[dict[str, Any]]) -> None:
+    for mode in ("physical", "literal", "frictionless"):
+        sel = [r for r in srows if r["mode"] == mode]
+        fc = [r["friction_cos_phys"] for r in sel if not math.isnan(r["friction_cos_phys"])]
+        print(f"slide check {mode}: friction cos with physical slide direction: median "
+              f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
+              f"/{len(sel) // 2} states")  # fmt: skip
