@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .contacts import force_generators, slide_unit, tangent_basis
-from .solvers import DROP_REL
+from .lp import DROP_REL
 from .state import GraspState
 
 __all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
