@@ -313,6 +313,113 @@ class _Problem2:
             return fallback(lp, e, scaling=s)
 
 
+@dataclass
+class _Pairs:
+    """The verdicts of the (k, l) pairs as they are solved (:class:`TvmmpResult`'s fields)."""
+
+    alpha: NDArray[np.float64]
+    status: list[list[PairStatus]]
+    witnesses: list[list[Witness | None]]
+    settled_by: list[list[str | None]]
+    notes: list[tuple[tuple[int, int], str]] = field(default_factory=list)
+    feasible: bool = True
+    num_lps: int = 0
+
+    @classmethod
+    def empty(cls, n_k: int, n_l: int) -> _Pairs:
+        return cls(
+            np.full((n_k, n_l), np.nan),
+            [["skipped"] * n_l for _ in range(n_k)],
+            [[None] * n_l for _ in range(n_k)],
+            [[None] * n_l for _ in range(n_k)],
+        )
+
+
+def _solve_pair(
+    problem: _Problem2, w: NDArray[np.float64], r: NDArray[np.float64], pair: tuple[int, int]
+) -> Settled:
+    """One LP of eq. (31-35) for REFS vertex ``w`` and RVDS vertex ``r`` (``r = 0``: only
+    whether ``w`` can be balanced, alpha held at 0), settled across the backends; a
+    SolverError names the pair."""
+    try:
+        return problem.solve(w, r, alpha_max=np.inf if pair[1] >= 0 else 0.0)
+    except SolverError as e:
+        raise SolverError(e.solver, e.status, pair) from e
+
+
+def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pairs:
+    """Every (k, l) pair's LP, the origin of the RVDS skipped (Supplement 3).
+
+    With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
+    exactly when w_k cannot be balanced; then every l of this k is (no more LPs). A state
+    whose RVDS is the origin only still checks each w_k (``l = -1``)."""
+    refs, rvds = state.refs, state.rvds
+    assert rvds is not None
+    n_k, n_l = refs.shape[0], rvds.shape[0]
+    out = _Pairs.empty(n_k, n_l)
+    nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
+    for k in range(n_k):
+        todo = nonzero if nonzero else [None]
+        for l in todo:
+            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+            pair = (k, -1 if l is None else l)
+            settled = _solve_pair(problem, refs[k], r, pair)
+            sol = settled.solution
+            out.num_lps += 1
+            if settled.note is not None:
+                out.notes.append((pair, settled.note))
+            if sol.status == "infeasible":
+                out.feasible = False
+                for ll in nonzero:
+                    out.status[k][ll] = "infeasible"
+                    out.settled_by[k][ll] = settled.solver
+                break
+            if l is None:
+                continue
+            out.status[k][l] = sol.status
+            out.settled_by[k][l] = settled.solver
+            if sol.status == "optimal" and sol.x is not None:
+                a = float(sol.x[problem.alpha_col])
+                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
+                # there), so that the rounding to 0 does not depend on the unit system.
+                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
+                out.alpha[k, l] = a
+                if witnesses:
+                    out.witnesses[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+    return out
+
+
+def _limiting(pairs: _Pairs) -> tuple[tuple[int, int] | None, float | None]:
+    r"""The pair attaining :math:`\min \alpha_{kl}` over the optimal pairs (eq. 32, 35) and
+    its value; ``None`` when a pair is infeasible or none is optimal."""
+    alpha, status = pairs.alpha, pairs.status
+    n_k, n_l = alpha.shape
+    optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
+    if not (pairs.feasible and optimal):
+        return None, None
+    limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
+    return limiting, float(alpha[limiting])
+
+
+def _distribution(
+    pairs: _Pairs, rvds: NDArray[np.float64], twist_dim: int
+) -> list[NDArray[np.float64] | None]:
+    r"""Per RVDS vertex, :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4): the origin
+    where skipped, ``None`` where a pair is infeasible or none is optimal."""
+    alpha, status = pairs.alpha, pairs.status
+    n_k, n_l = alpha.shape
+    distribution: list[NDArray[np.float64] | None] = []
+    for l in range(n_l):
+        col = [status[k][l] for k in range(n_k)]
+        if all(s == "skipped" for s in col):
+            distribution.append(np.zeros(twist_dim))
+        elif "infeasible" in col or "optimal" not in col:
+            distribution.append(None)
+        else:
+            distribution.append(np.nanmin(alpha[:, l]) * rvds[l])
+    return distribution
+
+
 def tvmmp(
     state: GraspState,
     *,
@@ -351,77 +458,20 @@ def tvmmp(
     t0 = time.perf_counter()
     problem = _Problem2(state, box, solver)
     t1 = time.perf_counter()
-    refs, rvds = state.refs, state.rvds
-    n_k, n_l = refs.shape[0], rvds.shape[0]
-    alpha = np.full((n_k, n_l), np.nan)
-    status: list[list[PairStatus]] = [["skipped"] * n_l for _ in range(n_k)]
-    wit: list[list[Witness | None]] = [[None] * n_l for _ in range(n_k)]
-    by: list[list[str | None]] = [[None] * n_l for _ in range(n_k)]
-    notes: list[tuple[tuple[int, int], str]] = []
-    nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]  # Supplement 3: skip the origin
-    feasible = True
-    num_lps = 0
-    for k in range(n_k):
-        # With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
-        # exactly when w_k cannot be balanced; then every l of this k is (no more LPs).
-        todo = nonzero if nonzero else [None]
-        for l in todo:
-            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
-            pair = (k, -1 if l is None else l)
-            try:
-                settled = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
-            except SolverError as e:
-                raise SolverError(e.solver, e.status, pair) from e
-            sol = settled.solution
-            num_lps += 1
-            if settled.note is not None:
-                notes.append((pair, settled.note))
-            if sol.status == "infeasible":
-                feasible = False
-                for ll in nonzero:
-                    status[k][ll] = "infeasible"
-                    by[k][ll] = settled.solver
-                break
-            if l is None:
-                continue
-            status[k][l] = sol.status
-            by[k][l] = settled.solver
-            if sol.status == "optimal" and sol.x is not None:
-                a = float(sol.x[problem.alpha_col])
-                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
-                # there), so that the rounding to 0 does not depend on the unit system.
-                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
-                alpha[k, l] = a
-                if witnesses:
-                    wit[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+    pairs = _solve_pairs(problem, state, witnesses)
     t2 = time.perf_counter()
-
-    optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
-    limiting = None
-    value = None
-    if feasible and optimal:
-        limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
-        value = float(alpha[limiting])
-    distribution: list[NDArray[np.float64] | None] = []
-    for l in range(n_l):
-        col = [status[k][l] for k in range(n_k)]
-        if all(s == "skipped" for s in col):
-            distribution.append(np.zeros(state.twist_dim))
-        elif "infeasible" in col or "optimal" not in col:
-            distribution.append(None)
-        else:
-            distribution.append(np.nanmin(alpha[:, l]) * rvds[l])
+    limiting, value = _limiting(pairs)
     return TvmmpResult(
-        alpha=alpha,
-        status=tuple(tuple(s) for s in status),
+        alpha=pairs.alpha,
+        status=tuple(tuple(s) for s in pairs.status),
         tvmmp=value,
-        feasible=feasible,
-        distribution=tuple(distribution),
+        feasible=pairs.feasible,
+        distribution=tuple(_distribution(pairs, state.rvds, state.twist_dim)),
         limiting=limiting,
-        witnesses=tuple(tuple(w) for w in wit),
-        timings=Timings(t1 - t0, t2 - t1, t2 - t0, num_lps),
+        witnesses=tuple(tuple(w) for w in pairs.witnesses),
+        timings=Timings(t1 - t0, t2 - t1, t2 - t0, pairs.num_lps),
         solver=solver,
         box=box,
-        settled_by=tuple(tuple(b) for b in by),
-        notes=tuple(notes),
+        settled_by=tuple(tuple(b) for b in pairs.settled_by),
+        notes=tuple(pairs.notes),
     )
