@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .contacts import force_generators, slide_unit, tangent_basis
-from .solvers import DROP_REL
+from .lp import DROP_REL
 from .state import GraspState
 
 __all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
@@ -160,6 +160,169 @@ class Assembly:
         return np.array([g @ lam[s] for g, s in zip(self.generators, self.generator_slices)])
 
 
+class _Rows:
+    """The rows of the system as they are appended: their triplets in ``A`` and ``A_twist``
+    and their bounds."""
+
+    def __init__(self) -> None:
+        self.coo, self.twist = _Coo(), _Coo()
+        self.lower: list[NDArray[np.float64]] = []
+        self.upper: list[NDArray[np.float64]] = []
+        self.count = 0
+
+    def add(self, lo: NDArray[np.float64] | float, hi: NDArray[np.float64] | float, count: int) -> int:
+        """Append ``count`` rows bounded by ``lo`` and ``hi``; the index of the first."""
+        bounds = np.empty((2, count))
+        bounds[0], bounds[1] = lo, hi
+        self.lower.append(bounds[0])
+        self.upper.append(bounds[1])
+        start = self.count
+        self.count += count
+        return start
+
+
+def _variables(
+    state: GraspState, copies: int, box: BoxForm, n_gen: int, n_rho: int
+) -> tuple[dict[str, slice], NDArray[np.float64], NDArray[np.float64]]:
+    """The variable layout (module docstring) and the sign constraints on it: ``lam >= 0``
+    (eq. 22, 24 in generator form), ``rho >= 0`` (eq. 13, 34) and, in the literal box,
+    ``tau_max, qd_max >= 0 >= tau_min, qd_min`` (appendix A)."""
+    m = state.num_joints
+    blocks: dict[str, slice] = {}
+    col = 0
+
+    def take(name: str, size: int) -> None:
+        nonlocal col
+        blocks[name] = slice(col, col + size)
+        col += size
+
+    for i in range(copies):
+        take(f"lam[{i}]", n_gen)
+        take(f"tau[{i}]", m)
+    take("qd", m)
+    take("rho", n_rho)
+    if box == "literal":
+        for name in ("tau_max", "tau_min", "qd_max", "qd_min"):
+            take(name, m)
+    col_lower = np.full(col, -np.inf)
+    col_upper = np.full(col, np.inf)
+    for i in range(copies):
+        col_lower[blocks[f"lam[{i}]"]] = 0.0
+    col_lower[blocks["rho"]] = 0.0
+    if box == "literal":
+        col_lower[blocks["tau_max"]] = 0.0
+        col_lower[blocks["qd_max"]] = 0.0
+        col_upper[blocks["tau_min"]] = 0.0
+        col_upper[blocks["qd_min"]] = 0.0
+    return blocks, col_lower, col_upper
+
+
+def _statics_rows(
+    out: _Rows,
+    state: GraspState,
+    gens: tuple[NDArray[np.float64], ...],
+    gt: list[NDArray[np.float64]],
+    blocks: dict[str, slice],
+    copies: int,
+) -> list[slice]:
+    """Per copy i, the statics with ``f = E lam_i`` (eq. 19-20): ``G E lam_i = -w_i`` (D
+    rows, bounds set later by :meth:`Assembly.statics_bounds`) and
+    ``tau_i - J^T E lam_i = g_f`` (M rows). Returns the slices of the balance rows."""
+    contacts, big_d, m = state.contacts, state.twist_dim, state.num_joints
+    wrench_map = (
+        np.hstack([_product(gt[i].T, gens[i]) for i in range(len(contacts))])
+        if contacts
+        else np.zeros((big_d, 0))
+    )
+    torque_map = (
+        np.hstack([_product(c.jacobian.T, g) for c, g in zip(contacts, gens)])
+        if contacts
+        else np.zeros((m, 0))
+    )
+    wrench_rows = []
+    for i in range(copies):
+        r0 = out.add(0.0, 0.0, big_d)
+        wrench_rows.append(slice(r0, r0 + big_d))
+        out.coo.add(r0, blocks[f"lam[{i}]"].start, wrench_map)
+        r0 = out.add(state.gravity_torque, state.gravity_torque, m)
+        out.coo.add(r0, blocks[f"tau[{i}]"].start, np.eye(m))
+        out.coo.add(r0, blocks[f"lam[{i}]"].start, -torque_map)
+    return wrench_rows
+
+
+def _kinematic_rows(
+    out: _Rows, state: GraspState, gt: list[NDArray[np.float64]], blocks: dict[str, slice]
+) -> NDArray[np.int64]:
+    """The contact kinematics (eq. 9-13): ``H (J qd - G^T rdot) [+ rho T s] (=, <=) 0`` --
+    all d directions for F, the normal for L and S (``<= 0`` for D, eq. 12), and for S the
+    tangential slip ``T (J qd - G^T rdot) = -rho T s`` (eq. 13; one shared ``rho`` whose
+    slide vectors' lengths set the ratios, or one per S-point). Returns their row indices."""
+    d, contacts = state.dim, state.contacts
+    s_contacts = [i for i, c in enumerate(contacts) if c.type == "S"]
+    kin_start = out.count
+    qd0, rho0 = blocks["qd"].start, blocks["rho"].start
+    for ci, c in enumerate(contacts):
+        if c.type == "F":
+            sel = np.eye(d)
+        else:
+            sel = c.normal.reshape(1, -1)
+        r0 = out.add(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0])
+        out.coo.add(r0, qd0, _product(sel, c.jacobian))
+        out.twist.add(r0, 0, -_product(sel, gt[ci]))
+        if c.type == "S":
+            tb = tangent_basis(c.normal)
+            r0 = out.add(0.0, 0.0, d - 1)
+            out.coo.add(r0, qd0, _product(tb, c.jacobian))
+            out.twist.add(r0, 0, -_product(tb, gt[ci]))
+            k = s_contacts.index(ci)
+            if state.slip == "shared":
+                s = c.slide_direction - (c.slide_direction @ c.normal) * c.normal  # type: ignore[operator]
+                out.coo.add(r0, rho0, (tb @ s).reshape(-1, 1))
+            else:
+                out.coo.add(r0, rho0 + k, (tb @ slide_unit(c)).reshape(-1, 1))
+    return np.arange(kin_start, out.count)
+
+
+def _range_rows_eliminated(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
+    """The operation ranges (eq. 1-3) by the exact reduction: per copy i, row h of joint j
+    is ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`)."""
+    m, qd0 = state.num_joints, blocks["qd"].start
+    hps = [op.mirrored_halfplanes for op in state.operation_ranges]
+    joint_of_row = np.repeat(np.arange(m), [len(hp) for hp in hps])
+    hp_all = np.vstack(hps)
+    for i in range(copies):
+        r0 = out.add(-np.inf, hp_all[:, 2], len(hp_all))
+        row_idx = r0 + np.arange(len(hp_all))
+        out.coo.add_entries(row_idx, blocks[f"tau[{i}]"].start + joint_of_row, hp_all[:, 0])
+        out.coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
+
+
+def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
+    """The paper's literal box (eq. 2) with four variables per joint:
+    ``tau_min <= tau_i <= tau_max``, ``qd_min <= qd <= qd_max``, and the operation range's
+    half-planes (eq. 3) at the box's four corners, in their mirrored copies."""
+    qd0 = blocks["qd"].start
+    for j, op in enumerate(state.operation_ranges):
+        tmax, tmin = blocks["tau_max"].start + j, blocks["tau_min"].start + j
+        qmax, qmin = blocks["qd_max"].start + j, blocks["qd_min"].start + j
+        for i in range(copies):
+            tau = blocks[f"tau[{i}]"].start + j
+            r0 = out.add(-np.inf, 0.0, 2)
+            out.coo.add(r0, tau, np.array([[1.0], [-1.0]]))
+            out.coo.add(r0, tmax, np.array([[-1.0], [0.0]]))
+            out.coo.add(r0, tmin, np.array([[0.0], [1.0]]))
+        r0 = out.add(-np.inf, 0.0, 2)
+        out.coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
+        out.coo.add(r0, qmax, np.array([[-1.0], [0.0]]))
+        out.coo.add(r0, qmin, np.array([[0.0], [1.0]]))
+        for a_t, a_q, b in op.halfplanes:
+            for t_col, st in ((tmax, 1.0), (tmin, -1.0)):
+                for q_col, sq in ((qmax, 1.0), (qmin, -1.0)):
+                    r0 = out.add(-np.inf, b, 1)
+                    out.coo.add(r0, t_col, np.array([[st * a_t]]))
+                    out.coo.add(r0, q_col, np.array([[sq * a_q]]))
+
+
 def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated") -> Assembly:
     r"""Build the sparse constraint system of ``state`` (see the module docstring).
 
@@ -179,143 +342,26 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     """
     if box not in ("eliminated", "literal"):
         raise ValueError(f"box: expected 'eliminated' or 'literal', got {box!r}")
-    d, big_d, m = state.dim, state.twist_dim, state.num_joints
     contacts = state.contacts
     gens = tuple(force_generators(c, state.friction_edges) for c in contacts)
     offsets = np.cumsum([0] + [g.shape[1] for g in gens])
     gen_slices = tuple(slice(int(a), int(b)) for a, b in pairwise(offsets))
-    n_gen = int(offsets[-1])
-    s_contacts = [i for i, c in enumerate(contacts) if c.type == "S"]
-    n_rho = (1 if s_contacts else 0) if state.slip == "shared" else len(s_contacts)
-
-    # ---- variable layout
-    blocks: dict[str, slice] = {}
-    col = 0
-
-    def take(name: str, size: int) -> slice:
-        nonlocal col
-        blocks[name] = slice(col, col + size)
-        col += size
-        return blocks[name]
-
-    for i in range(copies):
-        take(f"lam[{i}]", n_gen)
-        take(f"tau[{i}]", m)
-    take("qd", m)
-    take("rho", n_rho)
-    if box == "literal":
-        for name in ("tau_max", "tau_min", "qd_max", "qd_min"):
-            take(name, m)
-    n = col
-    col_lower = np.full(n, -np.inf)
-    col_upper = np.full(n, np.inf)
-    for i in range(copies):
-        col_lower[blocks[f"lam[{i}]"]] = 0.0  # eq. 24 (generator form), eq. 22
-    col_lower[blocks["rho"]] = 0.0  # slip speeds rho >= 0 (eq. 13, 34)
-    if box == "literal":  # appendix A: tau_max, qd_max >= 0 >= tau_min, qd_min
-        col_lower[blocks["tau_max"]] = 0.0
-        col_lower[blocks["qd_max"]] = 0.0
-        col_upper[blocks["tau_min"]] = 0.0
-        col_upper[blocks["qd_min"]] = 0.0
-
-    coo, coo_twist = _Coo(), _Coo()
-    lower: list[NDArray[np.float64]] = []
-    upper: list[NDArray[np.float64]] = []
-    row = 0
-
-    def rows(lo: NDArray[np.float64] | float, hi: NDArray[np.float64] | float, count: int) -> int:
-        nonlocal row
-        bounds = np.empty((2, count))
-        bounds[0], bounds[1] = lo, hi
-        lower.append(bounds[0])
-        upper.append(bounds[1])
-        start = row
-        row += count
-        return start
-
-    # ---- statics, per copy (eq. 19-20 with f = E lam)
+    n_s = sum(c.type == "S" for c in contacts)
+    n_rho = (1 if n_s else 0) if state.slip == "shared" else n_s
+    blocks, col_lower, col_upper = _variables(state, copies, box, int(offsets[-1]), n_rho)
     gt = [grasp_map_transpose(c.position, state.object_position) for c in contacts]
-    wrench_map = (
-        np.hstack([_product(gt[i].T, gens[i]) for i in range(len(contacts))])
-        if contacts
-        else np.zeros((big_d, 0))
-    )
-    torque_map = (
-        np.hstack([_product(c.jacobian.T, g) for c, g in zip(contacts, gens)])
-        if contacts
-        else np.zeros((m, 0))
-    )
-    wrench_rows = []
-    for i in range(copies):
-        r0 = rows(0.0, 0.0, big_d)  # G E lam = -w, bounds set by statics_bounds()
-        wrench_rows.append(slice(r0, r0 + big_d))
-        coo.add(r0, blocks[f"lam[{i}]"].start, wrench_map)
-        r0 = rows(state.gravity_torque, state.gravity_torque, m)  # tau - J^T E lam = g_f
-        coo.add(r0, blocks[f"tau[{i}]"].start, np.eye(m))
-        coo.add(r0, blocks[f"lam[{i}]"].start, -torque_map)
-
-    # ---- kinematics (eq. 7-13): H (J qd - G^T rdot) [+ rho T s] (=, <=) 0
-    kin_start = row
-    qd0, rho0 = blocks["qd"].start, blocks["rho"].start
-    for ci, c in enumerate(contacts):
-        if c.type == "F":
-            sel = np.eye(d)
-        else:
-            sel = c.normal.reshape(1, -1)
-        r0 = rows(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0])
-        coo.add(r0, qd0, _product(sel, c.jacobian))
-        coo_twist.add(r0, 0, -_product(sel, gt[ci]))
-        if c.type == "S":  # tangential: T (J qd - G^T rdot) = -rho T s (eq. 13)
-            tb = tangent_basis(c.normal)
-            r0 = rows(0.0, 0.0, d - 1)
-            coo.add(r0, qd0, _product(tb, c.jacobian))
-            coo_twist.add(r0, 0, -_product(tb, gt[ci]))
-            k = s_contacts.index(ci)
-            if state.slip == "shared":  # one rho; the slide vectors' lengths set the ratios
-                s = c.slide_direction - (c.slide_direction @ c.normal) * c.normal  # type: ignore[operator]
-                coo.add(r0, rho0, (tb @ s).reshape(-1, 1))
-            else:
-                coo.add(r0, rho0 + k, (tb @ slide_unit(c)).reshape(-1, 1))
-    kinematic_rows = np.arange(kin_start, row)
-
-    # ---- operation ranges (eq. 2-3)
+    out = _Rows()
+    wrench_rows = _statics_rows(out, state, gens, gt, blocks, copies)
+    kinematic_rows = _kinematic_rows(out, state, gt, blocks)
     if box == "eliminated":
-        # Row h of joint j: c_tau tau_ij + c_qd qd_j <= b; all joints at once.
-        hps = [op.mirrored_halfplanes for op in state.operation_ranges]
-        joint_of_row = np.repeat(np.arange(m), [len(hp) for hp in hps])
-        hp_all = np.vstack(hps)
-        for i in range(copies):
-            r0 = rows(-np.inf, hp_all[:, 2], len(hp_all))
-            row_idx = r0 + np.arange(len(hp_all))
-            coo.add_entries(row_idx, blocks[f"tau[{i}]"].start + joint_of_row, hp_all[:, 0])
-            coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
-    else:  # the paper's literal box (eq. 2): four variables per joint
-        for j, op in enumerate(state.operation_ranges):
-            tmax, tmin = blocks["tau_max"].start + j, blocks["tau_min"].start + j
-            qmax, qmin = blocks["qd_max"].start + j, blocks["qd_min"].start + j
-            for i in range(copies):  # tau_min <= tau_i <= tau_max
-                tau = blocks[f"tau[{i}]"].start + j
-                r0 = rows(-np.inf, 0.0, 2)
-                coo.add(r0, tau, np.array([[1.0], [-1.0]]))
-                coo.add(r0, tmax, np.array([[-1.0], [0.0]]))
-                coo.add(r0, tmin, np.array([[0.0], [1.0]]))
-            r0 = rows(-np.inf, 0.0, 2)  # qd_min <= qd <= qd_max
-            coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
-            coo.add(r0, qmax, np.array([[-1.0], [0.0]]))
-            coo.add(r0, qmin, np.array([[0.0], [1.0]]))
-            for a_t, a_q, b in op.halfplanes:  # the four corners in their mirrored copies
-                for t_col, st in ((tmax, 1.0), (tmin, -1.0)):
-                    for q_col, sq in ((qmax, 1.0), (qmin, -1.0)):
-                        r0 = rows(-np.inf, b, 1)
-                        coo.add(r0, t_col, np.array([[st * a_t]]))
-                        coo.add(r0, q_col, np.array([[sq * a_q]]))
-
-    shape = (row, n)
+        _range_rows_eliminated(out, state, blocks, copies)
+    else:
+        _range_rows_literal(out, state, blocks, copies)
     return Assembly(
-        A=coo.build(shape),
-        A_twist=coo_twist.build((row, big_d)),
-        row_lower=np.concatenate(lower),
-        row_upper=np.concatenate(upper),
+        A=out.coo.build((out.count, len(col_lower))),
+        A_twist=out.twist.build((out.count, state.twist_dim)),
+        row_lower=np.concatenate(out.lower),
+        row_upper=np.concatenate(out.upper),
         col_lower=col_lower,
         col_upper=col_upper,
         blocks=blocks,

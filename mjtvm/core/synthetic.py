@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .assembly import grasp_map_transpose
 from .contacts import Contact, force_generators
@@ -26,6 +27,69 @@ __all__ = ["PAPER_RVDS", "random_state"]
 PAPER_RVDS = np.array(
     [[1, 1, 1, 0, 0, 0], [1, -1, 1, 0, 0, 0], [-1, 1, 1, 0, 0, 0], [-1, -1, 1, 0, 0, 0]], float
 )
+
+
+def _random_contacts(
+    rng: np.random.Generator,
+    p_o: NDArray[np.float64],
+    radius: float,
+    m: int,
+    fingers: int,
+    joints_per_finger: int,
+    contact_types: Sequence[str],
+    mu: float,
+) -> list[Contact]:
+    """Contacts at random points of the sphere, normals into the object; contact i on
+    finger ``i % fingers`` with a random Jacobian in that finger's columns only, D
+    contacts on the fixed base (below, zero Jacobian), S contacts with a random slide."""
+    d = len(p_o)
+    contacts = []
+    for i, ctype in enumerate(contact_types):
+        direction = rng.normal(size=d)
+        if ctype == "D":
+            direction = -np.eye(d)[-1] + 0.2 * rng.normal(size=d)
+        direction /= np.linalg.norm(direction)
+        position = p_o + radius * direction
+        jac = np.zeros((d, m))
+        if ctype != "D":
+            finger = i % fingers
+            cols = slice(finger * joints_per_finger, (finger + 1) * joints_per_finger)
+            jac[:, cols] = 0.1 * rng.normal(size=(d, joints_per_finger))
+        slide = None
+        if ctype == "S":
+            slide = rng.normal(size=d)
+        contacts.append(
+            Contact(f"c{i}", ctype, position, -direction, jac, mu=mu, slide_direction=slide)  # type: ignore[arg-type]
+        )
+    return contacts
+
+
+def _balanced_refs(
+    rng: np.random.Generator,
+    contacts: list[Contact],
+    p_o: NDArray[np.float64],
+    budget: NDArray[np.float64],
+    num_refs: int,
+    friction_edges: int,
+) -> NDArray[np.float64]:
+    """REFS vertices ``-w`` that random admissible contact forces ``f = E lam`` balance
+    (eq. 19-20), scaled so that the joint torques ``J^T f`` stay within ``budget``."""
+    big_d = 3 if len(p_o) == 2 else 6
+    m = len(budget)
+    refs = []
+    for _ in range(num_refs):
+        wrench = np.zeros(big_d)
+        torque = np.zeros(m)
+        for c in contacts:
+            gen = force_generators(c, friction_edges)
+            f = gen @ rng.uniform(0, 1, size=gen.shape[1])
+            wrench += grasp_map_transpose(c.position, p_o).T @ f
+            torque += c.jacobian.T @ f
+        scale = 1.0
+        if np.max(np.abs(torque)) > 0:
+            scale = float(np.min(budget) / np.max(np.abs(torque)))
+        refs.append(-scale * wrench)
+    return np.array(refs)
 
 
 def random_state(
@@ -74,39 +138,10 @@ def random_state(
     op = operation_range or default_operation_range()
     p_o = np.zeros(d)
     p_o[-1] = radius
-    contacts = []
-    for i, ctype in enumerate(contact_types):
-        direction = rng.normal(size=d)
-        if ctype == "D":
-            direction = -np.eye(d)[-1] + 0.2 * rng.normal(size=d)
-        direction /= np.linalg.norm(direction)
-        position = p_o + radius * direction
-        jac = np.zeros((d, m))
-        if ctype != "D":
-            finger = i % fingers
-            cols = slice(finger * joints_per_finger, (finger + 1) * joints_per_finger)
-            jac[:, cols] = 0.1 * rng.normal(size=(d, joints_per_finger))
-        slide = None
-        if ctype == "S":
-            slide = rng.normal(size=d)
-        contacts.append(
-            Contact(f"c{i}", ctype, position, -direction, jac, mu=mu, slide_direction=slide)  # type: ignore[arg-type]
-        )
+    contacts = _random_contacts(rng, p_o, radius, m, fingers, joints_per_finger, contact_types, mu)
     g_f = gravity_scale * rng.uniform(-1, 1, size=m)
-    refs = []
     budget = load * op.max_torque - np.abs(g_f)
-    for _ in range(num_refs):
-        wrench = np.zeros(big_d)
-        torque = np.zeros(m)
-        for c in contacts:
-            gen = force_generators(c, friction_edges)
-            f = gen @ rng.uniform(0, 1, size=gen.shape[1])
-            wrench += grasp_map_transpose(c.position, p_o).T @ f
-            torque += c.jacobian.T @ f
-        scale = 1.0
-        if np.max(np.abs(torque)) > 0:
-            scale = float(np.min(budget) / np.max(np.abs(torque)))
-        refs.append(-scale * wrench)
+    refs = _balanced_refs(rng, contacts, p_o, budget, num_refs, friction_edges)
     if d == 3 and num_rvds == 4:
         rvds = PAPER_RVDS.copy()
     else:
@@ -118,7 +153,7 @@ def random_state(
         operation_ranges=(op,) * m,
         gravity_torque=g_f,
         contacts=tuple(contacts),
-        refs=np.array(refs),
+        refs=refs,
         rvds=rvds,
         friction_edges=friction_edges,
     )

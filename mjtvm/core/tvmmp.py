@@ -13,10 +13,8 @@ the column of ``alpha`` (``A_twist @ r_l``) and the right-hand side of the balan
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
-from typing import Any, Literal
 
 import numpy as np
 import scipy.sparse as sp
@@ -24,6 +22,24 @@ from numpy.typing import NDArray
 
 from ..errors import SolverError, StateError
 from .assembly import Assembly, BoxForm, assemble
+from .result import (  # re-exported: the result types lived here
+    PairStatus as PairStatus,
+)
+from .result import (
+    Timings as Timings,
+)
+from .result import (
+    TvmmpResult as TvmmpResult,
+)
+from .result import (
+    Witness as Witness,
+)
+from .result import (
+    finite_floats as finite_floats,
+)
+from .result import (
+    finite_or_none as finite_or_none,
+)
 from .solvers import (
     DROP_REL,
     SOLVERS,
@@ -39,166 +55,9 @@ from .solvers import (
 )
 from .state import GraspState
 
-__all__ = ["PairStatus", "Timings", "TvmmpResult", "Witness", "tvmmp"]
+__all__ = ["tvmmp"]
 
-PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
-RESULT_SCHEMA = "mjtvm.result/1"
 ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
-
-
-def finite_floats(values: Any) -> Any:
-    """Nested lists of floats for JSON with every NaN or infinity as ``None`` (JSON has
-    neither; ``json.dumps(..., allow_nan=False)`` holds on every document), signed zeros as
-    0.0. An overflow (e.g. ``alpha * r`` for an RVDS entry near 1e308) becomes ``None``."""
-    a = np.asarray(values, dtype=float) + 0.0
-    if a.ndim == 0:
-        return float(a) if np.isfinite(a) else None
-    out = a.tolist()
-    return out if np.all(np.isfinite(a)) else _none_nan(out)
-
-
-def _none_nan(x: Any) -> Any:
-    if isinstance(x, list):
-        return [_none_nan(v) for v in x]
-    return x if math.isfinite(x) else None
-
-
-def finite_or_none(x: float | None) -> float | None:
-    """``x`` when finite, else ``None`` (JSON has no NaN or infinity)."""
-    return None if x is None or not math.isfinite(x) else float(x)
-
-
-@dataclass(frozen=True, eq=False)
-class Witness:
-    r"""A solution attaining :math:`\alpha_{kl}` (Supplement 1 scales it down to any speed).
-
-    Attributes
-    ----------
-    alpha
-        :math:`\alpha_{kl}`.
-    twist
-        ``(D,)`` object twist :math:`\alpha \hat r_l` = [v of p_O (m/s); omega (rad/s)].
-    forces
-        ``(L, d)`` contact forces on the object (N), world frame.
-    torques
-        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19).
-    speeds
-        ``(M,)`` joint speeds :math:`\dot q` (rad/s).
-    slip_speeds
-        Slip speeds :math:`\rho` of the S-points (m/s), one per S-point or one shared.
-    box
-        ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint.
-        With the eliminated form it is the smallest valid box
-        ``[min(tau, 0), max(tau, 0), min(qd, 0), max(qd, 0)]``.
-    """
-
-    alpha: float
-    twist: NDArray[np.float64]
-    forces: NDArray[np.float64]
-    torques: NDArray[np.float64]
-    speeds: NDArray[np.float64]
-    slip_speeds: NDArray[np.float64]
-    box: NDArray[np.float64]
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form."""
-        return {
-            "alpha": finite_or_none(self.alpha),
-            "twist": finite_floats(self.twist),
-            "forces": finite_floats(self.forces),
-            "torques": finite_floats(self.torques),
-            "speeds": finite_floats(self.speeds),
-            "slip_speeds": finite_floats(self.slip_speeds),
-            "box": finite_floats(self.box),
-        }
-
-
-@dataclass(frozen=True)
-class Timings:
-    """Wall-clock seconds spent assembling and solving, and the number of LPs solved."""
-
-    assemble_s: float
-    solve_s: float
-    total_s: float
-    num_lps: int
-
-
-@dataclass(frozen=True, eq=False)
-class TvmmpResult:
-    r"""Result of Problem 2 for one state (the ``mjtvm.result/1`` document).
-
-    Attributes
-    ----------
-    alpha
-        ``(K, R)`` :math:`\alpha_{kl}`; NaN where the pair is not ``optimal``.
-    status
-        ``K`` tuples of ``R`` statuses: ``optimal``, ``infeasible``, ``unbounded`` or ``skipped``.
-    tvmmp
-        :math:`\min \alpha_{kl}` over the optimal pairs; ``None`` when a pair is
-        infeasible or no pair is optimal.
-    feasible
-        False when some REFS vertex cannot be balanced at all.
-    distribution
-        One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
-        ``None`` where no finite minimum exists; the origin is implied.
-    limiting
-        The (k, l) attaining the TVMMP, or ``None``.
-    witnesses
-        ``K`` tuples of ``R`` :class:`Witness` (``None`` where not optimal or not requested).
-    timings
-        :class:`Timings`.
-    solver, box
-        The backend asked for and the operation-range form used.
-    settled_by
-        ``K`` tuples of ``R``: the backend whose verdict each pair reports (``"highs"`` or
-        ``"clarabel"``; ``None`` where skipped). It differs from ``solver`` where HiGHS
-        could not settle an LP and Clarabel did, or where Clarabel's infeasible/unbounded
-        verdict was overruled by HiGHS and a feasibility re-solve.
-    notes
-        ``((k, l), message)`` for every LP on which a backend failed or the backends
-        disagreed (``l = -1``: the balance-only LP of a state without non-zero RVDS vertex).
-    """
-
-    alpha: NDArray[np.float64]
-    status: tuple[tuple[PairStatus, ...], ...]
-    tvmmp: float | None
-    feasible: bool
-    distribution: tuple[NDArray[np.float64] | None, ...]
-    limiting: tuple[int, int] | None
-    witnesses: tuple[tuple[Witness | None, ...], ...] = field(repr=False)
-    timings: Timings
-    solver: str
-    box: BoxForm
-    settled_by: tuple[tuple[str | None, ...], ...] = ()
-    notes: tuple[tuple[tuple[int, int], str], ...] = ()
-
-    def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
-        """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
-        out: dict[str, Any] = {
-            "schema": RESULT_SCHEMA,
-            "tvmmp": finite_or_none(self.tvmmp),
-            "feasible": self.feasible,
-            "alpha": [
-                [None if s != "optimal" else finite_or_none(a) for a, s in zip(ar, sr)]
-                for ar, sr in zip(self.alpha, self.status)
-            ],
-            "status": [list(s) for s in self.status],
-            "distribution": [None if v is None else finite_floats(v) for v in self.distribution],
-            "limiting": None if self.limiting is None else list(self.limiting),
-            "solver": self.solver,
-            "settled_by": [list(b) for b in self.settled_by],
-            "notes": [{"pair": list(p), "message": m} for p, m in self.notes],
-            "box": self.box,
-            "timings": {
-                "assemble_s": self.timings.assemble_s,
-                "solve_s": self.timings.solve_s,
-                "total_s": self.timings.total_s,
-                "num_lps": self.timings.num_lps,
-            },
-        }
-        if witnesses:
-            out["witnesses"] = [[None if w is None else w.to_dict() for w in row] for row in self.witnesses]
-        return out
 
 
 def _witness(
@@ -313,6 +172,113 @@ class _Problem2:
             return fallback(lp, e, scaling=s)
 
 
+@dataclass
+class _Pairs:
+    """The verdicts of the (k, l) pairs as they are solved (:class:`TvmmpResult`'s fields)."""
+
+    alpha: NDArray[np.float64]
+    status: list[list[PairStatus]]
+    witnesses: list[list[Witness | None]]
+    settled_by: list[list[str | None]]
+    notes: list[tuple[tuple[int, int], str]] = field(default_factory=list)
+    feasible: bool = True
+    num_lps: int = 0
+
+    @classmethod
+    def empty(cls, n_k: int, n_l: int) -> _Pairs:
+        return cls(
+            np.full((n_k, n_l), np.nan),
+            [["skipped"] * n_l for _ in range(n_k)],
+            [[None] * n_l for _ in range(n_k)],
+            [[None] * n_l for _ in range(n_k)],
+        )
+
+
+def _solve_pair(
+    problem: _Problem2, w: NDArray[np.float64], r: NDArray[np.float64], pair: tuple[int, int]
+) -> Settled:
+    """One LP of eq. (31-35) for REFS vertex ``w`` and RVDS vertex ``r`` (``r = 0``: only
+    whether ``w`` can be balanced, alpha held at 0), settled across the backends; a
+    SolverError names the pair."""
+    try:
+        return problem.solve(w, r, alpha_max=np.inf if pair[1] >= 0 else 0.0)
+    except SolverError as e:
+        raise SolverError(e.solver, e.status, pair) from e
+
+
+def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pairs:
+    """Every (k, l) pair's LP, the origin of the RVDS skipped (Supplement 3).
+
+    With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
+    exactly when w_k cannot be balanced; then every l of this k is (no more LPs). A state
+    whose RVDS is the origin only still checks each w_k (``l = -1``)."""
+    refs, rvds = state.refs, state.rvds
+    assert rvds is not None
+    n_k, n_l = refs.shape[0], rvds.shape[0]
+    out = _Pairs.empty(n_k, n_l)
+    nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
+    for k in range(n_k):
+        todo = nonzero if nonzero else [None]
+        for l in todo:
+            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+            pair = (k, -1 if l is None else l)
+            settled = _solve_pair(problem, refs[k], r, pair)
+            sol = settled.solution
+            out.num_lps += 1
+            if settled.note is not None:
+                out.notes.append((pair, settled.note))
+            if sol.status == "infeasible":
+                out.feasible = False
+                for ll in nonzero:
+                    out.status[k][ll] = "infeasible"
+                    out.settled_by[k][ll] = settled.solver
+                break
+            if l is None:
+                continue
+            out.status[k][l] = sol.status
+            out.settled_by[k][l] = settled.solver
+            if sol.status == "optimal" and sol.x is not None:
+                a = float(sol.x[problem.alpha_col])
+                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
+                # there), so that the rounding to 0 does not depend on the unit system.
+                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
+                out.alpha[k, l] = a
+                if witnesses:
+                    out.witnesses[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+    return out
+
+
+def _limiting(pairs: _Pairs) -> tuple[tuple[int, int] | None, float | None]:
+    r"""The pair attaining :math:`\min \alpha_{kl}` over the optimal pairs (eq. 32, 35) and
+    its value; ``None`` when a pair is infeasible or none is optimal."""
+    alpha, status = pairs.alpha, pairs.status
+    n_k, n_l = alpha.shape
+    optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
+    if not (pairs.feasible and optimal):
+        return None, None
+    limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
+    return limiting, float(alpha[limiting])
+
+
+def _distribution(
+    pairs: _Pairs, rvds: NDArray[np.float64], twist_dim: int
+) -> list[NDArray[np.float64] | None]:
+    r"""Per RVDS vertex, :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4): the origin
+    where skipped, ``None`` where a pair is infeasible or none is optimal."""
+    alpha, status = pairs.alpha, pairs.status
+    n_k, n_l = alpha.shape
+    distribution: list[NDArray[np.float64] | None] = []
+    for l in range(n_l):
+        col = [status[k][l] for k in range(n_k)]
+        if all(s == "skipped" for s in col):
+            distribution.append(np.zeros(twist_dim))
+        elif "infeasible" in col or "optimal" not in col:
+            distribution.append(None)
+        else:
+            distribution.append(np.nanmin(alpha[:, l]) * rvds[l])
+    return distribution
+
+
 def tvmmp(
     state: GraspState,
     *,
@@ -351,77 +317,20 @@ def tvmmp(
     t0 = time.perf_counter()
     problem = _Problem2(state, box, solver)
     t1 = time.perf_counter()
-    refs, rvds = state.refs, state.rvds
-    n_k, n_l = refs.shape[0], rvds.shape[0]
-    alpha = np.full((n_k, n_l), np.nan)
-    status: list[list[PairStatus]] = [["skipped"] * n_l for _ in range(n_k)]
-    wit: list[list[Witness | None]] = [[None] * n_l for _ in range(n_k)]
-    by: list[list[str | None]] = [[None] * n_l for _ in range(n_k)]
-    notes: list[tuple[tuple[int, int], str]] = []
-    nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]  # Supplement 3: skip the origin
-    feasible = True
-    num_lps = 0
-    for k in range(n_k):
-        # With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
-        # exactly when w_k cannot be balanced; then every l of this k is (no more LPs).
-        todo = nonzero if nonzero else [None]
-        for l in todo:
-            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
-            pair = (k, -1 if l is None else l)
-            try:
-                settled = problem.solve(refs[k], r, alpha_max=np.inf if l is not None else 0.0)
-            except SolverError as e:
-                raise SolverError(e.solver, e.status, pair) from e
-            sol = settled.solution
-            num_lps += 1
-            if settled.note is not None:
-                notes.append((pair, settled.note))
-            if sol.status == "infeasible":
-                feasible = False
-                for ll in nonzero:
-                    status[k][ll] = "infeasible"
-                    by[k][ll] = settled.solver
-                break
-            if l is None:
-                continue
-            status[k][l] = sol.status
-            by[k][l] = settled.solver
-            if sol.status == "optimal" and sol.x is not None:
-                a = float(sol.x[problem.alpha_col])
-                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
-                # there), so that the rounding to 0 does not depend on the unit system.
-                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
-                alpha[k, l] = a
-                if witnesses:
-                    wit[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+    pairs = _solve_pairs(problem, state, witnesses)
     t2 = time.perf_counter()
-
-    optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
-    limiting = None
-    value = None
-    if feasible and optimal:
-        limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
-        value = float(alpha[limiting])
-    distribution: list[NDArray[np.float64] | None] = []
-    for l in range(n_l):
-        col = [status[k][l] for k in range(n_k)]
-        if all(s == "skipped" for s in col):
-            distribution.append(np.zeros(state.twist_dim))
-        elif "infeasible" in col or "optimal" not in col:
-            distribution.append(None)
-        else:
-            distribution.append(np.nanmin(alpha[:, l]) * rvds[l])
+    limiting, value = _limiting(pairs)
     return TvmmpResult(
-        alpha=alpha,
-        status=tuple(tuple(s) for s in status),
+        alpha=pairs.alpha,
+        status=tuple(tuple(s) for s in pairs.status),
         tvmmp=value,
-        feasible=feasible,
-        distribution=tuple(distribution),
+        feasible=pairs.feasible,
+        distribution=tuple(_distribution(pairs, state.rvds, state.twist_dim)),
         limiting=limiting,
-        witnesses=tuple(tuple(w) for w in wit),
-        timings=Timings(t1 - t0, t2 - t1, t2 - t0, num_lps),
+        witnesses=tuple(tuple(w) for w in pairs.witnesses),
+        timings=Timings(t1 - t0, t2 - t1, t2 - t0, pairs.num_lps),
         solver=solver,
         box=box,
-        settled_by=tuple(tuple(b) for b in by),
-        notes=tuple(notes),
+        settled_by=tuple(tuple(b) for b in pairs.settled_by),
+        notes=tuple(pairs.notes),
     )

@@ -201,7 +201,7 @@ def test_highs_unknown_falls_back_to_clarabel(monkeypatch):
 
 def test_solver_error_only_when_nothing_settles_it(monkeypatch):
     """Both backends fail: SolverError naming the pair and both statuses, chained to HiGHS'."""
-    from mjtvm.core import solvers
+    from mjtvm.core import clarabel, solvers
 
     def unknown(self, *, duals=False):  # type: ignore[no-untyped-def]
         raise SolverError("highs", "Unknown")
@@ -210,7 +210,7 @@ def test_solver_error_only_when_nothing_settles_it(monkeypatch):
         raise SolverError("clarabel", "MaxIterations")
 
     monkeypatch.setattr(solvers.HighsSession, "solve", unknown)
-    monkeypatch.setattr(solvers, "_solve_clarabel", stalled)
+    monkeypatch.setattr(clarabel, "_solve_clarabel", stalled)
     with pytest.raises(SolverError, match=r"Unknown; fallback clarabel: MaxIterations.*\(0, 0\)") as info:
         tvmmp(load_state(EXAMPLE))
     assert info.value.pair == (0, 0)
@@ -320,3 +320,31 @@ def test_round_off_in_jacobians_does_not_change_the_tvms():
     assert distance_to_hull(raw, ref).max() <= 1e-9 * scale
     assert distance_to_hull(ref, raw).max() <= 1e-9 * scale
     assert tvmmp(noisy).tvmmp == pytest.approx(tvmmp(state).tvmmp, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("values", "error"),
+    [([5e-324, 1e-320], None), ([1e300, 1e-300], "outside"), ([np.inf, 1.0], "overflows")],
+)
+def test_rescaled_column_out_of_range_without_nan(values, error):
+    """A column rescaled from subnormals only (its factor would be 2^1037) or holding an
+    overflowed entry (its factor 2^-inf = 0) once gave ``inf * 0 = nan`` coefficients and
+    bounds with a RuntimeWarning (a fuzzed Case 1-S). Clipped like equilibrate's factors:
+    subnormals are round-off beside 1 (dropped), a span HiGHS cannot hold or an overflow is
+    a SolverError, never a nan and never a warning."""
+    import warnings
+
+    from mjtvm.core.solvers import HighsSession, LinearProgram
+
+    lp = LinearProgram(
+        np.array([-1.0, -1.0]), sp.csc_matrix(np.eye(2)), np.zeros(2), np.ones(2), np.zeros(2), np.ones(2)
+    )
+    session = HighsSession(lp)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        if error is None:
+            session.set_column(1, np.array([0, 1]), np.array(values), rescale=True)
+        else:
+            with pytest.raises(SolverError, match=error):
+                session.set_column(1, np.array([0, 1]), np.array(values), rescale=True)
+    assert np.isfinite(session.column_scale(1)) and session.column_scale(1) > 0.0

@@ -1,0 +1,276 @@
+r"""HiGHS through ``highspy``: :class:`HighsSession` holds one equilibrated LP and re-solves
+it after changing one column and some row bounds from the previous basis (the LPs of one
+state differ only there).
+
+HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from any
+call raises :class:`~mjtvm.errors.SolverError`.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import SolverError
+from .lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
+from .scaling import Scaling, column_factor, cost_scale, lp_scaling, scale_lp
+
+__all__ = ["HighsSession", "new_highs"]
+
+_HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
+_HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
+_HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
+
+
+def _highs():  # type: ignore[no-untyped-def]
+    import highspy
+
+    return highspy
+
+
+_FD_LOCK = threading.Lock()
+
+
+def new_highs():  # type: ignore[no-untyped-def]
+    """A new ``highspy.Highs`` whose start-up banner does not reach standard output.
+
+    highspy >= 1.16 writes "Running HiGHS ..." to file descriptor 1 from C++ when the first
+    ``Highs`` of a process is constructed, before any option (``output_flag``) can be set;
+    that breaks every JSON consumer of ``mjtvm solve``. File descriptor 1 is pointed at
+    ``/dev/null`` for the construction only (Python's own buffered output is flushed first,
+    so nothing of ours is lost); where descriptors cannot be duplicated it is left alone.
+    """
+    highspy = _highs()
+    with _FD_LOCK:
+        try:
+            sys.stdout.flush()
+        except (OSError, ValueError):  # closed or broken stdout: nothing of ours to keep
+            pass
+        try:
+            saved = os.dup(1)
+        except OSError:  # no descriptor 1 at all: nothing to protect
+            return highspy.Highs()
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(devnull, 1)
+            finally:
+                os.close(devnull)
+            return highspy.Highs()
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
+class HighsSession:
+    r"""A HiGHS instance holding one equilibrated LP, re-solved after small modifications.
+
+    Every method takes and returns the LP's own (unscaled) values; the session scales
+    them with its :class:`Scaling`. Every HiGHS call's status is checked: ``kWarning`` is
+    accepted, ``kError`` raises :class:`~mjtvm.errors.SolverError` naming the call.
+
+    Parameters
+    ----------
+    lp
+        The initial LP.
+    scaling
+        Precomputed factors (e.g. once per state for Problem 2); default
+        :func:`lp_scaling` of ``lp``.
+    """
+
+    def __init__(self, lp: LinearProgram, *, scaling: Scaling | None = None) -> None:
+        highspy = _highs()
+        self._hs = highspy
+        s = lp_scaling(lp) if scaling is None else scaling
+        self.scaling = s
+        self._col = np.array(s.col, dtype=float)  # per-column factors (set_column may change one)
+        self._cost = np.array(lp.c, dtype=float)  # unscaled costs, bounds: re-scaled on change
+        self._col_lower = np.array(lp.col_lower, dtype=float)
+        self._col_upper = np.array(lp.col_upper, dtype=float)
+        slp = scale_lp(lp, s)
+        h = new_highs()
+        self.highs = h
+        options = {
+            "output_flag": False,
+            "threads": 1,
+            "presolve": "off",  # the LPs are small and re-solved warm: presolve costs more than it saves
+            "primal_feasibility_tolerance": FEASIBILITY_TOL,
+            "dual_feasibility_tolerance": FEASIBILITY_TOL,
+            # Round-off is dropped by scale_lp; HiGHS must keep every other entry.
+            "small_matrix_value": _HIGHS_SMALL,
+        }
+        for name, value in options.items():
+            self._check(h.setOptionValue(name, value), f"option {name}={value!r} rejected")
+        a = slp.A
+        self._check_magnitudes(a.data, "passModel")
+        model = highspy.HighsLp()
+        n = a.shape[1]
+        model.num_col_ = n
+        model.num_row_ = a.shape[0]
+        inf = highspy.kHighsInf
+        model.col_cost_ = np.asarray(slp.c, dtype=float)
+        model.col_lower_ = np.where(np.isfinite(slp.col_lower), slp.col_lower, -inf)
+        model.col_upper_ = np.where(np.isfinite(slp.col_upper), slp.col_upper, inf)
+        model.row_lower_ = np.where(np.isfinite(slp.row_lower), slp.row_lower, -inf)
+        model.row_upper_ = np.where(np.isfinite(slp.row_upper), slp.row_upper, inf)
+        model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        model.a_matrix_.start_ = a.indptr
+        model.a_matrix_.index_ = a.indices
+        model.a_matrix_.value_ = a.data
+        model.a_matrix_.num_col_ = n
+        model.a_matrix_.num_row_ = a.shape[0]
+        self._check(h.passModel(model), "passModel")
+        # Largest scaled magnitude per row: the reference of set_column's round-off drop.
+        self._row_max = np.zeros(a.shape[0])
+        if a.nnz:
+            np.maximum.at(self._row_max, a.indices, np.abs(a.data))
+        self.num_col = n
+        self._options = dict(_HIGHS_DEFAULTS)  # what the retries in solve() restore
+
+    def _check(self, status: Any, what: str) -> None:
+        """kOk and kWarning pass (a warning is HiGHS informing, e.g. of a dropped tiny
+        value, which scale_lp has made impossible for data); kError raises."""
+        if status == self._hs.HighsStatus.kError:
+            raise SolverError("highs", f"{what}: {status}")
+
+    @staticmethod
+    def _check_magnitudes(values: NDArray[np.float64], what: str) -> None:
+        """HiGHS drops scaled entries below 1e-12 with only a warning (a silent wrong
+        answer) and refuses those above 1e15; after equilibration either means data
+        spanning more than ~27 orders of magnitude, which is reported instead."""
+        mag = np.abs(values[values != 0.0])
+        if mag.size and (mag.min() <= _HIGHS_SMALL or mag.max() >= _HIGHS_LARGE):
+            raise SolverError(
+                "highs",
+                f"{what}: an equilibrated coefficient is outside [1e-12, 1e15] "
+                f"({mag.min():.3g} .. {mag.max():.3g}): the data span too many orders of magnitude",
+            )
+
+    def column_scale(self, col: int) -> float:
+        """The factor of column ``col`` (its equilibrated value is ``x[col] / factor``)."""
+        return float(self._col[col])
+
+    def set_option(self, name: str, value: object) -> None:
+        """Set a HiGHS option for this session's solves (kept after :meth:`solve`'s retries)."""
+        self._check(self.highs.setOptionValue(name, value), f"option {name}={value!r} rejected")
+        self._options[name] = value
+
+    def set_column(
+        self, col: int, rows: NDArray[np.int64], values: NDArray[np.float64], *, rescale: bool = False
+    ) -> None:
+        """Overwrite ``A[rows, col]`` (entries outside ``rows`` are left as they are).
+
+        With ``rescale``, ``rows`` must hold every non-zero of the column: its factor is
+        chosen again from ``values`` (and its bounds and cost re-scaled), so that a column
+        1e15 times larger than the first one is as well conditioned.
+        """
+        rows = np.asarray(rows, dtype=np.int64)
+        v = self.scaling.row[rows] * np.asarray(values, dtype=float)
+        if rescale:
+            nz = np.abs(v[v != 0.0])
+            factor = column_factor(nz)
+            if factor != self._col[col]:
+                self._col[col] = factor
+                self._push_col_bounds(col)
+                self._push_costs(np.array([col], dtype=np.int32))
+        v = v * self._col[col]
+        if not np.isfinite(v).all():  # row factor times datum past 1e308: never drop an inf
+            raise SolverError(
+                "highs", "changeCoeff: an equilibrated coefficient overflows (data span too wide)"
+            )
+        mag = np.abs(v)
+        ref = np.maximum(np.maximum(self._row_max[rows], float(mag.max(initial=0.0))), 1.0)
+        v[mag <= DROP_REL * ref] = 0.0  # round-off, as in scale_lp
+        self._check_magnitudes(v, "changeCoeff")
+        change, check = self.highs.changeCoeff, self._check
+        for r, x in zip(rows.tolist(), v.tolist()):
+            check(change(r, col, x), "changeCoeff")
+
+    def set_row_bounds(
+        self, rows: NDArray[np.int64], lower: NDArray[np.float64], upper: NDArray[np.float64]
+    ) -> None:
+        """Change the bounds of some rows."""
+        f = self.scaling.row[rows]
+        lo, up = f * np.asarray(lower, dtype=float), f * np.asarray(upper, dtype=float)
+        inf = self._hs.kHighsInf
+        lo = np.where(np.isfinite(lo), lo, -inf)
+        up = np.where(np.isfinite(up), up, inf)
+        status = self.highs.changeRowsBounds(len(rows), np.asarray(rows, dtype=np.int32), lo, up)
+        self._check(status, "changeRowsBounds")
+
+    def _push_col_bounds(self, col: int) -> None:
+        inf = self._hs.kHighsInf
+        lo, up = self._col_lower[col] / self._col[col], self._col_upper[col] / self._col[col]
+        lo = lo if np.isfinite(lo) else -inf
+        up = up if np.isfinite(up) else inf
+        self._check(self.highs.changeColBounds(col, lo, up), "changeColBounds")
+
+    def _push_costs(self, cols: NDArray[np.int32]) -> None:
+        """Send the scaled costs of ``cols`` (of every column when the cost factor changes:
+        a full cost change costs the warm start more)."""
+        g = cost_scale(self._cost, self._col)
+        if g != self.scaling.cost:
+            self.scaling = replace(self.scaling, cost=g)
+            cols = np.arange(len(self._cost), dtype=np.int32)
+        cols = np.asarray(cols, dtype=np.int32)
+        cost = np.ascontiguousarray(g * self._col[cols] * self._cost[cols])
+        self._check(self.highs.changeColsCost(len(cols), cols, cost), "changeColsCost")
+
+    def set_col_bounds(self, col: int, lower: float, upper: float) -> None:
+        """Change one variable's bounds."""
+        self._col_lower[col], self._col_upper[col] = lower, upper
+        self._push_col_bounds(col)
+
+    def set_costs(self, cols: NDArray[np.int32], values: NDArray[np.float64]) -> None:
+        """Change some costs (the cost factor is chosen again from all of them)."""
+        self._cost[np.asarray(cols)] = values
+        self._push_costs(np.asarray(cols, dtype=np.int32))
+
+    def _run(self) -> Any:
+        """``run`` and the model status; a kError run counts as a solve error (retried)."""
+        h, ms = self.highs, self._hs.HighsModelStatus
+        if h.run() == self._hs.HighsStatus.kError:
+            return ms.kSolveError
+        return h.getModelStatus()
+
+    def solve(self, *, duals: bool = False) -> LPSolution:
+        """Run HiGHS from the current basis and classify the outcome (with the row duals if
+        ``duals`` and optimal), in the LP's own units."""
+        h, ms = self.highs, self._hs.HighsModelStatus
+        status = self._run()
+        # A warm-started dual simplex can stop without a verdict: dual infeasibility
+        # (unbounded or infeasible) or, seen on infeasible lift states, "Unknown" with a stuck
+        # basis. Settle it from cold starts: dual simplex, primal simplex, interior point (each
+        # failed alone on some lift LP that the next one certified); otherwise raise (the
+        # callers that can fall back to Clarabel do: solve_settled, tvmmp).
+        retries: tuple[dict[str, object], ...] = ({}, {"simplex_strategy": 4}, {"solver": "ipm"})
+        for options in retries:
+            if status not in (ms.kUnboundedOrInfeasible, ms.kUnknown, ms.kSolveError):
+                break
+            self._check(h.clearSolver(), "clearSolver")
+            for name, value in options.items():
+                self._check(h.setOptionValue(name, value), f"option {name}={value!r} rejected")
+            status = self._run()
+            for name in options:
+                self._check(h.setOptionValue(name, self._options[name]), f"option {name} restore")
+        if status == ms.kOptimal:
+            sol = h.getSolution()
+            y = np.array(sol.row_dual) if duals else None
+            g = self.scaling.cost
+            return LPSolution(
+                "optimal",
+                self._col * np.array(sol.col_value),
+                float(h.getObjectiveValue()) / g,
+                None if y is None else self.scaling.row * y / g,
+            )
+        if status == ms.kInfeasible:
+            return LPSolution("infeasible", None, None)
+        if status == ms.kUnbounded:
+            return LPSolution("unbounded", None, None)
+        raise SolverError("highs", h.modelStatusToString(status))

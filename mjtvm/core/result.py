@@ -1,0 +1,180 @@
+"""The result of Problem 2 (the ``mjtvm.result/1`` document) and its JSON helpers."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .assembly import BoxForm
+
+__all__ = [
+    "RESULT_SCHEMA",
+    "PairStatus",
+    "Timings",
+    "TvmmpResult",
+    "Witness",
+    "finite_floats",
+    "finite_or_none",
+]
+
+PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
+RESULT_SCHEMA = "mjtvm.result/1"
+
+
+def finite_floats(values: Any) -> Any:
+    """Nested lists of floats for JSON with every NaN or infinity as ``None`` (JSON has
+    neither; ``json.dumps(..., allow_nan=False)`` holds on every document), signed zeros as
+    0.0. An overflow (e.g. ``alpha * r`` for an RVDS entry near 1e308) becomes ``None``."""
+    a = np.asarray(values, dtype=float) + 0.0
+    if a.ndim == 0:
+        return float(a) if np.isfinite(a) else None
+    out = a.tolist()
+    return out if np.all(np.isfinite(a)) else _none_nan(out)
+
+
+def _none_nan(x: Any) -> Any:
+    if isinstance(x, list):
+        return [_none_nan(v) for v in x]
+    return x if math.isfinite(x) else None
+
+
+def finite_or_none(x: float | None) -> float | None:
+    """``x`` when finite, else ``None`` (JSON has no NaN or infinity)."""
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+@dataclass(frozen=True, eq=False)
+class Witness:
+    r"""A solution attaining :math:`\alpha_{kl}` (Supplement 1 scales it down to any speed).
+
+    Attributes
+    ----------
+    alpha
+        :math:`\alpha_{kl}`.
+    twist
+        ``(D,)`` object twist :math:`\alpha \hat r_l` = [v of p_O (m/s); omega (rad/s)].
+    forces
+        ``(L, d)`` contact forces on the object (N), world frame.
+    torques
+        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19).
+    speeds
+        ``(M,)`` joint speeds :math:`\dot q` (rad/s).
+    slip_speeds
+        Slip speeds :math:`\rho` of the S-points (m/s), one per S-point or one shared.
+    box
+        ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint.
+        With the eliminated form it is the smallest valid box
+        ``[min(tau, 0), max(tau, 0), min(qd, 0), max(qd, 0)]``.
+    """
+
+    alpha: float
+    twist: NDArray[np.float64]
+    forces: NDArray[np.float64]
+    torques: NDArray[np.float64]
+    speeds: NDArray[np.float64]
+    slip_speeds: NDArray[np.float64]
+    box: NDArray[np.float64]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {
+            "alpha": finite_or_none(self.alpha),
+            "twist": finite_floats(self.twist),
+            "forces": finite_floats(self.forces),
+            "torques": finite_floats(self.torques),
+            "speeds": finite_floats(self.speeds),
+            "slip_speeds": finite_floats(self.slip_speeds),
+            "box": finite_floats(self.box),
+        }
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall-clock seconds spent assembling and solving, and the number of LPs solved."""
+
+    assemble_s: float
+    solve_s: float
+    total_s: float
+    num_lps: int
+
+
+@dataclass(frozen=True, eq=False)
+class TvmmpResult:
+    r"""Result of Problem 2 for one state (the ``mjtvm.result/1`` document).
+
+    Attributes
+    ----------
+    alpha
+        ``(K, R)`` :math:`\alpha_{kl}`; NaN where the pair is not ``optimal``.
+    status
+        ``K`` tuples of ``R`` statuses: ``optimal``, ``infeasible``, ``unbounded`` or ``skipped``.
+    tvmmp
+        :math:`\min \alpha_{kl}` over the optimal pairs; ``None`` when a pair is
+        infeasible or no pair is optimal.
+    feasible
+        False when some REFS vertex cannot be balanced at all.
+    distribution
+        One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
+        ``None`` where no finite minimum exists; the origin is implied.
+    limiting
+        The (k, l) attaining the TVMMP, or ``None``.
+    witnesses
+        ``K`` tuples of ``R`` :class:`Witness` (``None`` where not optimal or not requested).
+    timings
+        :class:`Timings`.
+    solver, box
+        The backend asked for and the operation-range form used.
+    settled_by
+        ``K`` tuples of ``R``: the backend whose verdict each pair reports (``"highs"`` or
+        ``"clarabel"``; ``None`` where skipped). It differs from ``solver`` where HiGHS
+        could not settle an LP and Clarabel did, or where Clarabel's infeasible/unbounded
+        verdict was overruled by HiGHS and a feasibility re-solve.
+    notes
+        ``((k, l), message)`` for every LP on which a backend failed or the backends
+        disagreed (``l = -1``: the balance-only LP of a state without non-zero RVDS vertex).
+    """
+
+    alpha: NDArray[np.float64]
+    status: tuple[tuple[PairStatus, ...], ...]
+    tvmmp: float | None
+    feasible: bool
+    distribution: tuple[NDArray[np.float64] | None, ...]
+    limiting: tuple[int, int] | None
+    witnesses: tuple[tuple[Witness | None, ...], ...] = field(repr=False)
+    timings: Timings
+    solver: str
+    box: BoxForm
+    settled_by: tuple[tuple[str | None, ...], ...] = ()
+    notes: tuple[tuple[tuple[int, int], str], ...] = ()
+
+    def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
+        """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
+        out: dict[str, Any] = {
+            "schema": RESULT_SCHEMA,
+            "tvmmp": finite_or_none(self.tvmmp),
+            "feasible": self.feasible,
+            "alpha": [
+                [None if s != "optimal" else finite_or_none(a) for a, s in zip(ar, sr)]
+                for ar, sr in zip(self.alpha, self.status)
+            ],
+            "status": [list(s) for s in self.status],
+            "distribution": [None if v is None else finite_floats(v) for v in self.distribution],
+            "limiting": None if self.limiting is None else list(self.limiting),
+            "solver": self.solver,
+            "settled_by": [list(b) for b in self.settled_by],
+            "notes": [{"pair": list(p), "message": m} for p, m in self.notes],
+            "box": self.box,
+            "timings": {
+                "assemble_s": self.timings.assemble_s,
+                "solve_s": self.timings.solve_s,
+                "total_s": self.timings.total_s,
+                "num_lps": self.timings.num_lps,
+            },
+        }
+        if witnesses:
+            out["witnesses"] = [[None if w is None else w.to_dict() for w in row] for row in self.witnesses]
+        return out
