@@ -48,7 +48,8 @@ from ..apps.replay import Record, ReplayOutput
 from ..core.contacts import slide_unit
 from ..core.operation_range import OperationRange
 from ..core.state import GraspState
-from ..polytopes.projection import lifted_polytope, project_lp
+from ..polytopes.lifted import lifted_polytope
+from ..polytopes.projection import project_lp
 from ..polytopes.tvms import default_scale
 from ..sim.trajectory import Lift
 
