@@ -25,9 +25,9 @@ from ..core.state import GraspState
 from ..core.tvmmp import finite_floats, finite_or_none
 from ..errors import StateError
 from .enumeration import project_cdd
-from .hull import facet_volume, hull_volume
 from .lifted import ProjectionStatus, lifted_polytope
 from .projection import REL_TOL, project_lp
+from .volume import facet_volume, hull_volume
 
 __all__ = [
     "CHARACTERISTIC_LENGTH",
