@@ -25,7 +25,7 @@ from ..core.contacts import CONTACT_TYPES, Contact
 from ..core.operation_range import OperationRange, as_operation_range
 from ..core.state import GraspState, SlipMode
 from ..errors import ModelError
-from .hand import operation_range_from_actuator
+from .actuator import operation_range_from_actuator
 
 __all__ = ["DetectedContact", "detected_contacts", "grasp_state", "object_weight"]
 
