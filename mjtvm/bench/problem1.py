@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from ..core.state import GraspState
-from ..polytopes.hull import hausdorff
 from ..polytopes.tvms import TvmsResult, tvms
+from ..polytopes.volume import hausdorff
 from .timing import highs_run_timer, machine_info
 
 __all__ = ["PAPER_S", "TARGETS_S", "bench_tvms_state", "format_tvms_table", "run_tvms_benchmark"]

@@ -48,6 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ModelError, StateError
+from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
 
 __all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "sim_model"]
@@ -188,60 +189,29 @@ class RolloutResult:
     trace: Mapping[str, _F64] = field(default_factory=dict, repr=False)
 
 
-class _Rig:
-    """Indices of one model and drive, reused by every step."""
-
-    def __init__(self, model: mujoco.MjModel, drive: Drive, object_body: str) -> None:
-        m = self.m = model
-        self.ob = model.body(object_body).id
-        self.og = next(g for g in range(m.ngeom) if int(m.geom_bodyid[g]) == self.ob)
-        self.radius = float(m.geom_size[self.og, 0])
-        self.fadr = int(m.jnt_dofadr[m.body_jntadr[self.ob]])
-        self.dofs = np.array([int(m.joint(j).dofadr[0]) for j in drive.joints])
-        self.acts = np.array([int(m.actuator(j).id) for j in drive.joints])
-        self.gear = m.actuator_gear[self.acts, 0].copy()
-        self.cadr = m.actuator_ctrladr[self.acts].copy()
-        self.fmax = m.actuator_forcerange[self.acts, 1].copy()
-        self.r_k, self.kd, self.vmax = (m.actuator_gainprm[self.acts, i].copy() for i in (0, 6, 7))
-        self.kt = m.actuator_gainprm[self.acts, 1].copy()
-        self.fingers = []
-        jbody = {j: int(m.jnt_bodyid[m.joint(j).id]) for j in drive.joints}
-        for geom, kind in drive.contacts:
-            g = m.geom(geom).id
-            chain: set[int] = set()
-            b = int(m.geom_bodyid[g])
-            while b > 0:
-                chain, b = chain | {b}, int(m.body_parentid[b])
-            cols = np.array([i for i, j in enumerate(drive.joints) if jbody[j] in chain], dtype=int)
-            self.fingers.append((geom, g, int(m.geom_bodyid[g]), cols, kind, float(m.geom_size[g, 0])))
-        self.jac = np.zeros((3, m.nv))
-        self.jac2 = np.zeros((3, m.nv))
-
-    def setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
-        """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5)."""
-        q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
-        for geom, g, body, cols, kind, rad in self.fingers:
-            tip = d.geom_xpos[g]
-            n = (c - tip) / np.linalg.norm(c - tip)
-            p = tip + rad * n
-            mujoco.mj_jac(self.m, d, self.jac, None, p, body)
-            jm = self.jac[:, self.dofs[cols]]
-            want = v + np.cross(w, p - c)
-            if kind == "L":
-                jn = n @ jm
-                q[cols] += jn * (n @ want - jn @ q[cols]) / max(float(jn @ jn), 1e-12)
-            else:
-                if kind == "S" and geom in drive.slips:
-                    rho, hat = drive.slips[geom]
-                    tang = hat - (hat @ n) * n
-                    want = want - rho * tang / max(float(np.linalg.norm(tang)), 1e-12)
-                q[cols] += np.linalg.lstsq(jm, want - jm @ q[cols], rcond=None)[0]
-        return q
+def _settle(
+    m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive, st: SimSettings
+) -> tuple[mujoco.MjData, float]:
+    """Step 3: the configuration ``qpos`` held by the drive's feed-forward torques for the settle
+    time; returns the data and how far the object drifted (m)."""
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    d.ctrl[rig.cadr] = 0.0
+    d.ctrl[rig.cadr + 1] = drive.torques / rig.gear
+    mujoco.mj_forward(m, d)
+    p0 = d.xpos[rig.ob].copy()
+    if st.steps(st.settle):
+        mujoco.mj_step(m, d, nstep=st.steps(st.settle))
+    return d, float(np.linalg.norm(d.xpos[rig.ob] - p0))
 
 
-def _unit(x: _F64) -> _F64:
-    nrm = float(np.linalg.norm(x))
-    return x / nrm if nrm > 1e-12 else np.zeros_like(x)
+def _start(d: mujoco.MjData, rig: Rig, drive: Drive, st: SimSettings) -> None:
+    """Step 4: the object at the drive's twist, the joints at their (tracked) speeds, all else at rest."""
+    fa, tw = rig.fadr, drive.twist
+    d.qvel[:] = 0.0
+    d.qvel[fa : fa + 3] = tw[:3]
+    d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ tw[3:]
+    d.qvel[rig.dofs] = rig.setpoints(d, drive) if st.track else drive.speeds
 
 
 def rollout(
@@ -258,21 +228,10 @@ def rollout(
     ``model`` comes from :func:`sim_model`. ``record`` keeps per-step arrays (``trace``).
     """
     st = settings or SimSettings()
-    rig, m = _Rig(model, drive, object_body), model
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    d.ctrl[rig.cadr] = 0.0
-    d.ctrl[rig.cadr + 1] = drive.torques / rig.gear
-    mujoco.mj_forward(m, d)
-    p0 = d.xpos[rig.ob].copy()
-    if st.steps(st.settle):
-        mujoco.mj_step(m, d, nstep=st.steps(st.settle))
-    drift = float(np.linalg.norm(d.xpos[rig.ob] - p0))
+    rig, m = Rig(model, drive, object_body), model
+    d, drift = _settle(m, qpos, rig, drive, st)
+    _start(d, rig, drive, st)
     fa, tw = rig.fadr, drive.twist
-    d.qvel[:] = 0.0
-    d.qvel[fa : fa + 3] = tw[:3]
-    d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ tw[3:]
-    d.qvel[rig.dofs] = rig.setpoints(d, drive) if st.track else drive.speeds
     target = np.r_[tw[:3], rig.radius * tw[3:]]
     tnorm = float(np.linalg.norm(target))
     n0, n1 = st.steps(st.startup), st.steps(st.startup) + st.steps(st.window)
@@ -305,27 +264,8 @@ def rollout(
         v = d.qvel[fa : fa + 3]
         om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
         now = np.r_[v, rig.radius * om]
-        if tnorm > 0:
-            worst["speed"] = max(worst["speed"], abs(float(np.linalg.norm(now)) / tnorm - 1.0))
-            cosang = float(now @ target) / max(float(np.linalg.norm(now)) * tnorm, 1e-300)
-            worst["angle"] = max(worst["angle"], math.degrees(math.acos(max(-1.0, min(1.0, cosang)))))
-        else:
-            worst["speed"] = max(worst["speed"], float(np.linalg.norm(now)))
-        gaps = []
-        for geom, g, body, _cols, kind, _rad in rig.fingers:
-            dist = mujoco.mj_geomDistance(m, d, g, rig.og, 0.01, fromto)
-            gaps.append(dist)
-            p = 0.5 * (fromto[:3] + fromto[3:])
-            n = _unit(d.xpos[rig.ob] - p)
-            mujoco.mj_jac(m, d, rig.jac, None, p, rig.ob)
-            mujoco.mj_jac(m, d, rig.jac2, None, p, body)
-            rel = (rig.jac - rig.jac2) @ d.qvel  # object point relative to finger point
-            rel_t = rel - (rel @ n) * n
-            if kind == "F":
-                slip[geom] += float(np.linalg.norm(rel_t)) * st.timestep
-            else:
-                ssum[geom] += rel_t
-                fsum[geom] += _geom_force(m, d, g, rig.og, f6, n)
+        twist_errors(worst, now, target, tnorm)
+        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, fromto, f6)
         if max(gaps) > worst["gap"]:
             worst["gap"], gap_geom = max(gaps), rig.fingers[int(np.argmax(gaps))][0]
         if record:
@@ -365,20 +305,7 @@ def _violation(st: SimSettings, worst: dict[str, float], slip: dict[str, float],
     return ""
 
 
-def _geom_force(m: mujoco.MjModel, d: mujoco.MjData, g: int, og: int, f6: _F64, n: _F64) -> _F64:
-    """Tangential force (world) of geom ``g`` on the object, summed over their active contacts."""
-    total = np.zeros(3)
-    for i in range(d.ncon):
-        c = d.contact[i]
-        if c.exclude or {int(c.geom1), int(c.geom2)} != {g, og}:
-            continue
-        mujoco.mj_contactForce(m, d, i, f6)
-        f = c.frame.reshape(3, 3).T @ f6[:3]  # on geom2
-        total += f if int(c.geom2) == og else -f
-    return total - (total @ n) * n
-
-
-def _inertial(m: mujoco.MjModel, d: mujoco.MjData, pred: mujoco.MjData, rig: _Rig, drive: Drive,
+def _inertial(m: mujoco.MjModel, d: mujoco.MjData, pred: mujoco.MjData, rig: Rig, drive: Drive,
               qset: _F64) -> _F64:  # fmt: skip
     """Computed torque of the tracked setpoints: M qdd (one-step prediction) + Coriolis (ablation)."""
     pred.qpos[:] = d.qpos
@@ -415,7 +342,7 @@ def inertial_demand(
     (eq. 19) leaves out.
     """
     m, d, scratch = model, mujoco.MjData(model), mujoco.MjData(model)
-    rig = _Rig(m, drive, object_body)
+    rig = Rig(m, drive, object_body)
     d.qpos[:] = qpos
     dt, fa, worst = m.opt.timestep, rig.fadr, np.zeros(len(drive.joints))
     mujoco.mj_forward(m, d)

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from ..core.solvers import DROP_REL
 from ..errors import SolverError
 from .hull import CDD_REL_TOL, cone_facets, reduce_points
-from .projection import LiftedPolytope, Projection, ProjectionStatus
+from .lifted import LiftedPolytope, Projection, ProjectionStatus
 
 __all__ = ["force_form", "project_cdd"]
 

@@ -13,17 +13,13 @@ of :func:`~mjtvm.polytopes.projection.project_lp`:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..core.solvers import HighsSession, LinearProgram, LPSolution
 from ..errors import SolverError
-
-if TYPE_CHECKING:
-    from .projection import LiftedPolytope
+from .lifted import LiftedPolytope
 
 __all__ = ["DistanceOracle", "RayShooter", "SupportOracle"]
 
@@ -33,7 +29,7 @@ class SupportOracle:
 
     Only the costs of ``z`` change between LPs, and the primal simplex re-solves from the
     previous optimal basis (which stays primal feasible). An unbounded LP is followed by
-    one on the recession cone (:meth:`~mjtvm.polytopes.projection.LiftedPolytope.recession`) for a ray.
+    one on the recession cone (:meth:`~mjtvm.polytopes.lifted.LiftedPolytope.recession`) for a ray.
     """
 
     def __init__(self, poly: LiftedPolytope, metric: NDArray[np.float64]) -> None:

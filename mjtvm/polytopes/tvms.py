@@ -1,6 +1,6 @@
 r"""Problem 1: the TVMS :math:`S_{ov}` and the TVMM (eq. 26-29, 34), the ``mjtvm.tvms/1`` document.
 
-:func:`tvms` builds the lifted polytope (:func:`~mjtvm.polytopes.projection.lifted_polytope`),
+:func:`tvms` builds the lifted polytope (:func:`~mjtvm.polytopes.lifted.lifted_polytope`),
 projects it onto the twist space (:func:`~mjtvm.polytopes.projection.project_lp`, or the paper's
 vertex enumeration :func:`~mjtvm.polytopes.enumeration.project_cdd` as the baseline) and measures
 it: the D-dimensional volume (eq. 28-29, by Qhull), 0 unless :math:`S_{ov}` is full-dimensional,
@@ -25,8 +25,9 @@ from ..core.state import GraspState
 from ..core.tvmmp import finite_floats, finite_or_none
 from ..errors import StateError
 from .enumeration import project_cdd
-from .hull import facet_volume, hull_volume
-from .projection import REL_TOL, ProjectionStatus, lifted_polytope, project_lp
+from .lifted import ProjectionStatus, lifted_polytope
+from .projection import REL_TOL, project_lp
+from .volume import facet_volume, hull_volume
 
 __all__ = [
     "CHARACTERISTIC_LENGTH",

@@ -15,7 +15,7 @@ from __future__ import annotations
 import copy
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 import mujoco
 import numpy as np
@@ -25,7 +25,7 @@ from ..core.contacts import CONTACT_TYPES, Contact
 from ..core.operation_range import OperationRange, as_operation_range
 from ..core.state import GraspState, SlipMode
 from ..errors import ModelError
-from .hand import operation_range_from_actuator
+from .actuator import operation_range_from_actuator
 
 __all__ = ["DetectedContact", "detected_contacts", "grasp_state", "object_weight"]
 
@@ -293,10 +293,45 @@ def grasp_state(
         S contact without slide direction, or no contact between the object and a finger.
     """
     ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
-    inside = _subtree(model, ob)
-    joint_ids = _state_joints(model, joints, inside)
+    joint_ids = _state_joints(model, joints, _subtree(model, ob))
     names = [mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j) for j in joint_ids]
     dofs = np.array([int(model.jnt_dofadr[j]) for j in joint_ids])
+    overrides = dict(operation_ranges or {})
+    _check_mappings(model, contact_types, mu, slide_directions, overrides)
+    work = copy.copy(data)
+    work.qvel[:] = 0.0
+    mujoco.mj_forward(model, work)
+    detected = _detect_contacts(model, work, object_body, joint_ids, one_contact_per_body)
+    contacts = _contacts(model, work, detected, dofs, contact_types, mu, slide_directions)
+    ranges = tuple(
+        as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
+        for j, n in zip(joint_ids, names, strict=True)
+    )
+    gravity_torque = (work.qfrc_bias - work.qfrc_passive)[dofs]
+    if refs is None:
+        refs = object_weight(model, work, object_body=object_body)[None, :]
+    return GraspState(
+        space=3,
+        object_position=np.array(work.xpos[ob], dtype=float),
+        joint_names=tuple(names),
+        operation_ranges=ranges,
+        gravity_torque=gravity_torque,
+        contacts=tuple(contacts),
+        refs=cast(NDArray[np.float64], refs),  # GraspState validates and converts
+        rvds=cast(NDArray[np.float64] | None, rvds),
+        friction_edges=friction_edges,
+        slip=slip,
+    )
+
+
+def _check_mappings(
+    model: mujoco.MjModel,
+    contact_types: Mapping[str, str],
+    mu: float | Mapping[str, float],
+    slide_directions: Mapping[str, ArrayLike] | None,
+    operation_ranges: Mapping[str, Any],
+) -> None:
+    """The contact types are known and every geom and joint named in the mappings exists."""
     for key, value in contact_types.items():
         if value not in CONTACT_TYPES:
             raise ModelError(
@@ -305,23 +340,37 @@ def grasp_state(
     _check_geoms(model, contact_types, "contact_types")
     _check_geoms(model, mu if isinstance(mu, Mapping) else None, "mu")
     _check_geoms(model, slide_directions, "slide_directions")
-    overrides = dict(operation_ranges or {})
-    for key in overrides:
+    for key in operation_ranges:
         model_id(model, _OBJ.mjOBJ_JOINT, key, "joint")
 
-    work = copy.copy(data)
-    work.qvel[:] = 0.0
-    mujoco.mj_forward(model, work)
-    detected = detected_contacts(model, work, object_body=object_body, one_per_body=one_contact_per_body)
+
+def _detect_contacts(
+    model: mujoco.MjModel, work: mujoco.MjData, object_body: str, joint_ids: Sequence[int], one_per_body: bool
+) -> list[DetectedContact]:
+    """The object's contacts (:func:`detected_contacts`); at least one must be on a finger
+    (a body moved by one of ``joint_ids``)."""
+    detected = detected_contacts(model, work, object_body=object_body, one_per_body=one_per_body)
     moving = {int(model.jnt_bodyid[j]) for j in joint_ids}
-    fingers = [c for c in detected if _ancestors(model, c.body) & moving]
-    if not fingers:
+    if not any(_ancestors(model, c.body) & moving for c in detected):
         touching = sorted({c.geom for c in detected})
         raise ModelError(
             f"body {object_body!r}",
             f"no contact between the object and the fingers (touching: {touching or 'nothing'})",
         )
+    return detected
 
+
+def _contacts(
+    model: mujoco.MjModel,
+    work: mujoco.MjData,
+    detected: Sequence[DetectedContact],
+    dofs: NDArray[np.int64],
+    contact_types: Mapping[str, str],
+    mu: float | Mapping[str, float],
+    slide_directions: Mapping[str, ArrayLike] | None,
+) -> list[Contact]:
+    """The state's contacts: type, friction and slide direction from the mappings, and the
+    Jacobian ``(3, M)`` of the point fixed to the touching body over the state's ``dofs``."""
     contacts: list[Contact] = []
     seen: dict[str, int] = {}
     jacp = np.zeros((3, model.nv))
@@ -353,23 +402,4 @@ def grasp_state(
                 slide_direction=slide,
             )
         )
-
-    ranges = tuple(
-        as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
-        for j, n in zip(joint_ids, names, strict=True)
-    )
-    gravity_torque = (work.qfrc_bias - work.qfrc_passive)[dofs]
-    if refs is None:
-        refs = object_weight(model, work, object_body=object_body)[None, :]
-    return GraspState(
-        space=3,
-        object_position=np.array(work.xpos[ob], dtype=float),
-        joint_names=tuple(names),
-        operation_ranges=ranges,
-        gravity_torque=gravity_torque,
-        contacts=tuple(contacts),
-        refs=cast(NDArray[np.float64], refs),  # GraspState validates and converts
-        rvds=cast(NDArray[np.float64] | None, rvds),
-        friction_edges=friction_edges,
-        slip=slip,
-    )
+    return contacts

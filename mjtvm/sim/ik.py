@@ -245,6 +245,62 @@ def _chain_joints(model: mujoco.MjModel, bodies: list[int]) -> list[int]:
     return [j for j in range(model.njnt) if int(model.jnt_bodyid[j]) in chain]
 
 
+def _ik_joints(model: mujoco.MjModel, targets: Sequence[IkTarget], joints: Sequence[str] | None) -> list[int]:
+    """The hinge and slide joints :func:`solve_ik` moves (checked; default: the targets' chains)."""
+    scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    if joints is None:
+        ids = [j for j in _chain_joints(model, _bodies(model, targets)) if int(model.jnt_type[j]) in scalar]
+    else:
+        ids = [model_id(model, _OBJ.mjOBJ_JOINT, name, "joint") for name in joints]
+        for j, name in zip(ids, joints, strict=True):
+            if int(model.jnt_type[j]) not in scalar:
+                raise ModelError(f"joint {name!r}", "is not a hinge or slide joint")
+    _bodies(model, targets)
+    return ids
+
+
+def _joint_bounds(
+    model: mujoco.MjModel,
+    ids: Sequence[int],
+    names: Sequence[str],
+    bounds: Mapping[str, tuple[float, float]] | None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The joints' ranges (infinite where unlimited) intersected with ``bounds``."""
+    lo = np.array([model.jnt_range[j, 0] if model.jnt_limited[j] else -np.inf for j in ids])
+    hi = np.array([model.jnt_range[j, 1] if model.jnt_limited[j] else np.inf for j in ids])
+    for name, (b_lo, b_hi) in (bounds or {}).items():
+        if name not in names:
+            model_id(model, _OBJ.mjOBJ_JOINT, name, "joint")
+            raise ModelError(f"joint {name!r}", "has a bound but is not among the joints solved for")
+        k = list(names).index(name)
+        lo[k], hi[k] = max(lo[k], float(b_lo)), min(hi[k], float(b_hi))
+        if not lo[k] <= hi[k]:
+            raise ModelError(f"joint {name!r}", f"empty range [{lo[k]}, {hi[k]}] after its bound")
+    return lo, hi
+
+
+def _damped_step(
+    jac: NDArray[np.float64],
+    e: NDArray[np.float64],
+    q: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    mu: float,
+) -> NDArray[np.float64]:
+    r"""One Levenberg-Marquardt step :math:`(J^T J + \mu I)\,\delta q = -J^T e`, joints at a
+    bound it would push beyond frozen (projected gradient), capped at 0.5 rad per joint."""
+    free = np.ones(len(q), dtype=bool)
+    for _ in range(len(q) + 1):
+        jf = jac[:, free]
+        step = np.zeros(len(q))
+        step[free] = np.linalg.solve(jf.T @ jf + mu * np.eye(int(free.sum())), -jf.T @ e)
+        blocked = free & (((q <= lo) & (step < 0)) | ((q >= hi) & (step > 0)))
+        if not blocked.any():
+            break
+        free &= ~blocked
+    return step * min(1.0, 0.5 / max(float(np.abs(step).max()), 1e-300))
+
+
 def solve_ik(
     model: mujoco.MjModel,
     data: mujoco.MjData,
@@ -293,28 +349,11 @@ def solve_ik(
     """
     if not targets:
         raise ModelError("targets", "expected at least one IK target")
-    scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
-    if joints is None:
-        ids = [j for j in _chain_joints(model, _bodies(model, targets)) if int(model.jnt_type[j]) in scalar]
-    else:
-        ids = [model_id(model, _OBJ.mjOBJ_JOINT, name, "joint") for name in joints]
-        for j, name in zip(ids, joints, strict=True):
-            if int(model.jnt_type[j]) not in scalar:
-                raise ModelError(f"joint {name!r}", "is not a hinge or slide joint")
-    _bodies(model, targets)
+    ids = _ik_joints(model, targets, joints)
     names = tuple(mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j) for j in ids)
     adr = np.array([int(model.jnt_qposadr[j]) for j in ids], dtype=int)
     dofs = np.array([int(model.jnt_dofadr[j]) for j in ids], dtype=int)
-    lo = np.array([model.jnt_range[j, 0] if model.jnt_limited[j] else -np.inf for j in ids])
-    hi = np.array([model.jnt_range[j, 1] if model.jnt_limited[j] else np.inf for j in ids])
-    for name, (b_lo, b_hi) in (bounds or {}).items():
-        if name not in names:
-            model_id(model, _OBJ.mjOBJ_JOINT, name, "joint")
-            raise ModelError(f"joint {name!r}", "has a bound but is not among the joints solved for")
-        k = names.index(name)
-        lo[k], hi[k] = max(lo[k], float(b_lo)), min(hi[k], float(b_hi))
-        if not lo[k] <= hi[k]:
-            raise ModelError(f"joint {name!r}", f"empty range [{lo[k]}, {hi[k]}] after its bound")
+    lo, hi = _joint_bounds(model, ids, names, bounds)
 
     work = copy.copy(data)
     q = np.clip(np.array(work.qpos[adr], dtype=float), lo, hi)
@@ -327,17 +366,7 @@ def solve_ik(
     mu, it = 1e-6, 0
     while it < max_iterations and _per_target(e, targets).max() > tolerance:
         it += 1
-        free = np.ones(len(q), dtype=bool)
-        for _ in range(len(q) + 1):
-            jf = jac[:, free]
-            step = np.zeros(len(q))
-            step[free] = np.linalg.solve(jf.T @ jf + mu * np.eye(int(free.sum())), -jf.T @ e)
-            blocked = free & (((q <= lo) & (step < 0)) | ((q >= hi) & (step > 0)))
-            if not blocked.any():
-                break
-            free &= ~blocked
-        step *= min(1.0, 0.5 / max(float(np.abs(step).max()), 1e-300))
-        trial = np.clip(q + step, lo, hi)
+        trial = np.clip(q + _damped_step(jac, e, q, lo, hi, mu), lo, hi)
         e_trial, jac_trial = evaluate(trial)
         if e_trial @ e_trial < e @ e:
             q, e, jac, mu = trial, e_trial, jac_trial, max(mu / 3.0, 1e-15)

@@ -37,7 +37,6 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import mujoco
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
@@ -48,8 +47,10 @@ from ..apps.replay import Record, ReplayOutput
 from ..core.contacts import slide_unit
 from ..core.operation_range import OperationRange
 from ..core.state import GraspState
-from ..polytopes.projection import lifted_polytope, project_lp
+from ..polytopes.lifted import lifted_polytope
+from ..polytopes.projection import project_lp
 from ..polytopes.tvms import default_scale
+from ..sim.scene import scene_geometry, scene_poses
 from ..sim.trajectory import Lift
 
 __all__ = [
@@ -131,62 +132,52 @@ def _mirrored(rng: OperationRange) -> NDArray[np.float64]:
 
 
 class _Scene:
-    """The hand's and the object's geoms, from MuJoCo."""
+    """The hand's and the object's geoms (:mod:`~mjtvm.sim.scene`) and their poses along the lift."""
 
     def __init__(self, lift: Lift) -> None:
-        m = lift.scenario.model
-        self.model, self.data, ob = m, mujoco.MjData(m), m.body(lift.scenario.object_body).id
-        kind = {g: int(m.geom_type[g]) for g in range(m.ngeom)}
-        self.links = [g for g in kind if kind[g] == mujoco.mjtGeom.mjGEOM_CAPSULE]
-        spheres = [g for g in kind if kind[g] == mujoco.mjtGeom.mjGEOM_SPHERE]
-        self.tips = [g for g in spheres if m.geom_bodyid[g] != ob]
-        self.object = [g for g in spheres if m.geom_bodyid[g] == ob]
-        self.planes = [g for g in kind if kind[g] == mujoco.mjtGeom.mjGEOM_PLANE]
+        sc = lift.scenario
+        self.geometry = scene_geometry(sc.model, sc.object_body)
+        self.poses = scene_poses(sc.model, self.geometry, lift.qpos)
 
     def static(self, rec: rr.RecordingStream) -> None:
-        m, planes, links = self.model, self.planes, self.links
+        geo = self.geometry
+        links, planes = geo.links, geo.planes
         rec.log("scene", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        if links:
+        if len(links):
             rec.log("scene/links", rr.Capsules3D.from_fields(
-                lengths=2 * m.geom_size[links, 1], radii=m.geom_size[links, 0],
-                colors=[_rgb(m.geom_rgba[g]) for g in links], fill_mode="solid",
+                lengths=2 * links.size[:, 1], radii=links.size[:, 0],
+                colors=[_rgb(c) for c in links.rgba], fill_mode="solid",
             ), static=True)  # fmt: skip
         wire = rr.components.FillMode.MajorWireframe  # the object: see the velocity polytopes inside
         for path, geoms, fill in (
-            ("scene/tips", self.tips, rr.components.FillMode.Solid),
-            ("scene/object", self.object, wire),
+            ("scene/tips", geo.tips, rr.components.FillMode.Solid),
+            ("scene/object", geo.object, wire),
         ):
-            if geoms:
+            if len(geoms):
                 rec.log(path, rr.Ellipsoids3D.from_fields(
-                    half_sizes=np.repeat(m.geom_size[geoms, :1], 3, axis=1),
-                    colors=[_rgb(m.geom_rgba[g]) for g in geoms], fill_mode=fill,
+                    half_sizes=np.repeat(geoms.size[:, :1], 3, axis=1),
+                    colors=[_rgb(c) for c in geoms.rgba], fill_mode=fill,
                 ), static=True)  # fmt: skip
-        if planes:
+        if len(planes):
             rec.log("scene/palm", rr.Boxes3D(
-                half_sizes=[[m.geom_size[g, 0], m.geom_size[g, 1], 5e-4] for g in planes],
-                centers=[m.geom_pos[g] - [0.0, 0.0, 5e-4] for g in planes], fill_mode="solid",
-                colors=[_rgb(m.geom_rgba[g]) for g in planes],
-                labels=[mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or "palm" for g in planes],
+                half_sizes=[[s[0], s[1], 5e-4] for s in planes.size],
+                centers=[p - [0.0, 0.0, 5e-4] for p in planes.pos], fill_mode="solid",
+                colors=[_rgb(c) for c in planes.rgba], labels=[name or "palm" for name in planes.names],
             ), static=True)  # fmt: skip
 
-    def log(self, cols: _Columns, qpos: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Add the geoms' poses at ``qpos`` (their sizes and colours are static); returns the
+    def log(self, cols: _Columns, i: int) -> NDArray[np.float64]:
+        """Add the geoms' poses at state ``i`` (their sizes and colours are static); returns the
         object's centre."""
-        m, d, links = self.model, self.data, self.links
-        d.qpos[:] = qpos
-        mujoco.mj_kinematics(m, d)
-        if links:
-            quats = np.zeros((len(links), 4))
-            for q, g in zip(quats, links, strict=True):
-                mujoco.mju_mat2Quat(q, d.geom_xmat[g])
+        poses, links = self.poses, self.geometry.links
+        if len(links):
             # MuJoCo: a capsule's centre and axis z; rerun: from one end along z
-            ends = d.geom_xpos[links] - d.geom_xmat[links][:, [2, 5, 8]] * m.geom_size[links, 1:2]
+            ends = poses.link_pos[i] - poses.link_axis[i] * links.size[:, 1:2]
             cols.add("scene/links", rr.Capsules3D, len(links), translations=list(ends),
-                     quaternions=list(quats[:, [1, 2, 3, 0]]))  # fmt: skip
-        for path, geoms in (("scene/tips", self.tips), ("scene/object", self.object)):
-            if geoms:
-                cols.add(path, rr.Ellipsoids3D, len(geoms), centers=list(d.geom_xpos[geoms]))
-        return np.array(d.geom_xpos[self.object[0]] if self.object else np.zeros(3))
+                     quaternions=list(poses.link_quat[i][:, [1, 2, 3, 0]]))  # fmt: skip
+        for path, centres in (("scene/tips", poses.tip_pos[i]), ("scene/object", poses.object_pos[i])):
+            if len(centres):
+                cols.add(path, rr.Ellipsoids3D, len(centres), centers=list(centres))
+        return np.array(poses.object_pos[i][0] if len(self.geometry.object) else np.zeros(3))
 
 
 class _Columns:
@@ -376,7 +367,7 @@ def record_replay(
     for i in range(n):
         rec.set_time("state", sequence=i)
         rec.set_time("lift_z", sequence=z_steps[i])
-        centre = scene.log(cols, lift.qpos[i])
+        centre = scene.log(cols, i)
         for key, name in names.items():
             r = by_state[(key[0], key[1], i)]
             state = r.state  # the state the replay solved

@@ -14,7 +14,8 @@ from mjtvm.errors import StateError
 from mjtvm.physics.simulate import SimSettings, rerun_data, rollout, sim_model
 from mjtvm.physics.verify import bisect, summarize, verify_lift
 from mjtvm.physics.witness import central_witness, witness_drive
-from mjtvm.sim.hand import DCMotor, operation_range_from_actuator
+from mjtvm.sim.actuator import operation_range_from_actuator
+from mjtvm.sim.hand import DCMotor
 from mjtvm.sim.trajectory import Lift, lift_state, scripted_lift
 
 from ..helpers import Q_MAX, T_MAX

@@ -11,11 +11,10 @@ import pytest
 from mjtvm.polytopes.hull import (
     PolarHull,
     cone_facets,
-    facet_volume,
-    hausdorff,
     polar_vertices,
     polish_vertices,
 )
+from mjtvm.polytopes.volume import facet_volume, hausdorff
 
 TOL = 1e-9
 

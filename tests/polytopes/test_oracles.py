@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mjtvm.polytopes.lifted import lifted_polytope
 from mjtvm.polytopes.oracles import DistanceOracle, RayShooter, SupportOracle
-from mjtvm.polytopes.projection import lifted_polytope
 
 from ..helpers import max_speed
 from .test_projection import G_F, MG, J, gripper

@@ -8,9 +8,10 @@ import pytest
 from mjtvm import Contact, GraspState, assemble, default_operation_range
 from mjtvm.core.synthetic import random_state
 from mjtvm.polytopes.enumeration import force_form, project_cdd
-from mjtvm.polytopes.hull import hausdorff
-from mjtvm.polytopes.projection import lifted_polytope, project_lp
+from mjtvm.polytopes.lifted import lifted_polytope
+from mjtvm.polytopes.projection import project_lp
 from mjtvm.polytopes.tvms import tvms
+from mjtvm.polytopes.volume import hausdorff
 
 from ..helpers import T_MAX, distance_to_hull, max_speed
 

@@ -11,13 +11,13 @@ import pytest
 
 from mjtvm.core.operation_range import default_operation_range, load_motor_data
 from mjtvm.errors import ModelError
+from mjtvm.sim.actuator import operation_range_from_actuator
 from mjtvm.sim.hand import (
     HUMANLIKE_FINGER_JOINTS,
     DCMotor,
     finger_joint_names,
     hand_mjcf,
     model_files,
-    operation_range_from_actuator,
 )
 
 from ..helpers import Q_MAX, Q_NOM, RPM, T_MAX, G
