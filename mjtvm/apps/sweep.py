@@ -302,7 +302,7 @@ def _run_dask(
 
 
 # ------------------------------------------------------------------ files (mjtvm sweep)
-CHECKPOINT_SCHEMA = "mjtvm.apps.sweep-checkpoint/1"
+CHECKPOINT_SCHEMA = "mjtvm.sweep-checkpoint/1"
 CHECKPOINT_EVERY_S = 5.0
 """At most this often (s) the checkpoint is rewritten while a sweep runs (and always on an
 interrupt or a failure, with every finished row)."""
@@ -345,7 +345,7 @@ def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
 def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[Path]:
     r"""``mjtvm sweep``: check ``--out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
 
-    While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.apps.sweep-checkpoint/1``) holds
+    While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.sweep-checkpoint/1``) holds
     every finished row; it is rewritten atomically at most every :data:`CHECKPOINT_EVERY_S`
     seconds and on an interrupt or failure, and removed once ``NAME.json`` and ``NAME.csv``
     are written. With ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json``

@@ -147,7 +147,7 @@ def run_tvms_benchmark(
             None if target is None else per_case[name]["lp"]["median_s"] <= target
         )
     return {
-        "schema": "mjtvm.bench.timing-tvms/1",
+        "schema": "mjtvm.bench-tvms/1",
         "machine": machine_info(),
         "settings": {"time_limit_s": time_limit, "repeats": reps, "rvds_cone": False, "box": "eliminated"},
         "per_case": per_case,

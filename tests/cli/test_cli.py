@@ -353,7 +353,7 @@ def test_ctrl_c_during_a_sweep_is_one_line_and_leaves_no_partial_file(tmp_path):
     assert names <= {".mjtvm.lock", "sweep.partial.json"}  # no result, no temporary file
     if "sweep.partial.json" in names:  # complete JSON: the finished rows
         doc = json.loads((tmp_path / "sweep.partial.json").read_text())
-        assert doc["schema"] == "mjtvm.apps.sweep-checkpoint/1"
+        assert doc["schema"] == "mjtvm.sweep-checkpoint/1"
 
 
 def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys):
@@ -369,7 +369,7 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     def suite(**kwargs):
         for step in ("case 1, problem 1", "case 1, problem 2", "scaling"):
             kwargs["progress"](step)
-        return {"schema": "mjtvm.bench.timing-suite/1"}
+        return {"schema": "mjtvm.bench-suite/1"}
 
     monkeypatch.setattr(bench_suite, "run_suite", suite)
     monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
@@ -377,7 +377,7 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert main(["bench", "--quick", "--out", str(tmp_path), "--name", "b"]) == 0
     captured = capsys.readouterr()
     assert "bench: scaling" in captured.err and captured.out.startswith("TABLE\n")
-    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench.timing-suite/1"
+    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench-suite/1"
     assert (tmp_path / "b.md").read_text() == "```\nTABLE\n```\n"
 
 
