@@ -241,6 +241,9 @@ def grasp_state(
 ) -> GraspState:
     r"""The grasp state (space = 3) at the configuration ``data.qpos``.
 
+    Long only through its signature and parameter documentation (one keyword per option);
+    the body is a short sequence of the named steps below it in this module.
+
     Works on a copy of ``data`` with zero velocities, after ``mj_forward``; ``data`` itself
     is not modified.
 

@@ -205,6 +205,9 @@ def hand_mjcf(
 ) -> str:
     r"""MJCF text of the hand, the palm and a free sphere.
 
+    Long only through its signature and parameter documentation (one keyword per option);
+    the body is a short sequence of the named steps below it in this module.
+
     Parameters
     ----------
     finger_joints

