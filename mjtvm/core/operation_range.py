@@ -58,12 +58,12 @@ class OperationRange:
     @property
     def max_torque(self) -> float:
         """Largest absolute torque (N m), reached at zero speed."""
-        return float(self.vertices[:, 0].max())
+        return float(np.max(self.vertices[:, 0]))
 
     @property
     def max_speed(self) -> float:
         """Largest absolute speed (rad/s), reached at zero torque."""
-        return float(self.vertices[:, 1].max())
+        return float(np.max(self.vertices[:, 1]))
 
     @property
     def halfplanes(self) -> NDArray[np.float64]:

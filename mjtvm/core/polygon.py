@@ -122,7 +122,7 @@ def halfplanes(u: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np
             continue
         # (normal / scale) . v <= offset, multiplied by min(scale) first so that a
         # scale of 1e-300 cannot overflow the row before it is normalised.
-        c = float(scale.min())
+        c = float(np.min(scale))
         given = normal * (c / scale)
         size = float(np.linalg.norm(given))
         rows.append([given[0] / size, given[1] / size, offset * (c / size)])

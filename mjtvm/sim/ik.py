@@ -363,7 +363,7 @@ def solve_ik(
 
     e, jac = evaluate(q)
     mu, it = 1e-6, 0
-    while it < max_iterations and _per_target(e, targets).max() > tolerance:
+    while it < max_iterations and np.max(_per_target(e, targets)) > tolerance:
         it += 1
         trial = np.clip(q + _damped_step(jac, e, q, (lo, hi), mu), lo, hi)
         e_trial, jac_trial = evaluate(trial)
@@ -375,7 +375,7 @@ def solve_ik(
                 break
     work.qpos[adr] = q
     residuals = _per_target(e, targets)
-    converged = bool(residuals.max() <= tolerance)
+    converged = bool(np.max(residuals) <= tolerance)
     if strict and not converged:
         worst = int(np.argmax(residuals))
         raise ModelError(
