@@ -3,7 +3,7 @@ r"""Fuzz the state loader at scale: mutated shipped states and damaged bytes.
 
 Every shipped example (``mjtvm/data/examples/*.json``) and the states exported from the
 scenarios ``case1``, ``case1-s``, ``case2`` are mutated by :mod:`mjtvm.core.fuzz` (the same
-mutations as ``tests/test_fuzz.py``); a fraction of the runs feeds damaged bytes
+mutations as ``tests/core/test_fuzz.py``); a fraction of the runs feeds damaged bytes
 (truncated JSON, invalid UTF-8, deep brackets, huge literals) through ``load_state``.
 A state that loads is solved with ``mjtvm.tvmmp``. Outcomes are counted:
 

@@ -1,7 +1,7 @@
 r"""Write the committed MJCF models (``models/*.xml``) from :func:`mjtvm.sim.hand.model_files`.
 
 Usage: ``python scripts/make_models.py [OUTPUT_DIR]`` (default: ``models/`` beside this
-script's parent). ``tests/test_hand.py`` checks that the committed files equal this output.
+script's parent). ``tests/sim/test_hand.py`` checks that the committed files equal this output.
 """
 
 from __future__ import annotations

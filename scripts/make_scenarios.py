@@ -3,7 +3,7 @@ r"""Rerun the IK of every shipped scenario and write ``mjtvm/data/scenarios/*.js
 Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
 ``mjtvm/data/scenarios``). Each file's scenario data is kept; each variant's ``solution``
 (joint angles, IK residuals, achieved contacts) is recomputed by
-:func:`mjtvm.sim.scenario.make_documents`. ``tests/test_scenario.py`` checks that the committed
+:func:`mjtvm.sim.scenario.make_documents`. ``tests/sim/test_scenario.py`` checks that the committed
 files equal this output.
 """
 

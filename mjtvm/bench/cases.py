@@ -22,7 +22,7 @@ def case1_beta(state: Any) -> np.ndarray:
 
     rdot = E z (E the in-plane basis) is reachable by finger 3's contacts iff G_c^T E z lies in
     range(J_c) (eq. 7): the null space of (I - U U^T) G_c^T E, U an orthonormal basis of
-    range(J_c), as in ``tests/test_scenario.py``. The sign makes its xdot component >= 0.
+    range(J_c), as in ``tests/sim/test_scenario.py``. The sign makes its xdot component >= 0.
     """
     from ..core.assembly import grasp_map_transpose
 
