@@ -213,7 +213,8 @@ def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pai
     exactly when w_k cannot be balanced; then every l of this k is (no more LPs). A state
     whose RVDS is the origin only still checks each w_k (``l = -1``)."""
     refs, rvds = state.refs, state.rvds
-    assert rvds is not None
+    if rvds is None:  # checked by tvmmp() already; kept for callers of this step
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     n_k, n_l = refs.shape[0], rvds.shape[0]
     out = _Pairs.empty(n_k, n_l)
     nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
