@@ -7,8 +7,8 @@ one REFS vertex and four RVDS vertices (eq. 37), so four LPs. Measured per state
 
 * ``tvmmp(state, witnesses=False)`` (HiGHS, eliminated box) and the same with
   ``box="literal"``: median wall time over many repeats after a warm-up;
-* where the time goes: the HiGHS ``run()`` calls are timed by wrapping
-  :meth:`highspy.Highs.run` for the duration of one measurement, the rest of a call is
+* where the time goes: the HiGHS ``run()`` calls are timed through
+  :func:`~mjtvm.core.highs.observe_runs` for the duration of one measurement, the rest of a call is
   Python overhead, of which :func:`~mjtvm.core.assembly.assemble` alone is timed too;
 * the baseline :func:`~mjtvm.core.reference.reference_tvmmp`, which rebuilds a cvxpy problem
   for every pair, in the same run.
@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..core.assembly import assemble
+from ..core.highs import observe_runs
 from ..core.reference import reference_tvmmp
 from ..core.state import GraspState
 from ..core.synthetic import random_state
@@ -90,24 +91,10 @@ def _timed(fn: Callable[[], object], repeats: int, warmup: int) -> list[float]:
 
 @contextmanager
 def highs_run_timer() -> Iterator[list[float]]:
-    """Wrap :meth:`highspy.Highs.run` to record each call's wall time; restored on exit."""
-    import highspy
-
-    original = highspy.Highs.run
+    """Record the wall time of every HiGHS ``run`` (:func:`~mjtvm.core.highs.observe_runs`)."""
     spent: list[float] = []
-
-    def run(self: Any) -> Any:
-        t0 = time.perf_counter()
-        try:
-            return original(self)
-        finally:
-            spent.append(time.perf_counter() - t0)
-
-    highspy.Highs.run = run  # type: ignore[method-assign]
-    try:
+    with observe_runs(spent.append):
         yield spent
-    finally:
-        highspy.Highs.run = original  # type: ignore[method-assign]
 
 
 def _split(state: GraspState, repeats: int, warmup: int) -> dict[str, float]:

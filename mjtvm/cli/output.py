@@ -6,7 +6,6 @@ import contextlib
 import os
 import sys
 from collections.abc import Iterator
-from typing import Any
 
 from ..errors import OutputError
 
@@ -57,21 +56,13 @@ def lp_progress(enabled: bool, desc: str) -> Iterator[None]:
     if not enabled:
         yield
         return
-    import highspy
     from tqdm import tqdm
 
+    from ..core.highs import observe_runs
+
     bar = tqdm(desc=desc, unit=" LP", file=sys.stderr, mininterval=0.25, leave=False)
-    original = highspy.Highs.run
-
-    def run(self: Any) -> Any:
-        try:
-            return original(self)
-        finally:
-            bar.update()
-
-    highspy.Highs.run = run  # type: ignore[method-assign]
     try:
-        yield
+        with observe_runs(lambda _seconds: bar.update()):
+            yield
     finally:
-        highspy.Highs.run = original  # type: ignore[method-assign]
         bar.close()
