@@ -40,7 +40,7 @@ from .contacts import Contact
 from .files import atomic_write
 from .operation_range import OperationRange
 
-__all__ = ["SCHEMA", "GraspState", "dump_state", "json_floats", "load_state", "parse_state", "state_to_dict"]
+__all__ = ["SCHEMA", "GraspState", "dump_state", "load_state", "parse_state", "state_to_dict"]
 
 SCHEMA = "mjtvm.state/1"
 SlipMode = Literal["per_contact", "shared"]
@@ -356,11 +356,6 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
         raise StateError("", f"malformed JSON: {str(e).split(':')[0]}") from e
     check_json_tree(data)
     return parse_state(data)
-
-
-def json_floats(values: Any) -> Any:
-    """Nested lists of floats for JSON, with signed zeros printed as 0.0 (-0.0 + 0.0 == +0.0)."""
-    return (np.asarray(values, dtype=float) + 0.0).tolist()
 
 
 def state_to_dict(state: GraspState) -> dict[str, Any]:
