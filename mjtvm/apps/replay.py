@@ -35,6 +35,7 @@ from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import StateError
 from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
+from .figures import ALPHA_UNIT, lift_axes, lift_png
 
 __all__ = [
     "SCHEMA",
@@ -269,19 +270,11 @@ def _lift_dict(lift: Lift) -> dict[str, Any]:
     }  # fmt: skip
 
 
-ALPHA_LABEL = r"TVMMP $\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)"
-"""The TVMMP axis: alpha multiplies the RVDS vertex r_l (eq. 30: object velocity in m/s, angular
-velocity in rad/s), so alpha = 1 is the vertex itself; the scenarios' vertices have linear
-components of +-1 m/s, so alpha reads as m/s per unit of the vertex."""
+ALPHA_LABEL = rf"TVMMP $\alpha$ {ALPHA_UNIT}"
 
 
 def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> bytes:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.0, 4.0), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
+    fig, ax = lift_axes(6.0, 4.0)
     for label, style, recs in curves:
         z = np.array([r.z for r in recs])
         a = np.array([np.nan if r.result.tvmmp is None else r.result.tvmmp for r in recs])
@@ -291,15 +284,7 @@ def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> by
             ax.plot(
                 z[bad], np.zeros(int(bad.sum())), "x", color=line.get_color(), label=f"{label}: no solution"
             )
-    ax.set_xlabel("object height $z$ (m)")
-    ax.set_ylabel(ALPHA_LABEL, fontsize=8)
-    ax.set_title(title, fontsize=9)
-    ax.set_ylim(bottom=0.0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120)
-    return buf.getvalue()
+    return lift_png(fig, ax, ylabel=ALPHA_LABEL, title=title, legend_fontsize=8)
 
 
 def _figures(

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
+from ..apps.figures import ALPHA_UNIT, lift_axes, lift_png
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, StateError
@@ -227,12 +228,7 @@ def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndar
 
 def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     """PNG of the TVMMP (LP) and the minimum alpha_sim over the RVDS vertices along z, per run."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.5, 4.2), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
+    fig, ax = lift_axes(6.5, 4.2)
     for run in dict.fromkeys(r["run"] for r in rows):
         z, lp = _minima(rows, run, "alpha_lp")
         (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP), {run}")
@@ -240,15 +236,7 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
         ax.plot(
             z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
         )
-    ax.set_xlabel("object height $z$ (m)")
-    ax.set_ylabel(r"$\alpha$ (m/s per unit of RVDS vertex $\hat r_l$)", fontsize=8)
-    ax.set_title(title, fontsize=9)
-    ax.set_ylim(bottom=0.0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120)
-    return buf.getvalue()
+    return lift_png(fig, ax, ylabel=rf"$\alpha$ {ALPHA_UNIT}", title=title, legend_fontsize=7)
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
