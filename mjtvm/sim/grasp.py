@@ -27,7 +27,7 @@ from ..core.state import GraspState, SlipMode
 from ..errors import ModelError
 from .actuator import operation_range_from_actuator
 
-__all__ = ["DetectedContact", "detected_contacts", "grasp_state", "object_weight"]
+__all__ = ["DetectedContact", "detected_contacts", "geom_id", "geom_label", "grasp_state", "object_weight"]
 
 _OBJ = mujoco.mjtObj
 
@@ -58,7 +58,8 @@ class DetectedContact:
     Parameters
     ----------
     geom
-        Name of the geom touching the object (finger link, fingertip or palm).
+        Label of the geom touching the object (finger link, fingertip or palm): its name, or
+        ``"<body>/geom<n>"`` when unnamed (:func:`geom_label`).
     body
         Id of that geom's body.
     position
@@ -81,6 +82,36 @@ def model_id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: str) 
     if i < 0:
         raise ModelError(f"{label} {name!r}", "not in the model")
     return int(i)
+
+
+def geom_label(model: mujoco.MjModel, geom: int) -> str:
+    """A geom's name, or ``"<body>/geom<n>"`` for an unnamed geom (the n-th geom of its body).
+
+    Public MJCF hands leave their collision geoms unnamed; the label keys them in contact
+    types, state files and messages. It is stable under edits of other bodies, unlike the id.
+    An unnamed body is ``"body#<id>"``.
+    """
+    name = mujoco.mj_id2name(model, _OBJ.mjOBJ_GEOM, int(geom))
+    if name:
+        return str(name)
+    body = int(model.geom_bodyid[geom])
+    body_name = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or f"body#{body}"
+    return f"{body_name}/geom{int(geom) - int(model.body_geomadr[body])}"
+
+
+def geom_id(model: mujoco.MjModel, label: str, what: str = "geom") -> int:
+    """The id of the geom with this name or :func:`geom_label`; ModelError naming ``what`` if none."""
+    i = mujoco.mj_name2id(model, _OBJ.mjOBJ_GEOM, label)
+    if i >= 0:
+        return int(i)
+    body_name, sep, rest = label.rpartition("/geom")
+    if sep and rest.isdigit():
+        body = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, body_name)
+        if body < 0 and body_name.startswith("body#") and body_name[5:].isdigit():
+            body = int(body_name[5:])
+        if 0 <= body < model.nbody and int(rest) < int(model.body_geomnum[body]):
+            return int(model.body_geomadr[body]) + int(rest)
+    raise ModelError(f"{what} {label!r}", "not in the model")
 
 
 def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
@@ -123,7 +154,7 @@ def detected_contacts(
     Raises
     ------
     ModelError
-        Unknown body, or an unnamed geom touching the object.
+        Unknown body.
     """
     ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
     inside = _subtree(model, ob)
@@ -135,9 +166,7 @@ def detected_contacts(
         if in1 == in2:
             continue
         other = g1 if in2 else g2
-        name = mujoco.mj_id2name(model, _OBJ.mjOBJ_GEOM, other)
-        if not name:
-            raise ModelError(f"geom #{other}", "touches the object but has no name (contact_types needs one)")
+        name = geom_label(model, other)
         normal = without_round_off(np.array(c.frame[:3], dtype=float) * (1.0 if in2 else -1.0))
         contact = DetectedContact(
             geom=name,
