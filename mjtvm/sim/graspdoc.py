@@ -32,8 +32,10 @@ MAX_ITEMS = 256  # contacts, targets, joints, poses, wrenches, RVDS vertices
 _TOP = {
     "schema", "name", "description", "notes", "source", "model", "object", "configuration", "joints",
     "mu", "friction_edges", "slip", "contact_tolerance", "contacts", "ignore", "refs", "rvds",
-    "ranges", "lift",
+    "ranges", "lift", "supports",
 }  # fmt: skip
+SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
+SUPPORT_SHAPES = {**SHAPES, "plane": 3}
 _REQUIRED = ("schema", "model", "object", "configuration", "contacts")
 
 
@@ -211,12 +213,33 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
         raise c.fail("schema", f"expected {SCHEMA!r}, got {doc['schema']!r}")
     doc["name"] = c.string(doc.get("name", path.stem if path else "grasp"), "name")
     doc["model"] = c.string(doc["model"], "model")
-    obj = c.table(doc["object"], "object", {"body", "position", "quaternion"}, ("body",))
+    obj = c.table(
+        doc["object"], "object", {"body", "position", "quaternion", "shape", "size", "mass"}, ("body",)
+    )
     doc["object"] = {
         "body": c.string(obj["body"], "object.body"),
         "position": c.vector(obj["position"], "object.position", 3) if "position" in obj else None,
         "quaternion": _quaternion(c, obj["quaternion"], "object.quaternion") if "quaternion" in obj else None,
+        **_shape(c, obj, "object", SHAPES, mass=True),
     }
+    supports = doc.get("supports", [])
+    if not isinstance(supports, list) or len(supports) > MAX_ITEMS:
+        raise c.fail("supports", f"expected a list of support geoms to add, got {_kind(supports)}")
+    doc["supports"] = []
+    for i, item in enumerate(supports):
+        t = c.table(
+            item,
+            f"supports[{i}]",
+            {"name", "shape", "size", "position", "quaternion"},
+            ("name", "shape", "size"),
+        )
+        doc["supports"].append({
+            "name": c.string(t["name"], f"supports[{i}].name"),
+            "position": c.vector(t["position"], f"supports[{i}].position", 3) if "position" in t else [0.0] * 3,
+            "quaternion": _quaternion(c, t["quaternion"], f"supports[{i}].quaternion") if "quaternion" in t
+            else [1.0, 0.0, 0.0, 0.0],
+            **_shape(c, t, f"supports[{i}]", SUPPORT_SHAPES, mass=False),
+        })  # fmt: skip
     doc["configuration"] = _configuration(c, doc["configuration"])
     doc["joints"] = c.names(doc["joints"], "joints") if "joints" in doc else None
     doc["mu"] = c.number(doc["mu"], "mu", low=0.0) if "mu" in doc else None
@@ -238,6 +261,35 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
     doc["ranges"] = _ranges(c, doc.get("ranges", {}))
     doc["lift"] = _lift(c, doc["lift"]) if "lift" in doc else None
     return doc, path
+
+
+def _shape(
+    c: _Checker, t: Mapping[str, Any], field: str, shapes: Mapping[str, int], *, mass: bool
+) -> dict[str, Any]:
+    """``shape``, ``size`` (and ``mass``) of a geom to add; all None for an existing object body."""
+    if "shape" not in t:
+        for key in ("size", "mass"):
+            if key in t:
+                raise c.fail(f"{field}.{key}", "only with shape (a body to add)")
+        return {"shape": None, "size": None, "mass": None} if mass else {}
+    shape = t["shape"]
+    if shape not in shapes:
+        raise c.fail(f"{field}.shape", f"expected one of {', '.join(shapes)}, got {shape!r}")
+    n = shapes[shape]
+    size = t.get("size")
+    if not isinstance(size, list) or len(size) != n:
+        raise c.fail(
+            f"{field}.size", f"expected {n} numbers (MuJoCo's size of a {shape}, m), got {_kind(size)}"
+        )
+    out: dict[str, Any] = {
+        "shape": shape,
+        "size": [c.number(x, f"{field}.size[{i}]", positive=True) for i, x in enumerate(size)],
+    }
+    if mass:
+        if "mass" not in t:
+            raise c.fail(f"{field}.mass", "required with shape (kg)")
+        out["mass"] = c.number(t["mass"], f"{field}.mass", positive=True)
+    return out
 
 
 def _quaternion(c: _Checker, value: Any, field: str) -> list[float]:
@@ -280,7 +332,7 @@ def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
             "targets": out_targets,
             "start": c.number_map(ik.get("start", {}), "configuration.ik.start"),
             "bounds": c.bounds(ik.get("bounds", {}), "configuration.ik.bounds"),
-            "tolerance": c.number(ik.get("tolerance", 1e-9), "configuration.ik.tolerance", positive=True),
+            "tolerance": c.number(ik.get("tolerance", 1e-6), "configuration.ik.tolerance", positive=True),
             "max_iterations": c.integer(
                 ik.get("max_iterations", 200), "configuration.ik.max_iterations", 1, 10_000
             ),

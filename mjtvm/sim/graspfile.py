@@ -35,16 +35,29 @@ from numpy.typing import ArrayLike, NDArray
 from ..core.operation_range import OperationRange
 from ..core.state import GraspState
 from ..errors import ModelError
-from .grasp import detected_contacts, geom_id, geom_label, grasp_state, object_weight, subtree
+from .grasp import (
+    detected_contacts,
+    geom_id,
+    geom_label,
+    grasp_state,
+    object_weight,
+    precise_collision,
+    subtree,
+)
 from .graspdoc import GraspError, read_grasp_document
 from .hand import DCMotor
 from .ik import IkTarget, solve_ik
 from .ranges import joint_ranges
 
-__all__ = ["Grasp", "load_grasp", "shipped_grasps"]
+__all__ = ["Grasp", "build_spec", "load_grasp", "shipped_grasps"]
 
 _OBJ = mujoco.mjtObj
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+_GEOM_TYPES = {
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+    "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+    "box": mujoco.mjtGeom.mjGEOM_BOX, "plane": mujoco.mjtGeom.mjGEOM_PLANE,
+}  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,6 +151,11 @@ class Grasp:
                 else {**self.mu, **mu}
             )
         return replace(self, refs=refs, mu=friction)
+
+    def spec(self) -> mujoco.MjSpec:
+        """A fresh ``MjSpec`` of the model file with the grasp's additions (object, supports), e.g.
+        to attach motors (:mod:`mjtvm.physics`) before compiling; ``spec().compile()`` equals ``model``."""
+        return build_spec(self.document, self.model_path, self.file)
 
     @property
     def file(self) -> str:
@@ -285,17 +303,67 @@ def _names(model: mujoco.MjModel, kind: mujoco.mjtObj, count: int) -> list[str]:
     return [n for i in range(count) if (n := mujoco.mj_id2name(model, kind, i))]
 
 
-def _load_model(doc: Mapping[str, Any], path: Path | None, file: str) -> tuple[mujoco.MjModel, Path]:
+def _model_path(doc: Mapping[str, Any], path: Path | None, file: str) -> Path:
     model_path = Path(doc["model"])
     if not model_path.is_absolute() and path is not None:
         model_path = path.parent / model_path
     if not model_path.is_file():
         raise GraspError(file, "model", f"no such file: {str(model_path)!r}")
+    return model_path
+
+
+def _collision_bits(spec: mujoco.MjSpec) -> int:
+    """Every contype/conaffinity bit of the model's geoms: an added geom collides with every geom
+    that collides with anything (visual geoms, with both 0, stay out)."""
+    bits = 0
+    for g in spec.geoms:
+        bits |= int(g.contype) | int(g.conaffinity)
+    return bits or 1
+
+
+def build_spec(doc: Mapping[str, Any], model_path: Path, file: str) -> mujoco.MjSpec:
+    r"""The model file as an ``MjSpec`` with the grasp's additions: the object, when the file
+    gives its ``shape`` (a body on a free joint with one geom), and the ``supports`` (world
+    geoms). Keyframes get the added object's pose appended, so that they stay valid."""
     try:
-        return mujoco.MjModel.from_xml_path(str(model_path)), model_path
-    except ValueError as e:  # MuJoCo's XML or compiler error
-        first = str(e).strip().splitlines()
-        raise GraspError(file, "model", f"MuJoCo cannot load {str(model_path)!r}: {' '.join(first)}") from e
+        spec = mujoco.MjSpec.from_file(str(model_path))
+    except ValueError as e:  # MuJoCo's XML error
+        raise GraspError(
+            file, "model", f"MuJoCo cannot load {str(model_path)!r}: {' '.join(str(e).split())}"
+        ) from e
+    bits = _collision_bits(spec)
+    obj = doc["object"]
+    if obj["shape"] is not None:
+        if spec.body(obj["body"]) is not None:
+            raise GraspError(file, "object.body", f"{obj['body']!r} is already a body of the model: "
+                             "drop shape, size and mass to use it, or choose another name")  # fmt: skip
+        pos = obj["position"] or [0.0, 0.0, 0.0]
+        quat = obj["quaternion"] or [1.0, 0.0, 0.0, 0.0]
+        body = spec.worldbody.add_body(name=obj["body"], pos=pos, quat=quat)
+        body.add_freejoint(name=obj["body"])
+        size = [*obj["size"], 0.0, 0.0][:3]
+        body.add_geom(name=obj["body"], type=_GEOM_TYPES[obj["shape"]], size=size, mass=obj["mass"],
+                      contype=bits, conaffinity=bits)  # fmt: skip
+        for key in spec.keys:
+            if len(key.qpos):
+                key.qpos = [*key.qpos, *pos, *quat]
+    for i, sup in enumerate(doc["supports"]):
+        if spec.geom(sup["name"]) is not None:
+            raise GraspError(file, f"supports[{i}].name", f"{sup['name']!r} is already a geom of the model")
+        spec.worldbody.add_geom(name=sup["name"], type=_GEOM_TYPES[sup["shape"]], size=sup["size"],
+                                pos=sup["position"], quat=sup["quaternion"], contype=bits, conaffinity=bits)  # fmt: skip
+    return spec
+
+
+def _load_model(doc: Mapping[str, Any], path: Path | None, file: str) -> tuple[mujoco.MjModel, Path]:
+    model_path = _model_path(doc, path, file)
+    spec = build_spec(doc, model_path, file)
+    try:
+        return spec.compile(), model_path
+    except ValueError as e:  # MuJoCo's compiler error
+        raise GraspError(
+            file, "model", f"MuJoCo cannot compile {str(model_path)!r}: {' '.join(str(e).split())}"
+        ) from e
 
 
 def _joint(model: mujoco.MjModel, name: str, file: str, field: str) -> int:
@@ -354,72 +422,110 @@ def _object_geoms(model: mujoco.MjModel, ob: int) -> list[int]:
     return [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in inside]
 
 
+POINT_TOLERANCE = 1e-3  # m: how close a geom's contact must come to its target point along the surface
+
+
+def _geom_target(model: mujoco.MjModel, work: mujoco.MjData, g: int, obj: Sequence[int], point: Any,
+                 file: str, field: str) -> tuple[IkTarget, float, float]:  # fmt: skip
+    """The IK target moving geom ``g``'s point nearest the object onto ``point`` (or onto the
+    object's nearest surface point), its surface distance and its offset from ``point`` (m)."""
+    d, best, fromto = np.inf, np.zeros(6), np.zeros(6)
+    for o in obj:
+        dist = float(mujoco.mj_geomDistance(model, work, o, g, 1.0, fromto))
+        if dist < d:
+            d, best = dist, fromto.copy()
+    if not np.isfinite(d) or d >= 1.0:
+        raise GraspError(
+            file, f"{field}.geom", f"geom {geom_label(model, g)!r} is more than 1 m from the object"
+        )
+    body = int(model.geom_bodyid[g])
+    finger_point = best[3:]
+    surface = best[:3] if point is None else np.array(point, dtype=float)
+    local = data_xmat(work, body).T @ (finger_point - work.xpos[body])
+    name = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or ""
+    offset = 0.0 if point is None else float(np.linalg.norm(finger_point - surface))
+    return IkTarget(geom_label(model, g), name, local, surface), abs(d), offset
+
+
 def _solve_configuration(
     model: mujoco.MjModel, data: mujoco.MjData, ik: Mapping[str, Any], ob: int, file: str
 ) -> mujoco.MjData:
     r"""IK: each target's finger point onto the object's surface (retargeted until it touches).
 
-    A site goes to its ``point``. A geom's point nearest the object (``mj_geomDistance``)
-    goes to ``point`` when given (a point on the object's surface), else to the object's
-    nearest surface point; the nearest points move as the finger turns, so the targets are
-    recomputed and the IK rerun until every geom is within the tolerance of the surface.
+    A site goes to its ``point`` (within ``tolerance``). A geom's point nearest the object
+    (``mj_geomDistance``) goes to ``point`` when given (a point on the object's surface), else
+    to the object's nearest surface point; the nearest points move as the finger turns, so
+    the targets are recomputed and the IK rerun until every geom touches the surface (distance
+    within ``tolerance``) within :data:`POINT_TOLERANCE` (1 mm) of its ``point``: where a flat
+    face meets a curved surface the nearest point is not unique (it jumps along the line of
+    contact as the finger turns), the witness points of curved shapes are iterative (about
+    1e-6 m), and a finger may be unable to move along the surface at all (e.g. out of its plane).
     """
-    tol, obj, fromto = float(ik["tolerance"]), _object_geoms(model, ob), np.zeros(6)
+    obj = _object_geoms(model, ob)
     bounds = dict(ik["bounds"])
     for name in bounds:
         _joint(model, name, file, f"configuration.ik.bounds.{name}")
+    resolved = []
+    for i, t in enumerate(ik["targets"]):
+        field = f"configuration.ik.targets[{i}]"
+        if "site" in t:
+            s = mujoco.mj_name2id(model, _OBJ.mjOBJ_SITE, t["site"])
+            if s < 0:
+                raise GraspError(file, f"{field}.site", f"{t['site']!r} is not a site of the model"
+                                 f"{_suggest(t['site'], _names(model, _OBJ.mjOBJ_SITE, model.nsite))}")  # fmt: skip
+            resolved.append(("site", s, t["point"], field))
+            continue
+        try:
+            resolved.append(("geom", geom_id(model, t["geom"]), t["point"], field))
+        except ModelError as e:
+            names = _names(model, _OBJ.mjOBJ_GEOM, model.ngeom)
+            raise GraspError(file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model"
+                             f"{_suggest(t['geom'], names)}") from e  # fmt: skip
+    with precise_collision(model):
+        return _settle_targets(model, data, resolved, obj, bounds, ik, file)
+
+
+def _settle_targets(model: mujoco.MjModel, data: mujoco.MjData, resolved: Sequence[tuple[str, int, Any, str]],
+                    obj: Sequence[int], bounds: Mapping[str, tuple[float, float]], ik: Mapping[str, Any],
+                    file: str) -> mujoco.MjData:  # fmt: skip
+    """The rounds of :func:`_solve_configuration`: retarget, solve, until settled."""
+    tol = float(ik["tolerance"])
     work = copy.copy(data)
+    worst, last = "", np.inf
     for _round in range(30):
-        targets, gaps = [], []
-        for i, t in enumerate(ik["targets"]):
-            field = f"configuration.ik.targets[{i}]"
-            if "site" in t:
-                s = mujoco.mj_name2id(model, _OBJ.mjOBJ_SITE, t["site"])
-                if s < 0:
-                    raise GraspError(file, f"{field}.site", f"{t['site']!r} is not a site of the model"
-                                     f"{_suggest(t['site'], _names(model, _OBJ.mjOBJ_SITE, model.nsite))}")  # fmt: skip
-                body = int(model.site_bodyid[s])
-                targets.append(IkTarget(t["site"], mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or "",
-                                        np.array(model.site_pos[s]), np.array(t["point"])))  # fmt: skip
-                gaps.append(0.0)
-                continue
-            try:
-                g = geom_id(model, t["geom"])
-            except ModelError as e:
-                names = _names(model, _OBJ.mjOBJ_GEOM, model.ngeom)
-                raise GraspError(file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model"
-                                 f"{_suggest(t['geom'], names)}") from e  # fmt: skip
-            d, best = np.inf, np.zeros(6)
-            for o in obj:
-                dist = float(mujoco.mj_geomDistance(model, work, o, g, 1.0, fromto))
-                if dist < d:
-                    d, best = dist, fromto.copy()
-            if not np.isfinite(d):
-                raise GraspError(
-                    file, f"{field}.geom", f"geom {t['geom']!r} is more than 1 m from the object"
-                )
-            body = int(model.geom_bodyid[g])
-            finger_point, surface = best[3:], best[:3] if t["point"] is None else np.array(t["point"])
-            local = np.array(data_xmat(work, body).T @ (finger_point - work.xpos[body]))
-            targets.append(IkTarget(t["geom"], mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or "",
-                                    local, surface))  # fmt: skip
-            gaps.append(abs(d))
+        targets, misses = [], []
+        for kind, k, point, field in resolved:
+            if kind == "site":
+                body = int(model.site_bodyid[k])
+                name = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or ""
+                targets.append(IkTarget(str(mujoco.mj_id2name(model, _OBJ.mjOBJ_SITE, k)), name,
+                                        np.array(model.site_pos[k]), np.array(point)))  # fmt: skip
+                misses.append((float(np.linalg.norm(work.site_xpos[k] - np.array(point))) - tol, 0.0))
+            else:
+                target, gap, offset = _geom_target(model, work, k, obj, point, file, field)
+                targets.append(target)
+                misses.append((gap - tol, offset))
+        gaps, offsets = [m[0] for m in misses], [m[1] for m in misses]
+        if max(gaps) <= 0.0 and (max(offsets) <= tol or max(offsets) >= 0.99 * last):
+            if max(offsets) <= POINT_TOLERANCE:  # touching, and as near the points as it gets
+                return work
+        last = max(offsets)
+        w = int(np.argmax([max(g, o - POINT_TOLERANCE) for g, o in misses]))
+        worst = (f"{resolved[w][3]}: does not settle on the object's surface in 30 rounds (surface "
+                 f"distance {1e3 * (gaps[w] + tol):.3g} mm, {1e3 * offsets[w]:.3g} mm from its point)")  # fmt: skip
         result = solve_ik(model, work, targets, bounds=bounds, tolerance=tol,
                           max_iterations=int(ik["max_iterations"]), strict=False)  # fmt: skip
-        work.qpos[:] = result.qpos
-        mujoco.mj_forward(model, work)
-        if result.converged and max(gaps) <= tol and _round > 0:
-            return work
-        if not result.converged:
+        if float(np.max(result.residuals)) > 1e-4:  # far beyond the witness points' noise: out of reach
             w = int(np.argmax(result.residuals))
             raise GraspError(
-                file, f"configuration.ik.targets[{w}]",
-                f"unreachable: residual {1e3 * float(result.residuals[w]):.3g} mm > tolerance "
-                f"{1e3 * tol:.3g} mm after {result.iterations} iterations (joint limits or bounds, or too far)",
+                file, resolved[w][3],
+                f"unreachable: residual {1e3 * float(result.residuals[w]):.3g} mm after {result.iterations} "
+                "iterations (joint limits, bounds, or too far)",
             )  # fmt: skip
-    raise GraspError(
-        file, "configuration.ik", "the targets do not settle on the object's surface in 30 rounds"
-    )
+        work.qpos[:] = result.qpos
+        mujoco.mj_forward(model, work)
+    field, problem = worst.split(": ", 1)
+    raise GraspError(file, field, problem)
 
 
 def data_xmat(data: mujoco.MjData, body: int) -> NDArray[np.float64]:

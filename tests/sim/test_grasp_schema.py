@@ -15,7 +15,9 @@ import pytest
 from mjtvm.sim.graspdoc import GraspError, read_grasp_document
 from mjtvm.sim.graspfile import shipped_grasps
 
-SCHEMA = json.loads(resources.files("mjtvm.data").joinpath("schema", "grasp.schema.json").read_text(encoding="utf-8"))
+SCHEMA = json.loads(
+    resources.files("mjtvm.data").joinpath("schema", "grasp.schema.json").read_text(encoding="utf-8")
+)
 
 
 @pytest.fixture(scope="module")
