@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import ModelError
 from .grasp import model_id
 
-__all__ = ["IkResult", "IkTarget", "geom_contact_target", "ik_residual", "solve_ik"]
+__all__ = ["IkResult", "IkTarget", "body_label", "geom_contact_target", "ik_residual", "solve_ik"]
 
 _OBJ = mujoco.mjtObj
 
@@ -186,8 +186,20 @@ def geom_contact_target(
     return IkTarget(geom, body, point, p - shift * n, tangent_axis=axis, centre=c)
 
 
+def body_label(model: mujoco.MjModel, body: int) -> str:
+    """A body's name, or ``"body#<id>"`` when unnamed (as :func:`~mjtvm.sim.grasp.geom_label`)."""
+    return str(mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, int(body)) or f"body#{int(body)}")
+
+
+def _body_id(model: mujoco.MjModel, label: str) -> int:
+    if label.startswith("body#") and label[5:].isdigit() and 0 < int(label[5:]) < model.nbody:
+        if not mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, int(label[5:])):
+            return int(label[5:])
+    return model_id(model, _OBJ.mjOBJ_BODY, label, "body")
+
+
 def _bodies(model: mujoco.MjModel, targets: Sequence[IkTarget]) -> list[int]:
-    return [model_id(model, _OBJ.mjOBJ_BODY, t.body, "body") for t in targets]
+    return [_body_id(model, t.body) for t in targets]
 
 
 def ik_residual(
