@@ -62,7 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core.state import GraspState
 from ..errors import ModelError, StateError
-from .grasp import grasp_state
+from .grasp import detected_contacts, grasp_state
 from .march import TOUCH_TOL, GraspLike, Marcher
 from .motion import Motion
 from .scenario import load_scenario
@@ -413,7 +413,10 @@ def lift_state(
     if base is None:
         data = mujoco.MjData(sc.model)
         data.qpos[:] = lift.qpos[i]
-        types = {g: "D" for g in (*lift.base, *sc.ignored_geoms)} | {g: "L" for g in roles}
+        mujoco.mj_forward(sc.model, data)
+        # geoms within MuJoCo's margin but not touching need a type too; they are dropped below
+        near = {c.geom: "D" for c in detected_contacts(sc.model, data, object_body=sc.object_body)}
+        types = near | {g: "D" for g in (*lift.base, *sc.ignored_geoms)} | {g: "L" for g in roles}
         base = grasp_state(sc.model, data, contact_types=types, mu=1.0, rvds=sc.rvds, refs=np.zeros((1, 6)),
                            object_body=sc.object_body, joints=sc.joints)  # fmt: skip
     friction = sc.mu if mu is None else float(mu)
