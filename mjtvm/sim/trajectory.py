@@ -192,6 +192,26 @@ class Lift:
         return int(self.s.shape[0])
 
 
+def _as_spec(value: LiftSpec | Mapping[str, Any] | None, grasp: GraspLike) -> LiftSpec | None:
+    """A grasp's ``lift``: a :class:`LiftSpec`, or the grasp file's normalised ``[lift]`` table
+    (``direction``/``twist``/``poses`` of ``{position, quaternion}``, ``height``, ``bounds``; a pose
+    without quaternion keeps the orientation before it)."""
+    if value is None or isinstance(value, LiftSpec):
+        return value
+    options: dict[str, Any] = {"height": value.get("height"), "bounds": dict(value.get("bounds") or {})}
+    if value.get("direction") is not None:
+        return LiftSpec.from_direction(value["direction"], **options)
+    if value.get("poses") is not None:
+        ob = int(grasp.model.body(grasp.object_body).id)
+        quat, poses = np.array(grasp.data.xquat[ob], dtype=float), []
+        for pose in value["poses"]:
+            quat = quat if pose.get("quaternion") is None else np.array(pose["quaternion"], dtype=float)
+            poses.append([*pose["position"], *quat])
+        return LiftSpec(poses=np.array(poses), **options)
+    twist = value.get("twist")
+    return LiftSpec(twist=None if twist is None else np.array(twist, dtype=float), **options)
+
+
 def _motion_options(
     grasp: GraspLike, direction: ArrayLike | None, twist: ArrayLike | None, poses: ArrayLike | None,
     height: float | None,
@@ -202,7 +222,7 @@ def _motion_options(
     ]
     if len(given) > 1:
         raise StateError(given[1], f"give one of direction, twist and poses, got {' and '.join(given)}")
-    spec: LiftSpec | None = getattr(grasp, "lift", None)
+    spec = _as_spec(getattr(grasp, "lift", None), grasp)
     if direction is not None:
         motion = LiftSpec.from_direction(direction, height=height)
     elif twist is not None or poses is not None:
