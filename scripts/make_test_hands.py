@@ -254,13 +254,16 @@ def _allegro_extra(
     return np.concatenate([0.5 * normals.sum(axis=0), 20.0 * np.minimum(0.0, np.array(spread) - 0.03)])
 
 
-#: Where the gripper's tips touch the box (world frame, m): the side faces y = +-0.025 at mid-height
-#: z = 0.035, each in its finger's plane (x = 0.0365, -0.0355, 0.0005: the source's palm quaternion
-#: tilts the fingers by 0.24 deg), so fingers 1 and 2 oppose the middle finger.
+#: Where the gripper's tips touch the box (world frame, m): the side faces y = +-0.025, each in its
+#: finger's plane (x = 0.036, -0.036, 0), fingers 1 and 2 opposing the middle finger. The middle
+#: finger touches 10 mm higher: its contact is frictionless (L) in gripper3-box.toml, and with all
+#: three at one height the normal forces would have no lever arm against the weight's moment about
+#: x (the weight hangs between the faces, the friction of fingers 1 and 2 acts on one face), so
+#: no contact forces could hold the box.
 GRIPPER_TARGETS = {  # in the order of the spec's tips
-    "f1_tip": ((0.0365, 0.025, 0.035), (0.0, 1.0, 0.0)),
-    "f2_tip": ((-0.0355, 0.025, 0.035), (0.0, 1.0, 0.0)),
-    "fm_tip": ((0.0005, -0.025, 0.035), (0.0, -1.0, 0.0)),
+    "f1_tip": ((0.036, 0.025, 0.03), (0.0, 1.0, 0.0)),
+    "f2_tip": ((-0.036, 0.025, 0.03), (0.0, 1.0, 0.0)),
+    "fm_tip": ((0.0, -0.025, 0.04), (0.0, -1.0, 0.0)),
 }
 #: Least angle between each fingertip capsule and the face it touches: a tilted capsule touches a
 #: plane with the rounded end nearer to it, so the contact is a point, not a segment along its side.
@@ -311,17 +314,8 @@ HANDS = {
         tips=("f1_distal", "f2_distal", "fm_distal"),
         object_free=(False, False, False),  # the box rests on the table, centred under the palm
         object_start=(0.0, 0.0, 0.03),
-        posture={
-            "f1j1": 0.5,
-            "f1j2": 0.3,
-            "f1j3": 0.5,
-            "f2j1": 0.5,
-            "f2j2": 0.3,
-            "f2j3": 0.5,
-            "fmj1": 0.5,
-            "fmj2": 0.3,
-            "fmj3": 0.5,
-        },
+        posture={f"{f}j{k}": v for f in ("f1", "f2", "fm") for k, v in ((1, 0.2), (2, 0.6), (3, 0.6))},
+        posture_weight=0.2,  # bent fingers: a straight finger cannot move its tip along itself
         extra=_gripper_extra,
         starts=16,
     ),
