@@ -9,13 +9,19 @@ The grasp files are parsed as TOML and their names checked against the model.
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
 import numpy as np
 import pytest
-import tomllib
+
+import mjtvm
+from mjtvm.core.reference import reference_tvmmp
+from mjtvm.errors import ModelError
+from mjtvm.sim.grasp import geom_id
+from mjtvm.sim.graspfile import load_grasp
 
 MODELS = Path(__file__).resolve().parents[2] / "mjtvm" / "models"
 _OBJ = mujoco.mjtObj
@@ -206,3 +212,55 @@ def test_grasp_file_names_exist_in_the_model(hand: tuple[Hand, mujoco.MjModel]) 
             assert entry["speed_limit"] > 0
     rvds = np.array(doc["rvds"], dtype=float)
     assert rvds.shape[1] == 6 and np.all(np.abs(np.linalg.norm(rvds, axis=1) - 1.0) < 1e-12)
+
+
+# ---------------------------------------------------------------------- through the grasp loader
+#: On main at 7cd114b the loader passes unnamed geoms ("ff_tip/geom0") as contact-type keys, and
+#: sim.grasp._check_geoms accepts names only: every grasp of a hand with unnamed geoms fails.
+_UNNAMED = pytest.mark.xfail(
+    strict=True,
+    raises=ModelError,
+    reason="sim.grasp._check_geoms rejects <body>/geom<n> labels of unnamed geoms",
+)
+
+
+def _contact_body(model: mujoco.MjModel, name: str) -> int:
+    return int(model.geom_bodyid[geom_id(model, name.split("#")[0])])
+
+
+@_UNNAMED
+def test_grasp_jacobians_match_finite_differences(hand: tuple[Hand, mujoco.MjModel]) -> None:
+    """Each contact's (3, M) Jacobian = d(finger-fixed contact point)/dq, central differences."""
+    spec, _ = hand
+    grasp = load_grasp(spec.grasp)
+    state = grasp.state()
+    model, data = grasp.model, mujoco.MjData(grasp.model)
+    data.qpos[:] = grasp.data.qpos
+    mujoco.mj_kinematics(model, data)
+    h = 1e-6
+    for contact in state.contacts:
+        body = _contact_body(model, contact.name)
+        rot0 = data.xmat[body].reshape(3, 3).copy()
+        local = rot0.T @ (contact.position - data.xpos[body])
+        fd = np.zeros((3, len(state.joint_names)))
+        for col, name in enumerate(state.joint_names):
+            adr = int(model.jnt_qposadr[mujoco.mj_name2id(model, _OBJ.mjOBJ_JOINT, name)])
+            points = []
+            for step in (h, -h):
+                d = mujoco.MjData(model)
+                d.qpos[:] = data.qpos
+                d.qpos[adr] += step
+                mujoco.mj_kinematics(model, d)
+                points.append(d.xpos[body] + d.xmat[body].reshape(3, 3) @ local)
+            fd[:, col] = (points[0] - points[1]) / (2 * h)
+        np.testing.assert_allclose(contact.jacobian, fd, atol=1e-8, err_msg=contact.name)
+
+
+@_UNNAMED
+def test_grasp_alphas_match_the_cvxpy_reference(hand: tuple[Hand, mujoco.MjModel]) -> None:
+    spec, _ = hand
+    state = load_grasp(spec.grasp).state()
+    result = mjtvm.tvmmp(state)
+    alpha, _status = reference_tvmmp(state)
+    np.testing.assert_allclose(np.asarray(result.alpha, dtype=float), alpha, rtol=1e-6, atol=1e-8)
+    assert result.tvmmp is not None and result.tvmmp > 0  # both grasps hold and move their object
