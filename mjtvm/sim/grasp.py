@@ -194,9 +194,9 @@ def detected_contacts(
 
     Reads ``data`` as it is (call ``mj_forward`` first), unless ``tolerance`` is given. MuJoCo's
     contact frame normal points from ``geom1`` to ``geom2``; it is flipped when the object is
-    ``geom1``. For pairs MuJoCo may collide iteratively (a box, cylinder or ellipsoid on either
-    side) the normal is the object's exact surface normal at the contact point instead
-    (:mod:`mjtvm.sim.normals`).
+    ``geom1``. For pairs MuJoCo collides iteratively (an ellipsoid, or a cylinder with a
+    capsule, cylinder or box) the normal is the object's exact surface normal at the contact
+    point instead (:mod:`mjtvm.sim.normals`).
 
     Parameters
     ----------
@@ -237,7 +237,8 @@ def detected_contacts(
         normal = without_round_off(np.array(c.frame[:3], dtype=float) * (1.0 if in2 else -1.0))
         obj_geom = g2 if in2 else g1
         if needs_exact_normal(model, obj_geom, other):  # GJK/EPA normals: the object's exact one
-            normal = without_round_off(-object_normal(model, data, obj_geom, np.array(c.pos, dtype=float)))
+            exact = object_normal(model, data, obj_geom, np.array(c.pos, dtype=float))
+            normal = normal if exact is None else without_round_off(-exact)
         contact = DetectedContact(
             geom=name,
             body=int(model.geom_bodyid[other]),

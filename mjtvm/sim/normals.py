@@ -17,26 +17,32 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ITERATIVE_TYPES", "needs_exact_normal", "object_normal"]
+__all__ = ["CLOSED_FORM", "needs_exact_normal", "object_normal"]
 
 _G = mujoco.mjtGeom
-#: Geom types whose pairs MuJoCo may collide iteratively (GJK/EPA).
-ITERATIVE_TYPES = (int(_G.mjGEOM_BOX), int(_G.mjGEOM_CYLINDER), int(_G.mjGEOM_ELLIPSOID))
-_OBJECT_TYPES = (*ITERATIVE_TYPES, int(_G.mjGEOM_SPHERE), int(_G.mjGEOM_CAPSULE))
+_S, _C, _E, _Y, _B, _P = (int(_G.mjGEOM_SPHERE), int(_G.mjGEOM_CAPSULE), int(_G.mjGEOM_ELLIPSOID),
+                          int(_G.mjGEOM_CYLINDER), int(_G.mjGEOM_BOX), int(_G.mjGEOM_PLANE))  # fmt: skip
+#: Primitive pairs MuJoCo collides in closed form (engine_collision_driver's table): every plane
+#: pair, sphere with sphere, capsule, cylinder or box, capsule with capsule or box, box with box.
+CLOSED_FORM = {frozenset(p) for p in ((_S, _S), (_S, _C), (_S, _Y), (_S, _B), (_C, _C), (_C, _B), (_B, _B))}
+_OBJECT_TYPES = (_S, _C, _E, _Y, _B)
 
 
 def needs_exact_normal(model: mujoco.MjModel, object_geom: int, other_geom: int) -> bool:
-    """Whether the pair's MuJoCo normal may come from GJK/EPA (either geom a box, cylinder or
-    ellipsoid) while :func:`object_normal` knows the object's shape. Sphere, capsule and plane
-    pairs keep MuJoCo's closed-form normals (bit for bit)."""
-    kinds = {int(model.geom_type[object_geom]), int(model.geom_type[other_geom])}
-    return int(model.geom_type[object_geom]) in _OBJECT_TYPES and bool(kinds & set(ITERATIVE_TYPES))
+    """Whether the pair is collided iteratively (GJK/EPA) while :func:`object_normal` knows the
+    object's shape: an ellipsoid, or a cylinder with a capsule, cylinder or box. Closed-form
+    pairs keep MuJoCo's normals, bit for bit."""
+    a, b = int(model.geom_type[object_geom]), int(model.geom_type[other_geom])
+    if a not in _OBJECT_TYPES or _P in (a, b) or b > _B:  # plane pairs are closed-form; meshes: as MuJoCo
+        return False
+    return frozenset((a, b)) not in CLOSED_FORM
 
 
 def object_normal(
     model: mujoco.MjModel, data: mujoco.MjData, geom: int, point: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    r"""``(3,)`` outward unit normal of object geom ``geom`` at ``point``.
+) -> NDArray[np.float64] | None:
+    r"""``(3,)`` outward unit normal of object geom ``geom`` at ``point`` (``None`` on a box's
+    edge or corner, where it is not unique).
 
     ``point`` (m, world) is a contact point on or within a small distance of the surface. In
     the geom frame, with half-sizes ``a``: a box's normal is that of the face whose plane is
@@ -51,7 +57,10 @@ def object_normal(
     kind = int(model.geom_type[geom])
     n = np.zeros(3)
     if kind == int(_G.mjGEOM_BOX):
-        k = int(np.argmax(np.abs(local) - size))  # the face the point is nearest to (or beyond)
+        excess = np.abs(local) - size  # per axis, how far beyond (or inside) its pair of faces
+        k = int(np.argmax(excess))
+        if np.sort(excess)[-2] >= excess[k] - 1e-9 * float(np.max(size)):
+            return None  # an edge or a corner: no unique face normal
         n[k] = np.sign(local[k]) or 1.0
     elif kind == int(_G.mjGEOM_CYLINDER):
         radial = float(np.hypot(local[0], local[1]))

@@ -19,7 +19,6 @@ import pytest
 
 import mjtvm
 from mjtvm.core.reference import reference_tvmmp
-from mjtvm.errors import ModelError
 from mjtvm.sim.grasp import geom_id
 from mjtvm.sim.graspfile import load_grasp
 
@@ -215,20 +214,10 @@ def test_grasp_file_names_exist_in_the_model(hand: tuple[Hand, mujoco.MjModel]) 
 
 
 # ---------------------------------------------------------------------- through the grasp loader
-#: On main at 7cd114b the loader passes unnamed geoms ("ff_tip/geom0") as contact-type keys, and
-#: sim.grasp._check_geoms accepts names only: every grasp of a hand with unnamed geoms fails.
-_UNNAMED = pytest.mark.xfail(
-    strict=True,
-    raises=ModelError,
-    reason="sim.grasp._check_geoms rejects <body>/geom<n> labels of unnamed geoms",
-)
-
-
 def _contact_body(model: mujoco.MjModel, name: str) -> int:
     return int(model.geom_bodyid[geom_id(model, name.split("#")[0])])
 
 
-@_UNNAMED
 def test_grasp_jacobians_match_finite_differences(hand: tuple[Hand, mujoco.MjModel]) -> None:
     """Each contact's (3, M) Jacobian = d(finger-fixed contact point)/dq, central differences."""
     spec, _ = hand
@@ -256,7 +245,6 @@ def test_grasp_jacobians_match_finite_differences(hand: tuple[Hand, mujoco.MjMod
         np.testing.assert_allclose(contact.jacobian, fd, atol=1e-8, err_msg=contact.name)
 
 
-@_UNNAMED
 def test_grasp_alphas_match_the_cvxpy_reference(hand: tuple[Hand, mujoco.MjModel]) -> None:
     spec, _ = hand
     state = load_grasp(spec.grasp).state()
