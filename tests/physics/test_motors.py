@@ -1,0 +1,100 @@
+"""DC motors attached with MjSpec (mjtvm.physics.motors): datasheet ranges, the template's arrays, refusals."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from mjtvm.errors import ModelError
+from mjtvm.physics.motors import (
+    attach_dcmotors,
+    dcmotor_of_joint,
+    motor_for_range,
+    motor_of_actuator,
+    require_motors,
+)
+from mjtvm.sim.actuator import operation_range_from_actuator
+from mjtvm.sim.hand import DCMotor, _fmt
+
+HAND = Path(__file__).resolve().parents[2] / "models" / "four_finger_hand.xml"
+SERVOS = """<mujoco>
+  <default><position kp="5" ctrlrange="-1 1"/></default>
+  <worldbody><body name="b"><joint name="a" axis="0 0 1"/><joint name="b" axis="0 1 0"/>
+    <joint name="c" type="slide" axis="1 0 0"/><geom type="box" size="0.01 0.02 0.03"/></body></worldbody>
+  <actuator><position name="pa" joint="a"/><position name="pb" joint="b"/><motor name="mc" joint="c"/></actuator>
+  <sensor><actuatorfrc name="fa" actuator="pa"/><actuatorfrc name="fc" actuator="mc"/></sensor>
+  <keyframe><key name="k" qpos="0.1 0.2 0.3" ctrl="0.5 0.6 0.7"/></keyframe>
+</mujoco>"""
+
+
+def test_attached_motors_give_the_datasheet_range() -> None:
+    motor = DCMotor.from_datasheet()
+    model = attach_dcmotors(SERVOS, {"a": motor, "b": motor})
+    assert [model.actuator(i).name for i in range(model.nactuator)] == ["mc", "a", "b"]
+    want = operation_range_from_actuator(mujoco.MjModel.from_xml_string(
+        f'<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
+        f'<actuator>{motor.mjcf("j", "j")}</actuator></mujoco>'), 0).vertices  # fmt: skip
+    for joint in ("a", "b"):
+        a = dcmotor_of_joint(model, joint)
+        assert a is not None and model.actuator_ctrllimited[a] == 0  # the default's ctrlrange does not leak
+        np.testing.assert_allclose(
+            operation_range_from_actuator(model, a).vertices, want, rtol=1e-9, atol=1e-12
+        )
+        back = motor_of_actuator(model, a)
+        for f in (
+            "voltage",
+            "stall_torque",
+            "no_load_speed",
+            "max_continuous_torque",
+            "gear",
+            "rotor_inertia",
+        ):
+            assert getattr(back, f) == pytest.approx(getattr(motor, f), rel=1e-9)
+    assert dcmotor_of_joint(model, "c") is None  # its motor stays
+    assert model.nsensor == 1 and model.sensor(0).name == "fc"  # the removed servo's sensor went with it
+    np.testing.assert_array_equal(model.key_ctrl[0], [0.7, 0, 0, 0, 0])  # the kept control survives
+    assert dcmotor_of_joint(attach_dcmotors(mujoco.MjSpec.from_string(SERVOS), {"a": motor}), "a") is not None
+
+
+def test_reattaching_the_hand_motors_reproduces_the_template() -> None:
+    template = mujoco.MjModel.from_xml_path(str(HAND))
+    joints = [template.joint(j).name for j in range(template.njnt) if template.joint(j).name != "object"]
+    exact = DCMotor.from_datasheet()
+    # the template writes 10 significant digits (hand._fmt): the same motor, as the XML has it
+    written = DCMotor(*(float(_fmt(getattr(exact, f))) for f in (
+        "voltage", "stall_torque", "no_load_speed", "max_continuous_torque", "gear", "rotor_inertia",
+        "velocity_gain")))  # fmt: skip
+    fields = ("gainprm", "biasprm", "dynprm", "gear", "forcerange", "armature", "ctrlspec", "trnid", "dyntype",
+              "gaintype", "biastype", "forcelimited", "ctrllimited")  # fmt: skip
+    again = attach_dcmotors(HAND, dict.fromkeys(joints, written))
+    for f in fields:
+        np.testing.assert_array_equal(getattr(again, f"actuator_{f}"), getattr(template, f"actuator_{f}"), f)
+    close = attach_dcmotors(HAND, dict.fromkeys(joints, exact))  # unrounded: R differs by ~1e-10 relative
+    np.testing.assert_allclose(close.actuator_gainprm, template.actuator_gainprm, rtol=1e-9)
+
+
+def test_motor_routes_of_grasp_ranges() -> None:
+    hand = mujoco.MjModel.from_xml_path(str(HAND))
+    assert motor_for_range("j", {"datasheet": "maxon_re25_20w"}) == DCMotor.from_datasheet()
+    assert motor_for_range("j", {"datasheet": "maxon_re25_20w", "gear_ratio": 20}).gear == 20  # type: ignore[union-attr]
+    assert motor_for_range("j", {"datasheet": "maxon_re25_20w", "gear_efficiency": 0.8}) is None
+    assert motor_for_range("j", {"polygon": [[0, 0], [1, 0], [0, 1]]}) is None
+    assert motor_for_range("j", {"actuator": "x", "speed_limit": 3.0}) is None
+    assert motor_for_range("f1_yaw0", {"dcmotor": True}, model=hand) == motor_of_actuator(hand, 0)
+    assert motor_for_range("x", {"dcmotor": "f1_pitch0"}, model=hand) == motor_of_actuator(hand, 1)
+    servos = mujoco.MjModel.from_xml_string(SERVOS)
+    motors = require_motors(servos, ["a"], {"a": DCMotor.from_datasheet()})
+    assert list(motors) == ["a"]
+    assert require_motors(hand, ["f1_yaw0"], {}) == {}  # has its own <dcmotor>
+    with pytest.raises(ModelError, match=r"joint 'b'.*is a polygon.*gear_efficiency = 1"):
+        require_motors(servos, ["a", "b"], {"a": DCMotor.from_datasheet(), "b": None},
+                       {"a": {"datasheet": "maxon_re25_20w"}, "b*": {"polygon": [[0, 0], [1, 0], [0, 1]]}})  # fmt: skip
+    with pytest.raises(ModelError, match=r"joint 'a'.*datasheet with gear_efficiency != 1"):
+        require_motors(servos, ["a"], {"a": None}, {"*": {"datasheet": "x", "gear_efficiency": 0.9}})
+    with pytest.raises(ModelError, match="joint 'nope'"):
+        attach_dcmotors(SERVOS, {"nope": DCMotor.from_datasheet()})
+    with pytest.raises(ModelError, match="MJCF text"):
+        attach_dcmotors("<mujoco><bad", {"a": DCMotor.from_datasheet()})
