@@ -244,7 +244,7 @@ def rollout(
     saturated: set[str] = set()
     clamped, reason, gap_geom = 0, "", ""
     trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
-    fromto, f6, pred = np.zeros(6), np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
+    f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
         ff = drive.torques.copy()
@@ -265,7 +265,7 @@ def rollout(
         om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
         now = np.r_[v, rig.radius * om]
         twist_errors(worst, now, target, tnorm)
-        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, fromto, f6)
+        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, f6)
         if max(gaps) > worst["gap"]:
             worst["gap"], gap_geom = max(gaps), rig.fingers[int(np.argmax(gaps))][0]
         if record:
