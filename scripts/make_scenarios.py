@@ -1,29 +1,39 @@
-r"""Rerun the IK of every shipped scenario and write ``mjtvm/data/scenarios/*.json``.
+r"""Rerun the IK of the paper's cases; write their sources and their grasp files.
 
 Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
-``mjtvm/data/scenarios``). Each file's scenario data is kept; each variant's ``solution``
-(joint angles, IK residuals, achieved contacts) is recomputed by
-:func:`mjtvm.sim.scenario.make_documents`. ``tests/sim/test_scenario.py`` checks that the committed
-files equal this output.
+``mjtvm/data/scenarios`` for the sources and ``mjtvm/models/paper_hand`` for the grasp files).
+Each source's scenario data (the paper's points, IK start and bounds) is kept; each variant's
+``solution`` (joint angles, IK residuals, achieved contacts) is recomputed by
+:func:`mjtvm.sim.scenario.make_documents`, and the variant's ``mjtvm.grasp/1`` file
+(:func:`mjtvm.sim.scenario.grasp_document`) is written from it: ``case2.toml``,
+``case2-humanlike.toml``, ... ``tests/sim/test_scenario.py`` checks that the committed files
+equal this output.
 """
 
 from __future__ import annotations
 
 import sys
+from importlib import resources
 from pathlib import Path
 
-from mjtvm.sim.scenario import format_document, make_documents, scenario_path
+from mjtvm.sim.graspdoc import format_toml
+from mjtvm.sim.scenario import format_document, grasp_document, grasp_file_name, make_documents, scenario_path
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Write every scenario file; return the process exit code."""
+    """Write every scenario source and grasp file; return the process exit code."""
     args = sys.argv[1:] if argv is None else argv
+    grasps = Path(args[0]) if args else Path(str(resources.files("mjtvm").joinpath("models", "paper_hand")))
     docs = make_documents()
     for name, doc in docs.items():
         out = Path(args[0]) / f"{name}.json" if args else scenario_path(name)
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(format_document(doc) + "\n", encoding="utf-8")
         sys.stdout.write(f"wrote {out}\n")
+        for variant in doc["variants"]:
+            path = grasps / grasp_file_name(name, variant)
+            path.write_text(format_toml(grasp_document(doc, variant)), encoding="utf-8")
+            sys.stdout.write(f"wrote {path}\n")
     return 0
 
 

@@ -370,7 +370,7 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
     checkpoint = outdir / f"{args.name}.partial.json"
     with output_lock(outdir):
         points = grid(
-            scenarios=args.scenario, hands=args.hand, variants=args.contacts, readings=args.reading,
+            scenarios=args.grasp, hands=args.hand, variants=args.contacts, readings=args.reading,
             mus=args.mu, mgs=args.mg, states=args.state_indices, num_states=args.states,
         )  # fmt: skip
         wanted = {_key(p) for p in points}

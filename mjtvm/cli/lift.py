@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .options import Subparsers, command, deprecated_alias, lift_options, out_options
+from .options import (
+    GRASP_HELP,
+    Subparsers,
+    command,
+    deprecated_alias,
+    grasp_option,
+    lift_options,
+    out_options,
+)
 from .output import EXIT_OK, emit
 from .values import CONTACTS, READINGS, choices, cluster_address, integer, integers, names, numbers
 
@@ -74,7 +82,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         try:
             out = run_replay(
-                scenario=args.scenario, hand=args.hand, mu=args.mu, mg=args.mg, num_states=args.states,
+                scenario=args.grasp, hand=args.hand, mu=args.mu, mg=args.mg, num_states=args.states,
                 variants=args.contacts, readings=args.reading, out=outdir,
                 plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
                 on_replay=record if args.rrd is not None or args.spawn else None,
@@ -110,8 +118,8 @@ def add_sweep(sub: Subparsers) -> None:
 
 
 def _sweep_grid(p: argparse.ArgumentParser) -> None:
-    """The grid's axes: scenarios, hands, contacts, readings, mu, mg and the lift's states."""
-    p.add_argument("--scenario", type=names, default="case2", help="scenarios")
+    """The grid's axes: grasps, hands, contacts, readings, mu, mg and the lift's states."""
+    grasp_option(p, default="case2", type=names, help="grasps (comma-separated): " + GRASP_HELP)
     p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
     new = p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
                          help="contact types of fingers 2 and 4")  # fmt: skip

@@ -100,15 +100,31 @@ def out_options(p: argparse.ArgumentParser, *, name: str | None, out_help: str =
         p.add_argument("--name", type=stem, default=name, help=name_help)
 
 
-def hand_option(p: argparse.ArgumentParser, help: str = "hand model: default or humanlike") -> None:
+GRASP_HELP = (
+    "grasp: a mjtvm.grasp/1 file (.toml or .json), or a shipped grasp: the paper's case1, case1-s, "
+    "case2 (with --hand), or any name in mjtvm/models/*/"
+)
+
+
+def grasp_option(
+    p: argparse.ArgumentParser, *, default: str | None, type: Any = None, help: str = GRASP_HELP
+) -> None:
+    """``--grasp NAME|FILE`` (the old ``--scenario`` too)."""
+    new = p.add_argument("--grasp", default=default, type=type, metavar="GRASP", help=help)
+    deprecated_alias(p, "--scenario", new)
+
+
+def hand_option(
+    p: argparse.ArgumentParser, help: str = "hand model of the paper's cases: default or humanlike"
+) -> None:
     """``--hand`` (the old ``--variant`` too)."""
     new = p.add_argument("--hand", default="default", help=help)
     deprecated_alias(p, "--variant", new)
 
 
 def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> None:
-    """The scripted lift of ``replay``: scenario, hand, friction, weight, states, contacts, reading."""
-    p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
+    """The scripted lift of ``replay``: grasp, hand, friction, weight, states, contacts, reading."""
+    grasp_option(p, default="case2")
     hand_option(p)
     p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
     p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")

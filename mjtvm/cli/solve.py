@@ -6,31 +6,34 @@ import argparse
 import json
 import sys
 from importlib import resources
+from pathlib import Path
 
 from ..core.solvers import SOLVERS
 from ..core.state import GraspState, load_state
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
-from .options import Subparsers, command, hand_option
+from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
 from .output import EXIT_OK, emit, lp_progress
 from .values import integer, number
 
-__all__ = ["add_export_state", "add_solve", "add_tvms", "example_path"]
+__all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
 
 
 _TEXTS: dict[str, tuple[str, str]] = {
     # command: (help in the list of commands, description of its --help)
     "solve": (
-        "Problem 2: TVMMP of one mjtvm.state/1 grasp state (prints mjtvm.result/1)",
-        "Solve Problem 2 (eq. 31-35) for STATE and print the mjtvm.result/1 JSON.",
+        "Problem 2: TVMMP of one grasp state or grasp file (prints mjtvm.result/1)",
+        "Solve Problem 2 (eq. 31-35) for a mjtvm.state/1 STATE or a mjtvm.grasp/1 grasp and print "
+        "the mjtvm.result/1 JSON.",
     ),
     "export-state": (
-        "print the mjtvm.state/1 grasp state of a scenario, computed by MuJoCo",
-        "Build a scenario's grasp state from the MuJoCo model (mj_forward) and print it.",
+        "print the mjtvm.state/1 grasp state of a grasp file, computed by MuJoCo",
+        "Build a grasp's state from its MuJoCo model (mj_forward) and print it; the contacts found "
+        "against those the grasp file expects go to stderr.",
     ),
     "tvms": (
         "Problem 1: the exact TVMS polytope and its volume (prints mjtvm.tvms/1)",
-        "Solve Problem 1 (eq. 26-29, 34) for STATE or a scenario and print mjtvm.tvms/1.",
+        "Solve Problem 1 (eq. 26-29, 34) for STATE or a grasp and print mjtvm.tvms/1.",
     ),
 }
 
@@ -45,13 +48,18 @@ def _indent_option(p: argparse.ArgumentParser) -> None:
 
 
 # ------------------------------------------------------------------ solve
+_SOURCE_HELP = (
+    "a mjtvm.state/1 JSON file, - for standard input, or a mjtvm.grasp/1 file (.toml, or .json "
+    "with that schema) or shipped grasp name"
+)
+
+
 def add_solve(sub: Subparsers) -> None:
-    """``mjtvm solve [STATE|-]``: prints mjtvm.result/1."""
+    """``mjtvm solve [STATE|GRASP|-]``: prints mjtvm.result/1."""
     p = command(sub, "solve", *_TEXTS["solve"])
-    p.add_argument(
-        "state", nargs="?", default=None,
-        help="mjtvm.state/1 JSON file, or - for standard input (default: the shipped example pinch.json)",
-    )  # fmt: skip
+    p.add_argument("state", nargs="?", default=None, metavar="STATE|GRASP",
+                   help=_SOURCE_HELP + " (default: the shipped example pinch.json)")  # fmt: skip
+    hand_option(p)
     p.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend")
     p.add_argument(
         "--box", choices=("eliminated", "literal"), default="eliminated",
@@ -62,15 +70,44 @@ def add_solve(sub: Subparsers) -> None:
     p.set_defaults(func=_cmd_solve)
 
 
-def _cmd_solve(args: argparse.Namespace) -> int:
-    source = args.state
+def is_grasp_source(source: str) -> bool:
+    """A grasp (file or shipped name) rather than a state file: ``.toml``, a JSON document of
+    schema ``mjtvm.grasp/1``, or a name without a suffix that is not a file."""
+    path = Path(source)
+    if path.suffix.lower() == ".toml":
+        return True
+    if path.suffix.lower() == ".json":
+        try:
+            with path.open("rb") as f:
+                head = f.read(4096)
+        except OSError:
+            return False
+        return b'"mjtvm.grasp/1"' in head
+    return not path.suffix and "/" not in source and not path.exists()
+
+
+def load_source(source: str | None, *, hand: str = "default", default: str | None = None) -> GraspState:
+    """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo)."""
     if source == "-":
-        source = sys.stdin.read()
-        if not source.lstrip().startswith("{"):
+        text = sys.stdin.read()
+        if not text.lstrip().startswith("{"):
             raise StateError("", "standard input does not hold a JSON object")
-    elif source is None:
-        source = example_path()
-    state = load_state(source)
+        return load_state(text)
+    if source is None:
+        if default is None:
+            raise StateError("state", "give a mjtvm.state/1 file (or -) or a grasp (--grasp or a .toml file)")
+        source = default
+    if is_grasp_source(source):
+        from ..sim.scenario import load_scenario  # MuJoCo only for grasps
+
+        return load_scenario(source, variant=hand).state()
+    if hand != "default":
+        raise StateError("--hand", "applies to the paper's shipped grasps, not to a state file")
+    return load_state(source)
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    state = load_source(args.state, hand=args.hand, default=example_path())
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
     return EXIT_OK
@@ -78,36 +115,49 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ export-state
 def add_export_state(sub: Subparsers) -> None:
-    """``mjtvm export-state --scenario NAME``: prints the scenario's mjtvm.state/1."""
+    """``mjtvm export-state GRASP``: prints the grasp's mjtvm.state/1."""
     p = command(sub, "export-state", *_TEXTS["export-state"])
-    p.add_argument(
-        "--scenario",
-        required=True,
-        help="scenario name (case1, case1-s, case2) or path of a scenario JSON file",
-    )
+    p.add_argument("grasp_file", nargs="?", default=None, metavar="GRASP", help=GRASP_HELP)
+    grasp_option(p, default=None, help="the same as GRASP (the old --scenario spelling works too)")
     hand_option(p)
-    p.add_argument("--mg", type=number(0.0), default=None, help="object weight (N); default: the scenario's")
+    p.add_argument(
+        "--mg", type=number(0.0), default=None, help="object weight (N); default: the grasp's REFS"
+    )
+    p.add_argument("--mu", type=number(0.0), default=None, help="friction coefficient; default: the grasp's")
     _indent_option(p)
+    p.add_argument("--quiet", action="store_true", help="no contact report on stderr")
     p.set_defaults(func=_cmd_export_state)
 
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
-    from ..sim.scenario import export_state  # MuJoCo is imported only by the coupling commands
+    from ..core.state import state_to_dict
+    from ..sim.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
-    options = {"variant": args.hand}
-    if args.mg is not None:
-        options["mg"] = args.mg
-    emit(json.dumps(export_state(args.scenario, **options), indent=args.indent))
+    source = args.grasp_file or args.grasp
+    if source is None:
+        raise StateError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
+    grasp = load_scenario(source, variant=args.hand, mg=args.mg, mu=args.mu)
+    state = grasp.state()
+    if not args.quiet:
+        report = ", ".join(
+            f"{row['selection']} {row['type']}: " + (", ".join(row["found"]) or "not found")
+            for row in grasp.contact_report()
+        )
+        print(
+            f"contacts (expected: found within {1e3 * grasp.contact_tolerance:g} mm): {report}",
+            file=sys.stderr,
+        )
+    emit(json.dumps(state_to_dict(state), indent=args.indent))
     return EXIT_OK
 
 
 # ------------------------------------------------------------------ tvms
 def add_tvms(sub: Subparsers) -> None:
-    """``mjtvm tvms [STATE|-|--scenario NAME]``: prints mjtvm.tvms/1."""
+    """``mjtvm tvms [STATE|GRASP|-] [--grasp NAME]``: prints mjtvm.tvms/1."""
     p = command(sub, "tvms", *_TEXTS["tvms"])
-    p.add_argument("state", nargs="?", default=None, help="mjtvm.state/1 JSON file, or - for standard input")
-    p.add_argument("--scenario", default=None, help="a scenario instead of a file: case1, case1-s, case2")
-    hand_option(p, help="hand model of --scenario: default or humanlike")
+    p.add_argument("state", nargs="?", default=None, metavar="STATE|GRASP", help=_SOURCE_HELP)
+    grasp_option(p, default=None, help="a grasp instead of STATE: " + GRASP_HELP)
+    hand_option(p)
     p.add_argument("--no-rvds", action="store_true", help="ignore the state's RVDS (no cone restriction)")
     p.add_argument("--method", choices=("lp", "cdd"), default="lp", help="LP projection or cdd enumeration")
     p.add_argument(
@@ -122,21 +172,12 @@ def add_tvms(sub: Subparsers) -> None:
     p.set_defaults(func=_cmd_tvms)
 
 
-def _load_state_or_scenario(args: argparse.Namespace) -> GraspState:
-    if args.scenario is not None:
-        from ..sim.scenario import load_scenario  # MuJoCo only for scenario shortcuts
-
-        return load_scenario(args.scenario, variant=args.hand).state()
-    if args.state is None:
-        raise StateError("state", "give a mjtvm.state/1 file (or -) or --scenario NAME")
-    source = sys.stdin.read() if args.state == "-" else args.state
-    return load_state(source)
-
-
 def _cmd_tvms(args: argparse.Namespace) -> int:
     from ..polytopes.tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
 
-    state = _load_state_or_scenario(args)
+    if args.grasp is not None and args.state is not None:
+        raise StateError("--grasp", "give STATE or --grasp, not both")
+    state = load_source(args.grasp or args.state, hand=args.hand)
     if args.no_rvds:
         state = state.with_(rvds=None)
     with lp_progress(not args.quiet and args.method == "lp", "tvms"):

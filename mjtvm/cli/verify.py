@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, deprecated_alias, out_options
+from .options import Parser, deprecated_alias, grasp_option, out_options
 from .output import EXIT_OK
 from .values import CONTACTS, READINGS, choices, integer, number
 
@@ -37,7 +37,7 @@ def verify_parser() -> argparse.ArgumentParser:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
-    p.add_argument("--scenario", default="case2", help="scenario name or path of a scenario JSON file")
+    grasp_option(p, default="case2")
     p.add_argument(
         "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
     )
@@ -118,7 +118,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         t0 = time.perf_counter()
         rows = verify.verify_lift(
-            args.scenario, num_states=args.states, stride=args.stride,
+            args.grasp, num_states=args.states, stride=args.stride,
             runs=verify.runs_of(args.contacts, args.reading), mu=args.mu, mg=args.mg, settings=settings,
             witness=args.witness, jobs=args.jobs, start_method=args.start_method, out=None,
             progress=not args.quiet,
@@ -126,11 +126,11 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         wall = time.perf_counter() - t0
         files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": verify.rows_csv(rows)}
         if not args.no_plots:
-            title = f"{args.scenario}: $\\mu$ = {args.mu:g}, $mg$ = {args.mg:g} N"
+            title = f"{args.grasp}: $\\mu$ = {args.mu:g}, $mg$ = {args.mg:g} N"
             files[outdir / f"{args.name}.png"] = verify.plot_alpha(rows, title)
         srows: list[dict[str, Any]] = []
         if args.slide_check:
-            lift = verify.cached_lift(args.scenario, args.states)
+            lift = verify.cached_lift(args.grasp, args.states)
             indices = verify.state_indices(args.states, args.stride)
             srows = verify.slide_check(lift, indices, mu=args.mu, mg=args.mg, settings=settings)
             files[outdir / "slide-check.csv"] = verify.rows_csv(srows)

@@ -27,7 +27,16 @@ from ..core.state import GraspState, SlipMode
 from ..errors import ModelError
 from .actuator import operation_range_from_actuator
 
-__all__ = ["DetectedContact", "detected_contacts", "geom_id", "geom_label", "grasp_state", "object_weight"]
+__all__ = [
+    "DetectedContact",
+    "detected_contacts",
+    "forward_touching",
+    "geom_id",
+    "geom_label",
+    "grasp_state",
+    "object_weight",
+    "subtree",
+]
 
 _OBJ = mujoco.mjtObj
 
@@ -114,7 +123,8 @@ def geom_id(model: mujoco.MjModel, label: str, what: str = "geom") -> int:
     raise ModelError(f"{what} {label!r}", "not in the model")
 
 
-def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
+def subtree(model: mujoco.MjModel, root: int) -> set[int]:
+    """Ids of the body ``root`` and every body below it."""
     bodies = {root}
     for b in range(root + 1, model.nbody):  # parents precede children in mjModel
         if int(model.body_parentid[b]) in bodies:
@@ -130,16 +140,42 @@ def _ancestors(model: mujoco.MjModel, body: int) -> set[int]:
     return chain
 
 
+def forward_touching(model: mujoco.MjModel, data: mujoco.MjData, object_body: int, tolerance: float) -> None:
+    r"""``mj_forward`` with the object's geoms given a collision margin of ``tolerance`` (m).
+
+    MuJoCo reports a contact once the distance is below the larger margin of the pair (0
+    by default), so geoms placed exactly touching may be missed; with the margin, every geom
+    within ``tolerance`` of the object is in ``data.contact`` (with its true distance). The
+    margins are restored afterwards: they serve detection only, the model is unchanged.
+    """
+    geoms = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in subtree(model, object_body)]
+    saved = model.geom_margin[geoms].copy()
+    try:
+        model.geom_margin[geoms] = np.maximum(saved, tolerance)
+        mujoco.mj_forward(model, data)
+    finally:
+        model.geom_margin[geoms] = saved
+
+
 def detected_contacts(
-    model: mujoco.MjModel, data: mujoco.MjData, *, object_body: str = "object", one_per_body: bool = True
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    *,
+    object_body: str = "object",
+    one_per_body: bool = True,
+    tolerance: float | None = None,
 ) -> list[DetectedContact]:
     r"""Contacts between ``object_body`` (and its subtree) and every other geom in ``data.contact``.
 
-    Reads ``data`` as it is (call ``mj_forward`` first). MuJoCo's contact frame normal points
-    from ``geom1`` to ``geom2``; it is flipped when the object is ``geom1``.
+    Reads ``data`` as it is (call ``mj_forward`` first), unless ``tolerance`` is given. MuJoCo's
+    contact frame normal points from ``geom1`` to ``geom2``; it is flipped when the object is
+    ``geom1``.
 
     Parameters
     ----------
+    tolerance
+        Detect anew with :func:`forward_touching` (``data`` is updated) and keep the contacts
+        at a distance of at most ``tolerance`` (m). ``None``: the contacts MuJoCo reports.
     one_per_body
         Keep only the deepest contact of each body other than the world body. A convex link
         (a capsule with its fingertip sphere) touches a convex object at one point; when the
@@ -157,10 +193,14 @@ def detected_contacts(
         Unknown body.
     """
     ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
-    inside = _subtree(model, ob)
+    inside = subtree(model, ob)
+    if tolerance is not None:
+        forward_touching(model, data, ob, tolerance)
     found: list[tuple[int, int, DetectedContact]] = []
     for i in range(data.ncon):
         c = data.contact[i]
+        if tolerance is not None and float(c.dist) > tolerance:
+            continue  # within the model's own margin, not within the tolerance
         g1, g2 = int(c.geom1), int(c.geom2)
         in1, in2 = int(model.geom_bodyid[g1]) in inside, int(model.geom_bodyid[g2]) in inside
         if in1 == in2:
@@ -200,7 +240,7 @@ def object_weight(
     ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
     origin = np.array(data.xpos[ob], dtype=float)
     wrench = np.zeros(6)
-    for b in sorted(_subtree(model, ob)):
+    for b in sorted(subtree(model, ob)):
         force = (
             (1.0 - float(model.body_gravcomp[b])) * float(model.body_mass[b]) * np.array(model.opt.gravity)
         )
@@ -267,6 +307,7 @@ def grasp_state(
     one_contact_per_body: bool = True,
     friction_edges: int = 16,
     slip: SlipMode = "per_contact",
+    contact_tolerance: float | None = None,
 ) -> GraspState:
     r"""The grasp state (space = 3) at the configuration ``data.qpos``.
 
@@ -306,6 +347,9 @@ def grasp_state(
         See :func:`detected_contacts`.
     friction_edges, slip
         Passed to :class:`~mjtvm.core.state.GraspState`.
+    contact_tolerance
+        A geom within this distance (m) of the object touches it (:func:`forward_touching`);
+        ``None``: the contacts MuJoCo reports.
 
     Returns
     -------
@@ -325,7 +369,7 @@ def grasp_state(
         S contact without slide direction, or no contact between the object and a finger.
     """
     ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
-    joint_ids = _state_joints(model, joints, _subtree(model, ob))
+    joint_ids = _state_joints(model, joints, subtree(model, ob))
     names = [mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j) for j in joint_ids]
     dofs = np.array([int(model.jnt_dofadr[j]) for j in joint_ids])
     overrides = dict(operation_ranges or {})
@@ -333,7 +377,7 @@ def grasp_state(
     work = copy.copy(data)
     work.qvel[:] = 0.0
     mujoco.mj_forward(model, work)
-    detected = _detect_contacts(model, work, object_body, joint_ids, one_contact_per_body)
+    detected = _detect_contacts(model, work, object_body, joint_ids, one_contact_per_body, contact_tolerance)
     contacts = _contacts(model, work, detected, dofs, contact_types, mu, slide_directions)
     ranges = tuple(
         as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
@@ -377,11 +421,18 @@ def _check_mappings(
 
 
 def _detect_contacts(
-    model: mujoco.MjModel, work: mujoco.MjData, object_body: str, joint_ids: Sequence[int], one_per_body: bool
+    model: mujoco.MjModel,
+    work: mujoco.MjData,
+    object_body: str,
+    joint_ids: Sequence[int],
+    one_per_body: bool,
+    tolerance: float | None,
 ) -> list[DetectedContact]:
     """The object's contacts (:func:`detected_contacts`); at least one must be on a finger
     (a body moved by one of ``joint_ids``)."""
-    detected = detected_contacts(model, work, object_body=object_body, one_per_body=one_per_body)
+    detected = detected_contacts(
+        model, work, object_body=object_body, one_per_body=one_per_body, tolerance=tolerance
+    )
     moving = {int(model.jnt_bodyid[j]) for j in joint_ids}
     if not any(_ancestors(model, c.body) & moving for c in detected):
         touching = sorted({c.geom for c in detected})

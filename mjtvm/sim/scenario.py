@@ -26,19 +26,18 @@ from __future__ import annotations
 import copy
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any
 
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.state import GraspState, state_to_dict
+from ..core.state import state_to_dict
 from ..errors import ModelError
-from .grasp import detected_contacts, grasp_state
+from .grasp import detected_contacts
+from .graspfile import Grasp, load_grasp
 from .hand import finger_joint_names, hand_mjcf
 from .ik import IkTarget, geom_contact_target, solve_ik
 
@@ -282,68 +281,7 @@ def format_document(doc: Any, indent: int = 0) -> str:
     return "[\n" + ",\n".join(rows) + "\n" + " " * indent + "]"
 
 
-@dataclass(frozen=True, eq=False)
-class Scenario:
-    r"""A scenario at its configuration.
-
-    Attributes
-    ----------
-    name, variant
-        The scenario and model variant.
-    model, data
-        The compiled hand and sphere, and ``mjData`` after ``mj_forward`` at the stored
-        joint angles with the object at ``object_position``.
-    joints
-        The state's joints (those of the scenario's fingers), in model order.
-    contact_types, mu, slide_directions, refs, rvds, object_body
-        As :func:`~mjtvm.sim.grasp.grasp_state` takes them; ``refs`` ``(K, 6)`` [N; N m],
-        ``rvds`` ``(R, 6)`` or ``None``.
-    ignored_geoms
-        Geoms whose contacts with the object are dropped from the state.
-    document
-        The scenario document.
-    """
-
-    name: str
-    variant: str
-    model: mujoco.MjModel
-    data: mujoco.MjData
-    joints: tuple[str, ...]
-    contact_types: Mapping[str, str]
-    mu: float | Mapping[str, float]
-    slide_directions: Mapping[str, Sequence[float]]
-    refs: NDArray[np.float64]
-    rvds: NDArray[np.float64] | None
-    ignored_geoms: tuple[str, ...]
-    object_body: str
-    document: Mapping[str, Any]
-
-    def state(
-        self,
-        *,
-        contact_types: Mapping[str, str] | None = None,
-        slide_directions: Mapping[str, ArrayLike] | None = None,
-        refs: ArrayLike | None = None,
-        rvds: ArrayLike | None = None,
-        **options: Any,
-    ) -> GraspState:
-        r"""The grasp state (:func:`~mjtvm.sim.grasp.grasp_state`) with the ignored contacts dropped.
-
-        ``contact_types`` and ``slide_directions`` update the scenario's; ``refs`` and
-        ``rvds`` replace them; further keywords (``friction_edges``, ``slip``, ...) go to
-        :func:`~mjtvm.sim.grasp.grasp_state`.
-        """
-        types = {**{g: "D" for g in self.ignored_geoms}, **self.contact_types, **(contact_types or {})}
-        state = grasp_state(
-            self.model, self.data, contact_types=types, mu=self.mu,
-            refs=self.refs if refs is None else refs, rvds=self.rvds if rvds is None else rvds,
-            slide_directions={**self.slide_directions, **(slide_directions or {})},
-            object_body=self.object_body, joints=self.joints, **options,
-        )  # fmt: skip
-        kept = tuple(c for c in state.contacts if c.name.split("#")[0] not in self.ignored_geoms)
-        if not any(np.any(c.jacobian) for c in kept):
-            raise ModelError(f"scenario {self.name!r}", "no contact between the object and the fingers")
-        return state.with_(contacts=kept)
+Scenario = Grasp  # the paper's cases are grasp files like any other (kept for old imports)
 
 
 def load_scenario(
@@ -352,66 +290,93 @@ def load_scenario(
     variant: str = "default",
     mg: float | None = None,
     mu: float | Mapping[str, float] | None = None,
-) -> Scenario:
-    r"""A scenario at its stored configuration (no IK).
+) -> Grasp:
+    r"""A paper case as a :class:`~mjtvm.sim.graspfile.Grasp`: its shipped grasp file.
 
     Parameters
     ----------
     source
-        A shipped name (:data:`SCENARIOS`), a JSON file path or a document.
+        A shipped scenario name (:data:`SCENARIOS`; the grasp file
+        :func:`grasp_file_name` of ``variant`` in ``mjtvm/models/paper_hand/``), or any grasp
+        file or shipped grasp name (then ``variant`` must stay ``"default"``).
     variant
-        Model variant: ``"default"`` or ``"humanlike"`` (see the document's ``variants``).
-    mg
-        Object weight (N) instead of the scenario's; the REFS, when it is the scenario's
-        weight ``[[0, 0, -mg, 0, 0, 0]]``, follows.
-    mu
-        Friction coefficient (or geom -> coefficient) instead of the scenario's.
+        Hand of a shipped scenario: ``"default"`` or ``"humanlike"``.
+    mg, mu
+        Object weight (N) and friction coefficient instead of the file's
+        (:meth:`~mjtvm.sim.graspfile.Grasp.with_options`).
 
     Raises
     ------
     ModelError
-        Unknown scenario or variant, names not in the model, no stored solution, or an
-        ``mg`` override with a REFS that is not the weight.
+        Unknown scenario or variant, or a grasp file that does not load.
     """
-    doc = read_scenario(source)
-    v = _variant(doc, variant)
-    if "solution" not in v:
-        raise ModelError(
-            f"scenario {doc['name']!r}", f"variant {variant!r} has no solution: run the generator"
-        )
-    refs = np.array(doc["refs"], dtype=float)
-    rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
-    weight = float(doc["mg"])
-    if mg is not None:
-        if refs.shape != (1, 6) or not np.allclose(refs, [[0, 0, -weight, 0, 0, 0]]):
-            raise ModelError("mg", "the scenario's REFS is not its weight; pass refs to state() instead")
-        weight, refs = float(mg), np.array([[0.0, 0.0, -float(mg), 0.0, 0.0, 0.0]])
-    for array in (refs, rvds):
-        if array is not None:
-            array.setflags(write=False)
-    model = _build(doc, variant, weight)
-    data = _data(model, doc, v["solution"]["qpos"])
-    joints = tuple(n for i in doc["fingers"] for n in finger_joint_names(int(i), v["finger_joints"]))
-    for j in joints:
-        _check_name(model, _OBJ.mjOBJ_JOINT, j, "joint", "fingers")
-    friction = doc["mu"] if mu is None else mu
-    return Scenario(
-        name=str(doc["name"]),
-        variant=variant,
-        model=model,
-        data=data,
-        joints=joints,
-        contact_types=MappingProxyType(dict(doc["contact_types"])),
-        mu=MappingProxyType(dict(friction)) if isinstance(friction, Mapping) else float(friction),
-        slide_directions=MappingProxyType({k: tuple(s) for k, s in doc["slide_directions"].items()}),
-        refs=refs,
-        rvds=rvds,
-        ignored_geoms=(*doc["ignored_geoms"], *v.get("ignored_geoms", [])),
-        object_body=str(doc["object_body"]),
-        document=MappingProxyType(doc),
-    )
+    if isinstance(source, str) and source in SCENARIOS:
+        if variant not in ("default", "humanlike"):
+            raise ModelError(f"scenario {source!r}", f"no variant {variant!r} (has: default, humanlike)")
+        source = grasp_file_name(source, variant)[: -len(".toml")]
+    elif variant != "default":
+        raise ModelError("variant", f"applies to the shipped scenarios ({', '.join(SCENARIOS)}) only")
+    return load_grasp(source).with_options(mg=mg, mu=mu)
 
 
 def export_state(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
     """The ``mjtvm.state/1`` document of a scenario's state (``options`` go to :func:`load_scenario`)."""
     return state_to_dict(load_scenario(name, **options).state())
+
+
+def grasp_file_name(name: str, variant: str) -> str:
+    """The shipped grasp file of a scenario and hand variant: ``case2.toml``, ``case2-humanlike.toml``."""
+    return f"{name}.toml" if variant == "default" else f"{name}-{variant}.toml"
+
+
+def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
+    r"""The ``mjtvm.grasp/1`` document of one scenario variant at its stored IK solution.
+
+    The grasp is the paper's hand (``mjtvm/models/paper_hand/<model>``) at the solution's
+    joint angles with the object at ``object_position``; REFS = the weight ``mg`` along
+    gravity; the fingers' joints in finger order; ignored geoms as ``ignore``.
+    """
+    v = _variant(doc, variant)
+    if "solution" not in v:
+        raise ModelError(
+            f"scenario {doc['name']!r}", f"variant {variant!r} has no solution: run the generator"
+        )
+    joints = [n for i in doc["fingers"] for n in finger_joint_names(int(i), v["finger_joints"])]
+    contacts = []
+    for geom, kind in doc["contact_types"].items():
+        entry: dict[str, Any] = {"geom": geom, "type": kind}
+        if geom in doc["slide_directions"]:
+            entry["slide"] = [float(x) for x in doc["slide_directions"][geom]]
+        contacts.append(entry)
+    out: dict[str, Any] = {
+        "schema": "mjtvm.grasp/1",
+        "name": grasp_file_name(str(doc["name"]), variant)[:-5],
+        "description": f"{doc.get('description', '')} Hand: {variant}.".strip(),
+        "source": doc.get("source", ""),
+        "notes": [*doc.get("notes", []),
+                  "Written by scripts/make_scenarios.py from mjtvm/data/scenarios/"
+                  f"{doc['name']}.json (its IK solution); do not edit by hand."],
+        "model": str(v["model"]),
+        "joints": joints,
+        "mu": float(doc["mu"]),
+    }  # fmt: skip
+    if doc["rvds"] is not None:
+        out["rvds"] = [[float(x) for x in r] for r in doc["rvds"]]
+    out["object"] = {"body": doc["object_body"], "position": [float(x) for x in doc["object_position"]],
+                     "quaternion": [1.0, 0.0, 0.0, 0.0]}  # fmt: skip
+    out["configuration"] = {"qpos": {k: float(x) for k, x in v["solution"]["qpos"].items()}}
+    refs = np.array(doc["refs"], dtype=float)
+    if refs.shape == (1, 6) and np.array_equal(refs[0, [0, 1, 3, 4, 5]], np.zeros(5)) and refs[0, 2] < 0:
+        out["refs"] = {"mg": float(-refs[0, 2])}
+    else:
+        out["refs"] = {"weight": False, "wrenches": refs.tolist()}
+    out["ranges"] = {"*": {"dcmotor": True}}
+    out["lift"] = {
+        "direction": [0.0, 0.0, 1.0],
+        "bounds": {k: [float(lo), float(hi)] for k, (lo, hi) in v.get("bounds", {}).items()},
+    }
+    out["contacts"] = contacts
+    ignored = [*doc["ignored_geoms"], *v.get("ignored_geoms", [])]
+    if ignored:
+        out["ignore"] = [{"geom": g} for g in ignored]
+    return out

@@ -139,21 +139,20 @@ class _Marcher:
 
     def __init__(self, sc: Scenario, *, tolerance: float, max_iterations: int) -> None:
         self.sc, self.model, self.tol, self.max_it = sc, sc.model, tolerance, max_iterations
-        model, doc = sc.model, sc.document
-        self.bounds = {
-            k: (float(a), float(b)) for k, (a, b) in doc["variants"][sc.variant].get("bounds", {}).items()
-        }
+        model = sc.model
+        self.bounds = {k: (float(a), float(b)) for k, (a, b) in sc.ik_bounds.items()}
         ob = model.body(sc.object_body).id
         free = [j for j in range(model.njnt) if int(model.jnt_bodyid[j]) == ob]
         if len(free) != 1 or int(model.jnt_type[free[0]]) != int(mujoco.mjtJoint.mjJNT_FREE):
             raise ModelError(f"body {sc.object_body!r}", "the lift needs the object on one free joint")
-        self.zadr, self.radius = int(model.jnt_qposadr[free[0]]) + 2, float(doc["object_radius"])
+        og = int(model.body_geomadr[ob])
+        self.zadr, self.radius = int(model.jnt_qposadr[free[0]]) + 2, float(model.geom_size[og, 0])
         start = {c.geom: c for c in detected_contacts(model, sc.data, object_body=sc.object_body)}
         self.centre_xy = np.array(sc.data.xpos[ob][:2], dtype=float)
         fingers, base = [], []
-        for c in doc["contacts"]:
-            name, g = c["geom"], model.geom(c["geom"]).id
-            body, kind = int(model.geom_bodyid[g]), sc.contact_types.get(c["geom"])
+        for name, kind in sc.contact_types.items():
+            g = model.geom(name).id
+            body = int(model.geom_bodyid[g])
             if body == 0:
                 base.append(name)
                 continue
@@ -168,7 +167,7 @@ class _Marcher:
             while b > 0:
                 chain, b = chain | {b}, int(model.body_parentid[b])
             joints = [j for j in sc.joints if int(model.joint(j).bodyid[0]) in chain]
-            off = c.get("offset")
+            off = None
             fingers.append(_Finger(
                 name, "F" if kind == "F" else "N", g, body,
                 float(model.geom_size[g, 0]) if off is None else float(off), off,

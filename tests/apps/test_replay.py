@@ -131,7 +131,7 @@ def test_cli_replay_writes_results(tmp_path: Path, capsys: pytest.CaptureFixture
         (["--mg", "nan"], "error: --mg: expected a finite number >= 0, got 'nan'"),
         (["--tvms-every", "-1"], "error: --tvms-every: expected an integer >= 0"),
         (["--hand", "robot"], "no variant 'robot'"),
-        (["--scenario", "case9"], "error: scenario 'case9': unknown"),
+        (["--grasp", "case9"], "error: case9: no such grasp file, and not a shipped grasp"),
     ],
 )
 def test_cli_replay_bad_options_exit_2(

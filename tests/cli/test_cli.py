@@ -11,6 +11,7 @@ import pytest
 
 from mjtvm import load_state, tvmmp
 from mjtvm.cli import example_path, main
+from mjtvm.sim.graspfile import shipped_grasps
 
 
 def test_solve_prints_the_result_schema(capsys):
@@ -53,10 +54,11 @@ def _console_script() -> list[str]:
     "words",
     [
         ["solve", "--no-witnesses", "--indent", "0"],
-        ["tvms", "--scenario", "case1"],
-        ["export-state", "--scenario", "case1"],
+        ["tvms", "--grasp", "case1"],
+        ["export-state", "case1"],
+        ["solve", "case2", "--no-witnesses"],
     ],
-    ids=["solve", "tvms", "export-state"],
+    ids=["solve", "tvms", "export-state", "solve-grasp"],
 )
 def test_console_script_stdout_is_pure_json(words):
     """What C++ libraries write to file descriptor 1 (highspy >= 1.16 prints a banner when its
@@ -73,7 +75,7 @@ def test_export_state_round_trips_through_solve(tmp_path, capsys):
     alphas of the state built in memory from MuJoCo."""
     from mjtvm.sim.scenario import load_scenario
 
-    assert main(["export-state", "--scenario", "case2"]) == 0
+    assert main(["export-state", "case2", "--quiet"]) == 0
     path = tmp_path / "case2.json"
     path.write_text(capsys.readouterr().out)
     direct = tvmmp(load_scenario("case2").state())
@@ -83,19 +85,23 @@ def test_export_state_round_trips_through_solve(tmp_path, capsys):
 
 
 def test_export_state_unknown_scenario_exits_2(capsys):
-    assert main(["export-state", "--scenario", "case9"]) == 2
-    assert "case9" in capsys.readouterr().err
+    assert main(["export-state", "case9"]) == 2
+    assert "error: case9: no such grasp file, and not a shipped grasp (shipped: " in capsys.readouterr().err
+    assert main(["export-state", "--scenario", "case9"]) == 2  # the old spelling, with a notice
+    assert "mjtvm: --scenario is deprecated, use --grasp" in capsys.readouterr().err
 
 
 def test_tvms_prints_the_schema_for_a_file_and_a_scenario(tmp_path, capsys):
     """`mjtvm tvms` on the exported Case 1 file equals the scenario shortcut (dimension 4)."""
-    assert main(["export-state", "--scenario", "case1"]) == 0
+    assert main(["export-state", "case1", "--quiet"]) == 0
     path = tmp_path / "case1.json"
     path.write_text(capsys.readouterr().out)
     assert main(["tvms", str(path), "--indent", "0"]) == 0
     from_file = json.loads(capsys.readouterr().out)
-    assert main(["tvms", "--scenario", "case1", "--indent", "0"]) == 0
+    assert main(["tvms", "--grasp", "case1", "--indent", "0"]) == 0
     from_scenario = json.loads(capsys.readouterr().out)
+    assert main(["tvms", str(shipped_grasps()["case1"]), "--indent", "0"]) == 0  # the grasp file as STATE
+    assert json.loads(capsys.readouterr().out)["vertices"] == from_scenario["vertices"]
     assert from_file["schema"] == "mjtvm.tvms/1" and from_file["dimension"] == 4
     assert from_file["vertices"] == from_scenario["vertices"]
     assert main(["tvms"]) == 2
@@ -357,10 +363,10 @@ def test_ctrl_c_during_a_sweep_is_one_line_and_leaves_no_partial_file(tmp_path):
 
 
 def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys):
-    assert main(["tvms", "--scenario", "case1", "--indent", "0"]) == 0
+    assert main(["tvms", "--grasp", "case1", "--indent", "0"]) == 0
     captured = capsys.readouterr()
     assert json.loads(captured.out)["schema"] == "mjtvm.tvms/1" and " LP" in captured.err
-    assert main(["tvms", "--scenario", "case1", "--quiet"]) == 0
+    assert main(["tvms", "--grasp", "case1", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
 
     from mjtvm.bench import report as bench_report

@@ -157,7 +157,7 @@ def test_lift_state_contacts_refs_and_cheap_retyping(short: Lift) -> None:
 def test_humanlike_hand_lifts_too() -> None:
     lift = scripted_lift(variant="humanlike", num_states=3, height=0.01)
     assert lift.residual.max() < 1e-6 and len(lift.joints) == 16
-    assert lift.scenario.variant == "humanlike"
+    assert lift.scenario.name == "case2-humanlike"
 
 
 @pytest.mark.parametrize(

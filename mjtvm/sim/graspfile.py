@@ -1,0 +1,568 @@
+r"""A grasp of any MJCF hand, from a ``mjtvm.grasp/1`` file (``docs/grasp-format.md``).
+
+:func:`load_grasp` reads a grasp file (:mod:`mjtvm.sim.graspdoc`), loads the model it names,
+sets the configuration (a keyframe, joint values, or IK targets brought onto the object's
+surface), resolves the contact selections (geom name or label, body, geom id) against the
+model and each joint's operation range (:mod:`mjtvm.sim.ranges`). :meth:`Grasp.state` then
+gives the :class:`~mjtvm.core.state.GraspState` of :func:`~mjtvm.sim.grasp.grasp_state`.
+
+*Contacts that touch.* Geoms placed exactly touching are often reported by MuJoCo only once
+they penetrate; a grasp file's ``contact_tolerance`` (default 0.1 mm) counts a geom within
+that distance of the object as touching: MuJoCo's collision runs with that margin on the
+object's geoms for detection only (:func:`~mjtvm.sim.grasp.grasp_state`). Every selection
+must touch (else an error gives the nearest distance, from ``mj_geomDistance``) and every
+touching geom must be selected or ignored; :meth:`Grasp.contact_report` lists found vs
+expected.
+
+World frame, SI units.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from importlib import resources
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.operation_range import OperationRange
+from ..core.state import GraspState
+from ..errors import ModelError
+from .grasp import detected_contacts, geom_id, geom_label, grasp_state, object_weight, subtree
+from .graspdoc import GraspError, read_grasp_document
+from .hand import DCMotor
+from .ik import IkTarget, solve_ik
+from .ranges import joint_ranges
+
+__all__ = ["Grasp", "load_grasp", "shipped_grasps"]
+
+_OBJ = mujoco.mjtObj
+_SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+@dataclass(frozen=True, eq=False)
+class Grasp:
+    r"""A hand, an object and a grasp configuration, ready for :meth:`state`.
+
+    Attributes
+    ----------
+    name
+        The grasp's name (the file's stem by default).
+    path, model_path
+        The grasp file and the MJCF file (``None`` for a grasp given as a mapping with an
+        absolute model path: ``path`` only).
+    model, data
+        The compiled model and ``mjData`` at the configuration, after ``mj_forward``.
+    object_body
+        The object's body (its subtree is the object).
+    joints
+        The state's joints, in model order unless the file lists them.
+    contact_types
+        Geom label (:func:`~mjtvm.sim.grasp.geom_label`) -> ``"F"``, ``"L"``, ``"S"`` or
+        ``"D"``, every geom of every selection.
+    selections
+        Per ``contacts`` entry of the file: its description and the labels it selects.
+    mu, slide_directions
+        Geom label -> friction coefficient (F and S contacts) and -> ``(3,)`` slide direction.
+    refs, rvds
+        ``(K, 6)`` REFS [N; N m about the object's origin]; ``(R, 6)`` RVDS or ``None``.
+    ignored_geoms
+        Labels whose contacts with the object are dropped.
+    operation_ranges
+        Joint name -> operation range at the joint.
+    motors
+        Joint name -> :class:`~mjtvm.sim.hand.DCMotor` from a datasheet, ``None`` when the
+        model's ``<dcmotor>`` drives the joint, or why there is no motor model (a string).
+    contact_tolerance
+        m: a geom within this distance of the object touches it.
+    friction_edges, slip
+        As in ``mjtvm.state/1``.
+    lift
+        The file's ``lift`` table (normalised), or ``None``.
+    ik_bounds
+        Joint name -> (low, high) for the lift's IK (the file's ``lift.bounds``).
+    document
+        The normalised grasp document.
+    """
+
+    name: str
+    path: Path | None
+    model_path: Path
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    object_body: str
+    joints: tuple[str, ...]
+    contact_types: Mapping[str, str]
+    selections: tuple[tuple[str, tuple[str, ...]], ...]
+    mu: Mapping[str, float]
+    slide_directions: Mapping[str, tuple[float, ...]]
+    refs: NDArray[np.float64]
+    rvds: NDArray[np.float64] | None
+    ignored_geoms: tuple[str, ...]
+    operation_ranges: Mapping[str, OperationRange]
+    motors: Mapping[str, DCMotor | str | None]
+    contact_tolerance: float
+    friction_edges: int
+    slip: str
+    lift: Mapping[str, Any] | None
+    ik_bounds: Mapping[str, tuple[float, float]]
+    document: Mapping[str, Any]
+
+    def with_options(
+        self, *, mg: float | None = None, mu: float | Mapping[str, float] | None = None
+    ) -> Grasp:
+        r"""The grasp with another object weight and/or friction.
+
+        ``mg`` (N): the REFS become the object's weight of magnitude ``mg`` (along gravity,
+        through the object's centre of mass) plus each of the file's wrenches; the file's REFS
+        must include the weight. ``mu``: one coefficient for every contact, or geom label ->
+        coefficient updating the file's.
+        """
+        refs, friction = self.refs, self.mu
+        if mg is not None:
+            if not self.document["refs"]["weight"]:
+                raise GraspError(self.file, "refs", "has no weight (weight = false): mg cannot replace it")
+            spec = {**self.document["refs"], "mg": float(mg)}
+            refs = _refs(self.model, self.data, {"refs": spec}, self.object_body, self.file)
+        if mu is not None:
+            friction = MappingProxyType(
+                {g: float(mu) for g in self.contact_types}
+                if not isinstance(mu, Mapping)
+                else {**self.mu, **mu}
+            )
+        return replace(self, refs=refs, mu=friction)
+
+    @property
+    def file(self) -> str:
+        return str(self.path) if self.path is not None else "grasp"
+
+    def contact_report(self) -> list[dict[str, Any]]:
+        r"""Found vs expected, one row per ``contacts`` entry and per touching geom nobody selected.
+
+        Each row: ``selection`` (as written), ``type``, ``found`` (labels touching the
+        object within ``contact_tolerance``), ``distance`` (m, the smallest surface distance
+        of the selection's geoms, from ``mj_geomDistance`` up to 0.1 m; ``None`` beyond).
+        """
+        touching = self._touching()
+        rows = []
+        for (what, labels), entry in zip(self.selections, self.document["contacts"], strict=True):
+            rows.append({
+                "selection": what, "type": entry["type"], "found": [g for g in labels if g in touching],
+                "distance": self._nearest(labels),
+            })  # fmt: skip
+        known = {g for _, labels in self.selections for g in labels} | set(self.ignored_geoms)
+        for g, dist in touching.items():
+            if g not in known:
+                rows.append({"selection": None, "type": None, "found": [g], "distance": dist})
+        return rows
+
+    def check_contacts(self) -> None:
+        """Every selection touches the object and every touching geom is selected or ignored.
+
+        Raises
+        ------
+        GraspError
+            Naming the first selection that does not touch (with its nearest distance and the
+            tolerance) or the first touching geom that no selection names.
+        """
+        tol = self.contact_tolerance
+        for i, row in enumerate(self.contact_report()):
+            if row["selection"] is None:
+                g = row["found"][0]
+                raise GraspError(
+                    self.file, "contacts",
+                    f"geom {g!r} touches the object (distance {1e3 * row['distance']:.3g} mm) but no "
+                    "contact selects it: add it to contacts with a type, or to ignore",
+                )  # fmt: skip
+            if not row["found"]:
+                d = row["distance"]
+                far = "more than 100 mm" if d is None else f"{1e3 * d:.3g} mm"
+                raise GraspError(
+                    self.file, f"contacts[{i}]",
+                    f"{row['selection']} does not touch the object: nearest distance {far} > "
+                    f"contact_tolerance {1e3 * tol:.3g} mm",
+                )  # fmt: skip
+
+    def state(
+        self,
+        *,
+        contact_types: Mapping[str, str] | None = None,
+        slide_directions: Mapping[str, ArrayLike] | None = None,
+        refs: ArrayLike | None = None,
+        rvds: ArrayLike | None = None,
+        mu: float | Mapping[str, float] | None = None,
+        **options: Any,
+    ) -> GraspState:
+        r"""The grasp state (:func:`~mjtvm.sim.grasp.grasp_state`) with the ignored contacts dropped.
+
+        ``contact_types`` and ``slide_directions`` update the grasp's (geom labels); ``refs``,
+        ``rvds`` and ``mu`` replace them; further keywords go to
+        :func:`~mjtvm.sim.grasp.grasp_state`.
+
+        Raises
+        ------
+        GraspError
+            A selection that does not touch, a touching geom nobody selected, or an S
+            contact without a slide direction.
+        """
+        self.check_contacts()
+        types = {**{g: "D" for g in self.ignored_geoms}, **self.contact_types, **(contact_types or {})}
+        slides = {**self.slide_directions, **(slide_directions or {})}
+        for i, (what, labels) in enumerate(self.selections):
+            if any(types.get(g) == "S" and g not in slides for g in labels):
+                raise GraspError(self.file, f"contacts[{i}].slide", f"required for the S contact {what}")
+        options = {"friction_edges": self.friction_edges, "slip": self.slip, **options}
+        state = grasp_state(
+            self.model, self.data, contact_types=types, mu=self.mu if mu is None else mu,
+            refs=self.refs if refs is None else refs, rvds=self.rvds if rvds is None else rvds,
+            slide_directions=slides, object_body=self.object_body, joints=self.joints,
+            operation_ranges=self.operation_ranges, contact_tolerance=self.contact_tolerance, **options,
+        )  # fmt: skip
+        ignored = set(self.ignored_geoms)
+        kept = tuple(c for c in state.contacts if c.name.split("#")[0] not in ignored)
+        return state.with_(contacts=kept)
+
+    def _touching(self) -> dict[str, float]:
+        work = copy.copy(self.data)
+        found = detected_contacts(
+            self.model,
+            work,
+            object_body=self.object_body,
+            one_per_body=True,
+            tolerance=self.contact_tolerance,
+        )  # as the state sees them: the deepest contact of each finger body
+        out: dict[str, float] = {}
+        for c in found:
+            out[c.geom] = min(out.get(c.geom, np.inf), c.distance)
+        return out
+
+    def _nearest(self, labels: Sequence[str]) -> float | None:
+        """Smallest surface distance (m) between the labels' geoms and the object's, up to 0.1 m."""
+        inside = subtree(self.model, self.model.body(self.object_body).id)
+        obj = [g for g in range(self.model.ngeom) if int(self.model.geom_bodyid[g]) in inside]
+        best, fromto = None, np.zeros(6)
+        for label in labels:
+            g = geom_id(self.model, label)
+            for o in obj:
+                d = float(mujoco.mj_geomDistance(self.model, self.data, g, o, 0.1, fromto))
+                if d < 0.1 and (best is None or d < best):
+                    best = d
+        return best
+
+
+# ------------------------------------------------------------------ loading
+def shipped_grasps() -> dict[str, Path]:
+    """Name -> path of every grasp file shipped in ``mjtvm/models/<hand>/`` (``case2``, ...)."""
+    root = Path(str(resources.files("mjtvm").joinpath("models")))
+    return {p.stem: p for p in sorted(root.glob("*/*.toml"))}
+
+
+def _resolve(source: str | Path | Mapping[str, Any]) -> str | Path | Mapping[str, Any]:
+    """A shipped grasp's name becomes its path; paths and mappings pass."""
+    if isinstance(source, str) and not source.endswith((".toml", ".json")) and "/" not in source:
+        shipped = shipped_grasps()
+        if source not in shipped:
+            raise GraspError(
+                source, "", f"no such grasp file, and not a shipped grasp (shipped: {', '.join(shipped)})"
+            )
+        return shipped[source]
+    return source
+
+
+def _suggest(name: str, candidates: Sequence[str]) -> str:
+    close = difflib.get_close_matches(name, candidates, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _names(model: mujoco.MjModel, kind: mujoco.mjtObj, count: int) -> list[str]:
+    return [n for i in range(count) if (n := mujoco.mj_id2name(model, kind, i))]
+
+
+def _load_model(doc: Mapping[str, Any], path: Path | None, file: str) -> tuple[mujoco.MjModel, Path]:
+    model_path = Path(doc["model"])
+    if not model_path.is_absolute() and path is not None:
+        model_path = path.parent / model_path
+    if not model_path.is_file():
+        raise GraspError(file, "model", f"no such file: {str(model_path)!r}")
+    try:
+        return mujoco.MjModel.from_xml_path(str(model_path)), model_path
+    except ValueError as e:  # MuJoCo's XML or compiler error
+        first = str(e).strip().splitlines()
+        raise GraspError(file, "model", f"MuJoCo cannot load {str(model_path)!r}: {' '.join(first)}") from e
+
+
+def _joint(model: mujoco.MjModel, name: str, file: str, field: str) -> int:
+    j = mujoco.mj_name2id(model, _OBJ.mjOBJ_JOINT, name)
+    if j < 0:
+        raise GraspError(
+            file,
+            field,
+            f"{name!r} is not a joint of the model{_suggest(name, _names(model, _OBJ.mjOBJ_JOINT, model.njnt))}",
+        )
+    if int(model.jnt_type[j]) not in _SCALAR:
+        raise GraspError(file, field, f"joint {name!r} is not a hinge or slide joint")
+    return int(j)
+
+
+def _set_object_pose(
+    model: mujoco.MjModel, data: mujoco.MjData, ob: int, obj: Mapping[str, Any], file: str
+) -> None:
+    if obj["position"] is None and obj["quaternion"] is None:
+        return
+    free = [j for j in range(model.njnt) if int(model.jnt_bodyid[j]) == ob]
+    if len(free) != 1 or int(model.jnt_type[free[0]]) != int(mujoco.mjtJoint.mjJNT_FREE):
+        raise GraspError(
+            file, "object.position", "the object's pose can be set only on a body with one free joint"
+        )
+    adr = int(model.jnt_qposadr[free[0]])
+    if obj["position"] is not None:
+        data.qpos[adr : adr + 3] = obj["position"]
+    if obj["quaternion"] is not None:
+        data.qpos[adr + 3 : adr + 7] = obj["quaternion"]
+
+
+def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str) -> mujoco.MjData:
+    """``mjData`` at the configuration (keyframe, joint values or IK), after ``mj_forward``."""
+    data, config = mujoco.MjData(model), doc["configuration"]
+    if "keyframe" in config:
+        key = mujoco.mj_name2id(model, _OBJ.mjOBJ_KEY, config["keyframe"])
+        if key < 0:
+            keys = _names(model, _OBJ.mjOBJ_KEY, model.nkey)
+            raise GraspError(file, "configuration.keyframe",
+                             f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})")  # fmt: skip
+        mujoco.mj_resetDataKeyframe(model, data, key)
+    values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
+    where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
+    for name, value in values.items():
+        data.qpos[model.jnt_qposadr[_joint(model, name, file, f"{where}.{name}")]] = value
+    _set_object_pose(model, data, ob, doc["object"], file)
+    mujoco.mj_forward(model, data)
+    if "ik" in config:
+        data = _solve_configuration(model, data, config["ik"], ob, file)
+    return data
+
+
+def _object_geoms(model: mujoco.MjModel, ob: int) -> list[int]:
+    inside = subtree(model, ob)
+    return [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in inside]
+
+
+def _solve_configuration(
+    model: mujoco.MjModel, data: mujoco.MjData, ik: Mapping[str, Any], ob: int, file: str
+) -> mujoco.MjData:
+    r"""IK: each target's finger point onto the object's surface (retargeted until it touches).
+
+    A site goes to its ``point``. A geom's point nearest the object (``mj_geomDistance``)
+    goes to ``point`` when given (a point on the object's surface), else to the object's
+    nearest surface point; the nearest points move as the finger turns, so the targets are
+    recomputed and the IK rerun until every geom is within the tolerance of the surface.
+    """
+    tol, obj, fromto = float(ik["tolerance"]), _object_geoms(model, ob), np.zeros(6)
+    bounds = dict(ik["bounds"])
+    for name in bounds:
+        _joint(model, name, file, f"configuration.ik.bounds.{name}")
+    work = copy.copy(data)
+    for _round in range(30):
+        targets, gaps = [], []
+        for i, t in enumerate(ik["targets"]):
+            field = f"configuration.ik.targets[{i}]"
+            if "site" in t:
+                s = mujoco.mj_name2id(model, _OBJ.mjOBJ_SITE, t["site"])
+                if s < 0:
+                    raise GraspError(file, f"{field}.site", f"{t['site']!r} is not a site of the model"
+                                     f"{_suggest(t['site'], _names(model, _OBJ.mjOBJ_SITE, model.nsite))}")  # fmt: skip
+                body = int(model.site_bodyid[s])
+                targets.append(IkTarget(t["site"], mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or "",
+                                        np.array(model.site_pos[s]), np.array(t["point"])))  # fmt: skip
+                gaps.append(0.0)
+                continue
+            try:
+                g = geom_id(model, t["geom"])
+            except ModelError as e:
+                names = _names(model, _OBJ.mjOBJ_GEOM, model.ngeom)
+                raise GraspError(file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model"
+                                 f"{_suggest(t['geom'], names)}") from e  # fmt: skip
+            d, best = np.inf, np.zeros(6)
+            for o in obj:
+                dist = float(mujoco.mj_geomDistance(model, work, o, g, 1.0, fromto))
+                if dist < d:
+                    d, best = dist, fromto.copy()
+            if not np.isfinite(d):
+                raise GraspError(
+                    file, f"{field}.geom", f"geom {t['geom']!r} is more than 1 m from the object"
+                )
+            body = int(model.geom_bodyid[g])
+            finger_point, surface = best[3:], best[:3] if t["point"] is None else np.array(t["point"])
+            local = np.array(data_xmat(work, body).T @ (finger_point - work.xpos[body]))
+            targets.append(IkTarget(t["geom"], mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or "",
+                                    local, surface))  # fmt: skip
+            gaps.append(abs(d))
+        result = solve_ik(model, work, targets, bounds=bounds, tolerance=tol,
+                          max_iterations=int(ik["max_iterations"]), strict=False)  # fmt: skip
+        work.qpos[:] = result.qpos
+        mujoco.mj_forward(model, work)
+        if result.converged and max(gaps) <= tol and _round > 0:
+            return work
+        if not result.converged:
+            w = int(np.argmax(result.residuals))
+            raise GraspError(
+                file, f"configuration.ik.targets[{w}]",
+                f"unreachable: residual {1e3 * float(result.residuals[w]):.3g} mm > tolerance "
+                f"{1e3 * tol:.3g} mm after {result.iterations} iterations (joint limits or bounds, or too far)",
+            )  # fmt: skip
+    raise GraspError(
+        file, "configuration.ik", "the targets do not settle on the object's surface in 30 rounds"
+    )
+
+
+def data_xmat(data: mujoco.MjData, body: int) -> NDArray[np.float64]:
+    return np.array(data.xmat[body], dtype=float).reshape(3, 3)
+
+
+def _select(
+    model: mujoco.MjModel, sel: Mapping[str, Any], ob: int, file: str, field: str
+) -> tuple[str, list[int]]:
+    """The geoms of one selection (``geom``: name or label; ``body``: all its geoms; ``geom_id``)."""
+    kind, target = sel["select"], sel["target"]
+    if kind == "geom":
+        try:
+            ids = [geom_id(model, target)]
+        except ModelError as e:
+            raise GraspError(file, f"{field}.geom", f"{target!r} is not a geom of the model"
+                             f"{_suggest(target, _names(model, _OBJ.mjOBJ_GEOM, model.ngeom))}") from e  # fmt: skip
+    elif kind == "body":
+        b = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, target)
+        if b < 0:
+            raise GraspError(file, f"{field}.body", f"{target!r} is not a body of the model"
+                             f"{_suggest(target, _names(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+        ids = list(range(int(model.body_geomadr[b]), int(model.body_geomadr[b] + model.body_geomnum[b])))
+        if not ids:
+            raise GraspError(file, f"{field}.body", f"body {target!r} has no geom")
+    else:
+        if not 0 <= int(target) < model.ngeom:
+            raise GraspError(
+                file, f"{field}.geom_id", f"expected a geom id in [0, {model.ngeom}), got {target}"
+            )
+        ids = [int(target)]
+    inside = subtree(model, ob)
+    for g in ids:
+        if int(model.geom_bodyid[g]) in inside:
+            raise GraspError(file, field, f"geom {geom_label(model, g)!r} belongs to the object")
+    return f"{kind} {target!r}", ids
+
+
+def _default_joints(model: mujoco.MjModel, geoms: Sequence[int]) -> tuple[str, ...]:
+    """The hinge and slide joints on the chains from the world to the contact geoms' bodies."""
+    chain: set[int] = set()
+    for g in geoms:
+        b = int(model.geom_bodyid[g])
+        while b > 0:
+            chain.add(b)
+            b = int(model.body_parentid[b])
+    return tuple(
+        mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j)
+        for j in range(model.njnt)
+        if int(model.jnt_type[j]) in _SCALAR and int(model.jnt_bodyid[j]) in chain
+    )
+
+
+def _refs(
+    model: mujoco.MjModel, data: mujoco.MjData, doc: Mapping[str, Any], obj: str, file: str
+) -> NDArray[np.float64]:
+    """REFS vertices: (weight +) each wrench (eq. 25-26's required external wrenches)."""
+    spec = doc["refs"]
+    weight = np.zeros(6)
+    if spec["weight"]:
+        weight = object_weight(model, data, object_body=obj)
+        force = float(np.linalg.norm(weight[:3]))
+        if spec["mg"] is not None and force == 0.0:
+            raise GraspError(file, "refs.mg", "the object has no weight in the model to scale")
+        if spec["mg"] is not None:  # the unit vector times mg: exactly [0, 0, -mg] for gravity along -z
+            weight = np.concatenate([weight[:3] / force, weight[3:] / force]) * spec["mg"]
+    refs = np.array([weight + np.array(w) for w in spec["wrenches"]])
+    refs.setflags(write=False)
+    return refs
+
+
+def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
+    r"""Read a grasp file (TOML or JSON), a shipped grasp by name, or a document; build the grasp.
+
+    A mapping's ``model`` path is taken relative to the working directory.
+
+    Raises
+    ------
+    GraspError
+        Any field that breaks the format or does not fit the model (unknown body, geom,
+        site, joint, keyframe or actuator, with the closest name; a joint without an
+        operation range, with how to give one; an unreachable IK target, with its residual).
+    """
+    doc, path = read_grasp_document(_resolve(source))
+    file = str(path) if path is not None else "grasp"
+    model, model_path = _load_model(doc, path, file)
+    ob = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, doc["object"]["body"])
+    if ob <= 0:
+        name = doc["object"]["body"]
+        raise GraspError(file, "object.body", f"{name!r} is not a body of the model (other than the world)"
+                         f"{_suggest(name, _names(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+    if not _object_geoms(model, ob):
+        raise GraspError(file, "object.body", f"body {doc['object']['body']!r} has no geom")
+    data = _configure(model, doc, ob, file)
+    types: dict[str, str] = {}
+    selections, mu, slides, geoms = [], {}, {}, []
+    for i, entry in enumerate(doc["contacts"]):
+        what, ids = _select(model, entry, ob, file, f"contacts[{i}]")
+        labels = tuple(geom_label(model, g) for g in ids)
+        for g, label in zip(ids, labels, strict=True):
+            if label in types:
+                raise GraspError(
+                    file, f"contacts[{i}]", f"geom {label!r} is already selected by another contact"
+                )
+            types[label] = entry["type"]
+            coefficient = entry.get("mu", doc["mu"])
+            if coefficient is not None:
+                mu[label] = float(coefficient)
+            elif entry["type"] in ("F", "S"):
+                raise GraspError(file, f"contacts[{i}].mu", f"the {entry['type']} contact {what} needs a "
+                                 "friction coefficient: set mu at the top or in the contact")  # fmt: skip
+            if "slide" in entry:
+                s = np.array(entry["slide"], dtype=float)
+                slides[label] = tuple(float(x) for x in s / np.linalg.norm(s))
+            geoms.append(g)
+        selections.append((what, labels))
+    ignored = []
+    for i, sel in enumerate(doc["ignore"]):
+        _, ids = _select(model, sel, ob, file, f"ignore[{i}]")
+        ignored += [geom_label(model, g) for g in ids if geom_label(model, g) not in types]
+    if doc["joints"] is not None:
+        for k, name in enumerate(doc["joints"]):
+            _joint(model, name, file, f"joints[{k}]")
+        joints = tuple(doc["joints"])
+    else:
+        joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
+        if not joints:
+            raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
+    ranges, motors = joint_ranges(model, joints, doc["ranges"], base=path.parent if path else None, file=file)
+    rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
+    if rvds is not None:
+        rvds.setflags(write=False)
+    lift = doc["lift"]
+    bounds = dict(lift["bounds"]) if lift is not None else {}
+    for name in bounds:
+        _joint(model, name, file, f"lift.bounds.{name}")
+    return Grasp(
+        name=doc["name"], path=path, model_path=model_path, model=model, data=data,
+        object_body=doc["object"]["body"], joints=joints, contact_types=MappingProxyType(types),
+        selections=tuple(selections), mu=MappingProxyType(mu), slide_directions=MappingProxyType(slides),
+        refs=_refs(model, data, doc, doc["object"]["body"], file), rvds=rvds, ignored_geoms=tuple(ignored),
+        operation_ranges=MappingProxyType(ranges), motors=MappingProxyType(motors),
+        contact_tolerance=float(doc["contact_tolerance"]), friction_edges=int(doc["friction_edges"]),
+        slip=str(doc["slip"]), lift=None if lift is None else MappingProxyType(lift),
+        ik_bounds=MappingProxyType(bounds), document=MappingProxyType(doc),
+    )  # fmt: skip
