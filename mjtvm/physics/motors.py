@@ -9,27 +9,24 @@ them (:meth:`~mjtvm.sim.hand.DCMotor.mjcf`); a public hand usually has position 
 through MuJoCo's model-editing API, with exactly the attributes
 :meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes, so the compiled arrays are the template's.
 
-Where a joint's motor comes from (the ``[ranges]`` of a grasp file, ``docs/grasp-format.md``):
-a ``<dcmotor>`` of the model (:func:`motor_of_actuator` reads it back) or a datasheet
+Where a joint's motor comes from (the ``[ranges]`` of a grasp file, ``docs/grasp-format.md``,
+resolved by :func:`mjtvm.sim.ranges.joint_ranges` into ``Grasp.motors``): a ``<dcmotor>`` of
+the model (:func:`motor_of_actuator` reads it back) or a datasheet
 (:meth:`~mjtvm.sim.hand.DCMotor.from_datasheet`); a polygon or an actuator with a speed limit
 is an operation range without a motor, and a datasheet with a gear efficiency other than 1
-cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`motor_for_range` returns ``None``
-for those and :func:`require_motors` refuses them, naming the joint.
+cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`require_motors` refuses those,
+naming the joint and how to give motor data.
 
 Units: SI, motor side unless said otherwise (torques N m, speeds rad/s, inertia kg m^2).
 """
 
 from __future__ import annotations
 
-import fnmatch
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import mujoco
 
-from ..core.operation_range import load_motor_data
 from ..errors import ModelError
 from ..sim.hand import DCMotor
 
@@ -38,9 +35,7 @@ __all__ = [
     "attach_dcmotors",
     "dcmotor_of_joint",
     "joint_actuators",
-    "motor_for_range",
     "motor_of_actuator",
-    "range_entry",
     "require_motors",
 ]
 
@@ -49,8 +44,7 @@ CTRLSPEC = int(mujoco.mjtCtrlInput.mjINPUT_VEL) | int(mujoco.mjtCtrlInput.mjINPU
 _JOINT_TRN = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 _NO_MOTOR = (
-    "give its range as a datasheet with gear_efficiency = 1 or as dcmotor = true "
-    "(a polygon or an actuator with speed_limit has no motor to simulate)"
+    "give its [ranges] entry as a datasheet with gear_efficiency = 1, or dcmotor = true with a <dcmotor>"
 )
 
 
@@ -225,100 +219,31 @@ def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> 
     act.damping = [0.0] * len(act.damping)
 
 
-# ------------------------------------------------------------------ grasp-file ranges
-def range_entry(ranges: Mapping[str, Mapping[str, Any]], joint: str) -> tuple[str, Mapping[str, Any]] | None:
-    """The ``[ranges]`` entry of a grasp file for ``joint``: its own name first, then the first
-    matching glob pattern, then ``"*"`` (``docs/grasp-format.md``); ``(key, entry)`` or ``None``."""
-    if joint in ranges:
-        return joint, ranges[joint]
-    for key, entry in ranges.items():
-        if key != "*" and fnmatch.fnmatchcase(joint, key):
-            return key, entry
-    return ("*", ranges["*"]) if "*" in ranges else None
-
-
-def _datasheet(value: Any, base: Path | None) -> dict[str, Any]:
-    if isinstance(value, Mapping):
-        return dict(value)
-    text = str(value)
-    if text.endswith(".json"):
-        path = Path(text) if base is None else base / text
-        try:
-            data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError) as e:
-            raise ModelError(f"datasheet {text!r}", f"cannot be read: {e}") from e
-        return data
-    try:
-        return load_motor_data(text)
-    except (FileNotFoundError, OSError) as e:
-        raise ModelError(f"datasheet {text!r}", "expected a shipped datasheet or a .json file") from e
-
-
-def motor_for_range(
-    joint: str, entry: Mapping[str, Any], *, model: mujoco.MjModel | None = None, base: Path | None = None
-) -> DCMotor | None:
-    r"""The motor behind a grasp file's operation range of ``joint``, or ``None`` if it has none.
-
-    ``datasheet`` (a shipped name, a ``.json`` path relative to ``base`` or a table, with
-    optional ``gear_ratio`` and ``gear_efficiency`` overrides):
-    :meth:`~mjtvm.sim.hand.DCMotor.from_datasheet`, or ``None`` when the gear efficiency is
-    not 1 (MuJoCo's gear is ideal). ``dcmotor`` (``true`` or an actuator name): the model's
-    ``<dcmotor>`` read back (:func:`motor_of_actuator`; needs ``model``). ``polygon`` or
-    ``actuator`` + ``speed_limit``: ``None``.
-    """
-    if "datasheet" in entry:
-        data = _datasheet(entry["datasheet"], base)
-        for key in ("gear_ratio", "gear_efficiency"):
-            if key in entry:
-                data[key] = entry[key]
-        if float(data.get("gear_efficiency", 1.0)) != 1.0:
-            return None
-        return DCMotor.from_datasheet(data)
-    if "dcmotor" in entry:
-        if model is None:
-            raise ModelError(f"ranges[{joint!r}].dcmotor", "needs the compiled model to read the motor")
-        which = entry["dcmotor"]
-        if isinstance(which, str):
-            a = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, which)
-            if a < 0:
-                raise ModelError(f"actuator {which!r}", "not in the model")
-            return motor_of_actuator(model, a)
-        a_found = dcmotor_of_joint(model, joint)
-        if a_found is None:
-            raise ModelError(f"joint {joint!r}", 'expected one <dcmotor> with input="vel ff" driving it')
-        return motor_of_actuator(model, a_found)
-    return None
-
-
+# ------------------------------------------------------------------ a grasp's motors
 def require_motors(
-    model: mujoco.MjModel,
-    joints: Sequence[str],
-    motors: Mapping[str, DCMotor | None],
-    ranges: Mapping[str, Mapping[str, Any]] | None = None,
+    model: mujoco.MjModel, joints: Sequence[str], motors: Mapping[str, DCMotor | str | None]
 ) -> dict[str, DCMotor]:
-    """The motors to attach: every joint of ``joints`` without its own ``<dcmotor>`` needs one.
+    r"""The motors to attach so that every joint of ``joints`` has its ``<dcmotor>``.
+
+    ``motors`` follows :attr:`mjtvm.sim.graspfile.Grasp.motors` (:func:`mjtvm.sim.ranges.joint_ranges`):
+    a :class:`~mjtvm.sim.hand.DCMotor` (from a datasheet), ``None`` (the model's own
+    ``<dcmotor>`` drives the joint) or a string saying why the joint's range has no motor
+    (a polygon, an actuator with a speed limit, a gear efficiency other than 1). Joints that
+    already have one ``<dcmotor>`` with ``input="vel ff"`` need nothing.
 
     Raises
     ------
     ModelError
-        One line naming the first joint without motor data, and how to give it (with its
-        ``[ranges]`` entry's kind when ``ranges`` is given).
+        One line naming the first joint without motor data, why, and how to give it.
     """
     out: dict[str, DCMotor] = {}
     for joint in joints:
         if dcmotor_of_joint(model, joint) is not None:
             continue
         motor = motors.get(joint)
-        if motor is None:
-            found = range_entry(ranges, joint) if ranges is not None else None
-            if found is None:
-                what = "no <dcmotor> and no motor data"
-            else:
-                key, entry = found
-                kind = next((k for k in ("datasheet", "polygon", "actuator", "dcmotor") if k in entry), "?")
-                what = f"its range (ranges.{key!r}) is a {kind}"
-                if kind == "datasheet":
-                    what += " with gear_efficiency != 1 (MuJoCo's <dcmotor> gear is ideal)"
-            raise ModelError(f"joint {joint!r}", f"{what}: the physics check needs a DC motor; {_NO_MOTOR}")
-        out[joint] = motor
+        if isinstance(motor, DCMotor):
+            out[joint] = motor
+            continue
+        why = motor if isinstance(motor, str) else 'no <dcmotor> with input="vel ff" drives it'
+        raise ModelError(f"joint {joint!r}", f"{why}: the physics check needs a DC motor; {_NO_MOTOR}")
     return out

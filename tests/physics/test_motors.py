@@ -12,14 +12,13 @@ from mjtvm.errors import ModelError
 from mjtvm.physics.motors import (
     attach_dcmotors,
     dcmotor_of_joint,
-    motor_for_range,
     motor_of_actuator,
     require_motors,
 )
 from mjtvm.sim.actuator import operation_range_from_actuator
 from mjtvm.sim.hand import DCMotor, _fmt
 
-HAND = Path(__file__).resolve().parents[2] / "models" / "four_finger_hand.xml"
+HAND = Path(__file__).resolve().parents[2] / "mjtvm" / "models" / "paper_hand" / "four_finger_hand.xml"
 SERVOS = """<mujoco>
   <default><position kp="5" ctrlrange="-1 1"/></default>
   <worldbody><body name="b"><joint name="a" axis="0 0 1"/><joint name="b" axis="0 1 0"/>
@@ -76,25 +75,17 @@ def test_reattaching_the_hand_motors_reproduces_the_template() -> None:
     np.testing.assert_allclose(close.actuator_gainprm, template.actuator_gainprm, rtol=1e-9)
 
 
-def test_motor_routes_of_grasp_ranges() -> None:
+def test_motors_of_a_grasp_are_required() -> None:
     hand = mujoco.MjModel.from_xml_path(str(HAND))
-    assert motor_for_range("j", {"datasheet": "maxon_re25_20w"}) == DCMotor.from_datasheet()
-    assert motor_for_range("j", {"datasheet": "maxon_re25_20w", "gear_ratio": 20}).gear == 20  # type: ignore[union-attr]
-    assert motor_for_range("j", {"datasheet": "maxon_re25_20w", "gear_efficiency": 0.8}) is None
-    assert motor_for_range("j", {"polygon": [[0, 0], [1, 0], [0, 1]]}) is None
-    assert motor_for_range("j", {"actuator": "x", "speed_limit": 3.0}) is None
-    assert motor_for_range("f1_yaw0", {"dcmotor": True}, model=hand) == motor_of_actuator(hand, 0)
-    assert motor_for_range("x", {"dcmotor": "f1_pitch0"}, model=hand) == motor_of_actuator(hand, 1)
     servos = mujoco.MjModel.from_xml_string(SERVOS)
-    motors = require_motors(servos, ["a"], {"a": DCMotor.from_datasheet()})
-    assert list(motors) == ["a"]
-    assert require_motors(hand, ["f1_yaw0"], {}) == {}  # has its own <dcmotor>
-    with pytest.raises(ModelError, match=r"joint 'b'.*is a polygon.*gear_efficiency = 1"):
-        require_motors(servos, ["a", "b"], {"a": DCMotor.from_datasheet(), "b": None},
-                       {"a": {"datasheet": "maxon_re25_20w"}, "b*": {"polygon": [[0, 0], [1, 0], [0, 1]]}})  # fmt: skip
-    with pytest.raises(ModelError, match=r"joint 'a'.*datasheet with gear_efficiency != 1"):
-        require_motors(servos, ["a"], {"a": None}, {"*": {"datasheet": "x", "gear_efficiency": 0.9}})
+    motor = DCMotor.from_datasheet()
+    assert require_motors(servos, ["a"], {"a": motor}) == {"a": motor}
+    assert require_motors(hand, ["f1_yaw0"], {"f1_yaw0": None}) == {}  # has its own <dcmotor>
+    with pytest.raises(ModelError, match=r"^joint 'b': its range is a polygon.*needs a DC motor; give"):
+        require_motors(servos, ["a", "b"], {"a": motor, "b": "its range is a polygon, not a motor model"})
+    with pytest.raises(ModelError, match=r"^joint 'a': no <dcmotor>"):
+        require_motors(servos, ["a"], {"a": None})
     with pytest.raises(ModelError, match="joint 'nope'"):
-        attach_dcmotors(SERVOS, {"nope": DCMotor.from_datasheet()})
+        attach_dcmotors(SERVOS, {"nope": motor})
     with pytest.raises(ModelError, match="MJCF text"):
-        attach_dcmotors("<mujoco><bad", {"a": DCMotor.from_datasheet()})
+        attach_dcmotors("<mujoco><bad", {"a": motor})
