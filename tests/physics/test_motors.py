@@ -89,3 +89,26 @@ def test_motors_of_a_grasp_are_required() -> None:
         attach_dcmotors(SERVOS, {"nope": motor})
     with pytest.raises(ModelError, match="MJCF text"):
         attach_dcmotors("<mujoco><bad", {"a": motor})
+
+
+def test_motor_model_attaches_or_refuses(tmp_path: Path) -> None:
+    from types import SimpleNamespace
+
+    from mjtvm.physics.verify import motor_model
+
+    path = tmp_path / "servos.xml"
+    path.write_text(SERVOS)
+    servos = mujoco.MjModel.from_xml_path(str(path))
+    motor = DCMotor.from_datasheet()
+    grasp = SimpleNamespace(model=servos, model_path=path, joints=("a", "b"), motors={"a": motor, "b": motor})
+    model = motor_model(grasp)
+    assert dcmotor_of_joint(model, "a") is not None and dcmotor_of_joint(model, "b") is not None
+    assert motor_model(grasp) is model  # once per grasp
+    hand = SimpleNamespace(model=mujoco.MjModel.from_xml_path(str(HAND)), model_path=HAND, joints=("f1_yaw0",),
+                           motors={"f1_yaw0": None})  # fmt: skip
+    assert motor_model(hand) is hand.model  # its own <dcmotor>s: as is
+    bad = SimpleNamespace(
+        model=servos, model_path=path, joints=("a",), motors={"a": "its range is a polygon"}
+    )
+    with pytest.raises(ModelError, match=r"^joint 'a': its range is a polygon"):
+        motor_model(bad)
