@@ -6,11 +6,15 @@ each finger's gap, slip and contact force.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ModelError
+from ..sim.grasp import geom_id, model_id
+from .motors import dcmotor_of_joint
 from .witness import Drive
 
 __all__ = ["Rig", "finger_contacts", "geom_force", "twist_errors", "unit"]
@@ -19,41 +23,77 @@ _F64 = NDArray[np.float64]
 
 
 class Rig:
-    """Indices of one model and drive, reused by every step."""
+    r"""Indices of one model and drive, reused by every step.
+
+    Any hand: each driven joint's actuator is the single ``<dcmotor>`` (``input="vel ff"``)
+    whose transmission is that joint (:func:`~mjtvm.physics.motors.dcmotor_of_joint`), not
+    an actuator of the joint's name; finger geoms are found by label
+    (:func:`~mjtvm.sim.grasp.geom_id`: a name or ``"<body>/geom<n>"``); each finger's
+    contact point is its nearest point to the object (``mj_geomDistance``), so fingertips and
+    objects of any primitive or mesh shape work.
+
+    Attributes
+    ----------
+    ob, ogs
+        The object's body id and its colliding geoms (its subtree's geoms with a non-zero
+        ``contype`` or ``conaffinity``; all of its geoms if none).
+    radius
+        Length scale R (m) of the twist error [v; R omega]: the object's bounding radius
+        about its body origin, max over ``ogs`` of (distance of the geom's centre from the
+        origin + ``geom_rbound``). For a sphere centred on its body: its radius.
+    fingers
+        Per drive contact: (label, geom id, body id, columns of the drive's joints moving it, type).
+    """
 
     def __init__(self, model: mujoco.MjModel, drive: Drive, object_body: str) -> None:
         m = self.m = model
-        self.ob = model.body(object_body).id
-        self.og = next(g for g in range(m.ngeom) if int(m.geom_bodyid[g]) == self.ob)
-        self.radius = float(m.geom_size[self.og, 0])
+        self.ob = model_id(m, mujoco.mjtObj.mjOBJ_BODY, object_body, "body")
+        self.ogs, self.radius = _object_geoms(m, self.ob)
+        self.og = self.ogs[0]
         self.fadr = int(m.jnt_dofadr[m.body_jntadr[self.ob]])
-        self.dofs = np.array([int(m.joint(j).dofadr[0]) for j in drive.joints])
-        self.acts = np.array([int(m.actuator(j).id) for j in drive.joints])
+        jids = [model_id(m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in drive.joints]
+        self.dofs = np.array([int(m.jnt_dofadr[j]) for j in jids])
+        self.acts = np.array([_motor(m, j) for j in drive.joints], dtype=int)
         self.gear = m.actuator_gear[self.acts, 0].copy()
         self.cadr = m.actuator_ctrladr[self.acts].copy()
         self.fmax = m.actuator_forcerange[self.acts, 1].copy()
         self.r_k, self.kd, self.vmax = (m.actuator_gainprm[self.acts, i].copy() for i in (0, 6, 7))
         self.kt = m.actuator_gainprm[self.acts, 1].copy()
-        self.fingers = []
-        jbody = {j: int(m.jnt_bodyid[m.joint(j).id]) for j in drive.joints}
-        for geom, kind in drive.contacts:
-            g = m.geom(geom).id
+        self.fingers: list[tuple[str, int, int, NDArray[np.int64], str]] = []
+        jbody = [int(m.jnt_bodyid[j]) for j in jids]
+        for label, kind in drive.contacts:
+            g = geom_id(m, label, "finger geom")
             chain: set[int] = set()
             b = int(m.geom_bodyid[g])
             while b > 0:
                 chain, b = chain | {b}, int(m.body_parentid[b])
-            cols = np.array([i for i, j in enumerate(drive.joints) if jbody[j] in chain], dtype=int)
-            self.fingers.append((geom, g, int(m.geom_bodyid[g]), cols, kind, float(m.geom_size[g, 0])))
+            cols = np.array([i for i, jb in enumerate(jbody) if jb in chain], dtype=int)
+            self.fingers.append((label, g, int(m.geom_bodyid[g]), cols, kind))
         self.jac = np.zeros((3, m.nv))
         self.jac2 = np.zeros((3, m.nv))
+        self.fromto = np.zeros(6)
+
+    def nearest(self, d: mujoco.MjData, g: int) -> tuple[float, int, _F64, _F64, _F64]:
+        """Signed distance (m) from finger geom ``g`` to the nearest object geom, that geom, the
+        nearest point on the finger and on the object (world, m), and the unit normal from the
+        finger into the object (``mj_geomDistance``; its segment reverses under penetration)."""
+        best, ft = (np.inf, -1), self.fromto
+        for og in self.ogs:
+            dist = mujoco.mj_geomDistance(self.m, d, g, og, _DISTMAX, self.fromto)
+            if dist < best[0]:
+                best, ft = (dist, og), self.fromto.copy()
+        dist, og = best
+        on_f, on_o = ft[:3], ft[3:]
+        n = unit((on_o - on_f) * (1.0 if dist >= 0 else -1.0))
+        if not np.any(n):  # touching exactly: towards the object's centre
+            n = unit(d.geom_xpos[og] - on_f)
+        return float(dist), og, on_f, on_o, n
 
     def setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
         """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5)."""
         q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
-        for geom, g, body, cols, kind, rad in self.fingers:
-            tip = d.geom_xpos[g]
-            n = (c - tip) / np.linalg.norm(c - tip)
-            p = tip + rad * n
+        for label, g, body, cols, kind in self.fingers:
+            _dist, _og, p, _po, n = self.nearest(d, g)
             mujoco.mj_jac(self.m, d, self.jac, None, p, body)
             jm = self.jac[:, self.dofs[cols]]
             want = v + np.cross(w, p - c)
@@ -61,12 +101,42 @@ class Rig:
                 jn = n @ jm
                 q[cols] += jn * (n @ want - jn @ q[cols]) / max(float(jn @ jn), 1e-12)
             else:
-                if kind == "S" and geom in drive.slips:
-                    rho, hat = drive.slips[geom]
+                if kind == "S" and label in drive.slips:
+                    rho, hat = drive.slips[label]
                     tang = hat - (hat @ n) * n
                     want = want - rho * tang / max(float(np.linalg.norm(tang)), 1e-12)
                 q[cols] += np.linalg.lstsq(jm, want - jm @ q[cols], rcond=None)[0]
         return q
+
+
+_DISTMAX = 1.0  # m: mj_geomDistance's search radius; fingers are within mm of the object
+
+
+def _object_geoms(m: mujoco.MjModel, ob: int) -> tuple[list[int], float]:
+    """The object's colliding geoms and its bounding radius about the body origin (m)."""
+    inside = {ob}
+    for b in range(ob + 1, m.nbody):  # parents precede children
+        if int(m.body_parentid[b]) in inside:
+            inside.add(b)
+    geoms = [g for g in range(m.ngeom) if int(m.geom_bodyid[g]) in inside]
+    colliding = [g for g in geoms if int(m.geom_contype[g]) or int(m.geom_conaffinity[g])]
+    ogs = colliding or geoms
+    if not ogs:
+        raise ModelError(f"body {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, ob)!r}", "has no geom")
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)  # at qpos0: only the geoms' placement in the object matters
+    radius = max(float(np.linalg.norm(d.geom_xpos[g] - d.xpos[ob])) + float(m.geom_rbound[g]) for g in ogs)
+    return ogs, radius
+
+
+def _motor(m: mujoco.MjModel, joint: str) -> int:
+    a = dcmotor_of_joint(m, joint)
+    if a is None:
+        raise ModelError(
+            f"joint {joint!r}",
+            'expected one <dcmotor> with input="vel ff" driving it (mjtvm.physics.motors.attach_dcmotors)',
+        )
+    return a
 
 
 def unit(x: _F64) -> _F64:
@@ -92,38 +162,39 @@ def finger_contacts(
     slip: dict[str, float],
     ssum: dict[str, _F64],
     fsum: dict[str, _F64],
-    fromto: _F64,
     f6: _F64,
 ) -> list[float]:
-    """Each finger's gap to the object (returned), and at its nearest points the relative
-    tangential velocity: integrated into ``slip`` for F-contacts, summed with the contact
-    force into ``ssum`` and ``fsum`` for the others."""
+    """Each finger's gap to the object (m, returned; :meth:`Rig.nearest`), and midway between
+    the nearest points the object's velocity relative to the finger's, tangential to the
+    normal: integrated into ``slip`` for F-contacts, summed with the contact force into
+    ``ssum`` and ``fsum`` for the others (keys: the fingers' geom labels)."""
     gaps = []
-    for geom, g, body, _cols, kind, _rad in rig.fingers:
-        dist = mujoco.mj_geomDistance(m, d, g, rig.og, 0.01, fromto)
+    for label, g, body, _cols, kind in rig.fingers:
+        dist, _og, on_f, on_o, n = rig.nearest(d, g)
         gaps.append(dist)
-        p = 0.5 * (fromto[:3] + fromto[3:])
-        n = unit(d.xpos[rig.ob] - p)
+        p = 0.5 * (on_f + on_o)  # MuJoCo's contact point: midway between the surfaces
         mujoco.mj_jac(m, d, rig.jac, None, p, rig.ob)
         mujoco.mj_jac(m, d, rig.jac2, None, p, body)
         rel = (rig.jac - rig.jac2) @ d.qvel  # object point relative to finger point
         rel_t = rel - (rel @ n) * n
         if kind == "F":
-            slip[geom] += float(np.linalg.norm(rel_t)) * timestep
+            slip[label] += float(np.linalg.norm(rel_t)) * timestep
         else:
-            ssum[geom] += rel_t
-            fsum[geom] += geom_force(m, d, g, rig.og, f6, n)
+            ssum[label] += rel_t
+            fsum[label] += geom_force(m, d, g, rig.ogs, f6, n)
     return gaps
 
 
-def geom_force(m: mujoco.MjModel, d: mujoco.MjData, g: int, og: int, f6: _F64, n: _F64) -> _F64:
-    """Tangential force (world) of geom ``g`` on the object, summed over their active contacts."""
+def geom_force(m: mujoco.MjModel, d: mujoco.MjData, g: int, ogs: Sequence[int], f6: _F64, n: _F64) -> _F64:
+    """Tangential force (world) of geom ``g`` on the object (geoms ``ogs``), summed over their
+    active contacts; ``n`` is the contact normal (unit)."""
     total = np.zeros(3)
     for i in range(d.ncon):
         c = d.contact[i]
-        if c.exclude or {int(c.geom1), int(c.geom2)} != {g, og}:
+        g1, g2 = int(c.geom1), int(c.geom2)
+        if c.exclude or not ((g1 == g and g2 in ogs) or (g2 == g and g1 in ogs)):
             continue
         mujoco.mj_contactForce(m, d, i, f6)
         f = c.frame.reshape(3, 3).T @ f6[:3]  # on geom2
-        total += f if int(c.geom2) == og else -f
+        total += f if g2 in ogs else -f
     return total - (total @ n) * n

@@ -28,11 +28,16 @@ physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
    for L, eq. 7 minus the witness slip for S), so that the kinematic drift of constant joint
    speeds in a moving configuration is not mistaken for a motor limit.
 
-Failure (:class:`RolloutResult`), at any step of the window: the twist
-:math:`[v; R\omega]` (R the object radius) off :math:`s\alpha\hat r_l` by more than
-``speed_tol`` in magnitude or ``angle_tol`` degrees in direction; an F-point's accumulated
+Failure (:class:`RolloutResult`), at any step of the window: the twist :math:`[v; R\omega]`
+(R the object's bounding radius, :class:`~mjtvm.physics.rig.Rig`) off :math:`s\alpha\hat r_l`
+by more than ``speed_tol`` in magnitude or ``angle_tol`` degrees in direction; an F-point's accumulated
 tangential slip above ``slip_tol`` x the object's travel (+ ``slip_floor``); a finger geom
 more than ``lost_gap`` from the object; a motor torque at its saturation.
+
+Any hand: the model needs one ``<dcmotor>`` per state joint (found by its transmission;
+:mod:`mjtvm.physics.motors` attaches them to a hand with servos), finger geoms are keyed by
+label (:func:`~mjtvm.sim.grasp.geom_label`), and contact points come from
+``mj_geomDistance``, so fingertips and objects need not be spheres.
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ModelError, StateError
+from ..sim.grasp import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
 
@@ -108,12 +114,22 @@ def sim_model(
 
     Parameters
     ----------
+    model
+        A model whose state joints each have one ``<dcmotor>`` with ``input="vel ff"``
+        (:func:`~mjtvm.physics.motors.attach_dcmotors` gives any hand those).
     contact_types
-        Geom name -> ``"F"``, ``"L"``, ``"S"`` or ``"D"`` (a state's contacts).
+        Geom label (:func:`~mjtvm.sim.grasp.geom_label`: its name, or ``"<body>/geom<n>"``
+        when unnamed) -> ``"F"``, ``"L"``, ``"S"`` or ``"D"`` (a state's contacts). Geoms
+        not listed: ``"D"`` on the world body, else ``"F"``.
     mu
         Coulomb coefficient of the F- and S-geoms (and of finger geoms not listed).
     mg
-        Object weight (N); the object's mass and inertia are scaled to it. Default: as is.
+        Object weight (N); the object body's mass and inertia are scaled to it. Default: as is.
+
+    Raises
+    ------
+    ModelError
+        Unknown object body or a contact-type key that is no geom of the model.
     """
     st = settings or SimSettings()
     m = copy.deepcopy(model)
@@ -132,13 +148,17 @@ def sim_model(
         scale = mg / (float(m.body_mass[ob]) * -float(m.opt.gravity[2]))
         m.body_mass[ob] *= scale
         m.body_inertia[ob] *= scale
+    kinds = {geom_id(m, label, "contact_types geom"): kind for label, kind in contact_types.items()}
+    inside = {ob}
+    for b in range(ob + 1, m.nbody):  # parents precede children: the object's subtree
+        if int(m.body_parentid[b]) in inside:
+            inside.add(b)
     for g in range(m.ngeom):
         m.geom_solref[g] = st.solref
         m.geom_solimp[g] = st.solimp
-        if int(m.geom_bodyid[g]) == ob:
+        if int(m.geom_bodyid[g]) in inside:
             continue
-        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
-        kind = contact_types.get(name, "D" if int(m.geom_bodyid[g]) == 0 else "F")
+        kind = kinds.get(g, "D" if int(m.geom_bodyid[g]) == 0 else "F")
         m.geom_priority[g] = 1  # the finger's (palm's) parameters decide the contact
         m.geom_condim[g] = 3 if kind in ("F", "S") else 1
         m.geom_friction[g] = (mu, 0.005, 0.0001)
@@ -244,7 +264,7 @@ def rollout(
     saturated: set[str] = set()
     clamped, reason, gap_geom = 0, "", ""
     trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
-    fromto, f6, pred = np.zeros(6), np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
+    f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
         ff = drive.torques.copy()
@@ -265,7 +285,7 @@ def rollout(
         om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
         now = np.r_[v, rig.radius * om]
         twist_errors(worst, now, target, tnorm)
-        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, fromto, f6)
+        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, f6)
         if max(gaps) > worst["gap"]:
             worst["gap"], gap_geom = max(gaps), rig.fingers[int(np.argmax(gaps))][0]
         if record:

@@ -35,8 +35,9 @@ from tqdm import tqdm
 from ..apps.figures import ALPHA_UNIT, lift_axes, lift_png
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
-from ..errors import MjtvmError, StateError
+from ..errors import MjtvmError, ModelError, StateError
 from ..sim.trajectory import Lift, lift_state, scripted_lift
+from .motors import attach_dcmotors, require_motors
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .witness import WitnessKind, witness_drive
 
@@ -47,6 +48,7 @@ __all__ = [
     "alpha_sim",
     "bisect",
     "cached_lift",
+    "motor_model",
     "plot_alpha",
     "rows_csv",
     "runs_of",
@@ -60,14 +62,53 @@ __all__ = [
 RUNS = ("L", "S-physical", "S-literal")
 """Hand variants checked: fingers 2 and 4 as L-points, or as S-points of either reading."""
 _LIFTS: dict[tuple[str, int], Lift] = {}
+_MODELS: dict[int, tuple[Any, mujoco.MjModel]] = {}
 
 
-def cached_lift(scenario: str, num_states: int) -> Lift:
-    """The scripted lift of ``scenario`` with ``num_states`` states, built once per process."""
-    key = (scenario, num_states)
+def cached_lift(grasp: str | Path, num_states: int) -> Lift:
+    """The scripted lift of ``grasp`` (a shipped grasp's name or a grasp file's path) with
+    ``num_states`` states, built once per process."""
+    key = (str(grasp), num_states)
     if key not in _LIFTS:
-        _LIFTS[key] = scripted_lift(scenario, num_states=num_states)
+        _LIFTS[key] = scripted_lift(_grasp(grasp), num_states=num_states)
     return _LIFTS[key]
+
+
+def _grasp(grasp: str | Path) -> Any:
+    """A shipped grasp's name as is (``scripted_lift`` loads it); a path loaded as a grasp file."""
+    if isinstance(grasp, Path) or str(grasp).endswith((".toml", ".json")):
+        from ..sim.graspfile import load_grasp
+
+        return load_grasp(Path(grasp))
+    return str(grasp)
+
+
+def motor_model(grasp: Any) -> mujoco.MjModel:
+    r"""The grasp's model with a ``<dcmotor>`` on every state joint, built once per grasp.
+
+    The model as is when each state joint already has one (``input="vel ff"``); otherwise
+    the MJCF file ``grasp.model_path`` with the motors of ``grasp.motors`` attached
+    (:func:`~mjtvm.physics.motors.attach_dcmotors`; :func:`~mjtvm.physics.motors.require_motors`
+    refuses joints without motor data, naming them).
+
+    Parameters
+    ----------
+    grasp
+        A :class:`~mjtvm.sim.graspfile.Grasp` (``model``, ``model_path``, ``joints``, ``motors``).
+    """
+    if id(grasp) in _MODELS:
+        return _MODELS[id(grasp)][1]
+    model = grasp.model
+    motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
+    if motors:
+        model = attach_dcmotors(Path(grasp.model_path), motors)
+        if (model.nq, model.nv, model.nbody, model.ngeom) != (grasp.model.nq, grasp.model.nv,
+                                                               grasp.model.nbody, grasp.model.ngeom):  # fmt: skip
+            raise ModelError(
+                f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
+            )
+    _MODELS[id(grasp)] = (grasp, model)  # the grasp is kept so that its id is not reused
+    return model
 
 
 def _types(state: Any) -> dict[str, str]:
@@ -88,7 +129,10 @@ def verify_state(
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`)."""
     variant, _, reading = run.partition("-")
     state = lift_state(lift, index, variant=variant, reading=reading or "physical", mu=mu, mg=mg)  # type: ignore[arg-type]
-    model = sim_model(lift.scenario.model, _types(state), mu=mu, mg=mg, settings=settings)
+    ob = lift.scenario.object_body
+    model = sim_model(
+        motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
+    )
     base = {"run": run, "state": index, "z": float(lift.z[index]), "mu": mu, "mg": mg}
     try:
         res = tvmmp(state)
@@ -100,14 +144,14 @@ def verify_state(
         row: dict[str, Any] = {**base, "l": l, "status": status}
         if status == "optimal":
             a_sim, alpha, b = alpha_sim(model, lift.qpos[index], state, 0, l, result=res, settings=settings,
-                                        witness=witness)  # type: ignore[arg-type]  # fmt: skip
+                                        witness=witness, object_body=ob)  # type: ignore[arg-type]  # fmt: skip
             top = min(b.value + 0.01, 2.0)
             fail = rollout(model, lift.qpos[index], witness_drive(state, 0, l, alpha, top, witness=witness,  # type: ignore[arg-type]
-                           vertex=res.witnesses[0][l]), settings=settings)  # fmt: skip
+                           vertex=res.witnesses[0][l]), settings=settings, object_body=ob)  # fmt: skip
             chk = rollout(model, lift.qpos[index], witness_drive(state, 0, l, alpha, check_s, witness=witness,  # type: ignore[arg-type]
-                          vertex=res.witnesses[0][l]), settings=settings)  # fmt: skip
+                          vertex=res.witnesses[0][l]), settings=settings, object_body=ob)  # fmt: skip
             one = witness_drive(state, 0, l, alpha, 1.0, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
-            demand = inertial_demand(model, lift.qpos[index], one)
+            demand = inertial_demand(model, lift.qpos[index], one, object_body=ob)
             j = int(np.argmax(demand))
             row.update(alpha_lp=alpha, alpha_sim=a_sim, ratio=a_sim / alpha if alpha > 0 else math.nan,
                        censored=b.above_bracket or b.below_bracket, evaluations=b.evaluations,
@@ -119,14 +163,14 @@ def verify_state(
 
 
 def _task(args: tuple[str, int, int, str, dict[str, Any]]) -> list[dict[str, Any]]:
-    scenario, num_states, index, run, opts = args
+    grasp, num_states, index, run, opts = args
     opts = dict(opts)
     opts["settings"] = SimSettings(**opts["settings"])
-    return verify_state(cached_lift(scenario, num_states), index, run, **opts)
+    return verify_state(cached_lift(grasp, num_states), index, run, **opts)
 
 
 def verify_lift(
-    scenario: str = "case2",
+    grasp: str | Path = "case2",
     *,
     num_states: int = 30,
     stride: int = 1,
@@ -146,6 +190,10 @@ def verify_lift(
 
     Parameters
     ----------
+    grasp
+        A shipped grasp's name (``case2``, ...) or a grasp file's path (``mjtvm.grasp/1``).
+        Its model is simulated as is when every state joint has a ``<dcmotor>``, else with
+        the grasp's motors attached (:func:`motor_model`).
     stride
         Check every ``stride``-th state (the last state is always included).
     runs
@@ -166,7 +214,9 @@ def verify_lift(
     st = settings or SimSettings()
     indices = state_indices(num_states, stride)
     opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness}
-    tasks = [(scenario, num_states, i, r, opts) for r in runs for i in indices]
+    if jobs > 1:  # refuse a grasp without motor data here, not in every worker
+        motor_model(cached_lift(grasp, num_states).scenario)
+    tasks = [(str(grasp), num_states, i, r, opts) for r in runs for i in indices]
     rows: list[dict[str, Any]] = []
     bar = tqdm(
         total=len(tasks), desc=f"verify ({jobs} job{'s' * (jobs > 1)})", unit="state", disable=not progress
@@ -196,7 +246,7 @@ def verify_lift(
         outdir = check_output_dir(out, option="out")
         files: dict[Path, bytes | str] = {outdir / f"{name}.csv": rows_csv(rows)}
         if plot:
-            files[outdir / f"{name}.png"] = plot_alpha(rows, f"{scenario}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
+            files[outdir / f"{name}.png"] = plot_alpha(rows, f"{grasp}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
         write_files(files, option="out")
     return rows
 
@@ -300,8 +350,11 @@ def slide_check(
             drive = replace(drive, contacts=tuple((g, kinds.get(g, k)) for g, k in drive.contacts),
                             slips={g: (slip[g] if mode == "literal" else 0.0, -h if mode == "literal" else h)
                                    for g, h in hats.items()})  # fmt: skip
-            model = sim_model(lift.scenario.model, _types(state), mu=mu, mg=mg, settings=settings)
-            res = rollout(model, lift.qpos[i], drive, settings=settings)
+            model = sim_model(motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings,
+                              object_body=lift.scenario.object_body)  # fmt: skip
+            res = rollout(
+                model, lift.qpos[i], drive, settings=settings, object_body=lift.scenario.object_body
+            )
             for g, hat in hats.items():
                 force, sl = res.friction[g]
                 rows.append({"state": i, "z": float(lift.z[i]), "mode": mode, "ff": mode if ok else "L",
@@ -369,6 +422,7 @@ def alpha_sim(
     witness: WitnessKind = "central",
     bracket: tuple[float, float] = (0.0, 2.0),
     tol: float = 0.01,
+    object_body: str = "object",
 ) -> tuple[float, float, Bisection]:
     r"""alpha_sim of pair (k, l): :math:`s^* \alpha_{kl}`, s* by :func:`bisect` on rollouts.
 
@@ -388,7 +442,7 @@ def alpha_sim(
 
     def passes(s: float) -> bool:
         drive = witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex)
-        return rollout(model, qpos, drive, settings=settings).passed
+        return rollout(model, qpos, drive, settings=settings, object_body=object_body).passed
 
     b = bisect(passes, *bracket, tol=tol)
     return b.value * alpha, alpha, b

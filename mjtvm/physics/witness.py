@@ -78,15 +78,16 @@ class Drive:
     Attributes
     ----------
     joints
-        The M driven joints (actuators of the same names).
+        The M driven joints, each driven by its ``<dcmotor>`` (found by its transmission).
     speeds, torques
         ``(M,)`` joint speed setpoints (rad/s) and feedforward torques (N m, joint side).
     twist
         ``(6,)`` the object twist to produce, [v of the object origin; omega] (m/s, rad/s).
     contacts
-        ``(geom, type)`` of each finger contact (F, L, S); D-contacts are left out.
+        ``(geom label, type)`` of each finger contact (F, L, S); D-contacts are left out. The
+        label is :func:`~mjtvm.sim.grasp.geom_label` (a name, or ``"<body>/geom<n>"``).
     slips
-        S geom -> (slip speed rho (m/s), unit slide direction (3,)) of eq. (13).
+        S geom label -> (slip speed rho (m/s), unit slide direction (3,)) of eq. (13).
     """
 
     joints: tuple[str, ...]

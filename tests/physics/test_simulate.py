@@ -109,13 +109,16 @@ def test_central_witness_solves_the_lp_constraints(lift: Lift) -> None:
     assert np.allclose(wrench + state.refs[0], 0.0, atol=1e-6)  # eq. 20
     tau = sum(c.jacobian.T @ f for c, f in zip(state.contacts, forces)) + state.gravity_torque
     assert np.allclose(tau, sol["torques"], atol=1e-6)  # eq. 19
+    assert state.rvds is not None
     for c in state.contacts:
         if c.type == "F":  # eq. 7 at the twist alpha r_0
             v = state.rvds[0][:3] * alpha
             assert np.allclose(c.jacobian @ sol["speeds"], v, atol=1e-6)
     for rng, t, q in zip(state.operation_ranges, sol["torques"], sol["speeds"]):
         assert abs(q) <= rng.max_speed_at(min(abs(t), rng.max_torque)) + 1e-6
-    assert np.max(np.abs(sol["speeds"])) < np.max(np.abs(res.witnesses[0][0].speeds))  # least motion
+    vertex = res.witnesses[0][0]
+    assert vertex is not None
+    assert np.max(np.abs(sol["speeds"])) < np.max(np.abs(vertex.speeds))  # least motion
 
 
 def test_grasp_holds_still_at_s_zero(lift: Lift) -> None:

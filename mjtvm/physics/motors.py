@@ -1,0 +1,249 @@
+r"""DC motors for any hand: MuJoCo ``<dcmotor>`` actuators attached with ``mujoco.MjSpec``.
+
+The physics check (:mod:`mjtvm.physics.simulate`) drives each state joint with a
+``<dcmotor>`` (``input="vel ff"``: a velocity setpoint in actuator-length units and a
+motor-side torque feedforward; drive voltage clamped at Vmax; torque saturated at the
+continuous torque; rotor inertia as the actuator's ``armature``). The generated hand has
+them (:meth:`~mjtvm.sim.hand.DCMotor.mjcf`); a public hand usually has position servos.
+:func:`attach_dcmotors` replaces the actuators of the given joints by ``<dcmotor>`` elements
+through MuJoCo's model-editing API, with exactly the attributes
+:meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes, so the compiled arrays are the template's.
+
+Where a joint's motor comes from (the ``[ranges]`` of a grasp file, ``docs/grasp-format.md``,
+resolved by :func:`mjtvm.sim.ranges.joint_ranges` into ``Grasp.motors``): a ``<dcmotor>`` of
+the model (:func:`motor_of_actuator` reads it back) or a datasheet
+(:meth:`~mjtvm.sim.hand.DCMotor.from_datasheet`); a polygon or an actuator with a speed limit
+is an operation range without a motor, and a datasheet with a gear efficiency other than 1
+cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`require_motors` refuses those,
+naming the joint and how to give motor data.
+
+Units: SI, motor side unless said otherwise (torques N m, speeds rad/s, inertia kg m^2).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import mujoco
+
+from ..errors import ModelError
+from ..sim.hand import DCMotor
+
+__all__ = [
+    "CTRLSPEC",
+    "attach_dcmotors",
+    "dcmotor_of_joint",
+    "joint_actuators",
+    "motor_of_actuator",
+    "require_motors",
+]
+
+CTRLSPEC = int(mujoco.mjtCtrlInput.mjINPUT_VEL) | int(mujoco.mjtCtrlInput.mjINPUT_FF)
+"""``input="vel ff"``: control 0 the velocity setpoint, control 1 the torque feedforward."""
+_JOINT_TRN = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+_SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+_NO_MOTOR = (
+    "give its [ranges] entry as a datasheet with gear_efficiency = 1, or dcmotor = true with a <dcmotor>"
+)
+
+
+# ------------------------------------------------------------------ reading a model
+def joint_actuators(model: mujoco.MjModel, joint: int) -> list[int]:
+    """Ids of the actuators whose transmission is joint ``joint`` (``mjTRN_JOINT``), in model order."""
+    return [
+        a
+        for a in range(model.nactuator)
+        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+        and int(model.actuator_trnid[a, 0]) == int(joint)
+    ]
+
+
+def dcmotor_of_joint(model: mujoco.MjModel, joint: str) -> int | None:
+    """The id of the single ``<dcmotor>`` with ``input="vel ff"`` driving ``joint``, else ``None``.
+
+    ``None`` also when other actuators drive the joint too: the rollout's torques would not
+    be the motor's alone.
+    """
+    j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint)
+    if j < 0:
+        raise ModelError(f"joint {joint!r}", "not in the model")
+    acts = joint_actuators(model, j)
+    if len(acts) != 1:
+        return None
+    a = acts[0]
+    dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
+    return a if dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC else None
+
+
+def motor_of_actuator(model: mujoco.MjModel, actuator: int) -> DCMotor:
+    r"""The :class:`~mjtvm.sim.hand.DCMotor` of a compiled ``<dcmotor>`` (inverse of :func:`attach_dcmotors`).
+
+    ``actuator_gainprm`` holds R (Ohm), K (V s/rad), ..., kd, Vmax
+    (:func:`~mjtvm.sim.actuator.operation_range_from_actuator`): voltage = Vmax, stall
+    torque K V / R, no-load speed V / K, continuous torque the upper ``forcerange``.
+    """
+    label = f"actuator {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator) or f'#{actuator}'!r}"
+    if int(model.actuator_gaintype[actuator]) != int(mujoco.mjtGain.mjGAIN_DCMOTOR):
+        raise ModelError(label, "is not a <dcmotor>")
+    r_ohm, k = float(model.actuator_gainprm[actuator, 0]), float(model.actuator_gainprm[actuator, 1])
+    volts = float(model.actuator_gainprm[actuator, 7])
+    if not (r_ohm > 0 and k > 0 and volts > 0 and model.actuator_forcelimited[actuator]):
+        raise ModelError(label, "expected positive R, K and Vmax and a saturation (continuous torque)")
+    return DCMotor(
+        voltage=volts,
+        stall_torque=k * volts / r_ohm,
+        no_load_speed=volts / k,
+        max_continuous_torque=float(model.actuator_forcerange[actuator, 1]),
+        gear=float(model.actuator_gear[actuator, 0]),
+        rotor_inertia=float(model.actuator_armature[actuator]),
+        velocity_gain=float(model.actuator_gainprm[actuator, 6]),
+    )
+
+
+# ------------------------------------------------------------------ attaching motors
+def _spec(source: mujoco.MjSpec | str | Path) -> mujoco.MjSpec:
+    """A spec of our own: a copy of an ``MjSpec``, or parsed from an MJCF path or text."""
+    if isinstance(source, mujoco.MjSpec):
+        return source.copy()  # the caller's spec is left as it is
+    text = str(source)
+    try:
+        if isinstance(source, str) and text.lstrip().startswith("<"):
+            return mujoco.MjSpec.from_string(text)
+        return mujoco.MjSpec.from_file(text)
+    except (ValueError, OSError) as e:
+        where = "MJCF text" if text.lstrip().startswith("<") else f"MJCF file {text!r}"
+        raise ModelError(where, f"cannot be parsed: {str(e).splitlines()[0]}") from e
+
+
+def attach_dcmotors(
+    source: mujoco.MjSpec | str | Path, motors: Mapping[str, DCMotor], *, name_format: str = "{joint}"
+) -> mujoco.MjModel:
+    r"""The model of ``source`` with one ``<dcmotor>`` per joint of ``motors`` (compiled).
+
+    Every actuator whose transmission is one of those joints (``joint`` or
+    ``jointinparent``: e.g. a public hand's position servos) is removed, with the sensors
+    that measure it; keyframes keep the controls of the other actuators (the new ones get
+    0). Each joint then gets a ``<dcmotor>`` named ``name_format.format(joint=...)`` with
+    ``gear``, ``nominal = "voltage stall_torque no_load_speed"``, ``saturation =
+    "max_continuous_torque 0 0"``, ``armature = rotor_inertia``, ``input = "vel ff"`` and
+    ``controller = "0 0 velocity_gain 0 0 voltage"``: what
+    :meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes. The new actuators come after the kept ones,
+    in the joints' model order; no control range, no damping (the joint's own damping,
+    armature and ``actuatorfrcrange`` stay, and the latter caps the torque).
+
+    Parameters
+    ----------
+    source
+        An ``mujoco.MjSpec`` (copied, not modified), an MJCF file path or MJCF text.
+    motors
+        Joint name -> motor (hinge or slide joints).
+
+    Returns
+    -------
+    mujoco.MjModel
+
+    Raises
+    ------
+    ModelError
+        Unparsable MJCF, an unknown or non-scalar joint, an actuator name already taken,
+        or a model that does not compile after the change.
+    """
+    spec = _spec(source)
+    if not motors:
+        raise ModelError("motors", "expected at least one joint -> DCMotor")
+    order = {j.name: i for i, j in enumerate(spec.joints)}
+    for name, motor in motors.items():
+        joint = spec.joint(name)
+        if joint is None:
+            raise ModelError(f"joint {name!r}", "not in the model")
+        if int(joint.type) not in _SCALAR:
+            raise ModelError(f"joint {name!r}", "expected a hinge or slide joint for a <dcmotor>")
+        if not isinstance(motor, DCMotor):
+            raise ModelError(f"motors[{name!r}]", f"expected a DCMotor, got {type(motor).__name__}")
+    layout = _control_layout(spec)
+    removed = [a for a in spec.actuators if int(a.trntype) in _JOINT_TRN and a.target in motors]
+    gone = {id(a) for a in removed}
+    kept = [i for i, a in enumerate(spec.actuators) if id(a) not in gone]
+    for sensor in list(spec.sensors):  # they would measure an actuator that is no longer there
+        if int(sensor.objtype) == int(mujoco.mjtObj.mjOBJ_ACTUATOR) and sensor.objname in {
+            a.name for a in removed if a.name
+        }:
+            spec.delete(sensor)
+    for a in removed:
+        spec.delete(a)
+    taken = {a.name for a in spec.actuators}
+    for joint in sorted(motors, key=order.__getitem__):
+        name = name_format.format(joint=joint)
+        if name in taken:
+            raise ModelError(f"actuator {name!r}", "already in the model; pass another name_format")
+        _add_dcmotor(spec, name, joint, motors[joint])
+    for key in spec.keys:
+        ctrl = list(key.ctrl)
+        if ctrl:  # an unset ctrl stays unset (the compiler fills it)
+            old = [c for i in kept for c in ctrl[layout[i][0] : layout[i][0] + layout[i][1]]]
+            key.ctrl = old + [0.0] * (2 * len(motors))
+    try:
+        return spec.compile()
+    except ValueError as e:
+        raise ModelError(
+            "model", f"does not compile with the <dcmotor> actuators: {str(e).splitlines()[0]}"
+        ) from e
+
+
+def _control_layout(spec: mujoco.MjSpec) -> list[tuple[int, int]]:
+    """(first control, number of controls) of each actuator, from a compiled copy."""
+    try:
+        m = spec.copy().compile()
+    except ValueError as e:
+        raise ModelError("model", f"does not compile: {str(e).splitlines()[0]}") from e
+    return [(int(m.actuator_ctrladr[a]), int(m.actuator_ctrlnum[a])) for a in range(m.nactuator)]
+
+
+def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> None:
+    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes it."""
+    act = spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    # motorconst and resistance 0: the compiler derives K and R from `nominal`, as from the XML
+    act.set_to_dcmotor(
+        motorconst=[0.0, 0.0],
+        resistance=0.0,
+        nominal=[motor.voltage, motor.stall_torque, motor.no_load_speed],
+        saturation=[motor.max_continuous_torque, 0.0, 0.0],
+        controller=[0.0, 0.0, motor.velocity_gain, 0.0, 0.0, motor.voltage],
+        ctrlspec=CTRLSPEC,
+    )
+    act.gear = [motor.gear, 0.0, 0.0, 0.0, 0.0, 0.0]
+    act.armature = motor.rotor_inertia
+    # a default class's <general ctrlrange/damping> would otherwise leak into the motor
+    act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    act.damping = [0.0] * len(act.damping)
+
+
+# ------------------------------------------------------------------ a grasp's motors
+def require_motors(
+    model: mujoco.MjModel, joints: Sequence[str], motors: Mapping[str, DCMotor | str | None]
+) -> dict[str, DCMotor]:
+    r"""The motors to attach so that every joint of ``joints`` has its ``<dcmotor>``.
+
+    ``motors`` follows :attr:`mjtvm.sim.graspfile.Grasp.motors` (:func:`mjtvm.sim.ranges.joint_ranges`):
+    a :class:`~mjtvm.sim.hand.DCMotor` (from a datasheet), ``None`` (the model's own
+    ``<dcmotor>`` drives the joint) or a string saying why the joint's range has no motor
+    (a polygon, an actuator with a speed limit, a gear efficiency other than 1). Joints that
+    already have one ``<dcmotor>`` with ``input="vel ff"`` need nothing.
+
+    Raises
+    ------
+    ModelError
+        One line naming the first joint without motor data, why, and how to give it.
+    """
+    out: dict[str, DCMotor] = {}
+    for joint in joints:
+        if dcmotor_of_joint(model, joint) is not None:
+            continue
+        motor = motors.get(joint)
+        if isinstance(motor, DCMotor):
+            out[joint] = motor
+            continue
+        why = motor if isinstance(motor, str) else 'no <dcmotor> with input="vel ff" drives it'
+        raise ModelError(f"joint {joint!r}", f"{why}: the physics check needs a DC motor; {_NO_MOTOR}")
+    return out
