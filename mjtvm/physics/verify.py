@@ -87,7 +87,8 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     r"""The grasp's model with a ``<dcmotor>`` on every state joint, built once per grasp.
 
     The model as is when each state joint already has one (``input="vel ff"``); otherwise
-    the MJCF file ``grasp.model_path`` with the motors of ``grasp.motors`` attached
+    the grasp's ``MjSpec`` (its MJCF file with the object and supports it adds) with the motors
+    of ``grasp.motors`` attached
     (:func:`~mjtvm.physics.motors.attach_dcmotors`; :func:`~mjtvm.physics.motors.require_motors`
     refuses joints without motor data, naming them).
 
@@ -101,7 +102,7 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     model = grasp.model
     motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
     if motors:
-        model = attach_dcmotors(Path(grasp.model_path), motors)
+        model = attach_dcmotors(grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path), motors)
         if (model.nq, model.nv, model.nbody, model.ngeom) != (grasp.model.nq, grasp.model.nv,
                                                                grasp.model.nbody, grasp.model.ngeom):  # fmt: skip
             raise ModelError(
