@@ -35,7 +35,7 @@ from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import StateError
 from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
-from .figures import ALPHA_UNIT, lift_axes, lift_png
+from .figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
 
 __all__ = [
     "SCHEMA",
@@ -71,8 +71,9 @@ class Record:
         (``None`` for L-points, where it plays no part).
     mu, mg
         Friction coefficient and object weight (N).
-    index, z
-        State index and object centre height (m).
+    index, z, s
+        State index, object origin height (m) and travel along the lift (m; the lift's path
+        parameter, :attr:`~mjtvm.sim.trajectory.Lift.s`).
     result
         The :class:`~mjtvm.core.tvmmp.TvmmpResult` (alpha_kl, status, TVMMP, limiting pair, timings).
     solver
@@ -90,6 +91,7 @@ class Record:
     mg: float
     index: int
     z: float
+    s: float
     result: TvmmpResult
     solver: str
     saturated: tuple[str, ...]
@@ -100,7 +102,7 @@ class Record:
         r = self.result
         out: dict[str, Any] = {
             "variant": self.variant, "reading": self.reading or "", "mu": self.mu, "mg": self.mg,
-            "state": self.index, "z": self.z, "tvmmp": "" if r.tvmmp is None else r.tvmmp,
+            "state": self.index, "z": self.z, "s": self.s, "tvmmp": "" if r.tvmmp is None else r.tvmmp,
             "feasible": r.feasible,
         }  # fmt: skip
         for k, l in np.ndindex(*r.alpha.shape):
@@ -117,7 +119,7 @@ class Record:
         """JSON form: the row's identity plus the ``mjtvm.result/1`` document (no witnesses)."""
         return {
             "variant": self.variant, "reading": self.reading, "mu": self.mu, "mg": self.mg,
-            "state": self.index, "z": self.z, "solver": self.solver, "saturated": list(self.saturated),
+            "state": self.index, "z": self.z, "s": self.s, "solver": self.solver, "saturated": list(self.saturated),
             **self.result.to_dict(witnesses=False),
         }  # fmt: skip
 
@@ -154,8 +156,34 @@ def _record(
     state = lift_state(lift, i, variant=variant, reading=reading or "physical", mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
     result, solver = solve_state(state)
     return Record(
-        variant, reading, mu, mg, i, float(lift.z[i]), result, solver, _saturated(state, result), state
+        variant,
+        reading,
+        mu,
+        mg,
+        i,
+        float(lift.z[i]),
+        float(lift.s[i]),
+        result,
+        solver,
+        _saturated(state, result),
+        state,
     )
+
+
+def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[float, float]:
+    """``mu`` and ``mg`` (N), the grasp's own where ``None``: its friction coefficient and the
+    magnitude of its weight (REFS)."""
+    if mu is None:
+        mu = getattr(grasp, "default_mu", None)
+        if mu is None:
+            raise StateError("mu", f"the grasp {grasp.name!r} has no single friction coefficient: give one")
+    if mg is None:
+        mg = getattr(grasp, "weight_mg", None)
+        if mg is None:
+            raise StateError(
+                "mg", f"the grasp {grasp.name!r}'s REFS are not its weight alone: give the weight"
+            )
+    return float(mu), float(mg)
 
 
 def _check(variants: Sequence[str], readings: Sequence[str], mu: float, mg: float) -> None:
@@ -273,10 +301,10 @@ def _lift_dict(lift: Lift) -> dict[str, Any]:
 ALPHA_LABEL = rf"TVMMP $\alpha$ {ALPHA_UNIT}"
 
 
-def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> bytes:
+def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str, x: str = "z") -> bytes:
     fig, ax = lift_axes(6.0, 4.0)
     for label, style, recs in curves:
-        z = np.array([r.z for r in recs])
+        z = np.array([getattr(r, x) for r in recs])
         a = np.array([np.nan if r.result.tvmmp is None else r.result.tvmmp for r in recs])
         (line,) = ax.plot(z, a, style, label=label)
         bad = np.isnan(a)
@@ -284,7 +312,7 @@ def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str) -> by
             ax.plot(
                 z[bad], np.zeros(int(bad.sum())), "x", color=line.get_color(), label=f"{label}: no solution"
             )
-    return lift_png(fig, ax, ylabel=ALPHA_LABEL, title=title, legend_fontsize=8)
+    return lift_png(fig, ax, ylabel=ALPHA_LABEL, title=title, legend_fontsize=8, x=x)
 
 
 def _figures(
@@ -303,12 +331,13 @@ def _figures(
          [r for r in records if (r.variant, r.reading) == (v, rd)])
         for v, rd in runs
     ]  # fmt: skip
-    files = {"fig8.png": _plot(curves, f"Fig. 8: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N")}
+    x = lift_x(lift)
+    files = {"fig8.png": _plot(curves, f"Fig. 8: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N", x)}
     if swept is not None:
         a = [(f"$\\mu$ = {m:g}", "-", [r for r in swept["mu"] if r.mu == m]) for m in SWEEP_MUS]
-        files["fig9a.png"] = _plot(a, f"Fig. 9a: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N")
+        files["fig9a.png"] = _plot(a, f"Fig. 9a: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N", x)
         b = [(f"$mg$ = {g:g} N", "-", [r for r in swept["mg"] if r.mg == g]) for g in SWEEP_MGS]
-        files["fig9b.png"] = _plot(b, f"Fig. 9b: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}")
+        files["fig9b.png"] = _plot(b, f"Fig. 9b: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}", x)
     return files
 
 
@@ -327,8 +356,8 @@ def run_replay(
     *,
     scenario: str = "case2",
     hand: str = "default",
-    mu: float = 0.3,
-    mg: float = 1.0,
+    mu: float | None = None,
+    mg: float | None = None,
     num_states: int = 30,
     variants: Sequence[str] = VARIANTS,
     readings: Sequence[str] = ("physical",),
@@ -340,7 +369,8 @@ def run_replay(
 ) -> ReplayOutput:
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
 
-    ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
+    ``mu`` and ``mg`` default to the grasp's (:func:`grasp_defaults`): 0.3 and 1 N for the paper's
+    Case 2. ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
     plots: the CLI starts the rerun recording there (:func:`~mjtvm.viewer.recording.start_recording`).
 
@@ -358,10 +388,11 @@ def run_replay(
     """
     from ..core.files import check_output_dir, write_files
 
-    _check(variants, readings, mu, mg)
+    _check(variants, readings, 0.0 if mu is None else mu, 0.0 if mg is None else mg)
     outdir = check_output_dir(out, option="out")  # before any work
     times, t0 = {}, time.perf_counter()
     lift = scripted_lift(scenario, variant=hand, num_states=num_states)
+    mu, mg = grasp_defaults(lift.scenario, mu, mg)
     bases = [lift_state(lift, i) for i in range(lift.num_states)]
     times["lift_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     records = replay_lift(
@@ -383,7 +414,7 @@ def run_replay(
     times["output_s"] = time.perf_counter() - t0  # CSV and PNG (the JSON holds the timings)
     doc = {
         "schema": SCHEMA, **meta, "mu": mu, "mg": mg, "variants": list(variants), "readings": list(readings),
-        "refs": [[0.0, 0.0, -mg, 0.0, 0.0, 0.0]], "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
+        "refs": records[0].state.refs.tolist() if records else None, "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
         "lift": _lift_dict(lift), "records": [r.to_dict() for r in records],
         "sweeps": None if swept is None else {
             "mu": {"mg": SWEEP_MU_MG, "values": list(SWEEP_MUS), "records": [r.to_dict() for r in swept["mu"]]},

@@ -41,6 +41,7 @@ from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
 from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
+from .replay import grasp_defaults
 
 __all__ = ["SweepPoint", "grid", "run_sweep", "run_sweep_files"]
 
@@ -368,10 +369,21 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
     outdir = check_output_dir(args.out)
     out_json, out_csv = outdir / f"{args.name}.json", outdir / f"{args.name}.csv"
     checkpoint = outdir / f"{args.name}.partial.json"
+    mus, mgs = args.mu, args.mg
+    if mus is None or mgs is None:  # the grasps' own: they must agree to make one grid
+        defaults = {
+            grasp_defaults(_lift(g, h, args.states).scenario, None, None)
+            for g in args.grasp
+            for h in args.hand
+        }
+        if len(defaults) > 1:
+            raise StateError("--mu", "the grasps have different friction or weight: give --mu and --mg")
+        mu0, mg0 = defaults.pop()
+        mus, mgs = (mu0,) if mus is None else mus, (mg0,) if mgs is None else mgs
     with output_lock(outdir):
         points = grid(
             scenarios=args.grasp, hands=args.hand, variants=args.contacts, readings=args.reading,
-            mus=args.mu, mgs=args.mg, states=args.state_indices, num_states=args.states,
+            mus=mus, mgs=mgs, states=args.state_indices, num_states=args.states,
         )  # fmt: skip
         wanted = {_key(p) for p in points}
         done: dict[_RowKey, dict[str, Any]] = {}

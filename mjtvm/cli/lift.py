@@ -127,8 +127,10 @@ def _sweep_grid(p: argparse.ArgumentParser) -> None:
     new = p.add_argument("--reading", type=choices(READINGS, every="both"), default="physical",
                          metavar="READING", help="slide directions of S-points: physical, literal or both")  # fmt: skip
     deprecated_alias(p, "--readings", new)
-    p.add_argument("--mu", type=numbers(0.0), default="0.3", help="friction coefficients")
-    p.add_argument("--mg", type=numbers(0.0), default="1.0", help="object weights (N)")
+    p.add_argument(
+        "--mu", type=numbers(0.0), default=None, help="friction coefficients (default: the grasp's)"
+    )
+    p.add_argument("--mg", type=numbers(0.0), default=None, help="object weights (N) (default: the grasp's)")
     new = p.add_argument("--states", type=integer(2, hint="state indices are --state-indices"),
                          default=30, metavar="N", help="number of states along the lift")  # fmt: skip
     deprecated_alias(p, "--num-states", new)

@@ -126,8 +126,15 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     """The scripted lift of ``replay``: grasp, hand, friction, weight, states, contacts, reading."""
     grasp_option(p, default="case2")
     hand_option(p)
-    p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
-    p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
+    p.add_argument(
+        "--mu",
+        type=number(0.0),
+        default=None,
+        help="friction coefficient (default: the grasp's, 0.3 for case2)",
+    )
+    p.add_argument(
+        "--mg", type=number(0.0), default=None, help="object weight (N) (default: the grasp's, 1 for case2)"
+    )
     p.add_argument(
         "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
     )

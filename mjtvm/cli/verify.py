@@ -49,8 +49,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--reading", type=choices(READINGS, every="both"), default="both", metavar="READING",
                    help="slide directions of the S-points: physical, literal or both")  # fmt: skip
     p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
-    p.add_argument("--mu", type=number(0.0), default=0.3, help="friction coefficient")
-    p.add_argument("--mg", type=number(0.0), default=1.0, help="object weight (N)")
+    p.add_argument("--mu", type=number(0.0), default=None, help="friction coefficient (default: the grasp's)")
+    p.add_argument("--mg", type=number(0.0), default=None, help="object weight (N) (default: the grasp's)")
     p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")
     p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
                    help="how worker processes start")  # fmt: skip
@@ -116,23 +116,26 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     if args.rrd is not None:
         check_output_dir(Path(args.rrd).parent, option="--rrd")
     with output_lock(outdir):
+        from ..apps.replay import grasp_defaults
+
+        mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         t0 = time.perf_counter()
         rows = verify.verify_lift(
             args.grasp, num_states=args.states, stride=args.stride,
-            runs=verify.runs_of(args.contacts, args.reading), mu=args.mu, mg=args.mg, settings=settings,
+            runs=verify.runs_of(args.contacts, args.reading), mu=mu, mg=mg, settings=settings,
             witness=args.witness, jobs=args.jobs, start_method=args.start_method, out=None,
             progress=not args.quiet,
         )  # fmt: skip
         wall = time.perf_counter() - t0
         files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": verify.rows_csv(rows)}
         if not args.no_plots:
-            title = f"{args.grasp}: $\\mu$ = {args.mu:g}, $mg$ = {args.mg:g} N"
+            title = f"{args.grasp}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N"
             files[outdir / f"{args.name}.png"] = verify.plot_alpha(rows, title)
         srows: list[dict[str, Any]] = []
         if args.slide_check:
             lift = verify.cached_lift(args.grasp, args.states)
             indices = verify.state_indices(args.states, args.stride)
-            srows = verify.slide_check(lift, indices, mu=args.mu, mg=args.mg, settings=settings)
+            srows = verify.slide_check(lift, indices, mu=mu, mg=mg, settings=settings)
             files[outdir / "slide-check.csv"] = verify.rows_csv(srows)
         write_files(files)
     _print_summary(verify.summarize(rows), wall, args.jobs, outdir / (args.name + ".csv"))

@@ -32,7 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from ..apps.figures import ALPHA_UNIT, lift_axes, lift_png
+from ..apps.figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
+from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, ModelError, StateError
@@ -134,7 +135,8 @@ def verify_state(
     model = sim_model(
         motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
     )
-    base = {"run": run, "state": index, "z": float(lift.z[index]), "mu": mu, "mg": mg}
+    base = {"run": run, "state": index, "z": float(lift.z[index]), "s": float(lift.s[index]),
+            "x": float(getattr(lift, lift_x(lift))[index]), "mu": mu, "mg": mg}  # fmt: skip
     try:
         res = tvmmp(state)
     except MjtvmError as e:
@@ -176,8 +178,8 @@ def verify_lift(
     num_states: int = 30,
     stride: int = 1,
     runs: Sequence[str] = RUNS,
-    mu: float = 0.3,
-    mg: float = 1.0,
+    mu: float | None = None,
+    mg: float | None = None,
     settings: SimSettings | None = None,
     witness: str = "central",
     jobs: int = 1,
@@ -214,9 +216,11 @@ def verify_lift(
         check_output_dir(out, option="out")
     st = settings or SimSettings()
     indices = state_indices(num_states, stride)
+    lift = cached_lift(grasp, num_states)
+    mu, mg = grasp_defaults(lift.scenario, mu, mg)
     opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness}
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
-        motor_model(cached_lift(grasp, num_states).scenario)
+        motor_model(lift.scenario)
     tasks = [(str(grasp), num_states, i, r, opts) for r in runs for i in indices]
     rows: list[dict[str, Any]] = []
     bar = tqdm(
@@ -272,7 +276,9 @@ def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndar
     by: dict[float, list[float]] = {}
     for r in rows:
         if r["run"] == run:
-            by.setdefault(r["z"], []).append(r.get(key, math.nan) if r["status"] == "optimal" else math.nan)
+            by.setdefault(r.get("x", r["z"]), []).append(
+                r.get(key, math.nan) if r["status"] == "optimal" else math.nan
+            )
     z = np.array(sorted(by))
     return z, np.array([min(by[k]) if not any(math.isnan(v) for v in by[k]) else math.nan for k in z])
 
@@ -287,7 +293,8 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
         ax.plot(
             z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
         )
-    return lift_png(fig, ax, ylabel=rf"$\alpha$ {ALPHA_UNIT}", title=title, legend_fontsize=7)
+    x = "z" if all(r.get("x", r["z"]) == r["z"] for r in rows) else "s"  # the rows' lift_x axis
+    return lift_png(fig, ax, ylabel=rf"$\alpha$ {ALPHA_UNIT}", title=title, legend_fontsize=7, x=x)
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:

@@ -152,6 +152,26 @@ class Grasp:
             )
         return replace(self, refs=refs, mu=friction)
 
+    @property
+    def default_mu(self) -> float | None:
+        """The file's ``mu``, else the one coefficient its contacts share (``None`` if they differ)."""
+        if self.document["mu"] is not None:
+            return float(self.document["mu"])
+        values = set(self.mu.values())
+        return values.pop() if len(values) == 1 else None
+
+    @property
+    def weight_mg(self) -> float | None:
+        """|weight| (N) when the REFS are the object's weight alone, else ``None``."""
+        spec = self.document["refs"]
+        if not spec["weight"] or any(any(w) for w in spec["wrenches"]):
+            return None
+        return float(np.linalg.norm(self.refs[0, :3]))
+
+    def weight_refs(self, mg: float) -> NDArray[np.float64]:
+        """``(K, 6)`` the REFS with the weight's magnitude set to ``mg`` (N): :meth:`with_options`."""
+        return self.with_options(mg=mg).refs
+
     def spec(self) -> mujoco.MjSpec:
         """A fresh ``MjSpec`` of the model file with the grasp's additions (object, supports), e.g.
         to attach motors (:mod:`mjtvm.physics`) before compiling; ``spec().compile()`` equals ``model``."""
@@ -548,9 +568,13 @@ def _select(
         if b < 0:
             raise GraspError(file, f"{field}.body", f"{target!r} is not a body of the model"
                              f"{_suggest(target, _names(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
-        ids = list(range(int(model.body_geomadr[b]), int(model.body_geomadr[b] + model.body_geomnum[b])))
+        ids = [
+            g
+            for g in range(int(model.body_geomadr[b]), int(model.body_geomadr[b] + model.body_geomnum[b]))
+            if model.geom_contype[g] or model.geom_conaffinity[g]  # visual geoms never touch
+        ]
         if not ids:
-            raise GraspError(file, f"{field}.body", f"body {target!r} has no geom")
+            raise GraspError(file, f"{field}.body", f"body {target!r} has no geom that collides")
     else:
         if not 0 <= int(target) < model.ngeom:
             raise GraspError(

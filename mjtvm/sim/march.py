@@ -277,9 +277,12 @@ class Marcher:
         return work, info
 
     def touching(self, data: mujoco.MjData) -> list[tuple[str, float]]:
-        mujoco.mj_forward(self.model, data)
-        found = detected_contacts(self.model, data, object_body=self.grasp.object_body, one_per_body=False)
-        return [(c.geom, c.distance) for c in found if c.distance <= TOUCH_TOL]
+        # MuJoCo reports a contact only once its margin (0 by default) is reached: detect with a
+        # margin of TOUCH_TOL so that surfaces the IK left 1e-9 m apart still touch
+        found = detected_contacts(
+            self.model, data, object_body=self.grasp.object_body, one_per_body=False, tolerance=TOUCH_TOL
+        )
+        return [(c.geom, c.distance) for c in found]
 
     def inadmissible(self, data: mujoco.MjData) -> str | None:
         """Why the pose is not admissible (another geom touching the object, a finger in a support)."""

@@ -406,7 +406,8 @@ def lift_state(
 
     Contacts: the touching finger geoms (F-geoms ``"F"``; L/S geoms of type ``variant``, with
     the slide directions of ``reading`` when ``"S"``) and, while they touch, the support
-    geoms as D-points. REFS: ``[[0, 0, -mg, 0, 0, 0]]`` (N; N m about the object's origin),
+    geoms as D-points. REFS: the grasp's weight at magnitude ``mg`` (N; N m about the object's
+    origin; ``[[0, 0, -mg, 0, 0, 0]]`` for the paper's sphere) plus the grasp's extra wrenches,
     or the grasp's own ``refs`` when ``mg`` is ``None``; RVDS: the grasp's (eq. 37 for Case 2);
     friction ``mu`` for every F and S contact, or the grasp's ``mu`` when ``None``. ``base``,
     a state of the same index, skips MuJoCo: its contacts are retyped (cheap, for sweeps).
@@ -433,12 +434,16 @@ def lift_state(
     if base is None:
         data = mujoco.MjData(sc.model)
         data.qpos[:] = lift.qpos[i]
-        mujoco.mj_forward(sc.model, data)
         # geoms within MuJoCo's margin but not touching need a type too; they are dropped below
-        near = {c.geom: "D" for c in detected_contacts(sc.model, data, object_body=sc.object_body)}
+        near = {
+            c.geom: "D"
+            for c in detected_contacts(sc.model, data, object_body=sc.object_body, tolerance=TOUCH_TOL)
+        }
         types = near | {g: "D" for g in (*lift.base, *sc.ignored_geoms)} | {g: "L" for g in roles}
         base = grasp_state(sc.model, data, contact_types=types, mu=1.0, rvds=sc.rvds, refs=np.zeros((1, 6)),
-                           object_body=sc.object_body, joints=sc.joints)  # fmt: skip
+                           object_body=sc.object_body, joints=sc.joints,
+                           operation_ranges=getattr(sc, "operation_ranges", None),
+                           friction_edges=getattr(sc, "friction_edges", 16), contact_tolerance=TOUCH_TOL)  # fmt: skip
     friction = sc.mu if mu is None else float(mu)
     contacts = []
     for c in base.contacts:
@@ -453,5 +458,10 @@ def lift_state(
             raise ModelError(f"geom {geom!r}", f"its {kind} contact needs a friction coefficient in mu")
         contacts.append(replace(c, type=kind, mu=None if kind == "D" else float(coefficient),  # type: ignore[arg-type]
                                 slide_direction=slides[geom] if kind == "S" else None))  # fmt: skip
-    refs = np.array(sc.refs, dtype=float) if mg is None else np.array([[0.0, 0.0, -float(mg), 0.0, 0.0, 0.0]])
+    if mg is None:
+        refs = np.array(sc.refs, dtype=float)
+    elif hasattr(sc, "weight_refs"):  # a grasp: its weight (along gravity, through its centre of mass) at mg
+        refs = np.array(sc.weight_refs(float(mg)), dtype=float)
+    else:
+        refs = np.array([[0.0, 0.0, -float(mg), 0.0, 0.0, 0.0]])
     return base.with_(contacts=tuple(contacts), refs=refs)
