@@ -324,20 +324,31 @@ def _figures(
     mg: float,
 ) -> dict[str, bytes]:
     """Fig. 8 (solid L, dashed S) and, with the sweeps, Fig. 9a/9b: TVMMP vs z, as PNG bytes."""
-    tag = f"{lift.scenario.name}, {hand} hand"
+    name = str(lift.scenario.name)
+    paper = name.startswith(("case1", "case2"))  # the paper's figures keep the paper's names
+    tag = f"{name.removesuffix('-' + hand)}, {hand} hand" if paper else name
+    fig8, fig9a, fig9b = (
+        ("Fig. 8", "Fig. 9a", "Fig. 9b") if paper else ("TVMMP along the lift", "mu sweep", "mg sweep")
+    )
     runs = list(dict.fromkeys((r.variant, r.reading) for r in records))
+
+    def label(v: str, rd: str | None) -> str:
+        if "N" not in lift.roles:
+            return "TVMMP (every finger an F-point)"
+        return f"{v}-points" + (f" ({rd} reading)" if rd else "")
+
     curves = [
-        (f"{v}-points" + (f" ({rd} reading)" if rd else ""), "-" if v == "L" else "--",
+        (label(v, rd), "-" if v == "L" else "--",
          [r for r in records if (r.variant, r.reading) == (v, rd)])
         for v, rd in runs
     ]  # fmt: skip
     x = lift_x(lift)
-    files = {"fig8.png": _plot(curves, f"Fig. 8: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N", x)}
+    files = {"fig8.png": _plot(curves, f"{fig8}: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N", x)}
     if swept is not None:
         a = [(f"$\\mu$ = {m:g}", "-", [r for r in swept["mu"] if r.mu == m]) for m in SWEEP_MUS]
-        files["fig9a.png"] = _plot(a, f"Fig. 9a: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N", x)
+        files["fig9a.png"] = _plot(a, f"{fig9a}: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N", x)
         b = [(f"$mg$ = {g:g} N", "-", [r for r in swept["mg"] if r.mg == g]) for g in SWEEP_MGS]
-        files["fig9b.png"] = _plot(b, f"Fig. 9b: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}", x)
+        files["fig9b.png"] = _plot(b, f"{fig9b}: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}", x)
     return files
 
 
@@ -393,6 +404,8 @@ def run_replay(
     times, t0 = {}, time.perf_counter()
     lift = scripted_lift(scenario, variant=hand, num_states=num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
+    if "N" not in lift.roles:  # every finger an F-point: the L/S variants are one and the same
+        variants = ("L",)
     bases = [lift_state(lift, i) for i in range(lift.num_states)]
     times["lift_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     records = replay_lift(

@@ -68,6 +68,7 @@ def check_file_folder(path: str | None, option: str) -> None:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
+    from ..apps.figures import lift_x
     from ..apps.replay import ReplayOutput, run_replay  # MuJoCo and matplotlib: only the coupling commands
     from ..core.files import check_output_dir, output_lock
     from ..viewer.recording import RecordingJob, start_recording
@@ -93,7 +94,9 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             raise
         infos = [job.result() for job in jobs]
     lift = out.lift
-    emit(f"lift: {lift.num_states} states, z = {lift.z[0]:.4f} .. {lift.z[-1]:.4f} m ({lift.limit})")
+    x = lift_x(lift)
+    values = getattr(lift, x)
+    emit(f"lift: {lift.num_states} states, {x} = {values[0]:.4f} .. {values[-1]:.4f} m ({lift.limit})")
     for name, path in out.files.items():
         emit(f"wrote {name}: {path}")
     for info in infos:

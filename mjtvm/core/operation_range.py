@@ -11,6 +11,7 @@ operation range (see :func:`mirrored_halfplanes`).
 
 from __future__ import annotations
 
+import itertools
 import json
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -126,6 +127,46 @@ class OperationRange:
     def scaled(self, *, torque: float = 1.0, speed: float = 1.0) -> OperationRange:
         """A copy with torque and speed coordinates multiplied by positive factors."""
         return OperationRange(self.vertices * np.array([torque, speed]))
+
+    def with_losses(self, *, damping: float = 0.0, friction: float = 0.0) -> OperationRange:
+        r"""The range of the torque left at the joint after viscous damping and dry friction.
+
+        The joint's torque balance (eq. 19) gains the passive torque of the joint:
+        :math:`\tau_{motor} = \tau + d\,\dot q + f\,\mathrm{sgn}(\dot q)` with damping
+        ``d`` (N m s/rad) and friction loss ``f`` (N m), MuJoCo's ``dof_damping`` and
+        ``dof_frictionloss``. Requiring :math:`|\tau| + d|\dot q| + f \le T(|\dot q|)`
+        (``T`` this range's torque at a speed) maps every vertex :math:`(t, w)` to
+        :math:`(t - d w - f, w)` and clips at :math:`t = 0`: a convex, down-closed polygon
+        again. It is exact while the motor drives (torque and speed of one sign) and
+        conservative while it brakes, where the losses would help: the operation range is one
+        polygon for all four sign quadrants (eq. 2).
+
+        Raises
+        ------
+        StateError
+            Negative or non-finite losses, or a friction loss that leaves no torque.
+        """
+        for name, value in (("damping", damping), ("friction", friction)):
+            if not (np.isfinite(value) and value >= 0):
+                raise StateError(name, f"expected a finite number >= 0, got {value!r}")
+        if damping == 0.0 and friction == 0.0:
+            return self
+        chain = self.vertices[np.any(self.vertices != 0.0, axis=1)]
+        chain = chain[np.lexsort((-chain[:, 0], chain[:, 1]))]  # (T, 0) first, (0, w0) last
+        net = chain - np.column_stack([damping * chain[:, 1] + friction, np.zeros(len(chain))])
+        if net[0, 0] <= 0.0:
+            raise StateError(
+                "friction", f"friction loss {friction:g} N m leaves no torque of {net[0, 0] + friction:g}"
+            )
+        kept = [net[0]]
+        for a, b in itertools.pairwise(net):
+            if b[0] > 0.0:
+                kept.append(b)
+                continue
+            w = a[1] + (b[1] - a[1]) * a[0] / (a[0] - b[0])  # where the net torque reaches 0
+            kept.append(np.array([0.0, w]))
+            break  # the last vertex, (-d w0 - f, w0), always has a negative net torque: reached
+        return OperationRange(np.vstack([[0.0, 0.0], *kept]))
 
     def to_list(self) -> list[list[float]]:
         """The vertices as a JSON-ready list."""

@@ -11,7 +11,8 @@ physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
    priority in contact mixing: F- and S-geoms get friction ``mu`` (condim 3), L-geoms and the
    base D-geom are frictionless (condim 1), other finger geoms keep ``mu``.
 2. *Drive* (:func:`witness_drive`): the witness of pair (k, l) at speed factor ``s``: joint
-   speeds :math:`s\,\dot q^*`, feedforward torques :math:`\tau^*` (eq. 19), object twist
+   speeds :math:`s\,\dot q^*`, feedforward torques :math:`\tau^*` (eq. 19) plus the joints'
+   own damping and friction loss at the commanded speeds (zero on the paper's hand), object twist
    :math:`s\alpha_{kl}\hat r_l`. The ``"central"`` witness (default) re-solves the
    constraints of eq. (31) at :math:`\alpha = \min(s, 1)\alpha_{kl}` minimising
    :math:`\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2` (least joint motion,
@@ -267,7 +268,9 @@ def rollout(
     f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
-        ff = drive.torques.copy()
+        # the joints' own damping and friction loss (passive torques of the model), which the
+        # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)
+        ff = drive.torques + m.dof_damping[rig.dofs] * qset + m.dof_frictionloss[rig.dofs] * np.sign(qset)
         if st.inertial_ff and pred is not None:
             ff += _inertial(m, d, pred, rig, drive, qset)
         d.ctrl[rig.cadr] = qset * rig.gear

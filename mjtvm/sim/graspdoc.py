@@ -32,7 +32,7 @@ MAX_ITEMS = 256  # contacts, targets, joints, poses, wrenches, RVDS vertices
 _TOP = {
     "schema", "name", "description", "notes", "source", "model", "object", "configuration", "joints",
     "mu", "friction_edges", "slip", "contact_tolerance", "contacts", "ignore", "refs", "rvds",
-    "ranges", "lift", "supports",
+    "ranges", "lift", "supports", "joint_losses",
 }  # fmt: skip
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}
@@ -259,6 +259,9 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
     doc["refs"] = _refs(c, doc.get("refs", {}))
     doc["rvds"] = c.vectors(doc["rvds"], "rvds", 6) if doc.get("rvds") is not None else None
     doc["ranges"] = _ranges(c, doc.get("ranges", {}))
+    doc["joint_losses"] = doc.get("joint_losses", "fold")
+    if doc["joint_losses"] not in ("fold", "ignore"):
+        raise c.fail("joint_losses", f"expected 'fold' or 'ignore', got {doc['joint_losses']!r}")
     doc["lift"] = _lift(c, doc["lift"]) if "lift" in doc else None
     return doc, path
 

@@ -678,7 +678,10 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
         if not joints:
             raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
-    ranges, motors = joint_ranges(model, joints, doc["ranges"], base=path.parent if path else None, file=file)
+    ranges, motors = joint_ranges(
+        model, joints, doc["ranges"], base=path.parent if path else None, file=file,
+        losses=doc["joint_losses"] == "fold",
+    )  # fmt: skip
     rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
     if rvds is not None:
         rvds.setflags(write=False)

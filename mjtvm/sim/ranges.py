@@ -151,8 +151,15 @@ def joint_ranges(
     *,
     base: Path | None,
     file: str,
+    losses: bool = True,
 ) -> tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]:
     r"""Operation range and motor of each joint (module docstring).
+
+    With ``losses`` (the grasp file's ``joint_losses = "fold"``, the default) each range is the
+    torque left after the joint's own damping and friction loss in the model
+    (:meth:`~mjtvm.core.operation_range.OperationRange.with_losses`): public hand models often
+    carry joint damping (the Allegro's 1 N m s/rad eats 1.5 N m at 1.5 rad/s, more than its
+    0.7 N m motors give), which the motor must overcome before it moves the object.
 
     Returns
     -------
@@ -203,4 +210,12 @@ def joint_ranges(
             except MjtvmError as e:
                 raise fail(f"polygon: {e}") from e
             motors[joint] = "its range is a polygon, not a motor model"
+        dof = int(model.jnt_dofadr[j])
+        if losses and (model.dof_damping[dof] > 0 or model.dof_frictionloss[dof] > 0):
+            try:
+                out[joint] = out[joint].with_losses(
+                    damping=float(model.dof_damping[dof]), friction=float(model.dof_frictionloss[dof])
+                )
+            except MjtvmError as e:
+                raise fail(f"its damping and friction loss in the model leave no range: {e}") from e
     return out, motors

@@ -104,3 +104,24 @@ def test_invalid_datasheet_figures(kwargs, match):
     }  # fmt: skip
     with pytest.raises(StateError, match=match):
         OperationRange.from_datasheet(**{**base, **kwargs})
+
+
+def test_losses_fold_into_the_range_by_hand():
+    """RE 25 at 1/40 with joint damping d = 0.01 N m s/rad and friction loss f = 0.1 N m: every
+    vertex (t, w) -> (t - d w - f, w), clipped where the net torque reaches 0. On the
+    speed-torque line T(w) = 1.052 (w0 - w) / (w0 - w1) the new no-load speed solves
+    T(w) = d w + f."""
+    r = default_operation_range()
+    w1, w0 = r.vertices[2, 1], r.vertices[3, 1]
+    d, f = 0.01, 0.1
+    slope = 1.052 / (w0 - w1)
+    w_star = (slope * w0 - f) / (slope + d)
+    folded = r.with_losses(damping=d, friction=f)
+    np.testing.assert_allclose(folded.vertices, [[0, 0], [1.052 - f, 0], [1.052 - d * w1 - f, w1], [0, w_star]], rtol=1e-12)
+    assert r.with_losses() is r
+    # exact in the driving quadrant: at the vertex speed, motor torque = net torque + d w + f
+    assert folded.max_speed_at(0.5) == pytest.approx((slope * w0 - f - 0.5) / (slope + d), rel=1e-12)
+    with pytest.raises(StateError, match="friction loss 2 N m leaves no torque"):
+        r.with_losses(friction=2.0)
+    with pytest.raises(StateError, match="damping: expected a finite number >= 0"):
+        r.with_losses(damping=-1.0)

@@ -75,3 +75,21 @@ def test_schema_and_loader_agree_on_invalid_documents(
     assert list(validator.iter_errors(doc)), "the schema accepted it"
     with pytest.raises(GraspError):
         read_grasp_document(doc)
+
+
+def test_the_documented_example_is_a_valid_grasp_document(validator: jsonschema.Draft202012Validator) -> None:
+    """The annotated example of docs/grasp-format.md parses as TOML, passes the schema and the reader."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "grasp-format.md").read_text(encoding="utf-8")
+    start = text.index("```toml\n") + len("```toml\n")
+    doc = tomllib.loads(text[start : text.index("```\n", start)])
+    assert not list(validator.iter_errors(doc))
+    normalised, _ = read_grasp_document(doc)
+    assert normalised["supports"][0]["shape"] == "plane" and normalised["contacts"][1]["select"] == "body"
+
+
+@pytest.mark.parametrize("name", ["allegro-ik", "gripper3-box"])
+def test_the_test_hands_grasps_pass_the_schema(validator: jsonschema.Draft202012Validator, name: str) -> None:
+    doc = tomllib.loads(shipped_grasps()[name].read_text(encoding="utf-8"))
+    assert not list(validator.iter_errors(doc))

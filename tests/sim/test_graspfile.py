@@ -287,7 +287,11 @@ def test_a_hand_file_without_object_box_and_ellipsoid_tips(tmp_path: Path) -> No
         assert abs(c.position[2] - 0.12) < 1e-6
     np.testing.assert_allclose(state.refs, [[0, 0, -0.1 * 9.81, 0, 0, 0]], rtol=1e-12)
     assert grasp.joints == ("l0", "l1", "r0", "r1")
-    np.testing.assert_allclose(grasp.operation_ranges["l0"].vertices, [[0, 0], [0.8, 0], [0.8, 5], [0, 5]])
+    # the box gear x forcerange by the speed limit, less the joint's damping 0.1 N m s/rad:
+    # (0.8, 5) -> (0.8 - 0.1 x 5, 5) = (0.3, 5) (OperationRange.with_losses)
+    np.testing.assert_allclose(grasp.operation_ranges["l0"].vertices, [[0, 0], [0.8, 0], [0.3, 5], [0, 5]])
+    raw = load_grasp(_write(tmp_path, {**pincher_grasp(tmp_path), "joint_losses": "ignore"}))
+    np.testing.assert_allclose(raw.operation_ranges["l0"].vertices, [[0, 0], [0.8, 0], [0.8, 5], [0, 5]])
     # No TVMMP here: two point contacts cannot resist a moment about the line through them, and
     # MuJoCo's contact points are 1e-11 m off the plane of the fingers, so the weight has a
     # 1e-13 N m moment about that line: infeasible in exact arithmetic (the scale-invariant
