@@ -117,7 +117,9 @@ def test_losses_fold_into_the_range_by_hand():
     slope = 1.052 / (w0 - w1)
     w_star = (slope * w0 - f) / (slope + d)
     folded = r.with_losses(damping=d, friction=f)
-    np.testing.assert_allclose(folded.vertices, [[0, 0], [1.052 - f, 0], [1.052 - d * w1 - f, w1], [0, w_star]], rtol=1e-12)
+    np.testing.assert_allclose(
+        folded.vertices, [[0, 0], [1.052 - f, 0], [1.052 - d * w1 - f, w1], [0, w_star]], rtol=1e-12
+    )
     assert r.with_losses() is r
     # exact in the driving quadrant: at the vertex speed, motor torque = net torque + d w + f
     assert folded.max_speed_at(0.5) == pytest.approx((slope * w0 - f - 0.5) / (slope + d), rel=1e-12)
