@@ -252,3 +252,30 @@ def test_grasp_alphas_match_the_cvxpy_reference(hand: tuple[Hand, mujoco.MjModel
     alpha, _status = reference_tvmmp(state)
     np.testing.assert_allclose(np.asarray(result.alpha, dtype=float), alpha, rtol=1e-6, atol=1e-8)
     assert result.tvmmp is not None and result.tvmmp > 0  # both grasps hold and move their object
+
+
+# ---------------------------------------------------------------------- lifts of the test hands
+@pytest.mark.parametrize(("name", "travel"), [("allegro-ik", 0.04), ("gripper3-box", 0.03)])
+def test_lift_keeps_the_f_points_on_the_object(name: str, travel: float) -> None:
+    """The grasp file's lift (Allegro: 4 cm along -x; gripper: 3 cm up): every F-point stays on
+    its object-fixed point within 1e-8 m, every L finger on the surface, and lift states solve."""
+    from mjtvm.sim.trajectory import lift_state, scripted_lift
+
+    lift = scripted_lift(name, num_states=4)
+    assert lift.s[-1] == pytest.approx(travel, abs=1e-12)
+    model = lift.scenario.model
+    data = mujoco.MjData(model)
+    ob = model.body(lift.scenario.object_body).id
+    start: dict[str, np.ndarray] = {}
+    for i in range(lift.num_states):
+        data.qpos[:] = lift.qpos[i]
+        mujoco.mj_kinematics(model, data)
+        rot, pos = data.xmat[ob].reshape(3, 3), data.xpos[ob]
+        for g, role, p in zip(lift.geoms, lift.roles, lift.points[i], strict=True):
+            local = rot.T @ (p - pos)  # the contact point in the object's frame
+            if role == "F":
+                start.setdefault(g, local)
+                assert np.linalg.norm(local - start[g]) < 1e-8, (name, i, g)
+        assert np.all(lift.residual[i] < 1e-8)
+        state = lift_state(lift, i)
+        assert {c.name.split("#")[0] for c in state.contacts if c.type != "D"} == set(lift.geoms)
