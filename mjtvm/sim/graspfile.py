@@ -20,7 +20,6 @@ World frame, SI units.
 from __future__ import annotations
 
 import copy
-import difflib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from importlib import resources
@@ -41,23 +40,18 @@ from .grasp import (
     geom_label,
     grasp_state,
     object_weight,
-    precise_collision,
     subtree,
 )
 from .graspdoc import GraspError, read_grasp_document
+from .graspik import solve_configuration
+from .graspmodel import build_spec, joint_id, load_model, names_of, object_geoms, set_object_pose, suggest
 from .hand import DCMotor
-from .ik import IkTarget, solve_ik
 from .ranges import joint_ranges
 
 __all__ = ["Grasp", "build_spec", "load_grasp", "shipped_grasps"]
 
 _OBJ = mujoco.mjtObj
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
-_GEOM_TYPES = {
-    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
-    "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
-    "box": mujoco.mjtGeom.mjGEOM_BOX, "plane": mujoco.mjtGeom.mjGEOM_PLANE,
-}  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -314,242 +308,25 @@ def _resolve(source: str | Path | Mapping[str, Any]) -> str | Path | Mapping[str
     return source
 
 
-def _suggest(name: str, candidates: Sequence[str]) -> str:
-    close = difflib.get_close_matches(name, candidates, n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
-
-
-def _names(model: mujoco.MjModel, kind: mujoco.mjtObj, count: int) -> list[str]:
-    return [n for i in range(count) if (n := mujoco.mj_id2name(model, kind, i))]
-
-
-def _model_path(doc: Mapping[str, Any], path: Path | None, file: str) -> Path:
-    model_path = Path(doc["model"])
-    if not model_path.is_absolute() and path is not None:
-        model_path = path.parent / model_path
-    if not model_path.is_file():
-        raise GraspError(file, "model", f"no such file: {str(model_path)!r}")
-    return model_path
-
-
-def _collision_bits(spec: mujoco.MjSpec) -> int:
-    """Every contype/conaffinity bit of the model's geoms: an added geom collides with every geom
-    that collides with anything (visual geoms, with both 0, stay out)."""
-    bits = 0
-    for g in spec.geoms:
-        bits |= int(g.contype) | int(g.conaffinity)
-    return bits or 1
-
-
-def build_spec(doc: Mapping[str, Any], model_path: Path, file: str) -> mujoco.MjSpec:
-    r"""The model file as an ``MjSpec`` with the grasp's additions: the object, when the file
-    gives its ``shape`` (a body on a free joint with one geom), and the ``supports`` (world
-    geoms). Keyframes get the added object's pose appended, so that they stay valid."""
-    try:
-        spec = mujoco.MjSpec.from_file(str(model_path))
-    except ValueError as e:  # MuJoCo's XML error
-        raise GraspError(
-            file, "model", f"MuJoCo cannot load {str(model_path)!r}: {' '.join(str(e).split())}"
-        ) from e
-    bits = _collision_bits(spec)
-    obj = doc["object"]
-    if obj["shape"] is not None:
-        if spec.body(obj["body"]) is not None:
-            raise GraspError(file, "object.body", f"{obj['body']!r} is already a body of the model: "
-                             "drop shape, size and mass to use it, or choose another name")  # fmt: skip
-        pos = obj["position"] or [0.0, 0.0, 0.0]
-        quat = obj["quaternion"] or [1.0, 0.0, 0.0, 0.0]
-        body = spec.worldbody.add_body(name=obj["body"], pos=pos, quat=quat)
-        body.add_freejoint(name=obj["body"])
-        size = [*obj["size"], 0.0, 0.0][:3]
-        body.add_geom(name=obj["body"], type=_GEOM_TYPES[obj["shape"]], size=size, mass=obj["mass"],
-                      contype=bits, conaffinity=bits)  # fmt: skip
-        for key in spec.keys:
-            if len(key.qpos):
-                key.qpos = [*key.qpos, *pos, *quat]
-    for i, sup in enumerate(doc["supports"]):
-        if spec.geom(sup["name"]) is not None:
-            raise GraspError(file, f"supports[{i}].name", f"{sup['name']!r} is already a geom of the model")
-        spec.worldbody.add_geom(name=sup["name"], type=_GEOM_TYPES[sup["shape"]], size=sup["size"],
-                                pos=sup["position"], quat=sup["quaternion"], contype=bits, conaffinity=bits)  # fmt: skip
-    return spec
-
-
-def _load_model(doc: Mapping[str, Any], path: Path | None, file: str) -> tuple[mujoco.MjModel, Path]:
-    model_path = _model_path(doc, path, file)
-    spec = build_spec(doc, model_path, file)
-    try:
-        return spec.compile(), model_path
-    except ValueError as e:  # MuJoCo's compiler error
-        raise GraspError(
-            file, "model", f"MuJoCo cannot compile {str(model_path)!r}: {' '.join(str(e).split())}"
-        ) from e
-
-
-def _joint(model: mujoco.MjModel, name: str, file: str, field: str) -> int:
-    j = mujoco.mj_name2id(model, _OBJ.mjOBJ_JOINT, name)
-    if j < 0:
-        raise GraspError(
-            file,
-            field,
-            f"{name!r} is not a joint of the model{_suggest(name, _names(model, _OBJ.mjOBJ_JOINT, model.njnt))}",
-        )
-    if int(model.jnt_type[j]) not in _SCALAR:
-        raise GraspError(file, field, f"joint {name!r} is not a hinge or slide joint")
-    return int(j)
-
-
-def _set_object_pose(
-    model: mujoco.MjModel, data: mujoco.MjData, ob: int, obj: Mapping[str, Any], file: str
-) -> None:
-    if obj["position"] is None and obj["quaternion"] is None:
-        return
-    free = [j for j in range(model.njnt) if int(model.jnt_bodyid[j]) == ob]
-    if len(free) != 1 or int(model.jnt_type[free[0]]) != int(mujoco.mjtJoint.mjJNT_FREE):
-        raise GraspError(
-            file, "object.position", "the object's pose can be set only on a body with one free joint"
-        )
-    adr = int(model.jnt_qposadr[free[0]])
-    if obj["position"] is not None:
-        data.qpos[adr : adr + 3] = obj["position"]
-    if obj["quaternion"] is not None:
-        data.qpos[adr + 3 : adr + 7] = obj["quaternion"]
-
-
 def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str) -> mujoco.MjData:
     """``mjData`` at the configuration (keyframe, joint values or IK), after ``mj_forward``."""
     data, config = mujoco.MjData(model), doc["configuration"]
     if "keyframe" in config:
         key = mujoco.mj_name2id(model, _OBJ.mjOBJ_KEY, config["keyframe"])
         if key < 0:
-            keys = _names(model, _OBJ.mjOBJ_KEY, model.nkey)
+            keys = names_of(model, _OBJ.mjOBJ_KEY, model.nkey)
             raise GraspError(file, "configuration.keyframe",
                              f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})")  # fmt: skip
         mujoco.mj_resetDataKeyframe(model, data, key)
     values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
     where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
     for name, value in values.items():
-        data.qpos[model.jnt_qposadr[_joint(model, name, file, f"{where}.{name}")]] = value
-    _set_object_pose(model, data, ob, doc["object"], file)
+        data.qpos[model.jnt_qposadr[joint_id(model, name, file, f"{where}.{name}")]] = value
+    set_object_pose(model, data, ob, doc["object"], file)
     mujoco.mj_forward(model, data)
     if "ik" in config:
-        data = _solve_configuration(model, data, config["ik"], ob, file)
+        data = solve_configuration(model, data, config["ik"], ob, file)
     return data
-
-
-def _object_geoms(model: mujoco.MjModel, ob: int) -> list[int]:
-    inside = subtree(model, ob)
-    return [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in inside]
-
-
-POINT_TOLERANCE = 1e-3  # m: how close a geom's contact must come to its target point along the surface
-
-
-def _geom_target(model: mujoco.MjModel, work: mujoco.MjData, g: int, obj: Sequence[int], point: Any,
-                 file: str, field: str) -> tuple[IkTarget, float, float]:  # fmt: skip
-    """The IK target moving geom ``g``'s point nearest the object onto ``point`` (or onto the
-    object's nearest surface point), its surface distance and its offset from ``point`` (m)."""
-    d, best, fromto = np.inf, np.zeros(6), np.zeros(6)
-    for o in obj:
-        dist = float(mujoco.mj_geomDistance(model, work, o, g, 1.0, fromto))
-        if dist < d:
-            d, best = dist, fromto.copy()
-    if not np.isfinite(d) or d >= 1.0:
-        raise GraspError(
-            file, f"{field}.geom", f"geom {geom_label(model, g)!r} is more than 1 m from the object"
-        )
-    body = int(model.geom_bodyid[g])
-    finger_point = best[3:]
-    surface = best[:3] if point is None else np.array(point, dtype=float)
-    local = data_xmat(work, body).T @ (finger_point - work.xpos[body])
-    name = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or ""
-    offset = 0.0 if point is None else float(np.linalg.norm(finger_point - surface))
-    return IkTarget(geom_label(model, g), name, local, surface), abs(d), offset
-
-
-def _solve_configuration(
-    model: mujoco.MjModel, data: mujoco.MjData, ik: Mapping[str, Any], ob: int, file: str
-) -> mujoco.MjData:
-    r"""IK: each target's finger point onto the object's surface (retargeted until it touches).
-
-    A site goes to its ``point`` (within ``tolerance``). A geom's point nearest the object
-    (``mj_geomDistance``) goes to ``point`` when given (a point on the object's surface), else
-    to the object's nearest surface point; the nearest points move as the finger turns, so
-    the targets are recomputed and the IK rerun until every geom touches the surface (distance
-    within ``tolerance``) within :data:`POINT_TOLERANCE` (1 mm) of its ``point``: where a flat
-    face meets a curved surface the nearest point is not unique (it jumps along the line of
-    contact as the finger turns), the witness points of curved shapes are iterative (about
-    1e-6 m), and a finger may be unable to move along the surface at all (e.g. out of its plane).
-    """
-    obj = _object_geoms(model, ob)
-    bounds = dict(ik["bounds"])
-    for name in bounds:
-        _joint(model, name, file, f"configuration.ik.bounds.{name}")
-    resolved = []
-    for i, t in enumerate(ik["targets"]):
-        field = f"configuration.ik.targets[{i}]"
-        if "site" in t:
-            s = mujoco.mj_name2id(model, _OBJ.mjOBJ_SITE, t["site"])
-            if s < 0:
-                raise GraspError(file, f"{field}.site", f"{t['site']!r} is not a site of the model"
-                                 f"{_suggest(t['site'], _names(model, _OBJ.mjOBJ_SITE, model.nsite))}")  # fmt: skip
-            resolved.append(("site", s, t["point"], field))
-            continue
-        try:
-            resolved.append(("geom", geom_id(model, t["geom"]), t["point"], field))
-        except ModelError as e:
-            names = _names(model, _OBJ.mjOBJ_GEOM, model.ngeom)
-            raise GraspError(file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model"
-                             f"{_suggest(t['geom'], names)}") from e  # fmt: skip
-    with precise_collision(model):
-        return _settle_targets(model, data, resolved, obj, bounds, ik, file)
-
-
-def _settle_targets(model: mujoco.MjModel, data: mujoco.MjData, resolved: Sequence[tuple[str, int, Any, str]],
-                    obj: Sequence[int], bounds: Mapping[str, tuple[float, float]], ik: Mapping[str, Any],
-                    file: str) -> mujoco.MjData:  # fmt: skip
-    """The rounds of :func:`_solve_configuration`: retarget, solve, until settled."""
-    tol = float(ik["tolerance"])
-    work = copy.copy(data)
-    worst, last = "", np.inf
-    for _round in range(30):
-        targets, misses = [], []
-        for kind, k, point, field in resolved:
-            if kind == "site":
-                body = int(model.site_bodyid[k])
-                name = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or ""
-                targets.append(IkTarget(str(mujoco.mj_id2name(model, _OBJ.mjOBJ_SITE, k)), name,
-                                        np.array(model.site_pos[k]), np.array(point)))  # fmt: skip
-                misses.append((float(np.linalg.norm(work.site_xpos[k] - np.array(point))) - tol, 0.0))
-            else:
-                target, gap, offset = _geom_target(model, work, k, obj, point, file, field)
-                targets.append(target)
-                misses.append((gap - tol, offset))
-        gaps, offsets = [m[0] for m in misses], [m[1] for m in misses]
-        if max(gaps) <= 0.0 and (max(offsets) <= tol or max(offsets) >= 0.99 * last):
-            if max(offsets) <= POINT_TOLERANCE:  # touching, and as near the points as it gets
-                return work
-        last = max(offsets)
-        w = int(np.argmax([max(g, o - POINT_TOLERANCE) for g, o in misses]))
-        worst = (f"{resolved[w][3]}: does not settle on the object's surface in 30 rounds (surface "
-                 f"distance {1e3 * (gaps[w] + tol):.3g} mm, {1e3 * offsets[w]:.3g} mm from its point)")  # fmt: skip
-        result = solve_ik(model, work, targets, bounds=bounds, tolerance=tol,
-                          max_iterations=int(ik["max_iterations"]), strict=False)  # fmt: skip
-        if float(np.max(result.residuals)) > 1e-4:  # far beyond the witness points' noise: out of reach
-            w = int(np.argmax(result.residuals))
-            raise GraspError(
-                file, resolved[w][3],
-                f"unreachable: residual {1e3 * float(result.residuals[w]):.3g} mm after {result.iterations} "
-                "iterations (joint limits, bounds, or too far)",
-            )  # fmt: skip
-        work.qpos[:] = result.qpos
-        mujoco.mj_forward(model, work)
-    field, problem = worst.split(": ", 1)
-    raise GraspError(file, field, problem)
-
-
-def data_xmat(data: mujoco.MjData, body: int) -> NDArray[np.float64]:
-    return np.array(data.xmat[body], dtype=float).reshape(3, 3)
 
 
 def _select(
@@ -562,12 +339,12 @@ def _select(
             ids = [geom_id(model, target)]
         except ModelError as e:
             raise GraspError(file, f"{field}.geom", f"{target!r} is not a geom of the model"
-                             f"{_suggest(target, _names(model, _OBJ.mjOBJ_GEOM, model.ngeom))}") from e  # fmt: skip
+                             f"{suggest(target, names_of(model, _OBJ.mjOBJ_GEOM, model.ngeom))}") from e  # fmt: skip
     elif kind == "body":
         b = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, target)
         if b < 0:
             raise GraspError(file, f"{field}.body", f"{target!r} is not a body of the model"
-                             f"{_suggest(target, _names(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+                             f"{suggest(target, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
         ids = [
             g
             for g in range(int(model.body_geomadr[b]), int(model.body_geomadr[b] + model.body_geomnum[b]))
@@ -635,13 +412,13 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     """
     doc, path = read_grasp_document(_resolve(source))
     file = str(path) if path is not None else "grasp"
-    model, model_path = _load_model(doc, path, file)
+    model, model_path = load_model(doc, path, file)
     ob = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, doc["object"]["body"])
     if ob <= 0:
         name = doc["object"]["body"]
         raise GraspError(file, "object.body", f"{name!r} is not a body of the model (other than the world)"
-                         f"{_suggest(name, _names(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
-    if not _object_geoms(model, ob):
+                         f"{suggest(name, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+    if not object_geoms(model, ob):
         raise GraspError(file, "object.body", f"body {doc['object']['body']!r} has no geom")
     data = _configure(model, doc, ob, file)
     types: dict[str, str] = {}
@@ -672,7 +449,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         ignored += [geom_label(model, g) for g in ids if geom_label(model, g) not in types]
     if doc["joints"] is not None:
         for k, name in enumerate(doc["joints"]):
-            _joint(model, name, file, f"joints[{k}]")
+            joint_id(model, name, file, f"joints[{k}]")
         joints = tuple(doc["joints"])
     else:
         joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
@@ -688,7 +465,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     lift = doc["lift"]
     bounds = dict(lift["bounds"]) if lift is not None else {}
     for name in bounds:
-        _joint(model, name, file, f"lift.bounds.{name}")
+        joint_id(model, name, file, f"lift.bounds.{name}")
     return Grasp(
         name=doc["name"], path=path, model_path=model_path, model=model, data=data,
         object_body=doc["object"]["body"], joints=joints, contact_types=MappingProxyType(types),
