@@ -27,12 +27,12 @@ def scene() -> tuple[mujoco.MjModel, mujoco.MjData]:
     return m, d
 
 
-def _n(scene, name, point):  # noqa: ANN001, ANN202
+def _n(scene, name, point):
     m, d = scene
     return object_normal(m, d, m.geom(name).id, np.array(point, dtype=float))
 
 
-def test_closed_forms(scene) -> None:  # noqa: ANN001
+def test_closed_forms(scene) -> None:
     # the box turned 90 deg about z: its local +x face (half-size 0.1) faces world +y
     np.testing.assert_allclose(_n(scene, "box", [1.0, 0.1, 0.05]), [0, 1, 0], atol=1e-15)
     np.testing.assert_allclose(_n(scene, "box", [1.0, 0.0, -0.3]), [0, 0, -1], atol=1e-15)
@@ -42,12 +42,14 @@ def test_closed_forms(scene) -> None:  # noqa: ANN001
     # ellipsoid: gradient (x/a^2, y/b^2, z/c^2) at the surface point along the ray
     p = np.array([0.1, 0.2, 0.3]) / np.sqrt(3.0)
     g = p / np.array([0.1, 0.2, 0.3]) ** 2
-    np.testing.assert_allclose(_n(scene, "ell", p + [0, 0, 1]), g / np.linalg.norm(g), atol=1e-12)
+    np.testing.assert_allclose(
+        _n(scene, "ell", p + np.array([0.0, 0.0, 1.0])), g / np.linalg.norm(g), atol=1e-12
+    )
     np.testing.assert_allclose(_n(scene, "sph", [2.0, 0.06, 0.08]), [0, 0.6, 0.8], atol=1e-15)
     np.testing.assert_allclose(_n(scene, "cap", [3.06, 0.0, 0.28]), [0.6, 0, 0.8], atol=1e-12)  # end cap
 
 
-def test_which_pairs(scene) -> None:  # noqa: ANN001
+def test_which_pairs(scene) -> None:
     m, _ = scene
     g = {n: m.geom(n).id for n in ("box", "cyl", "ell", "sph", "cap", "pln")}
     assert needs_exact_normal(m, g["cyl"], g["box"]) and needs_exact_normal(m, g["sph"], g["ell"])
