@@ -134,6 +134,17 @@ def _lift_rows(report: dict[str, Any]) -> list[str]:
     )]  # fmt: skip
 
 
+def _hand_rows(report: dict[str, Any]) -> list[str]:
+    """Each test hand's grasp file: load (with IK), state, Problem 2, lift (mjtvm.bench.hands)."""
+    lines = []
+    for name, h in report.get("hands", {}).items():
+        tag = f"{name} ({h['joints']} joints, {h['contacts']} contacts)"
+        for key, what in (("load", "load + configure"), ("state", "grasp state"),
+                          ("p2", f"Problem 2 ({h['rvds']} RVDS)"), ("lift", "lift, 30 states")):  # fmt: skip
+            lines.append(_row(f"{tag}: {what}"[:44], h[key]["median_s"], "-", "-", None, "-", ""))
+    return lines
+
+
 def _sweep_rows(report: dict[str, Any]) -> list[str]:
     """The Fig. 9 sweeps per process count (speed-up against its target), then their runs."""
     if "sweeps" not in report:
@@ -207,4 +218,5 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
     cases, the lift, the sweeps, the scaling hands, then the notes and the machine."""
     lines = [_HEAD, "-" * len(_HEAD)]
     lines += _case_rows(report) + _lift_rows(report) + _sweep_rows(report) + _scaling_rows(report)
+    lines += _hand_rows(report)
     return "\n".join(lines + _footer(report, notes))

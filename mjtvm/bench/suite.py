@@ -21,7 +21,9 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
 * **scaling**: synthetic hands of 2, 4, 8 and 16 fingers of 4 joints (:func:`scaling_hand`:
   MJCF from :func:`~mjtvm.sim.hand.hand_mjcf`, one fingertip F-contact per finger, IK-free),
   time per TVMMP state (4 RVDS vertices) and per Problem 1 (restricted to the RVDS cone),
-  with the tracemalloc peak and the process's ``ru_maxrss``.
+  with the tracemalloc peak and the process's ``ru_maxrss``;
+* **hands mjtvm does not generate** (:mod:`mjtvm.bench.hands`): each test hand's grasp file
+  loaded, its state, Problem 2 and its lift.
 
 ``--quick`` skips Case 2's Problem 1 and every cdd run.
 """
@@ -33,6 +35,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from .cases import case1_beta, case1_rvds, paper_cases
+from .hands import HANDS, bench_hands
 from .measure import stats
 from .scaling import SCALING_FINGERS, bench_scaling, scaling_hand
 
@@ -156,6 +159,7 @@ def run_suite(
     cases: bool = True,
     lift: bool = True,
     sweeps: bool = True,
+    hands: Sequence[str] = HANDS,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
     """Every measurement of the module docstring; returns the JSON-ready report (times in s).
@@ -206,6 +210,9 @@ def run_suite(
     if scaling_fingers:
         say(f"scaling: {', '.join(map(str, scaling_fingers))} fingers")
         report["scaling"] = bench_scaling(scaling_fingers, repeats=max(1, repeats // 2), p1_repeats=5)
+    if hands:
+        say(f"hands: {', '.join(hands)}")
+        report["hands"] = bench_hands(hands, repeats=max(1, repeats // 10))
     report["targets"] = _targets(report)
     report["total_wall_s"] = time.perf_counter() - t_start
     return report

@@ -41,7 +41,7 @@ def _timings(doc: Any, path: str = "") -> list[tuple[str, float]]:
 def report() -> dict[str, Any]:
     doc = bench_suite.run_suite(
         quick=True, repeats=1, baseline_repeats=1, p1_repeats=1, lift=False, sweeps=False,
-        scaling_fingers=(2, 4), progress=False,
+        scaling_fingers=(2, 4), hands=("gripper3-box",), progress=False,
     )  # fmt: skip
     doc["lift"] = bench_suite.bench_lift(repeats=1, num_states=3)
     doc["sweeps"] = bench_suite.bench_sweeps(jobs=(1, 2), repeats=1, num_states=2)
@@ -62,6 +62,8 @@ def test_report_structure_and_positive_timings(report: dict[str, Any]) -> None:
     assert [scaling[f]["joints"] for f in ("2", "4")] == [8, 16]
     assert [scaling[f]["contacts"] for f in ("2", "4")] == [2, 4]
     assert set(doc["scaling"]["ratios"]) == {"4/2"}
+    hand = doc["hands"]["gripper3-box"]
+    assert (hand["joints"], hand["contacts"], hand["rvds"]) == (9, 7, 5)  # 4 table contacts, 3 fingers
     assert set(doc["targets"]) >= {"case1_p1", "case1_p2", "case2_p2", "lift", "sweep_speedup_2"}
     assert {"cpu", "python", "packages"} <= set(doc["machine"])
     times = _timings(doc)
@@ -73,6 +75,7 @@ def test_report_structure_and_positive_timings(report: dict[str, Any]) -> None:
 def test_table_and_notes(report: dict[str, Any]) -> None:
     table = bench_report.format_suite_table(report, ["a note"])
     for text in ("Case 1, Problem 1", "Case 1, Problem 2", "Case 2 initial, Problem 2", "Full lift",
+                 "gripper3-box (9 joints, 7 contacts): lift",
                  "2 proc incl. pool start", "a note", "machine:", "ratios (time)"):  # fmt: skip
         assert text in table
     assert all(isinstance(n, str) for n in bench_report.auto_notes(report))
