@@ -23,10 +23,11 @@ __all__ = ["add_replay", "add_sweep"]
 _TEXTS: dict[str, tuple[str, str]] = {
     # command: (help in the list of commands, description of its --help)
     "replay": (
-        "TVMMP along the scripted lift of Case 2 (Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
-        "Lift the object along +z to the fingers' reach, solve Problem 2 at every state with fingers 2 "
-        "and 4 as L- and S-points, sweep mu and mg (Fig. 9), and write lift.csv, lift.json, "
-        "lift-sweeps.csv and fig8/fig9a/fig9b.png to --out, as one set, atomically.",
+        "TVMMP along a grasp's scripted lift (default: Case 2, Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
+        "Move the grasp's object as its [lift] says (Case 2: along +z to the fingers' reach), solve "
+        "Problem 2 at every state with the lift's L/S fingers (Case 2: fingers 2 and 4) as L- and "
+        "S-points, sweep mu and mg (Fig. 9), and write lift.csv, lift.json, lift-sweeps.csv and "
+        "fig8/fig9a/fig9b.png to --out, as one set, atomically.",
     ),
     "sweep": (
         "Problem 2 over a grid of lift states and conditions (process pool or Dask)",
@@ -125,7 +126,7 @@ def _sweep_grid(p: argparse.ArgumentParser) -> None:
     grasp_option(p, default="case2", type=names, help="grasps (comma-separated): " + GRASP_HELP)
     p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
     new = p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
-                         help="contact types of fingers 2 and 4")  # fmt: skip
+                         help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4)")  # fmt: skip
     deprecated_alias(p, "--variants", new)
     new = p.add_argument("--reading", type=choices(READINGS, every="both"), default="physical",
                          metavar="READING", help="slide directions of S-points: physical, literal or both")  # fmt: skip

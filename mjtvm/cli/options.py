@@ -140,7 +140,8 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     )
     new = p.add_argument(
         "--contacts", type=choices(CONTACTS), default=contacts, metavar="L,S",
-        help="contact types of fingers 2 and 4 (L: line/rolling, S: sliding), comma-separated",
+        help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4; L: line/rolling, "
+        "S: sliding), comma-separated",
     )  # fmt: skip
     deprecated_alias(p, "--variants", new)
     p.add_argument(

@@ -45,7 +45,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--stride", type=integer(1), default=1, metavar="N", help="check every N-th state (and the last)"
     )
     p.add_argument("--contacts", type=choices(CONTACTS), default="L,S", metavar="L,S",
-                   help="contact types of fingers 2 and 4 to check")  # fmt: skip
+                   help="contact types of the lift's L/S fingers to check (Case 2: fingers 2 and 4)")  # fmt: skip
     p.add_argument("--reading", type=choices(READINGS, every="both"), default="both", metavar="READING",
                    help="slide directions of the S-points: physical, literal or both")  # fmt: skip
     p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)

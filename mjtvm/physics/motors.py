@@ -121,8 +121,9 @@ def attach_dcmotors(
 ) -> mujoco.MjModel:
     r"""The model of ``source`` with one ``<dcmotor>`` per joint of ``motors`` (compiled).
 
-    Every actuator whose transmission is one of those joints (``joint`` or
-    ``jointinparent``: e.g. a public hand's position servos) is removed, with the sensors
+    Every actuator that moves one of those joints is removed (a ``joint`` or ``jointinparent``
+    transmission, e.g. a public hand's position servos, or a tendon through the joint, e.g. the
+    Shadow hand's servos of two coupled finger joints: a non-zero moment arm), with the sensors
     that measure it; keyframes keep the controls of the other actuators (the new ones get
     0). Each joint then gets a ``<dcmotor>`` named ``name_format.format(joint=...)`` with
     ``gear``, ``nominal = "voltage stall_torque no_load_speed"``, ``saturation =
@@ -161,8 +162,12 @@ def attach_dcmotors(
             raise ModelError(f"joint {name!r}", "expected a hinge or slide joint for a <dcmotor>")
         if not isinstance(motor, DCMotor):
             raise ModelError(f"motors[{name!r}]", f"expected a DCMotor, got {type(motor).__name__}")
-    layout = _control_layout(spec)
-    removed = [a for a in spec.actuators if int(a.trntype) in _JOINT_TRN and a.target in motors]
+    layout, moves = _control_layout(spec, set(motors))
+    removed = [
+        a
+        for i, a in enumerate(spec.actuators)
+        if moves[i] or (int(a.trntype) in _JOINT_TRN and a.target in motors)
+    ]
     gone = {id(a) for a in removed}
     kept = [i for i, a in enumerate(spec.actuators) if id(a) not in gone]
     for sensor in list(spec.sensors):  # they would measure an actuator that is no longer there
@@ -191,13 +196,24 @@ def attach_dcmotors(
         ) from e
 
 
-def _control_layout(spec: mujoco.MjSpec) -> list[tuple[int, int]]:
-    """(first control, number of controls) of each actuator, from a compiled copy."""
+def _control_layout(spec: mujoco.MjSpec, joints: set[str]) -> tuple[list[tuple[int, int]], list[bool]]:
+    """(first control, number of controls) of each actuator, and whether it moves one of
+    ``joints`` (a non-zero moment arm on its dof at ``qpos0``: a tendon actuator such as the
+    Shadow hand's coupled finger servos), from a compiled copy."""
     try:
         m = spec.copy().compile()
     except ValueError as e:
         raise ModelError("model", f"does not compile: {str(e).splitlines()[0]}") from e
-    return [(int(m.actuator_ctrladr[a]), int(m.actuator_ctrlnum[a])) for a in range(m.nactuator)]
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    dofs = {int(m.jnt_dofadr[m.joint(j).id]) for j in joints}
+    moves = []
+    for a in range(m.nactuator):
+        start, count = int(d.moment_rowadr[a]), int(d.moment_rownnz[a])
+        cols = d.moment_colind[start : start + count]
+        arms = d.actuator_moment[start : start + count]
+        moves.append(any(int(c) in dofs and arm != 0.0 for c, arm in zip(cols, arms, strict=True)))
+    return [(int(m.actuator_ctrladr[a]), int(m.actuator_ctrlnum[a])) for a in range(m.nactuator)], moves
 
 
 def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> None:

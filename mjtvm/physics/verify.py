@@ -298,12 +298,16 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs, s = 0.9 failures."""
+    r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs, s = 0.9
+    failures; pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``)."""
     out: dict[str, dict[str, Any]] = {}
     for run in dict.fromkeys(r["run"] for r in rows):
         ok = [r for r in rows if r["run"] == run and r["status"] == "optimal"]
+        # alpha_kl = 0 (the hand cannot move the object along r_l at all) has no ratio
+        zero = sum(1 for r in ok if not math.isfinite(r["ratio"]))
+        ok = [r for r in ok if math.isfinite(r["ratio"])]
         if not ok:
-            out[run] = {"pairs": 0}
+            out[run] = {"pairs": 0, "zero_alpha": zero}
             continue
         ratios = sorted(r["ratio"] for r in ok)
         q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [ratios[0]] * 3
@@ -312,7 +316,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
                     "q1": q[0], "q3": q[2], "min": ratios[0], "max": ratios[-1],
                     "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["fail_reason"]) for r in worst],
                     "fail_at_check": sum(not r["pass_check"] for r in ok),
-                    "censored": sum(bool(r["censored"]) for r in ok)}  # fmt: skip
+                    "censored": sum(bool(r["censored"]) for r in ok), "zero_alpha": zero}  # fmt: skip
     return out
 
 

@@ -44,7 +44,17 @@ from .grasp import (
 )
 from .graspdoc import GraspError, read_grasp_document
 from .graspik import solve_configuration
-from .graspmodel import build_spec, joint_id, load_model, names_of, object_geoms, set_object_pose, suggest
+from .graspmodel import (
+    build_spec,
+    coupling,
+    geom_labels,
+    joint_id,
+    load_model,
+    names_of,
+    object_geoms,
+    set_object_pose,
+    suggest,
+)
 from .hand import DCMotor
 from .ranges import joint_ranges
 
@@ -339,7 +349,7 @@ def _select(
             ids = [geom_id(model, target)]
         except ModelError as e:
             raise GraspError(file, f"{field}.geom", f"{target!r} is not a geom of the model"
-                             f"{suggest(target, names_of(model, _OBJ.mjOBJ_GEOM, model.ngeom))}") from e  # fmt: skip
+                             f"{suggest(target, geom_labels(model))}") from e  # fmt: skip
     elif kind == "body":
         b = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, target)
         if b < 0:
@@ -455,6 +465,12 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
         if not joints:
             raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
+    if why := coupling(model, joints):
+        raise GraspError(
+            file, "joints",
+            f"{why}: mjtvm's state has independent joints (each its own torque and speed, eq. 19), "
+            "so a hand with coupled joints or closed chains (e.g. a linkage gripper) is not supported",
+        )  # fmt: skip
     ranges, motors = joint_ranges(
         model, joints, doc["ranges"], base=path.parent if path else None, file=file,
         losses=doc["joint_losses"] == "fold",

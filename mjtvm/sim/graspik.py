@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from ..errors import ModelError
 from .grasp import geom_id, geom_label, precise_collision
 from .graspdoc import GraspError
-from .graspmodel import joint_id, names_of, object_geoms, suggest
+from .graspmodel import geom_labels, joint_id, names_of, object_geoms, suggest
 from .ik import IkTarget, solve_ik
 
 __all__ = ["POINT_TOLERANCE", "solve_configuration"]
@@ -79,7 +79,7 @@ def solve_configuration(
         try:
             resolved.append(("geom", geom_id(model, t["geom"]), t["point"], field))
         except ModelError as e:
-            names = names_of(model, _OBJ.mjOBJ_GEOM, model.ngeom)
+            names = geom_labels(model)
             raise GraspError(file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model"
                              f"{suggest(t['geom'], names)}") from e  # fmt: skip
     with precise_collision(model):

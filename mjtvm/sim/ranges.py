@@ -80,7 +80,11 @@ def _actuator(model: mujoco.MjModel, j: int, joint: str, value: Any, fail: Any) 
         return int(a)
     drivers = _drivers(model, j)
     if len(drivers) != 1:
-        raise fail(f"joint {joint!r} has {len(drivers)} actuators on its transmission; name one")
+        if not drivers:
+            raise fail(
+                "no actuator drives this joint (a passive joint): give its range as a datasheet or a polygon"
+            )
+        raise fail(f"{len(drivers)} actuators drive this joint: name one")
     return drivers[0]
 
 

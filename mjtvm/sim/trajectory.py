@@ -315,7 +315,10 @@ def scripted_lift(
             path.append((s + ds, nxt, info))
             continue
         if math.isfinite(length):
-            raise ModelError(f"height {length:g}", f"beyond reach: {info['why']}")
+            raise ModelError(
+                "lift.height",
+                f"{length:g} m is beyond reach (omit it to lift to the reach limit): {info['why']}",
+            )
         limit, lo, hi, best = info["why"], 0.0, ds, None
         while hi - lo > limit_tolerance:  # bisect the failing step
             mid = 0.5 * (lo + hi)

@@ -112,3 +112,17 @@ def test_motor_model_attaches_or_refuses(tmp_path: Path) -> None:
     )
     with pytest.raises(ModelError, match=r"^joint 'a': its range is a polygon"):
         motor_model(bad)
+
+
+def test_tendon_servos_through_a_motor_joint_are_removed() -> None:
+    """A servo on a fixed tendon through joints a and b (the Shadow hand's coupled finger joints)
+    moves b: attaching a motor to b removes it; a servo of an untouched joint c stays."""
+    xml = """<mujoco><worldbody><body><joint name="a"/><geom size=".1" mass="1"/>
+      <body pos="0 0 .2"><joint name="b"/><geom size=".1" mass="1"/>
+      <body pos="0 0 .2"><joint name="c"/><geom size=".1" mass="1"/></body></body></body></worldbody>
+      <tendon><fixed name="t"><joint joint="a" coef="1"/><joint joint="b" coef="1"/></fixed></tendon>
+      <actuator><position name="coupled" tendon="t" kp="5"/><position name="third" joint="c" kp="5"/></actuator>
+    </mujoco>"""
+    model = attach_dcmotors(xml, {"b": DCMotor.from_datasheet()})
+    names = [model.actuator(i).name for i in range(model.nactuator)]
+    assert names == ["third", "b"]

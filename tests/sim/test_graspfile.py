@@ -326,3 +326,22 @@ def test_added_object_and_supports_errors(tmp_path: Path) -> None:
     # a flat face on a plane: MuJoCo gives several contact points, all D (one per finger body for F)
     assert [c.type for c in state.contacts] == ["D"] * (len(state.contacts) - 2) + ["F", "F"]
     assert {c.name.split("#")[0] for c in state.contacts if c.type == "D"} == {"table"}
+
+
+@pytest.mark.parametrize(
+    ("equality", "match"),
+    [
+        ('<joint name="mirror" joint1="l0" joint2="r0"/>', r"equality 'mirror' couples joints 'l0', 'r0'"),
+        ('<connect name="bar" body1="left_tip" body2="right_tip" anchor="0 0 0.03"/>',
+         r"equality 'bar' closes a chain between bodies 'left_tip', 'right_tip'"),
+    ],
+)  # fmt: skip
+def test_coupled_joints_are_refused(tmp_path: Path, equality: str, match: str) -> None:
+    """A closed chain or a joint coupling (e.g. the 4-bar linkages of a parallel gripper) adds
+    constraints the paper's LPs do not have: refused with the reason, not silently solved."""
+    doc = pincher_grasp(tmp_path)
+    (tmp_path / "pincher.xml").write_text(
+        PINCHER.replace("</mujoco>", f"<equality>{equality}</equality></mujoco>")
+    )
+    with pytest.raises(GraspError, match=r"joints: " + match + r": mjtvm's state has independent joints"):
+        load_grasp(_write(tmp_path, doc))
