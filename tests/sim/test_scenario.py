@@ -29,6 +29,7 @@ from mjtvm.sim.scenario import (
     read_scenario,
     scenario_path,
     solve_variant,
+    variant_model_text,
 )
 from mjtvm.sim.scenario import export_state as export
 
@@ -154,11 +155,16 @@ def test_grasp_files_equal_generator_output(generated: dict, name: str) -> None:
 @pytest.mark.parametrize("name", SCENARIOS)
 @pytest.mark.parametrize("variant", VARIANTS)
 def test_variant_models_are_the_committed_ones(name: str, variant: str) -> None:
-    v = read_scenario(name)["variants"][variant]
-    assert (
-        hand_mjcf(finger_joints=v["finger_joints"], model_name=Path(v["model"]).stem)
-        == model_files()[v["model"]]
-    )
+    doc = read_scenario(name)
+    v = doc["variants"][variant]
+    committed = (ROOT / "mjtvm" / "models" / "paper_hand" / v["model"]).read_text(encoding="utf-8")
+    assert variant_model_text(doc, variant) == committed
+    if v["model"] in model_files():  # the shared hands: the scenario uses them as they are
+        assert committed == model_files()[v["model"]]
+    else:  # Case 1's line-thin hand: the shared hand with other radii only
+        assert "hand" in v and committed == hand_mjcf(
+            finger_joints=v["finger_joints"], model_name=Path(v["model"]).stem, **v["hand"]
+        )
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
@@ -297,17 +303,22 @@ def _doc(**changes: Any) -> dict[str, Any]:
 
 def test_unreachable_target_and_bad_poses() -> None:
     far = _doc()
-    far["contacts"][0]["paper"] = [0.175, 0.0, 0.1]  # finger 1 (0.2 m long, from x = -0.1) cannot get there
+    # the sphere's point farthest from finger 1's base, 0.3077 m away: beyond 2 links (and 3)
+    far["contacts"][0]["paper"] = [0.425, 0.1, 0.3]
+    with pytest.raises(
+        ModelError, match=r"finger 1: point \[0\.1592.* out of reach \(0\.3077 m from the base\)"
+    ):
+        solve_variant(far, "default")  # the posture rule says so
     with pytest.raises(
         ModelError, match=r"IK target 'f1_tip': unreachable: residual 0\.\d+ m above the tolerance"
     ):
-        solve_variant(far, "default")
+        solve_variant(far, "humanlike")  # no rule: the IK says so
     with pytest.raises(ModelError, match="geom 'palm': touches the object"):
         solve_variant(_doc(ignored_geoms=[]), "default")
     deep = _doc()
-    deep["contacts"][0]["offset"] = -0.002  # tip centre 2 mm inside: 7 mm deep, contact 3.5 mm inside
+    deep["contacts"][0]["offset"] = -0.007  # tip centre 7 mm inside: 7.02 mm deep, contact 3.51 mm inside
     with pytest.raises(
-        ModelError, match=r"geom 'f1_tip': contact 3\.50 mm from the paper's point \(> 3 mm\)"
+        ModelError, match=r"geom 'f1_tip': contact 3\.51 mm from the paper's point \(> 3 mm\)"
     ):
         solve_variant(deep, "default")
     with pytest.raises(
