@@ -40,7 +40,7 @@ from .grasp import detected_contacts
 from .graspfile import Grasp, load_grasp
 from .hand import finger_joint_names, hand_mjcf
 from .ik import IkTarget, geom_contact_target, solve_ik
-from .posture import FingerPosture, finger_geometry, planar_fingertip
+from .posture import FingerPosture, finger_geometry, fingertip_family, planar_fingertip, side_postures
 
 __all__ = [
     "CONTACT_TOLERANCE",
@@ -48,9 +48,11 @@ __all__ = [
     "SCHEMA",
     "Scenario",
     "export_state",
+    "finger1_tvmm_curve",
     "format_document",
     "load_scenario",
     "make_documents",
+    "posture_grasp",
     "read_scenario",
     "rule_posture",
     "scenario_path",
@@ -433,3 +435,66 @@ def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
     if ignored:
         out["ignore"] = [{"geom": g} for g in ignored]
     return out
+
+
+def posture_grasp(doc: Mapping[str, Any], variant: str, posture: FingerPosture, finger: int = 1) -> Grasp:
+    r"""The variant's grasp with finger ``finger`` at ``posture`` instead of the stored solution.
+
+    A ``"side"`` posture touches with link 2 (geom ``f<i>_link2``, an F-point like the tip's);
+    every other joint keeps the solution's angle.
+    """
+    out = grasp_document(doc, variant)
+    out["model"] = str(Path(str(resources.files("mjtvm").joinpath("models").joinpath("paper_hand"))) / out["model"])
+    out["configuration"]["qpos"].update(posture.angles)
+    if posture.contact == "side":
+        for entry in out["contacts"]:
+            if entry["geom"] == f"f{finger}_tip":
+                entry["geom"] = f"f{finger}_link2"
+    return load_grasp(out)
+
+
+def finger1_tvmm_curve(
+    name: str = "case1",
+    *,
+    tip_angles: ArrayLike | None = None,
+    alongs: ArrayLike | None = None,
+) -> list[dict[str, Any]]:
+    r"""Case 1's TVMM (Problem 1, scaled affine volume, 1/s^4) over finger 1's feasible postures.
+
+    Finger 1's contact on the paper's point, every other joint at the stored solution:
+    fingertip postures (:func:`~mjtvm.sim.posture.fingertip_family` at the elbow angles
+    ``tip_angles``, rad; default every 2.5 deg) and contacts on link 2 at ``alongs`` (m) from
+    its joint (default every 2.5 mm)
+    (:func:`~mjtvm.sim.posture.side_postures`). Postures whose grasp is not the scenario's
+    (another geom touching) are left out.
+
+    Returns
+    -------
+    list of dict
+        One row per posture: ``contact`` (``"tip"``/``"side"``), ``along`` (m),
+        ``parameter`` (rad), ``angles`` (joint -> rad), ``elbow`` (m), ``dimension`` and
+        ``tvmm`` (scaled affine volume, 1/s^4).
+    """
+    from ..polytopes.tvms import tvms
+
+    tip_angles = np.radians(np.arange(-180.0, 180.0, 2.5)) if tip_angles is None else tip_angles
+    alongs = np.arange(0.0025, 0.1, 0.0025) if alongs is None else alongs
+    doc = read_scenario(name)
+    model = _build(doc, "default", float(doc["mg"]))
+    geo = finger_geometry(model, 1)
+    (target,) = [t for t in _targets(model, doc) if t.name == "f1_tip"]
+    (paper,) = [c["paper"] for c in doc["contacts"] if c["geom"] == "f1_tip"]
+    point, centre = _on_sphere(doc, paper), np.asarray(doc["object_position"], dtype=float)
+    postures = fingertip_family(geo, target.position, centre, tip_angles)
+    for along in np.asarray(alongs, dtype=float):
+        postures += side_postures(geo, point, centre, float(along)) if along > 0 else []
+    rows = []
+    for p in postures:
+        try:
+            result = tvms(posture_grasp(doc, "default", p).state())
+        except ModelError:  # e.g. link 1 or the tip touching too: not this grasp
+            continue
+        rows.append({"contact": p.contact, "along": p.along, "parameter": p.parameter, "angles": p.angles,
+                     "elbow": p.elbow.tolist(), "dimension": result.dimension,
+                     "tvmm": result.affine_volume})  # fmt: skip
+    return rows
