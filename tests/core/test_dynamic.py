@@ -68,7 +68,7 @@ def test_closed_form_values() -> None:
     assert (round(static, 5), round(dyn, 5)) == (2.17066, 0.84312)
     assert 0.84312 - 2.2e-4 <= res.alpha <= 0.84312  # default rtol 1e-4 of alpha_kl, from below
     assert res.demand[0] == pytest.approx(0.50424, abs=3e-4)
-    assert res.witness is not None and res.witness.speeds[0] == pytest.approx(9.607, abs=2e-3)
+    assert res.witness is not None and res.witness.speeds[0] == pytest.approx(9.607, abs=6e-3)
     assert res.term == "inertia"  # 0.504 N m of inertia against 0.176 N m of pushing
 
 
