@@ -56,6 +56,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="how worker processes start")  # fmt: skip
     p.add_argument("--witness", default="central", choices=("central", "vertex"),
                    help="drive the central solution of the LP or the simplex vertex")  # fmt: skip
+    p.add_argument("--dynamics", action="store_true",
+                   help="also the dynamic alpha (eq. 31 with M qdd + c of the witness motion, docs/dynamics.md), "
+                   "alpha_sim / alpha_dyn and a rollout at 0.9 alpha_dyn")  # fmt: skip
+    p.add_argument("--preload", type=number(0.0), default=0.0, metavar="N",
+                   help="minimum normal force (N) of every L contact (the state's contact preload)")  # fmt: skip
     _simulation_options(p)
     p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
     out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
@@ -123,7 +128,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         rows = verify.verify_lift(
             args.grasp, num_states=args.states, stride=args.stride,
             runs=verify.runs_of(args.contacts, args.reading), mu=mu, mg=mg, settings=settings,
-            witness=args.witness, jobs=args.jobs, start_method=args.start_method, out=None,
+            witness=args.witness, dynamics=args.dynamics, preload=args.preload, jobs=args.jobs, start_method=args.start_method, out=None,
             progress=not args.quiet,
         )  # fmt: skip
         wall = time.perf_counter() - t0

@@ -104,7 +104,8 @@ class DynamicAlpha:
     witness
         The LP's solution with that demand (its alpha is :math:`A(d(\alpha^{dyn}))`), or None.
     joint
-        Index of the limiting joint: the least slack of its operation range at the witness.
+        Index of the limiting joint: the least slack of its operation range at the witness
+        (a simplex vertex: :mod:`mjtvm.physics.dynamic` names it at a central solution instead).
     term
         Which use of that joint's range is largest (:data:`TERMS`): the torque of eq. (19)
         :math:`|\tau_j - d_j| / \tau_{max}`, the speed :math:`|\dot q_j| / \dot q_{max}` or the
@@ -126,17 +127,20 @@ class DynamicAlpha:
     bracket: tuple[float, float]
 
 
-def limiting_term(state: GraspState, witness: Witness, demand: ArrayLike) -> tuple[int, str]:
-    """The limiting joint of ``witness`` and its dominant term (:attr:`DynamicAlpha.term`)."""
+def limiting_term(
+    state: GraspState, torques: ArrayLike, speeds: ArrayLike, demand: ArrayLike
+) -> tuple[int, str]:
+    """The limiting joint of a solution (joint ``torques`` and ``speeds``, the ``demand`` included
+    in the torques) and its dominant term (:attr:`DynamicAlpha.term`)."""
     d = np.asarray(demand, dtype=float)
+    tau, qd = np.asarray(torques, dtype=float), np.asarray(speeds, dtype=float)
     slack = []
-    for op, t, q in zip(state.operation_ranges, witness.torques, witness.speeds):
+    for op, t, q in zip(state.operation_ranges, tau, qd):
         hp = op.mirrored_halfplanes
         slack.append(float(np.min((hp[:, 2] - hp[:, 0] * t - hp[:, 1] * q) / hp[:, 2])))
     j = int(np.argmin(slack))
     op = state.operation_ranges[j]
-    shares = (abs(witness.torques[j] - d[j]) / op.max_torque, abs(witness.speeds[j]) / op.max_speed,
-              abs(d[j]) / op.max_torque)  # fmt: skip
+    shares = (abs(tau[j] - d[j]) / op.max_torque, abs(qd[j]) / op.max_speed, abs(d[j]) / op.max_torque)
     return j, TERMS[int(np.argmax(shares))]
 
 
@@ -198,5 +202,5 @@ def dynamic_alpha(
     got, w, d = value(lo)
     if w is None or got is None:  # lo = 0 with a demand that is not 0 at rest
         return DynamicAlpha(0.0, a0, d, None, None, "", math.nan, lps, (lo, hi))
-    j, term = limiting_term(state, w, d)
+    j, term = limiting_term(state, w.torques, w.speeds, d)
     return DynamicAlpha(lo, a0, d, w, j, term, got - lo, lps, (lo, hi))
