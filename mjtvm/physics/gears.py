@@ -106,13 +106,21 @@ def plot_gears(rows: Sequence[dict[str, Any]], title: str = "") -> bytes:
         mean = [
             np.mean([v[k] for v in per.values() if v[k] is not None] or [np.nan]) for k in range(len(ratios))
         ]
-        (line,) = ax.plot(ratios, mean, style, lw=2.2, marker="o", ms=4, label=f"{label}, mean of states")
+        (line,) = ax.plot(
+            ratios, mean, style, lw=2.2, marker="o", ms=4, label=f"{label}, mean of the feasible states"
+        )
         for vals in per.values():
             ax.plot(ratios, [np.nan if v is None else v for v in vals], style, lw=0.6, alpha=0.4,
                     color=line.get_color())  # fmt: skip
         k = int(np.nanargmax(mean))
         ax.annotate(f"max at {ratios[k]:g}:1", (ratios[k], mean[k]), textcoords="offset points", xytext=(4, 6),
                     fontsize=8, color=line.get_color())  # fmt: skip
+    for n in ratios:
+        total = sum(1 for r in rows if r["ratio"] == n)
+        bad = sum(1 for r in rows if r["ratio"] == n and r.get("tvmmp") is None)
+        if bad:
+            ax.annotate(f"{bad}/{total} states\ninfeasible", (n, 0), textcoords="offset points", xytext=(2, 4),
+                        fontsize=7, color="0.3")  # fmt: skip
     ax.set_xlabel("gear ratio N (motor turns per joint turn)")
     ax.set_ylabel(r"$\alpha$ (m/s, unit RVDS vertices)")
     ax.set_title(title or "Gear-ratio sweep (thin: each lift state)", fontsize=9)

@@ -113,3 +113,19 @@ def test_zero_rotor_inertia_reduces_to_the_quasi_static_alpha() -> None:
     m, qpos = model(0.6, armature=0.0)
     dyn = dynamic_pair(m, qpos, state(0.6), 0, 0, object_body="object", rtol=1e-5)
     assert dyn.alpha == pytest.approx(dyn.alpha_static, rel=1e-4)
+
+
+def test_gear_sweep_shows_the_dynamic_optimum() -> None:
+    """Case 2, state 0 (L): at 30:1 inertia limits (dynamic 0.786 against quasi-static 1.594); at
+    100:1 the speed does and both agree (0.509 and 0.500; the dynamic one is a little higher:
+    decelerating joints give torque back); at 10:1 the grasp's torque no longer fits."""
+    from mjtvm.physics.gears import gear_sweep
+
+    rows = {r["ratio"]: r for r in gear_sweep("case2", (10.0, 30.0, 100.0), states=(0,))}
+    assert rows[10.0]["tvmmp"] is None
+    assert rows[30.0]["tvmmp"] == pytest.approx(1.59419, rel=1e-4)
+    assert rows[30.0]["tvmmp_dyn"] == pytest.approx(0.785568, rel=3e-3)
+    assert (rows[30.0]["joint_dyn"], rows[30.0]["term_dyn"]) == ("f1_pitch0", "inertia")
+    assert rows[100.0]["tvmmp"] == pytest.approx(0.499995, rel=1e-4)
+    assert rows[100.0]["tvmmp_dyn"] == pytest.approx(0.508784, rel=3e-3)
+    assert rows[100.0]["term_dyn"] == "speed"
