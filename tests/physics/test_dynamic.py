@@ -129,3 +129,12 @@ def test_gear_sweep_shows_the_dynamic_optimum() -> None:
     assert rows[100.0]["tvmmp"] == pytest.approx(0.499995, rel=1e-4)
     assert rows[100.0]["tvmmp_dyn"] == pytest.approx(0.508784, rel=3e-3)
     assert rows[100.0]["term_dyn"] == "speed"
+
+
+def test_verify_options_parse() -> None:
+    from mjtvm.cli.verify import verify_parser
+
+    args = verify_parser().parse_args(["--dynamics", "--preload", "0.5", "--gears", "20,40"])
+    assert (args.dynamics, args.preload, args.gears) == (True, 0.5, (20.0, 40.0))
+    with pytest.raises(SystemExit):
+        verify_parser().parse_args(["--gears", "0,40"])
