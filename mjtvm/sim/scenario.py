@@ -444,7 +444,9 @@ def posture_grasp(doc: Mapping[str, Any], variant: str, posture: FingerPosture, 
     every other joint keeps the solution's angle.
     """
     out = grasp_document(doc, variant)
-    out["model"] = str(Path(str(resources.files("mjtvm").joinpath("models").joinpath("paper_hand"))) / out["model"])
+    out["model"] = str(
+        Path(str(resources.files("mjtvm").joinpath("models").joinpath("paper_hand"))) / out["model"]
+    )
     out["configuration"]["qpos"].update(posture.angles)
     if posture.contact == "side":
         for entry in out["contacts"]:
