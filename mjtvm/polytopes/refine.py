@@ -191,7 +191,8 @@ def refine(
             if not cutter.cuts:
                 break
             cutter.cuts = 0
-            if watch and budget.elapsed - since >= cost:
+            # Progress alone (no tolerance) waits 2 s: quick exact runs are not slowed down.
+            if watch and budget.elapsed - since >= cost and (limits.tolerance > 0.0 or budget.elapsed > 2.0):
                 t = budget.elapsed
                 bracket = measure(cutter, polar, seeds, budget)
                 cost, since = budget.elapsed - t, budget.elapsed
