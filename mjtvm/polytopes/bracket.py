@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .budget import Budget, LimitReached
 from .hull import JOGGLE, PolarHull
@@ -104,6 +104,7 @@ def outer_volume(polar: PolarHull, budget: Budget) -> tuple[float, NDArray[np.fl
         a, b = polar.normals[j], polar.offsets[j]
         norm = float(np.linalg.norm(a))
         q = u[np.unique(corner[starts[j] : starts[j + 1]])]
+        q = q[np.unique(np.round(q / (10 * polar.tol)), axis=0, return_index=True)[1]]  # copies
         plane = np.linalg.svd(a[None, :] / norm)[2][1:]  # orthonormal basis of a's complement
         total += (b - a @ center) / norm * _area(q @ plane.T) / k
     return float(total), np.unique(np.round(u, 12), axis=0)
@@ -141,19 +142,11 @@ def ray_lengths(
 def hausdorff_bound(
     outer_vertices: NDArray[np.float64], inner: InnerHull, center: NDArray[np.float64], budget: Budget
 ) -> float:
-    r"""An upper bound of :math:`d_H(I, O)`: for each vertex ``v`` of O, the point where the
-    segment from ``c`` (inside I) to ``v`` leaves I is in I, so
-    :math:`d(v, I) \le (1 - t_I(v)) |v - c|`; the maximum over O's vertices bounds
-    :math:`d_H` (I is inside O)."""
-    if len(outer_vertices) == 0:
+    r"""An upper bound of :math:`d_H(I, O)`: as I is inside O, :math:`d_H` is the largest
+    distance from a vertex ``v`` of O to I, and :math:`d(v, I) \le |v - p|` for the nearest
+    vertex ``p`` of I (a k-d tree: no vertices x facets array). ``center`` is unused (kept for
+    the ray bound's signature)."""
+    if len(outer_vertices) == 0 or len(inner.vertices) == 0:
         return 0.0
-    slack = inner.offsets - inner.normals @ center
-    rows = budget.chunk_rows(8.0 * len(slack), cap=1 << 16)
-    worst = 0.0
-    for lo in range(0, len(outer_vertices), rows):
-        d = outer_vertices[lo : lo + rows] - center
-        rate = d @ inner.normals.T
-        ratio = np.where(rate > 0, slack / np.where(rate > 0, rate, 1.0), np.inf)
-        t = np.clip(np.min(ratio, axis=1), 0.0, 1.0)
-        worst = max(worst, float(np.max((1.0 - t) * np.linalg.norm(d, axis=1))))
-    return worst
+    budget.reserve(64.0 * (len(outer_vertices) + len(inner.vertices)), "the Hausdorff bound")
+    return float(np.max(cKDTree(inner.vertices).query(outer_vertices)[0]))

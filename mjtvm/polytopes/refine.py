@@ -191,8 +191,15 @@ def refine(
             if not cutter.cuts:
                 break
             cutter.cuts = 0
-            # Progress alone (no tolerance) waits 2 s: quick exact runs are not slowed down.
-            if watch and budget.elapsed - since >= cost and (limits.tolerance > 0.0 or budget.elapsed > 2.0):
+            # Progress alone (no tolerance) waits 2 s: quick exact runs are not slowed down. A
+            # measurement that would likely (4 x the last one's cost) overrun the time limit is skipped.
+            late = limits.time_limit is not None and budget.elapsed + 4 * cost > limits.time_limit
+            if (
+                watch
+                and not late
+                and budget.elapsed - since >= cost
+                and (limits.tolerance > 0.0 or budget.elapsed > 2.0)
+            ):
                 t = budget.elapsed
                 bracket = measure(cutter, polar, seeds, budget)
                 cost, since = budget.elapsed - t, budget.elapsed
@@ -200,11 +207,13 @@ def refine(
                 if bracket[0].gap <= limits.tolerance:
                     stop = LimitReached("tolerance", f"relative volume gap {bracket[0].gap:.3g}")
                     break
-            bracket = None
         # polish_vertices and the volume hold (vertices x rows) booleans: that must fit too.
         budget.reserve(2.0 * len(certified) * len(polar.offsets), "the incidences of the exact TVMS")
     except LimitReached as e:
-        stop, bracket = e, None
+        # A bracket measured earlier stays valid (I only grew, O only shrank since): on a time
+        # limit it is returned as it is rather than measured again past the limit.
+        stop = e
+        bracket = bracket if e.reason == "time" else None
     support.num_lps = cutter.num_lps
     if stop is not None:
         return _approximate(stop, cutter, polar, seeds, budget, bracket, result, basis, rounds)
