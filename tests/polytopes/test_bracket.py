@@ -7,6 +7,7 @@ of the exact vertices (an independent computation) before the bracket is compare
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from importlib import resources
@@ -107,8 +108,8 @@ def test_bracket_narrows_monotonically(exact):
     assert len(seen) >= 2
     inner = [d["inner"] for d in seen]
     outer = [d["outer"] for d in seen]
-    assert all(b >= a * (1 - 1e-9) for a, b in zip(inner, inner[1:]))
-    assert all(b <= a * (1 + 1e-9) for a, b in zip(outer, outer[1:]))
+    assert all(b >= a * (1 - 1e-9) for a, b in itertools.pairwise(inner))
+    assert all(b <= a * (1 + 1e-9) for a, b in itertools.pairwise(outer))
     assert inner[-1] <= r.affine_volume * (1 + 1e-7) <= outer[-1] * (1 + 2e-7)
 
 
