@@ -117,6 +117,7 @@ class PolarHull:
         self._rng = np.random.default_rng(0)
         self._hull: ConvexHull | None = None
         self._added = 0  # rows already in self._hull
+        self._count = 0  # simplices of the last hull (the budget's estimate of the next)
         self._seen = np.zeros(0, dtype=np.int64)  # keys of the simplices solved last time
         self.add(normals, offsets)
 
@@ -134,8 +135,7 @@ class PolarHull:
 
     def _simplices(self, budget: Budget | None = None) -> NDArray[np.int64]:
         if budget is not None:  # Qhull's hull grows with its simplices: about as many again
-            simplices = 0 if self._hull is None else len(self._hull.simplices)
-            budget.reserve(simplices * 8.0 * (4 * len(self.center) + 8), "the polar hull (Qhull)")
+            budget.reserve(self._count * 8.0 * (4 * len(self.center) + 8), "the polar hull (Qhull)")
         # Our own joggle spares Qhull its "QJ" retries and lets it add points to its hull;
         # "QJ" from scratch is the fallback. Only the triangulation comes from the joggle.
         try:
@@ -144,7 +144,9 @@ class PolarHull:
             elif self._added < len(self._joggled):
                 self._hull.add_points(self._joggled[self._added :])
             self._added = len(self._joggled)
-            return np.asarray(self._hull.simplices)
+            simp = np.asarray(self._hull.simplices)
+            self._count = len(simp)
+            return simp
         except QhullError:
             self._hull, self._added = None, 0
         try:

@@ -60,10 +60,13 @@ def _coplanar_groups(
     # Facets sharing >= k points (a sparse product: the incidence has a few facets per point),
     # of those the nearly parallel ones: points 10 tol from both planes over a face of
     # diameter d make an angle <= 20 tol / d, far below this cheap filter.
-    sparse_on = sp.csc_matrix(on, dtype=np.int32)
-    shared = sp.triu(sparse_on.T @ sparse_on, 1).tocoo()
-    pick = shared.data >= k
-    rows, cols = shared.row[pick], shared.col[pick]
+    if on.size <= 2**24:  # small: one BLAS product (integer matmul is not BLAS)
+        rows, cols = np.nonzero(np.triu(on.T.astype(float) @ on.astype(float) >= k, 1))
+    else:
+        sparse_on = sp.csc_matrix(on, dtype=np.int32)
+        shared = sp.triu(sparse_on.T @ sparse_on, 1).tocoo()
+        pick = shared.data >= k
+        rows, cols = shared.row[pick], shared.col[pick]
     close = np.einsum("ij,ij->i", normals[rows], normals[cols]) > 1.0 - 1e-6
     for i, j in zip(rows[close], cols[close], strict=True):
         q = points[on[:, i] & on[:, j]]
