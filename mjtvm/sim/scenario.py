@@ -1,4 +1,4 @@
-r"""The paper's grasp scenarios (section 5, Cases 1 and 2) as data, and their grasp states.
+r"""The paper's grasp scenarios (section 5, Cases 1 and 2): the sources of their grasp files.
 
 A scenario is a JSON document (``mjtvm/data/scenarios/<name>.json``, schema
 ``mjtvm.scenario/1``): the object (centre, radius, weight mg), the friction coefficient,
@@ -8,8 +8,11 @@ geoms whose contacts are modelling artefacts (``ignored_geoms``), and per model 
 (``default``: [yaw, pitch] + [pitch, yaw] fingers; ``humanlike``: yaw + three pitches) the
 finger joints, the IK start and bounds, and the ``solution`` written by
 ``scripts/make_scenarios.py`` (:func:`make_documents`): joint angles, IK residuals and the
-achieved contacts. Loading (:func:`load_scenario`) rebuilds the model with
-:func:`~mjtvm.sim.hand.hand_mjcf` and sets the stored angles; it does not rerun the IK.
+achieved contacts. From each variant's solution :func:`grasp_document` writes the grasp
+file ``mjtvm/models/paper_hand/<name>[-humanlike].toml`` (``mjtvm.grasp/1``): the paper's
+cases are loaded like any grasp (:func:`load_scenario` is
+:func:`~mjtvm.sim.graspfile.load_grasp` of that file, with ``mg`` and ``mu`` options); the
+IK runs only in the generator.
 
 Contact placement (:func:`solve_variant`). Each paper point ``p`` is projected radially onto
 the sphere, ``p_s = c + R (p - c) / |p - c|``, and the geom is placed by
