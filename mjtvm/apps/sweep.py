@@ -269,7 +269,7 @@ def run_sweep(
 
 def _fork_tasks(tasks: list[tuple[_Key, list[int]]], jobs: int) -> list[list[tuple[_Key, list[int]]]]:
     """The work regrouped for forked workers: per lift, its states dealt round-robin into
-    about 4 tasks per worker (a state's cost varies along the lift), each task solving every
+    about 8 tasks per worker (a state's cost varies along the lift), each task solving every
     configuration of the lift at its states, so that a state's MuJoCo grasp (``_base``) is
     read in one worker only. Task sizes never exceed the given tasks' states."""
     by_lift: dict[tuple[str, str, int], dict[_Key, set[int]]] = {}
@@ -279,7 +279,7 @@ def _fork_tasks(tasks: list[tuple[_Key, list[int]]], jobs: int) -> list[list[tup
     out = []
     for configs in by_lift.values():
         states = sorted(set().union(*configs.values()))
-        n = max(min(len(states), 4 * jobs), -(-len(states) // size))
+        n = max(min(len(states), 8 * jobs), -(-len(states) // size))
         for part in (set(states[t::n]) for t in range(n)):
             out.append([(key, sorted(part & wanted)) for key, wanted in configs.items() if part & wanted])
     return out
