@@ -112,6 +112,7 @@ class _Problem2:
         )
         self._scaled_a = _ScaledMatrix(asm.A, s)
         self.session: HighsSession | None = None
+        self._last: tuple[NDArray[np.float64], float] = (np.full(state.twist_dim, np.nan), np.nan)
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without the
@@ -179,8 +180,12 @@ class _Problem2:
             else:
                 ses = self.session
                 ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
-                ses.set_row_bounds(self.wrench_rows, -w, -w)
-                ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+                # The bounds only change with k (set_column re-sends alpha's when it rescales).
+                if not np.array_equal(w, self._last[0]):
+                    ses.set_row_bounds(self.wrench_rows, -w, -w)
+                if alpha_max != self._last[1]:
+                    ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+            self._last = (w, alpha_max)
             return Settled(self.session.solve(), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
