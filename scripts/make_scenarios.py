@@ -4,7 +4,9 @@ Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
 ``mjtvm/data/scenarios`` for the sources and ``mjtvm/models/paper_hand`` for the grasp files).
 Each source's scenario data (the paper's points, IK start and bounds) is kept; each variant's
 ``solution`` (joint angles, IK residuals, achieved contacts) is recomputed by
-:func:`mjtvm.sim.scenario.make_documents`, and the variant's ``mjtvm.grasp/1`` file
+:func:`mjtvm.sim.scenario.make_documents`, a variant's own hand model (one not in
+:func:`mjtvm.sim.hand.model_files`, e.g. Case 1's ``four_finger_hand_thin.xml``) is written by
+:func:`mjtvm.sim.scenario.variant_model_text`, and the variant's ``mjtvm.grasp/1`` file
 (:func:`mjtvm.sim.scenario.grasp_document`) is written from it: ``case2.toml``,
 ``case2-humanlike.toml``, ... ``tests/sim/test_scenario.py`` checks that the committed files
 equal this output.
@@ -17,7 +19,15 @@ from importlib import resources
 from pathlib import Path
 
 from mjtvm.sim.graspdoc import format_toml
-from mjtvm.sim.scenario import format_document, grasp_document, grasp_file_name, make_documents, scenario_path
+from mjtvm.sim.hand import model_files
+from mjtvm.sim.scenario import (
+    format_document,
+    grasp_document,
+    grasp_file_name,
+    make_documents,
+    scenario_path,
+    variant_model_text,
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -31,6 +41,10 @@ def main(argv: list[str] | None = None) -> int:
         out.write_text(format_document(doc) + "\n", encoding="utf-8")
         sys.stdout.write(f"wrote {out}\n")
         for variant in doc["variants"]:
+            model = str(doc["variants"][variant]["model"])
+            if model not in model_files():  # a hand of its own (Case 1's line-thin links)
+                (grasps / model).write_text(variant_model_text(doc, variant), encoding="utf-8")
+                sys.stdout.write(f"wrote {grasps / model}\n")
             path = grasps / grasp_file_name(name, variant)
             path.write_text(format_toml(grasp_document(doc, variant)), encoding="utf-8")
             sys.stdout.write(f"wrote {path}\n")

@@ -299,6 +299,12 @@ def _lift_dict(lift: Lift) -> dict[str, Any]:
 
 
 ALPHA_LABEL = rf"TVMMP $\alpha$ {ALPHA_UNIT}"
+READING_LABELS = {
+    "literal": "literal reading (the paper's Fig. 8)",
+    "physical": "physical reading (what the physics supports)",
+}
+"""Fig. 8's S-curves: which one is the paper's (the literal slide direction) and which one the physics check
+supports (the slip the minimum-norm motion produces: friction resists the lift); ``docs/paper-results.md``."""
 
 
 def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str, x: str = "z") -> bytes:
@@ -335,6 +341,8 @@ def _figures(
     def label(v: str, rd: str | None) -> str:
         if "N" not in lift.roles:
             return "TVMMP (every finger an F-point)"
+        if paper and rd in READING_LABELS:
+            return f"{v}-points, {READING_LABELS[rd]}"
         return f"{v}-points" + (f" ({rd} reading)" if rd else "")
 
     curves = [
@@ -371,7 +379,7 @@ def run_replay(
     mg: float | None = None,
     num_states: int = 30,
     variants: Sequence[str] = VARIANTS,
-    readings: Sequence[str] = ("physical",),
+    readings: Sequence[str] = ("physical", "literal"),
     out: str | Path = "results",
     plots: bool = True,
     sweeps: bool = True,

@@ -42,7 +42,7 @@ _TEXTS: dict[str, tuple[str, str]] = {
 def add_replay(sub: Subparsers) -> None:
     """``mjtvm replay``: the lift's CSV, JSON and plots, optionally a rerun recording."""
     p = command(sub, "replay", *_TEXTS["replay"])
-    lift_options(p, contacts="L,S", reading="physical")
+    lift_options(p, contacts="L,S", reading="both")
     out_options(p, name=None)
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")

@@ -146,6 +146,7 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     deprecated_alias(p, "--variants", new)
     p.add_argument(
         "--reading", type=choices(READINGS, every="both"), default=reading, metavar="READING",
-        help="slide direction of S-points: physical (the slip of the min-norm motion), literal "
-        "(the paper's printed vector), a comma list, or both",
+        help="slide direction of S-points: physical (the slip of the min-norm motion: friction "
+        "resists the lift, what the physics check supports), literal (the paper's printed vector: "
+        "reproduces its Fig. 8), a comma list, or both",
     )  # fmt: skip

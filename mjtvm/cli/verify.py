@@ -56,6 +56,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="how worker processes start")  # fmt: skip
     p.add_argument("--witness", default="central", choices=("central", "vertex"),
                    help="drive the central solution of the LP or the simplex vertex")  # fmt: skip
+    p.add_argument("--dynamics", action="store_true",
+                   help="also the dynamic alpha (eq. 31 with M qdd + c of the witness motion, docs/dynamics.md), "
+                   "alpha_sim / alpha_dyn and a rollout at 0.9 alpha_dyn")  # fmt: skip
+    p.add_argument("--preload", type=number(0.0), default=0.0, metavar="N",
+                   help="minimum normal force (N) of every L contact (the state's contact preload)")  # fmt: skip
+    p.add_argument("--gears", type=_ratios, default=None, metavar="N,N,...",
+                   help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP "
+                   "(e.g. 10,20,30,40,60,100; writes gears.csv and gears.png)")  # fmt: skip
     _simulation_options(p)
     p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
     out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
@@ -78,6 +86,44 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"),
                    help="MuJoCo friction cone")  # fmt: skip
     p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
+
+
+def _ratios(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
+        raise argparse.ArgumentTypeError(f"expected positive gear ratios separated by commas, got {text!r}")
+    return values
+
+
+def _cmd_gears(args: argparse.Namespace) -> int:
+    """``mjtvm verify --gears``: :func:`~mjtvm.physics.gears.gear_sweep` to gears.csv and gears.png."""
+    from ..apps.replay import grasp_defaults
+    from ..core.files import check_output_dir, output_lock, write_files
+    from ..physics import verify
+    from ..physics.gears import gear_sweep, plot_gears
+
+    outdir = check_output_dir(args.out)
+    with output_lock(outdir):
+        mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
+        states = verify.state_indices(args.states, args.stride)
+        rows = gear_sweep(args.grasp, args.gears, num_states=args.states, states=states, mu=mu, mg=mg)
+        files: dict[Path, bytes | str] = {outdir / "gears.csv": verify.rows_csv(rows)}
+        if not args.no_plots:
+            files[outdir / "gears.png"] = plot_gears(
+                rows, f"{args.grasp}, L: $\\mu$ = {mu:g}, $mg$ = {mg:g} N"
+            )
+        write_files(files)
+    for n in args.gears:
+        sel = [r for r in rows if r["ratio"] == n]
+        qs = [r["tvmmp"] for r in sel if r["tvmmp"] is not None]
+        dy = [r["tvmmp_dyn"] for r in sel if "tvmmp_dyn" in r]
+        print(f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
+              f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)")  # fmt: skip
+    print(f"rows in {outdir / 'gears.csv'}")
+    return EXIT_OK
 
 
 def _runs(text: str) -> tuple[str, ...]:
@@ -110,6 +156,8 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     from ..physics import verify
     from ..physics.simulate import SimSettings
 
+    if args.gears is not None:
+        return _cmd_gears(args)
     settings = SimSettings(armature_scale=args.armature_scale, window=args.window, startup=args.startup,
                            cone=args.cone, track=not args.no_track)  # fmt: skip
     outdir = check_output_dir(args.out)
@@ -123,7 +171,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         rows = verify.verify_lift(
             args.grasp, num_states=args.states, stride=args.stride,
             runs=verify.runs_of(args.contacts, args.reading), mu=mu, mg=mg, settings=settings,
-            witness=args.witness, jobs=args.jobs, start_method=args.start_method, out=None,
+            witness=args.witness, dynamics=args.dynamics, preload=args.preload, jobs=args.jobs, start_method=args.start_method, out=None,
             progress=not args.quiet,
         )  # fmt: skip
         wall = time.perf_counter() - t0

@@ -13,7 +13,10 @@ Problem 1 can keep it as D free variables. The rows are
   S normal (1 row), S tangential (d - 1 rows); ``<= 0`` for D (eq. 12);
 * operation ranges (eq. 2-3): either the exact reduction
   ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`), or
-  the paper's literal box with four variables per joint.
+  the paper's literal box with four variables per joint;
+* preloads, per copy and per contact with ``preload > 0`` (last, so that a state without
+  preloads has exactly the paper's system): ``n^T E_c lam_ic >= preload``, the contact's
+  normal force bounded below instead of eq. (22)'s ``n_f >= 0``.
 
 Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
@@ -333,6 +336,25 @@ def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice],
                     out.coo.add(r0, q_col, np.array([[sq * a_q]]))
 
 
+def _preload_rows(
+    out: _Rows,
+    state: GraspState,
+    gens: tuple[NDArray[np.float64], ...],
+    gen_slices: tuple[slice, ...],
+    blocks: dict[str, slice],
+    copies: int,
+) -> None:
+    """Per copy i and per contact c with a preload: ``n_c^T E_c lam_ic >= preload_c`` (the
+    normal force of eq. 22 bounded below by the contact's preload, N)."""
+    for ci, c in enumerate(state.contacts):
+        if c.preload <= 0.0 or gens[ci].shape[1] == 0:
+            continue
+        row = _product(c.normal.reshape(1, -1), gens[ci])
+        for i in range(copies):
+            r0 = out.add(c.preload, np.inf, 1)
+            out.coo.add(r0, blocks[f"lam[{i}]"].start + gen_slices[ci].start, row)
+
+
 def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated") -> Assembly:
     r"""Build the sparse constraint system of ``state`` (see the module docstring).
 
@@ -367,6 +389,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         _range_rows_eliminated(out, state, blocks, copies)
     else:
         _range_rows_literal(out, state, blocks, copies)
+    _preload_rows(out, state, gens, gen_slices, blocks, copies)
     return Assembly(
         A=out.coo.build((out.count, len(col_lower))),
         A_twist=out.twist.build((out.count, state.twist_dim)),

@@ -82,6 +82,11 @@ class Contact:
     slide_direction
         S only, ``(d,)``: direction of the object's contact-point velocity relative to
         the finger's; its normal component is ignored.
+    preload
+        Minimum normal force (N, default 0): the LP requires :math:`n^T f \ge` ``preload``
+        instead of eq. (22)'s :math:`n_f \ge 0` (F, L and S; a D-point carries no force).
+        A finger held on the object by its velocity loop alone (a zero-force L-point) leaves
+        it at the first lag; a preload makes the witness press it on.
     """
 
     name: str
@@ -92,6 +97,7 @@ class Contact:
     mu: float | None = None
     tangent: NDArray[np.float64] | None = None
     slide_direction: NDArray[np.float64] | None = None
+    preload: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -164,6 +170,12 @@ class Contact:
             object.__setattr__(self, "slide_direction", s)
         elif self.slide_direction is not None:
             raise StateError("slide_direction", f"only S contacts slide; this contact is of type {self.type}")
+        preload = number(self.preload, "preload")
+        if preload < 0.0:
+            raise StateError("preload", f"expected a finite number >= 0 (N), got {preload!r}", self.preload)
+        if preload > 0.0 and self.type == "D":
+            raise StateError("preload", "a D contact carries no force: its preload must be 0", self.preload)
+        object.__setattr__(self, "preload", preload)
 
     @property
     def dim(self) -> int:

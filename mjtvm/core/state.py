@@ -50,7 +50,9 @@ _TOP_KEYS = {
 }  # fmt: skip
 _REQUIRED_TOP = ("schema", "space", "object_position", "joints", "gravity_torque", "contacts", "refs")
 _JOINT_KEYS = {"name", "operation_range"}
-_CONTACT_KEYS = {"name", "type", "position", "normal", "mu", "jacobian", "tangent", "slide_direction"}
+_CONTACT_KEYS = {
+    "name", "type", "position", "normal", "mu", "jacobian", "tangent", "slide_direction", "preload",
+}  # fmt: skip
 _REQUIRED_CONTACT = ("name", "type", "position", "normal", "jacobian")
 
 
@@ -375,6 +377,8 @@ def state_to_dict(state: GraspState) -> dict[str, Any]:
             entry["tangent"] = c.tangent.tolist()
         if c.slide_direction is not None:
             entry["slide_direction"] = c.slide_direction.tolist()
+        if c.preload > 0.0:
+            entry["preload"] = c.preload
         contacts.append(entry)
     out: dict[str, Any] = {
         "schema": SCHEMA,

@@ -4,8 +4,11 @@ r"""Physics check of the TVMMP along the lift: alpha_sim (MuJoCo rollouts) again
 (:func:`~mjtvm.sim.trajectory.scripted_lift`), every hand variant / reading and every RVDS vertex
 l, the bisection of :func:`~mjtvm.physics.verify.alpha_sim` (REFS: the weight, k = 0), one rollout
 at s = 0.9 and the inertial torque the quasi-static LP leaves out
-(:func:`~mjtvm.physics.simulate.inertial_demand` at s = 1). Rows go to ``verify.csv``, the curves
-(TVMMP and the simulated minimum along z) to ``verify.png``. States run in parallel with
+(:func:`~mjtvm.physics.simulate.inertial_demand` at s = 1). With ``dynamics`` it adds the
+dynamic alpha (:func:`~mjtvm.physics.dynamic.dynamic_pair`: eq. 31 with the witness motion's
+:math:`M\ddot q + c` in the torque budget), its limiting joint and term, alpha_sim / alpha_dyn
+and one rollout at s = 0.9 alpha_dyn. Rows go to ``verify.csv``, the curves
+(TVMMP, the dynamic TVMMP and the simulated minimum along z) to ``verify.png``. States run in parallel with
 ``jobs`` processes (``ProcessPoolExecutor``, ``forkserver`` or ``spawn`` start).
 
 :func:`slide_check` settles the slide-direction ambiguity of the S variant: fingers 2 and 4,
@@ -38,6 +41,7 @@ from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, ModelError, StateError
 from ..sim.trajectory import Lift, lift_state, scripted_lift
+from .dynamic import dynamic_pair
 from .motors import attach_dcmotors, require_motors
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .witness import WitnessKind, witness_drive
@@ -127,10 +131,20 @@ def verify_state(
     settings: SimSettings | None = None,
     witness: str = "central",
     check_s: float = 0.9,
+    dynamics: bool = False,
+    preload: float = 0.0,
 ) -> list[dict[str, Any]]:
-    r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`)."""
+    r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
+
+    ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
+    minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
+    witnesses then press on the object.
+    """
     variant, _, reading = run.partition("-")
     state = lift_state(lift, index, variant=variant, reading=reading or "physical", mu=mu, mg=mg)  # type: ignore[arg-type]
+    if preload > 0:
+        state = state.with_(contacts=tuple(replace(c, preload=preload) if c.type == "L" else c
+                                           for c in state.contacts))  # fmt: skip
     ob = lift.scenario.object_body
     model = sim_model(
         motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
@@ -161,8 +175,30 @@ def verify_state(
                        fail_reason=fail.reason, fail_clamp=fail.clamp_fraction, pass_check=chk.passed,
                        check_reason=chk.reason, inertia_max=float(demand[j]), inertia_joint=state.joint_names[j],
                        settle_drift=chk.settle_drift)  # fmt: skip
+            if dynamics:
+                row.update(_dynamic_row(model, lift.qpos[index], state, l, res, alpha, a_sim, witness,
+                                        settings, ob, check_s))  # fmt: skip
         rows.append(row)
     return rows
+
+
+def _dynamic_row(model: mujoco.MjModel, qpos: _F64, state: GraspState, l: int, res: Any, alpha: float,
+                 a_sim: float, witness: str, settings: SimSettings | None, ob: str,
+                 check_s: float) -> dict[str, Any]:  # fmt: skip
+    """The dynamic alpha of pair (0, l), its limit, alpha_sim / alpha_dyn and the check at
+    ``check_s`` alpha_dyn (a rollout of the same drive at speed factor check_s alpha_dyn / alpha_kl)."""
+    dyn = dynamic_pair(model, qpos, state, 0, l, result=res, witness=witness, object_body=ob)  # type: ignore[arg-type]
+    a = dyn.alpha
+    out: dict[str, Any] = {"alpha_dyn": a, "ratio_dyn": a_sim / a if a > 0 else math.nan,
+                           "dyn_joint": state.joint_names[dyn.joint] if dyn.joint is not None else "",
+                           "dyn_term": dyn.term, "dyn_demand": float(np.max(np.abs(dyn.demand))),
+                           "dyn_lps": dyn.lps}  # fmt: skip
+    if a > 0:
+        s = check_s * a / alpha
+        chk = rollout(model, qpos, witness_drive(state, 0, l, alpha, s, witness=witness,  # type: ignore[arg-type]
+                      vertex=res.witnesses[0][l]), settings=settings, object_body=ob)  # fmt: skip
+        out.update(pass_check_dyn=chk.passed, check_dyn_reason=chk.reason)
+    return out
 
 
 def _task(args: tuple[str, int, int, str, dict[str, Any]]) -> list[dict[str, Any]]:
@@ -182,6 +218,8 @@ def verify_lift(
     mg: float | None = None,
     settings: SimSettings | None = None,
     witness: str = "central",
+    dynamics: bool = False,
+    preload: float = 0.0,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -201,6 +239,8 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of :data:`RUNS`.
+    dynamics, preload
+        As in :func:`verify_state`.
     jobs, start_method
         Worker processes (1: in this process) and their start method.
     out, name
@@ -218,7 +258,8 @@ def verify_lift(
     indices = state_indices(num_states, stride)
     lift = cached_lift(grasp, num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
-    opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness}
+    opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness, "dynamics": dynamics,
+            "preload": preload}  # fmt: skip
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)
     tasks = [(str(grasp), num_states, i, r, opts) for r in runs for i in indices]
@@ -284,11 +325,16 @@ def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndar
 
 
 def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
-    """PNG of the TVMMP (LP) and the minimum alpha_sim over the RVDS vertices along z, per run."""
+    """PNG of the TVMMP (LP), the dynamic TVMMP (rows with ``alpha_dyn``) and the minimum alpha_sim
+    over the RVDS vertices along z, per run."""
     fig, ax = lift_axes(6.5, 4.2)
     for run in dict.fromkeys(r["run"] for r in rows):
         z, lp = _minima(rows, run, "alpha_lp")
-        (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP), {run}")
+        (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP, quasi-static), {run}")
+        if any("alpha_dyn" in r for r in rows if r["run"] == run):
+            z, dyn = _minima(rows, run, "alpha_dyn")
+            label = rf"dynamic TVMMP (LP + $M\ddot q + c$), {run}"
+            ax.plot(z, dyn, ":", lw=2, color=line.get_color(), label=label)
         z, sim = _minima(rows, run, "alpha_sim")
         ax.plot(
             z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
@@ -312,11 +358,18 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
         ratios = sorted(r["ratio"] for r in ok)
         q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [ratios[0]] * 3
         worst = sorted(ok, key=lambda r: r["ratio"])[:3]
+        dyn: dict[str, Any] = {}
+        if any("alpha_dyn" in r for r in ok):
+            dr = sorted(r["ratio_dyn"] for r in ok if math.isfinite(r.get("ratio_dyn", math.nan)))
+            dq = statistics.quantiles(dr, n=4) if len(dr) > 1 else [dr[0]] * 3 if dr else [math.nan] * 3
+            feas = [r for r in ok if "pass_check_dyn" in r]
+            dyn = {"median_dyn": statistics.median(dr) if dr else math.nan, "q1_dyn": dq[0], "q3_dyn": dq[2],
+                   "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas), "dyn_feasible": len(feas)}  # fmt: skip
         out[run] = {"pairs": len(ok), "states": len({r["state"] for r in ok}), "median": statistics.median(ratios),
                     "q1": q[0], "q3": q[2], "min": ratios[0], "max": ratios[-1],
                     "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["fail_reason"]) for r in worst],
                     "fail_at_check": sum(not r["pass_check"] for r in ok),
-                    "censored": sum(bool(r["censored"]) for r in ok), "zero_alpha": zero}  # fmt: skip
+                    "censored": sum(bool(r["censored"]) for r in ok), "zero_alpha": zero, **dyn}  # fmt: skip
     return out
 
 

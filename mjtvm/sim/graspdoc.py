@@ -351,13 +351,17 @@ def _contacts(c: _Checker, value: Any) -> list[dict[str, Any]]:
     out = []
     for i, item in enumerate(value):
         field = f"contacts[{i}]"
-        s = c.selector(item, field, {"type", "mu", "slide"})
+        s = c.selector(item, field, {"type", "mu", "slide", "preload"})
         if "type" not in s:
             raise c.fail(f"{field}.type", "required (F, L, S or D)")
         if s["type"] not in CONTACT_TYPES:
             raise c.fail(f"{field}.type", f"expected one of {', '.join(CONTACT_TYPES)}, got {s['type']!r}")
         if "mu" in s:
             s["mu"] = c.number(s["mu"], f"{field}.mu", low=0.0)
+        if "preload" in s:
+            s["preload"] = c.number(s["preload"], f"{field}.preload", low=0.0)
+            if s["preload"] > 0.0 and s["type"] == "D":
+                raise c.fail(f"{field}.preload", "a D contact carries no force: its preload must be 0")
         if "slide" in s:
             if s["type"] != "S":
                 raise c.fail(f"{field}.slide", "only an S contact has a slide direction")

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
@@ -107,6 +107,9 @@ class Grasp:
         Joint name -> (low, high) for the lift's IK (the file's ``lift.bounds``).
     document
         The normalised grasp document.
+    preloads
+        Geom label -> minimum normal force (N) of its contact (a ``contacts`` entry's
+        ``preload``; ``mjtvm.state/1``'s contact ``preload``).
     """
 
     name: str
@@ -131,6 +134,7 @@ class Grasp:
     lift: Mapping[str, Any] | None
     ik_bounds: Mapping[str, tuple[float, float]]
     document: Mapping[str, Any]
+    preloads: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
 
     def with_options(
         self, *, mg: float | None = None, mu: float | Mapping[str, float] | None = None
@@ -240,12 +244,14 @@ class Grasp:
         refs: ArrayLike | None = None,
         rvds: ArrayLike | None = None,
         mu: float | Mapping[str, float] | None = None,
+        preloads: Mapping[str, float] | None = None,
         **options: Any,
     ) -> GraspState:
         r"""The grasp state (:func:`~mjtvm.sim.grasp.grasp_state`) with the ignored contacts dropped.
 
         ``contact_types`` and ``slide_directions`` update the grasp's (geom labels); ``refs``,
-        ``rvds`` and ``mu`` replace them; further keywords go to
+        ``rvds`` and ``mu`` replace them; ``preloads`` (geom label -> N) updates the file's
+        contact preloads; further keywords go to
         :func:`~mjtvm.sim.grasp.grasp_state`.
 
         Raises
@@ -268,7 +274,12 @@ class Grasp:
             operation_ranges=self.operation_ranges, contact_tolerance=self.contact_tolerance, **options,
         )  # fmt: skip
         ignored = set(self.ignored_geoms)
-        kept = tuple(c for c in state.contacts if c.name.split("#")[0] not in ignored)
+        pre = {**self.preloads, **(preloads or {})}
+        kept = tuple(
+            replace(c, preload=float(pre[c.name.split("#")[0]])) if pre.get(c.name.split("#")[0]) else c
+            for c in state.contacts
+            if c.name.split("#")[0] not in ignored
+        )
         return state.with_(contacts=kept)
 
     def _touching(self) -> dict[str, float]:
@@ -432,7 +443,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         raise GraspError(file, "object.body", f"body {doc['object']['body']!r} has no geom")
     data = _configure(model, doc, ob, file)
     types: dict[str, str] = {}
-    selections, mu, slides, geoms = [], {}, {}, []
+    selections, mu, slides, geoms, preloads = [], {}, {}, [], {}
     for i, entry in enumerate(doc["contacts"]):
         what, ids = _select(model, entry, ob, file, f"contacts[{i}]")
         labels = tuple(geom_label(model, g) for g in ids)
@@ -448,6 +459,8 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
             elif entry["type"] in ("F", "S"):
                 raise GraspError(file, f"contacts[{i}].mu", f"the {entry['type']} contact {what} needs a "
                                  "friction coefficient: set mu at the top or in the contact")  # fmt: skip
+            if entry.get("preload"):
+                preloads[label] = float(entry["preload"])
             if "slide" in entry:
                 s = np.array(entry["slide"], dtype=float)
                 slides[label] = tuple(float(x) for x in s / np.linalg.norm(s))
@@ -491,4 +504,5 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         contact_tolerance=float(doc["contact_tolerance"]), friction_edges=int(doc["friction_edges"]),
         slip=str(doc["slip"]), lift=None if lift is None else MappingProxyType(lift),
         ik_bounds=MappingProxyType(bounds), document=MappingProxyType(doc),
+        preloads=MappingProxyType(preloads),
     )  # fmt: skip

@@ -40,6 +40,7 @@ from .grasp import detected_contacts
 from .graspfile import Grasp, load_grasp
 from .hand import finger_joint_names, hand_mjcf
 from .ik import IkTarget, geom_contact_target, solve_ik
+from .posture import FingerPosture, finger_geometry, fingertip_family, planar_fingertip, side_postures
 
 __all__ = [
     "CONTACT_TOLERANCE",
@@ -47,12 +48,16 @@ __all__ = [
     "SCHEMA",
     "Scenario",
     "export_state",
+    "finger1_tvmm_curve",
     "format_document",
     "load_scenario",
     "make_documents",
+    "posture_grasp",
     "read_scenario",
+    "rule_posture",
     "scenario_path",
     "solve_variant",
+    "variant_model_text",
 ]
 
 SCHEMA = "mjtvm.scenario/1"
@@ -105,12 +110,27 @@ def _check_name(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: st
         raise ModelError(f"{label} {name!r}", f"named in the scenario's {where} but not in the model")
 
 
+def _hand_options(v: Mapping[str, Any]) -> dict[str, Any]:
+    """:func:`~mjtvm.sim.hand.hand_mjcf` keywords of a variant: its finger joints and optional link radii."""
+    options: dict[str, Any] = {"finger_joints": v["finger_joints"]}
+    for key in ("capsule_radius", "tip_radius"):
+        if key in v.get("hand", {}):
+            options[key] = float(v["hand"][key])
+    return options
+
+
+def variant_model_text(doc: Mapping[str, Any], variant: str) -> str:
+    """The MJCF of a variant's hand (``mjtvm/models/paper_hand/<model>``), as the generator writes it."""
+    v = _variant(doc, variant)
+    return hand_mjcf(**_hand_options(v), model_name=Path(str(v["model"])).stem)
+
+
 def _build(doc: Mapping[str, Any], variant: str, mg: float) -> mujoco.MjModel:
     """The variant's model, every name the scenario uses checked against it."""
     v = _variant(doc, variant)
     model = mujoco.MjModel.from_xml_string(
         hand_mjcf(
-            finger_joints=v["finger_joints"],
+            **_hand_options(v),
             object_position=doc["object_position"],
             object_radius=float(doc["object_radius"]),
             mg=mg,
@@ -211,8 +231,9 @@ def _targets(model: mujoco.MjModel, doc: Mapping[str, Any]) -> list[IkTarget]:
 def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e-10) -> dict[str, Any]:
     r"""Rerun the IK of one variant; return its ``solution`` section.
 
-    Starts from the variant's ``start`` angles (0 for the others), solves every finger
-    contact at once (:func:`~mjtvm.sim.ik.solve_ik`, within the variant's ``bounds``), and
+    Starts from the variant's ``start`` angles (0 for the others; a variant with a
+    ``posture`` rule starts its finger at :func:`rule_posture`, which the IK then leaves
+    unchanged, checked to 1e-9 rad), solves every finger contact at once (:func:`~mjtvm.sim.ik.solve_ik`, within the variant's ``bounds``), and
     checks the pose (module docstring).
 
     Returns
@@ -230,9 +251,13 @@ def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e
     """
     v = _variant(doc, variant)
     model = _build(doc, variant, float(doc["mg"]))
-    data = _data(model, doc, v.get("start", {}))
     bounds = {k: (float(lo), float(hi)) for k, (lo, hi) in v.get("bounds", {}).items()}
     targets = _targets(model, doc)
+    start, posture = dict(v.get("start", {})), None
+    if "posture" in v:
+        posture = rule_posture(model, doc, variant, targets)
+        start.update(posture.angles)
+    data = _data(model, doc, start)
     result = solve_ik(model, data, targets, bounds=bounds, tolerance=tolerance)
     qpos = {
         mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j): float(result.qpos[model.jnt_qposadr[j]])
@@ -240,11 +265,41 @@ def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e
     }
     contacts = _check_pose(model, _data(model, doc, qpos), doc, variant)
     residuals = {t.name: float(r) for t, r in zip(targets, result.residuals, strict=True)}
-    return {
-        "qpos": qpos,
-        "ik": {"iterations": result.iterations, "tolerance": tolerance, "residuals": residuals},
-        "contacts": contacts,
-    }
+    out: dict[str, Any] = {"qpos": qpos}
+    if posture is not None:
+        moved = max(abs(qpos[k] - a) for k, a in posture.angles.items())
+        if moved > 1e-9:
+            raise ModelError(
+                f"scenario {doc['name']!r}", f"the IK moved the rule's posture by {moved:.3g} rad"
+            )
+        out["posture"] = {"rule": v["posture"]["rule"], "finger": int(v["posture"]["finger"]),
+                          "elbow": posture.elbow.tolist()}  # fmt: skip
+    out["ik"] = {"iterations": result.iterations, "tolerance": tolerance, "residuals": residuals}
+    out["contacts"] = contacts
+    return out
+
+
+def rule_posture(
+    model: mujoco.MjModel, doc: Mapping[str, Any], variant: str, targets: Sequence[IkTarget] | None = None
+) -> FingerPosture:
+    r"""The posture the variant's ``posture`` rule gives its finger (no IK start angles).
+
+    ``{"finger": i, "rule": "planar_fingertip"}``: :func:`~mjtvm.sim.posture.planar_fingertip`
+    on the finger's tip target (the tip sphere's centre placed so that its surface touches the
+    paper's point projected on the sphere): the fingertip on the point, both links in the
+    vertical plane through the base (distal yaw 0), elbow up. Finger 3 in Case 1 is planar
+    too (its printed points lie in the x-z plane through its base); the paper's text does not
+    give finger 1's posture (``docs/paper-results.md``).
+    """
+    rule = _variant(doc, variant)["posture"]
+    if rule.get("rule") != "planar_fingertip":
+        raise ModelError(f"scenario {doc['name']!r}", f"unknown posture rule {rule.get('rule')!r}")
+    finger = int(rule["finger"])
+    tip = f"f{finger}_tip"
+    found = [t for t in (targets if targets is not None else _targets(model, doc)) if t.name == tip]
+    if not found:
+        raise ModelError(f"scenario {doc['name']!r}", f"the posture rule needs a contact of geom {tip!r}")
+    return planar_fingertip(finger_geometry(model, finger), found[0].position)
 
 
 def make_documents(names: Sequence[str] = SCENARIOS) -> dict[str, dict[str, Any]]:
@@ -380,3 +435,68 @@ def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
     if ignored:
         out["ignore"] = [{"geom": g} for g in ignored]
     return out
+
+
+def posture_grasp(doc: Mapping[str, Any], variant: str, posture: FingerPosture, finger: int = 1) -> Grasp:
+    r"""The variant's grasp with finger ``finger`` at ``posture`` instead of the stored solution.
+
+    A ``"side"`` posture touches with link 2 (geom ``f<i>_link2``, an F-point like the tip's);
+    every other joint keeps the solution's angle.
+    """
+    out = grasp_document(doc, variant)
+    out["model"] = str(
+        Path(str(resources.files("mjtvm").joinpath("models").joinpath("paper_hand"))) / out["model"]
+    )
+    out["configuration"]["qpos"].update(posture.angles)
+    if posture.contact == "side":
+        for entry in out["contacts"]:
+            if entry["geom"] == f"f{finger}_tip":
+                entry["geom"] = f"f{finger}_link2"
+    return load_grasp(out)
+
+
+def finger1_tvmm_curve(
+    name: str = "case1",
+    *,
+    tip_angles: ArrayLike | None = None,
+    alongs: ArrayLike | None = None,
+) -> list[dict[str, Any]]:
+    r"""Case 1's TVMM (Problem 1, scaled affine volume, 1/s^4) over finger 1's feasible postures.
+
+    Finger 1's contact on the paper's point, every other joint at the stored solution:
+    fingertip postures (:func:`~mjtvm.sim.posture.fingertip_family` at the elbow angles
+    ``tip_angles``, rad; default every 2.5 deg) and contacts on link 2 at ``alongs`` (m) from
+    its joint (default every 2.5 mm)
+    (:func:`~mjtvm.sim.posture.side_postures`). Postures whose grasp is not the scenario's
+    (another geom touching) are left out.
+
+    Returns
+    -------
+    list of dict
+        One row per posture: ``contact`` (``"tip"``/``"side"``), ``along`` (m),
+        ``parameter`` (rad), ``angles`` (joint -> rad), ``elbow`` (m), ``dimension`` and
+        ``tvmm`` (scaled affine volume, 1/s^4).
+    """
+    from ..polytopes.tvms import tvms
+
+    tip_angles = np.radians(np.arange(-180.0, 180.0, 2.5)) if tip_angles is None else tip_angles
+    alongs = np.arange(0.0025, 0.1, 0.0025) if alongs is None else alongs
+    doc = read_scenario(name)
+    model = _build(doc, "default", float(doc["mg"]))
+    geo = finger_geometry(model, 1)
+    (target,) = [t for t in _targets(model, doc) if t.name == "f1_tip"]
+    (paper,) = [c["paper"] for c in doc["contacts"] if c["geom"] == "f1_tip"]
+    point, centre = _on_sphere(doc, paper), np.asarray(doc["object_position"], dtype=float)
+    postures = fingertip_family(geo, target.position, centre, tip_angles)
+    for along in np.asarray(alongs, dtype=float):
+        postures += side_postures(geo, point, centre, float(along)) if along > 0 else []
+    rows = []
+    for p in postures:
+        try:
+            result = tvms(posture_grasp(doc, "default", p).state())
+        except ModelError:  # e.g. link 1 or the tip touching too: not this grasp
+            continue
+        rows.append({"contact": p.contact, "along": p.along, "parameter": p.parameter, "angles": p.angles,
+                     "elbow": p.elbow.tolist(), "dimension": result.dimension,
+                     "tvmm": result.affine_volume})  # fmt: skip
+    return rows

@@ -163,3 +163,37 @@ def test_time_replay_reports_runs(tmp_path: Path) -> None:
     report = time_replay(repeats=1, num_states=2)
     assert len(report["runs_s"]) == 1 and math.isfinite(report["median_s"]) and report["median_s"] > 0
     assert set(report["last"]) == {"lift_s", "replay_s", "sweeps_s", "output_s"}
+
+
+def test_default_replay_draws_the_readme_fig8(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A plain `mjtvm replay` draws the README's Fig. 8: L, S literal (the paper's curve) and S physical,
+    the same records as docs/fig8_default.csv (the rows behind docs/fig8_default.png), labelled."""
+    import mjtvm.apps.replay as replay
+
+    labels: list[str] = []
+    plot = replay._plot
+
+    def spy(curves, title, x="z"):  # type: ignore[no-untyped-def]
+        if title.startswith("Fig. 8"):
+            labels.extend(label for label, _, _ in curves)
+        return plot(curves, title, x)
+
+    monkeypatch.setattr(replay, "_plot", spy)
+    assert main(["replay", "--out", str(tmp_path), "--no-sweeps", "--quiet"]) == 0
+    assert labels == [
+        "L-points",
+        "S-points, physical reading (what the physics supports)",
+        "S-points, literal reading (the paper's Fig. 8)",
+    ]
+    got = _rows(tmp_path / "lift.csv")
+    shown = _rows(Path(__file__).resolve().parents[2] / "docs" / "fig8_default.csv")
+    assert [(r["variant"], r["reading"], r["state"]) for r in got] == [
+        (r["variant"], r["reading"], r["state"]) for r in shown
+    ]
+    assert len(shown) == 90 and {r["reading"] for r in shown} == {"", "physical", "literal"}
+    for a, b in zip(got, shown, strict=True):
+        for key, value in b.items():
+            if key.startswith(("alpha", "tvmmp", "z")) and value:
+                assert float(a[key]) == pytest.approx(float(value), rel=1e-7, abs=1e-12), key
+            elif not key.startswith(("alpha", "tvmmp", "z", "s")):
+                assert a[key] == value, key

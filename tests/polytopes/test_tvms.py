@@ -13,6 +13,7 @@ from mjtvm import StateError, tvmmp
 from mjtvm.core.operation_range import OperationRange, default_operation_range
 from mjtvm.core.synthetic import random_state
 from mjtvm.polytopes.tvms import TVMS_SCHEMA, tvms
+from mjtvm.sim.grasp import without_round_off
 from mjtvm.sim.scenario import load_scenario
 
 PAPER_TVMM = 8.4e5  # 1/s^4: Case 1, all F, in the 4-D TVMS scaled by diag(10, 10, 10, 1, 1, 1)
@@ -58,16 +59,18 @@ def test_case1_is_four_dimensional(case1_result):
 
 
 def test_case1_scaled_volume_and_the_motor(case1, case1_result):
-    r"""The paper reports 8.4e5 1/s^4; with the shipped RE25 range we get 1.74e6, twice as much.
+    r"""The paper reports 8.4e5 1/s^4; ours is 1.65e6 (finger 1's posture, which the paper's text
+    does not fix, accounts for x1.97 of it: docs/paper-results.md, tests/sim/test_scenario.py).
 
     Every constraint is homogeneous in (qd, rdot) once the torques are fixed, so scaling
     every joint's speed axis by c scales S_ov by c and its 4-D volume by c^4 (checked with
-    c = 1/2). A factor 2.08 is a uniform speed factor 2.08^(1/4) = 1.20: the RE25 behind
-    a real 40:1 planetary head (GP 26 B, at most 8000 rpm at the input, i.e. 20.94 rad/s
-    at the joint instead of the motor's 25.03) gives 8.63e5, within 3 % of the paper.
+    c = 1/2); a slower joint speed alone could also bring the volume to the paper's (the RE25
+    behind a real 40:1 planetary head capped at 8000 rpm: within 5 %), which is why the motor
+    was wrongly blamed before: the posture, not the motor, is what differs (the motor curve's
+    own effect is x1.0015).
     """
     r = case1_result
-    assert r.affine_volume > PAPER_TVMM  # our joints are faster than the paper's (see above)
+    assert r.affine_volume > PAPER_TVMM
     op = default_operation_range()
     half = tvms(case1.with_(operation_ranges=(op.scaled(speed=0.5),) * case1.num_joints))
     assert half.affine_volume == pytest.approx(r.affine_volume / 16, rel=1e-7)
@@ -76,7 +79,10 @@ def test_case1_scaled_volume_and_the_motor(case1, case1_result):
         max_permissible_speed_rpm=8000, gear_ratio=40,
     )  # fmt: skip
     gear = tvms(case1.with_(operation_ranges=(capped,) * case1.num_joints))
-    assert gear.affine_volume == pytest.approx(PAPER_TVMM, rel=0.05)
+    # the capped range lies between the default range scaled in speed by 20.94/25.03 and by
+    # 20.94/21.81 (its vertices), so by monotonicity and the c^4 law its volume does too
+    lo, hi = (capped.max_speed / op.max_speed) ** 4, (capped.max_speed / op.vertices[2, 1]) ** 4
+    assert lo * r.affine_volume <= gear.affine_volume * (1 + 1e-9) <= hi * r.affine_volume * (1 + 2e-9)
 
 
 def test_case1_lp_and_cdd_agree(case1, case1_result):
@@ -107,7 +113,13 @@ def test_case1_s_translations_only_forward_and_up():
 def case1_with_paper_rvds(case1, basis):
     """Problem 2's timing case: +-e_y, +-omega_x, +-omega_z, +-beta (beta from the model)."""
     beta = np.array([0.1, 0.0, -0.025, 0.0, 1.0, 0.0])
-    beta = basis.T @ (basis @ beta)
+    # The projection onto the TVMS's span leaves round-off (~1e-16) in beta's y, omega_x and
+    # omega_z. Case 1's fingers lie in the x-z plane (finger 1 by its posture rule), so the
+    # object cannot move out of it at all: with those components the exact LP allows only
+    # alpha = 0, and each solver stops wherever its 1e-9 tolerance lets 1e-16 alpha pass
+    # (HiGHS and Clarabel 5e-5 apart, depending on the direction's sign). The round-off is
+    # removed, as mjtvm removes MuJoCo's from normals and Jacobians.
+    beta = without_round_off(basis.T @ (basis @ beta))
     dirs = [np.eye(6)[1], np.eye(6)[3], np.eye(6)[5], beta]
     return case1.with_(rvds=np.array([s * d for d in dirs for s in (1.0, -1.0)]))
 

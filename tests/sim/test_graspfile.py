@@ -345,3 +345,28 @@ def test_coupled_joints_are_refused(tmp_path: Path, equality: str, match: str) -
     )
     with pytest.raises(GraspError, match=r"joints: " + match + r": mjtvm's state has independent joints"):
         load_grasp(_write(tmp_path, doc))
+
+
+def test_contact_preload_reaches_the_state() -> None:
+    """A contact's ``preload`` (N) becomes its state contacts' minimum normal force; refused on D."""
+    contacts = _doc()["contacts"]
+    li = next(i for i, c in enumerate(contacts) if c["type"] == "L")
+    contacts[li] = {**contacts[li], "preload": 0.25}
+    grasp = load_grasp(_doc(contacts=contacts))
+    label = next(iter(grasp.selections[li][1]))
+    assert dict(grasp.preloads) == {label: 0.25}
+    pre = {c.name.split("#")[0]: c.preload for c in grasp.state().contacts}
+    assert pre[label] == 0.25 and sum(pre.values()) == 0.25
+    assert {c.name.split("#")[0]: c.preload for c in grasp.state(preloads={label: 0.5}).contacts}[
+        label
+    ] == 0.5
+    di = next((i for i, c in enumerate(contacts) if c["type"] == "D"), None)
+    bad = copy.deepcopy(contacts)
+    bad[li] = {**bad[li], "preload": -1.0}
+    with pytest.raises(GraspError, match=rf"contacts\[{li}\]\.preload"):
+        load_grasp(_doc(contacts=bad))
+    if di is not None:
+        bad = copy.deepcopy(contacts)
+        bad[di] = {**bad[di], "preload": 1.0}
+        with pytest.raises(GraspError, match="D contact carries no force"):
+            load_grasp(_doc(contacts=bad))

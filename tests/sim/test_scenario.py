@@ -21,14 +21,17 @@ from mjtvm.sim.graspfile import shipped_grasps
 from mjtvm.sim.hand import hand_mjcf, model_files
 from mjtvm.sim.scenario import (
     SCENARIOS,
+    finger1_tvmm_curve,
     format_document,
     grasp_document,
     grasp_file_name,
     load_scenario,
     make_documents,
     read_scenario,
+    rule_posture,
     scenario_path,
     solve_variant,
+    variant_model_text,
 )
 from mjtvm.sim.scenario import export_state as export
 
@@ -154,11 +157,16 @@ def test_grasp_files_equal_generator_output(generated: dict, name: str) -> None:
 @pytest.mark.parametrize("name", SCENARIOS)
 @pytest.mark.parametrize("variant", VARIANTS)
 def test_variant_models_are_the_committed_ones(name: str, variant: str) -> None:
-    v = read_scenario(name)["variants"][variant]
-    assert (
-        hand_mjcf(finger_joints=v["finger_joints"], model_name=Path(v["model"]).stem)
-        == model_files()[v["model"]]
-    )
+    doc = read_scenario(name)
+    v = doc["variants"][variant]
+    committed = (ROOT / "mjtvm" / "models" / "paper_hand" / v["model"]).read_text(encoding="utf-8")
+    assert variant_model_text(doc, variant) == committed
+    if v["model"] in model_files():  # the shared hands: the scenario uses them as they are
+        assert committed == model_files()[v["model"]]
+    else:  # Case 1's line-thin hand: the shared hand with other radii only
+        assert "hand" in v and committed == hand_mjcf(
+            finger_joints=v["finger_joints"], model_name=Path(v["model"]).stem, **v["hand"]
+        )
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
@@ -297,17 +305,22 @@ def _doc(**changes: Any) -> dict[str, Any]:
 
 def test_unreachable_target_and_bad_poses() -> None:
     far = _doc()
-    far["contacts"][0]["paper"] = [0.175, 0.0, 0.1]  # finger 1 (0.2 m long, from x = -0.1) cannot get there
+    # the sphere's point farthest from finger 1's base, 0.3077 m away: beyond 2 links (and 3)
+    far["contacts"][0]["paper"] = [0.425, 0.1, 0.3]
+    with pytest.raises(
+        ModelError, match=r"finger 1: point \[0\.1592.* out of reach \(0\.3077 m from the base\)"
+    ):
+        solve_variant(far, "default")  # the posture rule says so
     with pytest.raises(
         ModelError, match=r"IK target 'f1_tip': unreachable: residual 0\.\d+ m above the tolerance"
     ):
-        solve_variant(far, "default")
+        solve_variant(far, "humanlike")  # no rule: the IK says so
     with pytest.raises(ModelError, match="geom 'palm': touches the object"):
         solve_variant(_doc(ignored_geoms=[]), "default")
     deep = _doc()
-    deep["contacts"][0]["offset"] = -0.002  # tip centre 2 mm inside: 7 mm deep, contact 3.5 mm inside
+    deep["contacts"][0]["offset"] = -0.007  # tip centre 7 mm inside: 7.02 mm deep, contact 3.51 mm inside
     with pytest.raises(
-        ModelError, match=r"geom 'f1_tip': contact 3\.50 mm from the paper's point \(> 3 mm\)"
+        ModelError, match=r"geom 'f1_tip': contact 3\.51 mm from the paper's point \(> 3 mm\)"
     ):
         solve_variant(deep, "default")
     with pytest.raises(
@@ -324,3 +337,67 @@ def test_case2_finger3_in_plane_would_go_below_the_palm() -> None:
     v["bounds"].pop("f3_pitch0")
     with pytest.raises(ModelError, match=r"geom 'f3_link1': goes below the palm \(z = -0\.015"):
         solve_variant(doc, "default")
+
+
+# ------------------------------------------------------- Case 1: finger 1's posture by a rule
+def test_case1_finger1_posture_is_the_rule() -> None:
+    """Planar fingertip rule: yaw1 = 0, base, elbow and fingertip in one vertical plane, elbow up,
+    the fingertip on the paper's point; the stored solution is the rule's posture, not an IK's choice."""
+    doc = read_scenario("case1")
+    sc = load_scenario("case1")
+    m, d = sc.model, sc.data
+    solution = doc["variants"]["default"]["solution"]
+    assert (
+        solution["posture"]["rule"] == "planar_fingertip"
+        and "f1_yaw0" not in doc["variants"]["default"]["start"]
+    )
+    rule = rule_posture(m, doc, "default")
+    for name, angle in rule.angles.items():
+        assert solution["qpos"][name] == pytest.approx(angle, abs=1e-12)
+    assert abs(solution["qpos"]["f1_yaw1"]) < 1e-12
+    base, elbow = d.xpos[m.body("f1_link1").id], d.xpos[m.body("f1_link2").id]
+    tip = d.geom_xpos[m.geom("f1_tip").id]
+    np.testing.assert_allclose(elbow, solution["posture"]["elbow"], atol=1e-12)
+    normal = np.cross(tip - base, [0.0, 0.0, 1.0])
+    assert abs((elbow - base) @ normal) / np.linalg.norm(normal) < 1e-12  # one vertical plane
+    assert elbow[2] > tip[2] > 0  # elbow up
+    for p in (elbow - base, tip - elbow):
+        assert np.linalg.norm(p) == pytest.approx(0.1, abs=1e-12)
+    on_sphere = doc["variants"]["default"]["solution"]["contacts"]["f1_tip"]["on_sphere"]
+    (f1,) = [c for c in sc.state().contacts if c.name == "f1_tip"]
+    np.testing.assert_allclose(f1.position, on_sphere, atol=1e-9)  # touching exactly
+
+
+def test_case1_finger3_contacts_on_the_printed_points() -> None:
+    """The line-thin hand (capsules of 0.01 mm) puts finger 3's contacts on the paper's points (within 5 um)."""
+    state = _state("case1")
+    printed = {"f3_link1": [0.075, 0.0, 0.0], "f3_link2": [0.171, 0.0, 0.072]}
+    for c in state.contacts:
+        if c.name in printed:
+            assert np.linalg.norm(c.position - printed[c.name]) <= 5.1e-6
+    sc = load_scenario("case1")
+    assert sc.model.geom("f3_link1").size[0] == 1e-5 and sc.model.geom("f1_tip").size[0] == 2e-5
+
+
+def test_case1_tvmm_against_finger1_posture() -> None:
+    """The shape docs/case1_tvmm_posture.png shows (scaled 4-D TVMM, 1/s^4): over the fingertip postures
+    the rule's (psi = 0) is the largest, 1.651e6; a dip to ~3.5e5 near psi = -20 deg; contacts on link 2
+    give 2.8e5 .. 8.7e5, branch B rising with the distance from the joint; the paper's 8.4e5 lies inside."""
+    from mjtvm.polytopes.tvms import tvms
+
+    rows = finger1_tvmm_curve(tip_angles=np.radians([-90.0, -60.0, -40.0, -20.0, -5.0, 0.0]),
+                              alongs=[0.045, 0.055, 0.0625])  # fmt: skip
+    tip = {round(float(np.degrees(r["parameter"]))): r["tvmm"] for r in rows if r["contact"] == "tip"}
+    assert set(tip) == {-90, -60, -40, -20, -5, 0}
+    assert all(r["dimension"] == 4 for r in rows)
+    assert tip[0] == pytest.approx(tvms(_state("case1")).affine_volume, rel=1e-6)
+    assert tip[0] == pytest.approx(1.6511e6, rel=1e-4) and tip[0] == max(tip.values())
+    assert tip[-60] == pytest.approx(1.5912e6, rel=1e-3) and tip[-20] == pytest.approx(3.4565e5, rel=1e-3)
+    assert tip[-60] > tip[-40] > tip[-20] < tip[-5] < tip[0]
+    side = sorted(
+        (r["along"], r["parameter"] % (2 * np.pi), r["tvmm"]) for r in rows if r["contact"] == "side"
+    )
+    b = [v for _, phi, v in side if phi > np.radians(315)]
+    assert len(b) == 3 and b[0] < b[1] < b[2] and b[2] == pytest.approx(8.727e5, rel=1e-3)
+    values = [r["tvmm"] for r in rows]
+    assert min(values) < 8.4e5 < max(values)  # the paper's value is one of finger 1's feasible postures
