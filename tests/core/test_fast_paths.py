@@ -8,6 +8,7 @@ instance reused by the next state (a fresh one).
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +38,9 @@ def states():
         "case2": case2,
         "case2_tiny_units": rescale(case2, length=1e6, force=1e-6, time=1e3),
         "pinch_mixed_scale": mixed_scale(pinch, 7),  # entries 1e-8 and 1e4: round-off drops happen
+        "case2_preload": case2.with_(
+            contacts=tuple(replace(c, preload=0.05) if c.type != "D" else c for c in case2.contacts)
+        ),
     }
 
 
