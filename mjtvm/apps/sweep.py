@@ -215,9 +215,11 @@ def run_sweep(
         A Dask scheduler address (``"tcp://..."``) or a ``distributed.Client``; overrides
         ``jobs``. Needs the ``cluster`` extra (``pip install "mjtvm[cluster]"``).
     chunk
-        States per task (tasks of one lift configuration share the worker's lift). In this
-        process (``jobs=1``) every state is its own task: the lift is cached anyway, and
-        ``on_rows`` then sees every row as soon as it exists.
+        States per task, at most. On a Dask cluster or a forkserver pool a task is one
+        configuration of a lift (they share the worker's lift); on a forked pool (Linux) a
+        task solves every configuration of a lift at its states, about 8 tasks per worker.
+        In this process (``jobs=1``) every state is its own task: the lift is cached anyway,
+        and ``on_rows`` then sees every row as soon as it exists.
     progress
         Show a tqdm progress bar over the rows to compute.
     done
