@@ -378,6 +378,7 @@ def run_replay(
     mu: float | None = None,
     mg: float | None = None,
     num_states: int = 30,
+    stop_margin: float | None = None,
     variants: Sequence[str] = VARIANTS,
     readings: Sequence[str] = ("physical", "literal"),
     out: str | Path = "results",
@@ -388,6 +389,7 @@ def run_replay(
 ) -> ReplayOutput:
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
 
+    ``stop_margin``: :func:`~mjtvm.sim.trajectory.scripted_lift`'s (the grasp's by default).
     ``mu`` and ``mg`` default to the grasp's (:func:`grasp_defaults`): 0.3 and 1 N for the paper's
     Case 2. ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
@@ -410,7 +412,7 @@ def run_replay(
     _check(variants, readings, 0.0 if mu is None else mu, 0.0 if mg is None else mg)
     outdir = check_output_dir(out, option="out")  # before any work
     times, t0 = {}, time.perf_counter()
-    lift = scripted_lift(scenario, variant=hand, num_states=num_states)
+    lift = scripted_lift(scenario, variant=hand, num_states=num_states, stop_margin=stop_margin)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
     if "N" not in lift.roles:  # every finger an F-point: the L/S variants are one and the same
         variants = ("L",)

@@ -17,6 +17,16 @@ RVDS) and 129 s for Case 2's initial state (Problem 1 without RVDS). mjtvm's tar
   peak resident set.
 
 Run it as ``python -m mjtvm.bench.problem1`` (prints a table, then the JSON report).
+
+**Problem 1 at scale** (:func:`bench_p1_scale`, ``python -m mjtvm.bench.problem1 --scale``):
+one row per case, each in a fresh child process whose own peak resident set is reported
+beside its wall time (:data:`SCALE_CASES`): Case 2's initial state, exact; the Allegro test
+hand's 16-joint four-fingertip grasp (``allegro-sphere``) with its TVMS restricted to the
+coordinate subspace of the 3 translations and the first ``D - 3`` rotations (3-D: translations;
+4-D: + omega_x; 5-D: + omega_y; 6-D: all), i.e. the section of S_ov by that subspace, which is
+what the RVDS cone of ``+-e_i`` (i in the subspace) gives (6-D: no RVDS); the 16-finger
+synthetic hand (:func:`~mjtvm.bench.scaling.scaling_hand`, its RVDS cone). The Allegro 5-D and
+6-D rows ask for a 1 % volume bracket within 60 s (``tolerance=0.01, time_limit=60``).
 """
 
 from __future__ import annotations
@@ -36,7 +46,16 @@ from ..polytopes.tvms import TvmsResult, tvms
 from ..polytopes.volume import hausdorff
 from .timing import highs_run_timer, machine_info
 
-__all__ = ["PAPER_S", "TARGETS_S", "bench_tvms_state", "format_tvms_table", "run_tvms_benchmark"]
+__all__ = [
+    "PAPER_S",
+    "SCALE_CASES",
+    "TARGETS_S",
+    "bench_p1_scale",
+    "bench_tvms_state",
+    "format_scale_table",
+    "format_tvms_table",
+    "run_tvms_benchmark",
+]
 
 PAPER_S = {"case1": 0.19, "case2": 129.0}  #: the paper's Problem 1 times (s)
 TARGETS_S = {"case1": 0.05, "case2": 2.0}  #: mjtvm's targets for the LP method (s)
@@ -184,7 +203,136 @@ def format_tvms_table(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+#: name: (state, tvms keyword arguments, target (s, MiB) or None)
+SCALE_CASES: dict[str, tuple[str, dict[str, Any], tuple[float, float] | None]] = {
+    "case2 exact": ("case2", {"rvds_cone": False}, (0.5, 2048.0)),
+    "allegro 3-D exact": ("allegro:3", {}, None),
+    "allegro 4-D exact": ("allegro:4", {}, None),
+    "allegro 5-D 1 %": ("allegro:5", {"tolerance": 0.01, "time_limit": 60.0}, (60.0, 2048.0)),
+    "allegro 6-D 1 %": ("allegro:6", {"tolerance": 0.01, "time_limit": 60.0}, (60.0, 2048.0)),
+    "16 fingers exact": ("scaling:16", {}, None),
+}
+
+
+def scale_state(spec: str) -> GraspState:
+    """The state of a :data:`SCALE_CASES` entry (``case2``, ``allegro:D``, ``scaling:F``)."""
+    if spec.startswith("allegro:"):
+        from ..sim.graspfile import load_grasp
+
+        dim = int(spec.split(":")[1])
+        state = load_grasp("allegro-sphere").state()
+        if dim == 6:
+            return state.with_(rvds=None)
+        return state.with_(rvds=np.array([sign * np.eye(6)[i] for i in range(dim) for sign in (1.0, -1.0)]))
+    if spec.startswith("scaling:"):
+        from .scaling import scaling_hand
+
+        return scaling_hand(int(spec.split(":")[1]))
+    from ..sim.scenario import load_scenario
+
+    return load_scenario(spec).state()
+
+
+def _scale_child(spec: str, kwargs: dict[str, Any], send: Any) -> None:
+    state = scale_state(spec)
+    t0 = time.perf_counter()
+    r = tvms(state, **kwargs)
+    wall = time.perf_counter() - t0
+    send.send(
+        {
+            "wall_s": wall,
+            "peak_rss_mib": _rss_mib(),
+            "status": r.status,
+            "stopped_by": None if r.stopped_by is None else r.stopped_by[0],
+            "dimension": r.dimension,
+            "vertices": len(r.vertices),
+            "num_lps": r.timings.num_lps,
+            "affine_volume": r.affine_volume,
+            "affine_volume_bracket": None
+            if r.affine_volume_bracket is None
+            else r.affine_volume_bracket.tolist(),
+            "hausdorff_gap": r.hausdorff_gap,
+        }
+    )
+
+
+def bench_p1_scale(
+    names: Sequence[str] | None = None, *, repeats: int = 1, say: Any = print
+) -> dict[str, Any]:
+    """Rows of :data:`SCALE_CASES` (module docstring): the median over ``repeats`` fresh child
+    processes of the wall time of ``tvms``, and the largest child peak resident set."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")
+    rows: dict[str, Any] = {}
+    for name in names or list(SCALE_CASES):
+        spec, kwargs, target = SCALE_CASES[name]
+        runs = []
+        for _ in range(max(repeats, 1)):
+            say(f"problem 1 at scale: {name}")
+            recv, send = ctx.Pipe(duplex=False)
+            proc = ctx.Process(target=_scale_child, args=(spec, kwargs, send))
+            proc.start()
+            send.close()
+            try:
+                runs.append(recv.recv())
+            except EOFError:
+                runs.append({"status": "crashed", "exitcode": None})
+            proc.join()
+            if runs[-1]["status"] == "crashed":
+                runs[-1]["exitcode"] = proc.exitcode
+        ok = [r for r in runs if "wall_s" in r]
+        row = dict(ok[-1]) if ok else dict(runs[-1])
+        if ok:
+            row["wall_s"] = statistics.median(r["wall_s"] for r in ok)
+            row["peak_rss_mib"] = max(r["peak_rss_mib"] for r in ok)
+        row.update(kwargs=kwargs, repeats=len(runs), target_s=None if target is None else target[0])
+        row["target_mib"] = None if target is None else target[1]
+        row["meets_target"] = (
+            None
+            if target is None or not ok
+            else row["wall_s"] <= target[0] and row["peak_rss_mib"] <= target[1] and _within(row, kwargs)
+        )
+        rows[name] = row
+    return {"schema": "mjtvm.bench-p1-scale/1", "machine": machine_info(), "rows": rows}
+
+
+def _within(row: dict[str, Any], kwargs: dict[str, Any]) -> bool:
+    """Exact, or a bracket as narrow as asked."""
+    if row["status"] == "bounded":
+        return True
+    b = row.get("affine_volume_bracket")
+    if not b:
+        return False
+    return b[1] > 0 and (b[1] - b[0]) / b[1] <= kwargs.get("tolerance", 0.0)
+
+
+def format_scale_table(report: dict[str, Any]) -> str:
+    """A plain-text table of :func:`bench_p1_scale`."""
+    head = (
+        f"{'case':<18} {'status':<12} {'dim':>3} {'verts':>6} {'LPs':>6} {'s':>8} {'MiB':>7} {'bracket':>26}"
+    )
+    lines = [head, "-" * len(head)]
+    for name, r in report["rows"].items():
+        b = r.get("affine_volume_bracket")
+        btxt = "-" if not b else f"[{b[0]:.5g}, {b[1]:.5g}]"
+        status = r["status"] + ("" if not r.get("stopped_by") else f"/{r['stopped_by']}")
+        lines.append(
+            f"{name:<18} {status:<12} {r.get('dimension')!s:>3} {r.get('vertices', 0):>6} "
+            f"{r.get('num_lps', 0):>6} {r.get('wall_s', float('nan')):8.2f} {r.get('peak_rss_mib', float('nan')):7.0f} "
+            f"{btxt:>26}"
+        )
+    return "\n".join(lines)
+
+
 if __name__ == "__main__":
-    report = run_tvms_benchmark()
-    print(format_tvms_table(report))
-    print(json.dumps(report, indent=1))
+    import sys
+
+    if "--scale" in sys.argv:
+        scale = bench_p1_scale([a for a in sys.argv[1:] if a != "--scale"] or None)
+        print(format_scale_table(scale))
+        print(json.dumps(scale, indent=1))
+    else:
+        report = run_tvms_benchmark()
+        print(format_tvms_table(report))
+        print(json.dumps(report, indent=1))

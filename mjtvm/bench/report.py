@@ -219,4 +219,8 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
     lines = [_HEAD, "-" * len(_HEAD)]
     lines += _case_rows(report) + _lift_rows(report) + _sweep_rows(report) + _scaling_rows(report)
     lines += _hand_rows(report)
+    if "problem1_scale" in report:
+        from .problem1 import format_scale_table
+
+        lines += ["", format_scale_table(report["problem1_scale"])]
     return "\n".join(lines + _footer(report, notes))

@@ -24,7 +24,10 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
   time per TVMMP state (4 RVDS vertices) and per Problem 1 (restricted to the RVDS cone),
   with the tracemalloc peak and the process's ``ru_maxrss``;
 * **hands mjtvm does not generate** (:mod:`mjtvm.bench.hands`): each test hand's grasp file
-  loaded, its state, Problem 2 and its lift.
+  loaded, its state, Problem 2 and its lift;
+* **Problem 1 at scale** (:func:`~mjtvm.bench.problem1.bench_p1_scale`, not with ``--quick``):
+  Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
+  the 16-finger hand, each in a fresh process with its peak resident memory.
 
 ``--quick`` skips Case 2's Problem 1 and every cdd run.
 """
@@ -171,6 +174,7 @@ def run_suite(
     lift: bool = True,
     sweeps: bool = True,
     hands: Sequence[str] = HANDS,
+    scale: bool = True,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
     """Every measurement of the module docstring; returns the JSON-ready report (times in s).
@@ -221,6 +225,10 @@ def run_suite(
     if scaling_fingers:
         say(f"scaling: {', '.join(map(str, scaling_fingers))} fingers")
         report["scaling"] = bench_scaling(scaling_fingers, repeats=max(1, repeats // 2), p1_repeats=5)
+    if scale and not quick:
+        from .problem1 import bench_p1_scale
+
+        report["problem1_scale"] = bench_p1_scale(say=say)
     if hands:
         say(f"hands: {', '.join(hands)}")
         report["hands"] = bench_hands(hands, repeats=max(1, repeats // 10))

@@ -84,7 +84,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         try:
             out = run_replay(
-                scenario=args.grasp, hand=args.hand, mu=args.mu, mg=args.mg, num_states=args.states,
+                scenario=args.grasp, hand=args.hand, mu=args.mu, mg=args.mg, num_states=args.states, stop_margin=args.stop_margin,
                 variants=args.contacts, readings=args.reading, out=outdir,
                 plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
                 on_replay=record if args.rrd is not None or args.spawn else None,

@@ -138,6 +138,11 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     p.add_argument(
         "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
     )
+    p.add_argument(
+        "--stop-margin", type=number(0.0), default=None, metavar="F",
+        help="end the lift where a finger's contact Jacobian keeps this fraction of its smallest singular "
+        "value at the start (default: the grasp's, 0.25; 0: to the reach limit)",
+    )  # fmt: skip
     new = p.add_argument(
         "--contacts", type=choices(CONTACTS), default=contacts, metavar="L,S",
         help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4; L: line/rolling, "

@@ -5,7 +5,8 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 from ..errors import OutputError
 
@@ -16,6 +17,7 @@ __all__ = [
     "EXIT_OK",
     "EXIT_PIPE",
     "EXIT_SOLVER",
+    "bracket_progress",
     "emit",
     "lp_progress",
     "stdout_to_devnull",
@@ -64,5 +66,28 @@ def lp_progress(enabled: bool, desc: str) -> Iterator[None]:
     try:
         with observe_runs(lambda _seconds: bar.update()):
             yield
+    finally:
+        bar.close()
+
+
+@contextlib.contextmanager
+def bracket_progress(enabled: bool) -> Iterator[Callable[[dict[str, Any]], None] | None]:
+    """A line on stderr with Problem 1's volume bracket as it narrows (the ``progress`` callback
+    of :func:`~mjtvm.polytopes.tvms.tvms`), or ``None`` when disabled."""
+    if not enabled:
+        yield None
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(desc="bracket", bar_format="{desc}: {postfix}", file=sys.stderr, leave=False)
+
+    def show(d: dict[str, Any]) -> None:
+        bar.set_postfix_str(
+            f"[{d['inner']:.6g}, {d['outer']:.6g}] gap {100 * d['gap']:.3g} %, Hausdorff "
+            f"{d['hausdorff']:.3g}, round {d['round']}, {d['lps']} LPs, {d['seconds']:.1f} s"
+        )
+
+    try:
+        yield show
     finally:
         bar.close()

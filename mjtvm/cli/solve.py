@@ -13,8 +13,8 @@ from ..core.state import GraspState, load_state
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
-from .output import EXIT_OK, emit, lp_progress
-from .values import integer, number
+from .output import EXIT_OK, bracket_progress, emit, lp_progress
+from .values import fraction, integer, memory_size, number
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
 
@@ -165,10 +165,27 @@ def add_tvms(sub: Subparsers) -> None:
         type=number(0.0, strict=True),
         default=120.0,
         metavar="S",
-        help="cap of the cdd method (s)",
+        help="wall-clock seconds for the projection: lp then stops with status approximate and the "
+        "volume bracket, cdd with status timeout (default 120)",
+    )
+    p.add_argument(
+        "--tolerance",
+        type=fraction,
+        default=0.0,
+        metavar="REL",
+        help="lp: stop once (outer - inner) / outer of the volume bracket is at most REL, in [0, 1) "
+        "(default 0: exact within floating point)",
+    )
+    p.add_argument(
+        "--memory",
+        type=memory_size,
+        default=None,
+        metavar="SIZE",
+        help="lp: memory the projection may use, e.g. 2G, 512M or 25%% of the available memory "
+        "(default 25%%); reaching it stops with status approximate",
     )
     _indent_option(p)
-    p.add_argument("--quiet", action="store_true", help="no progress spinner (LPs solved) on stderr")
+    p.add_argument("--quiet", action="store_true", help="no progress (LPs solved, volume bracket) on stderr")
     p.set_defaults(func=_cmd_tvms)
 
 
@@ -180,7 +197,15 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
     state = load_source(args.grasp or args.state, hand=args.hand)
     if args.no_rvds:
         state = state.with_(rvds=None)
-    with lp_progress(not args.quiet and args.method == "lp", "tvms"):
-        result = tvms(state, method=args.method, time_limit=args.time_limit)
+    show = not args.quiet and args.method == "lp"
+    with lp_progress(show, "tvms"), bracket_progress(show) as progress:
+        result = tvms(
+            state,
+            method=args.method,
+            time_limit=args.time_limit,
+            tolerance=args.tolerance,
+            memory=args.memory,
+            progress=progress,
+        )
     emit(json.dumps(result.to_dict(), indent=args.indent))
     return EXIT_OK

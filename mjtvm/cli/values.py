@@ -14,8 +14,10 @@ __all__ = [
     "choices",
     "cluster_address",
     "folder",
+    "fraction",
     "integer",
     "integers",
+    "memory_size",
     "names",
     "number",
     "numbers",
@@ -61,6 +63,40 @@ def number(low: float | None = None, *, strict: bool = False) -> Callable[[str],
         return value
 
     return parse
+
+
+def fraction(text: str) -> float:
+    """An argparse type: a number in [0, 1) (a relative tolerance)."""
+    value = _float(text)
+    if value is None or not 0.0 <= value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0 and < 1, got {text!r}")
+    return value
+
+
+_UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+
+
+def memory_size(text: str) -> int:
+    """An argparse type: bytes as ``512M``, ``2G``, ``1.5GiB``, ``2000000000`` or a share of the
+    available memory, ``25%``."""
+    t = text.strip().upper().removesuffix("IB").removesuffix("B")
+    try:
+        if t.endswith("%"):
+            share = float(t[:-1])
+            if not 0.0 < share <= 100.0:
+                raise ValueError
+            from ..polytopes.budget import available_memory
+
+            return int(share / 100.0 * available_memory())
+        unit = t[-1:] if t[-1:] in _UNITS and t[-1:] != "" else ""
+        value = float(t[: len(t) - len(unit)]) * _UNITS[unit]
+        if not (math.isfinite(value) and value >= 1.0):
+            raise ValueError
+        return int(value)
+    except (ValueError, IndexError):
+        raise argparse.ArgumentTypeError(
+            f"expected a size such as 512M, 2G or 25% (of the available memory), got {text!r}"
+        ) from None
 
 
 def numbers(low: float | None = None) -> Callable[[str], tuple[float, ...]]:

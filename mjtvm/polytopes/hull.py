@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from ..errors import SolverError
+from .budget import Budget
 
 __all__ = [
     "CDD_REL_TOL",
@@ -27,6 +28,7 @@ __all__ = [
     "PolarHull",
     "cone_facets",
     "distinct",
+    "incidence",
     "polar_vertices",
     "polish_vertices",
     "reduce_points",
@@ -115,6 +117,7 @@ class PolarHull:
         self._rng = np.random.default_rng(0)
         self._hull: ConvexHull | None = None
         self._added = 0  # rows already in self._hull
+        self._count = 0  # simplices of the last hull (the budget's estimate of the next)
         self._seen = np.zeros(0, dtype=np.int64)  # keys of the simplices solved last time
         self.add(normals, offsets)
 
@@ -130,7 +133,9 @@ class PolarHull:
             [self._joggled, polar + self._rng.uniform(-1.0, 1.0, polar.shape) * JOGGLE * size]
         )
 
-    def _simplices(self) -> NDArray[np.int64]:
+    def _simplices(self, budget: Budget | None = None) -> NDArray[np.int64]:
+        if budget is not None:  # Qhull's hull grows with its simplices: about as many again
+            budget.reserve(self._count * 8.0 * (4 * len(self.center) + 8), "the polar hull (Qhull)")
         # Our own joggle spares Qhull its "QJ" retries and lets it add points to its hull;
         # "QJ" from scratch is the fallback. Only the triangulation comes from the joggle.
         try:
@@ -139,7 +144,9 @@ class PolarHull:
             elif self._added < len(self._joggled):
                 self._hull.add_points(self._joggled[self._added :])
             self._added = len(self._joggled)
-            return np.asarray(self._hull.simplices)
+            simp = np.asarray(self._hull.simplices)
+            self._count = len(simp)
+            return simp
         except QhullError:
             self._hull, self._added = None, 0
         try:
@@ -147,15 +154,15 @@ class PolarHull:
         except QhullError as e:
             raise SolverError("qhull", str(e).splitlines()[0] if str(e) else "QhullError") from e
 
-    def vertices(self) -> NDArray[np.float64]:
+    def vertices(self, budget: Budget | None = None) -> NDArray[np.float64]:
         """``(n, k)`` the vertices of O, clusters closer than ``10 tol`` merged (near-parallel
         rows can leave spurious points on O's boundary: :func:`polish_vertices` sorts them out)."""
-        return self._solve(self._simplices())
+        return self._solve(self._simplices(budget), budget)
 
-    def new_vertices(self) -> NDArray[np.float64]:
+    def new_vertices(self, budget: Budget | None = None) -> NDArray[np.float64]:
         """The vertices of O as :meth:`vertices`, less those of simplices of Qhull's hull that
         an earlier call solved already (the vertices that survived the rows added since)."""
-        simp = self._simplices()
+        simp = self._simplices(budget)
         k, base = simp.shape[1], 2 ** (62 // simp.shape[1])
         if len(self._polar) <= base:  # sorted indices as one integer in that base
             keys = np.sort(simp, axis=1) @ (base ** np.arange(k, dtype=np.int64))
@@ -163,18 +170,43 @@ class PolarHull:
             # A simplex that left the hull never comes back (added points only grow it):
             # the last call's keys are all there is to compare with.
             self._seen = keys
-        return self._solve(simp)
+        return self._solve(simp, budget)
 
-    def _solve(self, simp: NDArray[np.int64]) -> NDArray[np.float64]:
+    def corners(self, budget: Budget | None = None) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Every simplex's vertex of O, unmerged, and the ``(n, k)`` rows of each (flat ones dropped)."""
+        return self._corners(self._simplices(budget), budget)
+
+    def _corners(
+        self, simp: NDArray[np.int64], budget: Budget | None
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """The vertices of the simplices ``simp``, in blocks that fit the budget (a block's
+        ``(n, m)`` distances to the rows are the largest array: never all of them at once)."""
+        k, m = len(self.center), len(self.offsets)
+        per_row = 8.0 * (3 * k * k + 2 * m + 4 * k)
+        step = budget.chunk_rows(per_row) if budget is not None else max(1, int(2**27 // per_row))
+        out_u, out_s = [], []
+        for lo in range(0, len(simp), step):
+            if budget is not None:
+                budget.reserve(per_row * min(step, len(simp) - lo), "the vertices of the outer polytope")
+            u, keep = self._solve_block(simp[lo : lo + step])
+            out_u.append(u)
+            out_s.append(simp[lo : lo + step][keep])
+        if not out_u:
+            return np.zeros((0, k)), np.zeros((0, k), dtype=np.int64)
+        return np.vstack(out_u), np.vstack(out_s)
+
+    def _solve_block(self, simp: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         k, normals, offsets, center = len(self.center), self.normals, self.offsets, self.center
         rows = self._polar[simp]
         # Flat simplices (rows dependent up to the joggle) fill lower-dimensional faces of the
         # polar hull and stand for no vertex: their |det| / product of row norms is <= 1e-12,
         # that of the others >= 1e-9 on the TVMSs met (a Hadamard ratio, cheaper than SVDs).
         hadamard = np.abs(np.linalg.det(rows)) / np.prod(np.linalg.norm(rows, axis=2), axis=1)
-        rows = rows[hadamard > FLAT]
-        w = np.linalg.solve(rows, np.ones((len(rows), k, 1)))[..., 0]
-        u = center + w[np.all(np.isfinite(w), axis=1)]
+        keep = hadamard > FLAT
+        w = np.linalg.solve(rows[keep], np.ones((int(np.count_nonzero(keep)), k, 1)))[..., 0]
+        finite = np.all(np.isfinite(w), axis=1)
+        keep[np.flatnonzero(keep)[~finite]] = False
+        u = center + w[finite]
         # Where rows are nearly dependent (facets at tiny angles) a vertex is ill-conditioned and
         # the joggled simplex's solution may break a neighbouring row (by more than tol): pull
         # it back along the ray from the centre onto O's boundary rather than lose that corner.
@@ -186,6 +218,10 @@ class PolarHull:
             over = reach[broken] > slack
             ratio = np.where(over, slack / np.where(over, reach[broken], 1.0), 1.0)
             u[broken] = center + (u[broken] - center) * np.min(ratio, axis=1)[:, None]
+        return u, keep
+
+    def _solve(self, simp: NDArray[np.int64], budget: Budget | None = None) -> NDArray[np.float64]:
+        u, _ = self._corners(simp, budget)
         # Rounding shrinks the many copies (one per simplex) cheaply; distinct() merges the rest.
         u = u[np.unique(np.round(u / (10 * self.tol)), axis=0, return_index=True)[1]]
         return distinct(u, 10 * self.tol)
@@ -196,6 +232,18 @@ def polar_vertices(
 ) -> NDArray[np.float64]:
     r"""The vertices of :math:`\{u : a_j^T u \le b_j\}` at once (:class:`PolarHull`)."""
     return PolarHull(normals, offsets, center, tol).vertices()
+
+
+def incidence(
+    points: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.float64], band: float
+) -> NDArray[np.bool_]:
+    """``(n, f)`` whether each point lies within ``band`` of each row's plane, computed in blocks
+    of points (never the ``(n, f)`` distances at once: 8 bytes per entry against 1)."""
+    out = np.zeros((len(points), len(offsets)), dtype=bool)
+    step = max(1, 2**22 // max(len(offsets), 1))
+    for lo in range(0, len(points), step):
+        out[lo : lo + step] = np.abs(points[lo : lo + step] @ normals.T - offsets) <= band
+    return out
 
 
 def _distinct_columns(incident: NDArray[np.bool_], least: int) -> Iterator[tuple[int, NDArray[np.bool_]]]:
@@ -242,7 +290,7 @@ def _refit_facets(
     """The facets of :func:`polish_vertices`: the least-squares plane through the points of each
     row whose points span a hyperplane (one per distinct point set), outward as the row."""
     k = points.shape[1]
-    incident = np.abs(points @ normals.T - offsets) <= 10 * tol
+    incident = incidence(points, normals, offsets, 10 * tol)
     fit_n, fit_b = [], []
     for j, on in _distinct_columns(incident, k):
         q = points[on]
@@ -263,7 +311,7 @@ def _vertex_candidates(
     """The points on facets of rank k, merged by their facet sets (the mean of each group):
     ``(c, k)`` candidates, ``(c, f)`` their facets, ``(c,)`` whether those are well apart."""
     k = points.shape[1]
-    on_facet = np.abs(points @ facet_n.T - facet_b) <= 10 * tol
+    on_facet = incidence(points, facet_n, facet_b, 10 * tol)
     # The smallest singular value of each point's facet normals, from the Gram matrices
     # (accurate to ~1e-7 absolute: an SVD settles the rank where it is below 1e-4).
     gram = (on_facet.astype(float) @ np.einsum("fi,fj->fij", facet_n, facet_n).reshape(-1, k * k)).reshape(

@@ -20,9 +20,9 @@ from numpy.typing import NDArray
 from ..core.assembly import Assembly, BoxForm, assemble
 from ..core.state import GraspState
 
-__all__ = ["LiftedPolytope", "Projection", "ProjectionStatus", "lifted_polytope"]
+__all__ = ["Approximation", "LiftedPolytope", "Projection", "ProjectionStatus", "lifted_polytope"]
 
-ProjectionStatus = Literal["bounded", "unbounded", "empty", "timeout"]
+ProjectionStatus = Literal["bounded", "approximate", "unbounded", "empty", "timeout"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,15 +120,45 @@ def lifted_polytope(
 
 
 @dataclass(frozen=True, eq=False)
+class Approximation:
+    r"""Where an anytime projection stopped before it was exact (status ``"approximate"``).
+
+    Attributes
+    ----------
+    reason
+        ``"tolerance"`` (the bracket is narrow enough), ``"time"`` or ``"memory"``.
+    detail
+        One line on the limit reached.
+    inner_volume, outer_volume
+        Volumes of the inner and outer polytopes in the scaled coordinates (those of
+        ``affine_volume``), ``dimension``-dimensional.
+    hausdorff
+        Upper bound of their Hausdorff distance, scaled coordinates.
+    inner_facets, outer_facets
+        ``(normals, offsets)`` in twist coordinates, as :attr:`Projection.facets`.
+    """
+
+    reason: str
+    detail: str
+    inner_volume: float
+    outer_volume: float
+    hausdorff: float
+    inner_facets: tuple[NDArray[np.float64], NDArray[np.float64]]
+    outer_facets: tuple[NDArray[np.float64], NDArray[np.float64]]
+
+
+@dataclass(frozen=True, eq=False)
 class Projection:
     r"""The projection :math:`S_{ov}` of a lifted polytope onto the twist space.
 
     Attributes
     ----------
     status
-        ``"bounded"``, ``"unbounded"``, ``"empty"`` (statics infeasible) or ``"timeout"``.
+        ``"bounded"``, ``"approximate"`` (a limit stopped ``lp``: see :attr:`approximation`),
+        ``"unbounded"``, ``"empty"`` (statics infeasible) or ``"timeout"`` (``cdd``).
     vertices
-        ``(n, D)`` its vertices in twist coordinates; ``(0, D)`` unless bounded.
+        ``(n, D)`` its vertices in twist coordinates (when approximate, the inner polytope's:
+        points proven in :math:`S_{ov}`); ``(0, D)`` unless bounded or approximate.
     dimension
         Dimension of its affine hull (a linear subspace, see the module docstring);
         -1 when empty, ``None`` when unknown.
@@ -146,6 +176,8 @@ class Projection:
         ``lp`` only, when ``dimension >= 2``: ``(normals, offsets)``, ``(f, D)`` unit rows and
         ``(f,)``, the facets :math:`n^T \dot r \le o` of :math:`S_{ov}` inside its linear hull
         (which ``basis`` spans in scaled coordinates).
+    approximation
+        :class:`Approximation` when status is ``"approximate"``.
     """
 
     status: ProjectionStatus
@@ -159,3 +191,4 @@ class Projection:
     method: str
     lifted_vertices: int | None = None
     facets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    approximation: Approximation | None = None

@@ -47,18 +47,18 @@ the metric, the tolerances do) and return the vertices in twist coordinates.
 from __future__ import annotations
 
 import time
-from typing import Any
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
-from ..errors import SolverError
-from .hull import ZERO_TOL, PolarHull, cone_facets, distinct, polish_vertices, span
-from .lifted import LiftedPolytope, Projection, ProjectionStatus
-from .oracles import DistanceOracle, RayShooter, SupportOracle
+from .budget import Budget, Limits
+from .hull import ZERO_TOL, cone_facets, distinct, span
+from .lifted import Approximation, LiftedPolytope, Projection, ProjectionStatus
+from .oracles import SupportOracle
+from .refine import refine
 
-__all__ = ["REL_TOL", "project_lp"]
+__all__ = ["REL_TOL", "project_lp", "twist_rows"]
 
 REL_TOL = 1e-9  #: tolerance relative to the extent of S_ov (LP tolerances are 1e-9)
 
@@ -99,8 +99,23 @@ def _linear_hull(
     return points, basis, tol, ray
 
 
+def twist_rows(
+    facets: tuple[NDArray[np.float64], NDArray[np.float64]],
+    basis: NDArray[np.float64],
+    w: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Rows ``a^T u <= b`` in the local coordinates ``u = basis (w * rdot)`` as unit rows over the twist."""
+    rows = (facets[0] @ basis) * w
+    norm = np.linalg.norm(rows, axis=1)
+    return rows / norm[:, None], facets[1] / norm
+
+
 def project_lp(
-    poly: LiftedPolytope, *, metric: NDArray[np.float64] | None = None, rel_tol: float = REL_TOL
+    poly: LiftedPolytope,
+    *,
+    metric: NDArray[np.float64] | None = None,
+    rel_tol: float = REL_TOL,
+    limits: Limits | None = None,
 ) -> Projection:
     r"""Exact projection of ``poly`` onto the twist space by support LPs (module docstring).
 
@@ -112,7 +127,12 @@ def project_lp(
         ``(D,)`` positive scaling of the working coordinates (default ones).
     rel_tol
         Facet and linear-hull tolerance, relative to the extent of :math:`S_{ov}`.
+    limits
+        When to stop before the polytope is exact (:class:`~mjtvm.polytopes.budget.Limits`;
+        default: exact, within :func:`~mjtvm.polytopes.budget.default_memory_budget`). Then
+        the status is ``"approximate"`` and :attr:`Projection.approximation` holds the bracket.
     """
+    budget = Budget(limits)
     t0 = time.perf_counter()
     big_d = poly.twist_dim
     w = np.ones(big_d) if metric is None else np.asarray(metric, dtype=float)
@@ -124,19 +144,22 @@ def project_lp(
         basis: NDArray[np.float64] | None,
         ray: NDArray[np.float64] | None = None,
         facets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+        approximation: Approximation | None = None,
     ) -> Projection:
         k = -1 if basis is None else basis.shape[0]
         ray_r = None if ray is None else (ray / w) / np.linalg.norm(ray / w)
-        twist_facets = None
-        if facets is not None and basis is not None:
-            # a^T u <= b with u = basis (w * rdot): rows (basis^T a) * w over rdot, made unit.
-            rows = (facets[0] @ basis) * w
-            norm = np.linalg.norm(rows, axis=1)
-            twist_facets = (rows / norm[:, None], facets[1] / norm)
+        twist_facets = None if facets is None or basis is None else twist_rows(facets, basis, w)
+        if approximation is not None and basis is not None:
+            approximation = replace(
+                approximation,
+                inner_facets=twist_rows(approximation.inner_facets, basis, w),
+                outer_facets=twist_rows(approximation.outer_facets, basis, w),
+            )
         seconds = time.perf_counter() - t0
         return Projection(
-            status, verts / w, k, basis, w, ray_r, support.num_lps, seconds, "lp", None, twist_facets
-        )
+            status, verts / w, k, basis, w, ray_r, support.num_lps, seconds, "lp", None, twist_facets,
+            approximation,
+        )  # fmt: skip
 
     if support(np.zeros(big_d))[0] == "infeasible":
         return result("empty", np.zeros((0, big_d)), None)
@@ -164,128 +187,4 @@ def project_lp(
         norm = np.linalg.norm(cone, axis=1)
         cone = cone[norm > 1e-6] / norm[norm > 1e-6, None]
         rows, offsets = np.vstack([rows, cone]), np.concatenate([offsets, np.zeros(len(cone))])
-    return _refine(support, distinct(local, tol), basis, tol, result, (rows, offsets))
-
-
-class _Cutter:
-    """The LPs of :func:`_refine` (ray shooting, support, distance; one HiGHS session each),
-    which certify vertices of O or cut them off."""
-
-    def __init__(
-        self, support: SupportOracle, basis: NDArray[np.float64], center: NDArray[np.float64], tol: float
-    ) -> None:
-        self.support, self.basis, self.center, self.tol = support, basis, center, tol
-        self.rows = basis @ (support.metric[:, None] * support.poly.generators)
-        self.shoot = RayShooter(support.poly, self.rows, center)
-        self.nearest: DistanceOracle | None = None  # the distance LP only when needed
-        self.found: set[tuple[float, ...]] = set()  # support LP solutions, on a grid of 10 tol
-
-    def _cell(self, u: NDArray[np.float64]) -> tuple[float, ...]:
-        return tuple(np.round(u / (10 * self.tol)).tolist())
-
-    @property
-    def num_lps(self) -> int:
-        return self.support.num_lps + self.shoot.num_lps + (self.nearest.num_lps if self.nearest else 0)
-
-    def cut(self, a: NDArray[np.float64]) -> float:
-        """The support value :math:`h(a)` of :math:`S_{ov}` along ``a`` (local coordinates)."""
-        status, s = self.support(self.basis.T @ a)
-        if status != "optimal":  # bounded after _linear_hull: a solver fault
-            raise SolverError("highs", f"support LP inside a bounded TVMS: {status}")
-        self.found.add(self._cell(self.basis @ s))
-        return float(a @ (self.basis @ s))
-
-    def settle(
-        self, verts: NDArray[np.float64]
-    ) -> tuple[list[NDArray[np.float64]], NDArray[np.float64], NDArray[np.float64]]:
-        """The certified vertices among ``verts`` and the rows ``(normals, offsets)`` cutting off the rest."""
-        k, tol, center = self.basis.shape[0], self.tol, self.center
-        certified: list[NDArray[np.float64]] = []
-        new_n, new_b, cuts = np.zeros((len(verts), k)), np.zeros(len(verts)), 0
-        for v in verts:
-            if cuts and np.any(new_n[:cuts] @ v - new_b[:cuts] > tol):
-                continue  # cut off by a row of this round already
-            if self._cell(v) in self.found:  # a support LP's solution: a point of S_ov
-                certified.append(v)
-                continue
-            t, a = self.shoot(v - center)
-            if (1.0 - t) * np.linalg.norm(v - center) <= 10 * tol:  # as close as distinct() merges
-                certified.append(v)
-                continue
-            b = self.cut(a)
-            if a @ v <= b + tol:
-                # The ray left S_ov far from v, but v lies within tol of that hyperplane (a ray
-                # nearly along a facet, or duals picked at a lower-dimensional face): measure the
-                # distance itself and cut with the dual's hyperplane.
-                self.nearest = self.nearest or DistanceOracle(self.support.poly, self.rows)
-                delta, a = self.nearest(v)
-                if delta <= tol:
-                    certified.append(v)
-                    continue
-                b = self.cut(a)
-                if a @ v <= b + tol:
-                    raise SolverError("highs", "no cutting plane separates a vertex outside the TVMS")
-            new_n[cuts], new_b[cuts], cuts = a, b, cuts + 1
-        return certified, new_n[:cuts], new_b[:cuts]
-
-
-def _chain(points: NDArray[np.float64], center: NDArray[np.float64]) -> NDArray[np.int64]:
-    """An order of ``points`` that keeps neighbours together, so that consecutive LPs
-    warm-start from a nearby basis: lexicographic in their directions from ``center``
-    rounded to a grid of 1/4 (Case 2's rays: 4.5 simplex iterations instead of 7 in the
-    order Qhull gives, 16 in a random one; a greedy nearest-neighbour tour, 3.3, costs
-    more in Python than it saves)."""
-    d = points - center
-    d = np.round(4.0 * d / np.linalg.norm(d, axis=1)[:, None])
-    return np.lexsort(d.T[::-1])
-
-
-def _refine(
-    support: SupportOracle,
-    local: NDArray[np.float64],
-    basis: NDArray[np.float64],
-    tol: float,
-    result: Any,
-    bounds: tuple[NDArray[np.float64], NDArray[np.float64]],
-) -> Projection:
-    r"""Outer approximation refined by cutting planes inside the linear hull (module docstring).
-
-    ``local``: points of :math:`S_{ov}` spanning its linear hull, in its coordinates ``u``.
-    ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as ``bounds`` (the support LPs along
-    :math:`\pm e_i` of the twist and the RVDS cone's facets, in these coordinates) or, where
-    they leave O unbounded, as the box of support LPs along :math:`\pm e_i` of ``u``; every
-    row is a support LP's value or a facet of a cone that holds :math:`S_{ov}`, so
-    :math:`O \supseteq S_{ov}`. Each round enumerates O's vertices (:class:`PolarHull`, which keeps Qhull's hull of the
-    polar points between rounds) and shoots a ray from the centre ``c`` of the points to
-    each vertex not yet certified (:class:`RayShooter`): a ray that reaches it (to ``10 tol``)
-    certifies the vertex as a point of :math:`S_{ov}`, hence one of its vertices; otherwise
-    the duals give the normal ``a`` of a hyperplane supporting :math:`S_{ov}` where the ray
-    leaves it, and the support LP along ``a`` adds the row :math:`a^T u \le h(a)`, which cuts
-    the vertex off. A vertex within ``tol`` of that row is settled by its distance to
-    :math:`S_{ov}` (:class:`DistanceOracle`): within ``tol``, certified; otherwise cut off by
-    the dual's separating hyperplane. When a round certifies every vertex, O =
-    :math:`S_{ov}` (to ``10 tol``); :func:`polish_vertices` then refits the facets and sorts
-    out the vertices. The rays of a round go in an order that keeps neighbours together
-    (:func:`_chain`), and a vertex that is a support LP's solution needs none.
-    """
-    k = basis.shape[0]
-    center = local.mean(axis=0)
-    cutter = _Cutter(support, basis, center, tol)
-    normals, offsets = bounds
-    if np.linalg.matrix_rank(normals) < k:  # O would be unbounded (not met: basis rows span)
-        normals = np.vstack([np.eye(k), -np.eye(k)])
-        offsets = np.array([cutter.cut(a) for a in normals])
-    certified: list[NDArray[np.float64]] = []
-    polar = PolarHull(normals, offsets, center, tol)
-    while True:
-        verts = polar.new_vertices()
-        if certified:
-            verts = verts[cKDTree(certified).query(verts)[0] > 10 * tol]
-        sure, new_n, new_b = cutter.settle(verts[_chain(verts, center)])
-        certified.extend(sure)
-        if not len(new_n):
-            break
-        polar.add(new_n, new_b)
-    support.num_lps = cutter.num_lps
-    verts, facet_n, facet_b = polish_vertices(np.array(certified), polar.normals, polar.offsets, tol)
-    return result("bounded", verts @ basis, basis, facets=(facet_n, facet_b))
+    return refine(support, distinct(local, tol), basis, tol, result, (rows, offsets), budget)

@@ -14,6 +14,7 @@ The baseline, like the paper, enumerates the lifted polytope's vertices with cdd
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -24,8 +25,10 @@ from ..core.assembly import BoxForm
 from ..core.state import GraspState
 from ..core.tvmmp import finite_floats, finite_or_none
 from ..errors import StateError
+from .bracket import ray_lengths
+from .budget import Limits
 from .enumeration import project_cdd
-from .lifted import ProjectionStatus, lifted_polytope
+from .lifted import Projection, ProjectionStatus, lifted_polytope
 from .projection import REL_TOL, project_lp
 from .volume import facet_volume, hull_volume
 
@@ -41,6 +44,7 @@ __all__ = [
 TVMS_SCHEMA = "mjtvm.tvms/1"
 CHARACTERISTIC_LENGTH = 0.1  #: m: the paper's object radius; linear twist parts are divided by it
 Method = Literal["lp", "cdd"]
+Facets = tuple[NDArray[np.float64], NDArray[np.float64]]
 
 
 # ------------------------------------------------------------------ result and volumes
@@ -62,7 +66,8 @@ class TvmsResult:
     Attributes
     ----------
     status
-        ``"bounded"``, ``"unbounded"``, ``"empty"`` (some REFS vertex cannot be balanced)
+        ``"bounded"``, ``"approximate"`` (``method="lp"`` stopped by a limit: the brackets
+        hold the answer), ``"unbounded"``, ``"empty"`` (some REFS vertex cannot be balanced)
         or ``"timeout"`` (``method="cdd"`` only).
     bounded
         False when unbounded; ``None`` on timeout.
@@ -87,6 +92,21 @@ class TvmsResult:
         :class:`TvmsTimings`.
     lifted_vertices
         Number of vertices of the lifted polytope (``"cdd"`` only).
+    volume_bracket, affine_volume_bracket
+        ``(2,)`` [inner, outer]: certified bounds of ``volume`` and ``affine_volume`` (both
+        equal to it when exact); ``None`` unless bounded or approximate.
+    hausdorff_gap
+        Upper bound of the Hausdorff distance between the inner and outer polytopes, in the
+        scaled coordinates of ``affine_volume`` (0 when exact); ``None`` unless bounded or
+        approximate.
+    alpha_bracket
+        ``(R, 2)`` [inner, outer] ray lengths along each RVDS vertex ``r_l``: bounds of
+        ``max alpha`` with ``alpha r_l`` in :math:`S_{ov}` (Problem 2's :math:`\alpha_l` when
+        the state has one REFS vertex); a row of ``nan`` for a zero vertex, ``inf`` where the
+        ray does not leave. ``None`` without RVDS or unless bounded or approximate.
+    stopped_by
+        ``None`` when exact; else ``(reason, detail)``: ``"tolerance"``, ``"time"`` or
+        ``"memory"`` and one line on it.
     """
 
     status: ProjectionStatus
@@ -101,6 +121,11 @@ class TvmsResult:
     rvds_cone: bool
     timings: TvmsTimings
     lifted_vertices: int | None = None
+    volume_bracket: NDArray[np.float64] | None = None
+    affine_volume_bracket: NDArray[np.float64] | None = None
+    hausdorff_gap: float | None = None
+    alpha_bracket: NDArray[np.float64] | None = None
+    stopped_by: tuple[str, str] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The ``mjtvm.tvms/1`` document; extra keys follow the schema's own."""
@@ -120,6 +145,15 @@ class TvmsResult:
             "method": self.method,
             "rvds_cone": self.rvds_cone,
             "lifted_vertices": self.lifted_vertices,
+            "volume_bracket": None if self.volume_bracket is None else finite_floats(self.volume_bracket),
+            "affine_volume_bracket": None
+            if self.affine_volume_bracket is None
+            else finite_floats(self.affine_volume_bracket),
+            "hausdorff_gap": finite_or_none(self.hausdorff_gap),
+            "alpha_bracket": None if self.alpha_bracket is None else finite_floats(self.alpha_bracket),
+            "stopped_by": None
+            if self.stopped_by is None
+            else {"reason": self.stopped_by[0], "detail": self.stopped_by[1]},
             "timings": {
                 "assemble_s": self.timings.assemble_s,
                 "project_s": self.timings.project_s,
@@ -168,7 +202,10 @@ def _volumes(
     local = scaled @ basis.T
     if dimension == 1:
         affine = float(np.ptp(local))
-    elif facets is not None:
+    elif facets is not None and dimension > 3:
+        # In 2-D and 3-D one Qhull hull of the vertices is cheap and exact; the pyramids over
+        # the facets lost 1.5e-3 on the Allegro grasp's 3-D TVMS (facets at ~1e-5 rad whose
+        # shared region the band of 10 tol assigns to the wrong one: found by the bracket).
         rows = (facets[0] / scale) @ basis.T  # n^T rdot <= o  ->  (basis (n / scale))^T u <= o
         norm = np.linalg.norm(rows, axis=1)
         # The basis spans the TVMS's linear hull (it contains the origin), so u = local.
@@ -180,6 +217,43 @@ def _volumes(
     return volume, affine
 
 
+def _ray_lengths(proj: Projection, rvds: NDArray[np.float64], facets: Facets | None) -> NDArray[np.float64]:
+    """``max alpha`` with ``alpha r`` in the polytope ``facets`` (twist coordinates, inside the
+    linear hull of the projection) for each row ``r`` of ``rvds``; ``nan`` for a zero row."""
+    basis, w = proj.basis, proj.metric
+    out = np.full(len(rvds), np.nan)
+    if basis is None:
+        return out
+    for i, r in enumerate(rvds):
+        s = w * r
+        norm = float(np.linalg.norm(s))
+        if norm == 0.0:
+            continue
+        inside = basis @ s
+        if np.linalg.norm(s - basis.T @ inside) > 1e-9 * norm:
+            out[i] = 0.0  # leaves the linear hull of S_ov at once
+        elif facets is not None:
+            out[i] = ray_lengths(facets[0], facets[1], r[None, :])[0]
+        else:  # dimension <= 1: the segment between the vertices (or the origin)
+            ends = (proj.vertices * w) @ basis.T @ inside / norm**2
+            out[i] = max(float(np.max(ends, initial=0.0)), 0.0)
+    return out
+
+
+def _brackets(
+    proj: Projection, weights: NDArray[np.float64], volume: float | None, affine: float | None
+) -> tuple[Any, Any, float | None]:
+    """``(volume_bracket, affine_volume_bracket, hausdorff_gap)`` of a projection."""
+    if proj.status == "bounded" and volume is not None and affine is not None:
+        return np.array([volume, volume]), np.array([affine, affine]), 0.0
+    approx = proj.approximation
+    if proj.status != "approximate" or approx is None or proj.dimension is None:
+        return None, None, None
+    aff = np.array([approx.inner_volume, approx.outer_volume])
+    vol = aff / float(np.prod(weights)) if proj.dimension == len(weights) else np.zeros(2)
+    return vol, aff, approx.hausdorff
+
+
 def tvms(
     state: GraspState,
     *,
@@ -187,7 +261,10 @@ def tvms(
     scale: ArrayLike | None = None,
     rvds_cone: bool = True,
     box: BoxForm = "eliminated",
-    time_limit: float = 120.0,
+    time_limit: float | None = 120.0,
+    tolerance: float = 0.0,
+    memory: int | None = None,
+    progress: Callable[[dict[str, Any]], None] | None = None,
 ) -> TvmsResult:
     r"""Solve Problem 1 (eq. 26-29, 34): the TVMS of ``state`` and its volume (TVMM).
 
@@ -210,7 +287,20 @@ def tvms(
     box
         ``"eliminated"`` (default) or ``"literal"`` (eq. 2's box variables).
     time_limit
-        Seconds after which ``method="cdd"`` gives up (status ``"timeout"``).
+        Seconds of wall-clock time for the projection (``None``: no limit). ``method="cdd"``
+        then gives up (status ``"timeout"``, no bracket); ``method="lp"`` stops refining and
+        returns status ``"approximate"`` with the brackets.
+    tolerance
+        ``method="lp"``: stop once the relative volume gap ``(outer - inner) / outer`` of the
+        bracket is at most this (default 0: exact within floating point).
+    memory
+        ``method="lp"``: bytes the projection may add to the process's resident set (default
+        :func:`~mjtvm.polytopes.budget.default_memory_budget`, a quarter of the available
+        memory); reaching it gives status ``"approximate"``.
+    progress
+        ``method="lp"``: called with the bracket (a dict, see
+        :class:`~mjtvm.polytopes.budget.Limits`) whenever it is measured (which it then is
+        between rounds, at most half of the time).
 
     Raises
     ------
@@ -226,9 +316,10 @@ def tvms(
     poly = lifted_polytope(state, rvds_cone=rvds_cone, box=box)
     t1 = time.perf_counter()
     if method == "lp":
-        proj = project_lp(poly, metric=weights)
+        limits = Limits(tolerance=tolerance, time_limit=time_limit, memory=memory, progress=progress)
+        proj = project_lp(poly, metric=weights, limits=limits)
     else:
-        proj = project_cdd(poly, metric=weights, time_limit=time_limit)
+        proj = project_cdd(poly, metric=weights, time_limit=1e9 if time_limit is None else time_limit)
     t2 = time.perf_counter()
     volume: float | None = None
     affine: float | None = None
@@ -236,6 +327,14 @@ def tvms(
         volume, affine = 0.0, 0.0
     elif proj.status == "bounded" and proj.dimension is not None:
         volume, affine = _volumes(proj.vertices, proj.dimension, weights, proj.facets)
+    vol_b, aff_b, gap = _brackets(proj, weights, volume, affine)
+    alpha = None
+    if state.rvds is not None and proj.status in ("bounded", "approximate"):
+        approx = proj.approximation
+        inner = approx.inner_facets if approx is not None else proj.facets
+        outer = approx.outer_facets if approx is not None else proj.facets
+        rv = np.asarray(state.rvds, dtype=float)
+        alpha = np.column_stack([_ray_lengths(proj, rv, inner), _ray_lengths(proj, rv, outer)])
     t3 = time.perf_counter()
     return TvmsResult(
         status=proj.status,
@@ -250,4 +349,11 @@ def tvms(
         rvds_cone=poly.cone,
         timings=TvmsTimings(t1 - t0, t2 - t1, t3 - t2, t3 - t0, proj.num_lps),
         lifted_vertices=proj.lifted_vertices,
+        volume_bracket=vol_b,
+        affine_volume_bracket=aff_b,
+        hausdorff_gap=gap,
+        alpha_bracket=alpha,
+        stopped_by=None
+        if proj.approximation is None
+        else (proj.approximation.reason, proj.approximation.detail),
     )

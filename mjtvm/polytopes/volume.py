@@ -11,11 +11,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 from scipy.spatial.distance import cdist
 
-from .hull import _joggled
+from .hull import _joggled, incidence
 
 __all__ = ["facet_volume", "hausdorff", "hull_volume"]
 
@@ -56,11 +57,18 @@ def _coplanar_groups(
             j = parent[j]
         return j
 
-    shared = on.T.astype(float) @ on.astype(float)  # BLAS: integer matmul is not
-    # Points 10 tol from both planes over a face of diameter d: the angle is <= 20 tol / d,
-    # far below this cheap filter.
-    near = np.triu((shared >= k) & (normals @ normals.T > 1.0 - 1e-6), 1)
-    for i, j in zip(*np.nonzero(near), strict=True):
+    # Facets sharing >= k points (a sparse product: the incidence has a few facets per point),
+    # of those the nearly parallel ones: points 10 tol from both planes over a face of
+    # diameter d make an angle <= 20 tol / d, far below this cheap filter.
+    if on.size <= 2**24:  # small: one BLAS product (integer matmul is not BLAS)
+        rows, cols = np.nonzero(np.triu(on.T.astype(float) @ on.astype(float) >= k, 1))
+    else:
+        sparse_on = sp.csc_matrix(on, dtype=np.int32)
+        shared = sp.triu(sparse_on.T @ sparse_on, 1).tocoo()
+        pick = shared.data >= k
+        rows, cols = shared.row[pick], shared.col[pick]
+    close = np.einsum("ij,ij->i", normals[rows], normals[cols]) > 1.0 - 1e-6
+    for i, j in zip(rows[close], cols[close], strict=True):
         q = points[on[:, i] & on[:, j]]
         sv = np.linalg.svd(q - q.mean(axis=0), compute_uv=False)
         if sv[k - 2] > 10 * tol * np.sqrt(len(q)):
@@ -96,7 +104,7 @@ def facet_volume(
     from concurrent.futures import ThreadPoolExecutor
 
     k = points.shape[1]
-    on = np.abs(points @ normals.T - offsets) <= 10 * tol
+    on = incidence(points, normals, offsets, 10 * tol)
     center = points.mean(axis=0)
 
     def pyramid(group: NDArray[np.int64]) -> float:

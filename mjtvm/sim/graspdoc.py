@@ -421,7 +421,7 @@ def _ranges(c: _Checker, value: Any) -> dict[str, dict[str, Any]]:
 
 
 def _lift(c: _Checker, value: Any) -> dict[str, Any]:
-    t = c.table(value, "lift", {"direction", "twist", "poses", "height", "bounds"})
+    t = c.table(value, "lift", {"direction", "twist", "poses", "height", "bounds", "stop_margin"})
     chosen = [k for k in ("direction", "twist", "poses") if k in t]
     if len(chosen) > 1:
         raise c.fail("lift", f"expected at most one of direction, twist, poses, got {', '.join(chosen)}")
@@ -449,6 +449,11 @@ def _lift(c: _Checker, value: Any) -> dict[str, Any]:
                 if "quaternion" in pt else None,
             })  # fmt: skip
     out["height"] = c.number(t["height"], "lift.height", positive=True) if "height" in t else None
+    out["stop_margin"] = (
+        c.number(t["stop_margin"], "lift.stop_margin", low=0.0) if "stop_margin" in t else None
+    )
+    if out["stop_margin"] is not None and out["stop_margin"] >= 1.0:
+        raise c.fail("lift.stop_margin", f"expected a fraction in [0, 1), got {out['stop_margin']:g}")
     out["bounds"] = c.bounds(t.get("bounds", {}), "lift.bounds")
     return out
 

@@ -89,8 +89,9 @@ class Marcher:
     """The predictor-corrector of one lift (module docstring)."""
 
     def __init__(self, grasp: GraspLike, motion: Motion, *, bounds: Mapping[str, tuple[float, float]],
-                 tolerance: float, max_iterations: int) -> None:  # fmt: skip
+                 tolerance: float, max_iterations: int, stop_margin: float = 0.0) -> None:  # fmt: skip
         self.grasp, self.model, self.motion = grasp, grasp.model, motion
+        self.stop_margin = stop_margin
         self.tol, self.max_it, self.bounds = tolerance, max_iterations, dict(bounds)
         model = grasp.model
         self.dmodel = distance_model(model)
@@ -137,6 +138,25 @@ class Marcher:
                 ):
                     d0 = float(mujoco.mj_geomDistance(self.dmodel, data, b, g, 1.0, None))
                     self.pairs.append((g, b, d0))
+        mujoco.mj_forward(model, data)
+        start = self._singular_values(data)
+        # the rank each finger has at the start (a planar finger moves its point in a plane: 2)
+        self.rank0 = [max(1, int(np.sum(sv > 1e-9 * sv[0]))) for sv in start]
+        self.sigma0 = np.array([sv[r - 1] for sv, r in zip(start, self.rank0, strict=True)])
+
+    def _singular_values(self, data: mujoco.MjData) -> list[NDArray[np.float64]]:
+        jacp, out = np.zeros((3, self.model.nv)), []
+        for f in self.fingers:
+            point = self._contact(data, f)[0]
+            mujoco.mj_jac(self.model, data, jacp, None, point, f.body)
+            out.append(np.linalg.svd(jacp[:, f.dofs], compute_uv=False))
+        return out
+
+    def sigmas(self, data: mujoco.MjData) -> NDArray[np.float64]:
+        """``(G,)`` per finger, the singular value of its contact Jacobian (m/rad; its joints'
+        columns, kinematics done) of the rank it has at the start (the smallest of a spatial
+        finger's three, the second of a planar finger's): 0 at a singular, stretched pose."""
+        return np.array([sv[r - 1] for sv, r in zip(self._singular_values(data), self.rank0, strict=True)])
 
     def _finger(self, data: mujoco.MjData, label: str, kind: str, g: int, w: Any, o: int) -> _Finger:
         model, grasp = self.model, self.grasp
@@ -295,6 +315,14 @@ class Marcher:
                 label, support = geom_label(self.model, g), geom_label(self.model, b)
                 return (
                     f"geom {label!r} penetrates the support {support!r} ({d:.3g} m, {d0:.3g} m at the start)"
+                )
+        if self.stop_margin > 0.0:
+            sig = self.sigmas(data)
+            k = int(np.argmin(sig / self.sigma0))
+            if sig[k] < self.stop_margin * self.sigma0[k]:
+                return (
+                    f"stop margin: {self.fingers[k].geom!r} near a singular pose (smallest singular value of its "
+                    f"contact Jacobian {sig[k]:.3g} m/rad < {self.stop_margin:g} x {self.sigma0[k]:.3g} at the start)"
                 )
         return None
 

@@ -68,13 +68,17 @@ from .motion import Motion
 from .scenario import load_scenario
 
 __all__ = [
-    "READINGS", "TOUCH_TOL", "VARIANTS", "Lift", "LiftSpec", "lift_state", "scripted_lift", "slide_directions",
+    "READINGS", "STOP_MARGIN", "TOUCH_TOL", "VARIANTS", "Lift", "LiftSpec", "lift_state", "scripted_lift",
+    "slide_directions",
 ]  # fmt: skip
 
 Reading = Literal["physical", "literal"]
 Variant = Literal["L", "S"]
 READINGS: tuple[Reading, ...] = ("physical", "literal")
 VARIANTS: tuple[Variant, ...] = ("L", "S")
+STOP_MARGIN = 0.25
+"""Default stop margin: a finger's contact Jacobian keeps at least a quarter of its smallest
+singular value at the start (:func:`scripted_lift`)."""
 _MAX_STEPS = 100_000  # marched steps: a motion the fingers follow forever is a scripting error
 _Path = list[tuple[float, mujoco.MjData, dict[str, Any]]]
 
@@ -255,6 +259,7 @@ def scripted_lift(
     tolerance: float = 1e-10,
     limit_tolerance: float = 1e-5,
     max_iterations: int = 100,
+    stop_margin: float | None = None,
 ) -> Lift:
     r"""Move the grasp's object (module docstring) and sample ``num_states`` states.
 
@@ -276,6 +281,11 @@ def scripted_lift(
     max_step, tolerance, limit_tolerance, max_iterations
         Largest integration step in s, IK tolerance per target (m), bisection width of the
         reach limit (in s); IK iteration budget per correction.
+    stop_margin
+        End the lift where a finger's contact Jacobian's smallest singular value falls below
+        this fraction of its value at the start (a margin from the singular, stretched pose
+        where the paper's "nearly stretched" finger ends; 0: go to the reach limit). Default:
+        the grasp's ``lift.stop_margin``, else :data:`STOP_MARGIN`.
 
     Raises
     ------
@@ -296,7 +306,14 @@ def scripted_lift(
     ob = int(sc.model.body(sc.object_body).id)
     start = np.concatenate([sc.data.xpos[ob], sc.data.xquat[ob]])
     motion = Motion(start, twist=spec.twist, poses=spec.poses)
-    m = Marcher(sc, motion, bounds=bounds, tolerance=tolerance, max_iterations=max_iterations)
+    if stop_margin is None:
+        lift_doc = getattr(sc, "lift", None)
+        stop_margin = lift_doc.get("stop_margin") if isinstance(lift_doc, Mapping) else None
+        stop_margin = STOP_MARGIN if stop_margin is None else float(stop_margin)
+    if not (math.isfinite(stop_margin) and 0.0 <= stop_margin < 1.0):
+        raise StateError("stop_margin", f"expected a fraction in [0, 1), got {stop_margin!r}")
+    m = Marcher(sc, motion, bounds=bounds, tolerance=tolerance, max_iterations=max_iterations,
+                stop_margin=stop_margin)  # fmt: skip
     data = copy.copy(sc.data)
     if why := m.inadmissible(data):
         raise ModelError(f"grasp {sc.name!r}", f"initial state not admissible: {why}")
@@ -328,7 +345,7 @@ def scripted_lift(
             else:
                 hi, limit = mid, tinfo["why"]
         path += [best] if best is not None else []
-        limit = f"reach limit: {limit}"
+        limit = limit if limit.startswith("stop margin") else f"reach limit: {limit}"
         break
     if len(path) < 2:
         raise ModelError(f"grasp {sc.name!r}", f"the object cannot be moved: {limit}")

@@ -1,0 +1,271 @@
+r"""Cutting planes of :func:`~mjtvm.polytopes.projection.project_lp`, anytime (Problem 1).
+
+:func:`refine` keeps an outer polytope O (valid inequalities) and an inner one I (the hull of
+points the LPs proved to lie in :math:`S_{ov}`, :mod:`~mjtvm.polytopes.bracket`) and refines O
+until every vertex is certified (then O = :math:`S_{ov}`), or until a limit of
+:class:`~mjtvm.polytopes.budget.Limits` stops it: the relative volume gap of the bracket
+[vol(I), vol(O)] at most ``tolerance``, the time limit or the memory budget. It then
+returns ``status: "approximate"`` with the bracket instead of failing.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from ..errors import SolverError
+from .bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume
+from .budget import Budget, LimitReached, Limits
+from .hull import PolarHull, polish_vertices
+from .lifted import Approximation, Projection
+from .oracles import DistanceOracle, RayShooter, SupportOracle
+
+__all__ = ["Cutter", "measure", "refine"]
+
+
+class Cutter:
+    """The LPs of :func:`_refine` (ray shooting, support, distance; one HiGHS session each),
+    which certify vertices of O or cut them off."""
+
+    def __init__(
+        self, support: SupportOracle, basis: NDArray[np.float64], center: NDArray[np.float64], tol: float
+    ) -> None:
+        self.support, self.basis, self.center, self.tol = support, basis, center, tol
+        self.rows = basis @ (support.metric[:, None] * support.poly.generators)
+        self.shoot = RayShooter(support.poly, self.rows, center)
+        self.nearest: DistanceOracle | None = None  # the distance LP only when needed
+        self.found: set[tuple[float, ...]] = set()  # support LP solutions, on a grid of 10 tol
+        self.proven: list[NDArray[np.float64]] = []  # points of S_ov met by the LPs (the inner hull)
+        self.budget: Budget | None = None
+        self.certified: list[NDArray[np.float64]] = []  # of the last settle()
+        self.new_n, self.new_b, self.cuts = np.zeros((0, basis.shape[0])), np.zeros(0), 0
+
+    def _cell(self, u: NDArray[np.float64]) -> tuple[float, ...]:
+        return tuple(np.round(u / (10 * self.tol)).tolist())
+
+    @property
+    def num_lps(self) -> int:
+        return self.support.num_lps + self.shoot.num_lps + (self.nearest.num_lps if self.nearest else 0)
+
+    def cut(self, a: NDArray[np.float64]) -> float:
+        """The support value :math:`h(a)` of :math:`S_{ov}` along ``a`` (local coordinates)."""
+        status, s = self.support(self.basis.T @ a)
+        if status != "optimal":  # bounded after _linear_hull: a solver fault
+            raise SolverError("highs", f"support LP inside a bounded TVMS: {status}")
+        self.found.add(self._cell(self.basis @ s))
+        self.proven.append(self.basis @ s)
+        return float(a @ (self.basis @ s))
+
+    def settle(self, verts: NDArray[np.float64]) -> None:
+        """Certify the vertices among ``verts`` (appended to :attr:`certified`) or cut them off
+        (rows ``(normals, offsets)`` in :attr:`new_n`, :attr:`new_b`, the first :attr:`cuts`).
+        A :class:`LimitReached` from the budget (checked every 32 vertices) leaves both as far as
+        they got."""
+        k, tol, center = self.basis.shape[0], self.tol, self.center
+        certified: list[NDArray[np.float64]] = []
+        self.certified = certified
+        new_n, new_b = self.new_n, self.new_b = np.zeros((len(verts), k)), np.zeros(len(verts))
+        self.cuts = 0
+        for i, v in enumerate(verts):
+            cuts = self.cuts
+            if self.budget is not None and i % 32 == 31:
+                self.budget.check()
+            if cuts and np.any(new_n[:cuts] @ v - new_b[:cuts] > tol):
+                continue  # cut off by a row of this round already
+            if self._cell(v) in self.found:  # a support LP's solution: a point of S_ov
+                certified.append(v)
+                continue
+            t, a = self.shoot(v - center)
+            self.proven.append(center + t * (v - center))
+            if (1.0 - t) * np.linalg.norm(v - center) <= 10 * tol:  # as close as distinct() merges
+                certified.append(v)
+                continue
+            b = self.cut(a)
+            if a @ v <= b + tol:
+                # The ray left S_ov far from v, but v lies within tol of that hyperplane (a ray
+                # nearly along a facet, or duals picked at a lower-dimensional face): measure the
+                # distance itself and cut with the dual's hyperplane.
+                self.nearest = self.nearest or DistanceOracle(self.support.poly, self.rows)
+                delta, a = self.nearest(v)
+                if delta <= tol:
+                    certified.append(v)
+                    continue
+                b = self.cut(a)
+                if a @ v <= b + tol:
+                    raise SolverError("highs", "no cutting plane separates a vertex outside the TVMS")
+            new_n[cuts], new_b[cuts], self.cuts = a, b, cuts + 1
+
+
+def _chain(points: NDArray[np.float64], center: NDArray[np.float64]) -> NDArray[np.int64]:
+    """An order of ``points`` that keeps neighbours together, so that consecutive LPs
+    warm-start from a nearby basis: lexicographic in their directions from ``center``
+    rounded to a grid of 1/4 (Case 2's rays: 4.5 simplex iterations instead of 7 in the
+    order Qhull gives, 16 in a random one; a greedy nearest-neighbour tour, 3.3, costs
+    more in Python than it saves)."""
+    d = points - center
+    d = np.round(4.0 * d / np.linalg.norm(d, axis=1)[:, None])
+    return np.lexsort(d.T[::-1])
+
+
+def measure(
+    cutter: Cutter, polar: PolarHull, seeds: NDArray[np.float64], budget: Budget
+) -> tuple[Bracket, InnerHull]:
+    """The bracket now: I = hull of ``seeds`` and the points the LPs proved, O = ``polar``'s rows."""
+    pts = np.vstack([seeds, np.array(cutter.proven).reshape(-1, seeds.shape[1])])
+    inner = inner_hull(pts, budget)
+    outer, corners = outer_volume(polar, budget)
+    gap = hausdorff_bound(corners, inner, cutter.center, budget)
+    # Round-off (the joggles, the exact areas of O's facets) can leave vol(I) a hair above vol(O).
+    return Bracket(min(inner.volume, outer), max(inner.volume, outer), gap), inner
+
+
+def refine(
+    support: SupportOracle,
+    local: NDArray[np.float64],
+    basis: NDArray[np.float64],
+    tol: float,
+    result: Any,
+    bounds: tuple[NDArray[np.float64], NDArray[np.float64]],
+    budget: Budget | None = None,
+) -> Projection:
+    r"""Outer approximation refined by cutting planes inside the linear hull (module docstring).
+
+    ``local``: points of :math:`S_{ov}` spanning its linear hull, in its coordinates ``u``.
+    ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as ``bounds`` (the support LPs along
+    :math:`\pm e_i` of the twist and the RVDS cone's facets, in these coordinates) or, where
+    they leave O unbounded, as the box of support LPs along :math:`\pm e_i` of ``u``; every
+    row is a support LP's value or a facet of a cone that holds :math:`S_{ov}`, so
+    :math:`O \supseteq S_{ov}`. Each round enumerates O's vertices (:class:`PolarHull`, which
+    keeps Qhull's hull of the polar points between rounds) and shoots a ray from the centre
+    ``c`` of the points to each vertex not yet certified (:class:`RayShooter`): a ray that
+    reaches it (to ``10 tol``) certifies the vertex as a point of :math:`S_{ov}`, hence one of
+    its vertices; otherwise the duals give the normal ``a`` of a hyperplane supporting
+    :math:`S_{ov}` where the ray leaves it, and the support LP along ``a`` adds the row
+    :math:`a^T u \le h(a)`, which cuts the vertex off. A vertex within ``tol`` of that row is
+    settled by its distance to :math:`S_{ov}` (:class:`DistanceOracle`): within ``tol``,
+    certified; otherwise cut off by the dual's separating hyperplane. When a round certifies
+    every vertex, O = :math:`S_{ov}` (to ``10 tol``); :func:`polish_vertices` then refits the
+    facets and sorts out the vertices. The rays of a round go in an order that keeps
+    neighbours together (:func:`_chain`), and a vertex that is a support LP's solution needs none.
+
+    With a ``tolerance`` or a ``progress`` callback in ``budget.limits`` the bracket is
+    measured between rounds (:func:`measure`), at most as often as it keeps its cost below the
+    time spent refining; a limit reached stops the loop, the cuts found so far are kept and
+    the result is ``"approximate"``, with the bracket measured then (only the memory budget
+    applies to that last measurement; if even it does not fit, a :class:`SolverError`).
+    """
+    budget = budget or Budget()
+    limits: Limits = budget.limits
+    k = basis.shape[0]
+    center = local.mean(axis=0)
+    cutter = Cutter(support, basis, center, tol)
+    cutter.budget = budget
+    normals, offsets = bounds
+    if np.linalg.matrix_rank(normals) < k:  # O would be unbounded (not met: basis rows span)
+        normals = np.vstack([np.eye(k), -np.eye(k)])
+        offsets = np.array([cutter.cut(a) for a in normals])
+    seeds = np.vstack([np.zeros((1, k)), local])  # the origin and the first points: in S_ov
+    certified: list[NDArray[np.float64]] = []
+    polar = PolarHull(normals, offsets, center, tol)
+    watch = limits.tolerance > 0.0 or limits.progress is not None
+    cost, since, rounds = 0.0, 0.0, 0
+    stop: LimitReached | None = None
+    bracket: tuple[Bracket, InnerHull] | None = None
+    try:
+        while True:
+            budget.check()
+            verts = polar.new_vertices(budget)
+            if certified:
+                verts = verts[cKDTree(certified).query(verts)[0] > 10 * tol]
+            try:
+                cutter.settle(verts[_chain(verts, center)])
+            finally:  # also when a limit interrupts the round: keep what it found
+                certified.extend(cutter.certified)
+                cutter.certified = []
+                if cutter.cuts:
+                    polar.add(cutter.new_n[: cutter.cuts], cutter.new_b[: cutter.cuts])
+            rounds += 1
+            if not cutter.cuts:
+                break
+            cutter.cuts = 0
+            # Progress alone (no tolerance) waits 2 s: quick exact runs are not slowed down. A
+            # measurement that would likely (4 x the last one's cost) overrun the time limit is skipped.
+            late = limits.time_limit is not None and budget.elapsed + 4 * cost > limits.time_limit
+            if (
+                watch
+                and not late
+                and budget.elapsed - since >= cost
+                and (limits.tolerance > 0.0 or budget.elapsed > 2.0)
+            ):
+                t = budget.elapsed
+                bracket = measure(cutter, polar, seeds, budget)
+                cost, since = budget.elapsed - t, budget.elapsed
+                _report(limits, rounds, cutter, bracket[0], budget)
+                if bracket[0].gap <= limits.tolerance:
+                    stop = LimitReached("tolerance", f"relative volume gap {bracket[0].gap:.3g}")
+                    break
+        # polish_vertices and the volume hold (vertices x rows) booleans: that must fit too.
+        budget.reserve(2.0 * len(certified) * len(polar.offsets), "the incidences of the exact TVMS")
+    except LimitReached as e:
+        # A bracket measured earlier stays valid (I only grew, O only shrank since): on a time
+        # limit it is returned as it is rather than measured again past the limit.
+        stop = e
+        bracket = bracket if e.reason == "time" else None
+    support.num_lps = cutter.num_lps
+    if stop is not None:
+        return _approximate(stop, cutter, polar, seeds, budget, bracket, result, basis, rounds)
+    verts, facet_n, facet_b = polish_vertices(np.array(certified), polar.normals, polar.offsets, tol)
+    return result("bounded", verts @ basis, basis, facets=(facet_n, facet_b))
+
+
+def _report(limits: Limits, rounds: int, cutter: Cutter, bracket: Bracket, budget: Budget) -> None:
+    if limits.progress is not None:
+        limits.progress(
+            {
+                "round": rounds,
+                "lps": cutter.num_lps,
+                "inner": bracket.inner,
+                "outer": bracket.outer,
+                "gap": bracket.gap,
+                "hausdorff": bracket.hausdorff,
+                "seconds": budget.elapsed,
+            }
+        )
+
+
+def _approximate(
+    stop: LimitReached,
+    cutter: Cutter,
+    polar: PolarHull,
+    seeds: NDArray[np.float64],
+    budget: Budget,
+    measured: tuple[Bracket, InnerHull] | None,
+    result: Any,
+    basis: NDArray[np.float64],
+    rounds: int,
+) -> Projection:
+    """The ``"approximate"`` result: the bracket (measured now unless ``measured``)."""
+    if measured is None:
+        final = Budget(Limits(memory=budget.memory))  # no time limit for the last measurement
+        final.base_rss = budget.base_rss
+        try:
+            measured = measure(cutter, polar, seeds, final)
+        except LimitReached as e:
+            raise SolverError(
+                "budget", f"{stop.reason} limit reached ({stop.detail}) and no bracket fits: {e.detail}"
+            ) from e
+    bracket, inner = measured
+    _report(budget.limits, rounds, cutter, bracket, budget)
+    approx = Approximation(
+        stop.reason,
+        stop.detail,
+        bracket.inner,
+        bracket.outer,
+        bracket.hausdorff,
+        (inner.normals, inner.offsets),
+        (polar.normals, polar.offsets),
+    )
+    return result("approximate", inner.vertices @ basis, basis, approximation=approx)
