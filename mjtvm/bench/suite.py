@@ -153,8 +153,12 @@ def bench_sweeps(*, jobs: Sequence[int] = (1, 2), repeats: int = 3, num_states: 
         "start_method": "fork" if sweep._forks() else "forkserver",
     }
     if "1" in per_jobs:
-        out["speedup"] = {
-            k: per_jobs["1"]["median_s"] / v["median_s"] for k, v in per_jobs.items() if k != "1"
+        serial = per_jobs["1"]["median_s"]
+        out["speedup"] = {k: serial / v["median_s"] for k, v in per_jobs.items() if k != "1"}
+        # Amdahl: the lift is built once before any state can be solved, the rest divides at
+        # best evenly; the speed-up no pool can pass with this serial run and this lift.
+        out["speedup_ceiling"] = {
+            k: serial / (lift_s + max(serial - lift_s, 0.0) / int(k)) for k in per_jobs if k != "1"
         }
     return out
 
