@@ -8,8 +8,9 @@ reads each state's MuJoCo grasp once per worker, and solves each requested state
 :func:`~mjtvm.core.tvmmp.tvmmp`. The same tasks run
 
 * serially (``jobs=1``),
-* on a local process pool (``jobs > 1``, the ``forkserver`` start method: MuJoCo and
-  HiGHS hold native state that should not be forked), or
+* on a local process pool (``jobs > 1``; on Linux forked after this process has built the
+  lifts, so that the workers neither import mjtvm nor rebuild a lift; elsewhere started
+  from a forkserver, each worker building the lift), or
 * on a Dask cluster (``cluster="tcp://host:8786"`` or a ``distributed.Client``), the
   optional ``cluster`` extra. Dask was chosen over Ray because it installs as pure-Python
   wheels from PyPI, its ``LocalCluster`` runs the same code in tests, and ``Client(address)``
@@ -26,7 +27,9 @@ import itertools
 import json
 import multiprocessing
 import signal
+import sys
 import time
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
@@ -212,9 +215,11 @@ def run_sweep(
         A Dask scheduler address (``"tcp://..."``) or a ``distributed.Client``; overrides
         ``jobs``. Needs the ``cluster`` extra (``pip install "mjtvm[cluster]"``).
     chunk
-        States per task (tasks of one lift configuration share the worker's lift). In this
-        process (``jobs=1``) every state is its own task: the lift is cached anyway, and
-        ``on_rows`` then sees every row as soon as it exists.
+        States per task, at most. On a Dask cluster or a forkserver pool a task is one
+        configuration of a lift (they share the worker's lift); on a forked pool (Linux) a
+        task solves every configuration of a lift at its states, about 8 tasks per worker.
+        In this process (``jobs=1``) every state is its own task: the lift is cached anyway,
+        and ``on_rows`` then sees every row as soon as it exists.
     progress
         Show a tqdm progress bar over the rows to compute.
     done
@@ -258,18 +263,74 @@ def run_sweep(
             for key, states in tasks:
                 finished(_solve_group(key, states))
         else:
-            context = multiprocessing.get_context("forkserver")
-            pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_ignore_sigint)
-            try:
-                for f in [pool.submit(_solve_group, key, states) for key, states in tasks]:
-                    finished(f.result())
-            except BaseException:
-                _stop(pool)
-                raise
-            pool.shutdown()
+            _run_pool(tasks, jobs, finished)
     finally:
         bar.close()
     return [table[_key(p)] for p in pts]
+
+
+def _fork_tasks(tasks: list[tuple[_Key, list[int]]], jobs: int) -> list[list[tuple[_Key, list[int]]]]:
+    """The work regrouped for forked workers: per lift, its states dealt round-robin into
+    about 8 tasks per worker (a state's cost varies along the lift), each task solving every
+    configuration of the lift at its states, so that a state's MuJoCo grasp (``_base``) is
+    read in one worker only. Task sizes never exceed the given tasks' states."""
+    by_lift: dict[tuple[str, str, int], dict[_Key, set[int]]] = {}
+    size = max((len(states) for _, states in tasks), default=1)
+    for key, states in tasks:
+        by_lift.setdefault((key[0], key[1], key[2]), {}).setdefault(key, set()).update(states)
+    out = []
+    for configs in by_lift.values():
+        states = sorted(set().union(*configs.values()))
+        n = max(min(len(states), 8 * jobs), -(-len(states) // size))
+        for part in (set(states[t::n]) for t in range(n)):
+            out.append([(key, sorted(part & wanted)) for key, wanted in configs.items() if part & wanted])
+    return out
+
+
+def _solve_many(groups: list[tuple[_Key, list[int]]]) -> list[dict[str, Any]]:
+    """:func:`_solve_group` of each group (one forked task)."""
+    return [row for key, states in groups for row in _solve_group(key, states)]
+
+
+def _forks() -> bool:
+    """Whether local pools fork their workers (Linux) rather than start them from a forkserver."""
+    return sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods()
+
+
+def _run_pool(
+    tasks: list[tuple[_Key, list[int]]], jobs: int, finished: Callable[[list[dict[str, Any]]], None]
+) -> None:
+    """The tasks on ``jobs`` local processes.
+
+    On Linux the lifts are built here and the workers are forked afterwards: they start with
+    mjtvm imported and the lifts in memory (the lift is the sweep's serial part; before, the
+    forkserver's workers imported mjtvm and built it again each). Forking is safe here: at
+    that point the process's only other threads are OpenBLAS' idle pools, which OpenBLAS
+    re-creates in the child (pthread_atfork); HiGHS runs single-threaded and its idle
+    instances are not reused across the fork (:mod:`mjtvm.core.highs`); MuJoCo holds no
+    threads. Elsewhere (no safe fork) the forkserver's workers build the lift themselves.
+    """
+    fork = _forks()
+    calls: list[tuple[Callable[..., list[dict[str, Any]]], tuple[Any, ...]]]
+    if fork:
+        for key in {(k[0], k[1], k[2]) for k, _ in tasks}:
+            _lift(*key)
+        calls = [(_solve_many, (groups,)) for groups in _fork_tasks(tasks, jobs)]
+    else:
+        calls = [(_solve_group, (key, states)) for key, states in tasks]
+    context = multiprocessing.get_context("fork" if fork else "forkserver")
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_ignore_sigint)
+    try:
+        with warnings.catch_warnings():
+            # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see above).
+            warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
+            futures = [pool.submit(fn, *args) for fn, args in calls]
+        for f in futures:
+            finished(f.result())
+    except BaseException:
+        _stop(pool)
+        raise
+    pool.shutdown()
 
 
 CONNECT_TIMEOUT_S = 10.0

@@ -95,9 +95,19 @@ class _Coo:
     def build(self, shape: tuple[int, int]) -> sp.csc_matrix:
         if not self.rows:
             return sp.csc_matrix(shape)
-        return sp.csc_matrix(
-            (np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))), shape=shape
-        )
+        rows, cols, vals = np.concatenate(self.rows), np.concatenate(self.cols), np.concatenate(self.vals)
+        # The blocks never overlap, so the canonical CSC is a sort by (column, row): built
+        # directly, it costs a tenth of scipy's COO conversion (Problem 2 assembles per state).
+        # Should an entry repeat, scipy sums the duplicates as before.
+        order = np.lexsort((rows, cols))
+        rows, cols = rows[order], cols[order]
+        if rows.size > 1 and np.any((np.diff(cols) == 0) & (np.diff(rows) == 0)):
+            return sp.csc_matrix((vals[order], (rows, cols)), shape=shape)
+        indptr = np.zeros(shape[1] + 1, dtype=np.int32)
+        np.cumsum(np.bincount(cols, minlength=shape[1]), out=indptr[1:])
+        out = sp.csc_matrix((vals[order], rows.astype(np.int32), indptr), shape=shape)
+        out.has_canonical_format = True
+        return out
 
 
 @dataclass(frozen=True, eq=False)

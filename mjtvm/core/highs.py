@@ -87,6 +87,27 @@ def new_highs():  # type: ignore[no-untyped-def]
             os.close(saved)
 
 
+_IDLE: list[Any] = []  # Highs instances given back by finished sessions (release), this process's
+_IDLE_PID = [os.getpid()]
+_IDLE_MAX = 4
+
+
+def _acquire_highs():  # type: ignore[no-untyped-def]
+    """An idle ``Highs`` given back by :meth:`HighsSession.release`, else :func:`new_highs`.
+
+    Constructing a ``Highs`` costs ~50 us, 2 % of a Problem 2 state; a reused one gets a new
+    model (``passModel`` discards the old model, basis and solution) and the session's options,
+    so its solves are the same, bit for bit (tested). Instances are never shared across a
+    fork: the list is emptied when the process id changes."""
+    if _IDLE_PID[0] != os.getpid():
+        _IDLE.clear()
+        _IDLE_PID[0] = os.getpid()
+    try:
+        return _IDLE.pop()
+    except IndexError:
+        return new_highs()
+
+
 class HighsSession:
     r"""A HiGHS instance holding one equilibrated LP, re-solved after small modifications.
 
@@ -104,16 +125,43 @@ class HighsSession:
     """
 
     def __init__(self, lp: LinearProgram, *, scaling: Scaling | None = None) -> None:
+        s = lp_scaling(lp) if scaling is None else scaling
+        self._load(scale_lp(lp, s), s, lp.c, lp.col_lower, lp.col_upper, new_highs())
+
+    @classmethod
+    def from_scaled(
+        cls,
+        scaled: LinearProgram,
+        scaling: Scaling,
+        cost: NDArray[np.float64],
+        col_lower: NDArray[np.float64],
+        col_upper: NDArray[np.float64],
+    ) -> HighsSession:
+        """The session of an LP whose ``scale_lp(lp, scaling)`` the caller has already (the
+        same arrays: Problem 2 builds it from a per-state cache, without the sparse copies),
+        given with the LP's own costs and column bounds. Its HiGHS instance may be one a
+        finished session gave back (:meth:`release`)."""
+        self = cls.__new__(cls)
+        self._load(scaled, scaling, cost, col_lower, col_upper, _acquire_highs())
+        return self
+
+    def _load(
+        self,
+        slp: LinearProgram,
+        s: Scaling,
+        cost: NDArray[np.float64],
+        col_lower: NDArray[np.float64],
+        col_upper: NDArray[np.float64],
+        h: Any,
+    ) -> None:
+        """Pass the equilibrated LP ``slp`` (factors ``s``) to the HiGHS instance ``h``."""
         highspy = _highs()
         self._hs = highspy
-        s = lp_scaling(lp) if scaling is None else scaling
         self.scaling = s
         self._col = np.array(s.col, dtype=float)  # per-column factors (set_column may change one)
-        self._cost = np.array(lp.c, dtype=float)  # unscaled costs, bounds: re-scaled on change
-        self._col_lower = np.array(lp.col_lower, dtype=float)
-        self._col_upper = np.array(lp.col_upper, dtype=float)
-        slp = scale_lp(lp, s)
-        h = new_highs()
+        self._cost = np.array(cost, dtype=float)  # unscaled costs, bounds: re-scaled on change
+        self._col_lower = np.array(col_lower, dtype=float)
+        self._col_upper = np.array(col_upper, dtype=float)
         self.highs = h
         options = {
             "output_flag": False,
@@ -124,33 +172,41 @@ class HighsSession:
             # Round-off is dropped by scale_lp; HiGHS must keep every other entry.
             "small_matrix_value": _HIGHS_SMALL,
         }
-        for name, value in options.items():
+        for name, value in {**options, **_HIGHS_DEFAULTS}.items():
             self._check(h.setOptionValue(name, value), f"option {name}={value!r} rejected")
         a = slp.A
         self._check_magnitudes(a.data, "passModel")
-        model = highspy.HighsLp()
-        n = a.shape[1]
-        model.num_col_ = n
-        model.num_row_ = a.shape[0]
+        m, n = a.shape
         inf = highspy.kHighsInf
-        model.col_cost_ = np.asarray(slp.c, dtype=float)
-        model.col_lower_ = np.where(np.isfinite(slp.col_lower), slp.col_lower, -inf)
-        model.col_upper_ = np.where(np.isfinite(slp.col_upper), slp.col_upper, inf)
-        model.row_lower_ = np.where(np.isfinite(slp.row_lower), slp.row_lower, -inf)
-        model.row_upper_ = np.where(np.isfinite(slp.row_upper), slp.row_upper, inf)
-        model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        model.a_matrix_.start_ = a.indptr
-        model.a_matrix_.index_ = a.indices
-        model.a_matrix_.value_ = a.data
-        model.a_matrix_.num_col_ = n
-        model.a_matrix_.num_row_ = a.shape[0]
-        self._check(h.passModel(model), "passModel")
+
+        def finite(x: NDArray[np.float64], default: float) -> NDArray[np.float64]:
+            return np.ascontiguousarray(np.where(np.isfinite(x), x, default), dtype=float)
+
+        # The flat passModel: filling a highspy.HighsLp field by field costs 60 us (each
+        # field a conversion), more than HiGHS' own copy of the model.
+        status = h.passModel(
+            n, m, a.nnz, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize), 0.0,
+            np.ascontiguousarray(slp.c, dtype=float), finite(slp.col_lower, -inf), finite(slp.col_upper, inf),
+            finite(slp.row_lower, -inf), finite(slp.row_upper, inf),
+            np.ascontiguousarray(a.indptr, dtype=np.int32), np.ascontiguousarray(a.indices, dtype=np.int32),
+            np.ascontiguousarray(a.data, dtype=float),
+            np.zeros(n, dtype=np.int32),  # every column continuous (HiGHS reads n entries: never empty)
+        )  # fmt: skip
+        self._check(status, "passModel")
         # Largest scaled magnitude per row: the reference of set_column's round-off drop.
         self._row_max = np.zeros(a.shape[0])
         if a.nnz:
             np.maximum.at(self._row_max, a.indices, np.abs(a.data))
         self.num_col = n
         self._options = dict(_HIGHS_DEFAULTS)  # what the retries in solve() restore
+
+    def release(self) -> None:
+        """Give the HiGHS instance back for the next session of this process (the session is
+        unusable afterwards). Only for a session whose options are the defaults (no
+        :meth:`set_option`) and whose last call returned normally."""
+        h, self.highs = self.highs, None
+        if h is not None and len(_IDLE) < _IDLE_MAX and _IDLE_PID[0] == os.getpid():
+            _IDLE.append(h)
 
     def _check(self, status: Any, what: str) -> None:
         """kOk and kWarning pass (a warning is HiGHS informing, e.g. of a dropped tiny

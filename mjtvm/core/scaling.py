@@ -113,7 +113,7 @@ class _LogEntries(NamedTuple):
 def _log_entries(a: sp.spmatrix, rhs: NDArray[np.float64] | None) -> _LogEntries:
     """The statistics of :func:`equilibrate`: the entries of ``|[A | rhs]|`` in log2."""
     m, n = a.shape
-    csc_in = sp.csc_matrix(a)
+    csc_in = a if isinstance(a, sp.csc_matrix) else sp.csc_matrix(a)  # read only: no copy needed
     cols = np.repeat(np.arange(n), np.diff(csc_in.indptr))
     keep = csc_in.data != 0.0
     rows, cols, vals = csc_in.indices[keep], cols[keep], np.abs(csc_in.data[keep])

@@ -91,7 +91,8 @@ class _Problem2:
         self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
         self.col_upper = np.append(asm.col_upper, np.inf)
         self.kin = asm.kinematic_rows
-        self.twist_rows = asm.A_twist.tocsr()[self.kin].toarray()
+        twist = asm.A_twist.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
+        self.twist_rows = twist[self.kin]
         self.abs_twist_rows = np.abs(self.twist_rows)
         self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
         lower, upper = asm.statics_bounds(np.max(np.abs(state.refs), axis=0))
@@ -105,13 +106,13 @@ class _Problem2:
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
         # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
         # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
-        tw = asm.A_twist.tocoo()
-        tw_max = np.zeros(tw.shape[1])
-        np.maximum.at(tw_max, tw.col, np.abs(tw.data * s.row[tw.row]))
+        tw_max = np.max(np.abs(twist * s.row[:, None]), axis=0, initial=0.0)
         self.twist_scale = np.where(
             tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
         )
+        self._scaled_a = _ScaledMatrix(asm.A, s)
         self.session: HighsSession | None = None
+        self._last: tuple[NDArray[np.float64], float] = (np.full(state.twist_dim, np.nan), np.nan)
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without the
@@ -151,6 +152,23 @@ class _Problem2:
         col_s = np.append(self.col_scale, factor)
         return lp, Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
 
+    def _session(self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float) -> HighsSession:
+        """A HiGHS session holding the LP of (w, r), built from the per-state scaled matrix
+        (the arrays :meth:`lp` then ``scale_lp`` would give, without their sparse copies)."""
+        kin_col = self.column(r)
+        factor = column_factor(self.row_scale[self.kin] * kin_col)
+        col_s = np.append(self.col_scale, factor)
+        s = Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
+        lower, upper = self.asm.statics_bounds(w)
+        cu = self.col_upper.copy()
+        cu[-1] = alpha_max
+        nz = np.flatnonzero(kin_col)
+        a_s = self._scaled_a.with_column(self.kin[nz], kin_col[nz], factor)
+        with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
+            slp = LinearProgram(s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper,
+                                self.col_lower / col_s, cu / col_s)  # fmt: skip
+        return HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu)
+
     def solve(self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf) -> Settled:
         """The settled LP of (w, r): HiGHS warm, Clarabel on failure; or Clarabel checked."""
         if self.solver != "highs":
@@ -158,18 +176,64 @@ class _Problem2:
             return clarabel_checked(lp, scaling=s)
         try:
             if self.session is None:
-                lp, s = self.lp(w, r, alpha_max=alpha_max)
-                self.session = HighsSession(lp, scaling=s)
+                self.session = self._session(w, r, alpha_max)
             else:
                 ses = self.session
                 ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
-                ses.set_row_bounds(self.wrench_rows, -w, -w)
-                ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+                # The bounds only change with k (set_column re-sends alpha's when it rescales).
+                if not np.array_equal(w, self._last[0]):
+                    ses.set_row_bounds(self.wrench_rows, -w, -w)
+                if alpha_max != self._last[1]:
+                    ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+            self._last = (w, alpha_max)
             return Settled(self.session.solve(), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return fallback(lp, e, scaling=s)
+
+
+class _ScaledMatrix:
+    """``diag(row) A diag(col)`` of one state, computed once, and the scaled ``[A | a]`` of each
+    alpha column ``a`` with :func:`~mjtvm.core.scaling.scale_lp`'s round-off rule (an entry at
+    most DROP_REL times the largest of its row, of its column, or 1 is dropped; the rows'
+    largest entries include the alpha column's)."""
+
+    def __init__(self, a: sp.csc_matrix, s: Scaling) -> None:
+        if not a.has_canonical_format:  # the assembly's matrix is canonical; copies stay exact
+            a = a.copy()
+            a.sum_duplicates()
+        m, n = a.shape
+        self.shape = (m, n)
+        self.indptr, self.indices = a.indptr, a.indices
+        self.cols = np.repeat(np.arange(n), np.diff(a.indptr))
+        self.data = a.data * s.row[a.indices] * s.col[self.cols]
+        self.mag = np.abs(self.data)
+        self.row_max = np.zeros(m)
+        np.maximum.at(self.row_max, a.indices, self.mag)
+        col_max = np.zeros(n)
+        np.maximum.at(col_max, self.cols, self.mag)
+        self.col_max_at = col_max[self.cols]
+        self.row = s.row
+
+    def with_column(
+        self, rows: NDArray[np.int64], values: NDArray[np.float64], factor: float
+    ) -> sp.csc_matrix:
+        """The scaled ``[A | a]`` with ``a[rows] = values`` (sorted rows, non-zero values)."""
+        m, n = self.shape
+        data_a = values * self.row[rows] * factor
+        mag_a = np.abs(data_a)
+        row_max = self.row_max.copy()
+        np.maximum.at(row_max, rows, mag_a)
+        ref = np.maximum(np.maximum(row_max[self.indices], self.col_max_at), 1.0)
+        keep = (self.mag > DROP_REL * ref) & (self.data != 0.0)
+        ref_a = np.maximum(np.maximum(row_max[rows], mag_a.max(initial=0.0)), 1.0)
+        keep_a = (mag_a > DROP_REL * ref_a) & (data_a != 0.0)
+        counts = np.append(np.bincount(self.cols[keep], minlength=n), np.count_nonzero(keep_a))
+        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(self.indptr.dtype)
+        data = np.concatenate([self.data[keep], data_a[keep_a]])
+        indices = np.concatenate([self.indices[keep], rows[keep_a]]).astype(self.indices.dtype)
+        return sp.csc_matrix((data, indices, indptr), shape=(m, n + 1))
 
 
 @dataclass
@@ -319,6 +383,9 @@ def tvmmp(
     problem = _Problem2(state, box, solver)
     t1 = time.perf_counter()
     pairs = _solve_pairs(problem, state, witnesses)
+    if problem.session is not None:  # the pairs are settled: its HiGHS instance serves the next state
+        problem.session.release()
+        problem.session = None
     t2 = time.perf_counter()
     limiting, value = _limiting(pairs)
     return TvmmpResult(

@@ -32,6 +32,29 @@ def test_process_pool_gives_the_same_rows(serial):
     assert run_sweep(POINTS, jobs=2, chunk=1, progress=False) == serial
 
 
+def test_process_pool_with_default_tasks_gives_the_same_rows(serial):
+    """Forked workers, several configurations per task (the bench's setting): every field of
+    every row equal to the serial run's, to the bit, in the order of the points."""
+    assert run_sweep(POINTS, jobs=2, progress=False) == serial
+
+
+@pytest.mark.parametrize("chunk", [1, 2, 30])
+def test_forked_tasks_cover_every_point_once(chunk):
+    from mjtvm.apps.sweep import _fork_tasks, _groups
+
+    points = grid(mus=(0.1, 0.5), states=range(10), num_states=10) + grid(
+        hands=("humanlike",), states=(2, 7), num_states=10
+    )
+    tasks = _fork_tasks(_groups(points, chunk), jobs=2)
+    solved = [(key, i) for task in tasks for key, states in task for i in states]
+    assert sorted(solved) == sorted(
+        ((p.scenario, p.hand, p.num_states, p.variant, p.reading, p.mu, p.mg), p.state) for p in points
+    )
+    for task in tasks:  # one lift per task, at most `chunk` states of it
+        assert len({key[:3] for key, _ in task}) == 1
+        assert len({i for _, states in task for i in states}) <= chunk
+
+
 def test_dask_local_cluster_gives_the_same_rows(serial):
     import distributed  # the "cluster" extra, part of the "test" extra: never skipped
 

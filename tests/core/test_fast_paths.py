@@ -1,0 +1,112 @@
+"""The shortcuts of Problem 2's per-state work (issue 15, item 5) give the very same numbers.
+
+Each fast path is compared with the generic code it replaces, to the bit: the assembly's
+CSC built by sorting (scipy's COO conversion), the first LP's equilibrated matrix built from
+the per-state scaled matrix (``scale_lp`` of ``lp``, round-off drop included), and a HiGHS
+instance reused by the next state (a fresh one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from mjtvm import tvmmp
+from mjtvm.core import highs
+from mjtvm.core.assembly import _Coo, assemble
+from mjtvm.core.scaling import scale_lp
+from mjtvm.core.state import load_state
+from mjtvm.core.tvmmp import _Problem2
+from mjtvm.sim.scenario import load_scenario
+
+from .test_solvers import mixed_scale
+from .test_units import rescale
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples" / "pinch.json"
+
+
+@pytest.fixture(scope="module")
+def states():
+    pinch = load_state(EXAMPLE)
+    case2 = load_scenario("case2").state()
+    return {
+        "pinch": pinch,
+        "case2": case2,
+        "case2_tiny_units": rescale(case2, length=1e6, force=1e-6, time=1e3),
+        "pinch_mixed_scale": mixed_scale(pinch, 7),  # entries 1e-8 and 1e4: round-off drops happen
+        "case2_preload": case2.with_(
+            contacts=tuple(replace(c, preload=0.05) if c.type != "D" else c for c in case2.contacts)
+        ),
+    }
+
+
+def _same_csc(a: sp.csc_matrix, b: sp.csc_matrix) -> None:
+    assert a.shape == b.shape
+    assert a.indptr.dtype == b.indptr.dtype and a.indices.dtype == b.indices.dtype
+    np.testing.assert_array_equal(a.indptr, b.indptr)
+    np.testing.assert_array_equal(a.indices, b.indices)
+    np.testing.assert_array_equal(a.data, b.data)
+
+
+def test_sorted_csc_is_scipys_conversion(states):
+    for state in states.values():
+        for kwargs in ({}, {"box": "literal"}, {"copies": 2}):
+            asm = assemble(state, **kwargs)  # type: ignore[arg-type]
+            for m in (asm.A, asm.A_twist):
+                coo = m.tocoo()
+                _same_csc(m, sp.csc_matrix((coo.data, (coo.row, coo.col)), shape=m.shape))
+
+
+def test_repeated_entries_are_still_summed():
+    coo = _Coo()
+    coo.add(0, 0, np.array([[1.0, 2.0], [0.0, 3.0]]))
+    coo.add(1, 1, np.array([[0.5]]))
+    np.testing.assert_array_equal(coo.build((2, 2)).toarray(), [[1.0, 2.0], [0.0, 3.5]])
+
+
+def test_first_lp_equals_scale_lp(states):
+    for state in states.values():
+        problem = _Problem2(state, "eliminated", "highs")
+        for r in state.rvds:
+            lp, s = problem.lp(state.refs[0], r)
+            generic = scale_lp(lp, s)
+            session = problem._session(state.refs[0], r, np.inf)
+            ref = highs.HighsSession(lp, scaling=s)
+            for name in ("col_cost_", "col_lower_", "col_upper_", "row_lower_", "row_upper_"):
+                np.testing.assert_array_equal(
+                    getattr(session.highs.getLp(), name), getattr(ref.highs.getLp(), name)
+                )
+            fast = session.highs.getLp().a_matrix_
+            np.testing.assert_array_equal(fast.start_, generic.A.indptr)
+            np.testing.assert_array_equal(fast.index_, generic.A.indices)
+            np.testing.assert_array_equal(fast.value_, generic.A.data)
+            np.testing.assert_array_equal(session._row_max, ref._row_max)
+
+
+def test_a_reused_highs_instance_solves_bit_for_bit(states, monkeypatch):
+    monkeypatch.setattr(highs, "_IDLE", [])
+    fresh = {name: tvmmp(state) for name, state in states.items()}
+    assert highs._IDLE  # the sessions gave their instances back
+    for name in reversed(list(states)):  # every state now on another state's instance
+        again = tvmmp(states[name])
+        np.testing.assert_array_equal(again.alpha, fresh[name].alpha)
+        assert again.status == fresh[name].status and again.notes == fresh[name].notes
+        for row_a, row_b in zip(again.witnesses, fresh[name].witnesses):
+            for a, b in zip(row_a, row_b):
+                assert (a is None) == (b is None)
+                if a is not None:
+                    np.testing.assert_array_equal(a.forces, b.forces)
+                    np.testing.assert_array_equal(a.speeds, b.speeds)
+
+
+def test_the_idle_instances_stay_in_their_process(monkeypatch):
+    import highspy
+
+    monkeypatch.setattr(highs, "_IDLE", ["an instance of the parent"])
+    monkeypatch.setattr(highs, "_IDLE_PID", [-1])  # as after a fork
+    assert isinstance(highs._acquire_highs(), highspy.Highs)
+    assert highs._IDLE == []
