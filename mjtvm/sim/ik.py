@@ -331,6 +331,7 @@ def solve_ik(
     tolerance: float = 1e-10,
     max_iterations: int = 500,
     strict: bool = True,
+    scratch: mujoco.MjData | None = None,
 ) -> IkResult:
     r"""Place every target: minimise :math:`\tfrac12 |e(q)|^2` over the chosen joints.
 
@@ -362,6 +363,9 @@ def solve_ik(
         Iteration budget.
     strict
         Raise when not converged (default); otherwise return with ``converged=False``.
+    scratch
+        An ``mjData`` of ``model`` to work in (overwritten with ``data`` first) instead of a
+        new copy: allocating one costs 0.3 ms, copying into one 5 us (the lift's corrections).
 
     Raises
     ------
@@ -378,7 +382,11 @@ def solve_ik(
     dofs = np.array([int(model.jnt_dofadr[j]) for j in ids], dtype=int)
     lo, hi = _joint_bounds(model, ids, names, bounds)
 
-    work = copy.copy(data)
+    if scratch is None:
+        work = copy.copy(data)
+    else:
+        work = scratch
+        mujoco.mj_copyData(work, model, data)
     q = np.clip(np.array(work.qpos[adr], dtype=float), lo, hi)
 
     def evaluate(qv: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -92,6 +92,7 @@ class Marcher:
                  tolerance: float, max_iterations: int, stop_margin: float = 0.0) -> None:  # fmt: skip
         self.grasp, self.model, self.motion = grasp, grasp.model, motion
         self.stop_margin = stop_margin
+        self.scratch = mujoco.MjData(grasp.model)  # reused by the IK and the sampling: no allocations
         self.tol, self.max_it, self.bounds = tolerance, max_iterations, dict(bounds)
         model = grasp.model
         self.dmodel = distance_model(model)
@@ -271,7 +272,8 @@ class Marcher:
         retarget = [k for k, f in enumerate(self.fingers) if f.role == "N" and not f.sphere]
         for _ in range(_MAX_ROUNDS):
             res = solve_ik(self.model, work, targets, joints=self.joint_names, bounds=self.bounds,
-                           tolerance=self.tol, max_iterations=self.max_it, strict=False)  # fmt: skip
+                           tolerance=self.tol, max_iterations=self.max_it, strict=False,
+                           scratch=self.scratch)  # fmt: skip
             work.qpos[:] = res.qpos
             info["residual"] = np.array(res.residuals)
             if not res.converged:
@@ -295,6 +297,11 @@ class Marcher:
         if why := self.inadmissible(work):
             info["ok"], info["why"] = False, f"{why} at {where}"
         return work, info
+
+    def copy_to_scratch(self, data: mujoco.MjData) -> mujoco.MjData:
+        """:attr:`scratch` holding a copy of ``data`` (valid until the next use of the scratch)."""
+        mujoco.mj_copyData(self.scratch, self.model, data)
+        return self.scratch
 
     def touching(self, data: mujoco.MjData) -> list[tuple[str, float]]:
         # MuJoCo reports a contact only once its margin (0 by default) is reached: detect with a

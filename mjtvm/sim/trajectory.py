@@ -369,9 +369,9 @@ def _sample(m: Marcher, path: _Path, n: int, **meta: Any) -> Lift:
         else:
             data, info = step
         qpos[i], poses[i], twists[i] = data.qpos, m.pose(data), m.motion.twist(float(s))
-        points[i], rates[i], slips[i] = m.kinematics(copy.copy(data), float(s))
+        points[i], rates[i], slips[i] = m.kinematics(m.copy_to_scratch(data), float(s))
         drift[i], residual[i] = info["drift"], info["residual"]
-        touching.append(tuple(dict.fromkeys(geom for geom, _ in m.touching(copy.copy(data)))))
+        touching.append(tuple(dict.fromkeys(geom for geom, _ in m.touching(m.copy_to_scratch(data)))))
     base_contact = np.array([any(b in t for b in m.base) for t in touching])
     z = poses[:, 2].copy()
     for a in (grid, z, poses, twists, qpos, points, rates, slips, drift, residual, base_contact):
