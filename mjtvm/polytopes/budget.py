@@ -22,6 +22,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..errors import StateError
+
 __all__ = [
     "DEFAULT_MEMORY_FRACTION",
     "Budget",
@@ -103,11 +105,11 @@ class Limits:
 
     def __post_init__(self) -> None:
         if not (0.0 <= self.tolerance < 1.0):
-            raise ValueError(f"tolerance: expected a number in [0, 1), got {self.tolerance!r}")
+            raise StateError("tolerance", f"expected a number in [0, 1), got {self.tolerance!r}")
         if self.time_limit is not None and not self.time_limit > 0.0:
-            raise ValueError(f"time_limit: expected a positive number of seconds, got {self.time_limit!r}")
+            raise StateError("time_limit", f"expected a positive number of seconds, got {self.time_limit!r}")
         if self.memory is not None and not self.memory > 0:
-            raise ValueError(f"memory: expected a positive number of bytes, got {self.memory!r}")
+            raise StateError("memory", f"expected a positive number of bytes, got {self.memory!r}")
 
 
 class Budget:

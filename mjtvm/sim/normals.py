@@ -17,6 +17,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ModelError
+
 __all__ = ["CLOSED_FORM", "needs_exact_normal", "object_normal"]
 
 _G = mujoco.mjtGeom
@@ -78,5 +80,7 @@ def object_normal(
         n = scaled / size**2
         n /= np.linalg.norm(n)
     else:
-        raise ValueError(f"geom type {kind} has no exact normal here")
+        raise ModelError(
+            f"geom #{geom}", f"type {kind} has no exact normal (sphere, capsule, box, cylinder or ellipsoid)"
+        )
     return rot @ n
