@@ -146,12 +146,8 @@ class Grasp:
         must include the weight. ``mu``: one coefficient for every contact, or geom label ->
         coefficient updating the file's.
         """
-        refs, friction = self.refs, self.mu
-        if mg is not None:
-            if not self.document["refs"]["weight"]:
-                raise GraspError(self.file, "refs", "has no weight (weight = false): mg cannot replace it")
-            spec = {**self.document["refs"], "mg": float(mg)}
-            refs = _refs(self.model, self.data, {"refs": spec}, self.object_body, self.file)
+        refs = self.refs if mg is None else self.weight_refs(mg)
+        friction = self.mu
         if mu is not None:
             friction = MappingProxyType(
                 {g: float(mu) for g in self.contact_types}
@@ -177,8 +173,12 @@ class Grasp:
         return float(np.linalg.norm(self.refs[0, :3]))
 
     def weight_refs(self, mg: float) -> NDArray[np.float64]:
-        """``(K, 6)`` the REFS with the weight's magnitude set to ``mg`` (N): :meth:`with_options`."""
-        return self.with_options(mg=mg).refs
+        """``(K, 6)`` the REFS with the weight's magnitude set to ``mg`` (N), as :meth:`with_options`
+        makes them (without building a new grasp: the lift's states call this for every point)."""
+        if not self.document["refs"]["weight"]:
+            raise GraspError(self.file, "refs", "has no weight (weight = false): mg cannot replace it")
+        spec = {**self.document["refs"], "mg": float(mg)}
+        return _refs(self.model, self.data, {"refs": spec}, self.object_body, self.file)
 
     def spec(self) -> mujoco.MjSpec:
         """A fresh ``MjSpec`` of the model file with the grasp's additions (object, supports), e.g.
@@ -219,21 +219,23 @@ class Grasp:
             tolerance) or the first touching geom that no selection names.
         """
         tol = self.contact_tolerance
-        for i, row in enumerate(self.contact_report()):
-            if row["selection"] is None:
-                g = row["found"][0]
-                raise GraspError(
-                    self.file, "contacts",
-                    f"geom {g!r} touches the object (distance {1e3 * row['distance']:.3g} mm) but no "
-                    "contact selects it: add it to contacts with a type, or to ignore",
-                )  # fmt: skip
-            if not row["found"]:
-                d = row["distance"]
+        touching = self._touching()  # the nearest distances are computed only for a message
+        for i, (what, labels) in enumerate(self.selections):
+            if not any(g in touching for g in labels):
+                d = self._nearest(labels)
                 far = "more than 100 mm" if d is None else f"{1e3 * d:.3g} mm"
                 raise GraspError(
                     self.file, f"contacts[{i}]",
-                    f"{row['selection']} does not touch the object: nearest distance {far} > "
+                    f"{what} does not touch the object: nearest distance {far} > "
                     f"contact_tolerance {1e3 * tol:.3g} mm",
+                )  # fmt: skip
+        known = {g for _, labels in self.selections for g in labels} | set(self.ignored_geoms)
+        for g, dist in touching.items():
+            if g not in known:
+                raise GraspError(
+                    self.file, "contacts",
+                    f"geom {g!r} touches the object (distance {1e3 * dist:.3g} mm) but no "
+                    "contact selects it: add it to contacts with a type, or to ignore",
                 )  # fmt: skip
 
     def state(

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from ..errors import ModelError
 from .grasp import geom_label
+from .touch import CCD_TOLERANCE
 
 __all__ = ["BACKOFF", "OBJECT_TYPES", "Witness", "distance_model", "is_sphere", "witness"]
 
@@ -68,10 +69,11 @@ def is_sphere(model: mujoco.MjModel, geom: int) -> bool:
 
 def distance_model(model: mujoco.MjModel) -> mujoco.MjModel:
     """A copy of ``model`` for distance queries: the convex solver (GJK/EPA, used for cylinders
-    and ellipsoids) run to 1e-12 instead of the model's tolerance (MuJoCo's default 1e-6 is coarser
+    and ellipsoids) run to :data:`~mjtvm.sim.touch.CCD_TOLERANCE` (1e-12 m, as the grasp is read)
+    instead of the model's tolerance (MuJoCo's default 1e-6 is coarser
     than the lift's 1e-10 m); the model itself is left as its author set it."""
     out = copy.deepcopy(model)
-    out.opt.ccd_tolerance = min(float(out.opt.ccd_tolerance), 1e-12)
+    out.opt.ccd_tolerance = min(float(out.opt.ccd_tolerance), CCD_TOLERANCE)
     out.opt.ccd_iterations = max(int(out.opt.ccd_iterations), 200)
     return out
 
