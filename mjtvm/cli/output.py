@@ -82,6 +82,12 @@ def bracket_progress(enabled: bool) -> Iterator[Callable[[dict[str, Any]], None]
     bar = tqdm(desc="bracket", bar_format="{desc}: {postfix}", file=sys.stderr, leave=False)
 
     def show(d: dict[str, Any]) -> None:
+        if d.get("phase") == "estimate":
+            bar.set_postfix_str(
+                f"estimate in [{d['lower']:.6g}, {d['upper']:.6g}] width {100 * d['width']:.3g} %, "
+                f"{d['samples']} points, {d['lps']} LPs, {d['seconds']:.1f} s"
+            )
+            return
         bar.set_postfix_str(
             f"[{d['inner']:.6g}, {d['outer']:.6g}] gap {100 * d['gap']:.3g} %, Hausdorff "
             f"{d['hausdorff']:.3g}, round {d['round']}, {d['lps']} LPs, {d['seconds']:.1f} s"

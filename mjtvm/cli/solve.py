@@ -12,6 +12,7 @@ from ..core.solvers import SOLVERS
 from ..core.state import GraspState, load_state
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
+from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
 from .output import EXIT_OK, bracket_progress, emit, lp_progress
 from .values import fraction, integer, memory_size, number
@@ -184,6 +185,15 @@ def add_tvms(sub: Subparsers) -> None:
         help="lp: memory the projection may use, e.g. 2G, 512M or 25%% of the available memory "
         "(default 25%%); reaching it stops with status approximate",
     )
+    p.add_argument(
+        "--confidence",
+        type=fraction,
+        default=DEFAULT_CONFIDENCE,
+        metavar="P",
+        help="lp with --tolerance: if the certified bracket stays wider, estimate the volume by "
+        "random points and LPs until an interval that holds it with probability P is that narrow "
+        "(volume_estimate; the cutting planes then stop at half of --time-limit); 0: none",
+    )
     _indent_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress (LPs solved, volume bracket) on stderr")
     p.set_defaults(func=_cmd_tvms)
@@ -206,6 +216,7 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
             tolerance=args.tolerance,
             memory=args.memory,
             progress=progress,
+            confidence=args.confidence,
         )
     emit(json.dumps(result.to_dict(), indent=args.indent))
     return EXIT_OK

@@ -25,6 +25,7 @@ from typing import Any
 from ..errors import StateError
 
 __all__ = [
+    "DEFAULT_CONFIDENCE",
     "DEFAULT_MEMORY_FRACTION",
     "Budget",
     "LimitReached",
@@ -35,6 +36,7 @@ __all__ = [
 ]
 
 DEFAULT_MEMORY_FRACTION = 0.25  #: of the available memory: the default budget
+DEFAULT_CONFIDENCE = 0.999  #: of the randomized estimate's interval (``tvms(confidence=...)``)
 
 
 def available_memory() -> int:
@@ -94,14 +96,21 @@ class Limits:
     memory
         Bytes of memory the solve may add to the process (``None``: :func:`default_memory_budget`).
     progress
-        Called with a dict (``round``, ``lps``, ``inner``, ``outer``, ``gap``, ``seconds``)
-        whenever the bracket is measured; ``None``: nothing.
+        Called with a dict (``round``, ``lps``, ``inner``, ``outer``, ``gap``, ``hausdorff``,
+        ``seconds``) whenever the bracket is measured, and (``phase: "estimate"``,
+        ``samples``, ``lower``, ``upper``, ``width``, ``lps``, ``seconds``) after each batch
+        of the randomized estimate; ``None``: nothing.
+    confidence
+        With a ``tolerance``: when the certified bracket stays wider, a randomized estimate
+        (:mod:`~mjtvm.polytopes.estimate`) whose interval holds the volume with this
+        probability; 0: none.
     """
 
     tolerance: float = 0.0
     time_limit: float | None = None
     memory: int | None = None
     progress: Callable[[dict[str, Any]], None] | None = None
+    confidence: float = 0.0
 
     def __post_init__(self) -> None:
         if not (0.0 <= self.tolerance < 1.0):
@@ -110,6 +119,8 @@ class Limits:
             raise StateError("time_limit", f"expected a positive number of seconds, got {self.time_limit!r}")
         if self.memory is not None and not self.memory > 0:
             raise StateError("memory", f"expected a positive number of bytes, got {self.memory!r}")
+        if not (0.0 <= self.confidence < 1.0):
+            raise StateError("confidence", f"expected a probability in [0, 1), got {self.confidence!r}")
 
 
 class Budget:
@@ -121,6 +132,8 @@ class Budget:
         self.base_rss = rss_bytes()
         self.memory = self.limits.memory if self.limits.memory is not None else default_memory_budget()
         self.peak = 0  #: the largest use (bytes above the start) seen by reserve / check
+        #: seconds after the start at which :meth:`check` stops (default: the time limit)
+        self.deadline: float | None = self.limits.time_limit
 
     @property
     def elapsed(self) -> float:
@@ -144,7 +157,7 @@ class Budget:
 
     def check(self) -> None:
         """Raise :class:`LimitReached` past the time limit or the memory budget."""
-        t = self.limits.time_limit
+        t = self.deadline
         if t is not None and self.elapsed > t:
             raise LimitReached("time", f"{self.elapsed:.1f} s > {t:g} s")
         self.reserve(0, "the solve")

@@ -11,7 +11,7 @@ projections (:func:`~mjtvm.polytopes.projection.project_lp`,
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import scipy.sparse as sp
@@ -19,6 +19,9 @@ from numpy.typing import NDArray
 
 from ..core.assembly import Assembly, BoxForm, assemble
 from ..core.state import GraspState
+
+if TYPE_CHECKING:
+    from .estimate import VolumeEstimate
 
 __all__ = ["Approximation", "LiftedPolytope", "Projection", "ProjectionStatus", "lifted_polytope"]
 
@@ -136,6 +139,9 @@ class Approximation:
         Upper bound of their Hausdorff distance, scaled coordinates.
     inner_facets, outer_facets
         ``(normals, offsets)`` in twist coordinates, as :attr:`Projection.facets`.
+    estimate
+        The randomized volume (scaled coordinates) when the bracket stayed wider than the
+        tolerance and a confidence was asked for, else ``None``.
     """
 
     reason: str
@@ -145,6 +151,7 @@ class Approximation:
     hausdorff: float
     inner_facets: tuple[NDArray[np.float64], NDArray[np.float64]]
     outer_facets: tuple[NDArray[np.float64], NDArray[np.float64]]
+    estimate: VolumeEstimate | None = None
 
 
 @dataclass(frozen=True, eq=False)

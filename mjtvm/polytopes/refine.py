@@ -10,6 +10,8 @@ returns ``status: "approximate"`` with the bracket instead of failing.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -19,11 +21,24 @@ from scipy.spatial import cKDTree
 from ..errors import SolverError
 from .bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume
 from .budget import Budget, LimitReached, Limits
+from .estimate import VolumeEstimate, estimate_volume
 from .hull import PolarHull, polish_vertices
+from .lattice import FaceLattice
 from .lifted import Approximation, Projection
 from .oracles import DistanceOracle, RayShooter, SupportOracle
 
-__all__ = ["Cutter", "measure", "refine"]
+__all__ = ["GROWTH", "REFINE_SHARE", "Cutter", "Meter", "refine"]
+
+GROWTH = 4.0
+"""A round of cuts may take this many times the last one: O's vertices grow so (the Allegro
+grasp's 6-D TVMS: rounds of 0.5, 1.5 and 5.8 s with 8k, 41k and 179k vertices); a round that
+would end past the deadline is not started (Qhull cannot be interrupted once it runs)."""
+INNER_GROWTH = 1.6
+"""Qhull's time for the hull of n proven points grows about as n to this power (the Allegro
+grasp's 6-D TVMS: 0.30 s for 450 points, 8.3 s for 3795, 58 s for 11,441)."""
+REFINE_SHARE = 0.5
+"""Of the time limit, for the cutting planes when a randomized estimate may follow (a
+``tolerance`` and a ``confidence``); the estimate has the rest."""
 
 
 class Cutter:
@@ -110,16 +125,64 @@ def _chain(points: NDArray[np.float64], center: NDArray[np.float64]) -> NDArray[
     return np.lexsort(d.T[::-1])
 
 
-def measure(
-    cutter: Cutter, polar: PolarHull, seeds: NDArray[np.float64], budget: Budget
-) -> tuple[Bracket, InnerHull]:
-    """The bracket now: I = hull of ``seeds`` and the points the LPs proved, O = ``polar``'s rows."""
-    pts = np.vstack([seeds, np.array(cutter.proven).reshape(-1, seeds.shape[1])])
-    inner = inner_hull(pts, budget)
-    outer, corners = outer_volume(polar, budget)
-    gap = hausdorff_bound(corners, inner, cutter.center, budget)
-    # Round-off (the joggles, the exact areas of O's facets) can leave vol(I) a hair above vol(O).
-    return Bracket(min(inner.volume, outer), max(inner.volume, outer), gap), inner
+@dataclass
+class Meter:
+    """The bracket's measurements (:meth:`measure`) with the last of each part and its cost.
+
+    A part whose predicted cost does not fit in the time left is not measured again: the last
+    inner hull stays valid (I only gains points, an older I is inside the newer), and so does
+    the last outer lattice (O only gains rows). The predictions: Qhull's hull of the proven
+    points grows as their number to the power :data:`INNER_GROWTH`, the face lattice linearly
+    with the simplices of the polar hull (:meth:`PolarHull.predicted_size`).
+    """
+
+    inner: InnerHull | None = None
+    inner_points: int = 0
+    inner_s: float = 0.0
+    lattice: FaceLattice | None = None
+    outer: float = math.inf
+    outer_s: float = 0.0
+    outer_simplices: int = 0
+    bracket: Bracket | None = None
+
+    def measure(
+        self,
+        cutter: Cutter,
+        polar: PolarHull,
+        seeds: NDArray[np.float64],
+        budget: Budget,
+        until: float | None = None,
+    ) -> Bracket:
+        """The bracket now: I = hull of ``seeds`` and the points the LPs proved, O = ``polar``'s
+        rows. A part predicted to end past ``until`` (seconds of ``budget``) keeps its last value;
+        the inner hull is then made of as many of the points (a seeded random subset) as fit."""
+        pts = np.vstack([seeds, np.array(cutter.proven).reshape(-1, seeds.shape[1])])
+        left = math.inf if until is None else until - budget.elapsed
+        if self.inner is not None and self.inner_s > 0.0:
+            # The hull of a subset is inside S_ov too: as many points as the time left allows
+            # (half of it, the lattice needs its share), drawn at random (seeded).
+            fit = self.inner_points * (0.5 * left / self.inner_s) ** (1.0 / INNER_GROWTH)
+            if fit < len(pts):
+                pts = pts[np.sort(np.random.default_rng(len(pts)).permutation(len(pts))[: int(fit)])]
+        if self.inner is None or len(pts) > self.inner_points:
+            t = budget.elapsed
+            self.inner = inner_hull(pts, budget)
+            self.inner_s, self.inner_points = budget.elapsed - t, len(pts)
+            left = math.inf if until is None else until - budget.elapsed
+        size = polar.predicted_size()
+        if self.lattice is None or (
+            size != self.outer_simplices and self.outer_s * size / self.outer_simplices <= left
+        ):
+            t = budget.elapsed
+            self.outer, self.lattice = outer_volume(polar, budget)
+            self.outer_s, self.outer_simplices = budget.elapsed - t, max(polar.size, 1)
+        gap = hausdorff_bound(self.lattice.vertices, self.inner, cutter.center, budget)
+        # Round-off (the joggles) can leave vol(I) a hair above vol(O).
+        inner, outer = self.inner.volume, self.outer
+        new = Bracket(min(inner, outer), max(inner, outer), gap)
+        if new != self.bracket:
+            self.bracket = new
+        return self.bracket
 
 
 def refine(
@@ -152,10 +215,14 @@ def refine(
     neighbours together (:func:`_chain`), and a vertex that is a support LP's solution needs none.
 
     With a ``tolerance`` or a ``progress`` callback in ``budget.limits`` the bracket is
-    measured between rounds (:func:`measure`), at most as often as it keeps its cost below the
+    measured between rounds (:class:`Meter`), at most as often as it keeps its cost below the
     time spent refining; a limit reached stops the loop, the cuts found so far are kept and
     the result is ``"approximate"``, with the bracket measured then (only the memory budget
-    applies to that last measurement; if even it does not fit, a :class:`SolverError`).
+    applies to a first measurement; if even it does not fit, a :class:`SolverError`). A round
+    predicted (:data:`GROWTH`) to end past the time limit is not started. With a tolerance and
+    a ``confidence``, the cutting planes stop at :data:`REFINE_SHARE` of the time limit and,
+    if the bracket is still wider than the tolerance, a randomized estimate
+    (:func:`~mjtvm.polytopes.estimate.estimate_volume`) uses the rest.
     """
     budget = budget or Budget()
     limits: Limits = budget.limits
@@ -171,12 +238,25 @@ def refine(
     certified: list[NDArray[np.float64]] = []
     polar = PolarHull(normals, offsets, center, tol)
     watch = limits.tolerance > 0.0 or limits.progress is not None
-    cost, since, rounds = 0.0, 0.0, 0
+    estimating = limits.tolerance > 0.0 and limits.confidence > 0.0
+    until = limits.time_limit
+    if until is not None and estimating:
+        until *= REFINE_SHARE
+    budget.deadline = until
+    # Measuring may go on past the rounds' deadline, leaving the estimate half of the rest.
+    measure_until = None if until is None or limits.time_limit is None else (until + limits.time_limit) / 2
+    meter = Meter()
+    cost, since, rounds, round_s = 0.0, 0.0, 0, 0.0
     stop: LimitReached | None = None
-    bracket: tuple[Bracket, InnerHull] | None = None
     try:
         while True:
             budget.check()
+            if until is not None and rounds and budget.elapsed + GROWTH * round_s > until:
+                raise LimitReached(
+                    "time",
+                    f"the next round of cuts would end past {until:g} s (the last took {round_s:.1f} s)",
+                )
+            started = budget.elapsed
             verts = polar.new_vertices(budget)
             if certified:
                 verts = verts[cKDTree(certified).query(verts)[0] > 10 * tol]
@@ -188,35 +268,28 @@ def refine(
                 if cutter.cuts:
                     polar.add(cutter.new_n[: cutter.cuts], cutter.new_b[: cutter.cuts])
             rounds += 1
+            round_s = budget.elapsed - started
             if not cutter.cuts:
                 break
             cutter.cuts = 0
-            # Progress alone (no tolerance) waits 2 s: quick exact runs are not slowed down. A
-            # measurement that would likely (4 x the last one's cost) overrun the time limit is skipped.
-            late = limits.time_limit is not None and budget.elapsed + 4 * cost > limits.time_limit
-            if (
-                watch
-                and not late
-                and budget.elapsed - since >= cost
-                and (limits.tolerance > 0.0 or budget.elapsed > 2.0)
-            ):
+            # Progress alone (no tolerance) waits 2 s: quick exact runs are not slowed down.
+            if watch and budget.elapsed - since >= cost and (limits.tolerance > 0.0 or budget.elapsed > 2.0):
                 t = budget.elapsed
-                bracket = measure(cutter, polar, seeds, budget)
+                bracket = meter.measure(cutter, polar, seeds, budget, measure_until)
                 cost, since = budget.elapsed - t, budget.elapsed
-                _report(limits, rounds, cutter, bracket[0], budget)
-                if bracket[0].gap <= limits.tolerance:
-                    stop = LimitReached("tolerance", f"relative volume gap {bracket[0].gap:.3g}")
+                _report(limits, rounds, cutter, bracket, budget)
+                if bracket.gap <= limits.tolerance:
+                    stop = LimitReached("tolerance", f"relative volume gap {bracket.gap:.3g}")
                     break
         # polish_vertices and the volume hold (vertices x rows) booleans: that must fit too.
         budget.reserve(2.0 * len(certified) * len(polar.offsets), "the incidences of the exact TVMS")
     except LimitReached as e:
-        # A bracket measured earlier stays valid (I only grew, O only shrank since): on a time
-        # limit it is returned as it is rather than measured again past the limit.
         stop = e
-        bracket = bracket if e.reason == "time" else None
+    finally:
+        budget.deadline = limits.time_limit
     support.num_lps = cutter.num_lps
     if stop is not None:
-        return _approximate(stop, cutter, polar, seeds, budget, bracket, result, basis, rounds)
+        return _approximate(stop, cutter, polar, seeds, budget, meter, result, basis, rounds, measure_until)
     verts, facet_n, facet_b = polish_vertices(np.array(certified), polar.normals, polar.offsets, tol)
     return result("bounded", verts @ basis, basis, facets=(facet_n, facet_b))
 
@@ -242,23 +315,57 @@ def _approximate(
     polar: PolarHull,
     seeds: NDArray[np.float64],
     budget: Budget,
-    measured: tuple[Bracket, InnerHull] | None,
+    meter: Meter,
     result: Any,
     basis: NDArray[np.float64],
     rounds: int,
+    until: float | None,
 ) -> Projection:
-    """The ``"approximate"`` result: the bracket (measured now unless ``measured``)."""
-    if measured is None:
-        final = Budget(Limits(memory=budget.memory))  # no time limit for the last measurement
-        final.base_rss = budget.base_rss
+    """The ``"approximate"`` result: the bracket (measured again where that fits in the time
+    left, see :class:`Meter`), then the randomized estimate where it is asked for."""
+    limits = budget.limits
+    before = meter.bracket
+    if stop.reason != "tolerance":
+        final = Budget(Limits(memory=budget.memory))  # the time limit is applied by `until`
+        final.base_rss, final.start = budget.base_rss, budget.start
         try:
-            measured = measure(cutter, polar, seeds, final)
+            meter.measure(cutter, polar, seeds, final, until)
         except LimitReached as e:
-            raise SolverError(
-                "budget", f"{stop.reason} limit reached ({stop.detail}) and no bracket fits: {e.detail}"
-            ) from e
-    bracket, inner = measured
-    _report(budget.limits, rounds, cutter, bracket, budget)
+            if meter.bracket is None:
+                raise SolverError(
+                    "budget", f"{stop.reason} limit reached ({stop.detail}) and no bracket fits: {e.detail}"
+                ) from e
+    bracket, inner = meter.bracket, meter.inner
+    if bracket is None or inner is None:  # measure() sets both or raises
+        raise SolverError("budget", f"{stop.reason} limit reached ({stop.detail}) before a bracket")
+    if bracket is not before:  # (the loop reported the others)
+        _report(limits, rounds, cutter, bracket, budget)
+    estimate: VolumeEstimate | None = None
+    left = None if limits.time_limit is None else limits.time_limit - budget.elapsed
+    if (
+        limits.tolerance > 0.0
+        and limits.confidence > 0.0
+        and bracket.gap > limits.tolerance
+        and meter.lattice is not None
+        and (left is None or left > 0.0)
+    ):
+        center = cutter.center
+        sampling = Budget(Limits(time_limit=left, memory=budget.memory))
+        estimate = estimate_volume(
+            meter.lattice,
+            cutter.shoot,
+            center,
+            cutter.tol,
+            (bracket.inner, bracket.outer),
+            sampling,
+            tolerance=limits.tolerance,
+            confidence=limits.confidence,
+            order=lambda points: _chain(points, center),
+            progress=None if limits.progress is None else _estimate_report(limits, cutter, budget),
+            tighten=lambda normals, offsets: _tighten(polar, normals, offsets, sampling),
+        )
+        if estimate.outer < bracket.outer:  # O was cut down on the way: a narrower bracket
+            bracket = replace(bracket, outer=max(estimate.outer, bracket.inner))
     approx = Approximation(
         stop.reason,
         stop.detail,
@@ -267,5 +374,25 @@ def _approximate(
         bracket.hausdorff,
         (inner.normals, inner.offsets),
         (polar.normals, polar.offsets),
+        estimate,
     )
     return result("approximate", inner.vertices @ basis, basis, approximation=approx)
+
+
+def _tighten(
+    polar: PolarHull, normals: NDArray[np.float64], offsets: NDArray[np.float64], budget: Budget
+) -> tuple[float, FaceLattice]:
+    """O with the rows ``normals @ u <= offsets`` added (supporting hyperplanes of S_ov found by
+    the estimate's LPs): its volume bound and lattice."""
+    polar.add(normals, offsets)
+    return outer_volume(polar, budget)
+
+
+def _estimate_report(limits: Limits, cutter: Cutter, budget: Budget) -> Any:
+    """The ``progress`` callback of the estimate: its interval after each batch."""
+
+    def report(d: dict[str, Any]) -> None:
+        if limits.progress is not None:
+            limits.progress(d | {"lps": cutter.num_lps, "seconds": budget.elapsed})
+
+    return report

@@ -26,14 +26,16 @@ from ..core.state import GraspState
 from ..core.tvmmp import finite_floats, finite_or_none
 from ..errors import StateError
 from .bracket import ray_lengths
-from .budget import Limits
+from .budget import DEFAULT_CONFIDENCE, Limits
 from .enumeration import project_cdd
+from .estimate import VolumeEstimate
 from .lifted import Projection, ProjectionStatus, lifted_polytope
 from .projection import REL_TOL, project_lp
 from .volume import facet_volume, hull_volume
 
 __all__ = [
     "CHARACTERISTIC_LENGTH",
+    "DEFAULT_CONFIDENCE",
     "TVMS_SCHEMA",
     "TvmsResult",
     "TvmsTimings",
@@ -107,6 +109,10 @@ class TvmsResult:
     stopped_by
         ``None`` when exact; else ``(reason, detail)``: ``"tolerance"``, ``"time"`` or
         ``"memory"`` and one line on it.
+    volume_estimate
+        The randomized volume (:class:`~mjtvm.polytopes.estimate.VolumeEstimate`, in the
+        units of ``affine_volume``; statistical, not certified) when the bracket stopped wider
+        than the tolerance and a ``confidence`` was asked for; else ``None``.
     """
 
     status: ProjectionStatus
@@ -126,6 +132,26 @@ class TvmsResult:
     hausdorff_gap: float | None = None
     alpha_bracket: NDArray[np.float64] | None = None
     stopped_by: tuple[str, str] | None = None
+    volume_estimate: VolumeEstimate | None = None
+
+    def _estimate_dict(self) -> dict[str, Any] | None:
+        e = self.volume_estimate
+        if e is None:
+            return None
+        full = self.dimension == len(self.scale)
+        per = 1.0 / float(np.prod(self.scale)) if full else 0.0
+        return {
+            "value": e.value * per,
+            "interval": [e.lower * per, e.upper * per],
+            "affine_value": e.value,
+            "affine_interval": [e.lower, e.upper],
+            "confidence": e.confidence,
+            "samples": e.samples,
+            "inside": e.inside,
+            "lps": e.lps,
+            "seconds": e.seconds,
+            "stopped_by": e.stopped_by,
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The ``mjtvm.tvms/1`` document; extra keys follow the schema's own."""
@@ -154,6 +180,7 @@ class TvmsResult:
             "stopped_by": None
             if self.stopped_by is None
             else {"reason": self.stopped_by[0], "detail": self.stopped_by[1]},
+            "volume_estimate": self._estimate_dict(),
             "timings": {
                 "assemble_s": self.timings.assemble_s,
                 "project_s": self.timings.project_s,
@@ -265,6 +292,7 @@ def tvms(
     tolerance: float = 0.0,
     memory: int | None = None,
     progress: Callable[[dict[str, Any]], None] | None = None,
+    confidence: float = DEFAULT_CONFIDENCE,
 ) -> TvmsResult:
     r"""Solve Problem 1 (eq. 26-29, 34): the TVMS of ``state`` and its volume (TVMM).
 
@@ -300,7 +328,15 @@ def tvms(
     progress
         ``method="lp"``: called with the bracket (a dict, see
         :class:`~mjtvm.polytopes.budget.Limits`) whenever it is measured (which it then is
-        between rounds, at most half of the time).
+        between rounds, at most half of the time), and with the estimate's interval.
+    confidence
+        ``method="lp"`` with a ``tolerance``: if the certified bracket is still wider than
+        the tolerance when the cutting planes stop (at half of ``time_limit``, or by the
+        memory budget), the volume is estimated by uniform points in the outer polytope and
+        LPs (:func:`~mjtvm.polytopes.estimate.estimate_volume`) until its interval, which
+        holds the volume with this probability, is that narrow or the time is up
+        (:attr:`TvmsResult.volume_estimate`). 0: no estimate (the cutting planes then have
+        all the time).
 
     Raises
     ------
@@ -316,7 +352,13 @@ def tvms(
     poly = lifted_polytope(state, rvds_cone=rvds_cone, box=box)
     t1 = time.perf_counter()
     if method == "lp":
-        limits = Limits(tolerance=tolerance, time_limit=time_limit, memory=memory, progress=progress)
+        limits = Limits(
+            tolerance=tolerance,
+            time_limit=time_limit,
+            memory=memory,
+            progress=progress,
+            confidence=confidence,
+        )
         proj = project_lp(poly, metric=weights, limits=limits)
     else:
         proj = project_cdd(poly, metric=weights, time_limit=1e9 if time_limit is None else time_limit)
@@ -356,4 +398,5 @@ def tvms(
         stopped_by=None
         if proj.approximation is None
         else (proj.approximation.reason, proj.approximation.detail),
+        volume_estimate=None if proj.approximation is None else proj.approximation.estimate,
     )
