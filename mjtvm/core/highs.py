@@ -280,6 +280,27 @@ class HighsSession:
         for r, x in zip(rows.tolist(), v.tolist()):
             check(change(r, col, x), "changeCoeff")
 
+    def start_basis(self, basic_cols: NDArray[np.int64], nonbasic_rows: NDArray[np.int64]) -> None:
+        """Start the next solve from the basis of the slacks with ``basic_cols`` swapped in
+        for the slacks of ``nonbasic_rows`` (as many), instead of HiGHS' slack basis: every
+        other column nonbasic at a finite bound (at 0 when free), those rows at their lower
+        bound. The caller makes it nonsingular (HiGHS would replace dependent columns by
+        slacks); HiGHS restores primal and dual feasibility from there."""
+        if len(basic_cols) != len(nonbasic_rows):
+            raise ValueError("start_basis: as many basic columns as nonbasic rows are needed")
+        hs = self._hs
+        status = hs.HighsBasisStatus
+        cols = np.where(np.isfinite(self._col_lower), 0, np.where(np.isfinite(self._col_upper), 1, 2))
+        cols[np.asarray(basic_cols)] = 3
+        rows = np.full(len(self._row_max), 3)
+        rows[np.asarray(nonbasic_rows)] = 0
+        names = (status.kLower, status.kUpper, status.kZero, status.kBasic)
+        basis = hs.HighsBasis()
+        basis.col_status = [names[c] for c in cols.tolist()]
+        basis.row_status = [names[r] for r in rows.tolist()]
+        basis.valid = True
+        self._check(self.highs.setBasis(basis), "setBasis")
+
     def set_row_bounds(
         self, rows: NDArray[np.int64], lower: NDArray[np.float64], upper: NDArray[np.float64]
     ) -> None:

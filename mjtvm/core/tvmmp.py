@@ -184,7 +184,13 @@ class _Problem2:
         with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
             slp = LinearProgram(s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper,
                                 self.col_lower / col_s, cu / col_s)  # fmt: skip
-        return HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu, options=P2_HIGHS_OPTIONS)
+        session = HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu, options=P2_HIGHS_OPTIONS)
+        # The torques are free and fixed by their rows (tau - J^T E lam = g_f, eq. 19): basic
+        # there from the start, the cold first LP of Case 2 takes 45 iterations instead of 87
+        # (0.41 ms instead of 0.61; HiGHS' slack basis has every free column to bring in).
+        tau, rows = self.asm.blocks["tau[0]"], self.asm.torque_rows[0]
+        session.start_basis(np.arange(tau.start, tau.stop), np.arange(rows.start, rows.stop))
+        return session
 
     def solve(self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf) -> Settled:
         """The settled LP of (w, r): HiGHS warm, Clarabel on failure; or Clarabel checked."""
