@@ -130,6 +130,9 @@ class Assembly:
         and, in the literal form, ``tau_max``, ``tau_min``, ``qd_max``, ``qd_min``.
     wrench_rows
         One ``slice`` of D rows per copy: the force-moment balance (eq. 20).
+    torque_rows
+        One ``slice`` of M rows per copy: ``tau_i - J^T E lam_i = g_f`` (eq. 19), row j
+        the only statics row of ``tau_i[j]``.
     generators
         Per contact, its ``(d, g)`` force generators (``E`` restricted to it).
     generator_slices
@@ -146,6 +149,7 @@ class Assembly:
     col_upper: NDArray[np.float64]
     blocks: dict[str, slice]
     wrench_rows: tuple[slice, ...]
+    torque_rows: tuple[slice, ...]
     generators: tuple[NDArray[np.float64], ...]
     generator_slices: tuple[slice, ...]
     kinematic_rows: NDArray[np.int64]
@@ -237,10 +241,11 @@ def _statics_rows(
     gt: list[NDArray[np.float64]],
     blocks: dict[str, slice],
     copies: int,
-) -> list[slice]:
+) -> tuple[list[slice], list[slice]]:
     """Per copy i, the statics with ``f = E lam_i`` (eq. 19-20): ``G E lam_i = -w_i`` (D
     rows, bounds set later by :meth:`Assembly.statics_bounds`) and
-    ``tau_i - J^T E lam_i = g_f`` (M rows). Returns the slices of the balance rows."""
+    ``tau_i - J^T E lam_i = g_f`` (M rows). Returns the slices of the balance rows and of
+    the torque rows."""
     contacts, big_d, m = state.contacts, state.twist_dim, state.num_joints
     wrench_map = (
         np.hstack([_product(gt[i].T, gens[i]) for i in range(len(contacts))])
@@ -252,15 +257,16 @@ def _statics_rows(
         if contacts
         else np.zeros((m, 0))
     )
-    wrench_rows = []
+    wrench_rows, torque_rows = [], []
     for i in range(copies):
         r0 = out.add(0.0, 0.0, big_d)
         wrench_rows.append(slice(r0, r0 + big_d))
         out.coo.add(r0, blocks[f"lam[{i}]"].start, wrench_map)
         r0 = out.add(state.gravity_torque, state.gravity_torque, m)
+        torque_rows.append(slice(r0, r0 + m))
         out.coo.add(r0, blocks[f"tau[{i}]"].start, np.eye(m))
         out.coo.add(r0, blocks[f"lam[{i}]"].start, -torque_map)
-    return wrench_rows
+    return wrench_rows, torque_rows
 
 
 def _kinematic_rows(
@@ -383,7 +389,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     blocks, col_lower, col_upper = _variables(state, copies, box, int(offsets[-1]), n_rho)
     gt = [grasp_map_transpose(c.position, state.object_position) for c in contacts]
     out = _Rows()
-    wrench_rows = _statics_rows(out, state, gens, gt, blocks, copies)
+    wrench_rows, torque_rows = _statics_rows(out, state, gens, gt, blocks, copies)
     kinematic_rows = _kinematic_rows(out, state, gt, blocks)
     if box == "eliminated":
         _range_rows_eliminated(out, state, blocks, copies)
@@ -399,6 +405,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         col_upper=col_upper,
         blocks=blocks,
         wrench_rows=tuple(wrench_rows),
+        torque_rows=tuple(torque_rows),
         generators=gens,
         generator_slices=gen_slices,
         kinematic_rows=kinematic_rows,

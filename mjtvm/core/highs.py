@@ -12,7 +12,7 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any
@@ -45,6 +45,11 @@ def observe_runs(callback: Callable[[float], None]) -> Iterator[None]:
 _HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
 _HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
 _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
+#: HiGHS' own defaults of the options a session may choose for itself at construction
+#: (:meth:`HighsSession.from_scaled`'s ``options``, e.g. Problem 2's): every session sets all
+#: of them, so that a ``Highs`` reused from another session (:meth:`HighsSession.release`)
+#: solves as a fresh one would.
+_TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 
 
 def _highs():  # type: ignore[no-untyped-def]
@@ -126,7 +131,7 @@ class HighsSession:
 
     def __init__(self, lp: LinearProgram, *, scaling: Scaling | None = None) -> None:
         s = lp_scaling(lp) if scaling is None else scaling
-        self._load(scale_lp(lp, s), s, lp.c, lp.col_lower, lp.col_upper, new_highs())
+        self._load(scale_lp(lp, s), s, lp.c, lp.col_lower, lp.col_upper, new_highs(), {})
 
     @classmethod
     def from_scaled(
@@ -136,13 +141,16 @@ class HighsSession:
         cost: NDArray[np.float64],
         col_lower: NDArray[np.float64],
         col_upper: NDArray[np.float64],
+        *,
+        options: Mapping[str, object] | None = None,
     ) -> HighsSession:
         """The session of an LP whose ``scale_lp(lp, scaling)`` the caller has already (the
         same arrays: Problem 2 builds it from a per-state cache, without the sparse copies),
         given with the LP's own costs and column bounds. Its HiGHS instance may be one a
-        finished session gave back (:meth:`release`)."""
+        finished session gave back (:meth:`release`). ``options`` (names of
+        ``_TUNABLE_DEFAULTS`` only) are this session's, kept through :meth:`solve`'s retries."""
         self = cls.__new__(cls)
-        self._load(scaled, scaling, cost, col_lower, col_upper, _acquire_highs())
+        self._load(scaled, scaling, cost, col_lower, col_upper, _acquire_highs(), options or {})
         return self
 
     def _load(
@@ -153,8 +161,12 @@ class HighsSession:
         col_lower: NDArray[np.float64],
         col_upper: NDArray[np.float64],
         h: Any,
+        tuned: Mapping[str, object],
     ) -> None:
-        """Pass the equilibrated LP ``slp`` (factors ``s``) to the HiGHS instance ``h``."""
+        """Pass the equilibrated LP ``slp`` (factors ``s``) to the HiGHS instance ``h``, with
+        the session's options ``tuned`` (over ``_TUNABLE_DEFAULTS``)."""
+        if not set(tuned) <= set(_TUNABLE_DEFAULTS):
+            raise ValueError(f"options: only {sorted(_TUNABLE_DEFAULTS)} may be chosen, got {sorted(tuned)}")
         highspy = _highs()
         self._hs = highspy
         self.scaling = s
@@ -172,7 +184,8 @@ class HighsSession:
             # Round-off is dropped by scale_lp; HiGHS must keep every other entry.
             "small_matrix_value": _HIGHS_SMALL,
         }
-        for name, value in {**options, **_HIGHS_DEFAULTS}.items():
+        session_options = {**_HIGHS_DEFAULTS, **_TUNABLE_DEFAULTS, **tuned}
+        for name, value in {**options, **session_options}.items():
             self._check(h.setOptionValue(name, value), f"option {name}={value!r} rejected")
         a = slp.A
         self._check_magnitudes(a.data, "passModel")
@@ -198,12 +211,12 @@ class HighsSession:
         if a.nnz:
             np.maximum.at(self._row_max, a.indices, np.abs(a.data))
         self.num_col = n
-        self._options = dict(_HIGHS_DEFAULTS)  # what the retries in solve() restore
+        self._options = session_options  # what the retries in solve() restore
 
     def release(self) -> None:
         """Give the HiGHS instance back for the next session of this process (the session is
-        unusable afterwards). Only for a session whose options are the defaults (no
-        :meth:`set_option`) and whose last call returned normally."""
+        unusable afterwards). Only for a session without :meth:`set_option` (the options given
+        at construction are set again by every session) whose last call returned normally."""
         h, self.highs = self.highs, None
         if h is not None and len(_IDLE) < _IDLE_MAX and _IDLE_PID[0] == os.getpid():
             _IDLE.append(h)
@@ -266,6 +279,27 @@ class HighsSession:
         change, check = self.highs.changeCoeff, self._check
         for r, x in zip(rows.tolist(), v.tolist()):
             check(change(r, col, x), "changeCoeff")
+
+    def start_basis(self, basic_cols: NDArray[np.int64], nonbasic_rows: NDArray[np.int64]) -> None:
+        """Start the next solve from the basis of the slacks with ``basic_cols`` swapped in
+        for the slacks of ``nonbasic_rows`` (as many), instead of HiGHS' slack basis: every
+        other column nonbasic at a finite bound (at 0 when free), those rows at their lower
+        bound. The caller makes it nonsingular (HiGHS would replace dependent columns by
+        slacks); HiGHS restores primal and dual feasibility from there."""
+        if len(basic_cols) != len(nonbasic_rows):
+            raise ValueError("start_basis: as many basic columns as nonbasic rows are needed")
+        hs = self._hs
+        status = hs.HighsBasisStatus
+        cols = np.where(np.isfinite(self._col_lower), 0, np.where(np.isfinite(self._col_upper), 1, 2))
+        cols[np.asarray(basic_cols)] = 3
+        rows = np.full(len(self._row_max), 3)
+        rows[np.asarray(nonbasic_rows)] = 0
+        names = (status.kLower, status.kUpper, status.kZero, status.kBasic)
+        basis = hs.HighsBasis()
+        basis.col_status = [names[c] for c in cols.tolist()]
+        basis.row_status = [names[r] for r in rows.tolist()]
+        basis.valid = True
+        self._check(self.highs.setBasis(basis), "setBasis")
 
     def set_row_bounds(
         self, rows: NDArray[np.int64], lower: NDArray[np.float64], upper: NDArray[np.float64]

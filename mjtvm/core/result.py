@@ -121,7 +121,8 @@ class TvmmpResult:
         One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
         ``None`` where no finite minimum exists; the origin is implied.
     limiting
-        The (k, l) attaining the TVMMP, or ``None``.
+        The (k, l) attaining the TVMMP, or ``None``; of alphas within a relative 1e-8 of
+        the TVMMP (a tie up to the solver's round-off), the first in (k, l) order.
     witnesses
         ``K`` tuples of ``R`` :class:`Witness` (``None`` where not optimal or not requested).
     timings

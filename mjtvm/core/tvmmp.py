@@ -58,6 +58,23 @@ from .state import GraspState
 __all__ = ["tvmmp"]
 
 ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
+#: Alphas within this relative distance of the smallest one tie for the limiting pair (the
+#: first of them in (k, l) order is reported). Symmetric grasps tie exactly in exact
+#: arithmetic (Case 1: alpha 0.48885298708278810 and ...824 for two RVDS vertices), and which
+#: of two tied alphas comes out smaller is round-off (HiGHS' options alone move alphas by up to
+#: 6e-10 relative), far below this tolerance.
+LIMITING_TIE_REL = 1e-8
+#: HiGHS options of Problem 2's sessions: dual edge weights Devex (1) rather than HiGHS'
+#: choice (steepest edge here). On Case 2's initial state the 4 runs take 1.59 ms instead of
+#: 1.70 ms (medians of 200 states, back to back; the cold first LP 87 iterations instead of 94).
+#: The vertex is the same, reached along another path: over 378 solves (Case 1, 1-S, 2 in
+#: three unit systems, the pinch, 120 lift states, 60 random states; both box forms) the
+#: alphas moved by at most 1.0e-11 relative and no status, note or backend changed. Rejected:
+#: HiGHS' scaling off (simplex_scale_strategy 0; the LP is equilibrated already), 1.10 ms, but
+#: it certified Case 2 "unbounded" in a rescaled unit system (tests/core/test_units.py, length
+#: x1e6, force x1e-6, time x1e-3); scaling by largest values (4), 1.29 ms, but the pinch in
+#: lengths of 1e12 m and forces of 1e-11 N came out 0.5 % low.
+P2_HIGHS_OPTIONS: dict[str, object] = {"simplex_dual_edge_weight_strategy": 1}
 
 
 def _witness(
@@ -167,7 +184,13 @@ class _Problem2:
         with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
             slp = LinearProgram(s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper,
                                 self.col_lower / col_s, cu / col_s)  # fmt: skip
-        return HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu)
+        session = HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu, options=P2_HIGHS_OPTIONS)
+        # The torques are free and fixed by their rows (tau - J^T E lam = g_f, eq. 19): basic
+        # there from the start, the cold first LP of Case 2 takes 45 iterations instead of 87
+        # (0.41 ms instead of 0.61; HiGHS' slack basis has every free column to bring in).
+        tau, rows = self.asm.blocks["tau[0]"], self.asm.torque_rows[0]
+        session.start_basis(np.arange(tau.start, tau.stop), np.arange(rows.start, rows.stop))
+        return session
 
     def solve(self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf) -> Settled:
         """The settled LP of (w, r): HiGHS warm, Clarabel on failure; or Clarabel checked."""
@@ -315,14 +338,19 @@ def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pai
 
 def _limiting(pairs: _Pairs) -> tuple[tuple[int, int] | None, float | None]:
     r"""The pair attaining :math:`\min \alpha_{kl}` over the optimal pairs (eq. 32, 35) and
-    its value; ``None`` when a pair is infeasible or none is optimal."""
+    that minimum; ``None`` when a pair is infeasible or none is optimal.
+
+    The pair is the first in (k, l) order whose alpha is within ``LIMITING_TIE_REL`` of the
+    minimum: alphas tied in exact arithmetic (symmetric grasps) differ by round-off, which
+    must not decide the pair (its alpha exceeds the reported minimum by that round-off)."""
     alpha, status = pairs.alpha, pairs.status
     n_k, n_l = alpha.shape
     optimal = [(k, l) for k in range(n_k) for l in range(n_l) if status[k][l] == "optimal"]
     if not (pairs.feasible and optimal):
         return None, None
-    limiting = min(optimal, key=lambda kl: (alpha[kl], kl))
-    return limiting, float(alpha[limiting])
+    least = min(float(alpha[kl]) for kl in optimal)
+    limiting = next(kl for kl in optimal if alpha[kl] <= least + LIMITING_TIE_REL * abs(least))
+    return limiting, least
 
 
 def _distribution(

@@ -110,3 +110,12 @@ def test_scaling_hand_has_one_tip_contact_per_finger() -> None:
 def test_cli_has_bench() -> None:
     args = build_parser().parse_args(["bench", "--quick", "--repeats", "3"])
     assert args.quick and args.repeats == 3 and args.func.__name__ == "_cmd_bench"
+
+
+def test_case2_problem2_has_its_own_target():
+    """Issue 15's target for Case 2's initial state (1.5 ms) is stricter than the general
+    Problem 2 state target (5 ms): 2 ms meets the one, not the other."""
+    row = {"ours": {"median_s": 2e-3}}
+    targets = bench_suite._targets({"cases": {"case1_p2": row, "case2_p2": row}})
+    assert targets == {"case1_p2": True, "case2_p2": False}
+    assert bench_suite.TARGETS_S["case2_p2_state"] == 1.5e-3

@@ -89,3 +89,13 @@ def test_invalid_contacts(kwargs, match):
     base = {"name": "c", "type": "F", "position": [0, 0, 0], "normal": [0, 0, 1], "jacobian": Z3, "mu": 0.3}
     with pytest.raises(StateError, match=match):
         Contact(**{**base, **kwargs})
+
+
+def test_tangent_basis_second_row_is_numpys_cross_product():
+    """tangent_basis writes n x t1 out (np.cross is slow): the very same bits."""
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        n = rng.normal(size=3) * 10.0 ** rng.integers(-6, 6)
+        n /= np.linalg.norm(n)
+        basis = tangent_basis(n)
+        np.testing.assert_array_equal(basis[1], np.cross(n, basis[0]))

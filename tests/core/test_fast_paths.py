@@ -110,3 +110,71 @@ def test_the_idle_instances_stay_in_their_process(monkeypatch):
     monkeypatch.setattr(highs, "_IDLE_PID", [-1])  # as after a fork
     assert isinstance(highs._acquire_highs(), highspy.Highs)
     assert highs._IDLE == []
+
+
+def test_the_tuned_highs_options_are_highs_defaults_elsewhere():
+    """Every session sets the options a session may tune, at HiGHS' own defaults unless
+    tuned: a ``Highs`` reused after Problem 2 solves other LPs as a fresh one."""
+    fresh = highs.new_highs()
+    for name, value in highs._TUNABLE_DEFAULTS.items():
+        assert fresh.getOptionValue(name)[1] == value
+    with pytest.raises(ValueError, match="options"):
+        highs.HighsSession.from_scaled(*_one_lp(), options={"presolve": "on"})
+
+
+def _one_lp():  # type: ignore[no-untyped-def]
+    from mjtvm.core.solvers import LinearProgram, Scaling
+
+    lp = LinearProgram(
+        np.array([-1.0]), sp.csc_matrix(np.ones((1, 1))), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1)
+    )
+    return lp, Scaling(np.ones(1), np.ones(1)), lp.c, lp.col_lower, lp.col_upper
+
+
+@pytest.mark.parametrize("box", ["eliminated", "literal"])
+def test_tuned_highs_options_give_the_default_alphas(states, box, monkeypatch):
+    """Problem 2's HiGHS options (tvmmp.P2_HIGHS_OPTIONS: Devex dual edge weights) reach
+    the same vertices as HiGHS' defaults along another path: the same statuses, alphas
+    within 1e-9 relative (1e-11 measured), on the fixtures and on random states."""
+    from mjtvm.core import tvmmp as tvmmp_module
+    from mjtvm.core.synthetic import random_state
+
+    cases = dict(states)
+    for seed, types in enumerate(
+        [("F", "L", "F", "L", "D"), ("L", "S", "L", "S", "D"), ("F", "F", "L", "S", "D")]
+    ):
+        cases[f"random{seed}"] = random_state(seed, contact_types=types, num_refs=2)
+    tuned = {name: tvmmp(state, box=box, witnesses=False) for name, state in cases.items()}
+    monkeypatch.setattr(tvmmp_module, "P2_HIGHS_OPTIONS", {})
+    for name, state in cases.items():
+        default = tvmmp(state, box=box, witnesses=False)
+        assert tuned[name].status == default.status, name
+        np.testing.assert_allclose(tuned[name].alpha, default.alpha, rtol=1e-9, atol=0.0, err_msg=name)
+
+
+@pytest.mark.parametrize("box", ["eliminated", "literal"])
+def test_the_start_basis_gives_the_slack_basis_alphas(states, box, monkeypatch):
+    """The first LP of a state starts from the torques basic in their rows
+    (HighsSession.start_basis) rather than from HiGHS' slack basis: the same statuses and
+    alphas within 1e-9 relative, on the fixtures and on random states."""
+    from mjtvm.core.synthetic import random_state
+
+    cases = dict(states)
+    for seed, types in enumerate(
+        [("F", "L", "F", "L", "D"), ("L", "S", "L", "S", "D"), ("F", "F", "L", "S", "D")]
+    ):
+        cases[f"random{seed}"] = random_state(seed, contact_types=types, num_refs=2)
+    started = {name: tvmmp(state, box=box, witnesses=False) for name, state in cases.items()}
+    monkeypatch.setattr(highs.HighsSession, "start_basis", lambda self, cols, rows: None)
+    for name, state in cases.items():
+        slack = tvmmp(state, box=box, witnesses=False)
+        assert started[name].status == slack.status, name
+        np.testing.assert_allclose(started[name].alpha, slack.alpha, rtol=1e-9, atol=0.0, err_msg=name)
+
+
+def test_start_basis_needs_as_many_columns_as_rows():
+    session = highs.HighsSession.from_scaled(*_one_lp())
+    with pytest.raises(ValueError, match="as many"):
+        session.start_basis(np.array([0]), np.array([], dtype=np.int64))
+    session.start_basis(np.array([0]), np.array([0]))
+    assert session.solve().objective == pytest.approx(-1.0)

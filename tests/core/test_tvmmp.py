@@ -312,3 +312,16 @@ def test_shared_slip_fixes_the_ratio_of_slip_speeds():
     w = shared.witnesses[0][0]
     assert w.speeds == pytest.approx([Q_MAX, -Q_MAX], rel=1e-9)
     assert w.slip_speeds == pytest.approx([2 * Q_MAX], rel=1e-9)
+
+
+def test_tied_alphas_give_the_first_pair():
+    """Alphas tied up to round-off (LIMITING_TIE_REL) name the first pair in (k, l) order,
+    whichever of them the solver's round-off made smaller; the TVMMP is the minimum."""
+    from mjtvm.core.tvmmp import _limiting, _Pairs
+
+    pairs = _Pairs.empty(2, 2)
+    pairs.alpha[:] = [[2.0, 1.0 + 4e-16], [1.0, 1.0 + 1e-6]]
+    pairs.status = [["optimal"] * 2 for _ in range(2)]
+    assert _limiting(pairs) == ((0, 1), 1.0)
+    pairs.alpha[0, 1] = 1.0 + 1e-7  # a genuine difference: not a tie
+    assert _limiting(pairs) == ((1, 0), 1.0)
