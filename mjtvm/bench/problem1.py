@@ -252,6 +252,7 @@ def _scale_child(spec: str, kwargs: dict[str, Any], send: Any) -> None:
             if r.affine_volume_bracket is None
             else r.affine_volume_bracket.tolist(),
             "hausdorff_gap": r.hausdorff_gap,
+            "volume_estimate": r.to_dict()["volume_estimate"],
         }
     )
 
@@ -310,17 +311,21 @@ def _within(row: dict[str, Any], kwargs: dict[str, Any]) -> bool:
 def format_scale_table(report: dict[str, Any]) -> str:
     """A plain-text table of :func:`bench_p1_scale`."""
     head = (
-        f"{'case':<18} {'status':<12} {'dim':>3} {'verts':>6} {'LPs':>6} {'s':>8} {'MiB':>7} {'bracket':>26}"
+        f"{'case':<18} {'status':<22} {'dim':>3} {'verts':>6} {'LPs':>6} {'s':>8} {'MiB':>7} {'bracket':>26} "
+        f"{'gap':>7} {'estimate (99.9 %)':>26}"
     )
     lines = [head, "-" * len(head)]
     for name, r in report["rows"].items():
         b = r.get("affine_volume_bracket")
         btxt = "-" if not b else f"[{b[0]:.5g}, {b[1]:.5g}]"
+        gap = "-" if not b or b[1] <= 0 else f"{100 * (b[1] - b[0]) / b[1]:.2f} %"
+        e = r.get("volume_estimate")
+        etxt = "-" if not e else f"[{e['affine_interval'][0]:.5g}, {e['affine_interval'][1]:.5g}]"
         status = r["status"] + ("" if not r.get("stopped_by") else f"/{r['stopped_by']}")
         lines.append(
-            f"{name:<18} {status:<12} {r.get('dimension')!s:>3} {r.get('vertices', 0):>6} "
+            f"{name:<18} {status:<22} {r.get('dimension')!s:>3} {r.get('vertices', 0):>6} "
             f"{r.get('num_lps', 0):>6} {r.get('wall_s', float('nan')):8.2f} {r.get('peak_rss_mib', float('nan')):7.0f} "
-            f"{btxt:>26}"
+            f"{btxt:>26} {gap:>7} {etxt:>26}"
         )
     return "\n".join(lines)
 
