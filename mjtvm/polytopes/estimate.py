@@ -145,7 +145,8 @@ def estimate_volume(
     order: Callable[[NDArray[np.float64]], NDArray[np.int64]] | None = None,
     seed: int = 0,
     progress: Callable[[dict[str, Any]], None] | None = None,
-    tighten: Callable[[NDArray[np.float64], NDArray[np.float64]], tuple[float, FaceLattice]] | None = None,
+    tighten: Callable[[NDArray[np.float64], NDArray[np.float64]], tuple[float, FaceLattice] | None]
+    | None = None,
 ) -> VolumeEstimate:
     r"""Estimate :math:`\mathrm{vol}(S_{ov})` by uniform points in O (module docstring).
 
@@ -177,7 +178,8 @@ def estimate_volume(
         and ``width``.
     tighten
         ``tighten(normals, offsets) -> (outer volume, lattice)``: O with the hyperplanes
-        ``normals @ u <= offsets`` added. Called when fewer than :data:`MIN_INSIDE` of the
+        ``normals @ u <= offsets`` added (``None`` when that would cost too much: the sampling
+        then goes on in the O it has). Called when fewer than :data:`MIN_INSIDE` of the
         points of a batch are inside (then the sampling starts again in the smaller O, and the
         certified bracket's outer volume comes down with it: :attr:`VolumeEstimate.outer`).
     """
@@ -218,12 +220,15 @@ def estimate_volume(
             # union bound still covers every interval (each from points drawn after the cut).
             try:
                 budget.check()
-                volume, lattice = tighten(
-                    classify.normals[: classify.count], classify.offsets[: classify.count]
-                )
+                smaller = tighten(classify.normals[: classify.count], classify.offsets[: classify.count])
             except LimitReached as e:
                 stopped = e.reason
                 break
+            if smaller is None:  # too costly now: go on sampling the O there is
+                tighten = None
+                batch = samples
+                continue
+            volume, lattice = smaller
             bracket = (bracket[0], min(bracket[1], volume))
             lps += classify.lps
             classify = _Classifier(shoot, center, tol)

@@ -161,7 +161,7 @@ class Meter:
         if self.inner is not None and self.inner_s > 0.0:
             # The hull of a subset is inside S_ov too: as many points as the time left allows
             # (half of it, the lattice needs its share), drawn at random (seeded).
-            fit = self.inner_points * (0.5 * left / self.inner_s) ** (1.0 / INNER_GROWTH)
+            fit = self.inner_points * (0.5 * max(left, 0.0) / self.inner_s) ** (1.0 / INNER_GROWTH)
             if fit < len(pts):
                 pts = pts[np.sort(np.random.default_rng(len(pts)).permutation(len(pts))[: int(fit)])]
         if self.inner is None or len(pts) > self.inner_points:
@@ -362,7 +362,7 @@ def _approximate(
             confidence=limits.confidence,
             order=lambda points: _chain(points, center),
             progress=None if limits.progress is None else _estimate_report(limits, cutter, budget),
-            tighten=lambda normals, offsets: _tighten(polar, normals, offsets, sampling),
+            tighten=lambda normals, offsets: _tighten(polar, meter, normals, offsets, sampling),
         )
         if estimate.outer < bracket.outer:  # O was cut down on the way: a narrower bracket
             bracket = replace(bracket, outer=max(estimate.outer, bracket.inner))
@@ -380,11 +380,17 @@ def _approximate(
 
 
 def _tighten(
-    polar: PolarHull, normals: NDArray[np.float64], offsets: NDArray[np.float64], budget: Budget
-) -> tuple[float, FaceLattice]:
+    polar: PolarHull, meter: Meter, normals: NDArray[np.float64], offsets: NDArray[np.float64], budget: Budget
+) -> tuple[float, FaceLattice] | None:
     """O with the rows ``normals @ u <= offsets`` added (supporting hyperplanes of S_ov found by
-    the estimate's LPs): its volume bound and lattice."""
+    the estimate's LPs): its volume bound and lattice; ``None`` (the rows kept, the lattice
+    not made) where its predicted cost (:class:`Meter`) exceeds the time left."""
     polar.add(normals, offsets)
+    t = budget.limits.time_limit
+    if t is not None and meter.outer_simplices:
+        predicted = meter.outer_s * polar.predicted_size() / meter.outer_simplices
+        if budget.elapsed + predicted > t:
+            return None
     return outer_volume(polar, budget)
 
 
