@@ -173,10 +173,6 @@ class PolarHull:
             self._seen = keys
         return self._solve(simp, budget)
 
-    def corners(self, budget: Budget | None = None) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-        """Every simplex's vertex of O, unmerged, and the ``(n, k)`` rows of each (flat ones dropped)."""
-        return self._corners(self._simplices(budget), budget)
-
     @property
     def size(self) -> int:
         """Simplices of the last hull (what a vertex enumeration or a face lattice now costs)."""

@@ -97,8 +97,8 @@ class FaceLattice:
         ``(k,)`` a point inside O (the apex of the first pyramids).
     corners, rows
         ``(n, k)`` O's vertices, one per simplex of the polar hull (copies of a degenerate
-        vertex included), and ``(n, k)`` the indices of the rows through each
-        (:meth:`~mjtvm.polytopes.hull.PolarHull.corners`).
+        vertex and flat simplices included), and ``(n, k)`` the indices of the rows through
+        each (:meth:`~mjtvm.polytopes.hull.PolarHull.lattice` solves them on the joggled rows).
     budget
         Checked between the levels; its memory reserved for the subsets of each level.
     """

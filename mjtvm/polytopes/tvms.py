@@ -138,11 +138,10 @@ class TvmsResult:
         e = self.volume_estimate
         if e is None:
             return None
-        full = self.dimension == len(self.scale)
-        per = 1.0 / float(np.prod(self.scale)) if full else 0.0
+        lower, value, upper = _d_volume(np.array([e.lower, e.value, e.upper]), self.dimension, self.scale)
         return {
-            "value": e.value * per,
-            "interval": [e.lower * per, e.upper * per],
+            "value": float(value),
+            "interval": [float(lower), float(upper)],
             "affine_value": e.value,
             "affine_interval": [e.lower, e.upper],
             "confidence": e.confidence,
@@ -198,6 +197,14 @@ def default_scale(state: GraspState) -> NDArray[np.float64]:
     )
 
 
+def _d_volume(
+    affine: NDArray[np.float64], dimension: int | None, scale: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The D-dimensional volumes of scaled volumes ``affine`` (eq. 29): divided by the product
+    of ``scale`` when the TVMS is full-dimensional, else 0."""
+    return affine / float(np.prod(scale)) if dimension == len(scale) else np.zeros_like(affine)
+
+
 def _check_scale(scale: ArrayLike, big_d: int) -> NDArray[np.float64]:
     try:
         s = np.array(scale, dtype=float).reshape(-1)
@@ -221,7 +228,6 @@ def _volumes(
     With the projection's ``facets`` it is a sum of pyramids (:func:`facet_volume`),
     otherwise one Qhull hull of the vertices (:func:`hull_volume`).
     """
-    big_d = vertices.shape[1]
     if dimension <= 0:
         return 0.0, 0.0
     scaled = vertices * scale
@@ -240,8 +246,7 @@ def _volumes(
         affine = facet_volume(local, rows / norm[:, None], facets[1] / norm, tol)
     else:
         affine = hull_volume(local)
-    volume = affine / float(np.prod(scale)) if dimension == big_d else 0.0
-    return volume, affine
+    return float(_d_volume(np.array(affine), dimension, scale)), affine
 
 
 def _ray_lengths(proj: Projection, rvds: NDArray[np.float64], facets: Facets | None) -> NDArray[np.float64]:
@@ -277,8 +282,7 @@ def _brackets(
     if proj.status != "approximate" or approx is None or proj.dimension is None:
         return None, None, None
     aff = np.array([approx.inner_volume, approx.outer_volume])
-    vol = aff / float(np.prod(weights)) if proj.dimension == len(weights) else np.zeros(2)
-    return vol, aff, approx.hausdorff
+    return _d_volume(aff, proj.dimension, weights), aff, approx.hausdorff
 
 
 def tvms(
