@@ -26,6 +26,7 @@ import io
 import itertools
 import json
 import multiprocessing
+import os
 import signal
 import sys
 import time
@@ -179,18 +180,58 @@ def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
 _RowKey = tuple[str, str, int, str, str, float, float, int]
 
 
-def _ignore_sigint() -> None:
-    """Pool workers leave Ctrl-C to the parent (a terminal sends SIGINT to the whole process
-    group; each worker would print its own KeyboardInterrupt traceback)."""
+_PR_SET_PDEATHSIG = 1
+"""``prctl`` option (``<linux/prctl.h>``): the signal a process gets when its parent ends."""
+
+STOP_WAIT_S = 1.0
+"""How long an interrupted pool's workers get to end on SIGTERM before they are killed."""
+
+
+def _die_with_parent() -> None:
+    """Have the kernel kill this process when its parent ends (Linux; elsewhere nothing).
+
+    A pool worker blocks on its task queue, which its siblings hold open too: it would never
+    notice a parent killed by SIGKILL, and would live on as an orphan.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):  # pragma: no cover - a libc without prctl
+        return
+
+
+def _init_worker(parent: int = 0) -> None:
+    """Set up a pool worker: Ctrl-C is the parent's (a terminal sends SIGINT to the whole
+    process group; each worker would print its own KeyboardInterrupt traceback), and the
+    worker dies with its parent (:func:`_die_with_parent`). ``parent``: the pid of the process
+    that forked the worker (0 for a forkserver's worker, whose parent is the forkserver)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent()
+    if parent and os.getppid() != parent:  # the parent ended before the death signal was armed
+        os._exit(1)
 
 
 def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel the pending tasks and end the workers now (``shutdown(wait=True)``, what the
-    ``with`` statement does, would first run every queued task)."""
+    """Cancel the pending tasks and end the workers now.
+
+    ``shutdown(wait=True)``, what the ``with`` statement does, would first run every queued
+    task; ``shutdown`` also forgets the workers, so they are taken before it. Workers get
+    SIGTERM, and SIGKILL after :data:`STOP_WAIT_S`.
+    """
+    procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    for proc in procs:
         proc.terminate()
+    deadline = time.monotonic() + STOP_WAIT_S
+    for proc in procs:
+        proc.join(max(0.0, deadline - time.monotonic()))
+        if proc.is_alive():
+            proc.kill()
+            proc.join(STOP_WAIT_S)
 
 
 def run_sweep(
@@ -319,7 +360,8 @@ def _run_pool(
     else:
         calls = [(_solve_group, (key, states)) for key, states in tasks]
     context = multiprocessing.get_context("fork" if fork else "forkserver")
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_ignore_sigint)
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_init_worker,
+                               initargs=(os.getpid() if fork else 0,))  # fmt: skip
     try:
         with warnings.catch_warnings():
             # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see above).

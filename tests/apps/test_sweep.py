@@ -127,3 +127,142 @@ def test_pool_and_dask_rows_are_checkpointed(tmp_path):
     seen: list[dict] = []
     rows = run_sweep(POINTS[:4], jobs=2, chunk=1, progress=False, on_rows=seen.extend)
     assert sorted(map(repr, seen)) == sorted(map(repr, rows))
+
+
+# ------------------------------------------------- faults of parallel sweeps (subprocesses)
+def _mjtvm() -> list[str]:
+    """The ``mjtvm`` command of this interpreter's environment."""
+    import sys
+    from pathlib import Path
+
+    script = Path(sys.executable).with_name("mjtvm")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "mjtvm.cli"]
+
+
+def _children(pid: int) -> list[int]:
+    """The live (not zombie) child processes of ``pid``, from /proc."""
+    import os
+
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat", "rb") as f:
+                    fields = f.read().rsplit(b")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != b"Z":
+                out.append(int(entry))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie is gone: it only waits to be reaped)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except OSError:
+        return False
+
+
+def _wait(condition, timeout: float) -> bool:
+    import time
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.05)
+    return condition()
+
+
+# 4800 rows (20 mu x 60 mg x 4 states) in 4 forked tasks of one state each: a task takes
+# seconds (about 10 s on one core), the whole sweep tens of seconds on 2 workers.
+_LONG = ["--mu", ",".join(f"{0.05 * k:.2f}" for k in range(1, 21)),
+         "--mg", ",".join(f"{0.5 + 0.05 * k:.2f}" for k in range(60)), "--states", "4"]  # fmt: skip
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="/proc and forked workers")
+@pytest.mark.parametrize("how", ["SIGKILL", "SIGTERM"])
+def test_a_killed_parallel_sweep_leaves_no_worker_and_no_lock(tmp_path, how):
+    """Kill the parent of a --jobs 2 sweep mid-run: its workers end with it (within 5 s), and the
+    next run into the folder starts and finishes."""
+    import contextlib
+    import os
+    import signal
+    import subprocess
+
+    workers: list[int] = []
+    proc = subprocess.Popen([*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path), "--quiet"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    try:
+        assert _wait(lambda: len(_children(proc.pid)) >= 2, 60), "the pool did not start"
+        workers += _children(proc.pid)
+        proc.send_signal(getattr(signal, how))
+        proc.wait(timeout=30)
+        assert _wait(lambda: not any(_alive(w) for w in workers), 5), "workers outlived the killed sweep"
+    finally:
+        for w in workers:  # whatever happened: no process of this test outlives it
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(w, signal.SIGKILL)
+        proc.kill()
+        proc.wait()
+        proc.stderr.close()
+    words = ["sweep", "--states", "2", "--out", str(tmp_path), "--quiet"]
+    again = subprocess.run([*_mjtvm(), *words], capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0, again.stderr
+    assert (tmp_path / "sweep.json").exists()
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="forked workers")
+def test_ctrl_c_stops_a_parallel_sweep_at_once_and_keeps_the_finished_rows(tmp_path):
+    """SIGINT to the process group (what a terminal's Ctrl-C does) once a task has finished:
+    exit 130 well within 5 s (the workers are not left to finish their tasks), one line on
+    stderr, and the checkpoint holds the finished rows."""
+    import contextlib
+    import json
+    import os
+    import re
+    import signal
+    import subprocess
+    import threading
+    import time
+
+    workers: list[int] = []
+    proc = subprocess.Popen([*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)  # fmt: skip
+    err: list[str] = []
+    moving = threading.Event()
+
+    def read() -> None:
+        assert proc.stderr is not None
+        while chunk := proc.stderr.read(1):
+            err.append(chunk)
+            if re.search(r"\|\s*[1-9][0-9]*/[0-9]+ ", "".join(err[-80:])):  # a task is finished
+                moving.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        assert moving.wait(timeout=180), "".join(err)
+        workers += _children(proc.pid)
+        start = time.monotonic()
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=60)
+        stopped = time.monotonic() - start
+    finally:
+        for w in workers:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(w, signal.SIGKILL)
+        proc.kill()
+        proc.wait()
+    reader.join(timeout=10)
+    text = "".join(err)
+    print(f"Ctrl-C to exit: {stopped:.2f} s")
+    assert proc.returncode == 130, text
+    assert text.rstrip("\n").splitlines()[-1].endswith("mjtvm: interrupted") and "Traceback" not in text
+    assert stopped < 5.0, f"{stopped:.1f} s from Ctrl-C to exit"
+    assert _wait(lambda: not any(_alive(w) for w in workers), 5)
+    doc = json.loads((tmp_path / "sweep.partial.json").read_text())
+    assert doc["schema"] == "mjtvm.sweep-checkpoint/1" and len(doc["rows"]) > 0
