@@ -379,6 +379,42 @@ CONNECT_TIMEOUT_S = 10.0
 """How long :func:`run_sweep` waits for a Dask scheduler given by address."""
 
 
+def _check_scheduler(address: str, timeout: float) -> None:
+    """Connect to ``address`` and read the scheduler's handshake, all within ``timeout`` s.
+
+    ``distributed.Client`` bounds only the TCP connection by its timeout: a server that
+    accepts and then stays silent keeps it waiting for the handshake without end, and one that
+    answers in another protocol makes it fail with whatever its decoder raises (a 2 EiB
+    allocation, a struct error).
+
+    Raises
+    ------
+    StateError
+        Nothing answers within ``timeout`` s, or the server there is not a Dask scheduler.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout))
+    except (OSError, TimeoutError) as e:  # refused, unreachable, or no handshake in time
+        why = str(e).splitlines()[0][:200] if str(e) else "no Dask handshake from the server there"
+        raise StateError(
+            "--cluster", f"cannot reach a Dask scheduler at {address} within {timeout:g} s ({why})"
+        ) from e
+    except Exception as e:  # whatever the handshake's decoder makes of another protocol
+        raise StateError(
+            "--cluster",
+            f"expected a Dask scheduler at {address}, but the server there answers in another "
+            f"protocol ({type(e).__name__} on its handshake)",
+        ) from e
+
+
 def _run_dask(
     tasks: list[tuple[_Key, list[int]]], cluster: Any, finished: Callable[[list[dict[str, Any]]], None]
 ) -> None:
@@ -389,6 +425,7 @@ def _run_dask(
     if isinstance(cluster, Client):
         client = cluster
     else:
+        _check_scheduler(cluster, CONNECT_TIMEOUT_S)
         try:
             client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
         except (OSError, TimeoutError, ValueError) as e:

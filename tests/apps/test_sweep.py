@@ -63,6 +63,8 @@ def test_dask_local_cluster_gives_the_same_rows(serial):
     ) as cluster:
         with distributed.Client(cluster) as client:
             assert run_sweep(POINTS, cluster=client, chunk=1, progress=False) == serial
+        # by address: the handshake check passes a real scheduler
+        assert run_sweep(POINTS[:2], cluster=cluster.scheduler_address, progress=False) == serial[:2]
 
 
 @pytest.mark.parametrize(
@@ -266,3 +268,80 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_keeps_the_finished_rows(tmp_p
     assert _wait(lambda: not any(_alive(w) for w in workers), 5)
     doc = json.loads((tmp_path / "sweep.partial.json").read_text())
     assert doc["schema"] == "mjtvm.sweep-checkpoint/1" and len(doc["rows"]) > 0
+
+
+class _Server:
+    """A TCP server on 127.0.0.1 (an ephemeral port) that is not a Dask scheduler: it accepts
+    and then stays silent, or greets every connection with an SSH banner. It stops by itself
+    after ``lifetime`` seconds, and at the end of the ``with`` block."""
+
+    def __init__(self, speaks: bool, lifetime: float = 30.0) -> None:
+        import socket
+        import threading
+
+        self.speaks, self.lifetime = speaks, lifetime
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.sock.settimeout(0.2)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+
+    def _serve(self) -> None:
+        import time
+
+        conns = []
+        end = time.monotonic() + self.lifetime
+        try:
+            while not self.done.is_set() and time.monotonic() < end:
+                try:
+                    conn, _ = self.sock.accept()
+                except OSError:  # the accept timeout: look at the clock again
+                    continue
+                conns.append(conn)
+                if self.speaks:
+                    conn.sendall(b"SSH-2.0-OpenSSH_9.6 not-dask\r\n" * 4)
+        finally:
+            for conn in conns:
+                conn.close()
+            self.sock.close()
+
+    def __enter__(self) -> _Server:
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.done.set()
+        self.thread.join(timeout=5)
+
+
+@pytest.mark.parametrize("speaks", [False, True], ids=["silent", "speaks-another-protocol"])
+def test_a_cluster_address_that_is_not_a_dask_scheduler_is_one_line_within_the_timeout(
+    tmp_path, monkeypatch, capsys, speaks
+):
+    """A server that stays silent after accepting (Client's own timeout covers the connection
+    only), or that answers in another protocol: exit 2 within the timeout (1 s here), one line
+    naming --cluster and what was expected, no traceback."""
+    import time
+
+    import mjtvm.apps.sweep
+    from mjtvm.cli import main
+
+    monkeypatch.setattr(mjtvm.apps.sweep, "CONNECT_TIMEOUT_S", 1.0)
+    words = ["sweep", "--states", "2", "--out", str(tmp_path), "--quiet"]
+    with _Server(speaks) as server:
+        start = time.monotonic()
+        code = main([*words, "--cluster", server.address])
+        took = time.monotonic() - start
+    err = capsys.readouterr().err
+    print(f"--cluster at a {'speaking' if speaks else 'silent'} server: gave up after {took:.2f} s")
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert err.startswith("error: --cluster: ") and "Dask scheduler at " + server.address in err
+    if speaks:
+        assert "expected a Dask scheduler" in err and "another protocol" in err
+    else:
+        assert "within 1 s" in err
+    assert took < 5.0  # the lift of --states 2 and the timeout (the parent builds no lift for Dask)
+    assert not (tmp_path / "sweep.json").exists()
