@@ -22,11 +22,13 @@ Every way returns the same rows in the order of the points (tested).
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import itertools
 import json
 import multiprocessing
 import os
+import re
 import signal
 import sys
 import time
@@ -449,6 +451,52 @@ CHECKPOINT_EVERY_S = 5.0
 interrupt or a failure, with every finished row)."""
 
 
+_FILE_ATTRIBUTE = re.compile(rb"""\bfile\s*=\s*["']([^"']+)["']""")
+"""An MJCF ``file="..."`` attribute (``<include>``, meshes, textures, ...)."""
+
+
+def _model_files(model: Path) -> list[Path]:
+    """The MJCF file and the files it names (``file=`` attributes, through ``<include>`` files,
+    taken relative to the naming file's folder, where they exist)."""
+    seen: list[Path] = []
+    todo = [model]
+    while todo:
+        path = todo.pop()
+        if path in seen or not path.is_file():
+            continue
+        seen.append(path)
+        if path.suffix.lower() == ".xml":
+            for name in _FILE_ATTRIBUTE.findall(path.read_bytes()):
+                todo.append(path.parent / os.fsdecode(name))
+    return seen
+
+
+def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
+    """A digest of what a sweep's rows of one grasp depend on beyond their point's fields.
+
+    That is: the grasp file's bytes (mjtvm.grasp/1, shipped or the user's), its MJCF model's
+    and those of the files the model names (includes, meshes), the number of lift states and
+    mjtvm's version. ``--resume`` keeps a finished row only if its ``inputs`` equals this.
+
+    Raises
+    ------
+    ModelError
+        The grasp does not load (its own error, as the sweep would raise it).
+    """
+    from .. import __version__
+    from ..sim.scenario import load_scenario
+
+    loaded = load_scenario(grasp, variant=hand)
+    h = hashlib.sha256(f"mjtvm {__version__}\n{grasp}\n{hand}\n{num_states}\n".encode())
+    files = ([loaded.path] if loaded.path is not None else []) + _model_files(loaded.model_path)
+    if loaded.path is None:  # a grasp given as a document: its normalised content
+        h.update(json.dumps(dict(loaded.document), sort_keys=True, default=str).encode())
+    for path in files:
+        h.update(f"{path.name}\n".encode())
+        h.update(hashlib.sha256(path.read_bytes()).digest())
+    return h.hexdigest()[:32]
+
+
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV: the point's fields, ``z``, ``tvmmp``, ``feasible``, ``limiting_k``,
     ``limiting_l`` and ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` (empty where not optimal)."""
@@ -483,15 +531,29 @@ def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
     return list(rows)
 
 
-def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[Path]:
+_BUILT_FROM: dict[tuple[str, str, int], str] = {}
+"""(grasp, hand, states) -> the inputs digest its cached lift (:func:`_lift`) was built from;
+a lift of unknown or other inputs is built again."""
+
+
+def _stderr(text: str) -> None:
+    print(text, file=sys.stderr)
+
+
+def run_sweep_files(
+    args: Any, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+) -> list[Path]:
     r"""``mjtvm sweep``: check ``--out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
 
     While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.sweep-checkpoint/1``) holds
     every finished row; it is rewritten atomically at most every :data:`CHECKPOINT_EVERY_S`
     seconds and on an interrupt or failure, and removed once ``NAME.json`` and ``NAME.csv``
-    are written. With ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json``
-    whose point belongs to this grid are kept and only the other points are solved; the
-    result equals an uninterrupted run (tested).
+    are written. Every row carries ``inputs``, the :func:`inputs_digest` of its grasp. With
+    ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json`` whose point
+    belongs to this grid and whose ``inputs`` equal the grasp's digest now are kept, and only
+    the other points are solved; rows whose inputs changed (an edited grasp or model file,
+    another mjtvm version, a row without ``inputs``) are solved again, and ``notice`` says how
+    many. The result equals an uninterrupted run (tested).
 
     Raises
     ------
@@ -509,6 +571,12 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
     outdir = check_output_dir(args.out)
     out_json, out_csv = outdir / f"{args.name}.json", outdir / f"{args.name}.csv"
     checkpoint = outdir / f"{args.name}.partial.json"
+    digests = {(g, h): inputs_digest(g, h, args.states) for g in args.grasp for h in args.hand}
+    if any(_BUILT_FROM.get((g, h, args.states)) != d for (g, h), d in digests.items()):
+        _lift.cache_clear()  # a grasp file may have changed since this process built its lift
+        _base.cache_clear()
+        _BUILT_FROM.clear()
+    _BUILT_FROM.update(((g, h, args.states), d) for (g, h), d in digests.items())
     mus, mgs = args.mu, args.mg
     if mus is None or mgs is None:  # the grasps' own: they must agree to make one grid
         defaults = {
@@ -520,6 +588,10 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
             raise StateError("--mu", "the grasps have different friction or weight: give --mu and --mg")
         mu0, mg0 = defaults.pop()
         mus, mgs = (mu0,) if mus is None else mus, (mg0,) if mgs is None else mgs
+
+    def tagged(row: dict[str, Any]) -> dict[str, Any]:
+        return {**row, "inputs": digests[row["scenario"], row["hand"]]}
+
     with output_lock(outdir):
         points = grid(
             scenarios=args.grasp, hands=args.hand, variants=args.contacts, readings=args.reading,
@@ -527,12 +599,21 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
         )  # fmt: skip
         wanted = {_key(p) for p in points}
         done: dict[_RowKey, dict[str, Any]] = {}
+        changed: set[_RowKey] = set()
         if args.resume:
             for path, is_checkpoint in ((out_json, False), (checkpoint, True)):
                 if path.exists():
-                    done.update(
-                        (_key(r), r) for r in _read_rows(path, checkpoint=is_checkpoint) if _key(r) in wanted
-                    )
+                    for r in _read_rows(path, checkpoint=is_checkpoint):
+                        key = _key(r)
+                        if key not in wanted:
+                            continue
+                        if r.get("inputs") == digests[key[0], key[1]]:
+                            done[key] = r
+                        else:
+                            changed.add(key)
+            changed -= done.keys()  # e.g. stale in NAME.json, solved again in the checkpoint
+            if changed:
+                notice(f"resume: {len(changed)} rows recomputed: inputs changed")
             if not args.quiet:
                 emit(f"resume: {len(done)} of {len(wanted)} rows already finished")
         finished = dict(done)
@@ -544,7 +625,7 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
 
         def on_rows(rows: list[dict[str, Any]]) -> None:
             nonlocal last
-            finished.update((_key(r), r) for r in rows)
+            finished.update((_key(r), tagged(r)) for r in rows)
             if time.monotonic() - last >= CHECKPOINT_EVERY_S:
                 save()
                 last = time.monotonic()
@@ -556,6 +637,7 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
             if len(finished) > len(done):  # no finished work is lost to an interrupt or a failure
                 save()
             raise
+        rows = [tagged(r) for r in rows]
         written = write_files({out_json: json.dumps(rows, indent=1) + "\n", out_csv: rows_csv(rows)})
         checkpoint.unlink(missing_ok=True)
     return written

@@ -125,6 +125,43 @@ def test_resume_after_an_interrupt_computes_only_the_missing_rows(tmp_path, monk
     assert len(calls) == 4
 
 
+def test_resume_recomputes_the_rows_of_an_edited_grasp_file(tmp_path, capsys):
+    """Run on a grasp file, edit it (RVDS twice as large: alpha halves) and resume: the rows are
+    those of the edited file, said on stderr; the finished rows of the unchanged grasp stay."""
+    import json
+    import shutil
+
+    from mjtvm.cli import main
+    from mjtvm.sim.graspfile import shipped_grasps
+
+    shipped = shipped_grasps()["case2"]
+    grasp = tmp_path / "mine.toml"
+    text = shipped.read_text().replace(
+        'model = "four_finger_hand.xml"', f"model = {str(shipped.parent / 'four_finger_hand.xml')!r}"
+    )
+    grasp.write_text(text)
+    words = ["sweep", "--grasp", f"case2,{grasp}", "--mu", "0.3", "--mg", "1", "--states", "3",
+             "--state-indices", "0,2", "--quiet"]  # fmt: skip
+    out = tmp_path / "out"
+    assert main([*words, "--out", str(out)]) == 0
+    before = json.loads((out / "sweep.json").read_text())
+    capsys.readouterr()
+    start = text.index("rvds = [")
+    rvds = text[start : text.index("\n]\n", start) + 3]  # the RVDS, twice as large: alpha halves
+    grasp.write_text(text.replace(rvds, rvds.replace("1.0", "2.0")))
+    assert main([*words, "--out", str(out), "--resume"]) == 0
+    assert capsys.readouterr().err == "resume: 2 rows recomputed: inputs changed\n"
+    after = json.loads((out / "sweep.json").read_text())
+    assert main([*words, "--out", str(tmp_path / "fresh")]) == 0
+    assert after == json.loads((tmp_path / "fresh" / "sweep.json").read_text())
+    mine = [(b, a) for b, a in zip(before, after) if b["scenario"] == str(grasp)]
+    assert len(mine) == 2 and all(a["tvmmp"] == pytest.approx(b["tvmmp"] / 2) for b, a in mine)
+    assert [a for a in after if a["scenario"] == "case2"] == [b for b in before if b["scenario"] == "case2"]
+    shutil.rmtree(tmp_path / "fresh")
+    assert main([*words, "--out", str(out), "--resume"]) == 0  # nothing changed since: nothing to say
+    assert capsys.readouterr().err == ""
+
+
 def test_pool_and_dask_rows_are_checkpointed(tmp_path):
     seen: list[dict] = []
     rows = run_sweep(POINTS[:4], jobs=2, chunk=1, progress=False, on_rows=seen.extend)
