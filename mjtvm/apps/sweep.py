@@ -16,7 +16,10 @@ reads each state's MuJoCo grasp once per worker, and solves each requested state
   wheels from PyPI, its ``LocalCluster`` runs the same code in tests, and ``Client(address)``
   attaches to any existing scheduler (including batch-queue clusters via dask-jobqueue).
 
-Every way returns the same rows in the order of the points (tested).
+Every way returns the same rows in the order of the points (tested). A local pool's workers
+never outlive the sweep: an interrupt ends them at once (:func:`_stop`), and on Linux the
+kernel kills them when their parent dies (:func:`_die_with_parent`). A scheduler address is
+checked by its handshake within :data:`CONNECT_TIMEOUT_S` (:func:`_check_scheduler`).
 """
 
 from __future__ import annotations
