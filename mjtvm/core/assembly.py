@@ -137,6 +137,11 @@ class Assembly:
         Per contact, the slice of its generators inside ``lam[i]``.
     kinematic_rows
         The rows whose ``A_twist`` coefficients are non-zero (eq. 11-13).
+    row_groups
+        ``(m,)`` one id per vector whose components the rows are (a copy's force balance,
+        its moment balance, a contact's relative velocity); every other row its own id.
+        A certificate measures a row's violation against its vector's size, as a rotation
+        of the frame mixes the components (:mod:`~mjtvm.core.certificate`).
     """
 
     A: sp.csc_matrix
@@ -151,6 +156,7 @@ class Assembly:
     generators: tuple[NDArray[np.float64], ...]
     generator_slices: tuple[slice, ...]
     kinematic_rows: NDArray[np.int64]
+    row_groups: NDArray[np.int64]
     copies: int
     box: BoxForm
 
@@ -183,14 +189,34 @@ class _Rows:
         self.coo, self.twist = _Coo(), _Coo()
         self.lower: list[NDArray[np.float64]] = []
         self.upper: list[NDArray[np.float64]] = []
+        self.groups: list[NDArray[np.int64]] = []
         self.count = 0
+        self.num_groups = 0
 
-    def add(self, lo: NDArray[np.float64] | float, hi: NDArray[np.float64] | float, count: int) -> int:
-        """Append ``count`` rows bounded by ``lo`` and ``hi``; the index of the first."""
+    def add(
+        self,
+        lo: NDArray[np.float64] | float,
+        hi: NDArray[np.float64] | float,
+        count: int,
+        *,
+        vector: bool = False,
+        join: bool = False,
+    ) -> int:
+        """Append ``count`` rows bounded by ``lo`` and ``hi``; the index of the first. With
+        ``vector`` the rows are the components of one vector (one row group, see
+        :attr:`Assembly.row_groups`); with ``join`` they join the last group."""
         bounds = np.empty((2, count))
         bounds[0], bounds[1] = lo, hi
         self.lower.append(bounds[0])
         self.upper.append(bounds[1])
+        if join:
+            self.groups.append(np.full(count, self.num_groups - 1))
+        elif vector:
+            self.groups.append(np.full(count, self.num_groups))
+            self.num_groups += 1
+        else:
+            self.groups.append(self.num_groups + np.arange(count))
+            self.num_groups += count
         start = self.count
         self.count += count
         return start
@@ -255,8 +281,10 @@ def _statics_rows(
         np.hstack([_product(j.T, g) for j, g in zip(jacobians, gens)]) if contacts else np.zeros((m, 0))
     )
     wrench_rows, torque_rows = [], []
+    d = state.dim
     for i in range(copies):
-        r0 = out.add(0.0, 0.0, big_d)
+        r0 = out.add(0.0, 0.0, d, vector=True)  # the force, then the moment (one vector each)
+        out.add(0.0, 0.0, big_d - d, vector=True)
         wrench_rows.append(slice(r0, r0 + big_d))
         out.coo.add(r0, blocks[f"lam[{i}]"].start, wrench_map)
         r0 = out.add(state.gravity_torque, state.gravity_torque, m)
@@ -286,12 +314,12 @@ def _kinematic_rows(
             sel = np.eye(d)
         else:
             sel = c.normal.reshape(1, -1)
-        r0 = out.add(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0])
+        r0 = out.add(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0], vector=True)
         out.coo.add(r0, qd0, _product(sel, jacobians[ci]))
         out.twist.add(r0, 0, -_product(sel, gt[ci]))
         if c.type == "S":
             tb = tangent_basis(c.normal)
-            r0 = out.add(0.0, 0.0, d - 1)
+            r0 = out.add(0.0, 0.0, d - 1, join=True)  # the same relative velocity
             out.coo.add(r0, qd0, _product(tb, jacobians[ci]))
             out.twist.add(r0, 0, -_product(tb, gt[ci]))
             k = s_contacts.index(ci)
@@ -413,6 +441,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         generators=gens,
         generator_slices=gen_slices,
         kinematic_rows=kinematic_rows,
+        row_groups=np.concatenate(out.groups),
         copies=copies,
         box=box,
     )

@@ -11,9 +11,13 @@ the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
 
 * **primal**: the solution clipped to its bounds (so ``alpha >= 0`` and ``lam >= 0`` hold
   exactly) satisfies every row to :data:`PRIMAL_TOL` relative to the magnitudes of the
-  row's terms, ``|A_i| s + |bound|`` with ``s_j = max(|x_j|, ref_j)`` and ``ref_j`` the
-  variable's typical magnitude (the equilibration's column factor: a variable that is ~0
-  in this solution still counts at its usual size);
+  row's terms, ``|A_i| s + |bound|`` with ``s_j = max(|x_j|, ref_j)`` and ``ref_j`` a
+  physical size of the variable given by the caller (Problem 2: each joint's largest speed
+  and torque), so that a kinematic row of joint speeds that are ~0 in this solution is
+  still measured at the speeds the joints can reach; rows that are the components of one
+  vector (a force balance, a contact's relative velocity) share the largest of their
+  scales, so that the check does not depend on the frame (the x balance of two forces
+  that are vertical is measured against the forces, not against their x components);
 * **dual**: the solver's row multipliers ``y`` (HiGHS' signs: ``y_i >= 0`` where the lower
   bound binds, ``<= 0`` the upper) and the reduced costs ``d = c - A^T y`` computed here on
   the unscaled ``A`` have the signs their bounds allow; those that do not are taken as 0,
@@ -36,7 +40,6 @@ from dataclasses import dataclass
 from typing import Any, TypeAlias
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .roundoff import drop_cancellation
@@ -114,10 +117,12 @@ def primal_violation(
     upper: NDArray[np.float64],
     abs_a: Matrix | None = None,
     size: NDArray[np.float64] | None = None,
+    groups: NDArray[np.int64] | None = None,
 ) -> float:
     """Largest violation of ``lower <= a x <= upper`` relative to ``|a| size + |bound|``,
     ``size`` the typical magnitudes of the variables (default ``|x|``): a row whose
-    variables are all ~0 in this solution is still measured at its usual scale."""
+    variables are all ~0 in this solution is still measured at its usual scale. Rows with
+    one ``groups`` id (the components of one vector) share the largest of their scales."""
     ax = a @ x
     terms = (abs(a) if abs_a is None else abs_a) @ (np.abs(x) if size is None else size)
     with np.errstate(invalid="ignore"):
@@ -127,6 +132,10 @@ def primal_violation(
                          np.abs(np.where(np.isfinite(upper), upper, 0.0)))  # fmt: skip
     viol = np.maximum(np.maximum(below, above), 0.0)
     scale = terms + bound
+    if groups is not None and groups.size:
+        largest = np.zeros(int(groups.max()) + 1)
+        np.maximum.at(largest, groups, scale)
+        scale = largest[groups]
     rel = np.where(viol > 0.0, viol / np.where(scale > 0.0, scale, 1.0), 0.0)
     rel[(viol > 0.0) & (scale == 0.0)] = np.inf
     return float(np.max(rel, initial=0.0))
@@ -145,6 +154,7 @@ def certify(
     floor: float = 0.0,
     col_ref: NDArray[np.float64] | None = None,
     abs_a: Matrix | None = None,
+    row_groups: NDArray[np.int64] | None = None,
 ) -> Certificate:
     """Check a solution ``x`` and row multipliers ``y`` of ``min c^T x`` s.t.
     ``row_lower <= a x <= row_upper``, ``col_lower <= x <= col_upper`` (unscaled).
@@ -161,11 +171,13 @@ def certify(
         An error of the objective that does not matter (for alpha: the value below which
         it is reported as 0): the gap may reach it, and the dual measure a tenth of it.
     col_ref
-        ``(n,)`` typical magnitudes of the variables (the equilibration's column factors),
-        or ``None`` (``|x|`` alone): the scale of the rows' violations, and of what a
+        ``(n,)`` physical sizes of the variables (0 where none is known), or ``None``
+        (``|x|`` alone): with ``|x|``, the scale of the rows' violations and of what a
         reduced cost of the wrong sign moves the bound by.
     abs_a
         ``|a|``, when the caller keeps it (Problem 2 checks every LP of a state on one matrix).
+    row_groups
+        ``(m,)`` ids of the vectors the rows are components of (:func:`primal_violation`).
 
     Returns
     -------
@@ -174,7 +186,7 @@ def certify(
     xc = clip(x, col_lower, col_upper)
     abs_a = abs(a) if abs_a is None else abs_a
     size = np.abs(xc) if col_ref is None else np.maximum(np.abs(xc), col_ref)
-    primal = primal_violation(a, xc, row_lower, row_upper, abs_a, size)
+    primal = primal_violation(a, xc, row_lower, row_upper, abs_a, size, row_groups)
     if y is None:
         return Certificate(primal, np.inf, np.inf, -np.inf)
     y = np.array(y, dtype=float)

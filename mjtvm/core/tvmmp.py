@@ -94,6 +94,23 @@ def _witness(
     return Witness(alpha, alpha * r, forces, tau.copy(), qd.copy(), x[asm.blocks["rho"]].copy(), box)
 
 
+def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
+    """``(n + 1,)`` the sizes the certificate measures a row's violation at where the solution
+    is ~0 (:func:`~mjtvm.core.certificate.certify`'s ``col_ref``): each joint's largest
+    speed and torque (its operation range) for the speeds, torques and the literal box's
+    variables; 0 elsewhere (forces, slip speeds, alpha: their own values). From the state,
+    never from the equilibration, which the certificate must not trust."""
+    size = np.zeros(asm.num_variables + 1)
+    speed = np.array([op.max_speed for op in state.operation_ranges])
+    torque = np.array([op.max_torque for op in state.operation_ranges])
+    for name, sl in asm.blocks.items():
+        if name.startswith("tau"):
+            size[sl] = torque
+        elif name.startswith("qd"):
+            size[sl] = speed
+    return size
+
+
 class _Problem2:
     """The LPs of one state: variables of the assembly, then ``alpha`` (last column).
 
@@ -112,6 +129,7 @@ class _Problem2:
         self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
         self.col_upper = np.append(asm.col_upper, np.inf)
         self.kin = asm.kinematic_rows
+        self.physical_sizes = _physical_sizes(state, asm)
         twist = asm.A_twist.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
         self.twist_rows = twist[self.kin]
         self.abs_twist_rows = np.abs(self.twist_rows)
@@ -260,9 +278,8 @@ class _Problem2:
         cu[-1] = alpha_max
         assert sol.x is not None
         a, abs_a = self.pair_matrix(r)
-        factor = column_factor(self.row_scale[self.kin] * a[self.kin, -1])
         return certify(self.c, a, lower, upper, self.col_lower, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r),
-                       col_ref=np.append(self.col_scale, factor), abs_a=abs_a)  # fmt: skip
+                       col_ref=self.physical_sizes, abs_a=abs_a, row_groups=self.asm.row_groups)  # fmt: skip
 
     def _bounds(
         self, w: NDArray[np.float64], alpha_max: float
@@ -277,9 +294,9 @@ class _Problem2:
         on the unscaled LP (:func:`~mjtvm.core.certificate.farkas`)."""
         lower, upper, cu = self._bounds(w, np.inf)
         a, abs_a = self.pair_matrix(r)
-        factor = column_factor(self.row_scale[self.kin] * a[self.kin, -1])
-        return farkas(a, lower, upper, self.col_lower, cu, sol.row_dual,
-                      col_ref=np.append(self.col_scale, factor), abs_a=abs_a)  # fmt: skip
+        return farkas(
+            a, lower, upper, self.col_lower, cu, sol.row_dual, col_ref=self.physical_sizes, abs_a=abs_a
+        )
 
     def certified(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf

@@ -1,0 +1,114 @@
+"""Certificates of LP answers (mjtvm.core.certificate) on LPs solved by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from mjtvm.core.certificate import DUAL_TOL, GAP_TOL, PRIMAL_TOL, certify, farkas, primal_violation
+from mjtvm.core.highs import HighsSession
+from mjtvm.core.lp import LinearProgram
+
+INF = np.inf
+
+# max x1 + 2 x2  s.t.  x1 + x2 <= 4,  x1 + 3 x2 <= 6,  x >= 0: optimum (3, 1), value 5, and
+# the dual y = (1/2, 1/2) (both rows bind; -c = A^T (-y) in HiGHS' signs: y <= 0 on upper rows).
+C = np.array([-1.0, -2.0])
+A = np.array([[1.0, 1.0], [1.0, 3.0]])
+LO, UP = np.array([-INF, -INF]), np.array([4.0, 6.0])
+CL, CU = np.zeros(2), np.array([INF, INF])
+X_OPT = np.array([3.0, 1.0])
+Y_OPT = np.array([-0.5, -0.5])
+
+
+def check(x, y, **kw):  # type: ignore[no-untyped-def]
+    return certify(C, A, LO, UP, CL, CU, x, y, **kw)
+
+
+def test_the_optimum_by_hand_is_certified():
+    cert = check(X_OPT, Y_OPT)
+    assert cert.ok
+    assert cert.primal == 0.0 and cert.dual == 0.0 and cert.gap == 0.0
+    assert cert.bound == pytest.approx(-5.0)  # weak duality: a lower bound of min c^T x = -5
+
+
+def test_highs_own_answer_and_duals_are_certified_in_the_same_signs():
+    lp = LinearProgram(C, sp.csc_matrix(A), LO, UP, CL, CU)
+    sol = HighsSession(lp).solve(duals=True)
+    assert sol.x is not None and sol.row_dual is not None
+    np.testing.assert_allclose(sol.row_dual, Y_OPT, atol=1e-12)
+    assert check(sol.x, sol.row_dual).ok
+
+
+def test_a_feasible_but_suboptimal_point_fails_on_the_gap():
+    """(2, 1) is feasible with value 4; the optimum's multipliers bound the optimum by 5: the
+    gap is 1/5 relative."""
+    cert = check(np.array([2.0, 1.0]), Y_OPT)
+    assert cert.primal == 0.0 and cert.dual == 0.0
+    assert cert.gap == pytest.approx(0.2)
+    assert not cert.ok
+
+
+def test_an_infeasible_point_fails_on_the_primal_check():
+    """(3, 1.1): row 2 reads 6.3 > 6, a violation of 0.3 against terms |1| 3 + |3| 1.1 + 6."""
+    cert = check(np.array([3.0, 1.1]), Y_OPT)
+    assert cert.primal == pytest.approx(0.3 / (3.0 + 3.3 + 6.0))
+    assert not cert.ok
+
+
+def test_a_point_outside_its_bounds_is_clipped_first():
+    """x2 = -1e-13 (a solver's round-off below alpha >= 0) is clipped to 0, and the clipped
+    point is what the rows are checked with: (4, 0) is feasible and, with value 4, not optimal."""
+    cert = check(np.array([4.0, -1e-13]), Y_OPT)
+    assert cert.primal == 0.0
+    assert cert.gap == pytest.approx(0.2)
+
+
+def test_multipliers_of_the_wrong_sign_fail_on_the_dual_check():
+    """y = (+1/2, -1/2): the first row has no lower bound, so a positive multiplier there has
+    no bound to pair with; taken as 0 it leaves d = c - A^T y = (-1/2, -1/2), negative on
+    columns without an upper bound."""
+    cert = check(X_OPT, np.array([0.5, -0.5]))
+    assert cert.dual > DUAL_TOL and not cert.ok
+
+
+def test_without_multipliers_nothing_but_the_primal_is_certified():
+    cert = check(X_OPT, None)
+    assert cert.primal == 0.0 and cert.dual == np.inf and not cert.ok
+
+
+def test_an_objective_below_the_floor_is_certified_absolutely():
+    """An alpha of 0 is certified by a bound within ``floor`` of 0 (the reporting threshold),
+    not relative to 0. max x s.t. x <= 1e-12: with floor 1e-9 the answer 0 passes the gap,
+    with floor 0 it does not."""
+    c, a = np.array([-1.0]), np.array([[1.0]])
+    args = (c, a, np.array([-INF]), np.array([1e-12]), np.array([0.0]), np.array([INF]), np.array([0.0]))
+    assert certify(*args, np.array([-1.0]), floor=1e-9).ok
+    assert not certify(*args, np.array([-1.0]), floor=0.0).ok
+
+
+def test_tolerances_are_documented_values():
+    assert (PRIMAL_TOL, DUAL_TOL, GAP_TOL) == (1e-8, 1e-8, 1e-7)
+
+
+def test_primal_violation_is_relative_to_the_rows_terms():
+    a = np.array([[1e6, -1e6]])
+    # 1e6 x1 - 1e6 x2 = 0 at x = (1, 1 + 1e-12): violation 1e-6 against terms 2e6
+    rel = primal_violation(a, np.array([1.0, 1.0 + 1e-12]), np.zeros(1), np.zeros(1))
+    assert rel == pytest.approx(1e-6 / 2e6, rel=1e-3)
+
+
+def test_farkas_proves_an_infeasible_lp_and_refuses_a_feasible_one():
+    """x1 + x2 >= 2 with 0 <= x <= 0.5 is infeasible: y = 1 on the row gives the dual bound
+    2 - 0.5 - 0.5 = 1 > 0. HiGHS' dual ray proves it too; with x <= 1 (feasible) no ray does."""
+    a = np.array([[1.0, 1.0]])
+    lo, up = np.array([2.0]), np.array([INF])
+    assert farkas(a, lo, up, np.zeros(2), np.full(2, 0.5), np.array([1.0]))
+    assert farkas(a, lo, up, np.zeros(2), np.full(2, 0.5), np.array([-1.0]))  # either sign
+    assert not farkas(a, lo, up, np.zeros(2), np.ones(2), np.array([1.0]))
+    assert not farkas(a, lo, up, np.zeros(2), np.full(2, 0.5), None)
+    lp = LinearProgram(np.zeros(2), sp.csc_matrix(a), lo, up, np.zeros(2), np.full(2, 0.5))
+    sol = HighsSession(lp).solve(duals=True)
+    assert sol.status == "infeasible"
+    assert farkas(a, lo, up, np.zeros(2), np.full(2, 0.5), sol.row_dual)

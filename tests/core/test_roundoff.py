@@ -1,0 +1,64 @@
+"""The round-off rules (mjtvm.core.roundoff) and their effect on the assembled LP."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from mjtvm.core.assembly import assemble, grasp_map_transpose
+from mjtvm.core.roundoff import DROP_REL, drop_cancellation, drop_data_roundoff
+from mjtvm.core.state import load_state
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"
+
+
+def test_data_rule_is_relative_to_the_largest_entry_or_a_given_reference():
+    j = np.array([[0.1, 1e-18, 0.0], [-0.05, 0.02, 9e-14]])  # 9e-13 and 1e-17 of 0.1
+    out = drop_data_roundoff(j)
+    np.testing.assert_array_equal(out, [[0.1, 0.0, 0.0], [-0.05, 0.02, 0.0]])
+    assert j[0, 1] == 1e-18  # the input is left as it is
+    # a support's Jacobian of noise only, relative to the state's largest entry (0.1)
+    np.testing.assert_array_equal(drop_data_roundoff(np.array([[3e-15, -1e-17]]), 0.1), [[0.0, 0.0]])
+    # the same entries are data when nothing larger is around (a state in tiny units)
+    np.testing.assert_array_equal(drop_data_roundoff(np.array([[3e-15, -1e-17]])), [[3e-15, -1e-17]])
+    # at exactly DROP_REL of the largest an entry is round-off, just above it is data
+    np.testing.assert_array_equal(
+        drop_data_roundoff(np.array([1.0, DROP_REL, 2 * DROP_REL])), [1.0, 0.0, 2e-12]
+    )
+
+
+def test_cancellation_rule_is_relative_to_the_terms():
+    a, b = np.array([0.3, 0.1]), np.array([0.1, -0.3])
+    v = np.array([a @ b])  # 0.03 - 0.03: 0 exactly or a few 1e-18
+    np.testing.assert_array_equal(drop_cancellation(v, np.array([np.abs(a) @ np.abs(b)])), [0.0])
+    # a genuine small product of small terms is kept, whatever the units
+    v = np.array([1e-20 * 3e-20])
+    np.testing.assert_array_equal(drop_cancellation(v.copy(), v.copy()), v)
+
+
+def test_grasp_map_of_a_position_with_round_off():
+    """p_C - p_O = (-0.05, 1e-17, 0): the 1e-17 is round-off of the vector (|r| = 0.05), and
+    G^T has exact zeros where it has, as for (-0.05, 0, 0)."""
+    np.testing.assert_array_equal(
+        grasp_map_transpose(np.array([-0.05, 1e-17, 0.12]), np.array([0.0, 0.0, 0.12])),
+        grasp_map_transpose(np.array([-0.05, 0.0, 0.12]), np.array([0.0, 0.0, 0.12])),
+    )
+
+
+def test_noise_in_the_zero_entries_of_a_state_gives_the_same_lp():
+    """Every zero of pinch.json's Jacobians set to +-1e-18..1e-14 (other tools' round-off):
+    the assembled matrix is the same, entry for entry."""
+    clean = load_state(EXAMPLES / "pinch.json")
+    rng = np.random.default_rng(1)
+    contacts = []
+    for c in clean.contacts:
+        j = c.jacobian.copy()
+        zero = j == 0.0
+        j[zero] = rng.choice([-1.0, 1.0], zero.sum()) * 10.0 ** rng.uniform(-18, -14, zero.sum())
+        contacts.append(replace(c, jacobian=j))
+    noisy = clean.with_(contacts=tuple(contacts))
+    assert any(np.any(c.jacobian != d.jacobian) for c, d in zip(clean.contacts, noisy.contacts))
+    a, b = assemble(clean), assemble(noisy)
+    assert (a.A != b.A).nnz == 0 and (a.A_twist != b.A_twist).nnz == 0
