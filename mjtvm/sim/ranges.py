@@ -32,7 +32,7 @@ import numpy as np
 from ..core.operation_range import OperationRange
 from ..errors import MjtvmError
 from .actuator import operation_range_from_actuator
-from .graspdoc import GraspError
+from .graspdoc import GraspError, key_of
 from .hand import DCMotor
 
 __all__ = ["joint_ranges", "range_entry"]
@@ -186,13 +186,15 @@ def joint_ranges(
         found = range_entry(ranges, joint)
         if found is None:
             raise GraspError(
-                file, f"ranges.{joint}", "no operation range for this joint: " + _HINT.format(j=joint)
+                file,
+                f"ranges.{key_of(joint)}",
+                "no operation range for this joint: " + _HINT.format(j=json.dumps(joint)[1:-1]),
             )
         key, entry = found
         j = int(model.joint(joint).id)
 
         def fail(problem: str, key: str = key, joint: str = joint) -> GraspError:
-            return GraspError(file, f"ranges.{key}", f"joint {joint!r}: {problem}")
+            return GraspError(file, f"ranges.{key_of(key)}", f"joint {joint!r}: {problem}")
 
         source = entry["source"]
         if source == "dcmotor":
