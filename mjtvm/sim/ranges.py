@@ -29,6 +29,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from ..core.bounds import MAX_FILE_BYTES
 from ..core.operation_range import OperationRange
 from ..errors import MjtvmError
 from .actuator import operation_range_from_actuator
@@ -100,9 +101,18 @@ def datasheet(value: Any, base: Path | None, fail: Any) -> dict[str, Any]:
         return dict(json.loads(shipped.read_text(encoding="utf-8")))
     path = Path(text) if base is None or Path(text).is_absolute() else base / text
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as e:
+        with path.open("rb") as f:
+            raw = f.read(MAX_FILE_BYTES + 1)  # bounded: a device or a huge file is refused
+    except OSError as e:
+        raise fail(f"cannot read datasheet {str(path)!r}: {e.strerror or e}") from e
+    except ValueError as e:  # a NUL in the path
         raise fail(f"cannot read datasheet {str(path)!r}: {e}") from e
+    if len(raw) > MAX_FILE_BYTES:
+        raise fail(f"datasheet {str(path)!r}: larger than {MAX_FILE_BYTES} bytes: not a datasheet")
+    try:
+        doc = json.loads(raw.decode("utf-8"))
+    except ValueError as e:  # not UTF-8, malformed JSON
+        raise fail(f"cannot read datasheet {str(path)!r}: {' '.join(str(e).split())}") from e
     if not isinstance(doc, dict):
         raise fail(f"datasheet {str(path)!r}: expected a JSON object")
     return doc

@@ -233,6 +233,23 @@ def test_grasp_file_errors_are_one_line_on_the_command_line(
     assert err.startswith(f"error: {path}: {line}") and err.count("\n") == 1, err
 
 
+def test_a_datasheet_file_is_read_up_to_a_bound(tmp_path: Path) -> None:
+    """A datasheet path that is a device (or a huge file) is refused after 64 MiB, not read forever."""
+    zero = tmp_path / "zero.json"
+    zero.symlink_to("/dev/zero")
+    with pytest.raises(GraspError) as info:
+        load_grasp(_doc(ranges={"*": {"datasheet": str(zero)}}))
+    assert str(info.value) == (
+        f"grasp: ranges.*: joint 'f1_yaw0': datasheet {str(zero)!r}: larger than 67108864 bytes: not a datasheet"
+    )
+    folder = tmp_path / "folder.json"
+    folder.mkdir()
+    with pytest.raises(
+        GraspError, match=r"ranges\.\*: joint 'f1_yaw0': cannot read datasheet .*: Is a directory$"
+    ):
+        load_grasp(_doc(ranges={"*": {"datasheet": str(folder)}}))
+
+
 def test_unreachable_ik_target_names_the_target() -> None:
     targets = [
         {"geom": "f1_tip", "point": [0.5, 0.0, 0.1]}
