@@ -15,7 +15,7 @@ from ..core.tvmmp import tvmmp
 from ..errors import StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
-from .output import EXIT_OK, bracket_progress, emit, lp_progress
+from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
@@ -162,7 +162,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
             for row in grasp.contact_report()
         )
         print(
-            f"contacts (expected: found within {1e3 * grasp.contact_tolerance:g} mm): {report}",
+            one_line(f"contacts (expected: found within {1e3 * grasp.contact_tolerance:g} mm): {report}"),
             file=sys.stderr,
         )
     emit(json.dumps(state_to_dict(state), indent=args.indent))

@@ -147,9 +147,10 @@ def memory_size(text: str) -> int:
                 raise ValueError
             from ..polytopes.budget import available_memory
 
-            return int(share / 100.0 * available_memory())
-        unit = t[-1:] if t[-1:] in _UNITS and t[-1:] != "" else ""
-        value = float(t[: len(t) - len(unit)]) * _UNITS[unit]
+            value = share / 100.0 * available_memory()
+        else:
+            unit = t[-1:] if t[-1:] in _UNITS and t[-1:] != "" else ""
+            value = float(t[: len(t) - len(unit)]) * _UNITS[unit]
         if not (math.isfinite(value) and 1.0 <= value <= MAX_MEMORY):
             raise ValueError
         return int(value)

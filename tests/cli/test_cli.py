@@ -229,6 +229,8 @@ MUS = ",".join(["0.5"] * 1000)
         (["tvms", "--confidence", "inf"], "error: --confidence: expected a number in [0, 1), got 'inf'"),
         (["tvms", "--memory", "2000T"], "error: --memory: expected a size such as 512M, 2G or 25% (of the available "
          "memory), at most 1024T, got '2000T'"),
+        (["tvms", "--memory", "1e-30%"], "error: --memory: expected a size such as 512M, 2G or 25% (of the "
+         "available memory), at most 1024T, got '1e-30%'"),
         (["export-state", "case1", "--mu", "1e308"], "error: --mu: expected a number in [0, 100], got '1e308'"),
         (["export-state", "case1", "--mg=-inf"], "error: --mg: expected a number in [0, 1000000], got '-inf'"),
         (["replay", "--stop-margin", "1e308"], "error: --stop-margin: expected a number in [0, 1), got '1e308'"),
