@@ -1,4 +1,5 @@
-"""The value types of the options (argparse ``type=``): one-line errors naming what is expected."""
+"""The value types of the options (argparse ``type=``) and the range of each option, in one
+place: one-line errors naming what is expected (the ranges: ``docs/cli.md``, "Bounds")."""
 
 from __future__ import annotations
 
@@ -12,19 +13,23 @@ from pathlib import Path
 
 __all__ = [
     "CONTACTS",
+    "MAX_BASELINE_REPEATS",
     "MAX_FORCE",
     "MAX_GEAR",
     "MAX_GRID",
     "MAX_INDENT",
     "MAX_JOBS",
     "MAX_LIST",
+    "MAX_MEMORY",
     "MAX_MU",
     "MAX_NOTES_BYTES",
+    "MAX_REPEATS",
     "MAX_SCALE",
     "MAX_SECONDS",
     "MAX_SIM_SECONDS",
     "MAX_STATES",
     "MAX_STEM",
+    "MIN_GEAR",
     "NAME_MAX",
     "PATH_MAX",
     "READINGS",
@@ -59,7 +64,10 @@ MAX_BASELINE_REPEATS = 1_000  # bench: timed cvxpy calls per state (about 0.1 s 
 MAX_SECONDS = 86_400.0  # --time-limit: a day
 MAX_MU = 100.0  # a friction coefficient (rubber on rubber is about 1-2)
 MAX_FORCE = 1e6  # N: --mg, --preload
-MAX_GEAR = 10_000.0  # --gears: a gear ratio
+MIN_GEAR, MAX_GEAR = (
+    1.0,
+    10_000.0,
+)  # --gears: a reduction (a tiny ratio scales the torques past the state bounds)
 MAX_SCALE = 1_000.0  # verify --armature-scale
 MAX_SIM_SECONDS = 1.0  # verify --window, --startup: 4000 MuJoCo steps of 0.25 ms per rollout
 MAX_MEMORY = 2**50  # --memory: 1 PiB

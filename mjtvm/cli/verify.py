@@ -26,6 +26,7 @@ from .values import (
     MAX_SCALE,
     MAX_SIM_SECONDS,
     MAX_STATES,
+    MIN_GEAR,
     READINGS,
     choices,
     integer,
@@ -76,7 +77,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient (default: the grasp's)"
     )
     p.add_argument(
-        "--mg", type=number(0.0, MAX_FORCE), default=None, help="object weight (N) (default: the grasp's)"
+        "--mg",
+        type=number(0.0, MAX_FORCE, strict=True),
+        default=None,
+        help="object weight (N) (default: the grasp's)",
     )
     p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
     p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
@@ -88,7 +92,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "alpha_sim / alpha_dyn and a rollout at 0.9 alpha_dyn")  # fmt: skip
     p.add_argument("--preload", type=number(0.0, MAX_FORCE), default=0.0, metavar="N",
                    help="minimum normal force (N) of every L contact (the state's contact preload)")  # fmt: skip
-    p.add_argument("--gears", type=numbers(0.0, MAX_GEAR, strict=True), default=None, metavar="N,N,...",
+    p.add_argument("--gears", type=numbers(MIN_GEAR, MAX_GEAR), default=None, metavar="N,N,...",
                    help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP "
                    "(e.g. 10,20,30,40,60,100; writes gears.csv and gears.png)")  # fmt: skip
     _simulation_options(p)
