@@ -16,16 +16,22 @@ reads each state's MuJoCo grasp once per worker, and solves each requested state
   wheels from PyPI, its ``LocalCluster`` runs the same code in tests, and ``Client(address)``
   attaches to any existing scheduler (including batch-queue clusters via dask-jobqueue).
 
-Every way returns the same rows in the order of the points (tested).
+Every way returns the same rows in the order of the points (tested). A local pool's workers
+never outlive the sweep: an interrupt ends them at once (:func:`_stop`), and on Linux the
+kernel kills them when their parent dies (:func:`_die_with_parent`). A scheduler address is
+checked by its handshake within :data:`CONNECT_TIMEOUT_S` (:func:`_check_scheduler`).
 """
 
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import itertools
 import json
 import multiprocessing
+import os
+import re
 import signal
 import sys
 import time
@@ -179,18 +185,58 @@ def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
 _RowKey = tuple[str, str, int, str, str, float, float, int]
 
 
-def _ignore_sigint() -> None:
-    """Pool workers leave Ctrl-C to the parent (a terminal sends SIGINT to the whole process
-    group; each worker would print its own KeyboardInterrupt traceback)."""
+_PR_SET_PDEATHSIG = 1
+"""``prctl`` option (``<linux/prctl.h>``): the signal a process gets when its parent ends."""
+
+STOP_WAIT_S = 1.0
+"""How long an interrupted pool's workers get to end on SIGTERM before they are killed."""
+
+
+def _die_with_parent() -> None:
+    """Have the kernel kill this process when its parent ends (Linux; elsewhere nothing).
+
+    A pool worker blocks on its task queue, which its siblings hold open too: it would never
+    notice a parent killed by SIGKILL, and would live on as an orphan.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):  # pragma: no cover - a libc without prctl
+        return
+
+
+def _init_worker(parent: int = 0) -> None:
+    """Set up a pool worker: Ctrl-C is the parent's (a terminal sends SIGINT to the whole
+    process group; each worker would print its own KeyboardInterrupt traceback), and the
+    worker dies with its parent (:func:`_die_with_parent`). ``parent``: the pid of the process
+    that forked the worker (0 for a forkserver's worker, whose parent is the forkserver)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent()
+    if parent and os.getppid() != parent:  # the parent ended before the death signal was armed
+        os._exit(1)
 
 
 def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel the pending tasks and end the workers now (``shutdown(wait=True)``, what the
-    ``with`` statement does, would first run every queued task)."""
+    """Cancel the pending tasks and end the workers now.
+
+    ``shutdown(wait=True)``, what the ``with`` statement does, would first run every queued
+    task; ``shutdown`` also forgets the workers, so they are taken before it. Workers get
+    SIGTERM, and SIGKILL after :data:`STOP_WAIT_S`.
+    """
+    procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    for proc in procs:
         proc.terminate()
+    deadline = time.monotonic() + STOP_WAIT_S
+    for proc in procs:
+        proc.join(max(0.0, deadline - time.monotonic()))
+        if proc.is_alive():
+            proc.kill()
+            proc.join(STOP_WAIT_S)
 
 
 def run_sweep(
@@ -319,7 +365,8 @@ def _run_pool(
     else:
         calls = [(_solve_group, (key, states)) for key, states in tasks]
     context = multiprocessing.get_context("fork" if fork else "forkserver")
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_ignore_sigint)
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_init_worker,
+                               initargs=(os.getpid() if fork else 0,))  # fmt: skip
     try:
         with warnings.catch_warnings():
             # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see above).
@@ -337,6 +384,42 @@ CONNECT_TIMEOUT_S = 10.0
 """How long :func:`run_sweep` waits for a Dask scheduler given by address."""
 
 
+def _check_scheduler(address: str, timeout: float) -> None:
+    """Connect to ``address`` and read the scheduler's handshake, all within ``timeout`` s.
+
+    ``distributed.Client`` bounds only the TCP connection by its timeout: a server that
+    accepts and then stays silent keeps it waiting for the handshake without end, and one that
+    answers in another protocol makes it fail with whatever its decoder raises (a 2 EiB
+    allocation, a struct error).
+
+    Raises
+    ------
+    StateError
+        Nothing answers within ``timeout`` s, or the server there is not a Dask scheduler.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout))
+    except (OSError, TimeoutError) as e:  # refused, unreachable, or no handshake in time
+        why = str(e).splitlines()[0][:200] if str(e) else "no Dask handshake from the server there"
+        raise StateError(
+            "--cluster", f"cannot reach a Dask scheduler at {address} within {timeout:g} s ({why})"
+        ) from e
+    except Exception as e:  # whatever the handshake's decoder makes of another protocol
+        raise StateError(
+            "--cluster",
+            f"expected a Dask scheduler at {address}, but the server there answers in another "
+            f"protocol ({type(e).__name__} on its handshake)",
+        ) from e
+
+
 def _run_dask(
     tasks: list[tuple[_Key, list[int]]], cluster: Any, finished: Callable[[list[dict[str, Any]]], None]
 ) -> None:
@@ -347,6 +430,7 @@ def _run_dask(
     if isinstance(cluster, Client):
         client = cluster
     else:
+        _check_scheduler(cluster, CONNECT_TIMEOUT_S)
         try:
             client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
         except (OSError, TimeoutError, ValueError) as e:
@@ -368,6 +452,52 @@ CHECKPOINT_SCHEMA = "mjtvm.sweep-checkpoint/1"
 CHECKPOINT_EVERY_S = 5.0
 """At most this often (s) the checkpoint is rewritten while a sweep runs (and always on an
 interrupt or a failure, with every finished row)."""
+
+
+_FILE_ATTRIBUTE = re.compile(rb"""\bfile\s*=\s*["']([^"']+)["']""")
+"""An MJCF ``file="..."`` attribute (``<include>``, meshes, textures, ...)."""
+
+
+def _model_files(model: Path) -> list[Path]:
+    """The MJCF file and the files it names (``file=`` attributes, through ``<include>`` files,
+    taken relative to the naming file's folder, where they exist)."""
+    seen: list[Path] = []
+    todo = [model]
+    while todo:
+        path = todo.pop()
+        if path in seen or not path.is_file():
+            continue
+        seen.append(path)
+        if path.suffix.lower() == ".xml":
+            for name in _FILE_ATTRIBUTE.findall(path.read_bytes()):
+                todo.append(path.parent / os.fsdecode(name))
+    return seen
+
+
+def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
+    """A digest of what a sweep's rows of one grasp depend on beyond their point's fields.
+
+    That is: the grasp file's bytes (mjtvm.grasp/1, shipped or the user's), its MJCF model's
+    and those of the files the model names (includes, meshes), the number of lift states and
+    mjtvm's version. ``--resume`` keeps a finished row only if its ``inputs`` equals this.
+
+    Raises
+    ------
+    ModelError
+        The grasp does not load (its own error, as the sweep would raise it).
+    """
+    from .. import __version__
+    from ..sim.scenario import load_scenario
+
+    loaded = load_scenario(grasp, variant=hand)
+    h = hashlib.sha256(f"mjtvm {__version__}\n{grasp}\n{hand}\n{num_states}\n".encode())
+    files = ([loaded.path] if loaded.path is not None else []) + _model_files(loaded.model_path)
+    if loaded.path is None:  # a grasp given as a document: its normalised content
+        h.update(json.dumps(dict(loaded.document), sort_keys=True, default=str).encode())
+    for path in files:
+        h.update(f"{path.name}\n".encode())
+        h.update(hashlib.sha256(path.read_bytes()).digest())
+    return h.hexdigest()[:32]
 
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
@@ -404,15 +534,29 @@ def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
     return list(rows)
 
 
-def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[Path]:
+_BUILT_FROM: dict[tuple[str, str, int], str] = {}
+"""(grasp, hand, states) -> the inputs digest its cached lift (:func:`_lift`) was built from;
+a lift of unknown or other inputs is built again."""
+
+
+def _stderr(text: str) -> None:
+    print(text, file=sys.stderr)
+
+
+def run_sweep_files(
+    args: Any, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+) -> list[Path]:
     r"""``mjtvm sweep``: check ``--out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
 
     While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.sweep-checkpoint/1``) holds
     every finished row; it is rewritten atomically at most every :data:`CHECKPOINT_EVERY_S`
     seconds and on an interrupt or failure, and removed once ``NAME.json`` and ``NAME.csv``
-    are written. With ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json``
-    whose point belongs to this grid are kept and only the other points are solved; the
-    result equals an uninterrupted run (tested).
+    are written. Every row carries ``inputs``, the :func:`inputs_digest` of its grasp. With
+    ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json`` whose point
+    belongs to this grid and whose ``inputs`` equal the grasp's digest now are kept, and only
+    the other points are solved; rows whose inputs changed (an edited grasp or model file,
+    another mjtvm version, a row without ``inputs``) are solved again, and ``notice`` says how
+    many. The result equals an uninterrupted run (tested).
 
     Raises
     ------
@@ -430,6 +574,12 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
     outdir = check_output_dir(args.out)
     out_json, out_csv = outdir / f"{args.name}.json", outdir / f"{args.name}.csv"
     checkpoint = outdir / f"{args.name}.partial.json"
+    digests = {(g, h): inputs_digest(g, h, args.states) for g in args.grasp for h in args.hand}
+    if any(_BUILT_FROM.get((g, h, args.states)) != d for (g, h), d in digests.items()):
+        _lift.cache_clear()  # a grasp file may have changed since this process built its lift
+        _base.cache_clear()
+        _BUILT_FROM.clear()
+    _BUILT_FROM.update(((g, h, args.states), d) for (g, h), d in digests.items())
     mus, mgs = args.mu, args.mg
     if mus is None or mgs is None:  # the grasps' own: they must agree to make one grid
         defaults = {
@@ -441,6 +591,10 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
             raise StateError("--mu", "the grasps have different friction or weight: give --mu and --mg")
         mu0, mg0 = defaults.pop()
         mus, mgs = (mu0,) if mus is None else mus, (mg0,) if mgs is None else mgs
+
+    def tagged(row: dict[str, Any]) -> dict[str, Any]:
+        return {**row, "inputs": digests[row["scenario"], row["hand"]]}
+
     with output_lock(outdir):
         points = grid(
             scenarios=args.grasp, hands=args.hand, variants=args.contacts, readings=args.reading,
@@ -448,12 +602,21 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
         )  # fmt: skip
         wanted = {_key(p) for p in points}
         done: dict[_RowKey, dict[str, Any]] = {}
+        changed: set[_RowKey] = set()
         if args.resume:
             for path, is_checkpoint in ((out_json, False), (checkpoint, True)):
                 if path.exists():
-                    done.update(
-                        (_key(r), r) for r in _read_rows(path, checkpoint=is_checkpoint) if _key(r) in wanted
-                    )
+                    for r in _read_rows(path, checkpoint=is_checkpoint):
+                        key = _key(r)
+                        if key not in wanted:
+                            continue
+                        if r.get("inputs") == digests[key[0], key[1]]:
+                            done[key] = r
+                        else:
+                            changed.add(key)
+            changed -= done.keys()  # e.g. stale in NAME.json, solved again in the checkpoint
+            if changed:
+                notice(f"resume: {len(changed)} rows recomputed: inputs changed")
             if not args.quiet:
                 emit(f"resume: {len(done)} of {len(wanted)} rows already finished")
         finished = dict(done)
@@ -465,7 +628,7 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
 
         def on_rows(rows: list[dict[str, Any]]) -> None:
             nonlocal last
-            finished.update((_key(r), r) for r in rows)
+            finished.update((_key(r), tagged(r)) for r in rows)
             if time.monotonic() - last >= CHECKPOINT_EVERY_S:
                 save()
                 last = time.monotonic()
@@ -477,6 +640,7 @@ def run_sweep_files(args: Any, *, emit: Callable[[str], None] = print) -> list[P
             if len(finished) > len(done):  # no finished work is lost to an interrupt or a failure
                 save()
             raise
+        rows = [tagged(r) for r in rows]
         written = write_files({out_json: json.dumps(rows, indent=1) + "\n", out_csv: rows_csv(rows)})
         checkpoint.unlink(missing_ok=True)
     return written

@@ -14,7 +14,7 @@ Exit codes
     invalid state file (:class:`~mjtvm.errors.StateError`) or scenario
     (:class:`~mjtvm.errors.ModelError`), an output folder that cannot be written or is in use
     by another run (:class:`~mjtvm.errors.OutputError`, checked before any work), an
-    unreachable ``--cluster``.
+    unreachable ``--cluster`` or one that is not a Dask scheduler.
 3
     Solver trouble (:class:`~mjtvm.errors.SolverError`): ``solver error: ...``.
 130

@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .contacts import force_generators, slide_unit, tangent_basis
-from .lp import DROP_REL
+from .roundoff import drop_cancellation, drop_data_roundoff
 from .state import GraspState
 
 __all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
@@ -48,9 +48,11 @@ def grasp_map_transpose(
 
     In space :math:`G^T = [I, -[r\times]]` with :math:`r = p_C - p_O`, so
     :math:`G^T \dot r = v + \omega \times r`; in the plane
-    :math:`G^T \dot r = [v_x - \omega r_y, v_y + \omega r_x]`.
+    :math:`G^T \dot r = [v_x - \omega r_y, v_y + \omega r_x]`. The round-off of ``r``
+    (:mod:`~mjtvm.core.roundoff`: of the difference, then of the vector) is 0.
     """
-    r = np.asarray(position, dtype=float) - np.asarray(object_position, dtype=float)
+    p_c, p_o = np.asarray(position, dtype=float), np.asarray(object_position, dtype=float)
+    r = drop_data_roundoff(drop_cancellation(p_c - p_o, np.abs(p_c) + np.abs(p_o)))
     if r.shape[0] == 2:
         return np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
     skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
@@ -58,13 +60,9 @@ def grasp_map_transpose(
 
 
 def _product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``a @ b`` with the round-off of exact cancellations set to 0: an entry at most
-    :data:`~mjtvm.core.solvers.DROP_REL` times the sum of the magnitudes of its terms
-    (``|a| @ |b|``), e.g. ``n . (r x n)``. Relative to the terms, so a state written in
-    any unit system keeps every genuine coefficient, however small."""
-    out = a @ b
-    out[np.abs(out) <= DROP_REL * (np.abs(a) @ np.abs(b))] = 0.0
-    return out
+    """``a @ b`` with the round-off of exact cancellations set to 0
+    (:func:`~mjtvm.core.roundoff.drop_cancellation`), e.g. ``n . (r x n)``."""
+    return drop_cancellation(a @ b, np.abs(a) @ np.abs(b))
 
 
 class _Coo:
@@ -239,6 +237,7 @@ def _statics_rows(
     state: GraspState,
     gens: tuple[NDArray[np.float64], ...],
     gt: list[NDArray[np.float64]],
+    jacobians: list[NDArray[np.float64]],
     blocks: dict[str, slice],
     copies: int,
 ) -> tuple[list[slice], list[slice]]:
@@ -253,9 +252,7 @@ def _statics_rows(
         else np.zeros((big_d, 0))
     )
     torque_map = (
-        np.hstack([_product(c.jacobian.T, g) for c, g in zip(contacts, gens)])
-        if contacts
-        else np.zeros((m, 0))
+        np.hstack([_product(j.T, g) for j, g in zip(jacobians, gens)]) if contacts else np.zeros((m, 0))
     )
     wrench_rows, torque_rows = [], []
     for i in range(copies):
@@ -270,7 +267,11 @@ def _statics_rows(
 
 
 def _kinematic_rows(
-    out: _Rows, state: GraspState, gt: list[NDArray[np.float64]], blocks: dict[str, slice]
+    out: _Rows,
+    state: GraspState,
+    gt: list[NDArray[np.float64]],
+    jacobians: list[NDArray[np.float64]],
+    blocks: dict[str, slice],
 ) -> NDArray[np.int64]:
     """The contact kinematics (eq. 9-13): ``H (J qd - G^T rdot) [+ rho T s] (=, <=) 0`` --
     all d directions for F, the normal for L and S (``<= 0`` for D, eq. 12), and for S the
@@ -286,19 +287,19 @@ def _kinematic_rows(
         else:
             sel = c.normal.reshape(1, -1)
         r0 = out.add(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0])
-        out.coo.add(r0, qd0, _product(sel, c.jacobian))
+        out.coo.add(r0, qd0, _product(sel, jacobians[ci]))
         out.twist.add(r0, 0, -_product(sel, gt[ci]))
         if c.type == "S":
             tb = tangent_basis(c.normal)
             r0 = out.add(0.0, 0.0, d - 1)
-            out.coo.add(r0, qd0, _product(tb, c.jacobian))
+            out.coo.add(r0, qd0, _product(tb, jacobians[ci]))
             out.twist.add(r0, 0, -_product(tb, gt[ci]))
             k = s_contacts.index(ci)
             if state.slip == "shared":
                 s = c.slide_direction - (c.slide_direction @ c.normal) * c.normal  # type: ignore[operator]
-                out.coo.add(r0, rho0, (tb @ s).reshape(-1, 1))
+                out.coo.add(r0, rho0, _product(tb, s).reshape(-1, 1))
             else:
-                out.coo.add(r0, rho0 + k, (tb @ slide_unit(c)).reshape(-1, 1))
+                out.coo.add(r0, rho0 + k, _product(tb, slide_unit(c)).reshape(-1, 1))
     return np.arange(kin_start, out.count)
 
 
@@ -388,9 +389,12 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     n_rho = (1 if n_s else 0) if state.slip == "shared" else n_s
     blocks, col_lower, col_upper = _variables(state, copies, box, int(offsets[-1]), n_rho)
     gt = [grasp_map_transpose(c.position, state.object_position) for c in contacts]
+    # The round-off of the Jacobians is relative to the largest entry of them all (roundoff).
+    jac_max = max((float(np.max(np.abs(c.jacobian), initial=0.0)) for c in contacts), default=0.0)
+    jacobians = [drop_data_roundoff(c.jacobian, jac_max) for c in contacts]
     out = _Rows()
-    wrench_rows, torque_rows = _statics_rows(out, state, gens, gt, blocks, copies)
-    kinematic_rows = _kinematic_rows(out, state, gt, blocks)
+    wrench_rows, torque_rows = _statics_rows(out, state, gens, gt, jacobians, blocks, copies)
+    kinematic_rows = _kinematic_rows(out, state, gt, jacobians, blocks)
     if box == "eliminated":
         _range_rows_eliminated(out, state, blocks, copies)
     else:

@@ -61,9 +61,21 @@ def _solve_clarabel(lp: LinearProgram) -> LPSolution:
     if name not in _CLARABEL_OK:
         raise SolverError("clarabel", name)
     status = _CLARABEL_OK[name]
+    # Row multipliers in HiGHS' signs (c = A^T y + d; y >= 0 where a lower bound binds):
+    # Clarabel's dual z of ``A_big x + s = b`` has c = -A_big^T z, so y = -z on the rows
+    # written as upper bounds (and equalities), +z on those written as lower bounds. For a
+    # primal infeasible LP, z is its certificate (certificate.farkas).
+    z = np.array(result.z)
+    k_eq, k_up, k_lo = int(eq.sum()), int(up.sum()), int(lo.sum())
+    y = np.zeros(a.shape[0])
+    y[eq] = -z[:k_eq]
+    y[up] -= z[k_eq : k_eq + k_up]
+    y[lo] += z[k_eq + k_up : k_eq + k_up + k_lo]
+    if status == "infeasible":
+        return LPSolution("infeasible", None, None, y)
     if status != "optimal":
         return LPSolution(status, None, None)  # type: ignore[arg-type]
-    return LPSolution("optimal", np.array(result.x), float(result.obj_val))
+    return LPSolution("optimal", np.array(result.x), float(result.obj_val), y)
 
 
 def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSolution:
@@ -71,6 +83,8 @@ def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSo
     s = lp_scaling(lp) if scaling is None else scaling
     slp1 = scale_lp(lp, s)
     first = _solve_clarabel(slp1)
+    if first.status == "infeasible" and first.row_dual is not None:
+        return replace(first, row_dual=s.row * first.row_dual)  # a ray: the cost factor does not apply
     if first.status != "optimal" or first.x is None:
         return first
     # An interior point's "Solved" is not a certificate: on Case 1 in odd units it returned

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import StateError
 from .bounds import MAX_JOINTS, describe, float_array, number
+from .roundoff import drop_cancellation
 
 __all__ = ["CONTACT_TYPES", "Contact", "force_generators", "slide_unit", "tangent_basis"]
 
@@ -205,20 +206,25 @@ def tangent_basis(
     else:
         t1 = np.asarray(tangent, dtype=float)
         t1 = t1 / _direction_norm(t1)  # validated non-zero; pre-scaled so a tiny or huge tangent is safe
-    t1 = t1 - (t1 @ n) * n
+    # The round-off of the differences is 0 (roundoff module): a tangent written with
+    # 1.7e-18 in a component that is exactly 0 puts that round-off into the LPs' twist column.
+    t1 = drop_cancellation(t1 - (t1 @ n) * n, np.abs(t1) + abs(t1 @ n) * np.abs(n))
     t1 /= np.linalg.norm(t1)
-    # n x t1 written out: np.cross costs 10 us per call (Problem 2 assembles per state); the
-    # same products and differences, so the same bits (tests/core/test_contacts.py).
+    # n x t1 written out: np.cross costs 10 us per call (Problem 2 assembles per state).
     (n0, n1, n2), (a0, a1, a2) = n.tolist(), t1.tolist()
-    return np.array([t1.tolist(), [n1 * a2 - n2 * a1, n2 * a0 - n0 * a2, n0 * a1 - n1 * a0]])
+    t2 = np.array([n1 * a2 - n2 * a1, n2 * a0 - n0 * a2, n0 * a1 - n1 * a0])
+    mag = np.array([abs(n1 * a2) + abs(n2 * a1), abs(n2 * a0) + abs(n0 * a2), abs(n0 * a1) + abs(n1 * a0)])
+    return np.array([t1, drop_cancellation(t2, mag)])
 
 
 def slide_unit(contact: Contact) -> NDArray[np.float64]:
-    """Unit tangential slide direction of an S contact (normal component removed)."""
+    """Unit tangential slide direction of an S contact (normal component removed, its
+    round-off 0 as in :func:`tangent_basis`)."""
     if contact.slide_direction is None:
         raise StateError("slide_direction", f"contact {contact.name!r} has none")
     s = contact.slide_direction / _direction_norm(contact.slide_direction)  # validated non-zero
-    s = s - (s @ contact.normal) * contact.normal
+    n = contact.normal
+    s = drop_cancellation(s - (s @ n) * n, np.abs(s) + abs(s @ n) * np.abs(n))
     return s / np.linalg.norm(s)
 
 
@@ -236,7 +242,8 @@ def force_generators(contact: Contact, friction_edges: int = 16) -> NDArray[np.f
         return np.zeros((contact.dim, 0))
     mu = float(contact.mu)  # type: ignore[arg-type]  # validated for F and S
     if contact.type == "S":
-        return (n - mu * slide_unit(contact)).reshape(-1, 1)
+        s = slide_unit(contact)
+        return drop_cancellation(n - mu * s, np.abs(n) + mu * np.abs(s)).reshape(-1, 1)
     basis = tangent_basis(n, contact.tangent)
     if contact.dim == 2:
         t = basis[0]
@@ -248,4 +255,7 @@ def force_generators(contact: Contact, friction_edges: int = 16) -> NDArray[np.f
     cos[np.abs(cos) < 1e-12] = 0.0
     sin[np.abs(sin) < 1e-12] = 0.0
     edges = n[:, None] + mu * (np.outer(basis[0], cos) + np.outer(basis[1], sin))
-    return np.asarray(edges)
+    mag = np.abs(n)[:, None] + mu * (
+        np.outer(np.abs(basis[0]), np.abs(cos)) + np.outer(np.abs(basis[1]), np.abs(sin))
+    )
+    return drop_cancellation(np.asarray(edges), mag)

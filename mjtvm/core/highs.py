@@ -52,6 +52,14 @@ _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
 _TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 
 
+#: HiGHS' ``threads`` option of every session: 1 (the LPs are small and serial; no scheduler
+#: threads to inherit across a fork), unless this process's HiGHS task scheduler was already
+#: started with another count by someone else (cvxpy's or a user's own ``highspy.Highs`` with
+#: HiGHS' default, ``threads = 0``): HiGHS then refuses every ``run`` with ``threads = 1``
+#: (kError), and ``threads = 0`` takes the scheduler as it is (see :meth:`HighsSession._run`).
+_THREADS = [1]
+
+
 def _highs():  # type: ignore[no-untyped-def]
     import highspy
 
@@ -177,7 +185,7 @@ class HighsSession:
         self.highs = h
         options = {
             "output_flag": False,
-            "threads": 1,
+            "threads": _THREADS[0],
             "presolve": "off",  # the LPs are small and re-solved warm: presolve costs more than it saves
             "primal_feasibility_tolerance": FEASIBILITY_TOL,
             "dual_feasibility_tolerance": FEASIBILITY_TOL,
@@ -347,6 +355,15 @@ class HighsSession:
         t0 = time.perf_counter()
         try:
             status = h.run()
+            if status == self._hs.HighsStatus.kError and _THREADS[0] == 1:
+                # The scheduler may have been started by another HiGHS user of this process
+                # with another thread count (see _THREADS): accept it, once for all sessions.
+                self._check(h.setOptionValue("threads", 0), "option threads=0 rejected")
+                status = h.run()
+                if status != self._hs.HighsStatus.kError:
+                    _THREADS[0] = 0
+                else:
+                    self._check(h.setOptionValue("threads", 1), "option threads restore")
         finally:
             if _RUN_OBSERVERS:
                 spent = time.perf_counter() - t0
@@ -387,7 +404,12 @@ class HighsSession:
                 None if y is None else self.scaling.row * y / g,
             )
         if status == ms.kInfeasible:
-            return LPSolution("infeasible", None, None)
+            ray = None
+            if duals:  # the Farkas multipliers, when HiGHS has them (certificate.farkas)
+                ok, has_ray, values = h.getDualRay()
+                if ok != self._hs.HighsStatus.kError and has_ray:
+                    ray = self.scaling.row * np.array(values)
+            return LPSolution("infeasible", None, None, ray)
         if status == ms.kUnbounded:
             return LPSolution("unbounded", None, None)
         raise SolverError("highs", h.modelStatusToString(status))

@@ -9,12 +9,10 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from .roundoff import DROP_REL
+
 __all__ = ["DROP_REL", "FEASIBILITY_TOL", "LPSolution", "LPStatus", "LinearProgram"]
 
-#: Round-off: a product's entry at most DROP_REL times the sum of its terms' magnitudes
-#: (assembly), or an equilibrated entry at most DROP_REL times the largest of its row, of its
-#: column, or 1 (scale_lp) is dropped.
-DROP_REL = 1e-12
 LPStatus = Literal["optimal", "infeasible", "unbounded"]
 FEASIBILITY_TOL = 1e-9
 

@@ -134,9 +134,15 @@ class TvmmpResult:
         ``"clarabel"``; ``None`` where skipped). It differs from ``solver`` where HiGHS
         could not settle an LP and Clarabel did, or where Clarabel's infeasible/unbounded
         verdict was overruled by HiGHS and a feasibility re-solve.
+    certified
+        ``K`` tuples of ``R``: whether each pair's answer is certified on the unscaled LP
+        (:mod:`~mjtvm.core.certificate`: an optimal alpha by its primal, dual and gap
+        checks; an infeasible or unbounded verdict by a second, cold solve); ``None`` where
+        skipped. A pair that is not certified has a note saying what failed.
     notes
-        ``((k, l), message)`` for every LP on which a backend failed or the backends
-        disagreed (``l = -1``: the balance-only LP of a state without non-zero RVDS vertex).
+        ``((k, l), message)`` for every LP on which a backend failed, the backends
+        disagreed, or an answer failed its certificate (``l = -1``: the balance-only LP of
+        a state without non-zero RVDS vertex).
     """
 
     alpha: NDArray[np.float64]
@@ -150,6 +156,7 @@ class TvmmpResult:
     solver: str
     box: BoxForm
     settled_by: tuple[tuple[str | None, ...], ...] = ()
+    certified: tuple[tuple[bool | None, ...], ...] = ()
     notes: tuple[tuple[tuple[int, int], str], ...] = ()
 
     def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
@@ -167,6 +174,7 @@ class TvmmpResult:
             "limiting": None if self.limiting is None else list(self.limiting),
             "solver": self.solver,
             "settled_by": [list(b) for b in self.settled_by],
+            "certified": [list(c) for c in self.certified],
             "notes": [{"pair": list(p), "message": m} for p, m in self.notes],
             "box": self.box,
             "timings": {

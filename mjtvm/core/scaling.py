@@ -185,8 +185,15 @@ def _ruiz_passes(
 
 
 def column_factor(magnitudes: NDArray[np.float64]) -> float:
-    """The power of 2 bringing the geometric mean of a column's largest and smallest
-    non-zero magnitudes to 1 (in log2: no overflow for entries near 1e308); 1 if none.
+    """The power of 2 bringing a column's largest non-zero magnitude to 1 (in log2: no
+    overflow for entries near 1e308); 1 if none.
+
+    The largest entry, as in Ruiz's passes, and not a mean over the column: a round-off
+    entry (1.7e-18 in the z component of a tangent ``n x t1`` that is exactly 0) would pull
+    a mean-based factor up by 1e9, blow the column's genuine entries up to 1e12 beside the
+    O(1) rest of their rows, and :func:`scale_lp`'s round-off rule would then drop those
+    rows' genuine entries instead (an S-point's tangential row lost its joint speeds).
+    Scaled to a largest entry of 1, round-off stays round-off and is dropped.
 
     Clipped at 2^+-400 as in :func:`equilibrate`: a column of subnormals only (a fuzzed
     state, after its row factors) asked for more than 2^1024, and a column holding an
@@ -196,7 +203,7 @@ def column_factor(magnitudes: NDArray[np.float64]) -> float:
     nz = np.abs(magnitudes[magnitudes != 0.0])
     if not nz.size:
         return 1.0
-    log2 = np.round(-(np.log2(nz.min()) + np.log2(nz.max())) / 2)
+    log2 = np.round(-np.log2(nz.max()))
     return float(np.exp2(np.clip(log2, -_MAX_LOG2, _MAX_LOG2)))
 
 

@@ -69,7 +69,7 @@ SOLVERS = ("highs", "clarabel")
 def solve_lp(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling | None = None) -> LPSolution:
     """Solve one LP with the named backend (``"highs"`` or ``"clarabel"``), equilibrated."""
     if solver == "highs":
-        return HighsSession(lp, scaling=scaling).solve()
+        return HighsSession(lp, scaling=scaling).solve(duals=True)
     if solver == "clarabel":
         return solve_clarabel(lp, scaling=scaling)
     raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
@@ -95,7 +95,7 @@ def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Se
         sol = solve_clarabel(lp, scaling=s)
     except SolverError as e:  # Clarabel could not settle it: HiGHS, noted
         try:
-            rescue = HighsSession(lp, scaling=s).solve()
+            rescue = HighsSession(lp, scaling=s).solve(duals=True)
         except SolverError as e2:
             raise SolverError("clarabel", f"{e.status}; fallback highs: {e2.status}") from e
         return Settled(rescue, "highs", f"clarabel: {e.status}; settled by highs: {rescue.status}")
@@ -105,7 +105,7 @@ def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Se
         # solve checks every verdict, and a disagreement is noted (the answer stays
         # Clarabel's, which was asked for).
         try:
-            check = HighsSession(lp, scaling=s).solve()
+            check = HighsSession(lp, scaling=s).solve(duals=True)
         except SolverError as e:
             return Settled(sol, "clarabel", f"highs could not check it ({e.status})")
         if check.status != "optimal":
@@ -113,7 +113,7 @@ def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Se
         return Settled(sol, "clarabel")
     checked: LPSolution | None = None
     try:
-        checked = HighsSession(lp, scaling=s).solve()
+        checked = HighsSession(lp, scaling=s).solve(duals=True)
     except SolverError as e:
         err = e
     other = checked
@@ -157,7 +157,7 @@ def solve_settled(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling 
     if solver != "highs":
         raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
     try:
-        return Settled(HighsSession(lp, scaling=scaling).solve(), "highs")
+        return Settled(HighsSession(lp, scaling=scaling).solve(duals=True), "highs")
     except SolverError as e:
         return fallback(lp, e, scaling=scaling)
 

@@ -14,7 +14,7 @@ the column of ``alpha`` (``A_twist @ r_l``) and the right-hand side of the balan
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from ..errors import SolverError, StateError
 from .assembly import Assembly, BoxForm, assemble
+from .certificate import Certificate, certify, clip, farkas
 from .result import (  # re-exported: the result types lived here
     PairStatus as PairStatus,
 )
@@ -40,11 +41,13 @@ from .result import (
 from .result import (
     finite_or_none as finite_or_none,
 )
+from .roundoff import drop_cancellation, drop_data_roundoff
 from .solvers import (
     DROP_REL,
     SOLVERS,
     HighsSession,
     LinearProgram,
+    LPSolution,
     Scaling,
     Settled,
     clarabel_checked,
@@ -52,6 +55,7 @@ from .solvers import (
     cost_scale,
     equilibrate,
     fallback,
+    solve_clarabel,
 )
 from .state import GraspState
 
@@ -117,27 +121,42 @@ class _Problem2:
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
         s = equilibrate(asm.A, rhs=rhs)
-        self.row_scale, self.col_scale = s.row, s.col
         # The twist columns are scaled after the rows, each so that its largest entry is 1:
         # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
         # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
         # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
-        tw_max = np.max(np.abs(twist * s.row[:, None]), axis=0, initial=0.0)
+        has_a = np.bincount(asm.A.indices, minlength=asm.A.shape[0]) > 0
+        tw_max = np.max(np.abs(twist[has_a] * s.row[has_a, None]), axis=0, initial=0.0)
         self.twist_scale = np.where(
             tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
         )
+        # A row of twist coefficients only (a support no joint moves: n^T G^T rdot >= 0) has
+        # no J qd side: its factor brings its twist coefficients to those of the other rows
+        # (largest 1 in the scaled twist). Left at 1, a table's row in um and ms held the
+        # largest entry of every alpha column, 1e9 times the rest.
+        only_twist = ~has_a & np.any(twist != 0.0, axis=1)
+        if only_twist.any():
+            big = np.max(np.abs(twist[only_twist] * self.twist_scale), axis=1)
+            row = s.row.copy()
+            row[only_twist] = np.exp2(np.clip(np.round(-np.log2(big)), -400.0, 400.0))
+            s = replace(s, row=row)
+        self.row_scale, self.col_scale = s.row, s.col
         self._scaled_a = _ScaledMatrix(asm.A, s)
         self.session: HighsSession | None = None
+        self._dense: NDArray[np.float64] | None = None  # pair_matrix's
+        self._abs_dense: NDArray[np.float64] | None = None
         self._last: tuple[NDArray[np.float64], float] = (np.full(state.twist_dim, np.nan), np.nan)
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without the
-        round-off of exact cancellations: entries at most DROP_REL times the sum of the
-        magnitudes they were computed from."""
-        col = self.twist_rows @ r
-        col[np.abs(col) <= DROP_REL * (self.abs_twist_rows @ np.abs(r))] = 0.0
-        return col
+        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without
+        round-off (:mod:`~mjtvm.core.roundoff`): components of ``r`` at most DROP_REL times
+        its largest, and entries at most DROP_REL times the sum of the magnitudes they were
+        computed from. A twist written with 1e-16 in a component that is exactly 0 (a
+        projection onto the TVMS's span) would otherwise ask for a motion the fingers
+        cannot make, and the exact LP's alpha would be 0."""
+        r = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
+        return drop_cancellation(self.twist_rows @ r, self.abs_twist_rows @ np.abs(r))
 
     def zero_alpha(self, r: NDArray[np.float64]) -> float:
         """The alpha below which the twist alpha r_l is within ZERO_ALPHA (the solver's
@@ -209,11 +228,141 @@ class _Problem2:
                 if alpha_max != self._last[1]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
             self._last = (w, alpha_max)
-            return Settled(self.session.solve(), "highs")
+            return Settled(self.session.solve(duals=True), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return fallback(lp, e, scaling=s)
+
+    def pair_matrix(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(m, n + 1)`` the unscaled ``[A | A_twist r]`` of the pair (nothing dropped but the
+        state's round-off), dense, and its magnitudes: the LP every answer is certified on.
+        Dense: a state's LP has a few hundred rows and columns, where numpy's dense products
+        cost a fraction of scipy's sparse ones (both arrays are the state's, overwritten)."""
+        if self._dense is None:
+            m, n = self.asm.A.shape
+            self._dense = np.zeros((m, n + 1))
+            self._dense[:, :n] = self.asm.A.toarray()
+            self._abs_dense = np.abs(self._dense)
+        assert self._abs_dense is not None
+        col = np.zeros(self._dense.shape[0])
+        col[self.kin] = self.column(r)
+        self._dense[:, -1] = col
+        self._abs_dense[:, -1] = np.abs(col)
+        return self._dense, self._abs_dense
+
+    def certify(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
+    ) -> Certificate:
+        """The certificate (:mod:`~mjtvm.core.certificate`) of an optimal ``sol`` of pair (w, r)."""
+        lower, upper = self.asm.statics_bounds(w)
+        cu = self.col_upper.copy()
+        cu[-1] = alpha_max
+        assert sol.x is not None
+        a, abs_a = self.pair_matrix(r)
+        factor = column_factor(self.row_scale[self.kin] * a[self.kin, -1])
+        return certify(self.c, a, lower, upper, self.col_lower, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r),
+                       col_ref=np.append(self.col_scale, factor), abs_a=abs_a)  # fmt: skip
+
+    def _bounds(
+        self, w: NDArray[np.float64], alpha_max: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        lower, upper = self.asm.statics_bounds(w)
+        cu = self.col_upper.copy()
+        cu[-1] = alpha_max
+        return lower, upper, cu
+
+    def proves_infeasible(self, w: NDArray[np.float64], r: NDArray[np.float64], sol: LPSolution) -> bool:
+        """Whether ``sol``'s Farkas multipliers (HiGHS' dual ray) prove pair (w, r) infeasible
+        on the unscaled LP (:func:`~mjtvm.core.certificate.farkas`)."""
+        lower, upper, cu = self._bounds(w, np.inf)
+        a, abs_a = self.pair_matrix(r)
+        factor = column_factor(self.row_scale[self.kin] * a[self.kin, -1])
+        return farkas(a, lower, upper, self.col_lower, cu, sol.row_dual,
+                      col_ref=np.append(self.col_scale, factor), abs_a=abs_a)  # fmt: skip
+
+    def certified(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
+    ) -> Verdict:
+        """The LP of (w, r) settled (:meth:`solve`) and its answer certified on the unscaled LP.
+
+        An optimal answer is certified by :meth:`certify`, an infeasible one by its Farkas
+        multipliers (:meth:`proves_infeasible`). An answer that is not is solved again
+        other ways, in turn: HiGHS from a cold start on the pair's own equilibration (which
+        includes the alpha column), Clarabel, and HiGHS on the LP as assembled (its own
+        scaling, no equilibration of ours); the first certified answer is reported, with a
+        note. If none is, the first answer is reported with a note naming what failed, and
+        ``certified`` False. An unbounded verdict (no certificate here) must be confirmed
+        by the cold HiGHS solve.
+        """
+        settled = self.solve(w, r, alpha_max=alpha_max)
+        first = settled.solution
+        cert = self._check(w, r, alpha_max, first)
+        if cert is not None and cert[0]:
+            return Verdict(settled, cert[1], True)
+        tried = [f"{settled.solver}: {_describe(first, cert)}"]
+        lp, _ = self.lp(w, r, alpha_max=alpha_max)
+        ones = Scaling(np.ones(lp.A.shape[0]), np.ones(lp.A.shape[1]), 1.0)
+        ways = (
+            ("highs (cold)", "highs", lambda: HighsSession(lp).solve(duals=True)),
+            ("clarabel", "clarabel", lambda: solve_clarabel(lp)),
+            ("highs (own scaling)", "highs", lambda: HighsSession(lp, scaling=ones).solve(duals=True)),
+        )
+        for name, solver, run in ways:
+            try:
+                other = run()
+            except SolverError as e:
+                tried.append(f"{name}: {e.status}")
+                continue
+            c2 = self._check(w, r, alpha_max, other)
+            if first.status == "unbounded" and other.status == "unbounded":
+                return Verdict(settled, None, True)  # confirmed by a second solve
+            if c2 is not None and c2[0]:
+                note = f"{settled.solver}'s answer ({first.status}) not certified ({_describe(first, cert)}); certified by {name}: {other.status}"
+                return Verdict(Settled(other, solver, _join(settled.note, note)), c2[1], True)
+            tried.append(f"{name}: {_describe(other, c2)}")
+        note = "not certified: " + "; ".join(tried)
+        return Verdict(
+            Settled(first, settled.solver, _join(settled.note, note)),
+            None if cert is None else cert[1],
+            False,
+        )
+
+    def _check(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
+    ) -> tuple[bool, Certificate | None] | None:
+        """``(certified, certificate)`` of an optimal or infeasible ``sol``; ``None`` for an
+        unbounded one (no certificate)."""
+        if sol.status == "optimal":
+            cert = self.certify(w, r, alpha_max, sol)
+            return cert.ok, cert
+        if sol.status == "infeasible":
+            return self.proves_infeasible(w, r, sol), None
+        return None
+
+
+def _describe(sol: LPSolution, check: tuple[bool, Certificate | None] | None) -> str:
+    """What a failed check of ``sol`` found, in a few words."""
+    if sol.status == "optimal" and check is not None and check[1] is not None:
+        return check[1].describe()
+    if sol.status == "infeasible":
+        return "infeasible without Farkas multipliers that prove it"
+    return f"{sol.status} (not certified by itself)"
+
+
+def _join(a: str | None, b: str) -> str:
+    return b if a is None else f"{a}; {b}"
+
+
+@dataclass(frozen=True, eq=False)
+class Verdict:
+    """A settled LP, the certificate of its optimal answer (``None`` otherwise), and whether
+    the answer is certified (optimal: its certificate holds; infeasible or unbounded: a
+    second, cold solve agrees)."""
+
+    settled: Settled
+    certificate: Certificate | None
+    certified: bool
 
 
 class _ScaledMatrix:
@@ -267,6 +416,7 @@ class _Pairs:
     status: list[list[PairStatus]]
     witnesses: list[list[Witness | None]]
     settled_by: list[list[str | None]]
+    certified: list[list[bool | None]]
     notes: list[tuple[tuple[int, int], str]] = field(default_factory=list)
     feasible: bool = True
     num_lps: int = 0
@@ -278,17 +428,18 @@ class _Pairs:
             [["skipped"] * n_l for _ in range(n_k)],
             [[None] * n_l for _ in range(n_k)],
             [[None] * n_l for _ in range(n_k)],
+            [[None] * n_l for _ in range(n_k)],
         )
 
 
 def _solve_pair(
     problem: _Problem2, w: NDArray[np.float64], r: NDArray[np.float64], pair: tuple[int, int]
-) -> Settled:
+) -> Verdict:
     """One LP of eq. (31-35) for REFS vertex ``w`` and RVDS vertex ``r`` (``r = 0``: only
-    whether ``w`` can be balanced, alpha held at 0), settled across the backends; a
-    SolverError names the pair."""
+    whether ``w`` can be balanced, alpha held at 0), settled across the backends and
+    certified; a SolverError names the pair."""
     try:
-        return problem.solve(w, r, alpha_max=np.inf if pair[1] >= 0 else 0.0)
+        return problem.certified(w, r, alpha_max=np.inf if pair[1] >= 0 else 0.0)
     except SolverError as e:
         raise SolverError(e.solver, e.status, pair) from e
 
@@ -310,7 +461,8 @@ def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pai
         for l in todo:
             r = rvds[l] if l is not None else np.zeros(state.twist_dim)
             pair = (k, -1 if l is None else l)
-            settled = _solve_pair(problem, refs[k], r, pair)
+            verdict = _solve_pair(problem, refs[k], r, pair)
+            settled = verdict.settled
             sol = settled.solution
             out.num_lps += 1
             if settled.note is not None:
@@ -320,19 +472,24 @@ def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pai
                 for ll in nonzero:
                     out.status[k][ll] = "infeasible"
                     out.settled_by[k][ll] = settled.solver
+                    out.certified[k][ll] = verdict.certified
                 break
             if l is None:
                 continue
             out.status[k][l] = sol.status
             out.settled_by[k][l] = settled.solver
+            out.certified[k][l] = verdict.certified
             if sol.status == "optimal" and sol.x is not None:
-                a = float(sol.x[problem.alpha_col])
+                # The witness within its bounds (the certificate checked the rows with it):
+                # alpha >= 0, lam >= 0 exactly, never a negative alpha.
+                x = clip(sol.x, problem.col_lower, problem.col_upper)
+                a = float(x[problem.alpha_col])
                 # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
                 # there), so that the rounding to 0 does not depend on the unit system.
                 a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
                 out.alpha[k, l] = a
                 if witnesses:
-                    out.witnesses[k][l] = _witness(problem.asm, state, sol.x, a, rvds[l])
+                    out.witnesses[k][l] = _witness(problem.asm, state, x, a, rvds[l])
     return out
 
 
@@ -428,5 +585,6 @@ def tvmmp(
         solver=solver,
         box=box,
         settled_by=tuple(tuple(b) for b in pairs.settled_by),
+        certified=tuple(tuple(c) for c in pairs.certified),
         notes=tuple(pairs.notes),
     )

@@ -272,10 +272,10 @@ def verify_lift(
             rows += _task(t)
             bar.update()
     else:
-        from ..apps.sweep import _ignore_sigint, _stop  # Ctrl-C: the parent alone reports it
+        from ..apps.sweep import _init_worker, _stop  # Ctrl-C: the parent alone reports it
 
         ctx = multiprocessing.get_context(start_method)
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_ignore_sigint)
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker)
         try:
             for fut in as_completed([pool.submit(_task, t) for t in tasks]):
                 rows += fut.result()

@@ -63,6 +63,8 @@ def test_dask_local_cluster_gives_the_same_rows(serial):
     ) as cluster:
         with distributed.Client(cluster) as client:
             assert run_sweep(POINTS, cluster=client, chunk=1, progress=False) == serial
+        # by address: the handshake check passes a real scheduler
+        assert run_sweep(POINTS[:2], cluster=cluster.scheduler_address, progress=False) == serial[:2]
 
 
 @pytest.mark.parametrize(
@@ -123,7 +125,260 @@ def test_resume_after_an_interrupt_computes_only_the_missing_rows(tmp_path, monk
     assert len(calls) == 4
 
 
+def test_resume_recomputes_the_rows_of_an_edited_grasp_file(tmp_path, capsys):
+    """Run on a grasp file, edit it (RVDS twice as large: alpha halves) and resume: the rows are
+    those of the edited file, said on stderr; the finished rows of the unchanged grasp stay."""
+    import json
+    import shutil
+
+    from mjtvm.cli import main
+    from mjtvm.sim.graspfile import shipped_grasps
+
+    shipped = shipped_grasps()["case2"]
+    grasp = tmp_path / "mine.toml"
+    text = shipped.read_text().replace(
+        'model = "four_finger_hand.xml"', f"model = {str(shipped.parent / 'four_finger_hand.xml')!r}"
+    )
+    grasp.write_text(text)
+    words = ["sweep", "--grasp", f"case2,{grasp}", "--mu", "0.3", "--mg", "1", "--states", "3",
+             "--state-indices", "0,2", "--quiet"]  # fmt: skip
+    out = tmp_path / "out"
+    assert main([*words, "--out", str(out)]) == 0
+    before = json.loads((out / "sweep.json").read_text())
+    capsys.readouterr()
+    start = text.index("rvds = [")
+    rvds = text[start : text.index("\n]\n", start) + 3]  # the RVDS, twice as large: alpha halves
+    grasp.write_text(text.replace(rvds, rvds.replace("1.0", "2.0")))
+    assert main([*words, "--out", str(out), "--resume"]) == 0
+    assert capsys.readouterr().err == "resume: 2 rows recomputed: inputs changed\n"
+    after = json.loads((out / "sweep.json").read_text())
+    assert main([*words, "--out", str(tmp_path / "fresh")]) == 0
+    assert after == json.loads((tmp_path / "fresh" / "sweep.json").read_text())
+    mine = [(b, a) for b, a in zip(before, after) if b["scenario"] == str(grasp)]
+    assert len(mine) == 2 and all(a["tvmmp"] == pytest.approx(b["tvmmp"] / 2) for b, a in mine)
+    assert [a for a in after if a["scenario"] == "case2"] == [b for b in before if b["scenario"] == "case2"]
+    shutil.rmtree(tmp_path / "fresh")
+    assert main([*words, "--out", str(out), "--resume"]) == 0  # nothing changed since: nothing to say
+    assert capsys.readouterr().err == ""
+
+
 def test_pool_and_dask_rows_are_checkpointed(tmp_path):
     seen: list[dict] = []
     rows = run_sweep(POINTS[:4], jobs=2, chunk=1, progress=False, on_rows=seen.extend)
     assert sorted(map(repr, seen)) == sorted(map(repr, rows))
+
+
+# ------------------------------------------------- faults of parallel sweeps (subprocesses)
+def _mjtvm() -> list[str]:
+    """The ``mjtvm`` command of this interpreter's environment."""
+    import sys
+    from pathlib import Path
+
+    script = Path(sys.executable).with_name("mjtvm")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "mjtvm.cli"]
+
+
+def _children(pid: int) -> list[int]:
+    """The live (not zombie) child processes of ``pid``, from /proc."""
+    import os
+
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat", "rb") as f:
+                    fields = f.read().rsplit(b")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != b"Z":
+                out.append(int(entry))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie is gone: it only waits to be reaped)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except OSError:
+        return False
+
+
+def _wait(condition, timeout: float) -> bool:
+    import time
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.05)
+    return condition()
+
+
+# 4800 rows (20 mu x 60 mg x 4 states) in 4 forked tasks of one state each: a task takes
+# seconds (about 10 s on one core), the whole sweep tens of seconds on 2 workers.
+_LONG = ["--mu", ",".join(f"{0.05 * k:.2f}" for k in range(1, 21)),
+         "--mg", ",".join(f"{0.5 + 0.05 * k:.2f}" for k in range(60)), "--states", "4"]  # fmt: skip
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="/proc and forked workers")
+@pytest.mark.parametrize("how", ["SIGKILL", "SIGTERM"])
+def test_a_killed_parallel_sweep_leaves_no_worker_and_no_lock(tmp_path, how):
+    """Kill the parent of a --jobs 2 sweep mid-run: its workers end with it (within 5 s), and the
+    next run into the folder starts and finishes."""
+    import contextlib
+    import os
+    import signal
+    import subprocess
+
+    workers: list[int] = []
+    proc = subprocess.Popen([*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path), "--quiet"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    try:
+        assert _wait(lambda: len(_children(proc.pid)) >= 2, 60), "the pool did not start"
+        workers += _children(proc.pid)
+        proc.send_signal(getattr(signal, how))
+        proc.wait(timeout=30)
+        assert _wait(lambda: not any(_alive(w) for w in workers), 5), "workers outlived the killed sweep"
+    finally:
+        for w in workers:  # whatever happened: no process of this test outlives it
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(w, signal.SIGKILL)
+        proc.kill()
+        proc.wait()
+        proc.stderr.close()
+    words = ["sweep", "--states", "2", "--out", str(tmp_path), "--quiet"]
+    again = subprocess.run([*_mjtvm(), *words], capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0, again.stderr
+    assert (tmp_path / "sweep.json").exists()
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="forked workers")
+def test_ctrl_c_stops_a_parallel_sweep_at_once_and_keeps_the_finished_rows(tmp_path):
+    """SIGINT to the process group (what a terminal's Ctrl-C does) once a task has finished:
+    exit 130 well within 5 s (the workers are not left to finish their tasks), one line on
+    stderr, and the checkpoint holds the finished rows."""
+    import contextlib
+    import json
+    import os
+    import re
+    import signal
+    import subprocess
+    import threading
+    import time
+
+    workers: list[int] = []
+    proc = subprocess.Popen([*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)  # fmt: skip
+    err: list[str] = []
+    moving = threading.Event()
+
+    def read() -> None:
+        assert proc.stderr is not None
+        while chunk := proc.stderr.read(1):
+            err.append(chunk)
+            if re.search(r"\|\s*[1-9][0-9]*/[0-9]+ ", "".join(err[-80:])):  # a task is finished
+                moving.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        assert moving.wait(timeout=180), "".join(err)
+        workers += _children(proc.pid)
+        start = time.monotonic()
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=60)
+        stopped = time.monotonic() - start
+    finally:
+        for w in workers:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(w, signal.SIGKILL)
+        proc.kill()
+        proc.wait()
+    reader.join(timeout=10)
+    text = "".join(err)
+    print(f"Ctrl-C to exit: {stopped:.2f} s")
+    assert proc.returncode == 130, text
+    assert text.rstrip("\n").splitlines()[-1].endswith("mjtvm: interrupted") and "Traceback" not in text
+    assert stopped < 5.0, f"{stopped:.1f} s from Ctrl-C to exit"
+    assert _wait(lambda: not any(_alive(w) for w in workers), 5)
+    doc = json.loads((tmp_path / "sweep.partial.json").read_text())
+    assert doc["schema"] == "mjtvm.sweep-checkpoint/1" and len(doc["rows"]) > 0
+
+
+class _Server:
+    """A TCP server on 127.0.0.1 (an ephemeral port) that is not a Dask scheduler: it accepts
+    and then stays silent, or greets every connection with an SSH banner. It stops by itself
+    after ``lifetime`` seconds, and at the end of the ``with`` block."""
+
+    def __init__(self, speaks: bool, lifetime: float = 30.0) -> None:
+        import socket
+        import threading
+
+        self.speaks, self.lifetime = speaks, lifetime
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.sock.settimeout(0.2)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+
+    def _serve(self) -> None:
+        import time
+
+        conns = []
+        end = time.monotonic() + self.lifetime
+        try:
+            while not self.done.is_set() and time.monotonic() < end:
+                try:
+                    conn, _ = self.sock.accept()
+                except OSError:  # the accept timeout: look at the clock again
+                    continue
+                conns.append(conn)
+                if self.speaks:
+                    conn.sendall(b"SSH-2.0-OpenSSH_9.6 not-dask\r\n" * 4)
+        finally:
+            for conn in conns:
+                conn.close()
+            self.sock.close()
+
+    def __enter__(self) -> _Server:
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.done.set()
+        self.thread.join(timeout=5)
+
+
+@pytest.mark.parametrize("speaks", [False, True], ids=["silent", "speaks-another-protocol"])
+def test_a_cluster_address_that_is_not_a_dask_scheduler_is_one_line_within_the_timeout(
+    tmp_path, monkeypatch, capsys, speaks
+):
+    """A server that stays silent after accepting (Client's own timeout covers the connection
+    only), or that answers in another protocol: exit 2 within the timeout (1 s here), one line
+    naming --cluster and what was expected, no traceback."""
+    import time
+
+    import mjtvm.apps.sweep
+    from mjtvm.cli import main
+
+    monkeypatch.setattr(mjtvm.apps.sweep, "CONNECT_TIMEOUT_S", 1.0)
+    words = ["sweep", "--states", "2", "--out", str(tmp_path), "--quiet"]
+    with _Server(speaks) as server:
+        start = time.monotonic()
+        code = main([*words, "--cluster", server.address])
+        took = time.monotonic() - start
+    err = capsys.readouterr().err
+    print(f"--cluster at a {'speaking' if speaks else 'silent'} server: gave up after {took:.2f} s")
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert err.startswith("error: --cluster: ") and "Dask scheduler at " + server.address in err
+    if speaks:
+        assert "expected a Dask scheduler" in err and "another protocol" in err
+    else:
+        assert "within 1 s" in err
+    assert took < 5.0  # the lift of --states 2 and the timeout (the parent builds no lift for Dask)
+    assert not (tmp_path / "sweep.json").exists()

@@ -92,10 +92,28 @@ def test_invalid_contacts(kwargs, match):
 
 
 def test_tangent_basis_second_row_is_numpys_cross_product():
-    """tangent_basis writes n x t1 out (np.cross is slow): the very same bits."""
+    """tangent_basis writes n x t1 out (np.cross is slow): the very same bits, except where
+    the difference is round-off of its terms (at most 1e-12 of them), which is exactly 0."""
     rng = np.random.default_rng(3)
     for _ in range(200):
         n = rng.normal(size=3) * 10.0 ** rng.integers(-6, 6)
         n /= np.linalg.norm(n)
         basis = tangent_basis(n)
-        np.testing.assert_array_equal(basis[1], np.cross(n, basis[0]))
+        cross = np.cross(n, basis[0])
+        t1 = basis[0]  # component i of n x t1 is n[i+1] t1[i+2] - n[i+2] t1[i+1]
+        terms = np.abs(np.roll(n, -1) * np.roll(t1, -2)) + np.abs(np.roll(n, -2) * np.roll(t1, -1))
+        cancelled = np.abs(cross) <= 1e-12 * terms
+        np.testing.assert_array_equal(basis[1][~cancelled], cross[~cancelled])
+        assert np.all(basis[1][cancelled] == 0.0)
+
+
+def test_tangent_basis_has_exact_zeros_where_the_exact_tangent_has():
+    """A normal with a zero-free direction: its default t1 is e_z made orthogonal, so
+    t2 = n x t1 is parallel to n x e_z = (n_y, -n_x, 0): its z component is 0 exactly
+    (1.7e-18 before the round-off rule, which put 1e12 coefficients into an S-point's LP)."""
+    n = np.array([-0.17647411084705222, 0.9810715791269544, -0.07972104383465155])
+    n /= np.linalg.norm(n)
+    t1, t2 = tangent_basis(n)
+    assert t2[2] == 0.0
+    np.testing.assert_allclose(t2, np.cross(n, t1), rtol=0, atol=1e-16)
+    np.testing.assert_allclose([t1 @ n, t2 @ n, t1 @ t2], 0.0, atol=1e-16)

@@ -1,0 +1,237 @@
+r"""Certificates: an LP's answer checked against the original, unscaled LP before it is reported.
+
+The solvers see an equilibrated LP whose round-off has been dropped
+(:mod:`~mjtvm.core.scaling`); their tolerances hold there. A wrong scaling, a dropped
+coefficient that was not round-off, or a solver's own slip can make an answer that is
+"optimal" for the solver and wrong for the grasp. So every optimal answer of Problem 2 is
+checked on the LP as assembled from the state (:func:`~mjtvm.core.assembly.assemble`: the
+paper's statics, friction, kinematics and operation ranges, unscaled, nothing dropped but
+the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
+``l <= A x <= u``, ``lc <= x <= uc``:
+
+* **primal**: the solution clipped to its bounds (so ``alpha >= 0`` and ``lam >= 0`` hold
+  exactly) satisfies every row to :data:`PRIMAL_TOL` relative to the magnitudes of the
+  row's terms, ``|A_i| s + |bound|`` with ``s_j = max(|x_j|, ref_j)`` and ``ref_j`` the
+  variable's typical magnitude (the equilibration's column factor: a variable that is ~0
+  in this solution still counts at its usual size);
+* **dual**: the solver's row multipliers ``y`` (HiGHS' signs: ``y_i >= 0`` where the lower
+  bound binds, ``<= 0`` the upper) and the reduced costs ``d = c - A^T y`` computed here on
+  the unscaled ``A`` have the signs their bounds allow; those that do not are taken as 0,
+  and what that moves the dual bound by (their sizes times the typical sizes of their
+  rows and variables) must stay within :data:`DUAL_TOL` of the objective;
+* **gap**: the dual objective ``D`` (weak duality: ``D <= c^T x*`` for any such ``y``)
+  meets the primal one within :data:`GAP_TOL` relative, or within ``floor`` absolute (for
+  alpha: the value below which alpha is reported as 0, so that an alpha of 0 is certified
+  by a bound below that value).
+
+For Problem 2 (``c = -e_alpha``) the gap bounds the true alpha from above: the reported
+alpha is feasible and within ``GAP_TOL`` of the maximum. Where a multiplier of the wrong
+sign moves the bound by less than ``DUAL_TOL`` it is taken as 0: the bound holds to that tolerance
+(a rigorous bound would need finite bounds on every variable: lam and rho have none).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, TypeAlias
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from .roundoff import drop_cancellation
+
+__all__ = [
+    "DUAL_TOL",
+    "GAP_TOL",
+    "PRIMAL_TOL",
+    "Certificate",
+    "certify",
+    "clip",
+    "farkas",
+    "primal_violation",
+]
+
+Matrix: TypeAlias = Any  #: a dense ``NDArray[np.float64]`` or a scipy sparse matrix
+
+#: Largest violation of a row, relative to the magnitudes of its terms (the solvers hold
+#: 1e-9 on the equilibrated rows; a row whose terms cancel keeps that scale here).
+PRIMAL_TOL = 1e-8
+#: Largest move of the dual bound by the multipliers and reduced costs of the wrong sign,
+#: relative to the objective.
+DUAL_TOL = 1e-8
+#: Largest duality gap, relative to the objective (or ``floor``): alphas reported as certified
+#: are within 1e-7 of the LP's maximum, ten times inside the 1e-6 of the differential tests.
+GAP_TOL = 1e-7
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """The check of one answer (every measure relative, see the module docstring).
+
+    Attributes
+    ----------
+    primal
+        Largest relative violation of a row by the clipped solution.
+    dual
+        What the multipliers and reduced costs of the wrong sign move the bound by, relative
+        to the objective (``inf`` without multipliers).
+    gap
+        ``|c^T x - D| / max(|c^T x|, |D|, floor)`` (``inf`` without multipliers).
+    bound
+        The dual objective ``D``: for a minimisation, a lower bound of the optimum.
+    """
+
+    primal: float
+    dual: float
+    gap: float
+    bound: float
+
+    @property
+    def ok(self) -> bool:
+        """Whether every measure is within its tolerance."""
+        return self.primal <= PRIMAL_TOL and self.dual <= DUAL_TOL and self.gap <= GAP_TOL
+
+    def describe(self) -> str:
+        """One line: the measures against their tolerances."""
+        return (
+            f"primal violation {self.primal:.1e} (tol {PRIMAL_TOL:.0e}), dual {self.dual:.1e} "
+            f"(tol {DUAL_TOL:.0e}), gap {self.gap:.1e} (tol {GAP_TOL:.0e})"
+        )
+
+
+def clip(
+    x: NDArray[np.float64], lower: NDArray[np.float64], upper: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``x`` clipped to its bounds (infinite bounds leave it as it is)."""
+    return np.minimum(np.maximum(x, lower), upper)
+
+
+def primal_violation(
+    a: Matrix,
+    x: NDArray[np.float64],
+    lower: NDArray[np.float64],
+    upper: NDArray[np.float64],
+    abs_a: Matrix | None = None,
+    size: NDArray[np.float64] | None = None,
+) -> float:
+    """Largest violation of ``lower <= a x <= upper`` relative to ``|a| size + |bound|``,
+    ``size`` the typical magnitudes of the variables (default ``|x|``): a row whose
+    variables are all ~0 in this solution is still measured at its usual scale."""
+    ax = a @ x
+    terms = (abs(a) if abs_a is None else abs_a) @ (np.abs(x) if size is None else size)
+    with np.errstate(invalid="ignore"):
+        below = np.where(np.isfinite(lower), lower - ax, 0.0)
+        above = np.where(np.isfinite(upper), ax - upper, 0.0)
+        bound = np.where(below > above, np.abs(np.where(np.isfinite(lower), lower, 0.0)),
+                         np.abs(np.where(np.isfinite(upper), upper, 0.0)))  # fmt: skip
+    viol = np.maximum(np.maximum(below, above), 0.0)
+    scale = terms + bound
+    rel = np.where(viol > 0.0, viol / np.where(scale > 0.0, scale, 1.0), 0.0)
+    rel[(viol > 0.0) & (scale == 0.0)] = np.inf
+    return float(np.max(rel, initial=0.0))
+
+
+def certify(
+    c: NDArray[np.float64],
+    a: Matrix,
+    row_lower: NDArray[np.float64],
+    row_upper: NDArray[np.float64],
+    col_lower: NDArray[np.float64],
+    col_upper: NDArray[np.float64],
+    x: NDArray[np.float64],
+    y: NDArray[np.float64] | None,
+    *,
+    floor: float = 0.0,
+    col_ref: NDArray[np.float64] | None = None,
+    abs_a: Matrix | None = None,
+) -> Certificate:
+    """Check a solution ``x`` and row multipliers ``y`` of ``min c^T x`` s.t.
+    ``row_lower <= a x <= row_upper``, ``col_lower <= x <= col_upper`` (unscaled).
+
+    Parameters
+    ----------
+    c, a, row_lower, row_upper, col_lower, col_upper
+        The LP: ``(n,)``, ``(m, n)`` (dense or sparse), ``(m,)``, ``(m,)``, ``(n,)``, ``(n,)``.
+    x
+        ``(n,)`` the solution; it is clipped to its bounds first.
+    y
+        ``(m,)`` the row multipliers (HiGHS' signs), or ``None`` (primal check only).
+    floor
+        An error of the objective that does not matter (for alpha: the value below which
+        it is reported as 0): the gap may reach it, and the dual measure a tenth of it.
+    col_ref
+        ``(n,)`` typical magnitudes of the variables (the equilibration's column factors),
+        or ``None`` (``|x|`` alone): the scale of the rows' violations, and of what a
+        reduced cost of the wrong sign moves the bound by.
+    abs_a
+        ``|a|``, when the caller keeps it (Problem 2 checks every LP of a state on one matrix).
+
+    Returns
+    -------
+    Certificate
+    """
+    xc = clip(x, col_lower, col_upper)
+    abs_a = abs(a) if abs_a is None else abs_a
+    size = np.abs(xc) if col_ref is None else np.maximum(np.abs(xc), col_ref)
+    primal = primal_violation(a, xc, row_lower, row_upper, abs_a, size)
+    if y is None:
+        return Certificate(primal, np.inf, np.inf, -np.inf)
+    y = np.array(y, dtype=float)
+    c = np.asarray(c, dtype=float)
+    # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
+    # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
+    # by its size times the row's (|A_i| x + |bound|), added up with the columns' below.
+    row_size = abs_a @ size + np.where(np.isfinite(row_lower), np.abs(row_lower), 0.0)
+    wrong_row = ((y > 0.0) & ~np.isfinite(row_lower)) | ((y < 0.0) & ~np.isfinite(row_upper))
+    moved = float(np.sum(np.abs(y[wrong_row]) * row_size[wrong_row]))
+    y[wrong_row] = 0.0
+    d = c - a.T @ y
+    # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
+    # free joint speeds and torques have d = 1e-17 where their terms are 1.
+    drop_cancellation(d, np.abs(c) + abs_a.T @ np.abs(y))
+    wrong_col = ((d > 0.0) & ~np.isfinite(col_lower)) | ((d < 0.0) & ~np.isfinite(col_upper))
+    moved += float(np.sum(np.abs(d[wrong_col]) * size[wrong_col]))
+    d[wrong_col] = 0.0
+    with np.errstate(invalid="ignore"):
+        bound = float(
+            np.sum(np.where(y > 0.0, y * np.where(np.isfinite(row_lower), row_lower, 0.0), 0.0))
+            + np.sum(np.where(y < 0.0, y * np.where(np.isfinite(row_upper), row_upper, 0.0), 0.0))
+            + np.sum(np.where(d > 0.0, d * np.where(np.isfinite(col_lower), col_lower, 0.0), 0.0))
+            + np.sum(np.where(d < 0.0, d * np.where(np.isfinite(col_upper), col_upper, 0.0), 0.0))
+        )
+    objective = float(c @ xc)
+    ref = max(abs(objective), abs(bound), floor / GAP_TOL)
+    if ref > 0.0:
+        gap, dual = abs(objective - bound) / ref, moved / ref
+    else:
+        gap, dual = (0.0 if objective == bound else np.inf), (0.0 if moved == 0.0 else np.inf)
+    return Certificate(primal, dual, gap, bound)
+
+
+def farkas(
+    a: Matrix,
+    row_lower: NDArray[np.float64],
+    row_upper: NDArray[np.float64],
+    col_lower: NDArray[np.float64],
+    col_upper: NDArray[np.float64],
+    y: NDArray[np.float64] | None,
+    *,
+    col_ref: NDArray[np.float64] | None = None,
+    abs_a: Matrix | None = None,
+) -> bool:
+    """Whether row multipliers ``y`` prove ``row_lower <= a x <= row_upper``,
+    ``col_lower <= x <= col_upper`` infeasible (Farkas): with zero costs, the dual bound
+    of :func:`certify` is positive, and what the multipliers of the wrong sign move it by
+    is within ``DUAL_TOL`` of it. Either sign of ``y`` is tried (solvers differ)."""
+    if y is None or not np.all(np.isfinite(y)):
+        return False
+    n = a.shape[1]
+    zero = np.zeros(n)
+    ref = np.ones(n) if col_ref is None else col_ref
+    for sign in (1.0, -1.0):
+        cert = certify(zero, a, row_lower, row_upper, col_lower, col_upper, zero, sign * np.asarray(y),
+                       col_ref=ref, abs_a=abs_a)  # fmt: skip
+        if cert.bound > 0.0 and cert.dual <= DUAL_TOL:
+            return True
+    return False
