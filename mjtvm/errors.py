@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MjtvmError", "ModelError", "OutputError", "SolverError", "StateError"]
+__all__ = ["MjtvmError", "ModelError", "OptionError", "OutputError", "SolverError", "StateError"]
 
 
 class MjtvmError(Exception):
@@ -41,6 +41,24 @@ class StateError(MjtvmError, ValueError):
         if self.field.startswith("["):
             field = f"{prefix}{self.field}"
         return type(self)(field, self.problem, self.value)
+
+
+class OptionError(MjtvmError, ValueError):
+    r"""Command-line options that are each well formed but do not fit together or exceed what
+    a run may take (e.g. a sweep grid of too many points).
+
+    Parameters
+    ----------
+    option
+        The option at fault as typed, e.g. ``"--mu"``.
+    problem
+        What was expected and what was found.
+    """
+
+    def __init__(self, option: str, problem: str) -> None:
+        self.option = option
+        self.problem = problem
+        super().__init__(f"{option}: {problem}")
 
 
 class SolverError(MjtvmError, RuntimeError):

@@ -8,7 +8,9 @@ Exit codes
     Another failure the package reports (e.g. a rerun recording that fails).
 2
     Bad input, printed as one line ``error: <what>: <expected>`` on stderr: a malformed or
-    out-of-range option (argparse's errors too, followed by ``(try 'mjtvm CMD --help')``), an
+    out-of-range option (the ranges: :mod:`~mjtvm.cli.values`; argparse's errors too, followed
+    by ``(try 'mjtvm CMD --help')``), options that together exceed a bound
+    (:class:`~mjtvm.errors.OptionError`), an
     invalid state file (:class:`~mjtvm.errors.StateError`) or scenario
     (:class:`~mjtvm.errors.ModelError`), an output folder that cannot be written or is in use
     by another run (:class:`~mjtvm.errors.OutputError`, checked before any work), an

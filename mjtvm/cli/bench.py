@@ -13,7 +13,16 @@ from typing import Any
 from ..errors import StateError
 from .options import Subparsers, command, out_options, removed_option
 from .output import EXIT_OK, emit
-from .values import integer, number
+from .values import (
+    MAX_BASELINE_REPEATS,
+    MAX_NOTES_BYTES,
+    MAX_REPEATS,
+    MAX_SECONDS,
+    input_file,
+    integer,
+    number,
+    shown,
+)
 
 __all__ = ["add_arguments", "add_bench"]
 
@@ -36,17 +45,17 @@ def add_bench(sub: Subparsers) -> None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
     parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
-    parser.add_argument("--repeats", type=integer(1), default=200, metavar="N",
+    parser.add_argument("--repeats", type=integer(1, MAX_REPEATS), default=200, metavar="N",
                         help="timed calls per Problem 2 state")  # fmt: skip
-    parser.add_argument("--baseline-repeats", type=integer(1), default=10, metavar="N",
+    parser.add_argument("--baseline-repeats", type=integer(1, MAX_BASELINE_REPEATS), default=10, metavar="N",
                         help="timed cvxpy calls per state")  # fmt: skip
-    parser.add_argument("--time-limit", type=number(0.0, strict=True), default=120.0, metavar="S",
+    parser.add_argument("--time-limit", type=number(0.0, MAX_SECONDS, strict=True), default=120.0, metavar="S",
                         help="cap of each cdd baseline run (s)")  # fmt: skip
     out_options(
         parser, name="bench", out_help="output folder of NAME.json (the report) and NAME.md (the table)"
     )
     removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
-    parser.add_argument("--notes", type=Path, default=None, metavar="FILE",
+    parser.add_argument("--notes", type=input_file, default=None, metavar="FILE",
                         help="text file whose lines are appended to the table's notes")  # fmt: skip
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -57,11 +66,24 @@ def _steps(quick: bool) -> int:
 
 
 def _read_notes(path: Path | None) -> list[str]:
-    """The lines of the ``--notes`` file (none without one)."""
+    """The lines of the ``--notes`` file (none without one), read up to :data:`MAX_NOTES_BYTES`."""
+    if path is None:
+        return []
     try:
-        return path.read_text(encoding="utf-8").rstrip().splitlines() if path else []
-    except (OSError, UnicodeDecodeError) as e:
-        raise StateError("--notes", f"cannot read {path} ({e})") from e
+        with path.open("rb") as f:
+            raw = f.read(MAX_NOTES_BYTES + 1)  # bounded: a device or a huge file is refused
+    except OSError as e:
+        raise StateError("--notes", f"cannot read {shown(str(path))} ({e.strerror or e})") from e
+    if len(raw) > MAX_NOTES_BYTES:
+        raise StateError(
+            "--notes", f"expected a text file of at most {MAX_NOTES_BYTES} bytes, got a larger one"
+        )
+    try:
+        return raw.decode("utf-8").rstrip().splitlines()
+    except UnicodeDecodeError as e:
+        raise StateError(
+            "--notes", f"expected UTF-8 text, got byte 0x{raw[e.start]:02x} at offset {e.start}"
+        ) from e
 
 
 @contextlib.contextmanager

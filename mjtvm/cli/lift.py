@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import OptionError
 from .options import (
     GRASP_HELP,
     Subparsers,
@@ -15,7 +16,23 @@ from .options import (
     out_options,
 )
 from .output import EXIT_OK, emit
-from .values import CONTACTS, READINGS, choices, cluster_address, integer, integers, names, numbers
+from .values import (
+    CONTACTS,
+    MAX_FORCE,
+    MAX_GRID,
+    MAX_JOBS,
+    MAX_MU,
+    MAX_STATES,
+    READINGS,
+    choices,
+    cluster_address,
+    grasps,
+    integer,
+    integers,
+    names,
+    numbers,
+    output_file,
+)
 
 __all__ = ["add_replay", "add_sweep"]
 
@@ -48,13 +65,13 @@ def add_replay(sub: Subparsers) -> None:
     p.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument(
-        "--rrd", metavar="FILE", default=None,
+        "--rrd", type=output_file, metavar="FILE", default=None,
         help="also write a rerun recording of the lift (scene, contacts, velocity polytopes, TVMMP, "
         "joint operation points); open it with `rerun FILE`",
     )  # fmt: skip
     p.add_argument("--spawn", action="store_true", help="also stream the recording to a new rerun viewer")
     p.add_argument(
-        "--tvms-every", type=integer(0), default=5, metavar="N",
+        "--tvms-every", type=integer(0, MAX_STATES), default=5, metavar="N",
         help="TVMS (Problem 1) in the recording at every N-th state and the last; 0: never",
     )  # fmt: skip
     p.set_defaults(func=_cmd_replay)
@@ -111,7 +128,7 @@ def add_sweep(sub: Subparsers) -> None:
     """``mjtvm sweep``: Problem 2 over a grid, rows to NAME.json and NAME.csv."""
     p = command(sub, "sweep", *_TEXTS["sweep"])
     _sweep_grid(p)
-    p.add_argument("--jobs", type=integer(1), default=1, help="local worker processes")
+    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
     p.add_argument("--cluster", type=cluster_address, default=None, metavar="tcp://HOST:PORT",
                    help="Dask scheduler address (overrides --jobs; connection timeout 10 s)")  # fmt: skip
     out_options(p, name="sweep")
@@ -123,7 +140,7 @@ def add_sweep(sub: Subparsers) -> None:
 
 def _sweep_grid(p: argparse.ArgumentParser) -> None:
     """The grid's axes: grasps, hands, contacts, readings, mu, mg and the lift's states."""
-    grasp_option(p, default="case2", type=names, help="grasps (comma-separated): " + GRASP_HELP)
+    grasp_option(p, default="case2", type=grasps, help="grasps (comma-separated): " + GRASP_HELP)
     p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
     new = p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
                          help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4)")  # fmt: skip
@@ -132,19 +149,36 @@ def _sweep_grid(p: argparse.ArgumentParser) -> None:
                          metavar="READING", help="slide directions of S-points: physical, literal or both")  # fmt: skip
     deprecated_alias(p, "--readings", new)
     p.add_argument(
-        "--mu", type=numbers(0.0), default=None, help="friction coefficients (default: the grasp's)"
+        "--mu", type=numbers(0.0, MAX_MU), default=None, help="friction coefficients (default: the grasp's)"
     )
-    p.add_argument("--mg", type=numbers(0.0), default=None, help="object weights (N) (default: the grasp's)")
-    new = p.add_argument("--states", type=integer(2, hint="state indices are --state-indices"),
+    p.add_argument(
+        "--mg", type=numbers(0.0, MAX_FORCE), default=None, help="object weights (N) (default: the grasp's)"
+    )
+    new = p.add_argument("--states", type=integer(2, MAX_STATES, hint="state indices are --state-indices"),
                          default=30, metavar="N", help="number of states along the lift")  # fmt: skip
     deprecated_alias(p, "--num-states", new)
-    p.add_argument("--state-indices", type=integers(0), default=None, metavar="I,J",
+    p.add_argument("--state-indices", type=integers(0, MAX_STATES - 1), default=None, metavar="I,J",
                    help="solve only these states of the lift (default: all)")  # fmt: skip
+
+
+def grid_size(args: argparse.Namespace) -> int:
+    """Points of the sweep's grid: the product of its lists (``--mu``/``--mg`` count 1 when not
+    given: the grasp's own value)."""
+    size = len(args.state_indices) if args.state_indices is not None else args.states
+    for values in (args.grasp, args.hand, args.contacts, args.reading, args.mu, args.mg):
+        size *= 1 if values is None else len(values)
+    return int(size)
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from ..apps.sweep import run_sweep_files
 
+    size = grid_size(args)
+    if size > MAX_GRID:  # the points are built before the first is solved
+        raise OptionError(
+            "--grasp x --hand x --contacts x --reading x --mu x --mg x --states",
+            f"expected a grid of at most {MAX_GRID} points, got {size}",
+        )
     files = run_sweep_files(args, emit=emit)
     for path in files:
         emit(f"wrote {path}")

@@ -7,8 +7,21 @@ import argparse
 import sys
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from .output import EXIT_INPUT
-from .values import CONTACTS, READINGS, choices, folder, integer, number, stem
+from .output import EXIT_INPUT, one_line
+from .values import (
+    CONTACTS,
+    MAX_FORCE,
+    MAX_MU,
+    MAX_STATES,
+    READINGS,
+    choices,
+    folder,
+    fraction,
+    integer,
+    number,
+    source,
+    stem,
+)
 
 __all__ = [
     "Formatter",
@@ -33,7 +46,7 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         message = message.removeprefix("argument ")  # "argument --states: ..." names the option
-        self.exit(EXIT_INPUT, f"error: {message} (try '{self.prog} --help')\n")
+        self.exit(EXIT_INPUT, f"error: {one_line(message)} (try '{self.prog} --help')\n")
 
 
 if TYPE_CHECKING:
@@ -110,7 +123,7 @@ def grasp_option(
     p: argparse.ArgumentParser, *, default: str | None, type: Any = None, help: str = GRASP_HELP
 ) -> None:
     """``--grasp NAME|FILE`` (the old ``--scenario`` too)."""
-    new = p.add_argument("--grasp", default=default, type=type, metavar="GRASP", help=help)
+    new = p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
     deprecated_alias(p, "--scenario", new)
 
 
@@ -128,18 +141,25 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     hand_option(p)
     p.add_argument(
         "--mu",
-        type=number(0.0),
+        type=number(0.0, MAX_MU),
         default=None,
         help="friction coefficient (default: the grasp's, 0.3 for case2)",
     )
     p.add_argument(
-        "--mg", type=number(0.0), default=None, help="object weight (N) (default: the grasp's, 1 for case2)"
+        "--mg",
+        type=number(0.0, MAX_FORCE),
+        default=None,
+        help="object weight (N) (default: the grasp's, 1 for case2)",
     )
     p.add_argument(
-        "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
+        "--states",
+        type=integer(2, MAX_STATES),
+        default=30,
+        metavar="N",
+        help="number of states along the lift",
     )
     p.add_argument(
-        "--stop-margin", type=number(0.0), default=None, metavar="F",
+        "--stop-margin", type=fraction, default=None, metavar="F",
         help="end the lift where a finger's contact Jacobian keeps this fraction of its smallest singular "
         "value at the start (default: the grasp's, 0.25; 0: to the reach limit)",
     )  # fmt: skip

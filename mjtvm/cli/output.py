@@ -20,10 +20,18 @@ __all__ = [
     "bracket_progress",
     "emit",
     "lp_progress",
+    "one_line",
     "stdout_to_devnull",
 ]
 
 EXIT_OK, EXIT_FAILURE, EXIT_INPUT, EXIT_SOLVER, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 130, 141
+
+
+def one_line(text: str) -> str:
+    """``text`` with every non-printable character escaped as ``repr`` would (a newline as
+    ``\\n``, a lone surrogate as ``\\ud800``): an error stays one line, and stderr never
+    meets a character it cannot encode."""
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in text)
 
 
 def stdout_to_devnull() -> None:

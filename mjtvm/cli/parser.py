@@ -7,11 +7,19 @@ import sys
 from collections.abc import Sequence
 from importlib import metadata
 
-from ..errors import MjtvmError, ModelError, OutputError, SolverError, StateError
+from ..errors import MjtvmError, ModelError, OptionError, OutputError, SolverError, StateError
 from .bench import add_bench
 from .lift import add_replay, add_sweep
 from .options import Parser
-from .output import EXIT_FAILURE, EXIT_INPUT, EXIT_INTERRUPTED, EXIT_PIPE, EXIT_SOLVER, stdout_to_devnull
+from .output import (
+    EXIT_FAILURE,
+    EXIT_INPUT,
+    EXIT_INTERRUPTED,
+    EXIT_PIPE,
+    EXIT_SOLVER,
+    one_line,
+    stdout_to_devnull,
+)
 from .solve import add_export_state, add_solve, add_tvms
 from .verify import verify_parser
 
@@ -70,12 +78,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:
         stdout_to_devnull()
         return EXIT_PIPE
-    except (StateError, ModelError, OutputError) as e:
-        print(f"error: {e}", file=sys.stderr)
+    except (StateError, ModelError, OptionError, OutputError) as e:
+        print(f"error: {one_line(str(e))}", file=sys.stderr)
         return EXIT_INPUT
     except SolverError as e:
-        print(f"solver error: {e}", file=sys.stderr)
+        print(f"solver error: {one_line(str(e))}", file=sys.stderr)
         return EXIT_SOLVER
     except MjtvmError as e:  # e.g. a RecordingError
-        print(f"error: {e}", file=sys.stderr)
+        print(f"error: {one_line(str(e))}", file=sys.stderr)
         return EXIT_FAILURE

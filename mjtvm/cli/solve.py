@@ -8,14 +8,15 @@ import sys
 from importlib import resources
 from pathlib import Path
 
+from ..core.bounds import MAX_FILE_BYTES
 from ..core.solvers import SOLVERS
 from ..core.state import GraspState, load_state
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
-from .output import EXIT_OK, bracket_progress, emit, lp_progress
-from .values import fraction, integer, memory_size, number
+from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line
+from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
 
@@ -45,7 +46,7 @@ def example_path(name: str = "pinch.json") -> str:
 
 
 def _indent_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--indent", type=integer(0), default=1, help="JSON indentation")
+    p.add_argument("--indent", type=integer(0, MAX_INDENT), default=1, help="JSON indentation")
 
 
 # ------------------------------------------------------------------ solve
@@ -58,7 +59,7 @@ _SOURCE_HELP = (
 def add_solve(sub: Subparsers) -> None:
     """``mjtvm solve [STATE|GRASP|-]``: prints mjtvm.result/1."""
     p = command(sub, "solve", *_TEXTS["solve"])
-    p.add_argument("state", nargs="?", default=None, metavar="STATE|GRASP",
+    p.add_argument("state", nargs="?", default=None, type=source, metavar="STATE|GRASP",
                    help=_SOURCE_HELP + " (default: the shipped example pinch.json)")  # fmt: skip
     hand_option(p)
     p.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend")
@@ -87,13 +88,27 @@ def is_grasp_source(source: str) -> bool:
     return not path.suffix and "/" not in source and not path.exists()
 
 
+def _read_stdin() -> bytes:
+    """Standard input, read up to one byte more than a state may have (``< /dev/zero`` is
+    refused as too large, not read forever)."""
+    buffer = getattr(sys.stdin, "buffer", None)
+    if buffer is not None:
+        raw: bytes = buffer.read(MAX_FILE_BYTES + 1)
+    else:  # a text stream (a test's StringIO)
+        raw = sys.stdin.read(MAX_FILE_BYTES + 1).encode("utf-8", "surrogateescape")
+    if len(raw) > MAX_FILE_BYTES:
+        raise StateError(
+            "-", f"expected a state of at most {MAX_FILE_BYTES} bytes on standard input, got more"
+        )
+    if not raw.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"{"):
+        raise StateError("", "standard input does not hold a JSON object")
+    return raw
+
+
 def load_source(source: str | None, *, hand: str = "default", default: str | None = None) -> GraspState:
     """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo)."""
     if source == "-":
-        text = sys.stdin.read()
-        if not text.lstrip().startswith("{"):
-            raise StateError("", "standard input does not hold a JSON object")
-        return load_state(text)
+        return load_state(_read_stdin())
     if source is None:
         if default is None:
             raise StateError("state", "give a mjtvm.state/1 file (or -) or a grasp (--grasp or a .toml file)")
@@ -118,13 +133,15 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 def add_export_state(sub: Subparsers) -> None:
     """``mjtvm export-state GRASP``: prints the grasp's mjtvm.state/1."""
     p = command(sub, "export-state", *_TEXTS["export-state"])
-    p.add_argument("grasp_file", nargs="?", default=None, metavar="GRASP", help=GRASP_HELP)
+    p.add_argument("grasp_file", nargs="?", default=None, type=source, metavar="GRASP", help=GRASP_HELP)
     grasp_option(p, default=None, help="the same as GRASP (the old --scenario spelling works too)")
     hand_option(p)
     p.add_argument(
-        "--mg", type=number(0.0), default=None, help="object weight (N); default: the grasp's REFS"
+        "--mg", type=number(0.0, MAX_FORCE), default=None, help="object weight (N); default: the grasp's REFS"
     )
-    p.add_argument("--mu", type=number(0.0), default=None, help="friction coefficient; default: the grasp's")
+    p.add_argument(
+        "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient; default: the grasp's"
+    )
     _indent_option(p)
     p.add_argument("--quiet", action="store_true", help="no contact report on stderr")
     p.set_defaults(func=_cmd_export_state)
@@ -145,7 +162,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
             for row in grasp.contact_report()
         )
         print(
-            f"contacts (expected: found within {1e3 * grasp.contact_tolerance:g} mm): {report}",
+            one_line(f"contacts (expected: found within {1e3 * grasp.contact_tolerance:g} mm): {report}"),
             file=sys.stderr,
         )
     emit(json.dumps(state_to_dict(state), indent=args.indent))
@@ -156,14 +173,14 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
 def add_tvms(sub: Subparsers) -> None:
     """``mjtvm tvms [STATE|GRASP|-] [--grasp NAME]``: prints mjtvm.tvms/1."""
     p = command(sub, "tvms", *_TEXTS["tvms"])
-    p.add_argument("state", nargs="?", default=None, metavar="STATE|GRASP", help=_SOURCE_HELP)
+    p.add_argument("state", nargs="?", default=None, type=source, metavar="STATE|GRASP", help=_SOURCE_HELP)
     grasp_option(p, default=None, help="a grasp instead of STATE: " + GRASP_HELP)
     hand_option(p)
     p.add_argument("--no-rvds", action="store_true", help="ignore the state's RVDS (no cone restriction)")
     p.add_argument("--method", choices=("lp", "cdd"), default="lp", help="LP projection or cdd enumeration")
     p.add_argument(
         "--time-limit",
-        type=number(0.0, strict=True),
+        type=number(0.0, MAX_SECONDS, strict=True),
         default=120.0,
         metavar="S",
         help="wall-clock seconds for the projection: lp then stops with status approximate and the "

@@ -1,44 +1,111 @@
-"""The value types of the options (argparse ``type=``): one-line errors naming what is expected."""
+"""The value types of the options (argparse ``type=``) and the range of each option, in one
+place: one-line errors naming what is expected (the ranges: ``docs/cli.md``, "Bounds")."""
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
+import stat
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 __all__ = [
     "CONTACTS",
+    "MAX_BASELINE_REPEATS",
+    "MAX_FORCE",
+    "MAX_GEAR",
+    "MAX_GRID",
+    "MAX_INDENT",
+    "MAX_JOBS",
+    "MAX_LIST",
+    "MAX_MEMORY",
+    "MAX_MU",
+    "MAX_NOTES_BYTES",
+    "MAX_REPEATS",
+    "MAX_SCALE",
+    "MAX_SECONDS",
+    "MAX_SIM_SECONDS",
+    "MAX_STATES",
+    "MAX_STEM",
+    "MIN_GEAR",
+    "NAME_MAX",
+    "PATH_MAX",
     "READINGS",
     "choices",
     "cluster_address",
     "folder",
     "fraction",
+    "grasps",
+    "input_file",
     "integer",
     "integers",
     "memory_size",
     "names",
     "number",
     "numbers",
+    "output_file",
+    "shown",
+    "source",
     "stem",
 ]
 
 CONTACTS = ("L", "S")
 READINGS = ("physical", "literal")
 
+# The accepted range of every option (docs/cli.md, "Bounds"). An upper bound keeps a typo
+# (an extra zero, a pasted number) from becoming a run of days or a MemoryError.
+MAX_INDENT = 16  # JSON indentation: json.dumps builds every line's prefix in memory
+MAX_STATES = 10_000  # states along a lift (the paper's figures use 30); also --stride, --tvms-every
+MAX_JOBS = 64  # worker processes, each with its own MuJoCo and HiGHS (100-200 MB)
+MAX_REPEATS = 100_000  # bench: timed Problem 2 calls per state (about a millisecond each)
+MAX_BASELINE_REPEATS = 1_000  # bench: timed cvxpy calls per state (about 0.1 s each)
+MAX_SECONDS = 86_400.0  # --time-limit: a day
+MAX_MU = 100.0  # a friction coefficient (rubber on rubber is about 1-2)
+MAX_FORCE = 1e6  # N: --mg, --preload
+MIN_GEAR, MAX_GEAR = (
+    1.0,
+    10_000.0,
+)  # --gears: a reduction (a tiny ratio scales the torques past the state bounds)
+MAX_SCALE = 1_000.0  # verify --armature-scale
+MAX_SIM_SECONDS = 1.0  # verify --window, --startup: 4000 MuJoCo steps of 0.25 ms per rollout
+MAX_MEMORY = 2**50  # --memory: 1 PiB
+MAX_LIST = 1_000  # entries of one comma-separated list
+MAX_GRID = 100_000  # sweep: points of the product of its lists (a row is kept in memory for each)
+NAME_MAX = 255  # bytes of one path component (Linux NAME_MAX)
+PATH_MAX = 4095  # bytes of a path (Linux PATH_MAX, less the terminating NUL)
+MAX_STEM = 200  # characters of --name: NAME.partial.json's temporary file must fit NAME_MAX
+MAX_NOTES_BYTES = 2**20  # bench --notes: read at most this much
 
-def integer(low: int, *, hint: str = "") -> Callable[[str], int]:
-    """An argparse type: an integer >= ``low`` (``1.5``, ``nan`` and ``0,3`` are errors)."""
+
+def shown(text: str, limit: int = 60) -> str:
+    """``text`` for a one-line message: ``repr`` (a newline or a lone surrogate stays escaped),
+    cut to ``limit`` characters."""
+    return repr(text[:limit]) + ("..." if len(text) > limit else "")
+
+
+def _bound(x: float) -> str:
+    return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:g}"  # 1000000, not 1e+06
+
+
+def _interval(low: float, high: float, *, strict: bool = False) -> str:
+    return f"{'(' if strict else '['}{_bound(low)}, {_bound(high)}]"
+
+
+def integer(low: int, high: int, *, hint: str = "") -> Callable[[str], int]:
+    """An argparse type: an integer in ``[low, high]`` (``1.5``, ``nan`` and ``0,3`` are errors)."""
 
     def parse(text: str) -> int:
         try:
             value = int(text.strip(), 10)
-        except ValueError:
+        except ValueError:  # also more than 4300 digits (int_max_str_digits)
             value = None
-        if value is None or value < low:
+        if value is None or not low <= value <= high:
             extra = f" ({hint})" if hint and "," in text else ""
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}{extra}")
+            raise argparse.ArgumentTypeError(
+                f"expected an integer in {_interval(low, high)}, got {shown(text)}{extra}"
+            )
         return value
 
     return parse
@@ -52,24 +119,25 @@ def _float(text: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def number(low: float | None = None, *, strict: bool = False) -> Callable[[str], float]:
-    """An argparse type: a finite number, ``> low`` (``strict``) or ``>= low``."""
-    bound = "" if low is None else f" {'>' if strict else '>='} {low:g}"
+def number(low: float, high: float, *, strict: bool = False) -> Callable[[str], float]:
+    """An argparse type: a finite number in ``[low, high]``, or ``(low, high]`` when ``strict``."""
 
     def parse(text: str) -> float:
         value = _float(text)
-        if value is None or (low is not None and (value <= low if strict else value < low)):
-            raise argparse.ArgumentTypeError(f"expected a finite number{bound}, got {text!r}")
+        if value is None or not (low < value if strict else low <= value) or value > high:
+            raise argparse.ArgumentTypeError(
+                f"expected a number in {_interval(low, high, strict=strict)}, got {shown(text)}"
+            )
         return value
 
     return parse
 
 
 def fraction(text: str) -> float:
-    """An argparse type: a number in [0, 1) (a relative tolerance)."""
+    """An argparse type: a number in [0, 1) (a relative tolerance, a probability, a margin)."""
     value = _float(text)
     if value is None or not 0.0 <= value < 1.0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0 and < 1, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {shown(text)}")
     return value
 
 
@@ -78,7 +146,7 @@ _UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
 
 def memory_size(text: str) -> int:
     """An argparse type: bytes as ``512M``, ``2G``, ``1.5GiB``, ``2000000000`` or a share of the
-    available memory, ``25%``."""
+    available memory, ``25%``; at most :data:`MAX_MEMORY`."""
     t = text.strip().upper().removesuffix("IB").removesuffix("B")
     try:
         if t.endswith("%"):
@@ -87,44 +155,59 @@ def memory_size(text: str) -> int:
                 raise ValueError
             from ..polytopes.budget import available_memory
 
-            return int(share / 100.0 * available_memory())
-        unit = t[-1:] if t[-1:] in _UNITS and t[-1:] != "" else ""
-        value = float(t[: len(t) - len(unit)]) * _UNITS[unit]
-        if not (math.isfinite(value) and value >= 1.0):
+            value = share / 100.0 * available_memory()
+        else:
+            unit = t[-1:] if t[-1:] in _UNITS and t[-1:] != "" else ""
+            value = float(t[: len(t) - len(unit)]) * _UNITS[unit]
+        if not (math.isfinite(value) and 1.0 <= value <= MAX_MEMORY):
             raise ValueError
         return int(value)
     except (ValueError, IndexError):
         raise argparse.ArgumentTypeError(
-            f"expected a size such as 512M, 2G or 25% (of the available memory), got {text!r}"
+            "expected a size such as 512M, 2G or 25% (of the available memory), at most 1024T, "
+            f"got {shown(text)}"
         ) from None
 
 
-def numbers(low: float | None = None) -> Callable[[str], tuple[float, ...]]:
-    """An argparse type: comma-separated finite numbers ``>= low``."""
-    one = number(low)
+def _items(text: str, what: str) -> list[str]:
+    values = text.split(",")
+    if len(values) > MAX_LIST:
+        raise argparse.ArgumentTypeError(
+            f"expected at most {MAX_LIST} comma-separated {what}, got {len(values)}"
+        )
+    return values
+
+
+def numbers(low: float, high: float, *, strict: bool = False) -> Callable[[str], tuple[float, ...]]:
+    """An argparse type: at most :data:`MAX_LIST` comma-separated finite numbers in ``[low, high]``
+    (``(low, high]`` when ``strict``)."""
+    one = number(low, high, strict=strict)
 
     def parse(text: str) -> tuple[float, ...]:
         try:
-            return tuple(one(v) for v in text.split(","))
-        except argparse.ArgumentTypeError:
-            bound = "" if low is None else f" >= {low:g}"
+            return tuple(one(v) for v in _items(text, "numbers"))
+        except argparse.ArgumentTypeError as e:
+            if str(e).startswith("expected at most"):
+                raise
             raise argparse.ArgumentTypeError(
-                f"expected comma-separated finite numbers{bound}, got {text!r}"
+                f"expected comma-separated numbers in {_interval(low, high, strict=strict)}, got {shown(text)}"
             ) from None
 
     return parse
 
 
-def integers(low: int) -> Callable[[str], tuple[int, ...]]:
-    """An argparse type: comma-separated integers ``>= low``."""
-    one = integer(low)
+def integers(low: int, high: int) -> Callable[[str], tuple[int, ...]]:
+    """An argparse type: at most :data:`MAX_LIST` comma-separated integers in ``[low, high]``."""
+    one = integer(low, high)
 
     def parse(text: str) -> tuple[int, ...]:
         try:
-            return tuple(one(v) for v in text.split(","))
-        except argparse.ArgumentTypeError:
+            return tuple(one(v) for v in _items(text, "integers"))
+        except argparse.ArgumentTypeError as e:
+            if str(e).startswith("expected at most"):
+                raise
             raise argparse.ArgumentTypeError(
-                f"expected comma-separated integers >= {low}, got {text!r}"
+                f"expected comma-separated integers in {_interval(low, high)}, got {shown(text)}"
             ) from None
 
     return parse
@@ -139,17 +222,17 @@ def choices(allowed: Sequence[str], *, every: str | None = None) -> Callable[[st
             return tuple(allowed)
         values = tuple(v.strip() for v in text.split(","))
         if not text.strip() or len(set(values)) != len(values) or any(v not in allowed for v in values):
-            raise argparse.ArgumentTypeError(f"expected distinct values among {expected}, got {text!r}")
+            raise argparse.ArgumentTypeError(f"expected distinct values among {expected}, got {shown(text)}")
         return values
 
     return parse
 
 
 def names(text: str) -> tuple[str, ...]:
-    """An argparse type: non-empty comma-separated names."""
-    values = tuple(v.strip() for v in text.split(","))
+    """An argparse type: at most :data:`MAX_LIST` non-empty comma-separated names."""
+    values = tuple(v.strip() for v in _items(text, "names"))
     if not all(values):
-        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {shown(text)}")
     return values
 
 
@@ -157,23 +240,92 @@ _STEM = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 
 
 def stem(text: str) -> str:
-    """An argparse type: a file stem (letters, digits, ``_ . -``; no folder, no leading dot)."""
-    if not _STEM.fullmatch(text):
+    """An argparse type: a file stem (letters, digits, ``_ . -``; no folder, no leading dot), at
+    most :data:`MAX_STEM` characters."""
+    if not _STEM.fullmatch(text) or len(text) > MAX_STEM:
         raise argparse.ArgumentTypeError(
-            f"expected a file stem of letters, digits, '_', '.', '-' (no '/'), got {text!r}"
+            f"expected a file stem of 1 to {MAX_STEM} letters, digits, '_', '.', '-' (no '/'), got {shown(text)}"
         )
     return text
+
+
+# ------------------------------------------------------------------ paths
+def _path(text: str, what: str) -> Path:
+    """``text`` as a path the system can take: not empty, at most :data:`PATH_MAX` bytes, no
+    component over :data:`NAME_MAX` bytes (else ``stat`` fails with ENAMETOOLONG deep inside)."""
+    if not text:
+        raise argparse.ArgumentTypeError(f"expected {what}, got ''")
+    try:
+        raw = os.fsencode(text)  # undecodable bytes of argv come back as they were given
+    except UnicodeError:
+        raise argparse.ArgumentTypeError(f"expected {what}, got the unencodable {shown(text)}") from None
+    if len(raw) > PATH_MAX:
+        raise argparse.ArgumentTypeError(f"expected {what} of at most {PATH_MAX} bytes, got {len(raw)} bytes")
+    longest = max(raw.split(b"/"), key=len)
+    if len(longest) > NAME_MAX:
+        raise argparse.ArgumentTypeError(
+            f"expected {what} whose every component has at most {NAME_MAX} bytes, got one of "
+            f"{len(longest)} bytes: {shown(os.fsdecode(longest), 40)}"
+        )
+    return Path(text)
+
+
+def _is_dir(path: Path, what: str) -> bool:
+    """Whether ``path`` is a folder; a path that cannot be inspected is a one-line error."""
+    try:
+        return stat.S_ISDIR(path.stat().st_mode)
+    except (FileNotFoundError, NotADirectoryError):
+        return False
+    except OSError as e:
+        raise argparse.ArgumentTypeError(
+            f"expected {what}, cannot inspect {shown(str(path))} ({e.strerror or e})"
+        ) from None
 
 
 def folder(text: str) -> str:
     """An argparse type: an output folder (a ``.json``/``.csv`` path is the old file form)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a folder, got ''")
-    if Path(text).suffix in (".json", ".csv", ".md") and not Path(text).is_dir():
+    path = _path(text, "a folder")
+    if path.suffix in (".json", ".csv", ".md") and not _is_dir(path, "a folder"):
         raise argparse.ArgumentTypeError(
-            f"expected a folder (the output files are written inside it), got the file name {text!r}"
+            f"expected a folder (the output files are written inside it), got the file name {shown(text)}"
         )
     return text
+
+
+def output_file(text: str) -> str:
+    """An argparse type: a file to write (not a folder; its folder is checked before any work)."""
+    path = _path(text, "a file name")
+    if _is_dir(path, "a file name"):
+        raise argparse.ArgumentTypeError(f"expected a file name, got the folder {shown(text)}")
+    return text
+
+
+def input_file(text: str) -> Path:
+    """An argparse type: an existing file to read (not a folder)."""
+    path = _path(text, "a file")
+    if _is_dir(path, "a file"):
+        raise argparse.ArgumentTypeError(f"expected a file, got the folder {shown(text)}")
+    if not os.path.lexists(path):
+        raise argparse.ArgumentTypeError(f"expected an existing file, got {shown(text)}")
+    return path
+
+
+def source(text: str) -> str:
+    """An argparse type: a state or grasp file, ``-``, or a shipped grasp's name (a path the
+    system can take; whether it exists is the loader's to say, naming the shipped grasps)."""
+    if text != "-":
+        _path(text, "a file or a shipped grasp's name")
+    return text
+
+
+def grasps(text: str) -> tuple[str, ...]:
+    """An argparse type: comma-separated grasps (each as :func:`source`)."""
+    values = names(text)
+    for value in values:
+        source(value)
+    return values
 
 
 _CLUSTER = re.compile(r"(?:(tcp|tls|ucx|ws|wss)://)?\[?[A-Za-z0-9_.:-]+\]?:\d{1,5}")

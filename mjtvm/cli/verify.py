@@ -17,7 +17,23 @@ from typing import Any
 
 from .options import Parser, deprecated_alias, grasp_option, out_options
 from .output import EXIT_OK
-from .values import CONTACTS, READINGS, choices, integer, number
+from .values import (
+    CONTACTS,
+    MAX_FORCE,
+    MAX_GEAR,
+    MAX_JOBS,
+    MAX_MU,
+    MAX_SCALE,
+    MAX_SIM_SECONDS,
+    MAX_STATES,
+    MIN_GEAR,
+    READINGS,
+    choices,
+    integer,
+    number,
+    numbers,
+    output_file,
+)
 
 __all__ = ["add_arguments", "verify_parser"]
 
@@ -39,19 +55,34 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
     p.add_argument(
-        "--states", type=integer(2), default=30, metavar="N", help="number of states along the lift"
+        "--states",
+        type=integer(2, MAX_STATES),
+        default=30,
+        metavar="N",
+        help="number of states along the lift",
     )
     p.add_argument(
-        "--stride", type=integer(1), default=1, metavar="N", help="check every N-th state (and the last)"
+        "--stride",
+        type=integer(1, MAX_STATES),
+        default=1,
+        metavar="N",
+        help="check every N-th state (and the last)",
     )
     p.add_argument("--contacts", type=choices(CONTACTS), default="L,S", metavar="L,S",
                    help="contact types of the lift's L/S fingers to check (Case 2: fingers 2 and 4)")  # fmt: skip
     p.add_argument("--reading", type=choices(READINGS, every="both"), default="both", metavar="READING",
                    help="slide directions of the S-points: physical, literal or both")  # fmt: skip
     p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
-    p.add_argument("--mu", type=number(0.0), default=None, help="friction coefficient (default: the grasp's)")
-    p.add_argument("--mg", type=number(0.0), default=None, help="object weight (N) (default: the grasp's)")
-    p.add_argument("--jobs", type=integer(1), default=1, help="worker processes")
+    p.add_argument(
+        "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient (default: the grasp's)"
+    )
+    p.add_argument(
+        "--mg",
+        type=number(0.0, MAX_FORCE, strict=True),
+        default=None,
+        help="object weight (N) (default: the grasp's)",
+    )
+    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
     p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
                    help="how worker processes start")  # fmt: skip
     p.add_argument("--witness", default="central", choices=("central", "vertex"),
@@ -59,9 +90,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dynamics", action="store_true",
                    help="also the dynamic alpha (eq. 31 with M qdd + c of the witness motion, docs/dynamics.md), "
                    "alpha_sim / alpha_dyn and a rollout at 0.9 alpha_dyn")  # fmt: skip
-    p.add_argument("--preload", type=number(0.0), default=0.0, metavar="N",
+    p.add_argument("--preload", type=number(0.0, MAX_FORCE), default=0.0, metavar="N",
                    help="minimum normal force (N) of every L contact (the state's contact preload)")  # fmt: skip
-    p.add_argument("--gears", type=_ratios, default=None, metavar="N,N,...",
+    p.add_argument("--gears", type=numbers(MIN_GEAR, MAX_GEAR), default=None, metavar="N,N,...",
                    help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP "
                    "(e.g. 10,20,30,40,60,100; writes gears.csv and gears.png)")  # fmt: skip
     _simulation_options(p)
@@ -69,7 +100,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
     new = p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
     deprecated_alias(p, "--no-plot", new)
-    p.add_argument("--rrd", default=None, metavar="FILE", help="also write a rerun recording of the results")
+    p.add_argument(
+        "--rrd",
+        type=output_file,
+        default=None,
+        metavar="FILE",
+        help="also write a rerun recording of the results",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -77,25 +114,15 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
     """The rollouts' :class:`~mjtvm.physics.simulate.SimSettings` (ablations)."""
     from ..physics.simulate import SimSettings  # MuJoCo
 
-    p.add_argument("--armature-scale", type=number(0.0, strict=True), default=1.0,
+    p.add_argument("--armature-scale", type=number(0.0, MAX_SCALE, strict=True), default=1.0,
                    help="ablation: scale the rotor inertia (armature)")  # fmt: skip
-    p.add_argument("--window", type=number(0.0, strict=True), default=SimSettings.window,
+    p.add_argument("--window", type=number(0.0, MAX_SIM_SECONDS, strict=True), default=SimSettings.window,
                    help="measurement window of a rollout (s)")  # fmt: skip
-    p.add_argument("--startup", type=number(0.0), default=SimSettings.startup,
+    p.add_argument("--startup", type=number(0.0, MAX_SIM_SECONDS), default=SimSettings.startup,
                    help="settling time before the window (s)")  # fmt: skip
     p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"),
                    help="MuJoCo friction cone")  # fmt: skip
     p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
-
-
-def _ratios(text: str) -> tuple[float, ...]:
-    try:
-        values = tuple(float(x) for x in text.split(","))
-    except ValueError:
-        values = ()
-    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
-        raise argparse.ArgumentTypeError(f"expected positive gear ratios separated by commas, got {text!r}")
-    return values
 
 
 def _cmd_gears(args: argparse.Namespace) -> int:

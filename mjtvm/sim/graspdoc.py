@@ -28,6 +28,7 @@ CONTACT_TYPES = ("F", "L", "S", "D")
 SELECTORS = ("geom", "body", "geom_id")
 RANGE_SOURCES = ("dcmotor", "datasheet", "actuator", "polygon")
 MAX_ITEMS = 256  # contacts, targets, joints, poses, wrenches, RVDS vertices
+MAX_DEPTH = 16  # a grasp document nests 6 levels (ranges.<pattern>.datasheet.<key>)
 
 _TOP = {
     "schema", "name", "description", "notes", "source", "model", "object", "configuration", "joints",
@@ -69,7 +70,7 @@ class _Checker:
     ) -> Mapping[str, Any]:
         if not isinstance(value, Mapping):
             raise self.fail(field, f"expected a table (object), got {_kind(value)}")
-        unknown = sorted(str(k) for k in value if k not in allowed)
+        unknown = sorted(key_of(k) for k in value if k not in allowed)
         if unknown:
             raise self.fail(
                 f"{field}.{unknown[0]}" if field else unknown[0],
@@ -118,16 +119,16 @@ class _Checker:
     def number_map(self, value: Any, field: str) -> dict[str, float]:
         if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
             raise self.fail(field, f"expected a table of name = number, got {_kind(value)}")
-        return {str(k): self.number(v, f"{field}.{k}") for k, v in value.items()}
+        return {str(k): self.number(v, f"{field}.{key_of(k)}") for k, v in value.items()}
 
     def bounds(self, value: Any, field: str) -> dict[str, tuple[float, float]]:
         if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
             raise self.fail(field, f"expected a table of joint = [low, high], got {_kind(value)}")
         out = {}
         for k, v in value.items():
-            lo, hi = self.vector(v, f"{field}.{k}", 2)
+            lo, hi = self.vector(v, f"{field}.{key_of(k)}", 2)
             if not lo < hi:
-                raise self.fail(f"{field}.{k}", f"expected low < high, got [{lo:g}, {hi:g}]")
+                raise self.fail(f"{field}.{key_of(k)}", f"expected low < high, got [{lo:g}, {hi:g}]")
             out[str(k)] = (lo, hi)
         return out
 
@@ -143,6 +144,44 @@ class _Checker:
             else self.string(t[key], f"{field}.{key}")
         )
         return {"select": key, "target": target, **{k: v for k, v in t.items() if k not in SELECTORS}}
+
+
+def key_of(key: Any) -> str:
+    """A key of the document as a field name: as written when it prints on one line, else its
+    ``repr`` (``'fro\\nbnicate'``), so that an error naming it stays one line."""
+    text = str(key)
+    return text if text.isprintable() and text == text.strip() and text else repr(text)
+
+
+def _check_text(doc: Mapping[str, Any], c: _Checker) -> None:
+    """Refuse a lone surrogate (JSON's ``"\\ud800"``) or a NUL character in any key or string:
+    neither reaches MuJoCo's C names (nor a UTF-8 stream) intact."""
+    stack: list[tuple[Any, str, int]] = [(doc, "", 0)]
+    while stack:
+        node, field, depth = stack.pop()
+        if depth > MAX_DEPTH and isinstance(node, (Mapping, list)):  # also a mapping that holds itself
+            raise c.fail(field, f"nested deeper than {MAX_DEPTH} levels")
+        if isinstance(node, Mapping):
+            for key, value in node.items():
+                name = f"{field}.{key_of(key)}" if field else key_of(key)
+                _check_string(str(key), name, c, "key")
+                stack.append((value, name, depth + 1))
+        elif isinstance(node, list):
+            stack.extend((value, f"{field}[{i}]", depth + 1) for i, value in enumerate(node))
+        elif isinstance(node, str):
+            _check_string(node, field, c, "string")
+
+
+def _check_string(text: str, field: str, c: _Checker, what: str) -> None:
+    if "\0" in text:
+        raise c.fail(field, f"expected a {what} without NUL characters, got {text[:40]!r}")
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as e:
+        raise c.fail(
+            field,
+            f"expected a {what} of valid Unicode text, got a lone surrogate {text[e.start]!r} in {text[:40]!r}",
+        ) from e
 
 
 def _kind(value: Any) -> str:
@@ -210,6 +249,7 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
     """
     raw, path, label = _load(source)
     c = _Checker(label)
+    _check_text(raw, c)
     doc = dict(c.table(raw, "", _TOP, _REQUIRED))
     if doc["schema"] != SCHEMA:
         raise c.fail("schema", f"expected {SCHEMA!r}, got {doc['schema']!r}")
@@ -391,7 +431,7 @@ def _ranges(c: _Checker, value: Any) -> dict[str, dict[str, Any]]:
         raise c.fail("ranges", f"expected a table of joint (or pattern) = range, got {_kind(value)}")
     out = {}
     for key, entry in value.items():
-        field = f"ranges.{key}"
+        field = f"ranges.{key_of(key)}"
         t = dict(c.table(entry, field, {*RANGE_SOURCES, "gear_ratio", "gear_efficiency", "speed_limit"}))
         chosen = [k for k in RANGE_SOURCES if k in t]
         if len(chosen) != 1:

@@ -42,7 +42,7 @@ from .grasp import (
     object_weight,
     subtree,
 )
-from .graspdoc import GraspError, read_grasp_document
+from .graspdoc import GraspError, key_of, read_grasp_document
 from .graspik import solve_configuration
 from .graspmodel import (
     build_spec,
@@ -344,7 +344,7 @@ def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str
     values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
     where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
     for name, value in values.items():
-        data.qpos[model.jnt_qposadr[joint_id(model, name, file, f"{where}.{name}")]] = value
+        data.qpos[model.jnt_qposadr[joint_id(model, name, file, f"{where}.{key_of(name)}")]] = value
     set_object_pose(model, data, ob, doc["object"], file)
     mujoco.mj_forward(model, data)
     if "ik" in config:
@@ -496,7 +496,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     lift = doc["lift"]
     bounds = dict(lift["bounds"]) if lift is not None else {}
     for name in bounds:
-        joint_id(model, name, file, f"lift.bounds.{name}")
+        joint_id(model, name, file, f"lift.bounds.{key_of(name)}")
     return Grasp(
         name=doc["name"], path=path, model_path=model_path, model=model, data=data,
         object_body=doc["object"]["body"], joints=joints, contact_types=MappingProxyType(types),

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from ..errors import ModelError
 from .grasp import geom_id, geom_label, precise_collision
-from .graspdoc import GraspError
+from .graspdoc import GraspError, key_of
 from .graspmodel import geom_labels, joint_id, names_of, object_geoms, suggest
 from .ik import IkTarget, solve_ik
 
@@ -65,7 +65,7 @@ def solve_configuration(
     obj = object_geoms(model, ob)
     bounds = dict(ik["bounds"])
     for name in bounds:
-        joint_id(model, name, file, f"configuration.ik.bounds.{name}")
+        joint_id(model, name, file, f"configuration.ik.bounds.{key_of(name)}")
     resolved = []
     for i, t in enumerate(ik["targets"]):
         field = f"configuration.ik.targets[{i}]"

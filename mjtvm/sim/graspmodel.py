@@ -71,21 +71,36 @@ def build_spec(doc: Mapping[str, Any], model_path: Path, file: str) -> mujoco.Mj
         if spec.body(obj["body"]) is not None:
             raise GraspError(file, "object.body", f"{obj['body']!r} is already a body of the model: "
                              "drop shape, size and mass to use it, or choose another name")  # fmt: skip
+        # The added body's geom and free joint take its name too: MuJoCo refuses a repeated name.
+        for kind, found in (("geom", spec.geom(obj["body"])), ("joint", spec.joint(obj["body"]))):
+            if found is not None:
+                raise GraspError(file, "object.body", f"{obj['body']!r} is already a {kind} of the model: "
+                                 "the added object's body, geom and free joint take this name; choose another")  # fmt: skip
         pos = obj["position"] or [0.0, 0.0, 0.0]
         quat = obj["quaternion"] or [1.0, 0.0, 0.0, 0.0]
-        body = spec.worldbody.add_body(name=obj["body"], pos=pos, quat=quat)
-        body.add_freejoint(name=obj["body"])
         size = [*obj["size"], 0.0, 0.0][:3]
-        body.add_geom(name=obj["body"], type=_GEOM_TYPES[obj["shape"]], size=size, mass=obj["mass"],
-                      contype=bits, conaffinity=bits)  # fmt: skip
+        try:
+            body = spec.worldbody.add_body(name=obj["body"], pos=pos, quat=quat)
+            body.add_freejoint(name=obj["body"])
+            body.add_geom(name=obj["body"], type=_GEOM_TYPES[obj["shape"]], size=size, mass=obj["mass"],
+                          contype=bits, conaffinity=bits)  # fmt: skip
+        except ValueError as e:  # MuJoCo refuses the name
+            raise GraspError(
+                file, "object.body", f"MuJoCo refuses {obj['body']!r}: {' '.join(str(e).split())}"
+            ) from e
         for key in spec.keys:
             if len(key.qpos):
                 key.qpos = [*key.qpos, *pos, *quat]
     for i, sup in enumerate(doc["supports"]):
         if spec.geom(sup["name"]) is not None:
             raise GraspError(file, f"supports[{i}].name", f"{sup['name']!r} is already a geom of the model")
-        spec.worldbody.add_geom(name=sup["name"], type=_GEOM_TYPES[sup["shape"]], size=sup["size"],
-                                pos=sup["position"], quat=sup["quaternion"], contype=bits, conaffinity=bits)  # fmt: skip
+        try:
+            spec.worldbody.add_geom(name=sup["name"], type=_GEOM_TYPES[sup["shape"]], size=sup["size"],
+                                    pos=sup["position"], quat=sup["quaternion"], contype=bits, conaffinity=bits)  # fmt: skip
+        except ValueError as e:  # MuJoCo refuses the name
+            raise GraspError(
+                file, f"supports[{i}].name", f"MuJoCo refuses {sup['name']!r}: {' '.join(str(e).split())}"
+            ) from e
     return spec
 
 

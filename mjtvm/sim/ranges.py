@@ -29,10 +29,11 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from ..core.bounds import MAX_FILE_BYTES
 from ..core.operation_range import OperationRange
 from ..errors import MjtvmError
 from .actuator import operation_range_from_actuator
-from .graspdoc import GraspError
+from .graspdoc import GraspError, key_of
 from .hand import DCMotor
 
 __all__ = ["joint_ranges", "range_entry"]
@@ -100,9 +101,18 @@ def datasheet(value: Any, base: Path | None, fail: Any) -> dict[str, Any]:
         return dict(json.loads(shipped.read_text(encoding="utf-8")))
     path = Path(text) if base is None or Path(text).is_absolute() else base / text
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as e:
+        with path.open("rb") as f:
+            raw = f.read(MAX_FILE_BYTES + 1)  # bounded: a device or a huge file is refused
+    except OSError as e:
+        raise fail(f"cannot read datasheet {str(path)!r}: {e.strerror or e}") from e
+    except ValueError as e:  # a NUL in the path
         raise fail(f"cannot read datasheet {str(path)!r}: {e}") from e
+    if len(raw) > MAX_FILE_BYTES:
+        raise fail(f"datasheet {str(path)!r}: larger than {MAX_FILE_BYTES} bytes: not a datasheet")
+    try:
+        doc = json.loads(raw.decode("utf-8"))
+    except ValueError as e:  # not UTF-8, malformed JSON
+        raise fail(f"cannot read datasheet {str(path)!r}: {' '.join(str(e).split())}") from e
     if not isinstance(doc, dict):
         raise fail(f"datasheet {str(path)!r}: expected a JSON object")
     return doc
@@ -186,13 +196,15 @@ def joint_ranges(
         found = range_entry(ranges, joint)
         if found is None:
             raise GraspError(
-                file, f"ranges.{joint}", "no operation range for this joint: " + _HINT.format(j=joint)
+                file,
+                f"ranges.{key_of(joint)}",
+                "no operation range for this joint: " + _HINT.format(j=json.dumps(joint)[1:-1]),
             )
         key, entry = found
         j = int(model.joint(joint).id)
 
         def fail(problem: str, key: str = key, joint: str = joint) -> GraspError:
-            return GraspError(file, f"ranges.{key}", f"joint {joint!r}: {problem}")
+            return GraspError(file, f"ranges.{key_of(key)}", f"joint {joint!r}: {problem}")
 
         source = entry["source"]
         if source == "dcmotor":

@@ -127,7 +127,7 @@ def test_sweep_writes_rows_and_rejects_bad_numbers(tmp_path, capsys):
     assert (tmp_path / "sweep.csv").read_text().count("\n") == 3
     assert not (tmp_path / "sweep.partial.json").exists()
     assert main(["sweep", "--mu", "lots", "--out", str(tmp_path)]) == 2
-    assert capsys.readouterr().err.startswith("error: --mu: expected comma-separated finite numbers >= 0")
+    assert capsys.readouterr().err.startswith("error: --mu: expected comma-separated numbers in [0, 100]")
 
 
 def test_verify_has_its_own_options(capsys):
@@ -140,43 +140,49 @@ def test_verify_has_its_own_options(capsys):
 @pytest.mark.parametrize(
     ("words", "line"),
     [
-        (["sweep", "--states", "1.5"], "error: --states: expected an integer >= 2, got '1.5'"),
-        (["sweep", "--states", "nan"], "error: --states: expected an integer >= 2, got 'nan'"),
-        (["sweep", "--states", "0"], "error: --states: expected an integer >= 2, got '0'"),
-        (["sweep", "--states", "-5"], "error: --states: expected an integer >= 2, got '-5'"),
-        (["sweep", "--num-states", "0"], "error: --num-states: expected an integer >= 2, got '0'"),
-        (["sweep", "--states", "0,3"], "error: --states: expected an integer >= 2, got '0,3' (state indices"),
-        (["sweep", "--mu", "inf"], "error: --mu: expected comma-separated finite numbers >= 0, got 'inf'"),
-        (["sweep", "--mg", "1,nan"], "error: --mg: expected comma-separated finite numbers >= 0"),
+        (["sweep", "--states", "1.5"], "error: --states: expected an integer in [2, 10000], got '1.5'"),
+        (["sweep", "--states", "nan"], "error: --states: expected an integer in [2, 10000], got 'nan'"),
+        (["sweep", "--states", "0"], "error: --states: expected an integer in [2, 10000], got '0'"),
+        (["sweep", "--states", "-5"], "error: --states: expected an integer in [2, 10000], got '-5'"),
+        (["sweep", "--num-states", "0"], "error: --num-states: expected an integer in [2, 10000], got '0'"),
+        (
+            ["sweep", "--states", "0,3"],
+            "error: --states: expected an integer in [2, 10000], got '0,3' (state indices",
+        ),
+        (["sweep", "--mu", "inf"], "error: --mu: expected comma-separated numbers in [0, 100], got 'inf'"),
+        (["sweep", "--mg", "1,nan"], "error: --mg: expected comma-separated numbers in [0, 1000000]"),
         (
             ["sweep", "--state-indices", "1.5"],
-            "error: --state-indices: expected comma-separated integers >= 0",
+            "error: --state-indices: expected comma-separated integers in [0, 9999]",
         ),
         (["sweep", "--state-indices", "30"], "error: --state-indices: expected indices below --states = 30"),
-        (["sweep", "--jobs", "0"], "error: --jobs: expected an integer >= 1, got '0'"),
+        (["sweep", "--jobs", "0"], "error: --jobs: expected an integer in [1, 64], got '0'"),
         (["sweep", "--cluster", "not an address"], "error: --cluster: expected a scheduler address"),
         (["sweep", "--cluster", "tcp://host:99999"], "error: --cluster: expected a scheduler address"),
         (["sweep", "--contacts", "X"], "error: --contacts: expected distinct values among L,S"),
         (["sweep", "--out", "results/sweep.json"], "error: --out: expected a folder"),
-        (["tvms", "--time-limit", "-1"], "error: --time-limit: expected a finite number > 0, got '-1'"),
-        (["tvms", "--time-limit", "0"], "error: --time-limit: expected a finite number > 0, got '0'"),
+        (["tvms", "--time-limit", "-1"], "error: --time-limit: expected a number in (0, 86400], got '-1'"),
+        (["tvms", "--time-limit", "0"], "error: --time-limit: expected a number in (0, 86400], got '0'"),
         (
             ["tvms", "--method", "cdd", "--time-limit", "nan"],
-            "error: --time-limit: expected a finite number > 0",
+            "error: --time-limit: expected a number in (0, 86400]",
         ),
-        (["solve", "--indent", "-1"], "error: --indent: expected an integer >= 0, got '-1'"),
+        (["solve", "--indent", "-1"], "error: --indent: expected an integer in [0, 16], got '-1'"),
         (["solve", "--solver", "gurobi"], "error: --solver: invalid choice: 'gurobi'"),
-        (["replay", "--tvms-every", "-1"], "error: --tvms-every: expected an integer >= 0, got '-1'"),
+        (
+            ["replay", "--tvms-every", "-1"],
+            "error: --tvms-every: expected an integer in [0, 10000], got '-1'",
+        ),
         (
             ["replay", "--reading", ""],
             "error: --reading: expected distinct values among physical,literal or both",
         ),
         (["verify", "--name", "a/b/c"], "error: --name: expected a file stem"),
         (["verify", "--contacts", ""], "error: --contacts: expected distinct values among L,S, got ''"),
-        (["verify", "--stride", "0"], "error: --stride: expected an integer >= 1, got '0'"),
-        (["verify", "--window", "nan"], "error: --window: expected a finite number > 0, got 'nan'"),
-        (["bench", "--repeats", "0"], "error: --repeats: expected an integer >= 1, got '0'"),
-        (["bench", "--time-limit", "inf"], "error: --time-limit: expected a finite number > 0, got 'inf'"),
+        (["verify", "--stride", "0"], "error: --stride: expected an integer in [1, 10000], got '0'"),
+        (["verify", "--window", "nan"], "error: --window: expected a number in (0, 1], got 'nan'"),
+        (["bench", "--repeats", "0"], "error: --repeats: expected an integer in [1, 100000], got '0'"),
+        (["bench", "--time-limit", "inf"], "error: --time-limit: expected a number in (0, 86400], got 'inf'"),
         (["frobnicate"], "error: COMMAND: invalid choice: 'frobnicate'"),
         (["sweep", "--bogus"], "error: unrecognized arguments: --bogus"),
         (["verify", "--runs", "L,S"], "error: --runs: expected distinct values among L,S-physical,S-literal"),
@@ -192,6 +198,144 @@ def test_malformed_options_exit_2_with_one_line(words, line, tmp_path, monkeypat
     assert len(lines) == 1 and lines[0].startswith(line), captured.err
     assert "Traceback" not in captured.err
     assert not (tmp_path / "results").exists()
+
+
+# ------------------------------------------- every number and path bounded (docs/cli.md, "Bounds")
+LONG = "a" * 300  # one path component over NAME_MAX (255 bytes)
+MUS = ",".join(["0.5"] * 1000)
+
+
+@pytest.mark.parametrize(
+    ("words", "line"),
+    [
+        (["solve", "--indent", "99999999999999999999"],
+         "error: --indent: expected an integer in [0, 16], got '99999999999999999999' (try 'mjtvm solve --help')"),
+        (["solve", "--indent", "100000000"], "error: --indent: expected an integer in [0, 16], got '100000000'"),
+        (["tvms", "--indent", "17"], "error: --indent: expected an integer in [0, 16], got '17'"),
+        (["replay", "--states", "99999999999999999999"],
+         "error: --states: expected an integer in [2, 10000], got '99999999999999999999'"),
+        (["verify", "--states", "10001"], "error: --states: expected an integer in [2, 10000], got '10001'"),
+        (["verify", "--stride", "10001"], "error: --stride: expected an integer in [1, 10000], got '10001'"),
+        (["replay", "--tvms-every", "1e308"], "error: --tvms-every: expected an integer in [0, 10000], got '1e308'"),
+        (["sweep", "--state-indices", "0,10000"],
+         "error: --state-indices: expected comma-separated integers in [0, 9999], got '0,10000'"),
+        (["sweep", "--jobs", "65"], "error: --jobs: expected an integer in [1, 64], got '65'"),
+        (["verify", "--jobs", "99999999999999999999"], "error: --jobs: expected an integer in [1, 64]"),
+        (["bench", "--repeats", "100001"], "error: --repeats: expected an integer in [1, 100000], got '100001'"),
+        (["bench", "--baseline-repeats", "-1"], "error: --baseline-repeats: expected an integer in [1, 1000]"),
+        (["bench", "--time-limit", "86401"], "error: --time-limit: expected a number in (0, 86400], got '86401'"),
+        (["tvms", "--time-limit", "1e308"], "error: --time-limit: expected a number in (0, 86400], got '1e308'"),
+        (["tvms", "--tolerance", "nan"], "error: --tolerance: expected a number in [0, 1), got 'nan'"),
+        (["tvms", "--confidence", "inf"], "error: --confidence: expected a number in [0, 1), got 'inf'"),
+        (["tvms", "--memory", "2000T"], "error: --memory: expected a size such as 512M, 2G or 25% (of the available "
+         "memory), at most 1024T, got '2000T'"),
+        (["tvms", "--memory", "1e-30%"], "error: --memory: expected a size such as 512M, 2G or 25% (of the "
+         "available memory), at most 1024T, got '1e-30%'"),
+        (["export-state", "case1", "--mu", "1e308"], "error: --mu: expected a number in [0, 100], got '1e308'"),
+        (["export-state", "case1", "--mg=-inf"], "error: --mg: expected a number in [0, 1000000], got '-inf'"),
+        (["replay", "--stop-margin", "1e308"], "error: --stop-margin: expected a number in [0, 1), got '1e308'"),
+        (["verify", "--mg", "0"], "error: --mg: expected a number in (0, 1000000], got '0'"),
+        (["verify", "--preload", "1e7"], "error: --preload: expected a number in [0, 1000000], got '1e7'"),
+        (["verify", "--gears", "20,1e308"], "error: --gears: expected comma-separated numbers in [1, 10000], got '20,1e308'"),
+        (["verify", "--gears", "1e-300"], "error: --gears: expected comma-separated numbers in [1, 10000], got '1e-300'"),
+        (["verify", "--armature-scale", "1e308"], "error: --armature-scale: expected a number in (0, 1000], got '1e308'"),
+        (["verify", "--window", "1e308"], "error: --window: expected a number in (0, 1], got '1e308'"),
+        (["verify", "--startup", "2"], "error: --startup: expected a number in [0, 1], got '2'"),
+        (["sweep", "--mu", MUS + ",0.5"], "error: --mu: expected at most 1000 comma-separated numbers, got 1001"),
+        (["sweep", "--name", "n" * 201], "error: --name: expected a file stem of 1 to 200 letters"),
+        (["replay", "--out", LONG], "error: --out: expected a folder whose every component has at most 255 bytes, "
+         "got one of 300 bytes: 'aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa'... (try 'mjtvm replay --help')"),
+        (["sweep", "--out", f"x/{LONG}/y"], "error: --out: expected a folder whose every component has at most 255"),
+        (["replay", "--rrd", f"{LONG}.rrd"], "error: --rrd: expected a file name whose every component has at most 255"),
+        (["solve", LONG], "error: STATE|GRASP: expected a file or a shipped grasp's name whose every component has "
+         "at most 255 bytes, got one of 300 bytes"),
+        (["export-state", f"/tmp/{LONG}.toml"], "error: GRASP: expected a file or a shipped grasp's name whose every"),
+        (["tvms", "--grasp", LONG], "error: --grasp: expected a file or a shipped grasp's name whose every"),
+        (["sweep", "--grasp", f"case2,{LONG}"], "error: --grasp: expected a file or a shipped grasp's name whose"),
+        (["verify", "--grasp", "/" * 5000], "error: --grasp: expected a file or a shipped grasp's name of at most 4095 bytes"),
+        (["bench", "--notes", "missing.txt"], "error: --notes: expected an existing file, got 'missing.txt'"),
+        (["solve", "--bo\nx"], "error: unrecognized arguments: --bo\\nx (try 'mjtvm --help')"),
+    ],
+)  # fmt: skip
+def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, monkeypatch, capsys):
+    """Each is refused while parsing: one line naming the option and the accepted range."""
+    monkeypatch.chdir(tmp_path)
+    assert main(words) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(line), captured.err
+    assert list(tmp_path.iterdir()) == []  # nothing created, not even --out
+
+
+@pytest.mark.parametrize(
+    ("words", "line"),
+    [
+        (["verify", "--rrd", "folder"], "error: --rrd: expected a file name, got the folder 'folder' (try 'mjtvm verify --help')"),
+        (["replay", "--rrd", "folder/"], "error: --rrd: expected a file name, got the folder 'folder/'"),
+        (["bench", "--notes", "folder"], "error: --notes: expected a file, got the folder 'folder' (try 'mjtvm bench --help')"),
+        (["bench", "--quick", "--out", "out", "--notes", "/dev/zero"],
+         "error: --notes: expected a text file of at most 1048576 bytes, got a larger one"),
+        (["bench", "--quick", "--out", "out", "--notes", "big.txt"],
+         "error: --notes: expected a text file of at most 1048576 bytes, got a larger one"),
+        (["bench", "--quick", "--out", "out", "--notes", "latin.txt"],
+         "error: --notes: expected UTF-8 text, got byte 0xe9 at offset 3"),
+    ],
+)  # fmt: skip
+def test_a_folder_for_a_file_and_unbounded_notes_exit_2(words, line, tmp_path, monkeypatch, capsys):
+    import mjtvm.bench.suite
+
+    def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
+        raise AssertionError("the suite started before --notes was read")
+
+    monkeypatch.setattr(mjtvm.bench.suite, "run_suite", no_work)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "big.txt").write_bytes(b"x" * (2**20 + 1))
+    (tmp_path / "latin.txt").write_bytes(b"caf\xe9\n")
+    assert main(words) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(line), captured.err
+
+
+def test_notes_are_read_into_the_table(tmp_path, monkeypatch, capsys):
+    from mjtvm.bench import report as bench_report
+    from mjtvm.bench import suite as bench_suite
+
+    monkeypatch.setattr(bench_suite, "run_suite", lambda **kwargs: {"schema": "mjtvm.bench-suite/1"})
+    monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
+    monkeypatch.setattr(bench_report, "format_suite_table", lambda report, notes: "\n".join(notes))
+    notes = tmp_path / "notes.txt"
+    notes.write_text("one\ntwo\n", encoding="utf-8")
+    assert main(["bench", "--quick", "--quiet", "--out", str(tmp_path), "--notes", str(notes)]) == 0
+    assert json.loads((tmp_path / "bench.json").read_text())["notes"] == ["one", "two"]
+
+
+def test_a_grid_too_large_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
+    """1000 x 10 x 30 points: refused before a lift is computed or a point is built."""
+    import mjtvm.apps.sweep
+
+    def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
+        raise AssertionError("work started before the grid was checked")
+
+    monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep_files", no_work)
+    mgs = ",".join(["1"] * 10)
+    assert main(["sweep", "--mu", MUS, "--mg", mgs, "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == (
+        "error: --grasp x --hand x --contacts x --reading x --mu x --mg x --states: expected a grid of at "
+        "most 100000 points, got 300000\n"
+    )
+    assert not (tmp_path / "o").exists()
+
+
+def test_stdin_is_read_up_to_a_bound():
+    """``mjtvm solve - < /dev/zero`` reads one byte more than a state may have, then stops."""
+    with open("/dev/zero", "rb") as zero:
+        proc = subprocess.run([*_console_script(), "solve", "-"], stdin=zero, capture_output=True,
+                              text=True, check=False, timeout=120)  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stderr == "error: -: expected a state of at most 67108864 bytes on standard input, got more\n"
 
 
 def test_version_and_help_show_defaults(capsys):

@@ -174,6 +174,82 @@ def test_every_wrong_field_is_named(changes: dict[str, Any], match: str) -> None
         load_grasp(_doc(**changes)).state()
 
 
+_SPHERE = {"shape": "sphere", "size": [0.03], "mass": 0.1}
+
+
+@pytest.mark.parametrize(
+    ("changes", "line"),
+    [
+        ({"object": {"body": "f1_tip", **_SPHERE}},
+         "grasp: object.body: 'f1_tip' is already a geom of the model: the added object's body, geom and free "
+         "joint take this name; choose another"),
+        ({"object": {"body": "f1_yaw0", **_SPHERE}},
+         "grasp: object.body: 'f1_yaw0' is already a joint of the model: the added object's body, geom and free "
+         "joint take this name; choose another"),
+        ({"name": "\ud800"},
+         "grasp: name: expected a string of valid Unicode text, got a lone surrogate '\\ud800' in '\\ud800'"),
+        ({"contacts": _contacts((1, {"geom": "f1_\udc80", "type": "F"}))},
+         "grasp: contacts[1].geom: expected a string of valid Unicode text, got a lone surrogate '\\udc80' in "
+         "'f1_\\udc80'"),
+        ({"ranges": {"f\ud800*": {"dcmotor": True}}},
+         "grasp: ranges.'f\\ud800*': expected a key of valid Unicode text, got a lone surrogate '\\ud800' in "
+         "'f\\ud800*'"),
+        ({"object": {"body": "ob\x00ject"}}, "grasp: object.body: expected a string without NUL characters, got 'ob\\x00ject'"),
+        ({"fro\nbnicate": 1}, "grasp: 'fro\\nbnicate': unknown key (allowed: "),
+        ({"lift": {"bounds": {"f1\nyaw0": [0, 1]}}}, "grasp: lift.bounds.'f1\\nyaw0': 'f1\\nyaw0' is not a joint"),
+    ],
+)  # fmt: skip
+def test_names_and_keys_stay_on_one_line(changes: dict[str, Any], line: str) -> None:
+    """An added object named like a geom or joint, a lone surrogate or NUL in a string or key, a
+    key with a newline: one error naming the field, on one line (``repr`` of the name)."""
+    with pytest.raises(GraspError) as info:
+        load_grasp(_doc(**changes)).state()
+    message = str(info.value)
+    assert message.startswith(line), message
+    assert message.isprintable()  # no newline, no lone surrogate: one line that any stream encodes
+
+
+@pytest.mark.parametrize(
+    ("changes", "line"),
+    [
+        ({"name": "\ud800"}, "name: expected a string of valid Unicode text, got a lone surrogate '\\ud800'"),
+        ({"fro\nbnicate": 1}, "'fro\\nbnicate': unknown key (allowed: "),
+        ({"object": {"body": "f1_tip", **_SPHERE}}, "object.body: 'f1_tip' is already a geom of the model"),
+    ],
+)  # fmt: skip
+def test_grasp_file_errors_are_one_line_on_the_command_line(
+    changes: dict[str, Any], line: str, tmp_path: Path
+) -> None:
+    """The same errors from a JSON grasp file through ``mjtvm export-state``: exit 2, one line."""
+    import subprocess
+    import sys
+
+    path = _write(tmp_path, _doc(**changes), ".json")
+    proc = subprocess.run([sys.executable, "-m", "mjtvm.cli", "export-state", str(path)], capture_output=True,
+                          check=False)  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stdout == b""
+    err = proc.stderr.decode("utf-8")
+    assert err.startswith(f"error: {path}: {line}") and err.count("\n") == 1, err
+
+
+def test_a_datasheet_file_is_read_up_to_a_bound(tmp_path: Path) -> None:
+    """A datasheet path that is a device (or a huge file) is refused after 64 MiB, not read forever."""
+    zero = tmp_path / "zero.json"
+    zero.symlink_to("/dev/zero")
+    with pytest.raises(GraspError) as info:
+        load_grasp(_doc(ranges={"*": {"datasheet": str(zero)}}))
+    assert str(info.value) == (
+        f"grasp: ranges.*: joint 'f1_yaw0': datasheet {str(zero)!r}: larger than 67108864 bytes: not a datasheet"
+    )
+    folder = tmp_path / "folder.json"
+    folder.mkdir()
+    with pytest.raises(
+        GraspError, match=r"ranges\.\*: joint 'f1_yaw0': cannot read datasheet .*: Is a directory$"
+    ):
+        load_grasp(_doc(ranges={"*": {"datasheet": str(folder)}}))
+
+
 def test_unreachable_ik_target_names_the_target() -> None:
     targets = [
         {"geom": "f1_tip", "point": [0.5, 0.0, 0.1]}
