@@ -110,6 +110,7 @@ class Record:
             out[f"alpha_k{k}_l{l}"] = float(r.alpha[k, l]) if ok else ""
             out[f"status_k{k}_l{l}"] = r.status[k][l]
         out["limiting_k"], out["limiting_l"] = ("", "") if r.limiting is None else r.limiting
+        out["certified"] = not r.uncertified()
         t = r.timings
         out.update(saturated=";".join(self.saturated), solver=self.solver, assemble_s=t.assemble_s,
                    solve_s=t.solve_s, total_s=t.total_s, num_lps=t.num_lps)  # fmt: skip

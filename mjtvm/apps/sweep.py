@@ -149,6 +149,7 @@ def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
                 **asdict(SweepPoint(scenario, hand, variant, reading, mu, mg, i, num_states)),
                 "z": float(lift.z[i]),
                 **{key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")},
+                "certified": all(c is not False for row in doc["certified"] for c in row),
             }
         )
     return rows
@@ -501,8 +502,9 @@ def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
 
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
-    """The rows as CSV: the point's fields, ``z``, ``tvmmp``, ``feasible``, ``limiting_k``,
-    ``limiting_l`` and ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` (empty where not optimal)."""
+    """The rows as CSV: the point's fields, ``z``, ``tvmmp``, ``feasible``, ``certified``,
+    ``limiting_k``, ``limiting_l`` and ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` (empty
+    where not optimal)."""
     flat = []
     for r in rows:
         out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting")}
@@ -641,6 +643,11 @@ def run_sweep_files(
                 save()
             raise
         rows = [tagged(r) for r in rows]
+        doubtful = sum(r.get("certified") is False for r in rows)
+        if doubtful:
+            notice(
+                f"mjtvm: warning: {doubtful} of {len(rows)} rows have an alpha that is not certified (column certified)"
+            )
         written = write_files({out_json: json.dumps(rows, indent=1) + "\n", out_csv: rows_csv(rows)})
         checkpoint.unlink(missing_ok=True)
     return written

@@ -15,7 +15,7 @@ from .options import (
     lift_options,
     out_options,
 )
-from .output import EXIT_OK, emit
+from .output import EXIT_OK, emit, warn
 from .values import (
     CONTACTS,
     MAX_FORCE,
@@ -115,6 +115,10 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     x = lift_x(lift)
     values = getattr(lift, x)
     emit(f"lift: {lift.num_states} states, {x} = {values[0]:.4f} .. {values[-1]:.4f} m ({lift.limit})")
+    doubtful = [r for r in out.records if r.result.uncertified()]
+    if doubtful:
+        warn(f"{len(doubtful)} of {len(out.records)} states have an alpha that is not certified "
+             f"(lift.csv: certified; lift.json: notes), the first: state {doubtful[0].index}")  # fmt: skip
     for name, path in out.files.items():
         emit(f"wrote {name}: {path}")
     for info in infos:

@@ -19,6 +19,8 @@ __all__ = [
     "EXIT_SOLVER",
     "bracket_progress",
     "emit",
+    "warn",
+    "warn_uncertified",
     "lp_progress",
     "one_line",
     "stdout_to_devnull",
@@ -57,6 +59,18 @@ def emit(text: str) -> None:
         stdout_to_devnull()
         raise OutputError("standard output", getattr(sys.stdout, "name", "<stdout>"),
                           f"cannot write ({e.strerror or e})") from e  # fmt: skip
+
+
+def warn(text: str) -> None:
+    """One line on stderr, ``mjtvm: warning: ...`` (escaped to one line)."""
+    print(one_line(f"mjtvm: warning: {text}"), file=sys.stderr, flush=True)
+
+
+def warn_uncertified(result: Any) -> None:
+    """One stderr line per pair of a :class:`~mjtvm.core.result.TvmmpResult` whose answer
+    is not certified, with its note (the JSON holds the same in ``certified`` and ``notes``)."""
+    for k, l in result.uncertified():
+        warn(f"alpha[{k}][{l}] is not certified: {result.note((k, l))}")
 
 
 @contextlib.contextmanager

@@ -15,7 +15,7 @@ from ..core.tvmmp import tvmmp
 from ..errors import StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
-from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line
+from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn_uncertified
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
@@ -126,6 +126,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     state = load_source(args.state, hand=args.hand, default=example_path())
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
+    warn_uncertified(result)
     return EXIT_OK
 
 

@@ -159,6 +159,15 @@ class TvmmpResult:
     certified: tuple[tuple[bool | None, ...], ...] = ()
     notes: tuple[tuple[tuple[int, int], str], ...] = ()
 
+    def uncertified(self) -> list[tuple[int, int]]:
+        """The pairs whose answer is not certified (each has a note), in (k, l) order."""
+        return [(k, l) for k, row in enumerate(self.certified) for l, c in enumerate(row) if c is False]
+
+    def note(self, pair: tuple[int, int]) -> str | None:
+        """The note of ``pair`` (the last, if several), or ``None``."""
+        found = [m for p, m in self.notes if p == pair]
+        return found[-1] if found else None
+
     def to_dict(self, *, witnesses: bool = True) -> dict[str, Any]:
         """The ``mjtvm.result/1`` document; extra keys follow the schema's own."""
         out: dict[str, Any] = {

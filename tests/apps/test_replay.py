@@ -59,6 +59,7 @@ def test_csv_json_and_a_fresh_solve_agree(output: ReplayOutput) -> None:
         assert rec["state"] == int(row["state"]) and rec["z"] == float(row["z"])
         assert rec["tvmmp"] == _value(row["tvmmp"])
         assert rec["feasible"] == (row["feasible"] == "True")
+        assert row["certified"] == str(all(c is not False for c in rec["certified"][0])) == "True"
         for l, alpha in enumerate(rec["alpha"][0]):
             assert alpha == _value(row[f"alpha_k0_l{l}"])
             assert rec["status"][0][l] == row[f"status_k0_l{l}"]

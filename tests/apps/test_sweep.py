@@ -25,6 +25,7 @@ def test_rows_follow_the_points_and_match_tvmmp(serial):
         assert (row["mu"], row["mg"], row["state"], row["variant"]) == (p.mu, p.mg, p.state, p.variant)
         direct = tvmmp(lift_state(lift, p.state, variant=p.variant, reading=p.reading, mu=p.mu, mg=p.mg))
         assert row["tvmmp"] == direct.tvmmp
+        assert row["certified"] is (not direct.uncertified()) is True
         assert row["z"] == float(lift.z[p.state])
 
 

@@ -554,3 +554,26 @@ def test_verify_old_runs_spelling_maps_to_contacts_and_reading(capsys):
         args = verify_parser().parse_args(["--runs", old])
         assert runs_of(args.contacts, args.reading) == runs
     assert "--runs is deprecated" in capsys.readouterr().err
+
+
+def test_solve_warns_on_stderr_of_a_pair_that_is_not_certified(monkeypatch, capsys):
+    """A pair whose answer no way certified: the JSON says so (certified false, its note) and
+    stderr has one line naming the pair; the exit code stays 0."""
+    from dataclasses import replace
+
+    import mjtvm.cli.solve as cli_solve
+
+    real = cli_solve.tvmmp
+
+    def doubtful(*args, **kwargs):  # type: ignore[no-untyped-def]
+        r = real(*args, **kwargs)
+        certified = tuple(tuple(False if (k, l) == (0, 1) else c for l, c in enumerate(row))
+                          for k, row in enumerate(r.certified))  # fmt: skip
+        return replace(r, certified=certified, notes=(((0, 1), "not certified: highs: gap 1e-3"),))
+
+    monkeypatch.setattr(cli_solve, "tvmmp", doubtful)
+    assert main(["solve", "--no-witnesses"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert doc["certified"][0][1] is False and doc["notes"][0]["pair"] == [0, 1]
+    assert err == "mjtvm: warning: alpha[0][1] is not certified: not certified: highs: gap 1e-3\n"
