@@ -19,11 +19,11 @@ __all__ = [
     "EXIT_SOLVER",
     "bracket_progress",
     "emit",
-    "warn",
-    "warn_uncertified",
     "lp_progress",
     "one_line",
     "stdout_to_devnull",
+    "warn",
+    "warn_uncertified",
 ]
 
 EXIT_OK, EXIT_FAILURE, EXIT_INPUT, EXIT_SOLVER, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 130, 141
