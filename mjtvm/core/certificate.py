@@ -110,6 +110,34 @@ def clip(
     return np.minimum(np.maximum(x, lower), upper)
 
 
+def _finite(bound: NDArray[np.float64]) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """Where ``bound`` is finite, and ``bound`` with its infinite entries 0."""
+    ok = np.isfinite(bound)
+    return ok, np.where(ok, bound, 0.0)
+
+
+def _violation(
+    ax: NDArray[np.float64],
+    terms: NDArray[np.float64],
+    lower: tuple[NDArray[np.bool_], NDArray[np.float64]],
+    upper: tuple[NDArray[np.bool_], NDArray[np.float64]],
+    groups: NDArray[np.int64] | None,
+) -> float:
+    """:func:`primal_violation` from the row activities ``ax`` and the rows' terms."""
+    (lo_ok, lo), (up_ok, up) = lower, upper
+    below = np.where(lo_ok, lo - ax, 0.0)
+    above = np.where(up_ok, ax - up, 0.0)
+    viol = np.maximum(np.maximum(below, above), 0.0)
+    scale = terms + np.where(below > above, np.abs(lo), np.abs(up))
+    if groups is not None and groups.size:
+        # Groups are runs of consecutive rows (Assembly.row_groups): one reduceat, not ufunc.at.
+        starts = np.flatnonzero(np.r_[True, groups[1:] != groups[:-1]])
+        scale = np.repeat(np.maximum.reduceat(scale, starts), np.diff(np.r_[starts, groups.size]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(viol > 0.0, viol / scale, 0.0)  # viol > 0 = scale: inf
+    return float(np.max(rel, initial=0.0))
+
+
 def primal_violation(
     a: Matrix,
     x: NDArray[np.float64],
@@ -122,23 +150,10 @@ def primal_violation(
     """Largest violation of ``lower <= a x <= upper`` relative to ``|a| size + |bound|``,
     ``size`` the typical magnitudes of the variables (default ``|x|``): a row whose
     variables are all ~0 in this solution is still measured at its usual scale. Rows with
-    one ``groups`` id (the components of one vector) share the largest of their scales."""
-    ax = a @ x
+    one ``groups`` id (the components of one vector, consecutive) share the largest of
+    their scales."""
     terms = (abs(a) if abs_a is None else abs_a) @ (np.abs(x) if size is None else size)
-    with np.errstate(invalid="ignore"):
-        below = np.where(np.isfinite(lower), lower - ax, 0.0)
-        above = np.where(np.isfinite(upper), ax - upper, 0.0)
-        bound = np.where(below > above, np.abs(np.where(np.isfinite(lower), lower, 0.0)),
-                         np.abs(np.where(np.isfinite(upper), upper, 0.0)))  # fmt: skip
-    viol = np.maximum(np.maximum(below, above), 0.0)
-    scale = terms + bound
-    if groups is not None and groups.size:
-        largest = np.zeros(int(groups.max()) + 1)
-        np.maximum.at(largest, groups, scale)
-        scale = largest[groups]
-    rel = np.where(viol > 0.0, viol / np.where(scale > 0.0, scale, 1.0), 0.0)
-    rel[(viol > 0.0) & (scale == 0.0)] = np.inf
-    return float(np.max(rel, initial=0.0))
+    return _violation(a @ x, terms, _finite(lower), _finite(upper), groups)
 
 
 def certify(
@@ -177,7 +192,8 @@ def certify(
     abs_a
         ``|a|``, when the caller keeps it (Problem 2 checks every LP of a state on one matrix).
     row_groups
-        ``(m,)`` ids of the vectors the rows are components of (:func:`primal_violation`).
+        ``(m,)`` ids of the vectors the rows are components of, the rows of one vector
+        consecutive (:func:`primal_violation`).
 
     Returns
     -------
@@ -186,32 +202,31 @@ def certify(
     xc = clip(x, col_lower, col_upper)
     abs_a = abs(a) if abs_a is None else abs_a
     size = np.abs(xc) if col_ref is None else np.maximum(np.abs(xc), col_ref)
-    primal = primal_violation(a, xc, row_lower, row_upper, abs_a, size, row_groups)
+    lower, upper = _finite(row_lower), _finite(row_upper)
+    terms = abs_a @ size
+    primal = _violation(a @ xc, terms, lower, upper, row_groups)
     if y is None:
         return Certificate(primal, np.inf, np.inf, -np.inf)
     y = np.array(y, dtype=float)
     c = np.asarray(c, dtype=float)
     # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
     # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
-    # by its size times the row's (|A_i| x + |bound|), added up with the columns' below.
-    row_size = abs_a @ size + np.where(np.isfinite(row_lower), np.abs(row_lower), 0.0)
-    wrong_row = ((y > 0.0) & ~np.isfinite(row_lower)) | ((y < 0.0) & ~np.isfinite(row_upper))
-    moved = float(np.sum(np.abs(y[wrong_row]) * row_size[wrong_row]))
+    # by its size times the row's (|A_i| s + |lower bound|), added up with the columns'.
+    wrong_row = ((y > 0.0) & ~lower[0]) | ((y < 0.0) & ~upper[0])
+    moved = float(np.abs(y[wrong_row]) @ (terms[wrong_row] + np.abs(lower[1][wrong_row])))
     y[wrong_row] = 0.0
     d = c - a.T @ y
     # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
     # free joint speeds and torques have d = 1e-17 where their terms are 1.
     drop_cancellation(d, np.abs(c) + abs_a.T @ np.abs(y))
-    wrong_col = ((d > 0.0) & ~np.isfinite(col_lower)) | ((d < 0.0) & ~np.isfinite(col_upper))
-    moved += float(np.sum(np.abs(d[wrong_col]) * size[wrong_col]))
+    (cl_ok, cl), (cu_ok, cu) = _finite(col_lower), _finite(col_upper)
+    wrong_col = ((d > 0.0) & ~cl_ok) | ((d < 0.0) & ~cu_ok)
+    moved += float(np.abs(d[wrong_col]) @ size[wrong_col])
     d[wrong_col] = 0.0
-    with np.errstate(invalid="ignore"):
-        bound = float(
-            np.sum(np.where(y > 0.0, y * np.where(np.isfinite(row_lower), row_lower, 0.0), 0.0))
-            + np.sum(np.where(y < 0.0, y * np.where(np.isfinite(row_upper), row_upper, 0.0), 0.0))
-            + np.sum(np.where(d > 0.0, d * np.where(np.isfinite(col_lower), col_lower, 0.0), 0.0))
-            + np.sum(np.where(d < 0.0, d * np.where(np.isfinite(col_upper), col_upper, 0.0), 0.0))
-        )
+    bound = float(
+        np.maximum(y, 0.0) @ lower[1] + np.minimum(y, 0.0) @ upper[1]
+        + np.maximum(d, 0.0) @ cl + np.minimum(d, 0.0) @ cu
+    )  # fmt: skip
     objective = float(c @ xc)
     ref = max(abs(objective), abs(bound), floor / GAP_TOL)
     if ref > 0.0:
