@@ -32,54 +32,12 @@ import pytest
 
 from mjtvm import tvmmp
 from mjtvm.core.contacts import Contact
-from mjtvm.core.operation_range import OperationRange
+from mjtvm.core.perturb import rescale
 from mjtvm.core.state import GraspState, load_state
 from mjtvm.sim.scenario import load_scenario
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"
 FACTORS = (1e-6, 1e-3, 1.0, 1e3, 1e6)
-
-
-def _range(op: OperationRange, torque: float, speed: float) -> OperationRange:
-    """``op`` with its torque axis times ``torque`` and its speed axis times ``speed``.
-
-    Built from the exactly transformed half-planes (``a^T x <= b`` becomes
-    ``(a / D)^T x' <= b``, renormalised), not through ``OperationRange(vertices)``: that
-    recomputes the half-planes from the scaled vertices and sets coefficients below 1e-15
-    to 0 (an absolute bound), which changes a range whose axes differ by ~1e18 (torque axis
-    times 1e-12, speed axis times 1e6). The solver's invariance is what this file tests.
-    """
-    v = op.vertices * np.array([torque, speed])
-    hp = op.halfplanes.copy()
-    hp[:, 0] /= torque
-    hp[:, 1] /= speed
-    hp /= np.linalg.norm(hp[:, :2], axis=1, keepdims=True)
-    hp.setflags(write=False)
-    v.setflags(write=False)
-    out = object.__new__(OperationRange)
-    object.__setattr__(out, "vertices", v)
-    object.__setattr__(out, "_halfplanes", hp)
-    return out
-
-
-def rescale(state: GraspState, *, length: float = 1.0, force: float = 1.0, time: float = 1.0) -> GraspState:
-    """``state`` in units whose length, force and time units are SI divided by the factors."""
-    d = state.dim
-    contacts = tuple(
-        replace(c, position=c.position * length, jacobian=c.jacobian * length) for c in state.contacts
-    )
-    ranges = tuple(_range(op, force * length, 1.0 / time) for op in state.operation_ranges)
-    wscale = np.concatenate([np.full(d, force), np.full(state.twist_dim - d, force * length)])
-    rscale = np.concatenate([np.full(d, length / time), np.full(state.twist_dim - d, 1.0 / time)])
-    return replace(
-        state,
-        object_position=state.object_position * length,
-        contacts=contacts,
-        operation_ranges=ranges,
-        gravity_torque=state.gravity_torque * force * length,
-        refs=state.refs * wscale,
-        rvds=None if state.rvds is None else state.rvds * rscale,
-    )
 
 
 @pytest.fixture(scope="module")
