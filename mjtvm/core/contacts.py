@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import StateError
 from .bounds import MAX_JOINTS, describe, float_array, number
-from .roundoff import drop_cancellation
+from .roundoff import drop_cancellation, drop_data_roundoff
 
 __all__ = ["CONTACT_TYPES", "Contact", "force_generators", "slide_unit", "tangent_basis"]
 
@@ -120,7 +120,9 @@ class Contact:
                 f"expected a unit vector (norm 1 within {UNIT_TOL:g}), got norm {norm:.6g}",
                 self.normal,
             )
-        normal = normal / norm
+        # Its round-off is 0 (roundoff module): MuJoCo's n_y = -1.07e-14 on a fingertip whose
+        # r_y is 0 made the moment-x row of the balance -2.8e-16 n_f = 0, which pins n_f.
+        normal = drop_data_roundoff(normal / norm)
         normal.setflags(write=False)
         object.__setattr__(self, "normal", normal)
         jac = float_array(

@@ -32,6 +32,9 @@ __all__ = ["pyramid_halfspaces", "reference_alpha", "reference_tvmmp"]
 _STATUS = {cp.OPTIMAL: "optimal", cp.INFEASIBLE: "infeasible", cp.UNBOUNDED: "unbounded"}
 #: Tighter than Clarabel's defaults (1e-8), so that alphas agree to ~1e-9 with a simplex solver.
 _CLARABEL_TOL = {"tol_gap_abs": 1e-9, "tol_gap_rel": 1e-9, "tol_feas": 1e-9}
+#: Tighter than HiGHS' defaults (1e-7): at Case 2's weight limit (2.9452894958 x its REFS)
+#: the defaults balanced up to 2.9452897995 (1.03e-7 beyond), with 1e-10 the limit is exact.
+_HIGHS_TOL = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 _CORNERS = ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0))  # (s1, s2) of eq. (2)
 
 
@@ -162,14 +165,16 @@ def reference_alpha(
     Raises
     ------
     SolverError
-        When cvxpy reports any other status (for Clarabel: also with its default
-        tolerances, tried after the tight ones of ``_CLARABEL_TOL``) or the solver fails.
+        When cvxpy reports any other status (for Clarabel and HiGHS: also with their default
+        tolerances, tried after the tight ones of ``_CLARABEL_TOL``, ``_HIGHS_TOL``) or the
+        solver fails.
     """
     if state.rvds is None:
         raise ValueError("state.rvds: Problem 2 needs RVDS vertices")
     problem = _build(state, state.refs[k], state.rvds[l])
-    attempts = [_CLARABEL_TOL, {}] if solver.upper() == "CLARABEL" else [{}]
-    for options in attempts:  # Clarabel: tight tolerances, then its defaults if they stall
+    tight = {"CLARABEL": _CLARABEL_TOL, "HIGHS": _HIGHS_TOL}.get(solver.upper())
+    attempts = [tight, {}] if tight is not None else [{}]
+    for options in attempts:  # tight tolerances, then the solver's defaults if they stall
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)  # "Solution may be inaccurate"

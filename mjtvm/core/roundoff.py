@@ -14,8 +14,9 @@ set to 0, by two rules (one constant, :data:`DROP_REL`):
   that no joint moves). The entries of the Jacobians share their units (m/rad, or m/m for
   a prismatic joint), so the rule holds in any unit system; relative to a row, a column or
   one contact alone it would not see a 1e-18 in an empty row of an empty column, or a
-  support's Jacobian of noise only. A component of a vector (a contact's position
-  relative to the object) at most ``DROP_REL`` times its largest component is 0 too;
+  support's Jacobian of noise only. A component of a vector (a contact's normal, when the
+  contact is built; its position relative to the object; an RVDS vertex) at most
+  ``DROP_REL`` times its largest component is 0 too;
 * **computation** (:func:`drop_cancellation`): a computed value at most ``DROP_REL`` times
   the sum of the magnitudes of the terms it was computed from (``n . (r x n)``, the
   tangent ``n x t1``, ``A_twist r``), however small the terms are in the state's units.
