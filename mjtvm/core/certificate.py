@@ -29,10 +29,11 @@ the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
   alpha: the value below which alpha is reported as 0, so that an alpha of 0 is certified
   by a bound below that value).
 
-For Problem 2 (``c = -e_alpha``) the gap bounds the true alpha from above: the reported
-alpha is feasible and within ``GAP_TOL`` of the maximum. Where a multiplier of the wrong
-sign moves the bound by less than ``DUAL_TOL`` it is taken as 0: the bound holds to that tolerance
-(a rigorous bound would need finite bounds on every variable: lam and rho have none).
+For Problem 2 (``c = -e_alpha``) the dual bound bounds the true alpha from above: the
+reported alpha is feasible and within ``GAP_TOL + DUAL_TOL`` (2e-7) of the maximum. The
+bound holds to ``DUAL_TOL``, not rigorously: that would need finite bounds on every
+variable, and the forces and slip speeds have none. An infeasible verdict is certified by
+Farkas multipliers (:func:`farkas`): the same dual bound with zero costs, positive.
 """
 
 from __future__ import annotations

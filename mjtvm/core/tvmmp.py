@@ -273,9 +273,7 @@ class _Problem2:
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
     ) -> Certificate:
         """The certificate (:mod:`~mjtvm.core.certificate`) of an optimal ``sol`` of pair (w, r)."""
-        lower, upper = self.asm.statics_bounds(w)
-        cu = self.col_upper.copy()
-        cu[-1] = alpha_max
+        lower, upper, cu = self._bounds(w, alpha_max)
         assert sol.x is not None
         a, abs_a = self.pair_matrix(r)
         return certify(self.c, a, lower, upper, self.col_lower, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r),
@@ -284,15 +282,18 @@ class _Problem2:
     def _bounds(
         self, w: NDArray[np.float64], alpha_max: float
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The row bounds of pair (w, .) and the column upper bounds with ``alpha <= alpha_max``."""
         lower, upper = self.asm.statics_bounds(w)
         cu = self.col_upper.copy()
         cu[-1] = alpha_max
         return lower, upper, cu
 
-    def proves_infeasible(self, w: NDArray[np.float64], r: NDArray[np.float64], sol: LPSolution) -> bool:
-        """Whether ``sol``'s Farkas multipliers (HiGHS' dual ray) prove pair (w, r) infeasible
-        on the unscaled LP (:func:`~mjtvm.core.certificate.farkas`)."""
-        lower, upper, cu = self._bounds(w, np.inf)
+    def proves_infeasible(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
+    ) -> bool:
+        """Whether ``sol``'s Farkas multipliers (HiGHS' dual ray, Clarabel's certificate) prove
+        pair (w, r) infeasible on the unscaled LP (:func:`~mjtvm.core.certificate.farkas`)."""
+        lower, upper, cu = self._bounds(w, alpha_max)
         a, abs_a = self.pair_matrix(r)
         return farkas(
             a, lower, upper, self.col_lower, cu, sol.row_dual, col_ref=self.physical_sizes, abs_a=abs_a
@@ -354,7 +355,7 @@ class _Problem2:
             cert = self.certify(w, r, alpha_max, sol)
             return cert.ok, cert
         if sol.status == "infeasible":
-            return self.proves_infeasible(w, r, sol), None
+            return self.proves_infeasible(w, r, alpha_max, sol), None
         return None
 
 
@@ -374,8 +375,8 @@ def _join(a: str | None, b: str) -> str:
 @dataclass(frozen=True, eq=False)
 class Verdict:
     """A settled LP, the certificate of its optimal answer (``None`` otherwise), and whether
-    the answer is certified (optimal: its certificate holds; infeasible or unbounded: a
-    second, cold solve agrees)."""
+    the answer is certified (optimal: its certificate holds; infeasible: Farkas multipliers
+    prove it; unbounded: a second solve agrees)."""
 
     settled: Settled
     certificate: Certificate | None
