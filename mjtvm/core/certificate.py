@@ -51,6 +51,7 @@ __all__ = [
     "GAP_TOL",
     "PRIMAL_TOL",
     "Certificate",
+    "Certifier",
     "certify",
     "clip",
     "farkas",
@@ -122,26 +123,137 @@ def _finite(bound: NDArray[np.float64]) -> tuple[NDArray[np.bool_], NDArray[np.f
     return ok, np.where(ok, bound, 0.0)
 
 
-def _violation(
-    ax: NDArray[np.float64],
-    terms: NDArray[np.float64],
-    lower: tuple[NDArray[np.bool_], NDArray[np.float64]],
-    upper: tuple[NDArray[np.bool_], NDArray[np.float64]],
-    groups: NDArray[np.int64] | None,
-) -> float:
-    """:func:`primal_violation` from the row activities ``ax`` and the rows' terms."""
-    (lo_ok, lo), (up_ok, up) = lower, upper
-    below = np.where(lo_ok, lo - ax, 0.0)
-    above = np.where(up_ok, ax - up, 0.0)
-    viol = np.maximum(np.maximum(below, above), 0.0)
-    scale = terms + np.where(below > above, np.abs(lo), np.abs(up))
-    if groups is not None and groups.size:
-        # Groups are runs of consecutive rows (Assembly.row_groups): one reduceat, not ufunc.at.
-        starts = np.flatnonzero(np.r_[True, groups[1:] != groups[:-1]])
-        scale = np.repeat(np.maximum.reduceat(scale, starts), np.diff(np.r_[starts, groups.size]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.where(viol > 0.0, viol / scale, 0.0)  # viol > 0 = scale: inf
-    return float(np.max(rel, initial=0.0))
+def _relative(value: float, ref: float) -> float:
+    """``value / ref``; 0 for ``0 / 0``, ``inf`` for a positive value over 0."""
+    if ref > 0.0:
+        return value / ref
+    return 0.0 if value == 0.0 else np.inf
+
+
+class Certifier:
+    """The checks of :func:`certify` and :func:`farkas` for a family of LPs that share their
+    matrix object, column lower bounds, variables' sizes and row groups: Problem 2 checks
+    every LP of a state with one (its matrix's last column, the alpha column, overwritten
+    in place between LPs), so what depends on those alone is computed once.
+
+    Parameters
+    ----------
+    a
+        ``(m, n)`` the matrix (dense or sparse); read at every check, never copied.
+    col_lower
+        ``(n,)`` the column lower bounds.
+    col_ref, abs_a, row_groups
+        As in :func:`certify`; ``abs_a`` must follow ``a`` if ``a`` changes.
+    """
+
+    def __init__(
+        self,
+        a: Matrix,
+        col_lower: NDArray[np.float64],
+        *,
+        col_ref: NDArray[np.float64] | None = None,
+        abs_a: Matrix | None = None,
+        row_groups: NDArray[np.int64] | None = None,
+    ) -> None:
+        self.a = a
+        self.abs_a = abs(a) if abs_a is None else abs_a
+        self.col_lower = np.asarray(col_lower, dtype=float)
+        self.lower_ok, self.lower0 = _finite(self.col_lower)
+        self.col_ref = col_ref
+        self.starts: NDArray[np.int64] | None = None
+        if row_groups is not None and row_groups.size:
+            # Groups are runs of consecutive rows (Assembly.row_groups): one reduceat, not ufunc.at.
+            self.starts = np.flatnonzero(np.concatenate([[True], row_groups[1:] != row_groups[:-1]]))
+            self.counts = np.diff(np.append(self.starts, row_groups.size))
+
+    def _scale(self, scale: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Each row's scale raised to the largest of its group's."""
+        if self.starts is None:
+            return scale
+        return np.repeat(np.maximum.reduceat(scale, self.starts), self.counts)
+
+    def _violation(
+        self,
+        ax: NDArray[np.float64],
+        terms: NDArray[np.float64],
+        lower: tuple[NDArray[np.bool_], NDArray[np.float64]],
+        upper: tuple[NDArray[np.bool_], NDArray[np.float64]],
+    ) -> float:
+        """:func:`primal_violation` from the row activities ``ax`` and the rows' terms."""
+        (lo_ok, lo), (up_ok, up) = lower, upper
+        below = np.where(lo_ok, lo - ax, 0.0)
+        above = np.where(up_ok, ax - up, 0.0)
+        viol = np.maximum(np.maximum(below, above), 0.0)
+        scale = self._scale(terms + np.where(below > above, np.abs(lo), np.abs(up)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(viol > 0.0, viol / scale, 0.0)  # viol > 0 = scale: inf
+        return float(np.max(rel, initial=0.0))
+
+    def check(
+        self,
+        c: NDArray[np.float64],
+        row_lower: NDArray[np.float64],
+        row_upper: NDArray[np.float64],
+        col_upper: NDArray[np.float64],
+        x: NDArray[np.float64],
+        y: NDArray[np.float64] | None,
+        *,
+        floor: float = 0.0,
+    ) -> Certificate:
+        """:func:`certify` on this family's matrix and column lower bounds."""
+        a, abs_a = self.a, self.abs_a
+        xc = clip(x, self.col_lower, col_upper)
+        size = np.abs(xc) if self.col_ref is None else np.maximum(np.abs(xc), self.col_ref)
+        lower, upper = _finite(row_lower), _finite(row_upper)
+        terms = abs_a @ size
+        primal = self._violation(a @ xc, terms, lower, upper)
+        if y is None:
+            return Certificate(primal, np.inf, np.inf, -np.inf)
+        y = np.array(y, dtype=float)
+        c = np.asarray(c, dtype=float)
+        # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
+        # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
+        # by its size times the row's (|A_i| s + |lower bound|), added up with the columns'.
+        wrong_row = ((y > 0.0) & ~lower[0]) | ((y < 0.0) & ~upper[0])
+        moved = float(np.abs(y[wrong_row]) @ (terms[wrong_row] + np.abs(lower[1][wrong_row])))
+        y[wrong_row] = 0.0
+        d = c - a.T @ y
+        # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
+        # free joint speeds and torques have d = 1e-17 where their terms are 1.
+        drop_cancellation(d, np.abs(c) + abs_a.T @ np.abs(y))
+        cu_ok, cu = _finite(col_upper)
+        wrong_col = ((d > 0.0) & ~self.lower_ok) | ((d < 0.0) & ~cu_ok)
+        moved += float(np.abs(d[wrong_col]) @ size[wrong_col])
+        d[wrong_col] = 0.0
+        bound = float(
+            np.maximum(y, 0.0) @ lower[1] + np.minimum(y, 0.0) @ upper[1]
+            + np.maximum(d, 0.0) @ self.lower0 + np.minimum(d, 0.0) @ cu
+        )  # fmt: skip
+        objective = float(c @ xc)
+        size_obj = max(abs(objective), abs(bound))
+        return Certificate(
+            primal,
+            _relative(moved, max(size_obj, floor / DUAL_TOL)),
+            _relative(abs(objective - bound), max(size_obj, floor / GAP_TOL)),
+            bound,
+        )
+
+    def farkas(
+        self,
+        row_lower: NDArray[np.float64],
+        row_upper: NDArray[np.float64],
+        col_upper: NDArray[np.float64],
+        y: NDArray[np.float64] | None,
+    ) -> bool:
+        """:func:`farkas` on this family's matrix and column lower bounds."""
+        if y is None or not np.all(np.isfinite(y)):
+            return False
+        zero = np.zeros(self.a.shape[1])
+        for sign in (1.0, -1.0):
+            cert = self.check(zero, row_lower, row_upper, col_upper, zero, sign * np.asarray(y))
+            if cert.bound > 0.0 and cert.dual <= DUAL_TOL:
+                return True
+        return False
 
 
 def primal_violation(
@@ -158,8 +270,9 @@ def primal_violation(
     variables are all ~0 in this solution is still measured at its usual scale. Rows with
     one ``groups`` id (the components of one vector, consecutive) share the largest of
     their scales."""
-    terms = (abs(a) if abs_a is None else abs_a) @ (np.abs(x) if size is None else size)
-    return _violation(a @ x, terms, _finite(lower), _finite(upper), groups)
+    one = Certifier(a, np.zeros(a.shape[1]), abs_a=abs_a, row_groups=groups)
+    terms = one.abs_a @ (np.abs(x) if size is None else size)
+    return one._violation(a @ x, terms, _finite(lower), _finite(upper))
 
 
 def certify(
@@ -197,7 +310,7 @@ def certify(
         (``|x|`` alone): with ``|x|``, the scale of the rows' violations and of what a
         reduced cost of the wrong sign moves the bound by.
     abs_a
-        ``|a|``, when the caller keeps it (Problem 2 checks every LP of a state on one matrix).
+        ``|a|``, when the caller keeps it.
     row_groups
         ``(m,)`` ids of the vectors the rows are components of, the rows of one vector
         consecutive (:func:`primal_violation`).
@@ -206,49 +319,8 @@ def certify(
     -------
     Certificate
     """
-    xc = clip(x, col_lower, col_upper)
-    abs_a = abs(a) if abs_a is None else abs_a
-    size = np.abs(xc) if col_ref is None else np.maximum(np.abs(xc), col_ref)
-    lower, upper = _finite(row_lower), _finite(row_upper)
-    terms = abs_a @ size
-    primal = _violation(a @ xc, terms, lower, upper, row_groups)
-    if y is None:
-        return Certificate(primal, np.inf, np.inf, -np.inf)
-    y = np.array(y, dtype=float)
-    c = np.asarray(c, dtype=float)
-    # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
-    # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
-    # by its size times the row's (|A_i| s + |lower bound|), added up with the columns'.
-    wrong_row = ((y > 0.0) & ~lower[0]) | ((y < 0.0) & ~upper[0])
-    moved = float(np.abs(y[wrong_row]) @ (terms[wrong_row] + np.abs(lower[1][wrong_row])))
-    y[wrong_row] = 0.0
-    d = c - a.T @ y
-    # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
-    # free joint speeds and torques have d = 1e-17 where their terms are 1.
-    drop_cancellation(d, np.abs(c) + abs_a.T @ np.abs(y))
-    (cl_ok, cl), (cu_ok, cu) = _finite(col_lower), _finite(col_upper)
-    wrong_col = ((d > 0.0) & ~cl_ok) | ((d < 0.0) & ~cu_ok)
-    moved += float(np.abs(d[wrong_col]) @ size[wrong_col])
-    d[wrong_col] = 0.0
-    bound = float(
-        np.maximum(y, 0.0) @ lower[1] + np.minimum(y, 0.0) @ upper[1]
-        + np.maximum(d, 0.0) @ cl + np.minimum(d, 0.0) @ cu
-    )  # fmt: skip
-    objective = float(c @ xc)
-    size_obj = max(abs(objective), abs(bound))
-    return Certificate(
-        primal,
-        _relative(moved, max(size_obj, floor / DUAL_TOL)),
-        _relative(abs(objective - bound), max(size_obj, floor / GAP_TOL)),
-        bound,
-    )
-
-
-def _relative(value: float, ref: float) -> float:
-    """``value / ref``; 0 for ``0 / 0``, ``inf`` for a positive value over 0."""
-    if ref > 0.0:
-        return value / ref
-    return 0.0 if value == 0.0 else np.inf
+    one = Certifier(a, col_lower, col_ref=col_ref, abs_a=abs_a, row_groups=row_groups)
+    return one.check(c, row_lower, row_upper, col_upper, x, y, floor=floor)
 
 
 def farkas(
@@ -266,14 +338,5 @@ def farkas(
     ``col_lower <= x <= col_upper`` infeasible (Farkas): with zero costs, the dual bound
     of :func:`certify` is positive, and what the multipliers of the wrong sign move it by
     is within ``DUAL_TOL`` of it. Either sign of ``y`` is tried (solvers differ)."""
-    if y is None or not np.all(np.isfinite(y)):
-        return False
-    n = a.shape[1]
-    zero = np.zeros(n)
-    ref = np.ones(n) if col_ref is None else col_ref
-    for sign in (1.0, -1.0):
-        cert = certify(zero, a, row_lower, row_upper, col_lower, col_upper, zero, sign * np.asarray(y),
-                       col_ref=ref, abs_a=abs_a)  # fmt: skip
-        if cert.bound > 0.0 and cert.dual <= DUAL_TOL:
-            return True
-    return False
+    one = Certifier(a, col_lower, col_ref=np.ones(a.shape[1]) if col_ref is None else col_ref, abs_a=abs_a)
+    return one.farkas(row_lower, row_upper, col_upper, y)

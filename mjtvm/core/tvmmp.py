@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from ..errors import SolverError, StateError
 from .assembly import Assembly, BoxForm, assemble
-from .certificate import Certificate, certify, clip, farkas
+from .certificate import Certificate, Certifier, clip
 from .result import (  # re-exported: the result types lived here
     PairStatus as PairStatus,
 )
@@ -164,6 +164,8 @@ class _Problem2:
         self.session: HighsSession | None = None
         self._dense: NDArray[np.float64] | None = None  # pair_matrix's
         self._abs_dense: NDArray[np.float64] | None = None
+        self._cert: Certifier | None = None  # _certifier's
+        self._column: tuple[bytes, NDArray[np.float64]] | None = None  # column's last
         self._last: tuple[NDArray[np.float64], float] = (np.full(state.twist_dim, np.nan), np.nan)
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -173,8 +175,13 @@ class _Problem2:
         computed from. A twist written with 1e-16 in a component that is exactly 0 (a
         projection onto the TVMS's span) would otherwise ask for a motion the fingers
         cannot make, and the exact LP's alpha would be 0."""
-        r = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
-        return drop_cancellation(self.twist_rows @ r, self.abs_twist_rows @ np.abs(r))
+        key = r.tobytes()  # each LP asks twice (its session, its certificate)
+        if self._column is None or self._column[0] != key:
+            r = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
+            col = drop_cancellation(self.twist_rows @ r, self.abs_twist_rows @ np.abs(r))
+            col.setflags(write=False)
+            self._column = (key, col)
+        return self._column[1]
 
     def zero_alpha(self, r: NDArray[np.float64]) -> float:
         """The alpha below which the twist alpha r_l is within ZERO_ALPHA (the solver's
@@ -275,9 +282,17 @@ class _Problem2:
         """The certificate (:mod:`~mjtvm.core.certificate`) of an optimal ``sol`` of pair (w, r)."""
         lower, upper, cu = self._bounds(w, alpha_max)
         assert sol.x is not None
+        return self._certifier(r).check(
+            self.c, lower, upper, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r)
+        )
+
+    def _certifier(self, r: NDArray[np.float64]) -> Certifier:
+        """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
-        return certify(self.c, a, lower, upper, self.col_lower, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r),
-                       col_ref=self.physical_sizes, abs_a=abs_a, row_groups=self.asm.row_groups)  # fmt: skip
+        if self._cert is None:
+            self._cert = Certifier(a, self.col_lower, col_ref=self.physical_sizes, abs_a=abs_a,
+                                   row_groups=self.asm.row_groups)  # fmt: skip
+        return self._cert
 
     def _bounds(
         self, w: NDArray[np.float64], alpha_max: float
@@ -294,10 +309,7 @@ class _Problem2:
         """Whether ``sol``'s Farkas multipliers (HiGHS' dual ray, Clarabel's certificate) prove
         pair (w, r) infeasible on the unscaled LP (:func:`~mjtvm.core.certificate.farkas`)."""
         lower, upper, cu = self._bounds(w, alpha_max)
-        a, abs_a = self.pair_matrix(r)
-        return farkas(
-            a, lower, upper, self.col_lower, cu, sol.row_dual, col_ref=self.physical_sizes, abs_a=abs_a
-        )
+        return self._certifier(r).farkas(lower, upper, cu, sol.row_dual)
 
     def certified(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
