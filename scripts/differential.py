@@ -11,6 +11,16 @@ shipped states with the same perturbations and the Allegro's fingertips as S-poi
 Writes ``DIR/differential.csv`` (one row per pair and configuration) and
 ``DIR/differential.json`` (summary per family), and prints the summary.
 
+CSV columns: ``state`` (the state's id), ``family`` (random, shipped, near-singular, units,
+joint-unit, roundoff, allegro-S), ``k``, ``l`` (the pair), ``solver``, ``box`` (tvmmp's
+configuration), ``alpha`` and ``ref_alpha`` (empty where not optimal), ``rel_err``
+(``|alpha - ref| / |ref|``, absolute below the zero floor), ``status``, ``ref_status``,
+``certified`` (tvmmp's verdict for the pair), ``noted`` (the pair has a note),
+``ref_inconclusive`` (cvxpy's HiGHS and Clarabel disagree beyond 1e-6: not counted).
+JSON: ``states``, ``seed``, ``random_states``, ``seconds`` and per family ``pairs``,
+``max_rel_err``, ``over_1e-6_noted``, ``over_1e-6_without_note`` (the acceptance: 0),
+``ref_inconclusive``, ``negative_alphas``, ``uncertified``, ``noted``.
+
 Usage: ``python scripts/differential.py --states 200 --seed 0 --out results/differential``
 """
 
