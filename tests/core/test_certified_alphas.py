@@ -11,14 +11,12 @@ import numpy as np
 import pytest
 
 from mjtvm import tvmmp
-from mjtvm.core.contacts import tangent_basis
+from mjtvm.core.perturb import add_jacobian_roundoff, rescale, slide_contact
 from mjtvm.core.reference import reference_tvmmp
 from mjtvm.core.state import GraspState, load_state
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.graspfile import load_grasp
 from mjtvm.sim.scenario import load_scenario
-
-from .test_units import rescale
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"
 FORMS = [("highs", "eliminated"), ("highs", "literal"), ("clarabel", "eliminated")]
@@ -39,14 +37,7 @@ def assert_matches(state: GraspState, ref: np.ndarray, *, rtol: float = 1e-6) ->
 
 def noisy(state: GraspState, seed: int) -> GraspState:
     """``state`` with +-1e-18..1e-14 in every zero entry of its Jacobians."""
-    rng = np.random.default_rng(seed)
-    contacts = []
-    for c in state.contacts:
-        j = c.jacobian.copy()
-        zero = j == 0.0
-        j[zero] = rng.choice([-1.0, 1.0], zero.sum()) * 10.0 ** rng.uniform(-18, -14, zero.sum())
-        contacts.append(replace(c, jacobian=j))
-    return state.with_(contacts=tuple(contacts))
+    return add_jacobian_roundoff(state, np.random.default_rng(seed))
 
 
 @pytest.fixture(scope="module")
@@ -54,19 +45,11 @@ def allegro() -> GraspState:
     return load_grasp("allegro-ik").state()
 
 
-def sliding(state: GraspState, i: int, angle: float) -> GraspState:
-    """Contact ``i`` made an S-point sliding along ``cos(angle) t1 + sin(angle) t2``."""
-    c = state.contacts[i]
-    t1, t2 = tangent_basis(c.normal)
-    s = replace(c, type="S", slide_direction=np.cos(angle) * t1 + np.sin(angle) * t2)
-    return state.with_(contacts=(*state.contacts[:i], s, *state.contacts[i + 1 :]))
-
-
 def test_allegro_fingertip_sliding_across_its_tangent_is_right():
     """allegro-ik, the first fingertip an S-point sliding along t2: TVMMP -0.0337 'optimal'
     before (its tangent's round-off z component, 1.7e-18, made the alpha column's factor
     1e9 too large and the LP lost that S-point's joint speeds); the reference says 0.02771."""
-    state = sliding(load_grasp("allegro-ik").state(), 0, np.pi / 2)
+    state = slide_contact(load_grasp("allegro-ik").state(), 0, np.pi / 2)
     ref, _status = reference_tvmmp(state, solver="HIGHS")
     assert np.nanmin(ref) == pytest.approx(0.027710445719941, rel=1e-9)
     assert_matches(state, ref)
@@ -75,8 +58,8 @@ def test_allegro_fingertip_sliding_across_its_tangent_is_right():
 
 @pytest.mark.parametrize("angle", [0.25 * np.pi, 0.75 * np.pi, 1.5 * np.pi])
 @pytest.mark.parametrize("finger", [1, 2])
-def test_allegro_other_fingertips_sliding(allegro, finger, angle):
-    state = sliding(allegro, finger, angle)
+def test_allegro_other_fingertips_slide_contact(allegro, finger, angle):
+    state = slide_contact(allegro, finger, angle)
     assert_matches(state, reference_tvmmp(state, solver="HIGHS")[0])
 
 

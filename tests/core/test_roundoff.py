@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from mjtvm.core.assembly import assemble, grasp_map_transpose
+from mjtvm.core.perturb import add_jacobian_roundoff
 from mjtvm.core.roundoff import DROP_REL, drop_cancellation, drop_data_roundoff
 from mjtvm.core.state import load_state
 
@@ -51,14 +51,7 @@ def test_noise_in_the_zero_entries_of_a_state_gives_the_same_lp():
     """Every zero of pinch.json's Jacobians set to +-1e-18..1e-14 (other tools' round-off):
     the assembled matrix is the same, entry for entry."""
     clean = load_state(EXAMPLES / "pinch.json")
-    rng = np.random.default_rng(1)
-    contacts = []
-    for c in clean.contacts:
-        j = c.jacobian.copy()
-        zero = j == 0.0
-        j[zero] = rng.choice([-1.0, 1.0], zero.sum()) * 10.0 ** rng.uniform(-18, -14, zero.sum())
-        contacts.append(replace(c, jacobian=j))
-    noisy = clean.with_(contacts=tuple(contacts))
+    noisy = add_jacobian_roundoff(clean, np.random.default_rng(1))
     assert any(np.any(c.jacobian != d.jacobian) for c, d in zip(clean.contacts, noisy.contacts))
     a, b = assemble(clean), assemble(noisy)
     assert (a.A != b.A).nnz == 0 and (a.A_twist != b.A_twist).nnz == 0
