@@ -12,7 +12,7 @@ from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_bas
 from .core.operation_range import OperationRange, default_operation_range, load_motor_data
 from .core.state import GraspState, dump_state, load_state, parse_state, state_to_dict
 from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
-from .errors import MjtvmError, ModelError, OutputError, SolverError, StateError
+from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .polytopes.tvms import TvmsResult, tvms
 
 __version__ = "0.1.0"
@@ -25,7 +25,9 @@ __all__ = [
     "MjtvmError",
     "ModelError",
     "OperationRange",
+    "OptionError",
     "OutputError",
+    "ParamError",
     "SolverError",
     "StateError",
     "Timings",

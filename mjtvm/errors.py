@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MjtvmError", "ModelError", "OptionError", "OutputError", "SolverError", "StateError"]
+__all__ = ["MjtvmError", "ModelError", "OptionError", "OutputError", "ParamError", "SolverError", "StateError"]
 
 
 class MjtvmError(Exception):
@@ -41,6 +41,28 @@ class StateError(MjtvmError, ValueError):
         if self.field.startswith("["):
             field = f"{prefix}{self.field}"
         return type(self)(field, self.problem, self.value)
+
+
+class ParamError(MjtvmError, ValueError):
+    r"""A bad argument to a Python function of the package: not bad data (a state, a grasp
+    file, a model: :class:`StateError`, :class:`ModelError`) and not a command-line option
+    (:class:`OptionError`).
+
+    Parameters
+    ----------
+    name
+        The parameter at fault, e.g. ``"box"``.
+    problem
+        What was expected and what was found.
+    value
+        The offending value, when there is one.
+    """
+
+    def __init__(self, name: str, problem: str, value: Any = None) -> None:
+        self.name = name
+        self.problem = problem
+        self.value = value
+        super().__init__(f"{name}: {problem}")
 
 
 class OptionError(MjtvmError, ValueError):
