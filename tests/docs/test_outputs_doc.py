@@ -1,0 +1,248 @@
+"""``docs/outputs.md`` against what the commands write.
+
+Each field table of the page follows a marker ``<!-- fields: NAME -->``; its first column
+holds the documented columns or keys as code spans (``alpha_k<k>_l<l>`` stands for one
+column per pair). The tests run the real writers on small inputs (a lift of 2-3 states, a
+sweep of 2 points, one or two states of the physics check, the benchmark's sections on the
+smallest inputs) and check that the documented set equals the written set.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import re
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "outputs.md"
+_MARKER = re.compile(r"<!--\s*fields:\s*(\S+)\s*-->")
+_CELL = re.compile(r"^\|\s*`([^`]+)`")
+
+
+def field_tables(text: str) -> dict[str, list[str]]:
+    """``{marker name: [documented field, ...]}``: the first-column code spans of the table
+    that follows each marker."""
+    tables: dict[str, list[str]] = {}
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        m = _MARKER.search(line)
+        if not m:
+            continue
+        names: list[str] = []
+        j = i + 1
+        while j < len(lines) and not lines[j].startswith("|"):
+            j += 1
+        j += 2  # the header and its separator
+        while j < len(lines) and lines[j].startswith("|"):
+            cell = _CELL.match(lines[j])
+            assert cell, f"{m.group(1)}: a row without a field name in backticks: {lines[j]!r}"
+            names.append(cell.group(1))
+            j += 1
+        assert names, f"the table of {m.group(1)} is empty"
+        assert m.group(1) not in tables, f"two tables named {m.group(1)}"
+        tables[m.group(1)] = names
+    return tables
+
+
+TABLES = field_tables(DOC.read_text(encoding="utf-8"))
+
+
+def _pattern(name: str) -> re.Pattern[str]:
+    """A documented name as a regex: ``<k>``, ``<l>`` (any placeholder) stand for an index."""
+    parts = re.split(r"<[a-z]+>", name)
+    return re.compile(r"\d+".join(re.escape(p) for p in parts) + r"\Z")
+
+
+def assert_documented(table: str, written: Iterable[str]) -> None:
+    """Every written field matches a documented one and every documented one is written."""
+    documented = TABLES[table]
+    written = list(dict.fromkeys(written))
+    patterns = {name: _pattern(name) for name in documented}
+    undocumented = [w for w in written if not any(p.match(w) for p in patterns.values())]
+    unwritten = [n for n, p in patterns.items() if not any(p.match(w) for w in written)]
+    assert not undocumented, f"{table}: written but not in docs/outputs.md: {undocumented}"
+    assert not unwritten, f"{table}: in docs/outputs.md but not written: {unwritten}"
+
+
+def _header(path: Path) -> list[str]:
+    with path.open(newline="", encoding="utf-8") as f:
+        return next(csv.reader(f))
+
+
+def _csv_header(text: str) -> list[str]:
+    return next(csv.reader(io.StringIO(text)))
+
+
+def test_every_table_is_parsed() -> None:
+    expected = {
+        "lift.csv", "lift-sweeps.csv", "lift.json", "lift.json:lift", "lift.json:record",
+        "lift.json:sweeps", "lift.json:timings", "sweep.json:row", "sweep.csv", "sweep.partial.json",
+        "verify.csv", "slide-check.csv", "gears.csv", "bench.json", "bench.json:machine",
+        "bench.json:settings", "bench.json:stats", "bench.json:problem1", "bench.json:problem2",
+        "bench.json:lift", "bench.json:sweeps", "bench.json:scaling", "bench.json:scaling.per_fingers",
+        "bench.json:hands",
+    }  # fmt: skip
+    assert set(TABLES) == expected
+
+
+# ------------------------------------------------------------------ mjtvm replay
+@pytest.fixture(scope="module")
+def replay_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from mjtvm.apps.replay import run_replay
+
+    out = tmp_path_factory.mktemp("replay")
+    run_replay(num_states=3, plots=False, sweeps=True, out=out)
+    return out
+
+
+def test_lift_csv(replay_dir: Path) -> None:
+    assert_documented("lift.csv", _header(replay_dir / "lift.csv"))
+
+
+def test_lift_sweeps_csv(replay_dir: Path) -> None:
+    header = _header(replay_dir / "lift-sweeps.csv")
+    assert header[1:] == _header(replay_dir / "lift.csv"), "lift-sweeps.csv is `sweep` + lift.csv's columns"
+    assert_documented("lift-sweeps.csv", header[:1])
+
+
+def test_lift_json(replay_dir: Path) -> None:
+    doc = json.loads((replay_dir / "lift.json").read_text(encoding="utf-8"))
+    assert_documented("lift.json", doc)
+    assert_documented("lift.json:lift", doc["lift"])
+    records = doc["records"] + doc["sweeps"]["mu"]["records"] + doc["sweeps"]["mg"]["records"]
+    assert records
+    for record in records:
+        assert_documented("lift.json:record", record)
+    assert_documented("lift.json:sweeps", doc["sweeps"])
+    assert set(doc["sweeps"]["mu"]) == {"mg", "values", "records"}
+    assert set(doc["sweeps"]["mg"]) == {"mu", "values", "records"}
+    assert_documented("lift.json:timings", doc["timings"])
+
+
+# ------------------------------------------------------------------ mjtvm sweep
+def _sweep_args(out: Path) -> argparse.Namespace:
+    return argparse.Namespace(
+        grasp=["case2"], hand=["default"], contacts=("L",), reading=("physical",), mu=None, mg=None,
+        states=3, state_indices=[0, 1], out=out, name="sweep", resume=False, quiet=True, jobs=1,
+        cluster=None,
+    )  # fmt: skip
+
+
+def test_sweep_files(tmp_path: Path) -> None:
+    from mjtvm.apps.sweep import run_sweep_files
+
+    run_sweep_files(_sweep_args(tmp_path), emit=lambda _: None, notice=lambda _: None)
+    rows = json.loads((tmp_path / "sweep.json").read_text(encoding="utf-8"))
+    assert len(rows) == 2
+    for row in rows:
+        assert_documented("sweep.json:row", row)
+    assert_documented("sweep.csv", _header(tmp_path / "sweep.csv"))
+    assert not (tmp_path / "sweep.partial.json").exists()
+
+
+def test_sweep_checkpoint(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The checkpoint a failing sweep leaves behind (the rows finished before the failure)."""
+    from mjtvm.apps import sweep
+
+    real = sweep.run_sweep
+
+    def failing(points: Any, **kwargs: Any) -> Any:
+        real(points, **kwargs)
+        raise RuntimeError("stop after the rows")
+
+    monkeypatch.setattr(sweep, "CHECKPOINT_EVERY_S", 1e9)
+    monkeypatch.setattr(sweep, "run_sweep", failing)
+    with pytest.raises(RuntimeError, match="stop after the rows"):
+        sweep.run_sweep_files(_sweep_args(tmp_path), emit=lambda _: None, notice=lambda _: None)
+    doc = json.loads((tmp_path / "sweep.partial.json").read_text(encoding="utf-8"))
+    assert_documented("sweep.partial.json", doc)
+    assert doc["rows"]
+    for row in doc["rows"]:
+        assert_documented("sweep.json:row", row)
+
+
+# ------------------------------------------------------------------ mjtvm verify
+@pytest.fixture(scope="module")
+def lift2() -> Any:
+    from mjtvm.physics import verify
+
+    return verify.cached_lift("case2", 2)
+
+
+def test_verify_csv(tmp_path: Path, lift2: Any) -> None:
+    from mjtvm.physics import verify
+
+    rows = verify.verify_lift(
+        "case2", num_states=2, stride=1, runs=("L",), dynamics=True, out=tmp_path, name="verify",
+        progress=False, plot=False,
+    )  # fmt: skip
+    assert rows
+    assert_documented("verify.csv", _header(tmp_path / "verify.csv"))
+
+
+def test_slide_check_csv(lift2: Any) -> None:
+    from mjtvm.physics import verify
+
+    rows = verify.slide_check(lift2, [0])
+    assert rows
+    assert_documented("slide-check.csv", _csv_header(verify.rows_csv(rows)))
+
+
+def test_gears_csv(lift2: Any) -> None:
+    from mjtvm.physics import verify
+    from mjtvm.physics.gears import gear_sweep
+
+    rows = gear_sweep("case2", [40.0], num_states=2, states=[0])
+    assert_documented("gears.csv", _csv_header(verify.rows_csv(rows)))
+
+
+# ------------------------------------------------------------------ mjtvm bench
+def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The suite with each section on its smallest input (the report's structure is the same)."""
+    from mjtvm.bench import cases, hands, scaling, suite
+    from mjtvm.core.state import load_state
+    from mjtvm.data import __file__ as data_init
+
+    pinch = load_state(Path(data_init).parent / "examples" / "pinch.json")
+
+    def small_cases(**_: Any) -> dict[str, Any]:
+        return {
+            "case1_p1": cases.bench_problem1(pinch, repeats=1, warmup=0, cdd=False),
+            "case1_p2": {
+                **cases.bench_problem2(pinch, repeats=1, baseline_repeats=1, warmup=0),
+                "beta": [0.0],
+            },
+        }
+
+    real_lift, real_sweeps = suite.bench_lift, suite.bench_sweeps
+    monkeypatch.setattr(suite, "paper_cases", small_cases)
+    monkeypatch.setattr(suite, "bench_lift", lambda **_: real_lift(repeats=1, num_states=2))
+    monkeypatch.setattr(suite, "bench_sweeps", lambda **_: real_sweeps(jobs=(1, 2), repeats=1, num_states=2))
+    monkeypatch.setattr(
+        suite, "bench_scaling", lambda f, **_: scaling.bench_scaling((2, 4), repeats=1, p1_repeats=1)
+    )
+    monkeypatch.setattr(
+        suite, "bench_hands", lambda h, **_: hands.bench_hands(("gripper3-box",), repeats=1, lift_repeats=1)
+    )
+    report = suite.run_suite(scale=False, progress=False)
+    report["notes"] = []  # added by the command (mjtvm.cli.bench) before writing
+    report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
+    assert_documented("bench.json", report)
+    assert_documented("bench.json:machine", report["machine"])
+    assert_documented("bench.json:settings", report["settings"])
+    assert_documented("bench.json:problem1", report["cases"]["case1_p1"])
+    assert_documented("bench.json:problem2", report["cases"]["case1_p2"])
+    assert_documented("bench.json:lift", report["lift"])
+    assert_documented("bench.json:sweeps", report["sweeps"])
+    assert_documented("bench.json:scaling", report["scaling"])
+    for entry in report["scaling"]["per_fingers"].values():
+        assert_documented("bench.json:scaling.per_fingers", entry)
+    for entry in report["hands"].values():
+        assert_documented("bench.json:hands", entry)
+        assert_documented("bench.json:stats", entry["load"])
