@@ -33,7 +33,7 @@ from tqdm import tqdm
 
 from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
-from ..errors import StateError
+from ..errors import ParamError
 from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
 from .figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
 
@@ -177,11 +177,11 @@ def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[floa
     if mu is None:
         mu = getattr(grasp, "default_mu", None)
         if mu is None:
-            raise StateError("mu", f"the grasp {grasp.name!r} has no single friction coefficient: give one")
+            raise ParamError("mu", f"the grasp {grasp.name!r} has no single friction coefficient: give one")
     if mg is None:
         mg = getattr(grasp, "weight_mg", None)
         if mg is None:
-            raise StateError(
+            raise ParamError(
                 "mg", f"the grasp {grasp.name!r}'s REFS are not its weight alone: give the weight"
             )
     return float(mu), float(mg)
@@ -189,17 +189,17 @@ def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[floa
 
 def _check(variants: Sequence[str], readings: Sequence[str], mu: float, mg: float) -> None:
     if not variants or len(set(variants)) != len(variants) or any(v not in VARIANTS for v in variants):
-        raise StateError(
+        raise ParamError(
             "variants", f"expected distinct values among {', '.join(VARIANTS)}, got {list(variants)}"
         )
     if not readings or len(set(readings)) != len(readings) or any(r not in READINGS for r in readings):
-        raise StateError(
-            "reading", f"expected distinct values among {', '.join(READINGS)}, got {list(readings)}"
+        raise ParamError(
+            "readings", f"expected distinct values among {', '.join(READINGS)}, got {list(readings)}"
         )
     if not (math.isfinite(mu) and mu >= 0):
-        raise StateError("mu", f"expected a friction coefficient >= 0, got {mu!r}")
+        raise ParamError("mu", f"expected a friction coefficient >= 0, got {mu!r}", mu)
     if not (math.isfinite(mg) and mg >= 0):
-        raise StateError("mg", f"expected a weight >= 0 (N), got {mg!r}")
+        raise ParamError("mg", f"expected a weight >= 0 (N), got {mg!r}", mg)
 
 
 def replay_lift(
@@ -401,8 +401,8 @@ def run_replay(
 
     Raises
     ------
-    StateError
-        Bad options.
+    ParamError
+        A bad argument (``variants``, ``readings``, ``mu``, ``mg``).
     OutputError
         An output folder that cannot be created or written.
     ModelError

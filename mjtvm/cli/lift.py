@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TypeVar
 
-from ..errors import OptionError
+from ..errors import OptionError, ParamError
 from .options import (
     GRASP_HELP,
     Subparsers,
     command,
-    deprecated_alias,
     grasp_option,
     lift_options,
     out_options,
@@ -35,6 +36,8 @@ from .values import (
 )
 
 __all__ = ["add_replay", "add_sweep"]
+
+_T = TypeVar("_T")
 
 
 _TEXTS: dict[str, tuple[str, str]] = {
@@ -146,23 +149,24 @@ def _sweep_grid(p: argparse.ArgumentParser) -> None:
     """The grid's axes: grasps, hands, contacts, readings, mu, mg and the lift's states."""
     grasp_option(p, default="case2", type=grasps, help="grasps (comma-separated): " + GRASP_HELP)
     p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
-    new = p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
+    p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
                          help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4)")  # fmt: skip
-    deprecated_alias(p, "--variants", new)
-    new = p.add_argument("--reading", type=choices(READINGS, every="both"), default="physical",
+    p.add_argument("--reading", type=choices(READINGS, every="both"), default="physical",
                          metavar="READING", help="slide directions of S-points: physical, literal or both")  # fmt: skip
-    deprecated_alias(p, "--readings", new)
     p.add_argument(
         "--mu", type=numbers(0.0, MAX_MU), default=None, help="friction coefficients (default: the grasp's)"
     )
     p.add_argument(
         "--mg", type=numbers(0.0, MAX_FORCE), default=None, help="object weights (N) (default: the grasp's)"
     )
-    new = p.add_argument("--states", type=integer(2, MAX_STATES, hint="state indices are --state-indices"),
+    p.add_argument("--states", type=integer(2, MAX_STATES, hint="state indices are --state-indices"),
                          default=30, metavar="N", help="number of states along the lift")  # fmt: skip
-    deprecated_alias(p, "--num-states", new)
     p.add_argument("--state-indices", type=integers(0, MAX_STATES - 1), default=None, metavar="I,J",
                    help="solve only these states of the lift (default: all)")  # fmt: skip
+
+
+def _tuple(values: Sequence[_T] | None) -> tuple[_T, ...] | None:
+    return None if values is None else tuple(values)
 
 
 def grid_size(args: argparse.Namespace) -> int:
@@ -174,8 +178,13 @@ def grid_size(args: argparse.Namespace) -> int:
     return int(size)
 
 
+_SWEEP_OPTIONS = {"mus": "--mu", "mgs": "--mg", "cluster": "--cluster", "states": "--state-indices"}
+"""The options of the :class:`~mjtvm.apps.sweep.SweepFiles` fields whose values only the run
+can judge (the grasps' own mu and mg, a scheduler's answer)."""
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from ..apps.sweep import run_sweep_files
+    from ..apps.sweep import SweepFiles, run_sweep_files
 
     size = grid_size(args)
     if size > MAX_GRID:  # the points are built before the first is solved
@@ -183,7 +192,32 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             "--grasp x --hand x --contacts x --reading x --mu x --mg x --states",
             f"expected a grid of at most {MAX_GRID} points, got {size}",
         )
-    files = run_sweep_files(args, emit=emit)
+    bad = [i for i in (args.state_indices or ()) if i >= args.states]
+    if bad:
+        raise OptionError("--state-indices", f"expected indices below --states = {args.states}, got {bad[0]}")
+    run = SweepFiles(
+        scenarios=tuple(args.grasp),
+        hands=tuple(args.hand),
+        variants=tuple(args.contacts),
+        readings=tuple(args.reading),
+        mus=_tuple(args.mu),
+        mgs=_tuple(args.mg),
+        num_states=args.states,
+        states=_tuple(args.state_indices),
+        out=args.out,
+        name=args.name,
+        jobs=args.jobs,
+        cluster=args.cluster,
+        resume=args.resume,
+        quiet=args.quiet,
+    )  # fmt: skip (a table: the options in the order of --help)
+    try:
+        files = run_sweep_files(run, emit=emit)
+    except ParamError as e:
+        if e.name not in _SWEEP_OPTIONS:
+            raise
+        problem = e.problem.replace("give the coefficients and the weights", "give --mu and --mg")
+        raise OptionError(_SWEEP_OPTIONS[e.name], problem) from e
     for path in files:
         emit(f"wrote {path}")
     return EXIT_OK

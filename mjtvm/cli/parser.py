@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 from importlib import metadata
 
-from ..errors import MjtvmError, ModelError, OptionError, OutputError, SolverError, StateError
+from ..errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .bench import add_bench
 from .lift import add_replay, add_sweep
 from .options import Parser
@@ -78,7 +78,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:
         stdout_to_devnull()
         return EXIT_PIPE
-    except (StateError, ModelError, OptionError, OutputError) as e:
+    except (StateError, ModelError, OptionError, OutputError, ParamError) as e:
         print(f"error: {one_line(str(e))}", file=sys.stderr)
         return EXIT_INPUT
     except SolverError as e:

@@ -9,13 +9,12 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, deprecated_alias, grasp_option, out_options
+from .options import Parser, grasp_option, out_options
 from .output import EXIT_OK
 from .values import (
     CONTACTS,
@@ -72,7 +71,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="contact types of the lift's L/S fingers to check (Case 2: fingers 2 and 4)")  # fmt: skip
     p.add_argument("--reading", type=choices(READINGS, every="both"), default="both", metavar="READING",
                    help="slide directions of the S-points: physical, literal or both")  # fmt: skip
-    p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
     p.add_argument(
         "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient (default: the grasp's)"
     )
@@ -98,8 +96,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     _simulation_options(p)
     p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
     out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
-    new = p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
-    deprecated_alias(p, "--no-plot", new)
+    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
     p.add_argument(
         "--rrd",
         type=output_file,
@@ -151,26 +148,6 @@ def _cmd_gears(args: argparse.Namespace) -> int:
               f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)")  # fmt: skip
     print(f"rows in {outdir / 'gears.csv'}")
     return EXIT_OK
-
-
-def _runs(text: str) -> tuple[str, ...]:
-    from ..physics.verify import RUNS  # the parser of verify imports MuJoCo anyway
-
-    runs = tuple(r.strip() for r in text.split(","))
-    if not text.strip() or len(set(runs)) != len(runs) or any(r not in RUNS for r in runs):
-        raise argparse.ArgumentTypeError(f"expected distinct values among {','.join(RUNS)}, got {text!r}")
-    return runs
-
-
-class _RunsAlias(argparse.Action):
-    """The old ``--runs L,S-literal``: deprecated, the same as ``--contacts L,S --reading literal``."""
-
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
-                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
-        print(f"mjtvm: {option_string} is deprecated, use --contacts and --reading", file=sys.stderr)
-        namespace.contacts = tuple(dict.fromkeys(r.split("-")[0] for r in values))
-        readings = tuple(r.split("-")[1] for r in values if "-" in r)
-        namespace.reading = readings or namespace.reading
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SolverError
+from ..errors import ParamError, SolverError
 from .lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from .scaling import Scaling, column_factor, cost_scale, lp_scaling, scale_lp
 
@@ -174,7 +174,9 @@ class HighsSession:
         """Pass the equilibrated LP ``slp`` (factors ``s``) to the HiGHS instance ``h``, with
         the session's options ``tuned`` (over ``_TUNABLE_DEFAULTS``)."""
         if not set(tuned) <= set(_TUNABLE_DEFAULTS):
-            raise ValueError(f"options: only {sorted(_TUNABLE_DEFAULTS)} may be chosen, got {sorted(tuned)}")
+            raise ParamError(
+                "options", f"only {sorted(_TUNABLE_DEFAULTS)} may be chosen, got {sorted(tuned)}", tuned
+            )
         highspy = _highs()
         self._hs = highspy
         self.scaling = s
@@ -295,7 +297,7 @@ class HighsSession:
         bound. The caller makes it nonsingular (HiGHS would replace dependent columns by
         slacks); HiGHS restores primal and dual feasibility from there."""
         if len(basic_cols) != len(nonbasic_rows):
-            raise ValueError("start_basis: as many basic columns as nonbasic rows are needed")
+            raise ParamError("start_basis", "as many basic columns as nonbasic rows are needed")
         hs = self._hs
         status = hs.HighsBasisStatus
         cols = np.where(np.isfinite(self._col_lower), 0, np.where(np.isfinite(self._col_upper), 1, 2))

@@ -23,7 +23,7 @@ import cvxpy as cp
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SolverError
+from ..errors import ParamError, SolverError
 from .contacts import Contact, slide_unit, tangent_basis
 from .state import GraspState
 
@@ -170,7 +170,7 @@ def reference_alpha(
         solver fails.
     """
     if state.rvds is None:
-        raise ValueError("state.rvds: Problem 2 needs RVDS vertices")
+        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
     problem = _build(state, state.refs[k], state.rvds[l])
     tight = {"CLARABEL": _CLARABEL_TOL, "HIGHS": _HIGHS_TOL}.get(solver.upper())
     attempts = [tight, {}] if tight is not None else [{}]
@@ -208,7 +208,7 @@ def reference_tvmmp(
         ``R`` statuses; the origin vertex is ``"skipped"`` (Supplement 3).
     """
     if state.rvds is None:
-        raise ValueError("state.rvds: Problem 2 needs RVDS vertices")
+        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
     n_k, n_l = len(state.refs), len(state.rvds)
     alpha = np.full((n_k, n_l), np.nan)
     status = [["skipped"] * n_l for _ in range(n_k)]

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..core.tvmmp import tvmmp
-from ..errors import StateError
+from ..errors import ParamError
 from ..sim.trajectory import lift_state
 from .dynamic import dynamic_pair
 from .simulate import sim_model
@@ -58,7 +58,7 @@ def gear_sweep(
         Lift state indices (of ``num_states``).
     """
     if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
-        raise StateError("ratios", f"expected positive gear ratios, got {list(ratios)!r}")
+        raise ParamError("ratios", f"expected positive gear ratios, got {list(ratios)!r}", list(ratios))
     lift = cached_lift(grasp, num_states)
     ob = lift.scenario.object_body
     base = motor_model(lift.scenario)

@@ -53,7 +53,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ModelError, StateError
+from ..errors import ModelError, ParamError
 from ..sim.grasp import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
@@ -94,9 +94,9 @@ class SimSettings:
                      "slip_floor", "lost_gap", "impratio", "armature_scale"):  # fmt: skip
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0) or (name in ("timestep", "window") and value == 0):
-                raise StateError(f"SimSettings.{name}", f"expected a finite number >= 0, got {value!r}")
+                raise ParamError(name, f"expected a finite number >= 0, got {value!r}", value)
         if self.cone not in ("elliptic", "pyramidal"):
-            raise StateError("SimSettings.cone", f"expected 'elliptic' or 'pyramidal', got {self.cone!r}")
+            raise ParamError("cone", f"expected 'elliptic' or 'pyramidal', got {self.cone!r}", self.cone)
 
     def steps(self, seconds: float) -> int:
         return round(seconds / self.timestep)
@@ -145,7 +145,7 @@ def sim_model(
         raise ModelError(f"body {object_body!r}", "not in the model")
     if mg is not None:
         if not (math.isfinite(mg) and mg > 0):
-            raise StateError("mg", f"expected a positive weight (N), got {mg!r}")
+            raise ParamError("mg", f"expected a positive weight (N), got {mg!r}", mg)
         scale = mg / (float(m.body_mass[ob]) * -float(m.opt.gravity[2]))
         m.body_mass[ob] *= scale
         m.body_inertia[ob] *= scale
@@ -397,7 +397,7 @@ def rerun_data(result: RolloutResult, *, prefix: str = "rollout") -> dict[str, d
     """
     tr = result.trace
     if not tr:
-        raise StateError("trace", "the rollout was not recorded (record=True)")
+        raise ParamError("rollout", "the rollout was not recorded (record=True)")
     t = tr["time"]
     out = {f"{prefix}/object/position": {"time": t, "positions": tr["object_pos"]},
            f"{prefix}/object/speed": {"time": t, "scalars": np.linalg.norm(tr["twist"], axis=1)},

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ..core.assembly import assemble
 from ..core.state import GraspState
-from ..errors import SolverError, StateError
+from ..errors import ParamError, SolverError
 
 __all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
 
@@ -40,7 +40,7 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
         The QP is not solved (e.g. ``alpha`` above :math:`\alpha_{kl}`).
     """
     if state.rvds is None:
-        raise StateError("rvds", "the state has no RVDS")
+        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     asm = assemble(state)
     w, r = state.refs[k], state.rvds[l]
     n = asm.num_variables
@@ -113,7 +113,7 @@ def witness_drive(
     ``vertex``: the :class:`~mjtvm.core.tvmmp.Witness` of the pair, required for ``"vertex"``.
     """
     if state.rvds is None:
-        raise StateError("rvds", "the state has no RVDS")
+        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     if witness == "central":
         frac = min(s, 1.0)
         sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7))
@@ -121,10 +121,10 @@ def witness_drive(
         speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
     elif witness == "vertex":
         if vertex is None:
-            raise StateError("vertex", "the 'vertex' drive needs the pair's Witness")
+            raise ParamError("vertex", "the 'vertex' drive needs the pair's Witness")
         speeds, torques, rho = vertex.speeds * s, vertex.torques, vertex.slip_speeds * s
     else:
-        raise StateError("witness", f"expected 'central' or 'vertex', got {witness!r}")
+        raise ParamError("witness", f"expected 'central' or 'vertex', got {witness!r}", witness)
     contacts, slips, i_s = [], {}, 0
     for c in state.contacts:
         if c.type == "D":

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ParamError
 from .budget import Budget, LimitReached
 from .lattice import FaceLattice
 
@@ -81,7 +82,9 @@ class VolumeEstimate:
 
     def __post_init__(self) -> None:
         if not (0.0 < self.confidence < 1.0):
-            raise ValueError(f"confidence: expected a number in (0, 1), got {self.confidence!r}")
+            raise ParamError(
+                "confidence", f"expected a number in (0, 1), got {self.confidence!r}", self.confidence
+            )
 
     @property
     def width(self) -> float:

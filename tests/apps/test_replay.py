@@ -12,7 +12,7 @@ import pytest
 
 from mjtvm.apps.replay import SWEEP_MGS, SWEEP_MUS, ReplayOutput, run_replay, solve_state, time_replay
 from mjtvm.cli import main
-from mjtvm.errors import StateError
+from mjtvm.errors import ParamError
 from mjtvm.sim.trajectory import lift_state, slide_directions
 
 STATES = 4
@@ -156,7 +156,7 @@ def test_cli_replay_unwritable_out_and_argparse_errors(
         "error: --reading: expected distinct values among physical,literal or both, got 'sideways' "
         "(try 'mjtvm replay --help')"
     ]
-    with pytest.raises(StateError):
+    with pytest.raises(ParamError, match=r"^readings: "):
         run_replay(out=tmp_path, readings=())
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mjtvm import StateError, tvmmp
+from mjtvm import ParamError, tvmmp
 from mjtvm.apps.sweep import SweepPoint, grid, run_sweep
 from mjtvm.sim.trajectory import lift_state, scripted_lift
 
@@ -78,12 +78,12 @@ def test_dask_local_cluster_gives_the_same_rows(serial):
     ],
 )
 def test_bad_points(kwargs, match):
-    with pytest.raises(StateError, match=match):
+    with pytest.raises(ParamError, match=match):
         SweepPoint(**kwargs)
 
 
 def test_bad_jobs():
-    with pytest.raises(StateError, match="jobs"):
+    with pytest.raises(ParamError, match=r"^jobs: "):
         run_sweep(POINTS, jobs=0, progress=False)
 
 

@@ -20,6 +20,7 @@ import pytest
 
 import mjtvm.polytopes.refine as refine_module
 from mjtvm.core.synthetic import random_state
+from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import outer_volume
 from mjtvm.polytopes.budget import Budget, Limits
 from mjtvm.polytopes.estimate import VolumeEstimate, clopper_pearson, estimate_volume
@@ -77,7 +78,7 @@ def test_interval_is_clipped_to_the_certified_bracket():
         tolerance=0.01, confidence=0.999,
     )  # fmt: skip
     assert truth * 0.999 <= e.lower <= e.value <= e.upper <= truth * 1.001
-    with pytest.raises(ValueError, match="confidence"):
+    with pytest.raises(ParamError, match=r"^confidence: "):
         VolumeEstimate(1.0, 0.0, 2.0, 1.0, 1, 1, 1, 0.0, "tolerance")
 
 

@@ -190,7 +190,7 @@ def test_cli_writes_a_recording(
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     rrd = tmp_path / "lift.rrd"
-    args = ["replay", "--states", "2", "--variants", "L", "--no-plots", "--no-sweeps", "--quiet"]
+    args = ["replay", "--states", "2", "--contacts", "L", "--no-plots", "--no-sweeps", "--quiet"]
     assert main([*args, "--out", str(tmp_path), "--rrd", str(rrd), "--spawn", "--tvms-every", "0"]) == 0
     captured = capsys.readouterr()
     assert f"wrote lift.rrd: {rrd}" in captured.out
