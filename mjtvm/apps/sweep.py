@@ -366,8 +366,9 @@ def _run_pool(
     else:
         calls = [(_solve_group, (key, states)) for key, states in tasks]
     context = multiprocessing.get_context("fork" if fork else "forkserver")
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_init_worker,
-                               initargs=(os.getpid() if fork else 0,))  # fmt: skip
+    pool = ProcessPoolExecutor(
+        max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
+    )
     try:
         with warnings.catch_warnings():
             # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see above).
@@ -648,9 +649,15 @@ def run_sweep_files(
 
     with output_lock(outdir):
         points = grid(
-            scenarios=run.scenarios, hands=run.hands, variants=run.variants, readings=run.readings,
-            mus=mus, mgs=mgs, states=run.states, num_states=run.num_states,
-        )  # fmt: skip
+            scenarios=run.scenarios,
+            hands=run.hands,
+            variants=run.variants,
+            readings=run.readings,
+            mus=mus,
+            mgs=mgs,
+            states=run.states,
+            num_states=run.num_states,
+        )
         wanted = {_key(p) for p in points}
         done: dict[_RowKey, dict[str, Any]] = {}
         changed: set[_RowKey] = set()
@@ -685,8 +692,9 @@ def run_sweep_files(
                 last = time.monotonic()
 
         try:
-            rows = run_sweep(points, jobs=run.jobs, cluster=run.cluster, progress=not run.quiet,
-                             done=done, on_rows=on_rows)  # fmt: skip
+            rows = run_sweep(
+                points, jobs=run.jobs, cluster=run.cluster, progress=not run.quiet, done=done, on_rows=on_rows
+            )
         except BaseException:
             if len(finished) > len(done):  # no finished work is lost to an interrupt or a failure
                 save()

@@ -42,9 +42,12 @@ def scaling_hand(fingers: int, *, mu: float = 0.5, mg: float = 1.0) -> Any:
     headings = [float(a + math.pi) for a in angles]
     radius, tip = 0.1, 0.005
     xml = hand_mjcf(
-        finger_bases=bases, finger_headings=headings, mg=mg, object_position=(0.0, 0.0, 10.0),
+        finger_bases=bases,
+        finger_headings=headings,
+        mg=mg,
+        object_position=(0.0, 0.0, 10.0),
         model_name=f"scaling_{fingers}",
-    )  # fmt: skip
+    )
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     for f in range(1, fingers + 1):

@@ -94,8 +94,13 @@ def command(sub: Subparsers, name: str, help: str, description: str) -> argparse
 _OUT_HELP = "output folder (created if missing; locked while the run writes)"
 
 
-def out_options(p: argparse.ArgumentParser, *, name: str | None, out_help: str = _OUT_HELP,
-                name_help: str = "file stem of the outputs in --out") -> None:  # fmt: skip
+def out_options(
+    p: argparse.ArgumentParser,
+    *,
+    name: str | None,
+    out_help: str = _OUT_HELP,
+    name_help: str = "file stem of the outputs in --out",
+) -> None:
     """``--out DIR`` and (unless ``name`` is None) ``--name STEM`` with the default ``name``."""
     p.add_argument("--out", type=folder, default="results", metavar="DIR", help=out_help)
     if name is not None:
@@ -146,18 +151,27 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
         help="number of states along the lift",
     )
     p.add_argument(
-        "--stop-margin", type=fraction, default=None, metavar="F",
+        "--stop-margin",
+        type=fraction,
+        default=None,
+        metavar="F",
         help="end the lift where a finger's contact Jacobian keeps this fraction of its smallest singular "
         "value at the start (default: the grasp's, 0.25; 0: to the reach limit)",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--contacts", type=choices(CONTACTS), default=contacts, metavar="L,S",
+        "--contacts",
+        type=choices(CONTACTS),
+        default=contacts,
+        metavar="L,S",
         help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4; L: line/rolling, "
         "S: sliding), comma-separated",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--reading", type=choices(READINGS, every="both"), default=reading, metavar="READING",
+        "--reading",
+        type=choices(READINGS, every="both"),
+        default=reading,
+        metavar="READING",
         help="slide direction of S-points: physical (the slip of the min-norm motion: friction "
         "resists the lift, what the physics check supports), literal (the paper's printed vector: "
         "reproduces its Fig. 8), a comma list, or both",
-    )  # fmt: skip
+    )

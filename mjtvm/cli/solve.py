@@ -59,14 +59,22 @@ _SOURCE_HELP = (
 def add_solve(sub: Subparsers) -> None:
     """``mjtvm solve [STATE|GRASP|-]``: prints mjtvm.result/1."""
     p = command(sub, "solve", *_TEXTS["solve"])
-    p.add_argument("state", nargs="?", default=None, type=source, metavar="STATE|GRASP",
-                   help=_SOURCE_HELP + " (default: the shipped example pinch.json)")  # fmt: skip
+    p.add_argument(
+        "state",
+        nargs="?",
+        default=None,
+        type=source,
+        metavar="STATE|GRASP",
+        help=_SOURCE_HELP + " (default: the shipped example pinch.json)",
+    )
     hand_option(p)
     p.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend")
     p.add_argument(
-        "--box", choices=("eliminated", "literal"), default="eliminated",
+        "--box",
+        choices=("eliminated", "literal"),
+        default="eliminated",
         help="operation-range form: exact reduction or the paper's literal eq. 2 box",
-    )  # fmt: skip
+    )
     p.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
     _indent_option(p)
     p.set_defaults(func=_cmd_solve)

@@ -208,13 +208,22 @@ class HighsSession:
         # The flat passModel: filling a highspy.HighsLp field by field costs 60 us (each
         # field a conversion), more than HiGHS' own copy of the model.
         status = h.passModel(
-            n, m, a.nnz, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize), 0.0,
-            np.ascontiguousarray(slp.c, dtype=float), finite(slp.col_lower, -inf), finite(slp.col_upper, inf),
-            finite(slp.row_lower, -inf), finite(slp.row_upper, inf),
-            np.ascontiguousarray(a.indptr, dtype=np.int32), np.ascontiguousarray(a.indices, dtype=np.int32),
+            n,
+            m,
+            a.nnz,
+            int(highspy.MatrixFormat.kColwise),
+            int(highspy.ObjSense.kMinimize),
+            0.0,
+            np.ascontiguousarray(slp.c, dtype=float),
+            finite(slp.col_lower, -inf),
+            finite(slp.col_upper, inf),
+            finite(slp.row_lower, -inf),
+            finite(slp.row_upper, inf),
+            np.ascontiguousarray(a.indptr, dtype=np.int32),
+            np.ascontiguousarray(a.indices, dtype=np.int32),
             np.ascontiguousarray(a.data, dtype=float),
             np.zeros(n, dtype=np.int32),  # every column continuous (HiGHS reads n entries: never empty)
-        )  # fmt: skip
+        )
         self._check(status, "passModel")
         # Largest scaled magnitude per row: the reference of set_column's round-off drop.
         self._row_max = np.zeros(a.shape[0])

@@ -87,8 +87,12 @@ def _box_constraints(state: GraspState, tau: cp.Expression, qd: cp.Expression) -
     cons += [t_min <= tau, tau <= t_max, q_min <= qd, qd <= q_max]
     n_v = max(len(r.vertices) for r in state.operation_ranges)
     # Pad each vertex list with copies of its first vertex: the hull is unchanged.
-    verts = np.array([np.vstack([r.vertices, np.repeat(r.vertices[:1], n_v - len(r.vertices), 0)])
-                      for r in state.operation_ranges])  # fmt: skip
+    verts = np.array(
+        [
+            np.vstack([r.vertices, np.repeat(r.vertices[:1], n_v - len(r.vertices), 0)])
+            for r in state.operation_ranges
+        ]
+    )
     for (s1, s2), (tc, qc) in zip(_CORNERS, ((t_max, q_max), (t_max, q_min), (t_min, q_max), (t_min, q_min))):
         lam = cp.Variable((m, n_v), nonneg=True)
         cons += [cp.sum(lam, axis=1) == 1]

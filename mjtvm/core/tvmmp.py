@@ -226,8 +226,9 @@ class _Problem2:
         nz = np.flatnonzero(kin_col)
         a_s = self._scaled_a.with_column(self.kin[nz], kin_col[nz], factor)
         with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
-            slp = LinearProgram(s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper,
-                                self.col_lower / col_s, cu / col_s)  # fmt: skip
+            slp = LinearProgram(
+                s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper, self.col_lower / col_s, cu / col_s
+            )
         session = HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu, options=P2_HIGHS_OPTIONS)
         # The torques are free and fixed by their rows (tau - J^T E lam = g_f, eq. 19): basic
         # there from the start, the cold first LP of Case 2 takes 45 iterations instead of 87
@@ -290,8 +291,9 @@ class _Problem2:
         """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
         if self._cert is None:
-            self._cert = Certifier(a, self.col_lower, col_ref=self.physical_sizes, abs_a=abs_a,
-                                   row_groups=self.asm.row_groups)  # fmt: skip
+            self._cert = Certifier(
+                a, self.col_lower, col_ref=self.physical_sizes, abs_a=abs_a, row_groups=self.asm.row_groups
+            )
         return self._cert
 
     def _bounds(

@@ -192,8 +192,9 @@ def dynamic_pair(
     alpha = float(res.alpha[k, l])
     if not math.isfinite(alpha):
         raise ParamError("k, l", f"pair ({k}, {l}) has alpha {alpha}")
-    demand = demand_of(model, qpos, state, k, l, alpha, witness=witness, vertex=res.witnesses[k][l],
-                       object_body=object_body)  # fmt: skip
+    demand = demand_of(
+        model, qpos, state, k, l, alpha, witness=witness, vertex=res.witnesses[k][l], object_body=object_body
+    )
     dyn = dynamic_alpha(state, k, l, demand, rtol=rtol)
     if dyn.alpha > 0 and dyn.witness is not None:
         # the simplex witness puts redundant joints on their limits; the limiting joint is named

@@ -58,8 +58,10 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     w0 = np.array([rng.max_speed for rng in state.operation_ranges])
     weight[asm.blocks["qd"]] = 1.0 / w0**2
     weight[asm.blocks["lam[0]"]] = 1.0 / max(float(np.linalg.norm(w)), 1e-3) ** 2
-    cones = [clarabel.ZeroConeT(int(eq.sum() + ceq.sum())),
-             clarabel.NonnegativeConeT(int(up.sum() + dn.sum() + cup.sum() + cdn.sum()))]  # fmt: skip
+    cones = [
+        clarabel.ZeroConeT(int(eq.sum() + ceq.sum())),
+        clarabel.NonnegativeConeT(int(up.sum() + dn.sum() + cup.sum() + cdn.sum())),
+    ]
     opts = clarabel.DefaultSettings()
     opts.verbose = False
     res = clarabel.DefaultSolver(sp.diags(2 * weight).tocsc(), np.zeros(n + 1), big, b, cones, opts).solve()
@@ -67,8 +69,12 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     if status not in ("Solved", "AlmostSolved"):
         raise SolverError("clarabel", status, (k, l))
     x = np.array(res.x)
-    return {"speeds": x[asm.blocks["qd"]], "torques": x[asm.blocks["tau[0]"]],
-            "forces": asm.forces(x), "slip_speeds": x[asm.blocks["rho"]]}  # fmt: skip
+    return {
+        "speeds": x[asm.blocks["qd"]],
+        "torques": x[asm.blocks["tau[0]"]],
+        "forces": asm.forces(x),
+        "slip_speeds": x[asm.blocks["rho"]],
+    }
 
 
 @dataclass(frozen=True, eq=False)
@@ -135,8 +141,14 @@ def witness_drive(
             rate = float(rho[min(i_s, len(rho) - 1)]) if len(rho) else 0.0
             slips[geom] = (rate, np.asarray(c.slide_direction, dtype=float))
             i_s += 1
-    return Drive(state.joint_names, np.asarray(speeds, float), np.asarray(torques, float),
-                 s * alpha * np.asarray(state.rvds[l], float), tuple(contacts), slips)  # fmt: skip
+    return Drive(
+        state.joint_names,
+        np.asarray(speeds, float),
+        np.asarray(torques, float),
+        s * alpha * np.asarray(state.rvds[l], float),
+        tuple(contacts),
+        slips,
+    )
 
 
 # ------------------------------------------------------------------- rollouts
