@@ -252,7 +252,7 @@ MUS = ",".join(["0.5"] * 1000)
         (["bench", "--notes", "missing.txt"], "error: --notes: expected an existing file, got 'missing.txt'"),
         (["solve", "--bo\nx"], "error: unrecognized arguments: --bo\\nx (try 'mjtvm --help')"),
     ],
-)  # fmt: skip
+)  # fmt: skip  # a table: one command line and its error per row
 def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, monkeypatch, capsys):
     """Each is refused while parsing: one line naming the option and the accepted range."""
     monkeypatch.chdir(tmp_path)
@@ -277,7 +277,7 @@ def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, m
         (["bench", "--quick", "--out", "out", "--notes", "latin.txt"],
          "error: --notes: expected UTF-8 text, got byte 0xe9 at offset 3"),
     ],
-)  # fmt: skip
+)  # fmt: skip  # a table: one command line and its error per row
 def test_a_folder_for_a_file_and_unbounded_notes_exit_2(words, line, tmp_path, monkeypatch, capsys):
     import mjtvm.bench.suite
 
@@ -328,8 +328,14 @@ def test_a_grid_too_large_is_refused_before_any_work(tmp_path, monkeypatch, caps
 def test_stdin_is_read_up_to_a_bound():
     """``mjtvm solve - < /dev/zero`` reads one byte more than a state may have, then stops."""
     with open("/dev/zero", "rb") as zero:
-        proc = subprocess.run([*_console_script(), "solve", "-"], stdin=zero, capture_output=True,
-                              text=True, check=False, timeout=120)  # fmt: skip
+        proc = subprocess.run(
+            [*_console_script(), "solve", "-"],
+            stdin=zero,
+            capture_output=True,
+            text=True,
+            check=False,
+            timeout=120,
+        )
     assert proc.returncode == 2
     assert proc.stderr == "error: -: expected a state of at most 67108864 bytes on standard input, got more\n"
 
@@ -472,8 +478,14 @@ def test_closed_stdout_is_quiet():
 
 def test_full_stdout_is_one_line():
     with open("/dev/full", "w") as full:
-        proc = subprocess.run([*_console_script(), "solve"], stdout=full, capture_output=False,
-                              stderr=subprocess.PIPE, text=True, check=False)  # fmt: skip
+        proc = subprocess.run(
+            [*_console_script(), "solve"],
+            stdout=full,
+            capture_output=False,
+            stderr=subprocess.PIPE,
+            text=True,
+            check=False,
+        )
     assert proc.returncode == 2
     assert proc.stderr == "error: standard output: cannot write (No space left on device): <stdout>\n"
 
@@ -552,8 +564,10 @@ def test_solve_warns_on_stderr_of_a_pair_that_is_not_certified(monkeypatch, caps
 
     def doubtful(*args, **kwargs):  # type: ignore[no-untyped-def]
         r = real(*args, **kwargs)
-        certified = tuple(tuple(False if (k, l) == (0, 1) else c for l, c in enumerate(row))
-                          for k, row in enumerate(r.certified))  # fmt: skip
+        certified = tuple(
+            tuple(False if (k, l) == (0, 1) else c for l, c in enumerate(row))
+            for k, row in enumerate(r.certified)
+        )
         return replace(r, certified=certified, notes=(((0, 1), "not certified: highs: gap 1e-3"),))
 
     monkeypatch.setattr(cli_solve, "tvmmp", doubtful)
