@@ -408,3 +408,46 @@ def test_a_cluster_address_that_is_not_a_dask_scheduler_is_one_line_within_the_t
         assert "within 1 s" in err
     assert took < 5.0  # the lift of --states 2 and the timeout (the parent builds no lift for Dask)
     assert not (tmp_path / "sweep.json").exists()
+
+
+def test_the_cli_hands_the_sweep_typed_options_and_names_its_options_in_errors(tmp_path, monkeypatch, capsys):
+    """``mjtvm sweep`` converts its options into a :class:`~mjtvm.apps.sweep.SweepFiles`; a
+    :class:`~mjtvm.errors.ParamError` the run raises about a field is reported as its option."""
+    import mjtvm.apps.sweep
+    from mjtvm.apps.sweep import SweepFiles
+    from mjtvm.cli import main
+
+    seen: list[SweepFiles] = []
+
+    def refuse(run, **kwargs):
+        seen.append(run)
+        raise ParamError(
+            "mus", "the grasps have different friction or weight: give the coefficients and the weights"
+        )
+
+    monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep_files", refuse)
+    words = [
+        "sweep",
+        "--grasp",
+        "case2,case1",
+        "--contacts",
+        "L,S",
+        "--states",
+        "5",
+        "--state-indices",
+        "0,4",
+    ]
+    assert main([*words, "--out", str(tmp_path), "--quiet"]) == 2
+    assert capsys.readouterr().err == (
+        "error: --mu: the grasps have different friction or weight: give --mu and --mg\n"
+    )
+    assert seen == [
+        SweepFiles(
+            scenarios=("case2", "case1"),
+            variants=("L", "S"),
+            num_states=5,
+            states=(0, 4),
+            out=str(tmp_path),
+            quiet=True,
+        )
+    ]
