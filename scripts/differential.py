@@ -52,8 +52,22 @@ from mjtvm.core.tvmmp import tvmmp
 CONFIGS = (("highs", "eliminated"), ("highs", "literal"), ("clarabel", "eliminated"))
 REL, ZERO_REL = 1e-6, 1e-9  # as tests/core/test_differential.py
 SHIPPED = ("allegro-ik", "allegro-sphere", "gripper3-box", "case1", "case1-s", "case2")
-COLUMNS = ["state", "family", "k", "l", "solver", "box", "alpha", "ref_alpha", "rel_err", "status",
-           "ref_status", "certified", "noted", "ref_inconclusive"]  # fmt: skip
+COLUMNS = [
+    "state",
+    "family",
+    "k",
+    "l",
+    "solver",
+    "box",
+    "alpha",
+    "ref_alpha",
+    "rel_err",
+    "status",
+    "ref_status",
+    "certified",
+    "noted",
+    "ref_inconclusive",
+]
 
 
 def _moving_column(state: GraspState) -> int:
@@ -139,14 +153,30 @@ def main() -> None:
                         except Exception:  # a reference that fails decides nothing
                             refs_c[ref_key] = None
                     rc = refs_c[ref_key]
-                    inconclusive = rc is None or rc[1][k][l] != ref_s[k][l] or (
-                        np.isfinite(b) and not _close(float(rc[0][k, l]), b, floor))  # fmt: skip
-                rows.append({
-                    "state": key, "family": family, "k": k, "l": l, "solver": solver, "box": box,
-                    "alpha": a, "ref_alpha": b, "rel_err": rel, "status": r.status[k][l],
-                    "ref_status": ref_s[k][l], "certified": r.certified[k][l], "noted": noted,
-                    "over": over, "ref_inconclusive": inconclusive,
-                })  # fmt: skip
+                    inconclusive = (
+                        rc is None
+                        or rc[1][k][l] != ref_s[k][l]
+                        or (np.isfinite(b) and not _close(float(rc[0][k, l]), b, floor))
+                    )
+                rows.append(
+                    {
+                        "state": key,
+                        "family": family,
+                        "k": k,
+                        "l": l,
+                        "solver": solver,
+                        "box": box,
+                        "alpha": a,
+                        "ref_alpha": b,
+                        "rel_err": rel,
+                        "status": r.status[k][l],
+                        "ref_status": ref_s[k][l],
+                        "certified": r.certified[k][l],
+                        "noted": noted,
+                        "over": over,
+                        "ref_inconclusive": inconclusive,
+                    }
+                )
     with (args.out / "differential.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS, extrasaction="ignore")
         w.writeheader()
@@ -168,8 +198,13 @@ def main() -> None:
             "uncertified": sum(r["certified"] is False for r in fr),
             "noted": sum(r["noted"] for r in fr),
         }
-    meta = {"states": len(cases), "seed": args.seed, "random_states": args.states,
-            "seconds": time.perf_counter() - t0, "families": summary}  # fmt: skip
+    meta = {
+        "states": len(cases),
+        "seed": args.seed,
+        "random_states": args.states,
+        "seconds": time.perf_counter() - t0,
+        "families": summary,
+    }
     (args.out / "differential.json").write_text(json.dumps(meta, indent=1) + "\n")
     head = ["family", *next(iter(summary.values()))]
     print(" | ".join(head))

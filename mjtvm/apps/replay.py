@@ -33,7 +33,7 @@ from tqdm import tqdm
 
 from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
-from ..errors import StateError
+from ..errors import ParamError
 from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
 from .figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
 
@@ -101,10 +101,16 @@ class Record:
         """The CSV row (``scenario`` and ``hand`` are added by the writer)."""
         r = self.result
         out: dict[str, Any] = {
-            "variant": self.variant, "reading": self.reading or "", "mu": self.mu, "mg": self.mg,
-            "state": self.index, "z": self.z, "s": self.s, "tvmmp": "" if r.tvmmp is None else r.tvmmp,
+            "variant": self.variant,
+            "reading": self.reading or "",
+            "mu": self.mu,
+            "mg": self.mg,
+            "state": self.index,
+            "z": self.z,
+            "s": self.s,
+            "tvmmp": "" if r.tvmmp is None else r.tvmmp,
             "feasible": r.feasible,
-        }  # fmt: skip
+        }
         for k, l in np.ndindex(*r.alpha.shape):
             ok = r.status[k][l] == "optimal"
             out[f"alpha_k{k}_l{l}"] = float(r.alpha[k, l]) if ok else ""
@@ -112,17 +118,30 @@ class Record:
         out["limiting_k"], out["limiting_l"] = ("", "") if r.limiting is None else r.limiting
         out["certified"] = not r.uncertified()
         t = r.timings
-        out.update(saturated=";".join(self.saturated), solver=self.solver, assemble_s=t.assemble_s,
-                   solve_s=t.solve_s, total_s=t.total_s, num_lps=t.num_lps)  # fmt: skip
+        out.update(
+            saturated=";".join(self.saturated),
+            solver=self.solver,
+            assemble_s=t.assemble_s,
+            solve_s=t.solve_s,
+            total_s=t.total_s,
+            num_lps=t.num_lps,
+        )
         return out
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: the row's identity plus the ``mjtvm.result/1`` document (no witnesses)."""
         return {
-            "variant": self.variant, "reading": self.reading, "mu": self.mu, "mg": self.mg,
-            "state": self.index, "z": self.z, "s": self.s, "solver": self.solver, "saturated": list(self.saturated),
+            "variant": self.variant,
+            "reading": self.reading,
+            "mu": self.mu,
+            "mg": self.mg,
+            "state": self.index,
+            "z": self.z,
+            "s": self.s,
+            "solver": self.solver,
+            "saturated": list(self.saturated),
             **self.result.to_dict(witnesses=False),
-        }  # fmt: skip
+        }
 
 
 def _saturated(state: GraspState, result: TvmmpResult) -> tuple[str, ...]:
@@ -177,11 +196,11 @@ def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[floa
     if mu is None:
         mu = getattr(grasp, "default_mu", None)
         if mu is None:
-            raise StateError("mu", f"the grasp {grasp.name!r} has no single friction coefficient: give one")
+            raise ParamError("mu", f"the grasp {grasp.name!r} has no single friction coefficient: give one")
     if mg is None:
         mg = getattr(grasp, "weight_mg", None)
         if mg is None:
-            raise StateError(
+            raise ParamError(
                 "mg", f"the grasp {grasp.name!r}'s REFS are not its weight alone: give the weight"
             )
     return float(mu), float(mg)
@@ -189,17 +208,17 @@ def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[floa
 
 def _check(variants: Sequence[str], readings: Sequence[str], mu: float, mg: float) -> None:
     if not variants or len(set(variants)) != len(variants) or any(v not in VARIANTS for v in variants):
-        raise StateError(
+        raise ParamError(
             "variants", f"expected distinct values among {', '.join(VARIANTS)}, got {list(variants)}"
         )
     if not readings or len(set(readings)) != len(readings) or any(r not in READINGS for r in readings):
-        raise StateError(
-            "reading", f"expected distinct values among {', '.join(READINGS)}, got {list(readings)}"
+        raise ParamError(
+            "readings", f"expected distinct values among {', '.join(READINGS)}, got {list(readings)}"
         )
     if not (math.isfinite(mu) and mu >= 0):
-        raise StateError("mu", f"expected a friction coefficient >= 0, got {mu!r}")
+        raise ParamError("mu", f"expected a friction coefficient >= 0, got {mu!r}", mu)
     if not (math.isfinite(mg) and mg >= 0):
-        raise StateError("mg", f"expected a weight >= 0 (N), got {mg!r}")
+        raise ParamError("mg", f"expected a weight >= 0 (N), got {mg!r}", mg)
 
 
 def replay_lift(
@@ -289,14 +308,24 @@ def _lift_dict(lift: Lift) -> dict[str, Any]:
         for reading in READINGS
     }
     return {
-        "num_states": lift.num_states, "z": lift.z.tolist(), "limit": lift.limit,
-        "max_step": lift.max_step, "tolerance": lift.tolerance, "marched_steps": lift.marched,
-        "joints": list(lift.joints), "geoms": list(lift.geoms), "roles": list(lift.roles),
-        "drift": lift.drift.tolist(), "residual": lift.residual.tolist(),
-        "base": list(lift.base), "base_contact": lift.base_contact.tolist(),
-        "touching": [list(t) for t in lift.touching], "contact_points": lift.points.tolist(),
-        "qpos": lift.qpos.tolist(), "slide_directions": slides,
-    }  # fmt: skip
+        "num_states": lift.num_states,
+        "z": lift.z.tolist(),
+        "limit": lift.limit,
+        "max_step": lift.max_step,
+        "tolerance": lift.tolerance,
+        "marched_steps": lift.marched,
+        "joints": list(lift.joints),
+        "geoms": list(lift.geoms),
+        "roles": list(lift.roles),
+        "drift": lift.drift.tolist(),
+        "residual": lift.residual.tolist(),
+        "base": list(lift.base),
+        "base_contact": lift.base_contact.tolist(),
+        "touching": [list(t) for t in lift.touching],
+        "contact_points": lift.points.tolist(),
+        "qpos": lift.qpos.tolist(),
+        "slide_directions": slides,
+    }
 
 
 ALPHA_LABEL = rf"TVMMP $\alpha$ {ALPHA_UNIT}"
@@ -347,10 +376,9 @@ def _figures(
         return f"{v}-points" + (f" ({rd} reading)" if rd else "")
 
     curves = [
-        (label(v, rd), "-" if v == "L" else "--",
-         [r for r in records if (r.variant, r.reading) == (v, rd)])
+        (label(v, rd), "-" if v == "L" else "--", [r for r in records if (r.variant, r.reading) == (v, rd)])
         for v, rd in runs
-    ]  # fmt: skip
+    ]
     x = lift_x(lift)
     files = {"fig8.png": _plot(curves, f"{fig8}: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N", x)}
     if swept is not None:
@@ -401,8 +429,8 @@ def run_replay(
 
     Raises
     ------
-    StateError
-        Bad options.
+    ParamError
+        A bad argument (``variants``, ``readings``, ``mu``, ``mg``).
     OutputError
         An output folder that cannot be created or written.
     ModelError
@@ -437,15 +465,32 @@ def run_replay(
         contents.update(_figures(lift, hand, records, swept, mu, mg))
     times["output_s"] = time.perf_counter() - t0  # CSV and PNG (the JSON holds the timings)
     doc = {
-        "schema": SCHEMA, **meta, "mu": mu, "mg": mg, "variants": list(variants), "readings": list(readings),
-        "refs": records[0].state.refs.tolist() if records else None, "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
-        "lift": _lift_dict(lift), "records": [r.to_dict() for r in records],
-        "sweeps": None if swept is None else {
-            "mu": {"mg": SWEEP_MU_MG, "values": list(SWEEP_MUS), "records": [r.to_dict() for r in swept["mu"]]},
-            "mg": {"mu": SWEEP_MG_MU, "values": list(SWEEP_MGS), "records": [r.to_dict() for r in swept["mg"]]},
+        "schema": SCHEMA,
+        **meta,
+        "mu": mu,
+        "mg": mg,
+        "variants": list(variants),
+        "readings": list(readings),
+        "refs": records[0].state.refs.tolist() if records else None,
+        "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
+        "lift": _lift_dict(lift),
+        "records": [r.to_dict() for r in records],
+        "sweeps": None
+        if swept is None
+        else {
+            "mu": {
+                "mg": SWEEP_MU_MG,
+                "values": list(SWEEP_MUS),
+                "records": [r.to_dict() for r in swept["mu"]],
+            },
+            "mg": {
+                "mu": SWEEP_MG_MU,
+                "values": list(SWEEP_MGS),
+                "records": [r.to_dict() for r in swept["mg"]],
+            },
         },
         "timings": times,
-    }  # fmt: skip
+    }
     contents["lift.json"] = json.dumps(doc, indent=1) + "\n"
     order = ["lift.csv", "lift.json", "lift-sweeps.csv", "fig8.png", "fig9a.png", "fig9b.png"]
     files = {name: outdir / name for name in order if name in contents}

@@ -48,11 +48,11 @@ from tqdm import tqdm
 
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
-from ..errors import StateError
+from ..errors import ParamError, StateError
 from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
 from .replay import grasp_defaults
 
-__all__ = ["SweepPoint", "grid", "run_sweep", "run_sweep_files"]
+__all__ = ["SweepFiles", "SweepPoint", "grid", "run_sweep", "run_sweep_files"]
 
 
 @dataclass(frozen=True)
@@ -86,15 +86,15 @@ class SweepPoint:
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
-            raise StateError("variant", f"expected one of {VARIANTS}, got {self.variant!r}")
+            raise ParamError("variant", f"expected one of {VARIANTS}, got {self.variant!r}")
         if self.reading not in READINGS:
-            raise StateError("reading", f"expected one of {READINGS}, got {self.reading!r}")
+            raise ParamError("reading", f"expected one of {READINGS}, got {self.reading!r}")
         if not (np.isfinite(self.mu) and self.mu >= 0):
-            raise StateError("mu", f"expected a friction coefficient >= 0, got {self.mu!r}")
+            raise ParamError("mu", f"expected a friction coefficient >= 0, got {self.mu!r}")
         if not (np.isfinite(self.mg) and self.mg >= 0):
-            raise StateError("mg", f"expected a weight >= 0 (N), got {self.mg!r}")
+            raise ParamError("mg", f"expected a weight >= 0 (N), got {self.mg!r}")
         if not (0 <= self.state < self.num_states):
-            raise StateError(
+            raise ParamError(
                 "state", f"expected 0 <= state < num_states = {self.num_states}, got {self.state}"
             )
 
@@ -283,14 +283,14 @@ def run_sweep(
 
     Raises
     ------
-    StateError
+    ParamError
         ``jobs`` or ``chunk`` below 1, or a ``cluster`` that cannot be reached.
     """
     pts = list(points)
     if jobs < 1:
-        raise StateError("jobs", f"expected a positive number of processes, got {jobs}")
+        raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
     if chunk < 1:
-        raise StateError("chunk", f"expected a positive number of states per task, got {chunk}")
+        raise ParamError("chunk", f"expected a positive number of states per task, got {chunk}")
     table: dict[_RowKey, dict[str, Any]] = dict(done or {})
     todo = [p for p in pts if _key(p) not in table]
     serial = cluster is None and jobs == 1
@@ -366,8 +366,9 @@ def _run_pool(
     else:
         calls = [(_solve_group, (key, states)) for key, states in tasks]
     context = multiprocessing.get_context("fork" if fork else "forkserver")
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_init_worker,
-                               initargs=(os.getpid() if fork else 0,))  # fmt: skip
+    pool = ProcessPoolExecutor(
+        max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
+    )
     try:
         with warnings.catch_warnings():
             # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see above).
@@ -395,7 +396,7 @@ def _check_scheduler(address: str, timeout: float) -> None:
 
     Raises
     ------
-    StateError
+    ParamError
         Nothing answers within ``timeout`` s, or the server there is not a Dask scheduler.
     """
     import asyncio
@@ -410,12 +411,12 @@ def _check_scheduler(address: str, timeout: float) -> None:
         asyncio.run(asyncio.wait_for(handshake(), timeout))
     except (OSError, TimeoutError) as e:  # refused, unreachable, or no handshake in time
         why = str(e).splitlines()[0][:200] if str(e) else "no Dask handshake from the server there"
-        raise StateError(
-            "--cluster", f"cannot reach a Dask scheduler at {address} within {timeout:g} s ({why})"
+        raise ParamError(
+            "cluster", f"cannot reach a Dask scheduler at {address} within {timeout:g} s ({why})"
         ) from e
     except Exception as e:  # whatever the handshake's decoder makes of another protocol
-        raise StateError(
-            "--cluster",
+        raise ParamError(
+            "cluster",
             f"expected a Dask scheduler at {address}, but the server there answers in another "
             f"protocol ({type(e).__name__} on its handshake)",
         ) from e
@@ -427,7 +428,7 @@ def _run_dask(
     try:
         from distributed import Client, as_completed
     except ImportError as e:  # pragma: no cover - depends on the optional extra
-        raise StateError("cluster", 'Dask is not installed: pip install "mjtvm[cluster]"') from e
+        raise ParamError("cluster", 'Dask is not installed: pip install "mjtvm[cluster]"') from e
     if isinstance(cluster, Client):
         client = cluster
     else:
@@ -435,8 +436,8 @@ def _run_dask(
         try:
             client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
         except (OSError, TimeoutError, ValueError) as e:
-            raise StateError(
-                "--cluster",
+            raise ParamError(
+                "cluster",
                 f"cannot reach a Dask scheduler at {cluster} within {CONNECT_TIMEOUT_S:g} s ({e})",
             ) from e
     try:
@@ -530,9 +531,7 @@ def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
             raise ValueError(f"schema {doc.get('schema')!r}, expected {CHECKPOINT_SCHEMA!r}")
         [_key(r) for r in rows]
     except (OSError, ValueError, TypeError, KeyError) as e:
-        raise StateError(
-            "--resume", f"cannot read the finished rows of {path} ({e}); rerun without --resume"
-        ) from e
+        raise StateError(str(path), f"cannot read the finished rows ({e}); run again without resuming") from e
     return list(rows)
 
 
@@ -545,16 +544,66 @@ def _stderr(text: str) -> None:
     print(text, file=sys.stderr)
 
 
+@dataclass(frozen=True)
+class SweepFiles:
+    """What ``mjtvm sweep`` runs: the grid (the arguments of :func:`grid`), where its files go
+    and how it is solved (the arguments of :func:`run_sweep`).
+
+    Parameters
+    ----------
+    scenarios, hands, variants, readings
+        The grid's grasps, hand models, contact types of the L/S fingers and slide readings.
+    mus, mgs
+        Friction coefficients and object weights (N); ``None``: the grasps' own, which must
+        then agree.
+    num_states
+        Number of states along the lift.
+    states
+        The lift states to solve (indices below ``num_states``); ``None``: all.
+    out, name
+        The folder of the files and their stem: ``NAME.json``, ``NAME.csv`` and, while the
+        sweep runs, ``NAME.partial.json``.
+    jobs, cluster
+        Local worker processes, or a Dask scheduler address (which overrides ``jobs``).
+    resume
+        Keep the finished rows of an earlier run (:func:`run_sweep_files`).
+    quiet
+        No progress bar and no resume summary.
+    """
+
+    scenarios: tuple[str, ...] = ("case2",)
+    hands: tuple[str, ...] = ("default",)
+    variants: tuple[str, ...] = ("L",)
+    readings: tuple[str, ...] = ("physical",)
+    mus: tuple[float, ...] | None = None
+    mgs: tuple[float, ...] | None = None
+    num_states: int = 30
+    states: tuple[int, ...] | None = None
+    out: str | Path = "results"
+    name: str = "sweep"
+    jobs: int = 1
+    cluster: str | None = None
+    resume: bool = False
+    quiet: bool = False
+
+    def __post_init__(self) -> None:
+        bad = [i for i in (self.states or ()) if not 0 <= i < self.num_states]
+        if bad:
+            raise ParamError(
+                "states", f"expected indices in [0, num_states = {self.num_states}), got {bad[0]}", bad[0]
+            )
+
+
 def run_sweep_files(
-    args: Any, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+    run: SweepFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
 ) -> list[Path]:
-    r"""``mjtvm sweep``: check ``--out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
+    r"""``mjtvm sweep``: check ``run.out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
 
     While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.sweep-checkpoint/1``) holds
     every finished row; it is rewritten atomically at most every :data:`CHECKPOINT_EVERY_S`
     seconds and on an interrupt or failure, and removed once ``NAME.json`` and ``NAME.csv``
     are written. Every row carries ``inputs``, the :func:`inputs_digest` of its grasp. With
-    ``--resume`` the rows of the checkpoint and of an earlier ``NAME.json`` whose point
+    ``run.resume`` the rows of the checkpoint and of an earlier ``NAME.json`` whose point
     belongs to this grid and whose ``inputs`` equal the grasp's digest now are kept, and only
     the other points are solved; rows whose inputs changed (an edited grasp or model file,
     another mjtvm version, a row without ``inputs``) are solved again, and ``notice`` says how
@@ -563,34 +612,35 @@ def run_sweep_files(
     Raises
     ------
     OutputError
-        ``--out`` cannot be written, or another run holds its lock.
+        ``run.out`` cannot be written, or another run holds its lock.
+    ParamError
+        ``mus`` or ``mgs`` left to grasps whose friction or weight differ, or an unreachable
+        ``cluster``.
     StateError
-        A ``--state-indices`` value outside the lift, an unreadable checkpoint, an
-        unreachable ``--cluster``.
+        An unreadable checkpoint or earlier ``NAME.json``.
     """
     from ..core.files import check_output_dir, output_lock, write_files
 
-    bad = [i for i in (args.state_indices or ()) if i >= args.states]
-    if bad:
-        raise StateError("--state-indices", f"expected indices below --states = {args.states}, got {bad[0]}")
-    outdir = check_output_dir(args.out)
-    out_json, out_csv = outdir / f"{args.name}.json", outdir / f"{args.name}.csv"
-    checkpoint = outdir / f"{args.name}.partial.json"
-    digests = {(g, h): inputs_digest(g, h, args.states) for g in args.grasp for h in args.hand}
-    if any(_BUILT_FROM.get((g, h, args.states)) != d for (g, h), d in digests.items()):
+    outdir = check_output_dir(run.out)
+    out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
+    checkpoint = outdir / f"{run.name}.partial.json"
+    digests = {(g, h): inputs_digest(g, h, run.num_states) for g in run.scenarios for h in run.hands}
+    if any(_BUILT_FROM.get((g, h, run.num_states)) != d for (g, h), d in digests.items()):
         _lift.cache_clear()  # a grasp file may have changed since this process built its lift
         _base.cache_clear()
         _BUILT_FROM.clear()
-    _BUILT_FROM.update(((g, h, args.states), d) for (g, h), d in digests.items())
-    mus, mgs = args.mu, args.mg
+    _BUILT_FROM.update(((g, h, run.num_states), d) for (g, h), d in digests.items())
+    mus, mgs = run.mus, run.mgs
     if mus is None or mgs is None:  # the grasps' own: they must agree to make one grid
         defaults = {
-            grasp_defaults(_lift(g, h, args.states).scenario, None, None)
-            for g in args.grasp
-            for h in args.hand
+            grasp_defaults(_lift(g, h, run.num_states).scenario, None, None)
+            for g in run.scenarios
+            for h in run.hands
         }
         if len(defaults) > 1:
-            raise StateError("--mu", "the grasps have different friction or weight: give --mu and --mg")
+            raise ParamError(
+                "mus", "the grasps have different friction or weight: give the coefficients and the weights"
+            )
         mu0, mg0 = defaults.pop()
         mus, mgs = (mu0,) if mus is None else mus, (mg0,) if mgs is None else mgs
 
@@ -599,13 +649,19 @@ def run_sweep_files(
 
     with output_lock(outdir):
         points = grid(
-            scenarios=args.grasp, hands=args.hand, variants=args.contacts, readings=args.reading,
-            mus=mus, mgs=mgs, states=args.state_indices, num_states=args.states,
-        )  # fmt: skip
+            scenarios=run.scenarios,
+            hands=run.hands,
+            variants=run.variants,
+            readings=run.readings,
+            mus=mus,
+            mgs=mgs,
+            states=run.states,
+            num_states=run.num_states,
+        )
         wanted = {_key(p) for p in points}
         done: dict[_RowKey, dict[str, Any]] = {}
         changed: set[_RowKey] = set()
-        if args.resume:
+        if run.resume:
             for path, is_checkpoint in ((out_json, False), (checkpoint, True)):
                 if path.exists():
                     for r in _read_rows(path, checkpoint=is_checkpoint):
@@ -619,7 +675,7 @@ def run_sweep_files(
             changed -= done.keys()  # e.g. stale in NAME.json, solved again in the checkpoint
             if changed:
                 notice(f"resume: {len(changed)} rows recomputed: inputs changed")
-            if not args.quiet:
+            if not run.quiet:
                 emit(f"resume: {len(done)} of {len(wanted)} rows already finished")
         finished = dict(done)
         last = time.monotonic()
@@ -636,8 +692,9 @@ def run_sweep_files(
                 last = time.monotonic()
 
         try:
-            rows = run_sweep(points, jobs=args.jobs, cluster=args.cluster, progress=not args.quiet,
-                             done=done, on_rows=on_rows)  # fmt: skip
+            rows = run_sweep(
+                points, jobs=run.jobs, cluster=run.cluster, progress=not run.quiet, done=done, on_rows=on_rows
+            )
         except BaseException:
             if len(finished) > len(done):  # no finished work is lost to an interrupt or a failure
                 save()

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ParamError
 from .measure import rss_mib, stats, traced_peak_mib
 
 __all__ = ["bench_problem1", "bench_problem2", "case1_beta", "case1_rvds", "paper_cases"]
@@ -38,7 +39,9 @@ def case1_beta(state: Any) -> np.ndarray:
     sk = np.r_[sk, np.zeros(3 - len(sk))]
     null = vt[sk <= 1e-9 * max(sk[0], 1.0)]
     if len(null) != 1:
-        raise ValueError(f"expected one in-plane motion of finger 3, got {len(null)} (singular values {sk})")
+        raise ParamError(
+            "state", f"expected one in-plane motion of finger 3, got {len(null)} (singular values {sk})"
+        )
     beta = plane @ null[0]
     return beta if beta[0] >= 0 else -beta
 

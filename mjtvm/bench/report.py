@@ -116,10 +116,17 @@ def _case_rows(report: dict[str, Any]) -> list[str]:
     ):
         if key in c:
             r = c[key]
-            lines.append(_row(
-                label, r["ours"]["median_s"], f"cvxpy {_ms(r['baseline']['median_s'])}",
-                f"{r['ratio_baseline_over_ours']:.1f}", paper[key], f"<= {_ms(TARGETS_S[P2_TARGET_KEYS[key]])}", _met(t.get(key)),
-            ))  # fmt: skip
+            lines.append(
+                _row(
+                    label,
+                    r["ours"]["median_s"],
+                    f"cvxpy {_ms(r['baseline']['median_s'])}",
+                    f"{r['ratio_baseline_over_ours']:.1f}",
+                    paper[key],
+                    f"<= {_ms(TARGETS_S[P2_TARGET_KEYS[key]])}",
+                    _met(t.get(key)),
+                )
+            )
     return lines
 
 
@@ -128,10 +135,17 @@ def _lift_rows(report: dict[str, Any]) -> list[str]:
     if "lift" not in report:
         return []
     lf = report["lift"]
-    return [_row(
-        f"Full lift, L + S ({lf['num_states']} states, no plots/sweeps)", lf["median_s"], "-", "-", None,
-        f"<= {_ms(TARGETS_S['lift'])}", _met(report["targets"].get("lift")),
-    )]  # fmt: skip
+    return [
+        _row(
+            f"Full lift, L + S ({lf['num_states']} states, no plots/sweeps)",
+            lf["median_s"],
+            "-",
+            "-",
+            None,
+            f"<= {_ms(TARGETS_S['lift'])}",
+            _met(report["targets"].get("lift")),
+        )
+    ]
 
 
 def _hand_rows(report: dict[str, Any]) -> list[str]:
@@ -139,8 +153,12 @@ def _hand_rows(report: dict[str, Any]) -> list[str]:
     lines = []
     for name, h in report.get("hands", {}).items():
         tag = f"{name} ({h['joints']} joints, {h['contacts']} contacts)"
-        for key, what in (("load", "load + configure"), ("state", "grasp state"),
-                          ("p2", f"Problem 2 ({h['rvds']} RVDS)"), ("lift", "lift, 30 states")):  # fmt: skip
+        for key, what in (
+            ("load", "load + configure"),
+            ("state", "grasp state"),
+            ("p2", f"Problem 2 ({h['rvds']} RVDS)"),
+            ("lift", "lift, 30 states"),
+        ):
             lines.append(_row(f"{tag}: {what}"[:44], h[key]["median_s"], "-", "-", None, "-", ""))
     return lines
 
@@ -154,11 +172,17 @@ def _sweep_rows(report: dict[str, Any]) -> list[str]:
     for j, r in sw["per_jobs"].items():
         extra = " incl. pool start" if j != "1" else ""
         sp = sw.get("speedup", {}).get(j)
-        lines.append(_row(
-            f"Fig. 9 sweeps, {sw['points']} pts, {j} proc{extra}", r["median_s"], "-",
-            "-" if sp is None else f"x{sp:.3f}", None,
-            f">= x{TARGET_SWEEP_SPEEDUP}" if j != "1" else "", met if j == "2" else "",
-        ))  # fmt: skip
+        lines.append(
+            _row(
+                f"Fig. 9 sweeps, {sw['points']} pts, {j} proc{extra}",
+                r["median_s"],
+                "-",
+                "-" if sp is None else f"x{sp:.3f}",
+                None,
+                f">= x{TARGET_SWEEP_SPEEDUP}" if j != "1" else "",
+                met if j == "2" else "",
+            )
+        )
     runs = "; ".join(
         f"{j} proc: " + ", ".join(f"{x:.2f}" for x in r["runs_s"]) for j, r in sw["per_jobs"].items()
     )
@@ -175,8 +199,11 @@ def _scaling_rows(report: dict[str, Any]) -> list[str]:
     if "scaling" not in report:
         return []
     sc = report["scaling"]
-    lines = ["", f"{'fingers':>7} {'joints':>6} {'LPs':>4} {'P2/state':>10} {'P1 (cone)':>10} {'P1 verts':>8} "
-             f"{'traced P2':>10} {'traced P1':>10} {'maxrss':>8}"]  # fmt: skip
+    lines = [
+        "",
+        f"{'fingers':>7} {'joints':>6} {'LPs':>4} {'P2/state':>10} {'P1 (cone)':>10} {'P1 verts':>8} "
+        f"{'traced P2':>10} {'traced P1':>10} {'maxrss':>8}",
+    ]
     for f, r in sc["per_fingers"].items():
         m = r["memory_mib"]
         tp1 = "-" if m["tracemalloc_peak_p1"] is None else f"{m['tracemalloc_peak_p1']:.1f} MiB"

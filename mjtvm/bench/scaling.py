@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ModelError
 from .measure import rss_mib, stats, times, traced_peak_mib
 
 __all__ = ["SCALING_FINGERS", "SCALING_RADIUS", "bench_scaling", "scaling_hand"]
@@ -41,9 +42,12 @@ def scaling_hand(fingers: int, *, mu: float = 0.5, mg: float = 1.0) -> Any:
     headings = [float(a + math.pi) for a in angles]
     radius, tip = 0.1, 0.005
     xml = hand_mjcf(
-        finger_bases=bases, finger_headings=headings, mg=mg, object_position=(0.0, 0.0, 10.0),
+        finger_bases=bases,
+        finger_headings=headings,
+        mg=mg,
+        object_position=(0.0, 0.0, 10.0),
         model_name=f"scaling_{fingers}",
-    )  # fmt: skip
+    )
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     for f in range(1, fingers + 1):
@@ -61,7 +65,10 @@ def scaling_hand(fingers: int, *, mu: float = 0.5, mg: float = 1.0) -> Any:
         model, data, contact_types={f"f{f}_tip": "F" for f in range(1, fingers + 1)}, mu=mu, rvds=rvds
     )
     if len(state.contacts) != fingers or any(c.name != f"f{i}_tip" for i, c in enumerate(state.contacts, 1)):
-        raise ValueError(f"expected one tip contact per finger, got {[c.name for c in state.contacts]}")
+        raise ModelError(
+            f"the {fingers}-finger hand",
+            f"expected one tip contact per finger, got {[c.name for c in state.contacts]}",
+        )
     return state
 
 

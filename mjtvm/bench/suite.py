@@ -222,9 +222,13 @@ def run_suite(
     }
     if cases:
         report["cases"] = paper_cases(
-            quick=quick, repeats=repeats, baseline_repeats=baseline_repeats, p1_repeats=p1_repeats,
-            time_limit=time_limit, say=say,
-        )  # fmt: skip
+            quick=quick,
+            repeats=repeats,
+            baseline_repeats=baseline_repeats,
+            p1_repeats=p1_repeats,
+            time_limit=time_limit,
+            say=say,
+        )
     if lift:
         say("full lift (L and S)")
         report["lift"] = bench_lift(repeats=lift_repeats)

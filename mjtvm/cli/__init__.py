@@ -14,7 +14,8 @@ Exit codes
     invalid state file (:class:`~mjtvm.errors.StateError`) or scenario
     (:class:`~mjtvm.errors.ModelError`), an output folder that cannot be written or is in use
     by another run (:class:`~mjtvm.errors.OutputError`, checked before any work), an
-    unreachable ``--cluster`` or one that is not a Dask scheduler.
+    unreachable ``--cluster`` or one that is not a Dask scheduler, an argument the library
+    refuses (:class:`~mjtvm.errors.ParamError`).
 3
     Solver trouble (:class:`~mjtvm.errors.SolverError`): ``solver error: ...``.
 130
@@ -25,7 +26,7 @@ Exit codes
 
 Modules: :mod:`~mjtvm.cli.parser` (the parser, :func:`main`), :mod:`~mjtvm.cli.solve`
 (``solve``, ``export-state``, ``tvms``), :mod:`~mjtvm.cli.lift` (``replay``, ``sweep``),
-:mod:`~mjtvm.cli.verify`, :mod:`~mjtvm.cli.bench`, :mod:`~mjtvm.cli.options` (parser, old
+:mod:`~mjtvm.cli.verify`, :mod:`~mjtvm.cli.bench`, :mod:`~mjtvm.cli.options` (parser, removed
 spellings, shared options), :mod:`~mjtvm.cli.values` (option types), :mod:`~mjtvm.cli.output`
 (exit codes, standard output).
 """

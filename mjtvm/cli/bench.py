@@ -45,18 +45,38 @@ def add_bench(sub: Subparsers) -> None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``mjtvm bench`` (the vocabulary of ``docs/cli.md``)."""
     parser.add_argument("--quick", action="store_true", help="skip Case 2's Problem 1 and every cdd run")
-    parser.add_argument("--repeats", type=integer(1, MAX_REPEATS), default=200, metavar="N",
-                        help="timed calls per Problem 2 state")  # fmt: skip
-    parser.add_argument("--baseline-repeats", type=integer(1, MAX_BASELINE_REPEATS), default=10, metavar="N",
-                        help="timed cvxpy calls per state")  # fmt: skip
-    parser.add_argument("--time-limit", type=number(0.0, MAX_SECONDS, strict=True), default=120.0, metavar="S",
-                        help="cap of each cdd baseline run (s)")  # fmt: skip
+    parser.add_argument(
+        "--repeats",
+        type=integer(1, MAX_REPEATS),
+        default=200,
+        metavar="N",
+        help="timed calls per Problem 2 state",
+    )
+    parser.add_argument(
+        "--baseline-repeats",
+        type=integer(1, MAX_BASELINE_REPEATS),
+        default=10,
+        metavar="N",
+        help="timed cvxpy calls per state",
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=number(0.0, MAX_SECONDS, strict=True),
+        default=120.0,
+        metavar="S",
+        help="cap of each cdd baseline run (s)",
+    )
     out_options(
         parser, name="bench", out_help="output folder of NAME.json (the report) and NAME.md (the table)"
     )
     removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
-    parser.add_argument("--notes", type=input_file, default=None, metavar="FILE",
-                        help="text file whose lines are appended to the table's notes")  # fmt: skip
+    parser.add_argument(
+        "--notes",
+        type=input_file,
+        default=None,
+        metavar="FILE",
+        help="text file whose lines are appended to the table's notes",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -128,9 +148,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         with _step_bar(_steps(args.quick), args.quiet) as step:
             report: dict[str, Any] = suite.run_suite(
-                quick=args.quick, repeats=args.repeats, baseline_repeats=args.baseline_repeats,
-                time_limit=args.time_limit, progress=step,
-            )  # fmt: skip
+                quick=args.quick,
+                repeats=args.repeats,
+                baseline_repeats=args.baseline_repeats,
+                time_limit=args.time_limit,
+                progress=step,
+            )
         notes = bench_report.auto_notes(report) + extra
         table = bench_report.format_suite_table(report, notes)
         report["notes"] = notes

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TypeVar
 
-from ..errors import OptionError
+from ..errors import OptionError, ParamError
 from .options import (
     GRASP_HELP,
     Subparsers,
     command,
-    deprecated_alias,
     grasp_option,
     lift_options,
     out_options,
@@ -35,6 +36,8 @@ from .values import (
 )
 
 __all__ = ["add_replay", "add_sweep"]
+
+_T = TypeVar("_T")
 
 
 _TEXTS: dict[str, tuple[str, str]] = {
@@ -65,15 +68,21 @@ def add_replay(sub: Subparsers) -> None:
     p.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument(
-        "--rrd", type=output_file, metavar="FILE", default=None,
+        "--rrd",
+        type=output_file,
+        metavar="FILE",
+        default=None,
         help="also write a rerun recording of the lift (scene, contacts, velocity polytopes, TVMMP, "
         "joint operation points); open it with `rerun FILE`",
-    )  # fmt: skip
+    )
     p.add_argument("--spawn", action="store_true", help="also stream the recording to a new rerun viewer")
     p.add_argument(
-        "--tvms-every", type=integer(0, MAX_STATES), default=5, metavar="N",
+        "--tvms-every",
+        type=integer(0, MAX_STATES),
+        default=5,
+        metavar="N",
         help="TVMS (Problem 1) in the recording at every N-th state and the last; 0: never",
-    )  # fmt: skip
+    )
     p.set_defaults(func=_cmd_replay)
 
 
@@ -101,11 +110,20 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         try:
             out = run_replay(
-                scenario=args.grasp, hand=args.hand, mu=args.mu, mg=args.mg, num_states=args.states, stop_margin=args.stop_margin,
-                variants=args.contacts, readings=args.reading, out=outdir,
-                plots=not args.no_plots, sweeps=not args.no_sweeps, progress=not args.quiet,
+                scenario=args.grasp,
+                hand=args.hand,
+                mu=args.mu,
+                mg=args.mg,
+                num_states=args.states,
+                stop_margin=args.stop_margin,
+                variants=args.contacts,
+                readings=args.reading,
+                out=outdir,
+                plots=not args.no_plots,
+                sweeps=not args.no_sweeps,
+                progress=not args.quiet,
                 on_replay=record if args.rrd is not None or args.spawn else None,
-            )  # fmt: skip
+            )
         except BaseException:
             for job in jobs:
                 job.cancel()
@@ -117,8 +135,10 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     emit(f"lift: {lift.num_states} states, {x} = {values[0]:.4f} .. {values[-1]:.4f} m ({lift.limit})")
     doubtful = [r for r in out.records if r.result.uncertified()]
     if doubtful:
-        warn(f"{len(doubtful)} of {len(out.records)} states have an alpha that is not certified "
-             f"(lift.csv: certified; lift.json: notes), the first: state {doubtful[0].index}")  # fmt: skip
+        warn(
+            f"{len(doubtful)} of {len(out.records)} states have an alpha that is not certified "
+            f"(lift.csv: certified; lift.json: notes), the first: state {doubtful[0].index}"
+        )
     for name, path in out.files.items():
         emit(f"wrote {name}: {path}")
     for info in infos:
@@ -133,11 +153,19 @@ def add_sweep(sub: Subparsers) -> None:
     p = command(sub, "sweep", *_TEXTS["sweep"])
     _sweep_grid(p)
     p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
-    p.add_argument("--cluster", type=cluster_address, default=None, metavar="tcp://HOST:PORT",
-                   help="Dask scheduler address (overrides --jobs; connection timeout 10 s)")  # fmt: skip
+    p.add_argument(
+        "--cluster",
+        type=cluster_address,
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help="Dask scheduler address (overrides --jobs; connection timeout 10 s)",
+    )
     out_options(p, name="sweep")
-    p.add_argument("--resume", action="store_true",
-                   help="keep the finished rows of NAME.partial.json / NAME.json that belong to this grid")  # fmt: skip
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="keep the finished rows of NAME.partial.json / NAME.json that belong to this grid",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_sweep)
 
@@ -146,23 +174,44 @@ def _sweep_grid(p: argparse.ArgumentParser) -> None:
     """The grid's axes: grasps, hands, contacts, readings, mu, mg and the lift's states."""
     grasp_option(p, default="case2", type=grasps, help="grasps (comma-separated): " + GRASP_HELP)
     p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
-    new = p.add_argument("--contacts", type=choices(CONTACTS), default="L", metavar="L,S",
-                         help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4)")  # fmt: skip
-    deprecated_alias(p, "--variants", new)
-    new = p.add_argument("--reading", type=choices(READINGS, every="both"), default="physical",
-                         metavar="READING", help="slide directions of S-points: physical, literal or both")  # fmt: skip
-    deprecated_alias(p, "--readings", new)
+    p.add_argument(
+        "--contacts",
+        type=choices(CONTACTS),
+        default="L",
+        metavar="L,S",
+        help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4)",
+    )
+    p.add_argument(
+        "--reading",
+        type=choices(READINGS, every="both"),
+        default="physical",
+        metavar="READING",
+        help="slide directions of S-points: physical, literal or both",
+    )
     p.add_argument(
         "--mu", type=numbers(0.0, MAX_MU), default=None, help="friction coefficients (default: the grasp's)"
     )
     p.add_argument(
         "--mg", type=numbers(0.0, MAX_FORCE), default=None, help="object weights (N) (default: the grasp's)"
     )
-    new = p.add_argument("--states", type=integer(2, MAX_STATES, hint="state indices are --state-indices"),
-                         default=30, metavar="N", help="number of states along the lift")  # fmt: skip
-    deprecated_alias(p, "--num-states", new)
-    p.add_argument("--state-indices", type=integers(0, MAX_STATES - 1), default=None, metavar="I,J",
-                   help="solve only these states of the lift (default: all)")  # fmt: skip
+    p.add_argument(
+        "--states",
+        type=integer(2, MAX_STATES, hint="state indices are --state-indices"),
+        default=30,
+        metavar="N",
+        help="number of states along the lift",
+    )
+    p.add_argument(
+        "--state-indices",
+        type=integers(0, MAX_STATES - 1),
+        default=None,
+        metavar="I,J",
+        help="solve only these states of the lift (default: all)",
+    )
+
+
+def _tuple(values: Sequence[_T] | None) -> tuple[_T, ...] | None:
+    return None if values is None else tuple(values)
 
 
 def grid_size(args: argparse.Namespace) -> int:
@@ -174,8 +223,13 @@ def grid_size(args: argparse.Namespace) -> int:
     return int(size)
 
 
+_SWEEP_OPTIONS = {"mus": "--mu", "mgs": "--mg", "cluster": "--cluster", "states": "--state-indices"}
+"""The options of the :class:`~mjtvm.apps.sweep.SweepFiles` fields whose values only the run
+can judge (the grasps' own mu and mg, a scheduler's answer)."""
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from ..apps.sweep import run_sweep_files
+    from ..apps.sweep import SweepFiles, run_sweep_files
 
     size = grid_size(args)
     if size > MAX_GRID:  # the points are built before the first is solved
@@ -183,7 +237,32 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             "--grasp x --hand x --contacts x --reading x --mu x --mg x --states",
             f"expected a grid of at most {MAX_GRID} points, got {size}",
         )
-    files = run_sweep_files(args, emit=emit)
+    bad = [i for i in (args.state_indices or ()) if i >= args.states]
+    if bad:
+        raise OptionError("--state-indices", f"expected indices below --states = {args.states}, got {bad[0]}")
+    run = SweepFiles(
+        scenarios=tuple(args.grasp),
+        hands=tuple(args.hand),
+        variants=tuple(args.contacts),
+        readings=tuple(args.reading),
+        mus=_tuple(args.mu),
+        mgs=_tuple(args.mg),
+        num_states=args.states,
+        states=_tuple(args.state_indices),
+        out=args.out,
+        name=args.name,
+        jobs=args.jobs,
+        cluster=args.cluster,
+        resume=args.resume,
+        quiet=args.quiet,
+    )
+    try:
+        files = run_sweep_files(run, emit=emit)
+    except ParamError as e:
+        if e.name not in _SWEEP_OPTIONS:
+            raise
+        problem = e.problem.replace("give the coefficients and the weights", "give --mu and --mg")
+        raise OptionError(_SWEEP_OPTIONS[e.name], problem) from e
     for path in files:
         emit(f"wrote {path}")
     return EXIT_OK

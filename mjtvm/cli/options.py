@@ -1,10 +1,9 @@
-"""The parser and help formatter, old spellings (deprecated or removed), and option groups that
-several commands share (the vocabulary of ``docs/cli.md``)."""
+"""The parser and help formatter, removed options (refused with a hint), and option groups
+that several commands share (the vocabulary of ``docs/cli.md``)."""
 
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from .output import EXIT_INPUT, one_line
@@ -28,7 +27,6 @@ __all__ = [
     "Parser",
     "Subparsers",
     "command",
-    "deprecated_alias",
     "hand_option",
     "lift_options",
     "out_options",
@@ -65,35 +63,26 @@ class Formatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action) or ""
 
 
-class _OldSpelling(argparse.Action):
-    """A hidden old spelling of an option. Deprecated (``use`` the new option): stores into the
-    new option's destination, with a notice on stderr. Removed (``hint``): a one-line error."""
+class _Removed(argparse.Action):
+    """A hidden option that is no longer one: a one-line error with a ``hint`` of what replaces it."""
 
-    def __init__(self, option_strings: list[str], dest: str, *, use: str = "", hint: str = "",
-                 **kwargs: Any) -> None:  # fmt: skip
-        self.use, self.hint = use, hint
+    def __init__(self, option_strings: list[str], dest: str, *, hint: str, **kwargs: Any) -> None:
+        self.hint = hint
         super().__init__(option_strings, dest, **kwargs)
 
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
-                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
-        if self.hint:
-            parser.error(f"{option_string}: no longer an option: {self.hint}")
-        print(f"mjtvm: {option_string} is deprecated, use {self.use}", file=sys.stderr)
-        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
-
-
-def deprecated_alias(parser: argparse.ArgumentParser, old: str, new: argparse.Action) -> None:
-    """Accept ``old`` as a hidden alias of the option ``new`` (same type), with a notice."""
-    kwargs: dict[str, Any] = {"nargs": 0, "const": new.const} if new.nargs == 0 else {"type": new.type}
-    parser.add_argument(old, dest=new.dest, action=_OldSpelling, use=new.option_strings[0],
-                        help=argparse.SUPPRESS, default=argparse.SUPPRESS, **kwargs)  # fmt: skip
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        parser.error(f"{option_string}: no longer an option: {self.hint}")
 
 
 def removed_option(parser: argparse.ArgumentParser, old: str, hint: str) -> None:
     """Refuse ``old`` (one value) with a hint, instead of argparse's bare "unrecognized"."""
-    parser.add_argument(
-        old, action=_OldSpelling, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS
-    )
+    parser.add_argument(old, action=_Removed, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
 
 
 def command(sub: Subparsers, name: str, help: str, description: str) -> argparse.ArgumentParser:
@@ -105,8 +94,13 @@ def command(sub: Subparsers, name: str, help: str, description: str) -> argparse
 _OUT_HELP = "output folder (created if missing; locked while the run writes)"
 
 
-def out_options(p: argparse.ArgumentParser, *, name: str | None, out_help: str = _OUT_HELP,
-                name_help: str = "file stem of the outputs in --out") -> None:  # fmt: skip
+def out_options(
+    p: argparse.ArgumentParser,
+    *,
+    name: str | None,
+    out_help: str = _OUT_HELP,
+    name_help: str = "file stem of the outputs in --out",
+) -> None:
     """``--out DIR`` and (unless ``name`` is None) ``--name STEM`` with the default ``name``."""
     p.add_argument("--out", type=folder, default="results", metavar="DIR", help=out_help)
     if name is not None:
@@ -122,17 +116,15 @@ GRASP_HELP = (
 def grasp_option(
     p: argparse.ArgumentParser, *, default: str | None, type: Any = None, help: str = GRASP_HELP
 ) -> None:
-    """``--grasp NAME|FILE`` (the old ``--scenario`` too)."""
-    new = p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
-    deprecated_alias(p, "--scenario", new)
+    """``--grasp NAME|FILE``."""
+    p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
 
 
 def hand_option(
     p: argparse.ArgumentParser, help: str = "hand model of the paper's cases: default or humanlike"
 ) -> None:
-    """``--hand`` (the old ``--variant`` too)."""
-    new = p.add_argument("--hand", default="default", help=help)
-    deprecated_alias(p, "--variant", new)
+    """``--hand``."""
+    p.add_argument("--hand", default="default", help=help)
 
 
 def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> None:
@@ -159,19 +151,27 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
         help="number of states along the lift",
     )
     p.add_argument(
-        "--stop-margin", type=fraction, default=None, metavar="F",
+        "--stop-margin",
+        type=fraction,
+        default=None,
+        metavar="F",
         help="end the lift where a finger's contact Jacobian keeps this fraction of its smallest singular "
         "value at the start (default: the grasp's, 0.25; 0: to the reach limit)",
-    )  # fmt: skip
-    new = p.add_argument(
-        "--contacts", type=choices(CONTACTS), default=contacts, metavar="L,S",
+    )
+    p.add_argument(
+        "--contacts",
+        type=choices(CONTACTS),
+        default=contacts,
+        metavar="L,S",
         help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4; L: line/rolling, "
         "S: sliding), comma-separated",
-    )  # fmt: skip
-    deprecated_alias(p, "--variants", new)
+    )
     p.add_argument(
-        "--reading", type=choices(READINGS, every="both"), default=reading, metavar="READING",
+        "--reading",
+        type=choices(READINGS, every="both"),
+        default=reading,
+        metavar="READING",
         help="slide direction of S-points: physical (the slip of the min-norm motion: friction "
         "resists the lift, what the physics check supports), literal (the paper's printed vector: "
         "reproduces its Fig. 8), a comma list, or both",
-    )  # fmt: skip
+    )

@@ -57,8 +57,9 @@ def emit(text: str) -> None:
         raise
     except OSError as e:
         stdout_to_devnull()
-        raise OutputError("standard output", getattr(sys.stdout, "name", "<stdout>"),
-                          f"cannot write ({e.strerror or e})") from e  # fmt: skip
+        raise OutputError(
+            "standard output", getattr(sys.stdout, "name", "<stdout>"), f"cannot write ({e.strerror or e})"
+        ) from e
 
 
 def warn(text: str) -> None:

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 from importlib import metadata
 
-from ..errors import MjtvmError, ModelError, OptionError, OutputError, SolverError, StateError
+from ..errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .bench import add_bench
 from .lift import add_replay, add_sweep
 from .options import Parser
@@ -39,7 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="mjtvm",
         description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands. "
         "Exit codes: 0 ok, 2 bad input, 3 solver trouble, 130 interrupted (docs/cli.md).",
-    )  # fmt: skip
+    )
     parser.add_argument("--version", action="version", version=f"mjtvm {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     add_solve(sub)
@@ -47,9 +47,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_replay(sub)
     add_tvms(sub)
     sub.add_parser(
-        "verify", add_help=False,  # its options import MuJoCo: parsed by verify_parser() in main()
+        "verify",
+        add_help=False,  # its options import MuJoCo: parsed by verify_parser() in main()
         help="check TVMMP along the lift against MuJoCo rollouts with the dcmotor actuators",
-    )  # fmt: skip
+    )
     add_sweep(sub)
     add_bench(sub)
     return parser
@@ -78,7 +79,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:
         stdout_to_devnull()
         return EXIT_PIPE
-    except (StateError, ModelError, OptionError, OutputError) as e:
+    except (StateError, ModelError, OptionError, OutputError, ParamError) as e:
         print(f"error: {one_line(str(e))}", file=sys.stderr)
         return EXIT_INPUT
     except SolverError as e:

@@ -12,7 +12,7 @@ from ..core.bounds import MAX_FILE_BYTES
 from ..core.solvers import SOLVERS
 from ..core.state import GraspState, load_state
 from ..core.tvmmp import tvmmp
-from ..errors import StateError
+from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
 from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn_uncertified
@@ -59,14 +59,22 @@ _SOURCE_HELP = (
 def add_solve(sub: Subparsers) -> None:
     """``mjtvm solve [STATE|GRASP|-]``: prints mjtvm.result/1."""
     p = command(sub, "solve", *_TEXTS["solve"])
-    p.add_argument("state", nargs="?", default=None, type=source, metavar="STATE|GRASP",
-                   help=_SOURCE_HELP + " (default: the shipped example pinch.json)")  # fmt: skip
+    p.add_argument(
+        "state",
+        nargs="?",
+        default=None,
+        type=source,
+        metavar="STATE|GRASP",
+        help=_SOURCE_HELP + " (default: the shipped example pinch.json)",
+    )
     hand_option(p)
     p.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend")
     p.add_argument(
-        "--box", choices=("eliminated", "literal"), default="eliminated",
+        "--box",
+        choices=("eliminated", "literal"),
+        default="eliminated",
         help="operation-range form: exact reduction or the paper's literal eq. 2 box",
-    )  # fmt: skip
+    )
     p.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
     _indent_option(p)
     p.set_defaults(func=_cmd_solve)
@@ -111,14 +119,16 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
         return load_state(_read_stdin())
     if source is None:
         if default is None:
-            raise StateError("state", "give a mjtvm.state/1 file (or -) or a grasp (--grasp or a .toml file)")
+            raise OptionError(
+                "STATE", "give a mjtvm.state/1 file (or -) or a grasp (--grasp or a .toml file)"
+            )
         source = default
     if is_grasp_source(source):
         from ..sim.scenario import load_scenario  # MuJoCo only for grasps
 
         return load_scenario(source, variant=hand).state()
     if hand != "default":
-        raise StateError("--hand", "applies to the paper's shipped grasps, not to a state file")
+        raise OptionError("--hand", "applies to the paper's shipped grasps, not to a state file")
     return load_state(source)
 
 
@@ -135,7 +145,7 @@ def add_export_state(sub: Subparsers) -> None:
     """``mjtvm export-state GRASP``: prints the grasp's mjtvm.state/1."""
     p = command(sub, "export-state", *_TEXTS["export-state"])
     p.add_argument("grasp_file", nargs="?", default=None, type=source, metavar="GRASP", help=GRASP_HELP)
-    grasp_option(p, default=None, help="the same as GRASP (the old --scenario spelling works too)")
+    grasp_option(p, default=None, help="the same as GRASP")
     hand_option(p)
     p.add_argument(
         "--mg", type=number(0.0, MAX_FORCE), default=None, help="object weight (N); default: the grasp's REFS"
@@ -154,7 +164,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
 
     source = args.grasp_file or args.grasp
     if source is None:
-        raise StateError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
+        raise OptionError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
     grasp = load_scenario(source, variant=args.hand, mg=args.mg, mu=args.mu)
     state = grasp.state()
     if not args.quiet:
@@ -221,7 +231,7 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
     from ..polytopes.tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
 
     if args.grasp is not None and args.state is not None:
-        raise StateError("--grasp", "give STATE or --grasp, not both")
+        raise OptionError("--grasp", "give STATE or --grasp, not both")
     state = load_source(args.grasp or args.state, hand=args.hand)
     if args.no_rvds:
         state = state.with_(rvds=None)

@@ -9,13 +9,12 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, deprecated_alias, grasp_option, out_options
+from .options import Parser, grasp_option, out_options
 from .output import EXIT_OK
 from .values import (
     CONTACTS,
@@ -68,11 +67,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="N",
         help="check every N-th state (and the last)",
     )
-    p.add_argument("--contacts", type=choices(CONTACTS), default="L,S", metavar="L,S",
-                   help="contact types of the lift's L/S fingers to check (Case 2: fingers 2 and 4)")  # fmt: skip
-    p.add_argument("--reading", type=choices(READINGS, every="both"), default="both", metavar="READING",
-                   help="slide directions of the S-points: physical, literal or both")  # fmt: skip
-    p.add_argument("--runs", action=_RunsAlias, type=_runs, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
+    p.add_argument(
+        "--contacts",
+        type=choices(CONTACTS),
+        default="L,S",
+        metavar="L,S",
+        help="contact types of the lift's L/S fingers to check (Case 2: fingers 2 and 4)",
+    )
+    p.add_argument(
+        "--reading",
+        type=choices(READINGS, every="both"),
+        default="both",
+        metavar="READING",
+        help="slide directions of the S-points: physical, literal or both",
+    )
     p.add_argument(
         "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient (default: the grasp's)"
     )
@@ -83,23 +91,43 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="object weight (N) (default: the grasp's)",
     )
     p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
-    p.add_argument("--start-method", default="forkserver", choices=("forkserver", "spawn"),
-                   help="how worker processes start")  # fmt: skip
-    p.add_argument("--witness", default="central", choices=("central", "vertex"),
-                   help="drive the central solution of the LP or the simplex vertex")  # fmt: skip
-    p.add_argument("--dynamics", action="store_true",
-                   help="also the dynamic alpha (eq. 31 with M qdd + c of the witness motion, docs/dynamics.md), "
-                   "alpha_sim / alpha_dyn and a rollout at 0.9 alpha_dyn")  # fmt: skip
-    p.add_argument("--preload", type=number(0.0, MAX_FORCE), default=0.0, metavar="N",
-                   help="minimum normal force (N) of every L contact (the state's contact preload)")  # fmt: skip
-    p.add_argument("--gears", type=numbers(MIN_GEAR, MAX_GEAR), default=None, metavar="N,N,...",
-                   help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP "
-                   "(e.g. 10,20,30,40,60,100; writes gears.csv and gears.png)")  # fmt: skip
+    p.add_argument(
+        "--start-method",
+        default="forkserver",
+        choices=("forkserver", "spawn"),
+        help="how worker processes start",
+    )
+    p.add_argument(
+        "--witness",
+        default="central",
+        choices=("central", "vertex"),
+        help="drive the central solution of the LP or the simplex vertex",
+    )
+    p.add_argument(
+        "--dynamics",
+        action="store_true",
+        help="also the dynamic alpha (eq. 31 with M qdd + c of the witness motion, docs/dynamics.md), "
+        "alpha_sim / alpha_dyn and a rollout at 0.9 alpha_dyn",
+    )
+    p.add_argument(
+        "--preload",
+        type=number(0.0, MAX_FORCE),
+        default=0.0,
+        metavar="N",
+        help="minimum normal force (N) of every L contact (the state's contact preload)",
+    )
+    p.add_argument(
+        "--gears",
+        type=numbers(MIN_GEAR, MAX_GEAR),
+        default=None,
+        metavar="N,N,...",
+        help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP "
+        "(e.g. 10,20,30,40,60,100; writes gears.csv and gears.png)",
+    )
     _simulation_options(p)
     p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
     out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
-    new = p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
-    deprecated_alias(p, "--no-plot", new)
+    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
     p.add_argument(
         "--rrd",
         type=output_file,
@@ -114,14 +142,27 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
     """The rollouts' :class:`~mjtvm.physics.simulate.SimSettings` (ablations)."""
     from ..physics.simulate import SimSettings  # MuJoCo
 
-    p.add_argument("--armature-scale", type=number(0.0, MAX_SCALE, strict=True), default=1.0,
-                   help="ablation: scale the rotor inertia (armature)")  # fmt: skip
-    p.add_argument("--window", type=number(0.0, MAX_SIM_SECONDS, strict=True), default=SimSettings.window,
-                   help="measurement window of a rollout (s)")  # fmt: skip
-    p.add_argument("--startup", type=number(0.0, MAX_SIM_SECONDS), default=SimSettings.startup,
-                   help="settling time before the window (s)")  # fmt: skip
-    p.add_argument("--cone", default="elliptic", choices=("elliptic", "pyramidal"),
-                   help="MuJoCo friction cone")  # fmt: skip
+    p.add_argument(
+        "--armature-scale",
+        type=number(0.0, MAX_SCALE, strict=True),
+        default=1.0,
+        help="ablation: scale the rotor inertia (armature)",
+    )
+    p.add_argument(
+        "--window",
+        type=number(0.0, MAX_SIM_SECONDS, strict=True),
+        default=SimSettings.window,
+        help="measurement window of a rollout (s)",
+    )
+    p.add_argument(
+        "--startup",
+        type=number(0.0, MAX_SIM_SECONDS),
+        default=SimSettings.startup,
+        help="settling time before the window (s)",
+    )
+    p.add_argument(
+        "--cone", default="elliptic", choices=("elliptic", "pyramidal"), help="MuJoCo friction cone"
+    )
     p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
 
 
@@ -147,30 +188,12 @@ def _cmd_gears(args: argparse.Namespace) -> int:
         sel = [r for r in rows if r["ratio"] == n]
         qs = [r["tvmmp"] for r in sel if r["tvmmp"] is not None]
         dy = [r["tvmmp_dyn"] for r in sel if "tvmmp_dyn" in r]
-        print(f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
-              f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)")  # fmt: skip
+        print(
+            f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
+            f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)"
+        )
     print(f"rows in {outdir / 'gears.csv'}")
     return EXIT_OK
-
-
-def _runs(text: str) -> tuple[str, ...]:
-    from ..physics.verify import RUNS  # the parser of verify imports MuJoCo anyway
-
-    runs = tuple(r.strip() for r in text.split(","))
-    if not text.strip() or len(set(runs)) != len(runs) or any(r not in RUNS for r in runs):
-        raise argparse.ArgumentTypeError(f"expected distinct values among {','.join(RUNS)}, got {text!r}")
-    return runs
-
-
-class _RunsAlias(argparse.Action):
-    """The old ``--runs L,S-literal``: deprecated, the same as ``--contacts L,S --reading literal``."""
-
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
-                 values: Any, option_string: str | None = None) -> None:  # fmt: skip
-        print(f"mjtvm: {option_string} is deprecated, use --contacts and --reading", file=sys.stderr)
-        namespace.contacts = tuple(dict.fromkeys(r.split("-")[0] for r in values))
-        readings = tuple(r.split("-")[1] for r in values if "-" in r)
-        namespace.reading = readings or namespace.reading
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
@@ -185,8 +208,13 @@ def _cmd_verify(args: argparse.Namespace) -> int:
 
     if args.gears is not None:
         return _cmd_gears(args)
-    settings = SimSettings(armature_scale=args.armature_scale, window=args.window, startup=args.startup,
-                           cone=args.cone, track=not args.no_track)  # fmt: skip
+    settings = SimSettings(
+        armature_scale=args.armature_scale,
+        window=args.window,
+        startup=args.startup,
+        cone=args.cone,
+        track=not args.no_track,
+    )
     outdir = check_output_dir(args.out)
     if args.rrd is not None:
         check_output_dir(Path(args.rrd).parent, option="--rrd")
@@ -196,11 +224,21 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         t0 = time.perf_counter()
         rows = verify.verify_lift(
-            args.grasp, num_states=args.states, stride=args.stride,
-            runs=verify.runs_of(args.contacts, args.reading), mu=mu, mg=mg, settings=settings,
-            witness=args.witness, dynamics=args.dynamics, preload=args.preload, jobs=args.jobs, start_method=args.start_method, out=None,
+            args.grasp,
+            num_states=args.states,
+            stride=args.stride,
+            runs=verify.runs_of(args.contacts, args.reading),
+            mu=mu,
+            mg=mg,
+            settings=settings,
+            witness=args.witness,
+            dynamics=args.dynamics,
+            preload=args.preload,
+            jobs=args.jobs,
+            start_method=args.start_method,
+            out=None,
             progress=not args.quiet,
-        )  # fmt: skip
+        )
         wall = time.perf_counter() - t0
         files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": verify.rows_csv(rows)}
         if not args.no_plots:
@@ -237,6 +275,8 @@ def _print_slide_check(srows: Sequence[dict[str, Any]]) -> None:
     for mode in ("physical", "literal", "frictionless"):
         sel = [r for r in srows if r["mode"] == mode]
         fc = [r["friction_cos_phys"] for r in sel if not math.isnan(r["friction_cos_phys"])]
-        print(f"slide check {mode}: friction cos with physical slide direction: median "
-              f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
-              f"/{len(sel) // 2} states")  # fmt: skip
+        print(
+            f"slide check {mode}: friction cos with physical slide direction: median "
+            f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
+            f"/{len(sel) // 2} states"
+        )

@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ..errors import ParamError
 from .contacts import force_generators, slide_unit, tangent_basis
 from .roundoff import drop_cancellation, drop_data_roundoff
 from .state import GraspState
@@ -408,7 +409,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     Assembly
     """
     if box not in ("eliminated", "literal"):
-        raise ValueError(f"box: expected 'eliminated' or 'literal', got {box!r}")
+        raise ParamError("box", f"expected 'eliminated' or 'literal', got {box!r}", box)
     contacts = state.contacts
     gens = tuple(force_generators(c, state.friction_edges) for c in contacts)
     offsets = np.cumsum([0] + [g.shape[1] for g in gens])

@@ -226,9 +226,11 @@ class Certifier:
         moved += float(np.abs(d[wrong_col]) @ size[wrong_col])
         d[wrong_col] = 0.0
         bound = float(
-            np.maximum(y, 0.0) @ lower[1] + np.minimum(y, 0.0) @ upper[1]
-            + np.maximum(d, 0.0) @ self.lower0 + np.minimum(d, 0.0) @ cu
-        )  # fmt: skip
+            np.maximum(y, 0.0) @ lower[1]
+            + np.minimum(y, 0.0) @ upper[1]
+            + np.maximum(d, 0.0) @ self.lower0
+            + np.minimum(d, 0.0) @ cu
+        )
         objective = float(c @ xc)
         size_obj = max(abs(objective), abs(bound))
         return Certificate(

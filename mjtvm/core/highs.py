@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SolverError
+from ..errors import ParamError, SolverError
 from .lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from .scaling import Scaling, column_factor, cost_scale, lp_scaling, scale_lp
 
@@ -174,7 +174,9 @@ class HighsSession:
         """Pass the equilibrated LP ``slp`` (factors ``s``) to the HiGHS instance ``h``, with
         the session's options ``tuned`` (over ``_TUNABLE_DEFAULTS``)."""
         if not set(tuned) <= set(_TUNABLE_DEFAULTS):
-            raise ValueError(f"options: only {sorted(_TUNABLE_DEFAULTS)} may be chosen, got {sorted(tuned)}")
+            raise ParamError(
+                "options", f"only {sorted(_TUNABLE_DEFAULTS)} may be chosen, got {sorted(tuned)}", tuned
+            )
         highspy = _highs()
         self._hs = highspy
         self.scaling = s
@@ -206,13 +208,22 @@ class HighsSession:
         # The flat passModel: filling a highspy.HighsLp field by field costs 60 us (each
         # field a conversion), more than HiGHS' own copy of the model.
         status = h.passModel(
-            n, m, a.nnz, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize), 0.0,
-            np.ascontiguousarray(slp.c, dtype=float), finite(slp.col_lower, -inf), finite(slp.col_upper, inf),
-            finite(slp.row_lower, -inf), finite(slp.row_upper, inf),
-            np.ascontiguousarray(a.indptr, dtype=np.int32), np.ascontiguousarray(a.indices, dtype=np.int32),
+            n,
+            m,
+            a.nnz,
+            int(highspy.MatrixFormat.kColwise),
+            int(highspy.ObjSense.kMinimize),
+            0.0,
+            np.ascontiguousarray(slp.c, dtype=float),
+            finite(slp.col_lower, -inf),
+            finite(slp.col_upper, inf),
+            finite(slp.row_lower, -inf),
+            finite(slp.row_upper, inf),
+            np.ascontiguousarray(a.indptr, dtype=np.int32),
+            np.ascontiguousarray(a.indices, dtype=np.int32),
             np.ascontiguousarray(a.data, dtype=float),
             np.zeros(n, dtype=np.int32),  # every column continuous (HiGHS reads n entries: never empty)
-        )  # fmt: skip
+        )
         self._check(status, "passModel")
         # Largest scaled magnitude per row: the reference of set_column's round-off drop.
         self._row_max = np.zeros(a.shape[0])
@@ -295,7 +306,7 @@ class HighsSession:
         bound. The caller makes it nonsingular (HiGHS would replace dependent columns by
         slacks); HiGHS restores primal and dual feasibility from there."""
         if len(basic_cols) != len(nonbasic_rows):
-            raise ValueError("start_basis: as many basic columns as nonbasic rows are needed")
+            raise ParamError("start_basis", "as many basic columns as nonbasic rows are needed")
         hs = self._hs
         status = hs.HighsBasisStatus
         cols = np.where(np.isfinite(self._col_lower), 0, np.where(np.isfinite(self._col_upper), 1, 2))

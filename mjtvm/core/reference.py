@@ -23,7 +23,7 @@ import cvxpy as cp
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SolverError
+from ..errors import ParamError, SolverError
 from .contacts import Contact, slide_unit, tangent_basis
 from .state import GraspState
 
@@ -87,8 +87,12 @@ def _box_constraints(state: GraspState, tau: cp.Expression, qd: cp.Expression) -
     cons += [t_min <= tau, tau <= t_max, q_min <= qd, qd <= q_max]
     n_v = max(len(r.vertices) for r in state.operation_ranges)
     # Pad each vertex list with copies of its first vertex: the hull is unchanged.
-    verts = np.array([np.vstack([r.vertices, np.repeat(r.vertices[:1], n_v - len(r.vertices), 0)])
-                      for r in state.operation_ranges])  # fmt: skip
+    verts = np.array(
+        [
+            np.vstack([r.vertices, np.repeat(r.vertices[:1], n_v - len(r.vertices), 0)])
+            for r in state.operation_ranges
+        ]
+    )
     for (s1, s2), (tc, qc) in zip(_CORNERS, ((t_max, q_max), (t_max, q_min), (t_min, q_max), (t_min, q_min))):
         lam = cp.Variable((m, n_v), nonneg=True)
         cons += [cp.sum(lam, axis=1) == 1]
@@ -170,7 +174,7 @@ def reference_alpha(
         solver fails.
     """
     if state.rvds is None:
-        raise ValueError("state.rvds: Problem 2 needs RVDS vertices")
+        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
     problem = _build(state, state.refs[k], state.rvds[l])
     tight = {"CLARABEL": _CLARABEL_TOL, "HIGHS": _HIGHS_TOL}.get(solver.upper())
     attempts = [tight, {}] if tight is not None else [{}]
@@ -208,7 +212,7 @@ def reference_tvmmp(
         ``R`` statuses; the origin vertex is ``"skipped"`` (Supplement 3).
     """
     if state.rvds is None:
-        raise ValueError("state.rvds: Problem 2 needs RVDS vertices")
+        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
     n_k, n_l = len(state.refs), len(state.rvds)
     alpha = np.full((n_k, n_l), np.nan)
     status = [["skipped"] * n_l for _ in range(n_k)]

@@ -215,8 +215,10 @@ def cost_scale(c: NDArray[np.float64], col: NDArray[np.float64]) -> float:
 
 def lp_scaling(lp: LinearProgram) -> Scaling:
     """:func:`equilibrate` on ``lp`` (its finite row bounds as the right-hand side), with the cost factor."""
-    rhs = np.fmax(np.where(np.isfinite(lp.row_lower), np.abs(lp.row_lower), 0.0),
-                  np.where(np.isfinite(lp.row_upper), np.abs(lp.row_upper), 0.0))  # fmt: skip
+    rhs = np.fmax(
+        np.where(np.isfinite(lp.row_lower), np.abs(lp.row_lower), 0.0),
+        np.where(np.isfinite(lp.row_upper), np.abs(lp.row_upper), 0.0),
+    )
     s = equilibrate(lp.A, rhs=rhs)
     return replace(s, cost=cost_scale(lp.c, s.col))
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import SolverError
+from ..errors import ParamError, SolverError
 from .clarabel import feasible_clarabel, solve_clarabel
 from .highs import HighsSession, new_highs
 from .lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution, LPStatus
@@ -72,7 +72,7 @@ def solve_lp(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling | Non
         return HighsSession(lp, scaling=scaling).solve(duals=True)
     if solver == "clarabel":
         return solve_clarabel(lp, scaling=scaling)
-    raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+    raise ParamError("solver", f"expected one of {SOLVERS}, got {solver!r}", solver)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,7 +155,7 @@ def solve_settled(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling 
     if solver == "clarabel":
         return clarabel_checked(lp, scaling=scaling)
     if solver != "highs":
-        raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+        raise ParamError("solver", f"expected one of {SOLVERS}, got {solver!r}", solver)
     try:
         return Settled(HighsSession(lp, scaling=scaling).solve(duals=True), "highs")
     except SolverError as e:

@@ -45,14 +45,30 @@ __all__ = ["SCHEMA", "GraspState", "dump_state", "load_state", "parse_state", "s
 SCHEMA = "mjtvm.state/1"
 SlipMode = Literal["per_contact", "shared"]
 _TOP_KEYS = {
-    "schema", "space", "object_position", "joints", "gravity_torque", "contacts",
-    "refs", "rvds", "friction_edges", "slip",
-}  # fmt: skip
+    "schema",
+    "space",
+    "object_position",
+    "joints",
+    "gravity_torque",
+    "contacts",
+    "refs",
+    "rvds",
+    "friction_edges",
+    "slip",
+}
 _REQUIRED_TOP = ("schema", "space", "object_position", "joints", "gravity_torque", "contacts", "refs")
 _JOINT_KEYS = {"name", "operation_range"}
 _CONTACT_KEYS = {
-    "name", "type", "position", "normal", "mu", "jacobian", "tangent", "slide_direction", "preload",
-}  # fmt: skip
+    "name",
+    "type",
+    "position",
+    "normal",
+    "mu",
+    "jacobian",
+    "tangent",
+    "slide_direction",
+    "preload",
+}
 _REQUIRED_CONTACT = ("name", "type", "position", "normal", "jacobian")
 
 

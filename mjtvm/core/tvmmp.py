@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..errors import SolverError, StateError
+from ..errors import ParamError, SolverError
 from .assembly import Assembly, BoxForm, assemble
 from .certificate import Certificate, Certifier, clip
 from .result import (  # re-exported: the result types lived here
@@ -226,8 +226,9 @@ class _Problem2:
         nz = np.flatnonzero(kin_col)
         a_s = self._scaled_a.with_column(self.kin[nz], kin_col[nz], factor)
         with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
-            slp = LinearProgram(s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper,
-                                self.col_lower / col_s, cu / col_s)  # fmt: skip
+            slp = LinearProgram(
+                s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper, self.col_lower / col_s, cu / col_s
+            )
         session = HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu, options=P2_HIGHS_OPTIONS)
         # The torques are free and fixed by their rows (tau - J^T E lam = g_f, eq. 19): basic
         # there from the start, the cold first LP of Case 2 takes 45 iterations instead of 87
@@ -290,8 +291,9 @@ class _Problem2:
         """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
         if self._cert is None:
-            self._cert = Certifier(a, self.col_lower, col_ref=self.physical_sizes, abs_a=abs_a,
-                                   row_groups=self.asm.row_groups)  # fmt: skip
+            self._cert = Certifier(
+                a, self.col_lower, col_ref=self.physical_sizes, abs_a=abs_a, row_groups=self.asm.row_groups
+            )
         return self._cert
 
     def _bounds(
@@ -482,7 +484,7 @@ def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pai
     whose RVDS is the origin only still checks each w_k (``l = -1``)."""
     refs, rvds = state.refs, state.rvds
     if rvds is None:  # checked by tvmmp() already; kept for callers of this step
-        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
+        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
     n_k, n_l = refs.shape[0], rvds.shape[0]
     out = _Pairs.empty(n_k, n_l)
     nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
@@ -585,15 +587,15 @@ def tvmmp(
 
     Raises
     ------
-    StateError
-        When the state has no RVDS.
+    ParamError
+        When the state has no RVDS, or ``solver`` or ``box`` is unknown.
     SolverError
         When a solver fails (the failing pair is named).
     """
     if state.rvds is None:
-        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
+        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
     if solver not in SOLVERS:
-        raise ValueError(f"solver: expected one of {SOLVERS}, got {solver!r}")
+        raise ParamError("solver", f"expected one of {SOLVERS}, got {solver!r}", solver)
     t0 = time.perf_counter()
     problem = _Problem2(state, box, solver)
     t1 = time.perf_counter()

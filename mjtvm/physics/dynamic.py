@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from ..core.dynamic import DynamicAlpha, dynamic_alpha, limiting_term
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
-from ..errors import SolverError, StateError
+from ..errors import ParamError, SolverError
 from .rig import Rig
 from .simulate import _gravity
 from .witness import Drive, WitnessKind, central_witness, witness_drive
@@ -183,17 +183,18 @@ def dynamic_pair(
 
     Raises
     ------
-    StateError
+    ParamError
         The pair has no quasi-static solution.
     """
     res = tvmmp(state) if result is None else result
     if res.status[k][l] != "optimal":
-        raise StateError("pair", f"pair ({k}, {l}) is {res.status[k][l]}: no witness to move")
+        raise ParamError("k, l", f"pair ({k}, {l}) is {res.status[k][l]}: no witness to move")
     alpha = float(res.alpha[k, l])
     if not math.isfinite(alpha):
-        raise StateError("pair", f"pair ({k}, {l}) has alpha {alpha}")
-    demand = demand_of(model, qpos, state, k, l, alpha, witness=witness, vertex=res.witnesses[k][l],
-                       object_body=object_body)  # fmt: skip
+        raise ParamError("k, l", f"pair ({k}, {l}) has alpha {alpha}")
+    demand = demand_of(
+        model, qpos, state, k, l, alpha, witness=witness, vertex=res.witnesses[k][l], object_body=object_body
+    )
     dyn = dynamic_alpha(state, k, l, demand, rtol=rtol)
     if dyn.alpha > 0 and dyn.witness is not None:
         # the simplex witness puts redundant joints on their limits; the limiting joint is named

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..core.tvmmp import tvmmp
-from ..errors import StateError
+from ..errors import ParamError
 from ..sim.trajectory import lift_state
 from .dynamic import dynamic_pair
 from .simulate import sim_model
@@ -58,7 +58,7 @@ def gear_sweep(
         Lift state indices (of ``num_states``).
     """
     if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
-        raise StateError("ratios", f"expected positive gear ratios, got {list(ratios)!r}")
+        raise ParamError("ratios", f"expected positive gear ratios, got {list(ratios)!r}", list(ratios))
     lift = cached_lift(grasp, num_states)
     ob = lift.scenario.object_body
     base = motor_model(lift.scenario)
@@ -70,8 +70,9 @@ def gear_sweep(
         gear0 = float(np.median(model.actuator_gear[acts, 0]))
         for n in ratios:
             f = n / gear0
-            state = state0.with_(operation_ranges=tuple(r.scaled(torque=f, speed=1 / f)
-                                                         for r in state0.operation_ranges))  # fmt: skip
+            state = state0.with_(
+                operation_ranges=tuple(r.scaled(torque=f, speed=1 / f) for r in state0.operation_ranges)
+            )
             model.actuator_gear[acts, 0] = n
             res = tvmmp(state)
             row: dict[str, Any] = {"ratio": n, "state": i, "z": float(lift.z[i]), "tvmmp": res.tvmmp}
@@ -101,8 +102,10 @@ def plot_gears(rows: Sequence[dict[str, Any]], title: str = "") -> bytes:
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
     ratios = sorted({r["ratio"] for r in rows})
     for key, style, label in (("tvmmp", "-", "TVMMP (quasi-static)"), ("tvmmp_dyn", "--", "dynamic TVMMP")):
-        per = {s: [next((r.get(key) for r in rows if r["state"] == s and r["ratio"] == n), None) for n in ratios]
-               for s in dict.fromkeys(r["state"] for r in rows)}  # fmt: skip
+        per = {
+            s: [next((r.get(key) for r in rows if r["state"] == s and r["ratio"] == n), None) for n in ratios]
+            for s in dict.fromkeys(r["state"] for r in rows)
+        }
         mean = [
             np.mean([v[k] for v in per.values() if v[k] is not None] or [np.nan]) for k in range(len(ratios))
         ]
@@ -110,17 +113,35 @@ def plot_gears(rows: Sequence[dict[str, Any]], title: str = "") -> bytes:
             ratios, mean, style, lw=2.2, marker="o", ms=4, label=f"{label}, mean of the feasible states"
         )
         for vals in per.values():
-            ax.plot(ratios, [np.nan if v is None else v for v in vals], style, lw=0.6, alpha=0.4,
-                    color=line.get_color())  # fmt: skip
+            ax.plot(
+                ratios,
+                [np.nan if v is None else v for v in vals],
+                style,
+                lw=0.6,
+                alpha=0.4,
+                color=line.get_color(),
+            )
         k = int(np.nanargmax(mean))
-        ax.annotate(f"max at {ratios[k]:g}:1", (ratios[k], mean[k]), textcoords="offset points", xytext=(4, 6),
-                    fontsize=8, color=line.get_color())  # fmt: skip
+        ax.annotate(
+            f"max at {ratios[k]:g}:1",
+            (ratios[k], mean[k]),
+            textcoords="offset points",
+            xytext=(4, 6),
+            fontsize=8,
+            color=line.get_color(),
+        )
     for n in ratios:
         total = sum(1 for r in rows if r["ratio"] == n)
         bad = sum(1 for r in rows if r["ratio"] == n and r.get("tvmmp") is None)
         if bad:
-            ax.annotate(f"{bad}/{total} states\ninfeasible", (n, 0), textcoords="offset points", xytext=(2, 4),
-                        fontsize=7, color="0.3")  # fmt: skip
+            ax.annotate(
+                f"{bad}/{total} states\ninfeasible",
+                (n, 0),
+                textcoords="offset points",
+                xytext=(2, 4),
+                fontsize=7,
+                color="0.3",
+            )
     ax.set_xlabel("gear ratio N (motor turns per joint turn)")
     ax.set_ylabel(r"$\alpha$ (m/s, unit RVDS vertices)")
     ax.set_title(title or "Gear-ratio sweep (thin: each lift state)", fontsize=9)

@@ -53,7 +53,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ModelError, StateError
+from ..errors import ModelError, ParamError
 from ..sim.grasp import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
@@ -90,13 +90,24 @@ class SimSettings:
     lost_gap: float = 5e-4
 
     def __post_init__(self) -> None:
-        for name in ("timestep", "settle", "startup", "window", "speed_tol", "angle_tol", "slip_tol",
-                     "slip_floor", "lost_gap", "impratio", "armature_scale"):  # fmt: skip
+        for name in (
+            "timestep",
+            "settle",
+            "startup",
+            "window",
+            "speed_tol",
+            "angle_tol",
+            "slip_tol",
+            "slip_floor",
+            "lost_gap",
+            "impratio",
+            "armature_scale",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0) or (name in ("timestep", "window") and value == 0):
-                raise StateError(f"SimSettings.{name}", f"expected a finite number >= 0, got {value!r}")
+                raise ParamError(name, f"expected a finite number >= 0, got {value!r}", value)
         if self.cone not in ("elliptic", "pyramidal"):
-            raise StateError("SimSettings.cone", f"expected 'elliptic' or 'pyramidal', got {self.cone!r}")
+            raise ParamError("cone", f"expected 'elliptic' or 'pyramidal', got {self.cone!r}", self.cone)
 
     def steps(self, seconds: float) -> int:
         return round(seconds / self.timestep)
@@ -145,7 +156,7 @@ def sim_model(
         raise ModelError(f"body {object_body!r}", "not in the model")
     if mg is not None:
         if not (math.isfinite(mg) and mg > 0):
-            raise StateError("mg", f"expected a positive weight (N), got {mg!r}")
+            raise ParamError("mg", f"expected a positive weight (N), got {mg!r}", mg)
         scale = mg / (float(m.body_mass[ob]) * -float(m.opt.gravity[2]))
         m.body_mass[ob] *= scale
         m.body_inertia[ob] *= scale
@@ -292,8 +303,14 @@ def rollout(
         if max(gaps) > worst["gap"]:
             worst["gap"], gap_geom = max(gaps), rig.fingers[int(np.argmax(gaps))][0]
         if record:
-            for key, val in (("time", d.time), ("object_pos", d.xpos[rig.ob].copy()), ("twist", now.copy()),
-                             ("qvel", d.qvel[rig.dofs].copy()), ("torque", force * rig.gear), ("gap", gaps)):  # fmt: skip
+            for key, val in (
+                ("time", d.time),
+                ("object_pos", d.xpos[rig.ob].copy()),
+                ("twist", now.copy()),
+                ("qvel", d.qvel[rig.dofs].copy()),
+                ("torque", force * rig.gear),
+                ("gap", gaps),
+            ):
                 trace[key].append(val)
         if not reason:
             reason = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom)
@@ -302,16 +319,30 @@ def rollout(
     nwin = max(1, n1 - n0)
     friction = {g: (fsum[g] / nwin, ssum[g] / nwin) for g in fsum}
     return RolloutResult(
-        passed=not reason, reason=reason, speed_error=worst["speed"], angle_error=worst["angle"],
-        slip_ratio=max(slip.values(), default=0.0) / slip_tol, gap=float(worst["gap"]),
-        saturated=tuple(sorted(saturated)), clamp_fraction=clamped / max(1, (n1 - n0) * len(rig.acts)),
-        settle_drift=drift, friction=friction, joints=drive.joints,
+        passed=not reason,
+        reason=reason,
+        speed_error=worst["speed"],
+        angle_error=worst["angle"],
+        slip_ratio=max(slip.values(), default=0.0) / slip_tol,
+        gap=float(worst["gap"]),
+        saturated=tuple(sorted(saturated)),
+        clamp_fraction=clamped / max(1, (n1 - n0) * len(rig.acts)),
+        settle_drift=drift,
+        friction=friction,
+        joints=drive.joints,
         trace={k: np.array(v, dtype=float) for k, v in trace.items()} if record else {},
-    )  # fmt: skip
+    )
 
 
-def _violation(st: SimSettings, worst: dict[str, float], slip: dict[str, float], slip_tol: float,
-               saturated: set[str], tnorm: float, gap_geom: str) -> str:  # fmt: skip
+def _violation(
+    st: SimSettings,
+    worst: dict[str, float],
+    slip: dict[str, float],
+    slip_tol: float,
+    saturated: set[str],
+    tnorm: float,
+    gap_geom: str,
+) -> str:
     if tnorm > 0 and worst["speed"] > st.speed_tol:
         return f"twist magnitude off by {100 * worst['speed']:.1f} %"
     if tnorm == 0 and worst["speed"] > st.slip_floor / max(st.window, 1e-12):
@@ -328,8 +359,9 @@ def _violation(st: SimSettings, worst: dict[str, float], slip: dict[str, float],
     return ""
 
 
-def _inertial(m: mujoco.MjModel, d: mujoco.MjData, pred: mujoco.MjData, rig: Rig, drive: Drive,
-              qset: _F64) -> _F64:  # fmt: skip
+def _inertial(
+    m: mujoco.MjModel, d: mujoco.MjData, pred: mujoco.MjData, rig: Rig, drive: Drive, qset: _F64
+) -> _F64:
     """Computed torque of the tracked setpoints: M qdd (one-step prediction) + Coriolis (ablation)."""
     pred.qpos[:] = d.qpos
     mujoco.mj_integratePos(m, pred.qpos, d.qvel, m.opt.timestep)
@@ -397,11 +429,13 @@ def rerun_data(result: RolloutResult, *, prefix: str = "rollout") -> dict[str, d
     """
     tr = result.trace
     if not tr:
-        raise StateError("trace", "the rollout was not recorded (record=True)")
+        raise ParamError("rollout", "the rollout was not recorded (record=True)")
     t = tr["time"]
-    out = {f"{prefix}/object/position": {"time": t, "positions": tr["object_pos"]},
-           f"{prefix}/object/speed": {"time": t, "scalars": np.linalg.norm(tr["twist"], axis=1)},
-           f"{prefix}/contacts/max_gap": {"time": t, "scalars": np.max(tr["gap"], axis=1)}}  # fmt: skip
+    out = {
+        f"{prefix}/object/position": {"time": t, "positions": tr["object_pos"]},
+        f"{prefix}/object/speed": {"time": t, "scalars": np.linalg.norm(tr["twist"], axis=1)},
+        f"{prefix}/contacts/max_gap": {"time": t, "scalars": np.max(tr["gap"], axis=1)},
+    }
     for j, name in enumerate(result.joints):
         out[f"{prefix}/joints/{name}/speed"] = {"time": t, "scalars": tr["qvel"][:, j]}
         out[f"{prefix}/joints/{name}/torque"] = {"time": t, "scalars": tr["torque"][:, j]}

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ..core.assembly import assemble
 from ..core.state import GraspState
-from ..errors import SolverError, StateError
+from ..errors import ParamError, SolverError
 
 __all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
 
@@ -40,7 +40,7 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
         The QP is not solved (e.g. ``alpha`` above :math:`\alpha_{kl}`).
     """
     if state.rvds is None:
-        raise StateError("rvds", "the state has no RVDS")
+        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     asm = assemble(state)
     w, r = state.refs[k], state.rvds[l]
     n = asm.num_variables
@@ -58,8 +58,10 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     w0 = np.array([rng.max_speed for rng in state.operation_ranges])
     weight[asm.blocks["qd"]] = 1.0 / w0**2
     weight[asm.blocks["lam[0]"]] = 1.0 / max(float(np.linalg.norm(w)), 1e-3) ** 2
-    cones = [clarabel.ZeroConeT(int(eq.sum() + ceq.sum())),
-             clarabel.NonnegativeConeT(int(up.sum() + dn.sum() + cup.sum() + cdn.sum()))]  # fmt: skip
+    cones = [
+        clarabel.ZeroConeT(int(eq.sum() + ceq.sum())),
+        clarabel.NonnegativeConeT(int(up.sum() + dn.sum() + cup.sum() + cdn.sum())),
+    ]
     opts = clarabel.DefaultSettings()
     opts.verbose = False
     res = clarabel.DefaultSolver(sp.diags(2 * weight).tocsc(), np.zeros(n + 1), big, b, cones, opts).solve()
@@ -67,8 +69,12 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     if status not in ("Solved", "AlmostSolved"):
         raise SolverError("clarabel", status, (k, l))
     x = np.array(res.x)
-    return {"speeds": x[asm.blocks["qd"]], "torques": x[asm.blocks["tau[0]"]],
-            "forces": asm.forces(x), "slip_speeds": x[asm.blocks["rho"]]}  # fmt: skip
+    return {
+        "speeds": x[asm.blocks["qd"]],
+        "torques": x[asm.blocks["tau[0]"]],
+        "forces": asm.forces(x),
+        "slip_speeds": x[asm.blocks["rho"]],
+    }
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,7 +119,7 @@ def witness_drive(
     ``vertex``: the :class:`~mjtvm.core.tvmmp.Witness` of the pair, required for ``"vertex"``.
     """
     if state.rvds is None:
-        raise StateError("rvds", "the state has no RVDS")
+        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     if witness == "central":
         frac = min(s, 1.0)
         sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7))
@@ -121,10 +127,10 @@ def witness_drive(
         speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
     elif witness == "vertex":
         if vertex is None:
-            raise StateError("vertex", "the 'vertex' drive needs the pair's Witness")
+            raise ParamError("vertex", "the 'vertex' drive needs the pair's Witness")
         speeds, torques, rho = vertex.speeds * s, vertex.torques, vertex.slip_speeds * s
     else:
-        raise StateError("witness", f"expected 'central' or 'vertex', got {witness!r}")
+        raise ParamError("witness", f"expected 'central' or 'vertex', got {witness!r}", witness)
     contacts, slips, i_s = [], {}, 0
     for c in state.contacts:
         if c.type == "D":
@@ -135,8 +141,14 @@ def witness_drive(
             rate = float(rho[min(i_s, len(rho) - 1)]) if len(rho) else 0.0
             slips[geom] = (rate, np.asarray(c.slide_direction, dtype=float))
             i_s += 1
-    return Drive(state.joint_names, np.asarray(speeds, float), np.asarray(torques, float),
-                 s * alpha * np.asarray(state.rvds[l], float), tuple(contacts), slips)  # fmt: skip
+    return Drive(
+        state.joint_names,
+        np.asarray(speeds, float),
+        np.asarray(torques, float),
+        s * alpha * np.asarray(state.rvds[l], float),
+        tuple(contacts),
+        slips,
+    )
 
 
 # ------------------------------------------------------------------- rollouts

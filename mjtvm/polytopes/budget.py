@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import StateError
+from ..errors import ParamError
 
 __all__ = [
     "DEFAULT_CONFIDENCE",
@@ -114,13 +114,13 @@ class Limits:
 
     def __post_init__(self) -> None:
         if not (0.0 <= self.tolerance < 1.0):
-            raise StateError("tolerance", f"expected a number in [0, 1), got {self.tolerance!r}")
+            raise ParamError("tolerance", f"expected a number in [0, 1), got {self.tolerance!r}")
         if self.time_limit is not None and not self.time_limit > 0.0:
-            raise StateError("time_limit", f"expected a positive number of seconds, got {self.time_limit!r}")
+            raise ParamError("time_limit", f"expected a positive number of seconds, got {self.time_limit!r}")
         if self.memory is not None and not self.memory > 0:
-            raise StateError("memory", f"expected a positive number of bytes, got {self.memory!r}")
+            raise ParamError("memory", f"expected a positive number of bytes, got {self.memory!r}")
         if not (0.0 <= self.confidence < 1.0):
-            raise StateError("confidence", f"expected a probability in [0, 1), got {self.confidence!r}")
+            raise ParamError("confidence", f"expected a probability in [0, 1), got {self.confidence!r}")
 
 
 class Budget:

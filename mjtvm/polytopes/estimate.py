@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ParamError
 from .budget import Budget, LimitReached
 from .lattice import FaceLattice
 
@@ -81,7 +82,9 @@ class VolumeEstimate:
 
     def __post_init__(self) -> None:
         if not (0.0 < self.confidence < 1.0):
-            raise ValueError(f"confidence: expected a number in (0, 1), got {self.confidence!r}")
+            raise ParamError(
+                "confidence", f"expected a number in (0, 1), got {self.confidence!r}", self.confidence
+            )
 
     @property
     def width(self) -> float:
@@ -102,9 +105,11 @@ class _Classifier:
     """Points in or out of :math:`S_{ov}`: the hyperplanes found, then the ray-shooting LP."""
 
     def __init__(
-        self, shoot: Callable[[NDArray[np.float64]], tuple[float, NDArray[np.float64]]],
-        center: NDArray[np.float64], tol: float,
-    ) -> None:  # fmt: skip
+        self,
+        shoot: Callable[[NDArray[np.float64]], tuple[float, NDArray[np.float64]]],
+        center: NDArray[np.float64],
+        tol: float,
+    ) -> None:
         self.shoot, self.center, self.tol = shoot, center, tol
         self.normals = np.zeros((64, len(center)))
         self.offsets = np.zeros(64)
@@ -210,8 +215,9 @@ def estimate_volume(
             look += 1
             if progress is not None:
                 width = (upper - lower) / upper if upper > 0 else 0.0
-                progress({"phase": "estimate", "samples": samples, "lower": lower, "upper": upper,
-                          "width": width})  # fmt: skip
+                progress(
+                    {"phase": "estimate", "samples": samples, "lower": lower, "upper": upper, "width": width}
+                )
         if stopped != "tolerance" or (upper > 0 and (upper - lower) / upper <= tolerance):
             break
         if tighten is not None and classify.count and inside < samples * MIN_INSIDE:

@@ -157,9 +157,19 @@ def project_lp(
             )
         seconds = time.perf_counter() - t0
         return Projection(
-            status, verts / w, k, basis, w, ray_r, support.num_lps, seconds, "lp", None, twist_facets,
+            status,
+            verts / w,
+            k,
+            basis,
+            w,
+            ray_r,
+            support.num_lps,
+            seconds,
+            "lp",
+            None,
+            twist_facets,
             approximation,
-        )  # fmt: skip
+        )
 
     if support(np.zeros(big_d))[0] == "infeasible":
         return result("empty", np.zeros((0, big_d)), None)

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core.assembly import BoxForm
 from ..core.state import GraspState
 from ..core.tvmmp import finite_floats, finite_or_none
-from ..errors import StateError
+from ..errors import ParamError
 from .bracket import ray_lengths
 from .budget import DEFAULT_CONFIDENCE, Limits
 from .enumeration import project_cdd
@@ -209,9 +209,9 @@ def _check_scale(scale: ArrayLike, big_d: int) -> NDArray[np.float64]:
     try:
         s = np.array(scale, dtype=float).reshape(-1)
     except (TypeError, ValueError) as e:
-        raise StateError("scale", f"expected {big_d} positive numbers", scale) from e
+        raise ParamError("scale", f"expected {big_d} positive numbers", scale) from e
     if s.shape != (big_d,) or not np.all(np.isfinite(s)) or np.any(s <= 0.0):
-        raise StateError("scale", f"expected {big_d} positive finite numbers", scale)
+        raise ParamError("scale", f"expected {big_d} positive finite numbers", scale)
     return s
 
 
@@ -344,13 +344,13 @@ def tvms(
 
     Raises
     ------
-    StateError
-        A malformed ``scale``.
+    ParamError
+        A malformed ``scale`` or an unknown ``method``.
     SolverError
         When HiGHS, Qhull or cddlib fails.
     """
     if method not in ("lp", "cdd"):
-        raise ValueError(f"method: expected 'lp' or 'cdd', got {method!r}")
+        raise ParamError("method", f"expected 'lp' or 'cdd', got {method!r}", method)
     weights = default_scale(state) if scale is None else _check_scale(scale, state.twist_dim)
     t0 = time.perf_counter()
     poly = lifted_polytope(state, rvds_cone=rvds_cone, box=box)

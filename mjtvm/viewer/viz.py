@@ -54,9 +54,18 @@ from ..sim.scene import scene_geometry, scene_poses
 from ..sim.trajectory import Lift
 
 __all__ = [
-    "APPLICATION_ID", "FORCE_SCALE", "TVMS_EVERY", "TYPE_COLORS", "VELOCITY_SCALE", "Z_UNIT",
-    "blueprint", "hull_mesh", "record_replay", "record_verify", "translational_tvms",
-]  # fmt: skip
+    "APPLICATION_ID",
+    "FORCE_SCALE",
+    "TVMS_EVERY",
+    "TYPE_COLORS",
+    "VELOCITY_SCALE",
+    "Z_UNIT",
+    "blueprint",
+    "hull_mesh",
+    "record_replay",
+    "record_verify",
+    "translational_tvms",
+]
 
 APPLICATION_ID = "mjtvm_replay"
 VELOCITY_SCALE = 0.06  #: m drawn per m/s of object velocity
@@ -144,26 +153,43 @@ class _Scene:
         links, planes = geo.links, geo.planes
         rec.log("scene", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         if len(links):
-            rec.log("scene/links", rr.Capsules3D.from_fields(
-                lengths=2 * links.size[:, 1], radii=links.size[:, 0],
-                colors=[_rgb(c) for c in links.rgba], fill_mode="solid",
-            ), static=True)  # fmt: skip
+            rec.log(
+                "scene/links",
+                rr.Capsules3D.from_fields(
+                    lengths=2 * links.size[:, 1],
+                    radii=links.size[:, 0],
+                    colors=[_rgb(c) for c in links.rgba],
+                    fill_mode="solid",
+                ),
+                static=True,
+            )
         wire = rr.components.FillMode.MajorWireframe  # the object: see the velocity polytopes inside
         for path, geoms, fill in (
             ("scene/tips", geo.tips, rr.components.FillMode.Solid),
             ("scene/object", geo.object, wire),
         ):
             if len(geoms):
-                rec.log(path, rr.Ellipsoids3D.from_fields(
-                    half_sizes=np.repeat(geoms.size[:, :1], 3, axis=1),
-                    colors=[_rgb(c) for c in geoms.rgba], fill_mode=fill,
-                ), static=True)  # fmt: skip
+                rec.log(
+                    path,
+                    rr.Ellipsoids3D.from_fields(
+                        half_sizes=np.repeat(geoms.size[:, :1], 3, axis=1),
+                        colors=[_rgb(c) for c in geoms.rgba],
+                        fill_mode=fill,
+                    ),
+                    static=True,
+                )
         if len(planes):
-            rec.log("scene/palm", rr.Boxes3D(
-                half_sizes=[[s[0], s[1], 5e-4] for s in planes.size],
-                centers=[p - [0.0, 0.0, 5e-4] for p in planes.pos], fill_mode="solid",
-                colors=[_rgb(c) for c in planes.rgba], labels=[name or "palm" for name in planes.names],
-            ), static=True)  # fmt: skip
+            rec.log(
+                "scene/palm",
+                rr.Boxes3D(
+                    half_sizes=[[s[0], s[1], 5e-4] for s in planes.size],
+                    centers=[p - [0.0, 0.0, 5e-4] for p in planes.pos],
+                    fill_mode="solid",
+                    colors=[_rgb(c) for c in planes.rgba],
+                    labels=[name or "palm" for name in planes.names],
+                ),
+                static=True,
+            )
 
     def log(self, cols: _Columns, i: int) -> NDArray[np.float64]:
         """Add the geoms' poses at state ``i`` (their sizes and colours are static); returns the
@@ -172,8 +198,13 @@ class _Scene:
         if len(links):
             # MuJoCo: a capsule's centre and axis z; rerun: from one end along z
             ends = poses.link_pos[i] - poses.link_axis[i] * links.size[:, 1:2]
-            cols.add("scene/links", rr.Capsules3D, len(links), translations=list(ends),
-                     quaternions=list(poses.link_quat[i][:, [1, 2, 3, 0]]))  # fmt: skip
+            cols.add(
+                "scene/links",
+                rr.Capsules3D,
+                len(links),
+                translations=list(ends),
+                quaternions=list(poses.link_quat[i][:, [1, 2, 3, 0]]),
+            )
         for path, centres in (("scene/tips", poses.tip_pos[i]), ("scene/object", poses.object_pos[i])):
             if len(centres):
                 cols.add(path, rr.Ellipsoids3D, len(centres), centers=list(centres))
@@ -198,7 +229,9 @@ class _Columns:
             rec.send_columns(path, indexes=times, columns=archetype.columns(**store).partition(lengths))
 
 
-def _log_mesh(rec: rr.RecordingStream, path: str, points: NDArray | None, centre: NDArray, rgba: tuple) -> None:  # fmt: skip
+def _log_mesh(
+    rec: rr.RecordingStream, path: str, points: NDArray | None, centre: NDArray, rgba: tuple
+) -> None:
     mesh = None if points is None else hull_mesh(points)
     if mesh is None:
         rec.log(path, rr.Clear(recursive=False))
@@ -206,38 +239,74 @@ def _log_mesh(rec: rr.RecordingStream, path: str, points: NDArray | None, centre
         verts, tris = mesh
         normals = verts - verts.mean(axis=0)  # smooth shading, from the hull's centroid
         normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
-        rec.log(path, rr.Transform3D(translation=centre, scale=VELOCITY_SCALE), rr.Mesh3D(
-            vertex_positions=verts, triangle_indices=tris, vertex_normals=normals, albedo_factor=rgba,
-        ))  # fmt: skip
+        rec.log(
+            path,
+            rr.Transform3D(translation=centre, scale=VELOCITY_SCALE),
+            rr.Mesh3D(
+                vertex_positions=verts,
+                triangle_indices=tris,
+                vertex_normals=normals,
+                albedo_factor=rgba,
+            ),
+        )
 
 
 def _log_run(
-    rec: rr.RecordingStream, cols: _Columns, name: str, r: Record, state: GraspState, centre: NDArray,
-    tvms_points: NDArray | None, color: tuple[int, ...],
-) -> None:  # fmt: skip
+    rec: rr.RecordingStream,
+    cols: _Columns,
+    name: str,
+    r: Record,
+    state: GraspState,
+    centre: NDArray,
+    tvms_points: NDArray | None,
+    color: tuple[int, ...],
+) -> None:
     """One run (variant, reading) at one state: contacts, forces, polytopes, scalars, joints."""
     res, contacts = r.result, state.contacts
-    rec.log(f"scene/{name}/contacts", rr.Points3D(
-        [c.position for c in contacts], radii=0.004, colors=[TYPE_COLORS[c.type] for c in contacts],
-        labels=[f"{c.name.split('#')[0]} {c.type}" for c in contacts], show_labels=True,
-    ))  # fmt: skip
+    rec.log(
+        f"scene/{name}/contacts",
+        rr.Points3D(
+            [c.position for c in contacts],
+            radii=0.004,
+            colors=[TYPE_COLORS[c.type] for c in contacts],
+            labels=[f"{c.name.split('#')[0]} {c.type}" for c in contacts],
+            show_labels=True,
+        ),
+    )
     slides = [c for c in contacts if c.type == "S" and c.slide_direction is not None]
     if slides:
-        rec.log(f"scene/{name}/slides", rr.Arrows3D(
-            vectors=[SLIDE_LENGTH * slide_unit(c) for c in slides],  # the tangential unit direction the LP uses
-            origins=[c.position for c in slides], colors=TYPE_COLORS["S"], radii=0.0015,
-        ))  # fmt: skip
+        rec.log(
+            f"scene/{name}/slides",
+            rr.Arrows3D(
+                # the tangential unit direction the LP uses
+                vectors=[SLIDE_LENGTH * slide_unit(c) for c in slides],
+                origins=[c.position for c in slides],
+                colors=TYPE_COLORS["S"],
+                radii=0.0015,
+            ),
+        )
     k, l = res.limiting if res.limiting is not None else (-1, -1)
     w = res.witnesses[k][l] if res.limiting is not None else None
     if w is not None and len(w.forces):
-        rec.log(f"scene/{name}/forces", rr.Arrows3D(
-            vectors=FORCE_SCALE * w.forces, origins=[c.position for c in contacts], colors=color, radii=0.002,
-        ))  # fmt: skip
+        rec.log(
+            f"scene/{name}/forces",
+            rr.Arrows3D(
+                vectors=FORCE_SCALE * w.forces,
+                origins=[c.position for c in contacts],
+                colors=color,
+                radii=0.002,
+            ),
+        )
     else:
         rec.log(f"scene/{name}/forces", rr.Clear(recursive=False))
     dist = [v[: state.dim] for v in res.distribution if v is not None]
-    _log_mesh(rec, f"scene/{name}/distribution", np.vstack([np.zeros(3), *dist]) if dist else None, centre,
-              (*color, 220))  # fmt: skip
+    _log_mesh(
+        rec,
+        f"scene/{name}/distribution",
+        np.vstack([np.zeros(3), *dist]) if dist else None,
+        centre,
+        (*color, 220),
+    )
     _log_mesh(rec, f"scene/{name}/tvms", tvms_points, centre, (235, 235, 235, 90))
     value = [] if res.tvmmp is None else [float(res.tvmmp)]
     cols.add(f"tvmmp/{name}", rr.Scalars, len(value), scalars=value)
@@ -256,18 +325,29 @@ def _log_run(
         lo, hi = _panel(rng, w.box[j, [0, 2]]), _panel(rng, w.box[j, [1, 3]])
         cols.add(box, rr.Boxes2D, 1, half_sizes=[np.abs(hi - lo) / 2], centers=[(hi + lo) / 2])
         label = f"{name}: {tau:.3g} N m, {qd:.3g} rad/s" + (" (saturated)" if sat else "")
-        cols.add(witness, rr.Points2D, 1, positions=[_panel(rng, [tau, qd])], colors=[_SATURATED if sat else color],
-                 labels=[label], show_labels=[False])  # fmt: skip
+        cols.add(
+            witness,
+            rr.Points2D,
+            1,
+            positions=[_panel(rng, [tau, qd])],
+            colors=[_SATURATED if sat else color],
+            labels=[label],
+            show_labels=[False],
+        )
 
 
 def blueprint(joints: Sequence[str], runs: Sequence[str]) -> rrb.Blueprint:
     """The layout: a 3-D view per run over the time series, and a grid of joint panels (a finger per row)."""
     eye = rrb.EyeControls3D(position=[0.4, -0.52, 0.26], look_target=[0.0, 0.0, 0.16], eye_up=[0.0, 0.0, 1.0])
     scenes = [
-        rrb.Spatial3DView(origin="/scene", name=f"{run}: contacts, forces, velocity polytopes", eye_controls=eye,
-                          contents=["+ $origin/**", *(f"- /scene/{o}/**" for o in runs if o != run)])
+        rrb.Spatial3DView(
+            origin="/scene",
+            name=f"{run}: contacts, forces, velocity polytopes",
+            eye_controls=eye,
+            contents=["+ $origin/**", *(f"- /scene/{o}/**" for o in runs if o != run)],
+        )
         for run in runs
-    ]  # fmt: skip
+    ]
     series = rrb.Horizontal(
         rrb.TimeSeriesView(origin="/tvmmp", name="TVMMP"),
         rrb.TimeSeriesView(origin="/alpha", name="alpha_kl"),
@@ -278,9 +358,12 @@ def blueprint(joints: Sequence[str], runs: Sequence[str]) -> rrb.Blueprint:
     fingers = max(1, len({j.split("_")[0] for j in joints}))
     grid = rrb.Grid(*panels, grid_columns=-(-len(joints) // fingers), name="joints (tau, qdot)")
     left = rrb.Vertical(rrb.Horizontal(*scenes), series, row_shares=[3, 1])
-    return rrb.Blueprint(rrb.Horizontal(left, grid, column_shares=[3, 2]), rrb.BlueprintPanel(state="collapsed"),
-                         rrb.SelectionPanel(state="collapsed"),
-                         rrb.TimePanel(state="collapsed", timeline="state", play_state="paused"))  # fmt: skip
+    return rrb.Blueprint(
+        rrb.Horizontal(left, grid, column_shares=[3, 2]),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline="state", play_state="paused"),
+    )
 
 
 def _run_names(keys: Sequence[_Run]) -> dict[_Run, str]:
@@ -348,10 +431,17 @@ def record_replay(
     axes = [[[-1.1, 0.0], [1.1, 0.0]], [[0.0, -1.1], [0.0, 1.1]]]
     for j, rng in zip(joints, first.operation_ranges, strict=True):
         rec.log(f"joints/{j}/axes", rr.LineStrips2D(axes, colors=(90, 90, 90), radii=-0.75), static=True)
-        rec.log(f"joints/{j}/range", rr.LineStrips2D(
-            [_panel(rng, _mirrored(rng))], colors=(200, 200, 200), radii=-1.5, show_labels=False,
-            labels=f"{j}: {rng.max_torque:.3g} N m, {rng.max_speed:.3g} rad/s",
-        ), static=True)  # fmt: skip
+        rec.log(
+            f"joints/{j}/range",
+            rr.LineStrips2D(
+                [_panel(rng, _mirrored(rng))],
+                colors=(200, 200, 200),
+                radii=-1.5,
+                show_labels=False,
+                labels=f"{j}: {rng.max_torque:.3g} N m, {rng.max_speed:.3g} rad/s",
+            ),
+            static=True,
+        )
         for key, name in names.items():
             rec.log(
                 f"joints/{j}/{name}/box", rr.Boxes2D.from_fields(colors=colors[key], radii=-1.0), static=True

@@ -12,7 +12,7 @@ import pytest
 
 from mjtvm.apps.replay import SWEEP_MGS, SWEEP_MUS, ReplayOutput, run_replay, solve_state, time_replay
 from mjtvm.cli import main
-from mjtvm.errors import StateError
+from mjtvm.errors import ParamError
 from mjtvm.sim.trajectory import lift_state, slide_directions
 
 STATES = 4
@@ -127,7 +127,6 @@ def test_cli_replay_writes_results(tmp_path: Path, capsys: pytest.CaptureFixture
         (["--states", "1"], "error: --states: expected an integer in [2, 10000], got '1'"),
         (["--contacts", "L,X"], "error: --contacts: expected distinct values among L,S"),
         (["--contacts", "L,L"], "error: --contacts:"),
-        (["--variants", "L,L"], "error: --variants:"),  # the deprecated spelling, as typed
         (["--mu", "-0.1"], "error: --mu: expected a number in [0, 100], got '-0.1'"),
         (["--mg", "nan"], "error: --mg: expected a number in [0, 1000000], got 'nan'"),
         (["--tvms-every", "-1"], "error: --tvms-every: expected an integer in [0, 10000]"),
@@ -156,7 +155,7 @@ def test_cli_replay_unwritable_out_and_argparse_errors(
         "error: --reading: expected distinct values among physical,literal or both, got 'sideways' "
         "(try 'mjtvm replay --help')"
     ]
-    with pytest.raises(StateError):
+    with pytest.raises(ParamError, match=r"^readings: "):
         run_replay(out=tmp_path, readings=())
 
 

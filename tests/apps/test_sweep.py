@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mjtvm import StateError, tvmmp
+from mjtvm import ParamError, tvmmp
 from mjtvm.apps.sweep import SweepPoint, grid, run_sweep
 from mjtvm.sim.trajectory import lift_state, scripted_lift
 
@@ -78,12 +78,12 @@ def test_dask_local_cluster_gives_the_same_rows(serial):
     ],
 )
 def test_bad_points(kwargs, match):
-    with pytest.raises(StateError, match=match):
+    with pytest.raises(ParamError, match=match):
         SweepPoint(**kwargs)
 
 
 def test_bad_jobs():
-    with pytest.raises(StateError, match="jobs"):
+    with pytest.raises(ParamError, match=r"^jobs: "):
         run_sweep(POINTS, jobs=0, progress=False)
 
 
@@ -141,8 +141,20 @@ def test_resume_recomputes_the_rows_of_an_edited_grasp_file(tmp_path, capsys):
         'model = "four_finger_hand.xml"', f"model = {str(shipped.parent / 'four_finger_hand.xml')!r}"
     )
     grasp.write_text(text)
-    words = ["sweep", "--grasp", f"case2,{grasp}", "--mu", "0.3", "--mg", "1", "--states", "3",
-             "--state-indices", "0,2", "--quiet"]  # fmt: skip
+    words = [
+        "sweep",
+        "--grasp",
+        f"case2,{grasp}",
+        "--mu",
+        "0.3",
+        "--mg",
+        "1",
+        "--states",
+        "3",
+        "--state-indices",
+        "0,2",
+        "--quiet",
+    ]
     out = tmp_path / "out"
     assert main([*words, "--out", str(out)]) == 0
     before = json.loads((out / "sweep.json").read_text())
@@ -218,8 +230,14 @@ def _wait(condition, timeout: float) -> bool:
 
 # 4800 rows (20 mu x 60 mg x 4 states) in 4 forked tasks of one state each: a task takes
 # seconds (about 10 s on one core), the whole sweep tens of seconds on 2 workers.
-_LONG = ["--mu", ",".join(f"{0.05 * k:.2f}" for k in range(1, 21)),
-         "--mg", ",".join(f"{0.5 + 0.05 * k:.2f}" for k in range(60)), "--states", "4"]  # fmt: skip
+_LONG = [
+    "--mu",
+    ",".join(f"{0.05 * k:.2f}" for k in range(1, 21)),
+    "--mg",
+    ",".join(f"{0.5 + 0.05 * k:.2f}" for k in range(60)),
+    "--states",
+    "4",
+]
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="/proc and forked workers")
@@ -233,8 +251,11 @@ def test_a_killed_parallel_sweep_leaves_no_worker_and_no_lock(tmp_path, how):
     import subprocess
 
     workers: list[int] = []
-    proc = subprocess.Popen([*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path), "--quiet"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    proc = subprocess.Popen(
+        [*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path), "--quiet"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     try:
         assert _wait(lambda: len(_children(proc.pid)) >= 2, 60), "the pool did not start"
         workers += _children(proc.pid)
@@ -269,9 +290,13 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_keeps_the_finished_rows(tmp_p
     import time
 
     workers: list[int] = []
-    proc = subprocess.Popen([*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path)],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)  # fmt: skip
+    proc = subprocess.Popen(
+        [*_mjtvm(), "sweep", *_LONG, "--jobs", "2", "--out", str(tmp_path)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     err: list[str] = []
     moving = threading.Event()
 
@@ -383,3 +408,46 @@ def test_a_cluster_address_that_is_not_a_dask_scheduler_is_one_line_within_the_t
         assert "within 1 s" in err
     assert took < 5.0  # the lift of --states 2 and the timeout (the parent builds no lift for Dask)
     assert not (tmp_path / "sweep.json").exists()
+
+
+def test_the_cli_hands_the_sweep_typed_options_and_names_its_options_in_errors(tmp_path, monkeypatch, capsys):
+    """``mjtvm sweep`` converts its options into a :class:`~mjtvm.apps.sweep.SweepFiles`; a
+    :class:`~mjtvm.errors.ParamError` the run raises about a field is reported as its option."""
+    import mjtvm.apps.sweep
+    from mjtvm.apps.sweep import SweepFiles
+    from mjtvm.cli import main
+
+    seen: list[SweepFiles] = []
+
+    def refuse(run, **kwargs):
+        seen.append(run)
+        raise ParamError(
+            "mus", "the grasps have different friction or weight: give the coefficients and the weights"
+        )
+
+    monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep_files", refuse)
+    words = [
+        "sweep",
+        "--grasp",
+        "case2,case1",
+        "--contacts",
+        "L,S",
+        "--states",
+        "5",
+        "--state-indices",
+        "0,4",
+    ]
+    assert main([*words, "--out", str(tmp_path), "--quiet"]) == 2
+    assert capsys.readouterr().err == (
+        "error: --mu: the grasps have different friction or weight: give --mu and --mg\n"
+    )
+    assert seen == [
+        SweepFiles(
+            scenarios=("case2", "case1"),
+            variants=("L", "S"),
+            num_states=5,
+            states=(0, 4),
+            out=str(tmp_path),
+            quiet=True,
+        )
+    ]

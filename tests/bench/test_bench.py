@@ -40,9 +40,16 @@ def _timings(doc: Any, path: str = "") -> list[tuple[str, float]]:
 @pytest.fixture(scope="module")
 def report() -> dict[str, Any]:
     doc = bench_suite.run_suite(
-        quick=True, repeats=1, baseline_repeats=1, p1_repeats=1, lift=False, sweeps=False,
-        scaling_fingers=(2, 4), hands=("gripper3-box",), progress=False,
-    )  # fmt: skip
+        quick=True,
+        repeats=1,
+        baseline_repeats=1,
+        p1_repeats=1,
+        lift=False,
+        sweeps=False,
+        scaling_fingers=(2, 4),
+        hands=("gripper3-box",),
+        progress=False,
+    )
     doc["lift"] = bench_suite.bench_lift(repeats=1, num_states=3)
     doc["sweeps"] = bench_suite.bench_sweeps(jobs=(1, 2), repeats=1, num_states=2)
     doc["targets"] = bench_suite._targets(doc)
@@ -74,9 +81,17 @@ def test_report_structure_and_positive_timings(report: dict[str, Any]) -> None:
 
 def test_table_and_notes(report: dict[str, Any]) -> None:
     table = bench_report.format_suite_table(report, ["a note"])
-    for text in ("Case 1, Problem 1", "Case 1, Problem 2", "Case 2 initial, Problem 2", "Full lift",
-                 "gripper3-box (9 joints, 7 contacts): lift",
-                 "2 proc incl. pool start", "a note", "machine:", "ratios (time)"):  # fmt: skip
+    for text in (
+        "Case 1, Problem 1",
+        "Case 1, Problem 2",
+        "Case 2 initial, Problem 2",
+        "Full lift",
+        "gripper3-box (9 joints, 7 contacts): lift",
+        "2 proc incl. pool start",
+        "a note",
+        "machine:",
+        "ratios (time)",
+    ):
         assert text in table
     assert all(isinstance(n, str) for n in bench_report.auto_notes(report))
 

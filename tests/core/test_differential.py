@@ -203,9 +203,20 @@ def compare(case: str, config: tuple[str, str], result: TvmmpResult, ref_alpha, 
             continue
         # An infeasible k is decided by its first LP (the note names that l, or l = -1).
         has_note = any(p[0] == k and (p[1] == l or result.status[k][l] == "infeasible") for p in noted)
-        out.append(Pair(case, config, (k, l), float(result.alpha[k, l]), float(ref_alpha[k, l]),
-                        result.status[k][l], ref_status[k][l], result.certified[k][l], has_note,
-                        floor))  # fmt: skip
+        out.append(
+            Pair(
+                case,
+                config,
+                (k, l),
+                float(result.alpha[k, l]),
+                float(ref_alpha[k, l]),
+                result.status[k][l],
+                ref_status[k][l],
+                result.certified[k][l],
+                has_note,
+                floor,
+            )
+        )
     return out
 
 
@@ -265,9 +276,11 @@ def test_check_flags_a_wrong_alpha() -> None:
     def result(alpha, notes=(), certified=True):  # type: ignore[no-untyped-def]
         return replace(
             tvmmp(random_case(0)[1], witnesses=False),
-            alpha=np.array([alpha]), status=status, notes=notes,
+            alpha=np.array([alpha]),
+            status=status,
+            notes=notes,
             certified=((certified,) * 3,),
-        )  # fmt: skip
+        )
 
     bad, _ = _check(
         compare("x", ("highs", "eliminated"), result([1.0 + 1e-5, 2.0 + 1e-6, 1e-9]), ref, status)

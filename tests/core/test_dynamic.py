@@ -30,9 +30,16 @@ L, F0, T, W = 0.1, 2.0, 1.0, 30.0
 def pusher(q: float, *, f0: float = F0) -> GraspState:
     tip = np.array([L * math.sin(q), L * math.cos(q)])
     contact = Contact("tip", "L", tip, [1.0, 0.0], [[L * math.cos(q)], [-L * math.sin(q)]])
-    return GraspState(space=2, object_position=tip + np.array([0.05, 0.0]), joint_names=("q",),
-                      operation_ranges=(OperationRange([[0, 0], [T, 0], [0, W]]),), gravity_torque=[0.0],
-                      contacts=(contact,), refs=[[-f0, 0.0, 0.0]], rvds=[[1.0, 0.0, 0.0]])  # fmt: skip
+    return GraspState(
+        space=2,
+        object_position=tip + np.array([0.05, 0.0]),
+        joint_names=("q",),
+        operation_ranges=(OperationRange([[0, 0], [T, 0], [0, W]]),),
+        gravity_torque=[0.0],
+        contacts=(contact,),
+        refs=[[-f0, 0.0, 0.0]],
+        rvds=[[1.0, 0.0, 0.0]],
+    )
 
 
 def closed_form(q: float, inertia: float) -> tuple[float, float]:

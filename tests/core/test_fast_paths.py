@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from mjtvm import tvmmp
+from mjtvm import ParamError, tvmmp
 from mjtvm.core import highs
 from mjtvm.core.assembly import _Coo, assemble
 from mjtvm.core.scaling import scale_lp
@@ -118,7 +118,7 @@ def test_the_tuned_highs_options_are_highs_defaults_elsewhere():
     fresh = highs.new_highs()
     for name, value in highs._TUNABLE_DEFAULTS.items():
         assert fresh.getOptionValue(name)[1] == value
-    with pytest.raises(ValueError, match="options"):
+    with pytest.raises(ParamError, match=r"^options: "):
         highs.HighsSession.from_scaled(*_one_lp(), options={"presolve": "on"})
 
 
@@ -174,7 +174,7 @@ def test_the_start_basis_gives_the_slack_basis_alphas(states, box, monkeypatch):
 
 def test_start_basis_needs_as_many_columns_as_rows():
     session = highs.HighsSession.from_scaled(*_one_lp())
-    with pytest.raises(ValueError, match="as many"):
+    with pytest.raises(ParamError, match=r"^start_basis: as many"):
         session.start_basis(np.array([0]), np.array([], dtype=np.int64))
     session.start_basis(np.array([0]), np.array([0]))
     assert session.solve().objective == pytest.approx(-1.0)

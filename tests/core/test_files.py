@@ -99,10 +99,17 @@ def test_a_held_lock_whose_owner_cannot_be_checked_is_refused(tmp_path, content)
 
 def test_the_temporaries_of_ended_processes_are_removed_and_live_ones_kept(tmp_path):
     dead, live = _dead_pid(), os.getpid()
-    stale = [tmp_path / f".sweep.json.{dead}.k2j_3h.tmp", tmp_path / f".mjtvm-probe.{dead}.x1y2.tmp",
-             tmp_path / f".mjtvm.lock.{dead}.abc.tmp"]  # fmt: skip
-    kept = [tmp_path / f".sweep.json.{live}.k2j_3h.tmp", tmp_path / ".sweep.json.k2j3h.tmp",
-            tmp_path / "sweep.partial.json", tmp_path / "notes.tmp"]  # fmt: skip
+    stale = [
+        tmp_path / f".sweep.json.{dead}.k2j_3h.tmp",
+        tmp_path / f".mjtvm-probe.{dead}.x1y2.tmp",
+        tmp_path / f".mjtvm.lock.{dead}.abc.tmp",
+    ]
+    kept = [
+        tmp_path / f".sweep.json.{live}.k2j_3h.tmp",
+        tmp_path / ".sweep.json.k2j3h.tmp",
+        tmp_path / "sweep.partial.json",
+        tmp_path / "notes.tmp",
+    ]
     for path in stale + kept:
         path.write_text("x")
     with output_lock(tmp_path):

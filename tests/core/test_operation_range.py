@@ -32,9 +32,12 @@ def test_max_permissible_speed_cuts_the_speed_torque_line():
     meets 9000 rpm at T = (9560 - 9000) 26.3 / 1230 mNm, i.e. x 40 / 1000 N m at the joint."""
     m = load_motor_data()
     op = OperationRange.from_datasheet(
-        no_load_speed_rpm=m["no_load_speed_rpm"], nominal_speed_rpm=m["nominal_speed_rpm"],
-        nominal_torque_mNm=m["nominal_torque_mNm"], max_permissible_speed_rpm=9000.0, gear_ratio=40.0,
-    )  # fmt: skip
+        no_load_speed_rpm=m["no_load_speed_rpm"],
+        nominal_speed_rpm=m["nominal_speed_rpm"],
+        nominal_torque_mNm=m["nominal_torque_mNm"],
+        max_permissible_speed_rpm=9000.0,
+        gear_ratio=40.0,
+    )
     knee = (9560 - 9000) * 26.3 / 1230 * 40 / 1000
     np.testing.assert_allclose(
         op.vertices,
@@ -99,9 +102,12 @@ def test_invalid_operation_ranges_are_rejected(vertices, match):
 )
 def test_invalid_datasheet_figures(kwargs, match):
     base = {
-        "no_load_speed_rpm": 9560.0, "nominal_speed_rpm": 8330.0, "nominal_torque_mNm": 26.3,
-        "max_permissible_speed_rpm": 14000.0, "gear_ratio": 40.0,
-    }  # fmt: skip
+        "no_load_speed_rpm": 9560.0,
+        "nominal_speed_rpm": 8330.0,
+        "nominal_torque_mNm": 26.3,
+        "max_permissible_speed_rpm": 14000.0,
+        "gear_ratio": 40.0,
+    }
     with pytest.raises(StateError, match=match):
         OperationRange.from_datasheet(**{**base, **kwargs})
 

@@ -164,7 +164,7 @@ BOUND_CASES = [
     (("contacts", 0, "name"), "\ud800", "contacts[0].name", r"expected valid Unicode text"),
     (("joints", 0, "name"), "j" * 300, "joints[0].name", r"expected at most 256 characters, got 300$"),
     (("rvds",), None, "rvds", r"omit the key for no RVDS"),
-]  # fmt: skip
+]  # fmt: skip  # a table: one bad field per row
 
 
 @pytest.mark.parametrize(("path", "value", "field", "match"), BOUND_CASES, ids=[c[2] for c in BOUND_CASES])

@@ -53,12 +53,24 @@ def test_every_exported_scenario_state_passes_the_schema(validator, name):
 
 def test_planar_state_passes_the_schema(validator):
     doc = {
-        "schema": "mjtvm.state/1", "space": 2, "object_position": [0.0, 0.1],
-        "joints": [{"name": "j", "operation_range": [[0, 0], [1, 0], [0, 2]]}], "gravity_torque": [0.0],
-        "contacts": [{"name": "c", "type": "F", "position": [0.1, 0.1], "normal": [-1.0, 0.0], "mu": 0.5,
-                      "jacobian": [[0.0], [0.1]]}],
-        "refs": [[0.0, -1.0, 0.0]], "rvds": [[0.0, 1.0, 0.0]],
-    }  # fmt: skip
+        "schema": "mjtvm.state/1",
+        "space": 2,
+        "object_position": [0.0, 0.1],
+        "joints": [{"name": "j", "operation_range": [[0, 0], [1, 0], [0, 2]]}],
+        "gravity_torque": [0.0],
+        "contacts": [
+            {
+                "name": "c",
+                "type": "F",
+                "position": [0.1, 0.1],
+                "normal": [-1.0, 0.0],
+                "mu": 0.5,
+                "jacobian": [[0.0], [0.1]],
+            }
+        ],
+        "refs": [[0.0, -1.0, 0.0]],
+        "rvds": [[0.0, 1.0, 0.0]],
+    }
     assert list(validator.iter_errors(doc)) == []
     assert load_state(doc).twist_dim == 3
 

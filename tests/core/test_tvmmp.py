@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mjtvm import Contact, GraspState, StateError, default_operation_range, tvmmp
+from mjtvm import Contact, GraspState, ParamError, default_operation_range, tvmmp
 from mjtvm.core.assembly import grasp_map_transpose
 from mjtvm.core.synthetic import random_state
 
@@ -238,7 +238,7 @@ def test_origin_rvds_vertex_is_skipped():
 
 def test_problem_2_needs_rvds():
     st = one_joint_state([link_contact()], [[0, -1, 0]], [[0, 1, 0]]).with_(rvds=None)
-    with pytest.raises(StateError, match="rvds"):
+    with pytest.raises(ParamError, match=r"^state: .*state.rvds is None"):
         tvmmp(st)
 
 

@@ -59,8 +59,13 @@ def closed_form_h(q: float, inertia: float) -> float:
 
 
 def drive(q: float, v: float) -> Drive:
-    return Drive(("q",), np.array([v / (L * math.cos(q))]), np.zeros(1), np.array([v, 0, 0, 0, 0, 0.0]),
-                 (("tip", "L"),))  # fmt: skip
+    return Drive(
+        ("q",),
+        np.array([v / (L * math.cos(q))]),
+        np.zeros(1),
+        np.array([v, 0, 0, 0, 0, 0.0]),
+        (("tip", "L"),),
+    )
 
 
 @pytest.mark.parametrize("q", [0.3, 0.6, 0.9])
@@ -84,11 +89,23 @@ def test_joint_demand_is_quadratic_in_speed_and_zero_without_inertia() -> None:
 
 def state(q: float, f0: float = 2.0) -> GraspState:
     tip = np.array([L * math.sin(q), 0.0, L * math.cos(q)])
-    contact = Contact("tip", "L", tip + np.array([R_TIP, 0, 0]), [1.0, 0.0, 0.0],
-                      [[L * math.cos(q)], [0.0], [-L * math.sin(q)]])  # fmt: skip
-    return GraspState(space=3, object_position=tip + np.array([R_TIP + HALF, 0, 0]), joint_names=("q",),
-                      operation_ranges=(OperationRange([[0, 0], [1.0, 0], [0, 30.0]]),), gravity_torque=[0.0],
-                      contacts=(contact,), refs=[[-f0, 0, 0, 0, 0, 0]], rvds=[[1.0, 0, 0, 0, 0, 0]])  # fmt: skip
+    contact = Contact(
+        "tip",
+        "L",
+        tip + np.array([R_TIP, 0, 0]),
+        [1.0, 0.0, 0.0],
+        [[L * math.cos(q)], [0.0], [-L * math.sin(q)]],
+    )
+    return GraspState(
+        space=3,
+        object_position=tip + np.array([R_TIP + HALF, 0, 0]),
+        joint_names=("q",),
+        operation_ranges=(OperationRange([[0, 0], [1.0, 0], [0, 30.0]]),),
+        gravity_torque=[0.0],
+        contacts=(contact,),
+        refs=[[-f0, 0, 0, 0, 0, 0]],
+        rvds=[[1.0, 0, 0, 0, 0, 0]],
+    )
 
 
 def test_dynamic_pair_matches_the_closed_form_alpha() -> None:

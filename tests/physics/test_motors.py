@@ -33,9 +33,13 @@ def test_attached_motors_give_the_datasheet_range() -> None:
     motor = DCMotor.from_datasheet()
     model = attach_dcmotors(SERVOS, {"a": motor, "b": motor})
     assert [model.actuator(i).name for i in range(model.nactuator)] == ["mc", "a", "b"]
-    want = operation_range_from_actuator(mujoco.MjModel.from_xml_string(
-        f'<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
-        f'<actuator>{motor.mjcf("j", "j")}</actuator></mujoco>'), 0).vertices  # fmt: skip
+    want = operation_range_from_actuator(
+        mujoco.MjModel.from_xml_string(
+            f'<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
+            f"<actuator>{motor.mjcf('j', 'j')}</actuator></mujoco>"
+        ),
+        0,
+    ).vertices
     for joint in ("a", "b"):
         a = dcmotor_of_joint(model, joint)
         assert a is not None and model.actuator_ctrllimited[a] == 0  # the default's ctrlrange does not leak
@@ -63,11 +67,35 @@ def test_reattaching_the_hand_motors_reproduces_the_template() -> None:
     joints = [template.joint(j).name for j in range(template.njnt) if template.joint(j).name != "object"]
     exact = DCMotor.from_datasheet()
     # the template writes 10 significant digits (hand._fmt): the same motor, as the XML has it
-    written = DCMotor(*(float(_fmt(getattr(exact, f))) for f in (
-        "voltage", "stall_torque", "no_load_speed", "max_continuous_torque", "gear", "rotor_inertia",
-        "velocity_gain")))  # fmt: skip
-    fields = ("gainprm", "biasprm", "dynprm", "gear", "forcerange", "armature", "ctrlspec", "trnid", "dyntype",
-              "gaintype", "biastype", "forcelimited", "ctrllimited")  # fmt: skip
+    written = DCMotor(
+        *(
+            float(_fmt(getattr(exact, f)))
+            for f in (
+                "voltage",
+                "stall_torque",
+                "no_load_speed",
+                "max_continuous_torque",
+                "gear",
+                "rotor_inertia",
+                "velocity_gain",
+            )
+        )
+    )
+    fields = (
+        "gainprm",
+        "biasprm",
+        "dynprm",
+        "gear",
+        "forcerange",
+        "armature",
+        "ctrlspec",
+        "trnid",
+        "dyntype",
+        "gaintype",
+        "biastype",
+        "forcelimited",
+        "ctrllimited",
+    )
     again = attach_dcmotors(HAND, dict.fromkeys(joints, written))
     for f in fields:
         np.testing.assert_array_equal(getattr(again, f"actuator_{f}"), getattr(template, f"actuator_{f}"), f)
@@ -104,8 +132,12 @@ def test_motor_model_attaches_or_refuses(tmp_path: Path) -> None:
     model = motor_model(grasp)
     assert dcmotor_of_joint(model, "a") is not None and dcmotor_of_joint(model, "b") is not None
     assert motor_model(grasp) is model  # once per grasp
-    hand = SimpleNamespace(model=mujoco.MjModel.from_xml_path(str(HAND)), model_path=HAND, joints=("f1_yaw0",),
-                           motors={"f1_yaw0": None})  # fmt: skip
+    hand = SimpleNamespace(
+        model=mujoco.MjModel.from_xml_path(str(HAND)),
+        model_path=HAND,
+        joints=("f1_yaw0",),
+        motors={"f1_yaw0": None},
+    )
     assert motor_model(hand) is hand.model  # its own <dcmotor>s: as is
     bad = SimpleNamespace(
         model=servos, model_path=path, joints=("a",), motors={"a": "its range is a polygon"}

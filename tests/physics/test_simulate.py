@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mjtvm.core.tvmmp import tvmmp
-from mjtvm.errors import StateError
+from mjtvm.errors import ParamError, StateError
 from mjtvm.physics.simulate import SimSettings, rerun_data, rollout, sim_model
 from mjtvm.physics.verify import bisect, summarize, verify_lift
 from mjtvm.physics.witness import central_witness, witness_drive
@@ -152,7 +152,7 @@ def test_sim_model_contacts_and_mass(lift: Lift) -> None:
     assert condim == {"f1_tip": 3, "f2_tip": 1, "f3_tip": 3, "f4_tip": 3, "palm": 1}
     assert model.geom("f1_tip").friction[0] == pytest.approx(0.4)
     assert model.body("object").mass[0] * 9.81 == pytest.approx(2.0)
-    with pytest.raises(StateError):
+    with pytest.raises(ParamError, match=r"^window: "):
         SimSettings(window=0.0)
 
 

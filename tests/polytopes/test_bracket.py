@@ -19,7 +19,7 @@ from scipy.spatial import ConvexHull
 
 from mjtvm import SolverError, tvmmp
 from mjtvm.core.synthetic import random_state
-from mjtvm.errors import StateError
+from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import inner_hull, outer_volume, ray_lengths
 from mjtvm.polytopes.budget import Budget, LimitReached, Limits
 from mjtvm.polytopes.hull import PolarHull
@@ -146,9 +146,9 @@ def test_budget_reserve_refuses_before_allocating():
     budget = Budget(Limits(memory=2**20))
     with pytest.raises(LimitReached, match="memory limit: a test array needs 1024 MiB"):
         budget.reserve(2**30, "a test array")
-    with pytest.raises(StateError, match="tolerance"):
+    with pytest.raises(ParamError, match=r"^tolerance: "):
         Limits(tolerance=1.0)
-    with pytest.raises(StateError, match="time_limit"):
+    with pytest.raises(ParamError, match=r"^time_limit: "):
         Limits(time_limit=0.0)
 
 

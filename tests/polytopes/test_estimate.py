@@ -20,6 +20,7 @@ import pytest
 
 import mjtvm.polytopes.refine as refine_module
 from mjtvm.core.synthetic import random_state
+from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import outer_volume
 from mjtvm.polytopes.budget import Budget, Limits
 from mjtvm.polytopes.estimate import VolumeEstimate, clopper_pearson, estimate_volume
@@ -56,9 +57,16 @@ def test_interval_covers_a_box_at_the_confidence():
     runs, misses = 60, 0
     for seed in range(runs):
         e = estimate_volume(
-            lattice, box_shooter(s), np.zeros(k), 1e-12, (0.0, 2.0**k), Budget(),
-            tolerance=0.05, confidence=confidence, seed=seed,
-        )  # fmt: skip
+            lattice,
+            box_shooter(s),
+            np.zeros(k),
+            1e-12,
+            (0.0, 2.0**k),
+            Budget(),
+            tolerance=0.05,
+            confidence=confidence,
+            seed=seed,
+        )
         assert e.stopped_by == "tolerance" and e.width <= 0.05
         assert e.lower <= e.value <= e.upper
         assert e.lps < e.samples  # points beyond a face found already: no LP
@@ -73,11 +81,17 @@ def test_interval_is_clipped_to_the_certified_bracket():
     lattice = PolarHull(np.vstack([eye, -eye]), np.ones(2 * k), np.zeros(k), 1e-12).lattice()
     truth = 1.8**k
     e = estimate_volume(
-        lattice, box_shooter(0.9), np.zeros(k), 1e-12, (truth * 0.999, truth * 1.001), Budget(),
-        tolerance=0.01, confidence=0.999,
-    )  # fmt: skip
+        lattice,
+        box_shooter(0.9),
+        np.zeros(k),
+        1e-12,
+        (truth * 0.999, truth * 1.001),
+        Budget(),
+        tolerance=0.01,
+        confidence=0.999,
+    )
     assert truth * 0.999 <= e.lower <= e.value <= e.upper <= truth * 1.001
-    with pytest.raises(ValueError, match="confidence"):
+    with pytest.raises(ParamError, match=r"^confidence: "):
         VolumeEstimate(1.0, 0.0, 2.0, 1.0, 1, 1, 1, 0.0, "tolerance")
 
 
@@ -142,14 +156,28 @@ def test_loose_outer_polytope_is_cut_down_first():
         return outer_volume(polar, Budget())  # the certified bound (the joggle's inflation)
 
     e = estimate_volume(
-        polar.lattice(), box_shooter(s), np.zeros(k), 1e-12, (0.0, 8.0), Budget(),
-        tolerance=0.05, confidence=0.999, tighten=tighten,
-    )  # fmt: skip
+        polar.lattice(),
+        box_shooter(s),
+        np.zeros(k),
+        1e-12,
+        (0.0, 8.0),
+        Budget(),
+        tolerance=0.05,
+        confidence=0.999,
+        tighten=tighten,
+    )
     assert calls and e.outer == pytest.approx(truth, rel=1e-6)  # the box's own faces were found
     assert e.lower <= truth <= e.upper and e.width <= 0.05
     loose = PolarHull(np.vstack([eye, -eye]), np.ones(2 * k), np.zeros(k), 1e-12).lattice()
     e = estimate_volume(
-        loose, box_shooter(s), np.zeros(k), 1e-12, (0.0, 8.0), Budget(),
-        tolerance=0.2, confidence=0.999, tighten=lambda n, o: None,
-    )  # fmt: skip
+        loose,
+        box_shooter(s),
+        np.zeros(k),
+        1e-12,
+        (0.0, 8.0),
+        Budget(),
+        tolerance=0.2,
+        confidence=0.999,
+        tighten=lambda n, o: None,
+    )
     assert e.outer == 8.0 and e.lower <= truth <= e.upper and e.width <= 0.2

@@ -175,9 +175,14 @@ def test_unbounded_rolling_about_one_contact():
     r"""One F-jaw at (-R, 0), no load: J qd = (v_x, v_y - R w) bounds v_x and v_y - R w only,
     so the object rolls about the contact without limit: direction +-(0, R, 1)."""
     state = GraspState(
-        2, [0.0, 0.0], ("q0", "q1"), (OP, OP), [0.0, 0.0],
-        (Contact("left", "F", [-R, 0.0], [1.0, 0.0], J, mu=0.5),), np.zeros((1, 3)),
-    )  # fmt: skip
+        2,
+        [0.0, 0.0],
+        ("q0", "q1"),
+        (OP, OP),
+        [0.0, 0.0],
+        (Contact("left", "F", [-R, 0.0], [1.0, 0.0], J, mu=0.5),),
+        np.zeros((1, 3)),
+    )
     roll = np.array([0.0, R, 1.0]) / np.hypot(R, 1.0)
     for proj in both(state):
         assert proj.status == "unbounded"
@@ -210,9 +215,17 @@ def test_force_form_has_the_papers_variables():
 
 
 CASES = [
-    (2, 2, 0, 1), (2, 2, 1, 2), (2, 3, 1, 1), (2, 3, 3, 2), (3, 2, 2, 1),
-    (3, 2, 3, 2), (3, 3, 0, 1), (3, 3, 1, 2), (3, 3, 2, 2), (3, 3, 3, 2),
-]  # fmt: skip
+    (2, 2, 0, 1),
+    (2, 2, 1, 2),
+    (2, 3, 1, 1),
+    (2, 3, 3, 2),
+    (3, 2, 2, 1),
+    (3, 2, 3, 2),
+    (3, 3, 0, 1),
+    (3, 3, 1, 2),
+    (3, 3, 2, 2),
+    (3, 3, 3, 2),
+]
 
 
 @pytest.mark.parametrize(("space", "joints", "seed", "refs"), CASES)

@@ -38,8 +38,11 @@ CHILD = textwrap.dedent(
 def _fresh(tmp_path: Path, rrd: Path) -> dict[str, object]:
     proc = subprocess.run(
         [sys.executable, "-c", CHILD, str(tmp_path / "out"), str(rrd)],
-        capture_output=True, text=True, timeout=300, check=True,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
     report: dict[str, object] = json.loads(proc.stdout.strip().splitlines()[-1])
     return report
 

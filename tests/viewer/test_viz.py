@@ -190,7 +190,7 @@ def test_cli_writes_a_recording(
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     rrd = tmp_path / "lift.rrd"
-    args = ["replay", "--states", "2", "--variants", "L", "--no-plots", "--no-sweeps", "--quiet"]
+    args = ["replay", "--states", "2", "--contacts", "L", "--no-plots", "--no-sweeps", "--quiet"]
     assert main([*args, "--out", str(tmp_path), "--rrd", str(rrd), "--spawn", "--tvms-every", "0"]) == 0
     captured = capsys.readouterr()
     assert f"wrote lift.rrd: {rrd}" in captured.out
@@ -208,11 +208,21 @@ def test_verify_results_read_back_from_a_recording(tmp_path: Path) -> None:
     from mjtvm.viewer.viz import record_verify
 
     rows = [
-        {"run": run, "state": i, "z": 0.1 + 0.01 * i, "l": l, "status": "optimal",
-         "alpha_lp": 1.0 + i + l, "alpha_sim": 0.5 + i + 0.1 * l, "ratio": (0.5 + i + 0.1 * l) / (1.0 + i + l),
-         "fail_reason": "torque saturated" if l == 0 else ""}
-        for run in ("L", "S_literal") for i in range(3) for l in range(2)
-    ]  # fmt: skip
+        {
+            "run": run,
+            "state": i,
+            "z": 0.1 + 0.01 * i,
+            "l": l,
+            "status": "optimal",
+            "alpha_lp": 1.0 + i + l,
+            "alpha_sim": 0.5 + i + 0.1 * l,
+            "ratio": (0.5 + i + 0.1 * l) / (1.0 + i + l),
+            "fail_reason": "torque saturated" if l == 0 else "",
+        }
+        for run in ("L", "S_literal")
+        for i in range(3)
+        for l in range(2)
+    ]
     path = tmp_path / "verify.rrd"
     assert record_verify(rows, path)["runs"] == ["L", "S_literal"]
     frame = _read(path, "state")
