@@ -9,7 +9,6 @@ smallest inputs) and check that the documented set equals the written set.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import json
@@ -19,6 +18,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+
+from mjtvm.apps.sweep import SweepFiles
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "outputs.md"
 _MARKER = re.compile(r"<!--\s*fields:\s*(\S+)\s*-->")
@@ -126,12 +127,11 @@ def test_lift_json(replay_dir: Path) -> None:
 
 
 # ------------------------------------------------------------------ mjtvm sweep
-def _sweep_args(out: Path) -> argparse.Namespace:
-    return argparse.Namespace(
-        grasp=["case2"], hand=["default"], contacts=("L",), reading=("physical",), mu=None, mg=None,
-        states=3, state_indices=[0, 1], out=out, name="sweep", resume=False, quiet=True, jobs=1,
-        cluster=None,
-    )  # fmt: skip
+def _sweep_args(out: Path) -> SweepFiles:
+    return SweepFiles(
+        scenarios=("case2",), hands=("default",), variants=("L",), readings=("physical",),
+        num_states=3, states=(0, 1), out=out, name="sweep", quiet=True,
+    )  # fmt: skip  # a table: the grid, then the files
 
 
 def test_sweep_files(tmp_path: Path) -> None:
