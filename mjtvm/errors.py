@@ -9,7 +9,15 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MjtvmError", "ModelError", "OptionError", "OutputError", "ParamError", "SolverError", "StateError"]
+__all__ = [
+    "MjtvmError",
+    "ModelError",
+    "OptionError",
+    "OutputError",
+    "ParamError",
+    "SolverError",
+    "StateError",
+]
 
 
 class MjtvmError(Exception):

@@ -78,7 +78,7 @@ def _variants(
 
 
 def _cases(n: int, seed: int) -> Iterator[tuple[str, str, GraspState, str]]:
-    from mjtvm.sim.scenario import load_scenario
+    from mjtvm.sim.paper_hand.scenario import load_scenario
 
     shipped = {"pinch": load_state(Path(__file__).resolve().parents[1] / "mjtvm/data/examples/pinch.json")}
     for name in SHIPPED:

@@ -35,7 +35,7 @@ from typing import Any
 
 from mjtvm import MjtvmError, SolverError, StateError, load_state, tvmmp
 from mjtvm.core.fuzz import mutate_bytes, mutate_document
-from mjtvm.sim.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import export_state
 
 _INDEX = re.compile(r"\[\d+\]")
 

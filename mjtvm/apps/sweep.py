@@ -49,7 +49,7 @@ from tqdm import tqdm
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
-from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
+from ..sim.lift.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
 from .replay import grasp_defaults
 
 __all__ = ["SweepPoint", "grid", "run_sweep", "run_sweep_files"]
@@ -488,7 +488,7 @@ def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
         The grasp does not load (its own error, as the sweep would raise it).
     """
     from .. import __version__
-    from ..sim.scenario import load_scenario
+    from ..sim.paper_hand.scenario import load_scenario
 
     loaded = load_scenario(grasp, variant=hand)
     h = hashlib.sha256(f"mjtvm {__version__}\n{grasp}\n{hand}\n{num_states}\n".encode())

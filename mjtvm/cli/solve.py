@@ -114,7 +114,7 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
             raise StateError("state", "give a mjtvm.state/1 file (or -) or a grasp (--grasp or a .toml file)")
         source = default
     if is_grasp_source(source):
-        from ..sim.scenario import load_scenario  # MuJoCo only for grasps
+        from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
         return load_scenario(source, variant=hand).state()
     if hand != "default":
@@ -150,7 +150,7 @@ def add_export_state(sub: Subparsers) -> None:
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
     from ..core.state import state_to_dict
-    from ..sim.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
+    from ..sim.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
     source = args.grasp_file or args.grasp
     if source is None:

@@ -96,7 +96,7 @@ def _with_rvds(state: GraspState) -> GraspState:
 @pytest.fixture(scope="module")
 def shipped() -> dict[str, GraspState]:
     """The shipped states, as ``mjtvm export-state`` builds them (load_scenario(...).state())."""
-    from mjtvm.sim.scenario import load_scenario  # MuJoCo only for these
+    from mjtvm.sim.paper_hand.scenario import load_scenario  # MuJoCo only for these
 
     out = {"pinch": load_state(EXAMPLES / "pinch.json")}
     for name in SHIPPED:
@@ -286,7 +286,7 @@ def lift_end() -> list[tuple[str, GraspState]]:
     """Case 2's lift to its reach limit (``stop_margin=0``: past the default margin, the
     fingers nearly stretched): the last 3 of 30 states, L-points and S-points (literal
     reading; the physical one has no balance there), mu 0.3, mg 1 N as ``mjtvm replay``."""
-    from mjtvm.sim.trajectory import lift_state, scripted_lift
+    from mjtvm.sim.lift.trajectory import lift_state, scripted_lift
 
     lift = scripted_lift("case2", num_states=30, stop_margin=0.0)
     out = []

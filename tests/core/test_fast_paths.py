@@ -21,7 +21,7 @@ from mjtvm.core.assembly import _Coo, assemble
 from mjtvm.core.scaling import scale_lp
 from mjtvm.core.state import load_state
 from mjtvm.core.tvmmp import _Problem2
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.paper_hand.scenario import load_scenario
 
 from .test_solvers import mixed_scale
 from .test_units import rescale
