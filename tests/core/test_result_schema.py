@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from mjtvm import tvmmp
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.state import load_state
-from mjtvm.core.synthetic import random_state
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.paper_hand.scenario import load_scenario
 

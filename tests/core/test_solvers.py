@@ -11,8 +11,8 @@ import pytest
 import scipy.sparse as sp
 
 from mjtvm import tvmmp
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.state import load_state
-from mjtvm.core.synthetic import random_state
 from mjtvm.errors import SolverError
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.lift.trajectory import lift_state, scripted_lift

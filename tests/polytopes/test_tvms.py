@@ -9,8 +9,8 @@ import pytest
 from scipy.optimize import linprog
 
 from mjtvm import StateError, tvmmp
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.operation_range import OperationRange, default_operation_range
-from mjtvm.core.synthetic import random_state
 from mjtvm.polytopes.tvms import TVMS_SCHEMA, tvms
 from mjtvm.sim.grasp.state import without_round_off
 from mjtvm.sim.paper_hand.scenario import load_scenario

@@ -16,10 +16,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .assembly import grasp_map_transpose
-from .contacts import Contact, force_generators
-from .operation_range import OperationRange, default_operation_range
-from .state import GraspState
+from ..core.assembly import grasp_map_transpose
+from ..core.contacts import Contact, force_generators
+from ..core.operation_range import OperationRange, default_operation_range
+from ..core.state import GraspState
 
 __all__ = ["PAPER_RVDS", "random_state"]
 

@@ -16,7 +16,14 @@ import random
 from collections.abc import Callable
 from typing import Any
 
-from .bounds import MAX_ABS, MAX_CONTACTS, MAX_FRICTION_EDGES, MAX_JOINTS, MAX_RANGE_VERTICES, MAX_REFS
+from mjtvm.core.bounds import (
+    MAX_ABS,
+    MAX_CONTACTS,
+    MAX_FRICTION_EDGES,
+    MAX_JOINTS,
+    MAX_RANGE_VERTICES,
+    MAX_REFS,
+)
 
 __all__ = ["NASTY_VALUES", "mutate_bytes", "mutate_document", "nested"]
 

@@ -21,10 +21,10 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .contacts import tangent_basis
-from .operation_range import OperationRange
-from .roundoff import DROP_REL
-from .state import GraspState
+from mjtvm.core.contacts import tangent_basis
+from mjtvm.core.operation_range import OperationRange
+from mjtvm.core.roundoff import DROP_REL
+from mjtvm.core.state import GraspState
 
 __all__ = [
     "RANDOM_TYPES",
@@ -265,7 +265,7 @@ RANDOM_TYPES: tuple[tuple[str, ...], ...] = (
 
 
 def random_case(seed: int) -> tuple[str, GraspState]:
-    """A seeded random state of :func:`~mjtvm.core.synthetic.random_state` and its family name
+    """A seeded random state of :func:`~mjtvm.bench.synthetic.random_state` and its family name
     (``random-<space>d-<types>``): the seed picks the space (2 or 3), the contact types among
     :data:`RANDOM_TYPES`, one or two REFS vertices, 4 or 6 RVDS vertices and the slip mode.
 
@@ -279,7 +279,7 @@ def random_case(seed: int) -> tuple[str, GraspState]:
     tuple
         ``(family, state)``.
     """
-    from .synthetic import random_state  # the solver core: only for this generator
+    from mjtvm.bench.synthetic import random_state
 
     rng = np.random.default_rng([seed, 0x5EED])
     space = int(rng.choice([2, 3]))
