@@ -1,7 +1,7 @@
 r"""Rerun the IK of the paper's cases; write their sources and their grasp files.
 
 Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
-``mjtvm/data/scenarios`` for the sources and ``mjtvm/models/paper_hand`` for the grasp files).
+``mjtvm/data/scenarios`` for the sources and ``models/paper_hand`` for the grasp files).
 Each source's scenario data (the paper's points, IK start and bounds) is kept; each variant's
 ``solution`` (joint angles, IK residuals, achieved contacts) is recomputed by
 :func:`mjtvm.sim.paper_hand.placement.make_documents`, a variant's own hand model (one not in
@@ -27,7 +27,7 @@ from mjtvm.sim.paper_hand.scenario import format_document, grasp_document, grasp
 def main(argv: list[str] | None = None) -> int:
     """Write every scenario source and grasp file; return the process exit code."""
     args = sys.argv[1:] if argv is None else argv
-    grasps = Path(args[0]) if args else Path(str(resources.files("mjtvm").joinpath("models", "paper_hand")))
+    grasps = Path(args[0]) if args else Path(str(resources.files("mjtvm.models").joinpath("paper_hand")))
     docs = make_documents()
     for name, doc in docs.items():
         out = Path(args[0]) / f"{name}.json" if args else scenario_path(name)

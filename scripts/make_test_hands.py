@@ -1,4 +1,4 @@
-"""Find the "grasp" keyframes of the test hands in mjtvm/models (issue 14) by a small IK.
+"""Find the "grasp" keyframes of the test hands in models (issue 14) by a small IK.
 
 For each hand the chosen fingertip geoms are brought onto the object's surface
 (``mj_geomDistance`` = 0), every other hand geom is kept at least :data:`CLEARANCE` from the
@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-MODELS = Path(__file__).resolve().parent.parent / "mjtvm" / "models"
+MODELS = Path(__file__).resolve().parent.parent / "models"
 
 #: Tip-object distance the keyframe must reach (m); the test allows 1e-4.
 TOLERANCE = 1e-7

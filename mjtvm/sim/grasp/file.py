@@ -61,8 +61,8 @@ _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 # ------------------------------------------------------------------ loading
 def shipped_grasps() -> dict[str, Path]:
-    """Name -> path of every grasp file shipped in ``mjtvm/models/<hand>/`` (``case2``, ...)."""
-    root = Path(str(resources.files("mjtvm").joinpath("models")))
+    """Name -> path of every grasp file shipped in ``models/<hand>/`` (installed as ``mjtvm.models``)."""
+    root = Path(str(resources.files("mjtvm.models")))
     return {p.stem: p for p in sorted(root.glob("*/*.toml"))}
 
 

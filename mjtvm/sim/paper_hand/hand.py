@@ -1,6 +1,6 @@
 r"""The paper's four-finger hand and its sphere as a MuJoCo model (MJCF), section 5, Fig. 4.
 
-:func:`hand_mjcf` writes the model; ``mjtvm/models/paper_hand/*.xml`` are its committed output
+:func:`hand_mjcf` writes the model; ``models/paper_hand/*.xml`` are its committed output
 (``scripts/make_models.py``). :func:`~mjtvm.sim.grasp.actuator.operation_range_from_actuator` reads a joint's
 operation range back from the compiled ``<dcmotor>``: the MJCF is the single source of truth.
 
@@ -260,7 +260,7 @@ def _finger_bodies(
 
 
 def model_files() -> dict[str, str]:
-    """File name -> MJCF of the committed models in ``mjtvm/models/paper_hand/`` (default and human-like hands)."""
+    """File name -> MJCF of the committed models in ``models/paper_hand/`` (default and human-like hands)."""
     return {
         "four_finger_hand.xml": hand_mjcf(),
         "four_finger_hand_humanlike.xml": hand_mjcf(

@@ -60,7 +60,7 @@ def _hand_options(v: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def variant_model_text(doc: Mapping[str, Any], variant: str) -> str:
-    """The MJCF of a variant's hand (``mjtvm/models/paper_hand/<model>``), as the generator writes it."""
+    """The MJCF of a variant's hand (``models/paper_hand/<model>``), as the generator writes it."""
     v = _variant(doc, variant)
     return hand_mjcf(**_hand_options(v), model_name=Path(str(v["model"])).stem)
 
@@ -261,9 +261,7 @@ def posture_grasp(doc: Mapping[str, Any], variant: str, posture: FingerPosture, 
     every other joint keeps the solution's angle.
     """
     out = grasp_document(doc, variant)
-    out["model"] = str(
-        Path(str(resources.files("mjtvm").joinpath("models").joinpath("paper_hand"))) / out["model"]
-    )
+    out["model"] = str(Path(str(resources.files("mjtvm.models").joinpath("paper_hand"))) / out["model"])
     out["configuration"]["qpos"].update(posture.angles)
     if posture.contact == "side":
         for entry in out["contacts"]:

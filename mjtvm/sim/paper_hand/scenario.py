@@ -9,7 +9,7 @@ geoms whose contacts are modelling artefacts (``ignored_geoms``), and per model 
 finger joints, the IK start and bounds, and the ``solution`` written by
 ``scripts/make_scenarios.py`` (:func:`~mjtvm.sim.paper_hand.placement.make_documents`): joint angles, IK residuals and the
 achieved contacts. From each variant's solution :func:`grasp_document` writes the grasp
-file ``mjtvm/models/paper_hand/<name>[-humanlike].toml`` (``mjtvm.grasp/1``): the paper's
+file ``models/paper_hand/<name>[-humanlike].toml`` (``mjtvm.grasp/1``): the paper's
 cases are loaded like any grasp (:func:`load_scenario` is
 :func:`~mjtvm.sim.grasp.file.load_grasp` of that file, with ``mg`` and ``mu`` options); the
 IK runs only in the generator.
@@ -132,7 +132,7 @@ def load_scenario(
     ----------
     source
         A shipped scenario name (:data:`SCENARIOS`; the grasp file
-        :func:`grasp_file_name` of ``variant`` in ``mjtvm/models/paper_hand/``), or any grasp
+        :func:`grasp_file_name` of ``variant`` in ``models/paper_hand/``), or any grasp
         file or shipped grasp name (then ``variant`` must stay ``"default"``).
     variant
         Hand of a shipped scenario: ``"default"`` or ``"humanlike"``.
@@ -167,7 +167,7 @@ def grasp_file_name(name: str, variant: str) -> str:
 def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
     r"""The ``mjtvm.grasp/1`` document of one scenario variant at its stored IK solution.
 
-    The grasp is the paper's hand (``mjtvm/models/paper_hand/<model>``) at the solution's
+    The grasp is the paper's hand (``models/paper_hand/<model>``) at the solution's
     joint angles with the object at ``object_position``; REFS = the weight ``mg`` along
     gravity; the fingers' joints in finger order; ignored geoms as ``ignore``.
     """

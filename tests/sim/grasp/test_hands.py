@@ -1,4 +1,4 @@
-"""The test hands in mjtvm/models (issue 14): MJCF written the way public hands are written.
+"""The test hands in models (issue 14): MJCF written the way public hands are written.
 
 Checks that need MuJoCo only: each model loads as a complete scene, its grasp keyframe puts the
 chosen fingertips on the object (``mj_geomDistance`` within 0.1 mm) and nothing else of the hand
@@ -22,7 +22,7 @@ from mjtvm.core.reference import reference_tvmmp
 from mjtvm.sim.grasp.file import load_grasp
 from mjtvm.sim.grasp.state import geom_id
 
-MODELS = Path(__file__).resolve().parents[3] / "mjtvm" / "models"
+MODELS = Path(__file__).resolve().parents[3] / "models"
 _OBJ = mujoco.mjtObj
 
 #: A fingertip meant to touch the object: its surface distance at the keyframe (m).

@@ -118,7 +118,7 @@ def test_case1_finger3_configuration_is_reachable(hand: mujoco.MjModel) -> None:
 # ------------------------------------------------------------- committed files
 def test_committed_models_equal_generator_output() -> None:
     for name, text in model_files().items():
-        path = ROOT / "mjtvm" / "models" / "paper_hand" / name
+        path = ROOT / "models" / "paper_hand" / name
         assert path.read_text(encoding="utf-8") == text, f"{path} is stale: run scripts/make_models.py"
         mujoco.MjModel.from_xml_path(str(path))
 

@@ -161,7 +161,7 @@ def test_grasp_files_equal_generator_output(generated: dict, name: str) -> None:
 def test_variant_models_are_the_committed_ones(name: str, variant: str) -> None:
     doc = read_scenario(name)
     v = doc["variants"][variant]
-    committed = (ROOT / "mjtvm" / "models" / "paper_hand" / v["model"]).read_text(encoding="utf-8")
+    committed = (ROOT / "models" / "paper_hand" / v["model"]).read_text(encoding="utf-8")
     assert variant_model_text(doc, variant) == committed
     if v["model"] in model_files():  # the shared hands: the scenario uses them as they are
         assert committed == model_files()[v["model"]]
