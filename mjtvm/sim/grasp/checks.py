@@ -88,7 +88,10 @@ class _Checker:
         return x
 
     def integer(self, value: Any, field: str, low: int, high: int) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        # JSON Schema counts 16.0 as an integer; the reader does too, so that it and
+        # grasp.schema.json accept the same documents
+        whole = isinstance(value, int) or (isinstance(value, float) and value.is_integer())
+        if isinstance(value, bool) or not whole or not low <= value <= high:
             raise self.fail(field, f"expected an integer in [{low}, {high}], got {value!r}")
         return int(value)
 

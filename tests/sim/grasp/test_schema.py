@@ -77,6 +77,49 @@ def test_schema_and_loader_agree_on_invalid_documents(
         read_grasp_document(doc)
 
 
+# Documents on both sides of the format's edges: case2 with one field set to the value.
+EDGES = [
+    (("friction_edges",), 16.0),
+    (("friction_edges",), 3),
+    (("friction_edges",), 256),
+    (("friction_edges",), 257),
+    (("friction_edges",), 16.5),
+    (("friction_edges",), "16"),
+    (("friction_edges",), True),
+    (("mu",), 0),
+    (("mu",), 0.0),
+    (("mu",), "0.3"),
+    (("contact_tolerance",), 0.01),
+    (("contact_tolerance",), 0.0),
+    (("contact_tolerance",), -1e-4),
+    (("slip",), "shared"),
+    (("slip",), "both"),
+    (("joint_losses",), "ignore"),
+    (("joint_losses",), "keep"),
+    (("contacts", 0, "type"), "D"),
+    (("contacts", 0, "type"), "d"),
+    (("rvds",), [[1, 0, 0, 0, 0, 0]]),
+    (("rvds",), []),
+    (("name",), ""),
+    (("name",), 7),
+    (("model",), 7),
+]
+
+
+@pytest.mark.parametrize(("path", "value"), EDGES)
+def test_schema_and_reader_accept_the_same_documents(
+    validator: jsonschema.Draft202012Validator, path: tuple[Any, ...], value: Any
+) -> None:
+    doc = _set(_case2(), path, value)
+    schema_accepts = not list(validator.iter_errors(doc))
+    try:
+        read_grasp_document(doc)
+        reader_accepts = True
+    except GraspError:
+        reader_accepts = False
+    assert schema_accepts == reader_accepts, f"schema accepts: {schema_accepts}, reader: {reader_accepts}"
+
+
 def test_the_documented_example_is_a_valid_grasp_document(validator: jsonschema.Draft202012Validator) -> None:
     """The annotated example of docs/grasp-format.md parses as TOML, passes the schema and the reader."""
     from pathlib import Path
