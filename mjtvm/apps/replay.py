@@ -34,7 +34,8 @@ from tqdm import tqdm
 from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import StateError
-from ..sim.lift.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
+from ..sim.lift.states import READINGS, VARIANTS, lift_state, slide_directions
+from ..sim.lift.trajectory import Lift, scripted_lift
 from .figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
 
 __all__ = [
@@ -215,7 +216,7 @@ def replay_lift(
     r"""TVMMP and every :math:`\alpha_{kl}` along the lift (Fig. 8).
 
     One record per (variant, reading, state): L-points once (reading ``None``), S-points once
-    per reading. ``bases`` are :func:`~mjtvm.sim.lift.trajectory.lift_state` of each state, reused.
+    per reading. ``bases`` are :func:`~mjtvm.sim.lift.states.lift_state` of each state, reused.
     """
     _check(variants, readings, mu, mg)
     runs = [(v, r) for v in variants for r in ((None,) if v == "L" else readings)]

@@ -49,7 +49,8 @@ from tqdm import tqdm
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import StateError
-from ..sim.lift.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
+from ..sim.lift.states import READINGS, VARIANTS, lift_state
+from ..sim.lift.trajectory import Lift, scripted_lift
 from .replay import grasp_defaults
 
 __all__ = ["SweepPoint", "grid", "run_sweep", "run_sweep_files"]

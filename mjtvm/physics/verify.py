@@ -37,7 +37,8 @@ from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, ModelError, StateError
-from ..sim.lift.trajectory import Lift, lift_state, scripted_lift
+from ..sim.lift.states import lift_state
+from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
 from .motors import attach_dcmotors, require_motors

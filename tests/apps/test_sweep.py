@@ -6,7 +6,8 @@ import pytest
 
 from mjtvm import StateError, tvmmp
 from mjtvm.apps.sweep import SweepPoint, grid, run_sweep
-from mjtvm.sim.lift.trajectory import lift_state, scripted_lift
+from mjtvm.sim.lift.states import lift_state
+from mjtvm.sim.lift.trajectory import scripted_lift
 
 POINTS = grid(mus=(0.1, 0.5), mgs=(1.0, 2.0), states=(0, 3), num_states=6) + grid(
     variants=("S",), readings=("literal",), states=(1,), num_states=6

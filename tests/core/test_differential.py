@@ -286,7 +286,8 @@ def lift_end() -> list[tuple[str, GraspState]]:
     """Case 2's lift to its reach limit (``stop_margin=0``: past the default margin, the
     fingers nearly stretched): the last 3 of 30 states, L-points and S-points (literal
     reading; the physical one has no balance there), mu 0.3, mg 1 N as ``mjtvm replay``."""
-    from mjtvm.sim.lift.trajectory import lift_state, scripted_lift
+    from mjtvm.sim.lift.states import lift_state
+    from mjtvm.sim.lift.trajectory import scripted_lift
 
     lift = scripted_lift("case2", num_states=30, stop_margin=0.0)
     out = []

@@ -15,7 +15,8 @@ from mjtvm.bench.synthetic import random_state
 from mjtvm.core.state import load_state
 from mjtvm.errors import SolverError
 from mjtvm.polytopes.tvms import tvms
-from mjtvm.sim.lift.trajectory import lift_state, scripted_lift
+from mjtvm.sim.lift.states import lift_state
+from mjtvm.sim.lift.trajectory import scripted_lift
 
 from ..helpers import distance_to_hull
 

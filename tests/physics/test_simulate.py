@@ -18,7 +18,8 @@ from mjtvm.physics.verify_report import summarize
 from mjtvm.physics.witness import central_witness, witness_drive
 from mjtvm.sim.grasp.actuator import operation_range_from_actuator
 from mjtvm.sim.grasp.dcmotor import DCMotor
-from mjtvm.sim.lift.trajectory import Lift, lift_state, scripted_lift
+from mjtvm.sim.lift.states import lift_state
+from mjtvm.sim.lift.trajectory import Lift, scripted_lift
 
 from ..helpers import Q_MAX, T_MAX
 

@@ -3,16 +3,8 @@ predictor-corrector that keeps the fingers on its surface, and the grasp states 
 """
 
 from .motion import Motion
-from .trajectory import (
-    READINGS,
-    STOP_MARGIN,
-    VARIANTS,
-    Lift,
-    LiftSpec,
-    lift_state,
-    scripted_lift,
-    slide_directions,
-)
+from .states import READINGS, VARIANTS, lift_state, slide_directions
+from .trajectory import STOP_MARGIN, Lift, LiftSpec, scripted_lift
 
 __all__ = [
     "READINGS",

@@ -259,7 +259,8 @@ def test_grasp_alphas_match_the_cvxpy_reference(hand: tuple[Hand, mujoco.MjModel
 def test_lift_keeps_the_f_points_on_the_object(name: str, travel: float) -> None:
     """The grasp file's lift (Allegro: 4 cm along -x; gripper: 3 cm up): every F-point stays on
     its object-fixed point within 1e-8 m, every L finger on the surface, and lift states solve."""
-    from mjtvm.sim.lift.trajectory import lift_state, scripted_lift
+    from mjtvm.sim.lift.states import lift_state
+    from mjtvm.sim.lift.trajectory import scripted_lift
 
     lift = scripted_lift(name, num_states=4)
     assert lift.s[-1] == pytest.approx(travel, abs=1e-12)

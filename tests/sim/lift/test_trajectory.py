@@ -14,8 +14,9 @@ import pytest
 from mjtvm.errors import ModelError, StateError
 from mjtvm.sim.grasp.ik import IkTarget, solve_ik
 from mjtvm.sim.grasp.state import detected_contacts
+from mjtvm.sim.lift.states import lift_state, slide_directions
 from mjtvm.sim.lift.surface import distance_model, witness
-from mjtvm.sim.lift.trajectory import TOUCH_TOL, Lift, LiftSpec, lift_state, scripted_lift, slide_directions
+from mjtvm.sim.lift.trajectory import TOUCH_TOL, Lift, LiftSpec, scripted_lift
 
 EZ = np.array([0.0, 0.0, 1.0])
 RADIUS, TIP = 0.1, 0.005  # sphere and fingertip radii (m), from the scenario and the hand model
