@@ -2,10 +2,14 @@ r"""mjtvm: joint torque-velocity pair based manipulability (Watanabe) on top of 
 
 The core (this namespace) needs neither MuJoCo nor rerun: grasp states, operation
 ranges, contacts, Problem 2 (TVMMP, :func:`tvmmp`) and Problem 1 (TVMS, :func:`tvms`). The
-MuJoCo coupling (``hand``, ``grasp``, ``ik``, ``scenario``, ``trajectory``, ``replay``,
-``simulate``, ``verify``) and the rerun recording (``viz``, run beside the job by ``recording``)
-live in their own modules.
+MuJoCo coupling (:mod:`mjtvm.sim`: ``grasp``, ``lift``, ``paper_hand``; :mod:`mjtvm.physics`)
+and the rerun recording (:mod:`mjtvm.viewer`) live in their own packages. The grasp-file names
+here (:func:`load_grasp`, :func:`export_state`, :class:`Grasp`, :class:`GraspError`,
+:func:`shipped_grasps`) are imported on first use, so that ``import mjtvm`` does not load MuJoCo.
 """
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from .core.assembly import Assembly, assemble
 from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
@@ -15,12 +19,20 @@ from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .polytopes.tvms import TvmsResult, tvms
 
+if TYPE_CHECKING:
+    from .sim.grasp import Grasp, GraspError, export_state, load_grasp, shipped_grasps
+
 __version__ = "0.1.0"
+
+# Names of the MuJoCo layer, imported by __getattr__ on first use.
+_MUJOCO_NAMES = frozenset({"Grasp", "GraspError", "export_state", "load_grasp", "shipped_grasps"})
 
 __all__ = [
     "CONTACT_TYPES",
     "Assembly",
     "Contact",
+    "Grasp",
+    "GraspError",
     "GraspState",
     "MjtvmError",
     "ModelError",
@@ -37,12 +49,21 @@ __all__ = [
     "assemble",
     "default_operation_range",
     "dump_state",
+    "export_state",
     "force_generators",
+    "load_grasp",
     "load_motor_data",
     "load_state",
     "parse_state",
+    "shipped_grasps",
     "state_to_dict",
     "tangent_basis",
     "tvmmp",
     "tvms",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _MUJOCO_NAMES:
+        return getattr(importlib.import_module(".sim.grasp", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -3,7 +3,7 @@ r"""Differential run at scale: ``tvmmp`` (HiGHS eliminated / literal, Clarabel) 
 reference (:func:`~mjtvm.core.reference.reference_tvmmp`, solver HiGHS; Clarabel where the
 HiGHS reference and ``tvmmp`` disagree, to tell a reference that cannot decide).
 
-States: ``--states N`` seeded random states (:func:`~mjtvm.core.perturb.random_case`), each
+States: ``--states N`` seeded random states (:func:`~tests.support.perturb.random_case`), each
 also near-singular (one Jacobian column x 1e-6), in a unit system (lengths x 1e-3, forces
 x 1e3, times x 1e2), in joint units of 1e-6 rad and with Jacobian round-off noise; plus the
 shipped states with the same perturbations and the Allegro's fingertips as S-points (4 x 8).
@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -37,7 +38,14 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from mjtvm.core.perturb import (
+from mjtvm.core.reference import reference_tvmmp
+from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.tvmmp import tvmmp
+
+# The test oracles live in tests/support, outside the installed package: import them from
+# this checkout.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from tests.support.perturb import (
     add_jacobian_roundoff,
     random_case,
     rescale,
@@ -45,9 +53,6 @@ from mjtvm.core.perturb import (
     scale_joint_column,
     slide_contact,
 )
-from mjtvm.core.reference import reference_tvmmp
-from mjtvm.core.state import GraspState, load_state
-from mjtvm.core.tvmmp import tvmmp
 
 CONFIGS = (("highs", "eliminated"), ("highs", "literal"), ("clarabel", "eliminated"))
 REL, ZERO_REL = 1e-6, 1e-9  # as tests/core/test_differential.py
@@ -92,7 +97,7 @@ def _variants(
 
 
 def _cases(n: int, seed: int) -> Iterator[tuple[str, str, GraspState, str]]:
-    from mjtvm.sim.scenario import load_scenario
+    from mjtvm.sim.paper_hand.scenario import load_scenario
 
     shipped = {"pinch": load_state(Path(__file__).resolve().parents[1] / "mjtvm/data/examples/pinch.json")}
     for name in SHIPPED:

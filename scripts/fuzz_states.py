@@ -2,7 +2,7 @@
 r"""Fuzz the state loader at scale: mutated shipped states and damaged bytes.
 
 Every shipped example (``mjtvm/data/examples/*.json``) and the states exported from the
-scenarios ``case1``, ``case1-s``, ``case2`` are mutated by :mod:`mjtvm.core.fuzz` (the same
+scenarios ``case1``, ``case1-s``, ``case2`` are mutated by :mod:`tests.support.fuzz` (the same
 mutations as ``tests/core/test_fuzz.py``); a fraction of the runs feeds damaged bytes
 (truncated JSON, invalid UTF-8, deep brackets, huge literals) through ``load_state``.
 A state that loads is solved with ``mjtvm.tvmmp``. Outcomes are counted:
@@ -31,11 +31,16 @@ import time
 import traceback
 from collections import Counter
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 from mjtvm import MjtvmError, SolverError, StateError, load_state, tvmmp
-from mjtvm.core.fuzz import mutate_bytes, mutate_document
-from mjtvm.sim.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import export_state
+
+# The test oracles live in tests/support, outside the installed package: import them from
+# this checkout.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from tests.support.fuzz import mutate_bytes, mutate_document
 
 _INDEX = re.compile(r"\[\d+\]")
 

@@ -1,7 +1,7 @@
-r"""Write the committed MJCF models (``mjtvm/models/paper_hand/*.xml``) from :func:`mjtvm.sim.hand.model_files`.
+r"""Write the committed MJCF models (``models/paper_hand/*.xml``) from :func:`mjtvm.sim.paper_hand.hand.model_files`.
 
 Usage: ``python scripts/make_models.py [OUTPUT_DIR]`` (default: the repository's
-``mjtvm/models/paper_hand/``). ``tests/sim/test_hand.py`` checks that the committed files equal this output.
+``models/paper_hand/``). ``tests/sim/paper_hand/test_hand.py`` checks that the committed files equal this output.
 """
 
 from __future__ import annotations
@@ -9,15 +9,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mjtvm.sim.hand import model_files
+from mjtvm.sim.paper_hand.hand import model_files
 
 
 def main(argv: list[str] | None = None) -> int:
     """Write every model file; return the process exit code."""
     args = sys.argv[1:] if argv is None else argv
-    out = (
-        Path(args[0]) if args else Path(__file__).resolve().parent.parent / "mjtvm" / "models" / "paper_hand"
-    )
+    out = Path(args[0]) if args else Path(__file__).resolve().parent.parent / "models" / "paper_hand"
     out.mkdir(parents=True, exist_ok=True)
     for name, text in model_files().items():
         (out / name).write_text(text, encoding="utf-8")

@@ -1,14 +1,14 @@
 r"""Rerun the IK of the paper's cases; write their sources and their grasp files.
 
 Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
-``mjtvm/data/scenarios`` for the sources and ``mjtvm/models/paper_hand`` for the grasp files).
+``mjtvm/data/scenarios`` for the sources and ``models/paper_hand`` for the grasp files).
 Each source's scenario data (the paper's points, IK start and bounds) is kept; each variant's
 ``solution`` (joint angles, IK residuals, achieved contacts) is recomputed by
-:func:`mjtvm.sim.scenario.make_documents`, a variant's own hand model (one not in
-:func:`mjtvm.sim.hand.model_files`, e.g. Case 1's ``four_finger_hand_thin.xml``) is written by
-:func:`mjtvm.sim.scenario.variant_model_text`, and the variant's ``mjtvm.grasp/1`` file
-(:func:`mjtvm.sim.scenario.grasp_document`) is written from it: ``case2.toml``,
-``case2-humanlike.toml``, ... ``tests/sim/test_scenario.py`` checks that the committed files
+:func:`mjtvm.sim.paper_hand.placement.make_documents`, a variant's own hand model (one not in
+:func:`mjtvm.sim.paper_hand.hand.model_files`, e.g. Case 1's ``four_finger_hand_thin.xml``) is written by
+:func:`mjtvm.sim.paper_hand.placement.variant_model_text`, and the variant's ``mjtvm.grasp/1`` file
+(:func:`mjtvm.sim.paper_hand.scenario.grasp_document`) is written from it: ``case2.toml``,
+``case2-humanlike.toml``, ... ``tests/sim/paper_hand/test_scenario.py`` checks that the committed files
 equal this output.
 """
 
@@ -18,22 +18,16 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from mjtvm.sim.graspdoc import format_toml
-from mjtvm.sim.hand import model_files
-from mjtvm.sim.scenario import (
-    format_document,
-    grasp_document,
-    grasp_file_name,
-    make_documents,
-    scenario_path,
-    variant_model_text,
-)
+from mjtvm.sim.grasp.document import format_toml
+from mjtvm.sim.paper_hand.hand import model_files
+from mjtvm.sim.paper_hand.placement import make_documents, variant_model_text
+from mjtvm.sim.paper_hand.scenario import format_document, grasp_document, grasp_file_name, scenario_path
 
 
 def main(argv: list[str] | None = None) -> int:
     """Write every scenario source and grasp file; return the process exit code."""
     args = sys.argv[1:] if argv is None else argv
-    grasps = Path(args[0]) if args else Path(str(resources.files("mjtvm").joinpath("models", "paper_hand")))
+    grasps = Path(args[0]) if args else Path(str(resources.files("mjtvm.models").joinpath("paper_hand")))
     docs = make_documents()
     for name, doc in docs.items():
         out = Path(args[0]) / f"{name}.json" if args else scenario_path(name)

@@ -1,4 +1,4 @@
-"""Find the "grasp" keyframes of the test hands in mjtvm/models (issue 14) by a small IK.
+"""Find the "grasp" keyframes of the test hands in models (issue 14) by a small IK.
 
 For each hand the chosen fingertip geoms are brought onto the object's surface
 (``mj_geomDistance`` = 0), every other hand geom is kept at least :data:`CLEARANCE` from the
@@ -12,7 +12,7 @@ Usage::
     python scripts/make_test_hands.py            # print each keyframe and its distances
     python scripts/make_test_hands.py --write    # also rewrite <key name="grasp"> in the XML
 
-The committed XML files hold the printed values; ``tests/sim/test_hands.py`` checks them.
+The committed XML files hold the printed values; ``tests/sim/grasp/test_hands.py`` checks them.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-MODELS = Path(__file__).resolve().parent.parent / "mjtvm" / "models"
+MODELS = Path(__file__).resolve().parent.parent / "models"
 
 #: Tip-object distance the keyframe must reach (m); the test allows 1e-4.
 TOLERANCE = 1e-7

@@ -22,3 +22,17 @@ def test_core_imports_without_mujoco_or_rerun():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_every_package_is_installed():
+    """pyproject.toml lists the packages by hand (models/ is mapped to mjtvm.models): none missing."""
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    listed = set(
+        tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["packages"]
+    )
+    found = {".".join(p.parent.relative_to(root).parts) for p in (root / "mjtvm").rglob("__init__.py")}
+    assert found | {"mjtvm.models"} == listed
+    assert (root / "models" / "__init__.py").is_file()

@@ -1,8 +1,8 @@
 r"""Replay of the scripted lift: TVMMP along it (paper section 5, Fig. 8) and the Fig. 9 sweeps.
 
-For every state of a :class:`~mjtvm.sim.trajectory.Lift`, Problem 2 (eq. 31-35,
+For every state of a :class:`~mjtvm.sim.lift.trajectory.Lift`, Problem 2 (eq. 31-35,
 :func:`~mjtvm.core.tvmmp.tvmmp`) is solved with fingers 2 and 4 as L-points and as S-points (slide
-directions of the chosen reading, :mod:`mjtvm.sim.trajectory`), at the given mu and mg; the sweeps
+directions of the chosen reading, :mod:`mjtvm.sim.lift.trajectory`), at the given mu and mg; the sweeps
 take L-points at mu in :data:`SWEEP_MUS` (mg = :data:`SWEEP_MU_MG`) and mg in
 :data:`SWEEP_MGS` (mu = :data:`SWEEP_MG_MU`). Results go to ``lift.csv`` (one row per
 (variant, reading, state) of the main run), ``lift-sweeps.csv``, ``lift.json`` (the same
@@ -34,7 +34,8 @@ from tqdm import tqdm
 from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import ParamError
-from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift, slide_directions
+from ..sim.lift.states import READINGS, VARIANTS, lift_state, slide_directions
+from ..sim.lift.trajectory import Lift, scripted_lift
 from .figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
 
 __all__ = [
@@ -73,7 +74,7 @@ class Record:
         Friction coefficient and object weight (N).
     index, z, s
         State index, object origin height (m) and travel along the lift (m; the lift's path
-        parameter, :attr:`~mjtvm.sim.trajectory.Lift.s`).
+        parameter, :attr:`~mjtvm.sim.lift.trajectory.Lift.s`).
     result
         The :class:`~mjtvm.core.tvmmp.TvmmpResult` (alpha_kl, status, TVMMP, limiting pair, timings).
     solver
@@ -234,7 +235,7 @@ def replay_lift(
     r"""TVMMP and every :math:`\alpha_{kl}` along the lift (Fig. 8).
 
     One record per (variant, reading, state): L-points once (reading ``None``), S-points once
-    per reading. ``bases`` are :func:`~mjtvm.sim.trajectory.lift_state` of each state, reused.
+    per reading. ``bases`` are :func:`~mjtvm.sim.lift.states.lift_state` of each state, reused.
     """
     _check(variants, readings, mu, mg)
     runs = [(v, r) for v in variants for r in ((None,) if v == "L" else readings)]
@@ -418,7 +419,7 @@ def run_replay(
 ) -> ReplayOutput:
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
 
-    ``stop_margin``: :func:`~mjtvm.sim.trajectory.scripted_lift`'s (the grasp's by default).
+    ``stop_margin``: :func:`~mjtvm.sim.lift.trajectory.scripted_lift`'s (the grasp's by default).
     ``mu`` and ``mg`` default to the grasp's (:func:`grasp_defaults`): 0.3 and 1 N for the paper's
     Case 2. ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the

@@ -49,7 +49,8 @@ from tqdm import tqdm
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import ParamError, StateError
-from ..sim.trajectory import READINGS, VARIANTS, Lift, lift_state, scripted_lift
+from ..sim.lift.states import READINGS, VARIANTS, lift_state
+from ..sim.lift.trajectory import Lift, scripted_lift
 from .replay import grasp_defaults
 
 __all__ = ["SweepFiles", "SweepPoint", "grid", "run_sweep", "run_sweep_files"]
@@ -489,7 +490,7 @@ def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
         The grasp does not load (its own error, as the sweep would raise it).
     """
     from .. import __version__
-    from ..sim.scenario import load_scenario
+    from ..sim.paper_hand.scenario import load_scenario
 
     loaded = load_scenario(grasp, variant=hand)
     h = hashlib.sha256(f"mjtvm {__version__}\n{grasp}\n{hand}\n{num_states}\n".encode())

@@ -23,7 +23,7 @@ def case1_beta(state: Any) -> np.ndarray:
 
     rdot = E z (E the in-plane basis) is reachable by finger 3's contacts iff G_c^T E z lies in
     range(J_c) (eq. 7): the null space of (I - U U^T) G_c^T E, U an orthonormal basis of
-    range(J_c), as in ``tests/sim/test_scenario.py``. The sign makes its xdot component >= 0.
+    range(J_c), as in ``tests/sim/paper_hand/test_scenario.py``. The sign makes its xdot component >= 0.
     """
     from ..core.assembly import grasp_map_transpose
 
@@ -138,7 +138,7 @@ def paper_cases(
 ) -> dict[str, Any]:
     """The rows ``case1_p1``, ``case1_p2`` (8 RVDS vertices, with beta), ``case2_p1`` (not
     ``quick``) and ``case2_p2`` of the report."""
-    from ..sim.scenario import load_scenario
+    from ..sim.paper_hand.scenario import load_scenario
 
     out: dict[str, Any] = {}
     case1 = load_scenario("case1").state()

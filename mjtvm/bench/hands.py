@@ -4,12 +4,12 @@ test hands through the pipeline a user runs.
 Per grasp (``allegro-ik``: the hand-only Allegro, the grasp found by IK; ``allegro-sphere``: the
 same hand at a keyframe; ``gripper3-box``: a three-finger gripper and a box on a table):
 
-* **load**: :func:`~mjtvm.sim.graspfile.load_grasp` (read and check the file, build the model
+* **load**: :func:`~mjtvm.sim.grasp.file.load_grasp` (read and check the file, build the model
   with its additions through ``MjSpec``, set the configuration, the IK for ``allegro-ik``);
-* **state**: :meth:`~mjtvm.sim.graspfile.Grasp.state` (contact detection within the tolerance,
+* **state**: :meth:`~mjtvm.sim.grasp.loaded.Grasp.state` (contact detection within the tolerance,
   Jacobians, gravity torques);
 * **Problem 2**: :func:`~mjtvm.core.tvmmp.tvmmp` of that state (its RVDS);
-* **lift**: :func:`~mjtvm.sim.trajectory.scripted_lift` of the file's ``[lift]``, 30 states.
+* **lift**: :func:`~mjtvm.sim.lift.trajectory.scripted_lift` of the file's ``[lift]``, 30 states.
 
 Medians over repeats after one warm-up.
 """
@@ -29,8 +29,8 @@ HANDS = ("allegro-ik", "allegro-sphere", "gripper3-box")
 def bench_hands(names: Sequence[str] = HANDS, *, repeats: int = 20, lift_repeats: int = 3) -> dict[str, Any]:
     """``{name: {"joints", "contacts", "load", "state", "p2", "lift": stats}}`` (times in s)."""
     from ..core.tvmmp import tvmmp
-    from ..sim.graspfile import load_grasp
-    from ..sim.trajectory import scripted_lift
+    from ..sim.grasp.file import load_grasp
+    from ..sim.lift.trajectory import scripted_lift
 
     out: dict[str, Any] = {}
     for name in names:

@@ -149,8 +149,8 @@ def run_tvms_benchmark(
     time_limit: float = 120.0,
     trace_memory: bool = True,
 ) -> dict[str, Any]:
-    """Benchmark the shipped scenarios (:func:`~mjtvm.sim.scenario.load_scenario`); JSON-ready report."""
-    from ..sim.scenario import load_scenario
+    """Benchmark the shipped scenarios (:func:`~mjtvm.sim.paper_hand.scenario.load_scenario`); JSON-ready report."""
+    from ..sim.paper_hand.scenario import load_scenario
 
     reps = {"case1": 50, "case2": 1} | (repeats or {})
     per_case = {}
@@ -217,7 +217,7 @@ SCALE_CASES: dict[str, tuple[str, dict[str, Any], tuple[float, float] | None]] =
 def scale_state(spec: str) -> GraspState:
     """The state of a :data:`SCALE_CASES` entry (``case2``, ``allegro:D``, ``scaling:F``)."""
     if spec.startswith("allegro:"):
-        from ..sim.graspfile import load_grasp
+        from ..sim.grasp.file import load_grasp
 
         dim = int(spec.split(":")[1])
         state = load_grasp("allegro-sphere").state()
@@ -228,7 +228,7 @@ def scale_state(spec: str) -> GraspState:
         from .scaling import scaling_hand
 
         return scaling_hand(int(spec.split(":")[1]))
-    from ..sim.scenario import load_scenario
+    from ..sim.paper_hand.scenario import load_scenario
 
     return load_scenario(spec).state()
 

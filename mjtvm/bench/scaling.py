@@ -24,7 +24,7 @@ SCALING_RADIUS = 0.12  # m: finger bases on this circle around the object's axis
 def scaling_hand(fingers: int, *, mu: float = 0.5, mg: float = 1.0) -> Any:
     r"""A grasp state of a synthetic hand with ``fingers`` fingers of 4 joints (IK-free).
 
-    The MJCF comes from :func:`~mjtvm.sim.hand.hand_mjcf` (default finger: [yaw, pitch] at the
+    The MJCF comes from :func:`~mjtvm.sim.paper_hand.hand.hand_mjcf` (default finger: [yaw, pitch] at the
     base, [pitch, yaw] after link 1): bases evenly on a circle of radius
     :data:`SCALING_RADIUS` around the z axis, headings pointing inwards. Every finger takes
     the same pose (link 1 vertical, link 2 pointing up and inwards at 54 deg), so all tips lie
@@ -34,8 +34,8 @@ def scaling_hand(fingers: int, *, mu: float = 0.5, mg: float = 1.0) -> Any:
     """
     import mujoco
 
-    from ..sim.grasp import grasp_state
-    from ..sim.hand import hand_mjcf
+    from ..sim.grasp.state import grasp_state
+    from ..sim.paper_hand.hand import hand_mjcf
 
     angles = 2 * math.pi * np.arange(fingers) / fingers
     bases = [(SCALING_RADIUS * math.cos(a), SCALING_RADIUS * math.sin(a), 0.0) for a in angles]

@@ -20,7 +20,7 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
   (:func:`~mjtvm.core.reference.reference_tvmmp`) for the Problem 2 cases and the cdd vertex
   enumeration (capped at ``time_limit`` s) for Problem 1;
 * **scaling**: synthetic hands of 2, 4, 8 and 16 fingers of 4 joints (:func:`scaling_hand`:
-  MJCF from :func:`~mjtvm.sim.hand.hand_mjcf`, one fingertip F-contact per finger, IK-free),
+  MJCF from :func:`~mjtvm.sim.paper_hand.hand.hand_mjcf`, one fingertip F-contact per finger, IK-free),
   time per TVMMP state (4 RVDS vertices) and per Problem 1 (restricted to the RVDS cone),
   with the tracemalloc peak and the process's ``ru_maxrss``;
 * **hands mjtvm does not generate** (:mod:`mjtvm.bench.hands`): each test hand's grasp file

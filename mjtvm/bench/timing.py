@@ -34,8 +34,8 @@ from ..core.assembly import assemble
 from ..core.highs import observe_runs
 from ..core.reference import reference_tvmmp
 from ..core.state import GraspState
-from ..core.synthetic import random_state
 from ..core.tvmmp import tvmmp
+from .synthetic import random_state
 
 __all__ = ["PAPER_S", "TARGET_S", "case2_state", "format_table", "machine_info", "run_benchmark"]
 

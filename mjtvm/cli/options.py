@@ -109,7 +109,7 @@ def out_options(
 
 GRASP_HELP = (
     "grasp: a mjtvm.grasp/1 file (.toml or .json), or a shipped grasp: the paper's case1, case1-s, "
-    "case2 (with --hand), or any name in mjtvm/models/*/"
+    "case2 (with --hand), or any name in models/*/ (installed as mjtvm.models)"
 )
 
 

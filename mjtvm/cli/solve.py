@@ -124,7 +124,7 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
             )
         source = default
     if is_grasp_source(source):
-        from ..sim.scenario import load_scenario  # MuJoCo only for grasps
+        from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
         return load_scenario(source, variant=hand).state()
     if hand != "default":
@@ -160,7 +160,7 @@ def add_export_state(sub: Subparsers) -> None:
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
     from ..core.state import state_to_dict
-    from ..sim.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
+    from ..sim.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
     source = args.grasp_file or args.grasp
     if source is None:

@@ -1,0 +1,62 @@
+r"""The physics check: MuJoCo rollouts of TVMMP witnesses with the hand's ``<dcmotor>`` actuators.
+
+:func:`verify_lift` compares alpha_sim (rollouts, :func:`alpha_sim`) with alpha_kl (the LP)
+along the lift; :func:`slide_check` settles the slide direction of S-points;
+:func:`dynamic_pair` adds the torque the witness motion needs beyond eq. (19);
+:func:`gear_sweep` varies the gear ratio; :func:`attach_dcmotors` gives any hand DC motors.
+
+The names below are imported on first use: the report's plots load matplotlib, which a
+rollout alone does not need.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .bisection import Bisection, alpha_sim
+    from .dynamic import dynamic_pair
+    from .gears import gear_sweep
+    from .motors import attach_dcmotors
+    from .simulate import RolloutResult, SimSettings, rollout, sim_model
+    from .verify import slide_check, verify_lift, verify_state
+    from .witness import witness_drive
+
+_HOMES = {
+    "Bisection": "bisection",
+    "alpha_sim": "bisection",
+    "dynamic_pair": "dynamic",
+    "gear_sweep": "gears",
+    "attach_dcmotors": "motors",
+    "RolloutResult": "simulate",
+    "SimSettings": "simulate",
+    "rollout": "simulate",
+    "sim_model": "simulate",
+    "slide_check": "verify",
+    "verify_lift": "verify",
+    "verify_state": "verify",
+    "witness_drive": "witness",
+}
+
+__all__ = [
+    "Bisection",
+    "RolloutResult",
+    "SimSettings",
+    "alpha_sim",
+    "attach_dcmotors",
+    "dynamic_pair",
+    "gear_sweep",
+    "rollout",
+    "sim_model",
+    "slide_check",
+    "verify_lift",
+    "verify_state",
+    "witness_drive",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        return getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..core.tvmmp import tvmmp
 from ..errors import ParamError
-from ..sim.trajectory import lift_state
+from ..sim.lift.states import lift_state
 from .dynamic import dynamic_pair
 from .simulate import sim_model
 from .verify import _types, cached_lift, motor_model

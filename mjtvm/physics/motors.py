@@ -4,15 +4,15 @@ The physics check (:mod:`mjtvm.physics.simulate`) drives each state joint with a
 ``<dcmotor>`` (``input="vel ff"``: a velocity setpoint in actuator-length units and a
 motor-side torque feedforward; drive voltage clamped at Vmax; torque saturated at the
 continuous torque; rotor inertia as the actuator's ``armature``). The generated hand has
-them (:meth:`~mjtvm.sim.hand.DCMotor.mjcf`); a public hand usually has position servos.
+them (:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf`); a public hand usually has position servos.
 :func:`attach_dcmotors` replaces the actuators of the given joints by ``<dcmotor>`` elements
 through MuJoCo's model-editing API, with exactly the attributes
-:meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes, so the compiled arrays are the template's.
+:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes, so the compiled arrays are the template's.
 
 Where a joint's motor comes from (the ``[ranges]`` of a grasp file, ``docs/grasp-format.md``,
-resolved by :func:`mjtvm.sim.ranges.joint_ranges` into ``Grasp.motors``): a ``<dcmotor>`` of
+resolved by :func:`mjtvm.sim.grasp.ranges.joint_ranges` into ``Grasp.motors``): a ``<dcmotor>`` of
 the model (:func:`motor_of_actuator` reads it back) or a datasheet
-(:meth:`~mjtvm.sim.hand.DCMotor.from_datasheet`); a polygon or an actuator with a speed limit
+(:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet`); a polygon or an actuator with a speed limit
 is an operation range without a motor, and a datasheet with a gear efficiency other than 1
 cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`require_motors` refuses those,
 naming the joint and how to give motor data.
@@ -28,7 +28,7 @@ from pathlib import Path
 import mujoco
 
 from ..errors import ModelError
-from ..sim.hand import DCMotor
+from ..sim.grasp.dcmotor import DCMotor
 
 __all__ = [
     "CTRLSPEC",
@@ -77,10 +77,10 @@ def dcmotor_of_joint(model: mujoco.MjModel, joint: str) -> int | None:
 
 
 def motor_of_actuator(model: mujoco.MjModel, actuator: int) -> DCMotor:
-    r"""The :class:`~mjtvm.sim.hand.DCMotor` of a compiled ``<dcmotor>`` (inverse of :func:`attach_dcmotors`).
+    r"""The :class:`~mjtvm.sim.grasp.dcmotor.DCMotor` of a compiled ``<dcmotor>`` (inverse of :func:`attach_dcmotors`).
 
     ``actuator_gainprm`` holds R (Ohm), K (V s/rad), ..., kd, Vmax
-    (:func:`~mjtvm.sim.actuator.operation_range_from_actuator`): voltage = Vmax, stall
+    (:func:`~mjtvm.sim.grasp.actuator.operation_range_from_actuator`): voltage = Vmax, stall
     torque K V / R, no-load speed V / K, continuous torque the upper ``forcerange``.
     """
     label = f"actuator {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator) or f'#{actuator}'!r}"
@@ -129,7 +129,7 @@ def attach_dcmotors(
     ``gear``, ``nominal = "voltage stall_torque no_load_speed"``, ``saturation =
     "max_continuous_torque 0 0"``, ``armature = rotor_inertia``, ``input = "vel ff"`` and
     ``controller = "0 0 velocity_gain 0 0 voltage"``: what
-    :meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes. The new actuators come after the kept ones,
+    :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes. The new actuators come after the kept ones,
     in the joints' model order; no control range, no damping (the joint's own damping,
     armature and ``actuatorfrcrange`` stay, and the latter caps the torque).
 
@@ -217,7 +217,7 @@ def _control_layout(spec: mujoco.MjSpec, joints: set[str]) -> tuple[list[tuple[i
 
 
 def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> None:
-    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.hand.DCMotor.mjcf` writes it."""
+    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes it."""
     act = spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
     # motorconst and resistance 0: the compiler derives K and R from `nominal`, as from the XML
     act.set_to_dcmotor(
@@ -241,8 +241,8 @@ def require_motors(
 ) -> dict[str, DCMotor]:
     r"""The motors to attach so that every joint of ``joints`` has its ``<dcmotor>``.
 
-    ``motors`` follows :attr:`mjtvm.sim.graspfile.Grasp.motors` (:func:`mjtvm.sim.ranges.joint_ranges`):
-    a :class:`~mjtvm.sim.hand.DCMotor` (from a datasheet), ``None`` (the model's own
+    ``motors`` follows :attr:`mjtvm.sim.grasp.loaded.Grasp.motors` (:func:`mjtvm.sim.grasp.ranges.joint_ranges`):
+    a :class:`~mjtvm.sim.grasp.dcmotor.DCMotor` (from a datasheet), ``None`` (the model's own
     ``<dcmotor>`` drives the joint) or a string saying why the joint's range has no motor
     (a polygon, an actuator with a speed limit, a gear efficiency other than 1). Joints that
     already have one ``<dcmotor>`` with ``input="vel ff"`` need nothing.

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ModelError
-from ..sim.grasp import geom_id, model_id
+from ..sim.grasp.state import geom_id, model_id
 from .motors import dcmotor_of_joint
 from .witness import Drive
 
@@ -28,7 +28,7 @@ class Rig:
     Any hand: each driven joint's actuator is the single ``<dcmotor>`` (``input="vel ff"``)
     whose transmission is that joint (:func:`~mjtvm.physics.motors.dcmotor_of_joint`), not
     an actuator of the joint's name; finger geoms are found by label
-    (:func:`~mjtvm.sim.grasp.geom_id`: a name or ``"<body>/geom<n>"``); each finger's
+    (:func:`~mjtvm.sim.grasp.state.geom_id`: a name or ``"<body>/geom<n>"``); each finger's
     contact point is its nearest point to the object (``mj_geomDistance``), so fingertips and
     objects of any primitive or mesh shape work.
 

@@ -37,7 +37,7 @@ more than ``lost_gap`` from the object; a motor torque at its saturation.
 
 Any hand: the model needs one ``<dcmotor>`` per state joint (found by its transmission;
 :mod:`mjtvm.physics.motors` attaches them to a hand with servos), finger geoms are keyed by
-label (:func:`~mjtvm.sim.grasp.geom_label`), and contact points come from
+label (:func:`~mjtvm.sim.grasp.state.geom_label`), and contact points come from
 ``mj_geomDistance``, so fingertips and objects need not be spheres.
 """
 
@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ModelError, ParamError
-from ..sim.grasp import geom_id
+from ..sim.grasp.state import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
 
@@ -130,7 +130,7 @@ def sim_model(
         A model whose state joints each have one ``<dcmotor>`` with ``input="vel ff"``
         (:func:`~mjtvm.physics.motors.attach_dcmotors` gives any hand those).
     contact_types
-        Geom label (:func:`~mjtvm.sim.grasp.geom_label`: its name, or ``"<body>/geom<n>"``
+        Geom label (:func:`~mjtvm.sim.grasp.state.geom_label`: its name, or ``"<body>/geom<n>"``
         when unnamed) -> ``"F"``, ``"L"``, ``"S"`` or ``"D"`` (a state's contacts). Geoms
         not listed: ``"D"`` on the world body, else ``"F"``.
     mu

@@ -1,8 +1,8 @@
 r"""Physics check of the TVMMP along the lift: alpha_sim (MuJoCo rollouts) against alpha_kl (LP).
 
 :func:`verify_lift` runs, for every sampled state of the scripted lift
-(:func:`~mjtvm.sim.trajectory.scripted_lift`), every hand variant / reading and every RVDS vertex
-l, the bisection of :func:`~mjtvm.physics.verify.alpha_sim` (REFS: the weight, k = 0), one rollout
+(:func:`~mjtvm.sim.lift.trajectory.scripted_lift`), every hand variant / reading and every RVDS vertex
+l, the bisection of :func:`~mjtvm.physics.bisection.alpha_sim` (REFS: the weight, k = 0), one rollout
 at s = 0.9 and the inertial torque the quasi-static LP leaves out
 (:func:`~mjtvm.physics.simulate.inertial_demand` at s = 1). With ``dynamics`` it adds the
 dynamic alpha (:func:`~mjtvm.physics.dynamic.dynamic_pair`: eq. 31 with the witness motion's
@@ -19,14 +19,11 @@ or left frictionless (control); it reports the direction of MuJoCo's friction fo
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import multiprocessing
-import statistics
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -35,16 +32,19 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from ..apps.figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
+from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, ModelError, StateError
-from ..sim.trajectory import Lift, lift_state, scripted_lift
+from ..sim.lift.states import lift_state
+from ..sim.lift.trajectory import Lift, scripted_lift
+from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
 from .motors import attach_dcmotors, require_motors
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
-from .witness import WitnessKind, witness_drive
+from .verify_report import plot_alpha, rows_csv, summarize
+from .witness import witness_drive
 
 _F64 = NDArray[np.float64]
 
@@ -82,7 +82,7 @@ def cached_lift(grasp: str | Path, num_states: int) -> Lift:
 def _grasp(grasp: str | Path) -> Any:
     """A shipped grasp's name as is (``scripted_lift`` loads it); a path loaded as a grasp file."""
     if isinstance(grasp, Path) or str(grasp).endswith((".toml", ".json")):
-        from ..sim.graspfile import load_grasp
+        from ..sim.grasp.file import load_grasp
 
         return load_grasp(Path(grasp))
     return str(grasp)
@@ -100,7 +100,7 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     Parameters
     ----------
     grasp
-        A :class:`~mjtvm.sim.graspfile.Grasp` (``model``, ``model_path``, ``joints``, ``motors``).
+        A :class:`~mjtvm.sim.grasp.loaded.Grasp` (``model``, ``model_path``, ``joints``, ``motors``).
     """
     if id(grasp) in _MODELS:
         return _MODELS[id(grasp)][1]
@@ -302,77 +302,6 @@ def state_indices(num_states: int, stride: int) -> list[int]:
     return sorted({*range(0, num_states, stride), num_states - 1})
 
 
-def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
-    """The rows as CSV (columns in order of first appearance, floats to 6 significant digits)."""
-    cols = list(dict.fromkeys(k for r in rows for k in r))
-    buf = io.StringIO(newline="")
-    w = csv.DictWriter(buf, fieldnames=cols)
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-    return buf.getvalue()
-
-
-def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndarray, np.ndarray]:
-    by: dict[float, list[float]] = {}
-    for r in rows:
-        if r["run"] == run:
-            by.setdefault(r.get("x", r["z"]), []).append(
-                r.get(key, math.nan) if r["status"] == "optimal" else math.nan
-            )
-    z = np.array(sorted(by))
-    return z, np.array([min(by[k]) if not any(math.isnan(v) for v in by[k]) else math.nan for k in z])
-
-
-def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
-    """PNG of the TVMMP (LP), the dynamic TVMMP (rows with ``alpha_dyn``) and the minimum alpha_sim
-    over the RVDS vertices along z, per run."""
-    fig, ax = lift_axes(6.5, 4.2)
-    for run in dict.fromkeys(r["run"] for r in rows):
-        z, lp = _minima(rows, run, "alpha_lp")
-        (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP, quasi-static), {run}")
-        if any("alpha_dyn" in r for r in rows if r["run"] == run):
-            z, dyn = _minima(rows, run, "alpha_dyn")
-            label = rf"dynamic TVMMP (LP + $M\ddot q + c$), {run}"
-            ax.plot(z, dyn, ":", lw=2, color=line.get_color(), label=label)
-        z, sim = _minima(rows, run, "alpha_sim")
-        ax.plot(
-            z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
-        )
-    x = "z" if all(r.get("x", r["z"]) == r["z"] for r in rows) else "s"  # the rows' lift_x axis
-    return lift_png(fig, ax, ylabel=rf"$\alpha$ {ALPHA_UNIT}", title=title, legend_fontsize=7, x=x)
-
-
-def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs, s = 0.9
-    failures; pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``)."""
-    out: dict[str, dict[str, Any]] = {}
-    for run in dict.fromkeys(r["run"] for r in rows):
-        ok = [r for r in rows if r["run"] == run and r["status"] == "optimal"]
-        # alpha_kl = 0 (the hand cannot move the object along r_l at all) has no ratio
-        zero = sum(1 for r in ok if not math.isfinite(r["ratio"]))
-        ok = [r for r in ok if math.isfinite(r["ratio"])]
-        if not ok:
-            out[run] = {"pairs": 0, "zero_alpha": zero}
-            continue
-        ratios = sorted(r["ratio"] for r in ok)
-        q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [ratios[0]] * 3
-        worst = sorted(ok, key=lambda r: r["ratio"])[:3]
-        dyn: dict[str, Any] = {}
-        if any("alpha_dyn" in r for r in ok):
-            dr = sorted(r["ratio_dyn"] for r in ok if math.isfinite(r.get("ratio_dyn", math.nan)))
-            dq = statistics.quantiles(dr, n=4) if len(dr) > 1 else [dr[0]] * 3 if dr else [math.nan] * 3
-            feas = [r for r in ok if "pass_check_dyn" in r]
-            dyn = {"median_dyn": statistics.median(dr) if dr else math.nan, "q1_dyn": dq[0], "q3_dyn": dq[2],
-                   "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas), "dyn_feasible": len(feas)}  # fmt: skip
-        out[run] = {"pairs": len(ok), "states": len({r["state"] for r in ok}), "median": statistics.median(ratios),
-                    "q1": q[0], "q3": q[2], "min": ratios[0], "max": ratios[-1],
-                    "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["fail_reason"]) for r in worst],
-                    "fail_at_check": sum(not r["pass_check"] for r in ok),
-                    "censored": sum(bool(r["censored"]) for r in ok), "zero_alpha": zero, **dyn}  # fmt: skip
-    return out
-
-
 # --------------------------------------------------------------- slide check
 def slide_check(
     lift: Lift,
@@ -439,75 +368,3 @@ def _cos(a: np.ndarray, b: np.ndarray) -> float:
 def runs_of(contacts: Sequence[str], readings: Sequence[str]) -> list[str]:
     """The :data:`RUNS` of contact types (``L``, ``S``) and readings: L once, S once per reading."""
     return [r for r in RUNS if r.split("-")[0] in contacts and (r == "L" or r.split("-")[1] in readings)]
-
-
-# ----------------------------------------------------------------- bisection
-@dataclass(frozen=True)
-class Bisection:
-    """Largest passing value found, and whether it sits at a bracket end (censored)."""
-
-    value: float
-    below_bracket: bool
-    above_bracket: bool
-    evaluations: int
-
-
-def bisect(
-    passes: Callable[[float], bool], lo: float = 0.0, hi: float = 2.0, *, tol: float = 0.01
-) -> Bisection:
-    r"""Largest ``x`` in ``[lo, hi]`` with ``passes(x)``, assuming pass below / fail above a threshold.
-
-    Returns ``lo`` (``below_bracket``) if ``passes(lo)`` is False and ``hi``
-    (``above_bracket``) if ``passes(hi)`` is True; otherwise the last passing midpoint,
-    within ``tol`` of the threshold.
-    """
-    if not (lo < hi and tol > 0):
-        raise StateError("bracket", f"expected lo < hi and tol > 0, got {lo}, {hi}, {tol}")
-    if passes(hi):
-        return Bisection(hi, False, True, 1)
-    if not passes(lo):
-        return Bisection(lo, True, False, 2)
-    count = 2
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        count += 1
-        lo, hi = (mid, hi) if passes(mid) else (lo, mid)
-    return Bisection(lo, False, False, count)
-
-
-def alpha_sim(
-    model: mujoco.MjModel,
-    qpos: _F64,
-    state: GraspState,
-    k: int,
-    l: int,
-    *,
-    result: Any = None,
-    settings: SimSettings | None = None,
-    witness: WitnessKind = "central",
-    bracket: tuple[float, float] = (0.0, 2.0),
-    tol: float = 0.01,
-    object_body: str = "object",
-) -> tuple[float, float, Bisection]:
-    r"""alpha_sim of pair (k, l): :math:`s^* \alpha_{kl}`, s* by :func:`bisect` on rollouts.
-
-    ``model`` from :func:`sim_model`; ``result``: the state's
-    :class:`~mjtvm.core.tvmmp.TvmmpResult` (solved here when omitted). Returns
-    ``(alpha_sim, alpha_kl, bisection)``.
-
-    Raises
-    ------
-    StateError
-        The pair is not optimal in the LP (no witness).
-    """
-    res = tvmmp(state) if result is None else result
-    if res.status[k][l] != "optimal":
-        raise StateError("pair", f"pair ({k}, {l}) is {res.status[k][l]}: no witness to simulate")
-    alpha, vertex = float(res.alpha[k, l]), res.witnesses[k][l]
-
-    def passes(s: float) -> bool:
-        drive = witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex)
-        return rollout(model, qpos, drive, settings=settings, object_body=object_body).passed
-
-    b = bisect(passes, *bracket, tol=tol)
-    return b.value * alpha, alpha, b

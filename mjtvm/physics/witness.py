@@ -91,7 +91,7 @@ class Drive:
         ``(6,)`` the object twist to produce, [v of the object origin; omega] (m/s, rad/s).
     contacts
         ``(geom label, type)`` of each finger contact (F, L, S); D-contacts are left out. The
-        label is :func:`~mjtvm.sim.grasp.geom_label` (a name, or ``"<body>/geom<n>"``).
+        label is :func:`~mjtvm.sim.grasp.state.geom_label` (a name, or ``"<body>/geom<n>"``).
     slips
         S geom label -> (slip speed rho (m/s), unit slide direction (3,)) of eq. (13).
     """

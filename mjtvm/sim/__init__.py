@@ -1,0 +1,57 @@
+r"""The MuJoCo coupling, in three rooms: :mod:`mjtvm.sim.grasp` (a grasp file and everything it
+loads, down to the grasp state), :mod:`mjtvm.sim.lift` (the scripted lift) and
+:mod:`mjtvm.sim.paper_hand` (the paper's hand and its Cases 1 and 2); :mod:`mjtvm.sim.scene`
+hands the geometry to the viewer.
+
+The names below are imported on first use, so that importing one room (e.g. the viewer's
+:mod:`mjtvm.sim.scene`) does not load the others.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .grasp import DCMotor, Grasp, GraspError, export_state, grasp_state, load_grasp, shipped_grasps
+    from .lift import Lift, lift_state, scripted_lift
+    from .paper_hand import hand_mjcf, load_scenario
+    from .scene import scene_geometry
+
+_HOMES = {
+    "DCMotor": "grasp",
+    "Grasp": "grasp",
+    "GraspError": "grasp",
+    "export_state": "grasp",
+    "grasp_state": "grasp",
+    "load_grasp": "grasp",
+    "shipped_grasps": "grasp",
+    "Lift": "lift",
+    "lift_state": "lift",
+    "scripted_lift": "lift",
+    "hand_mjcf": "paper_hand",
+    "load_scenario": "paper_hand",
+    "scene_geometry": "scene",
+}
+
+__all__ = [
+    "DCMotor",
+    "Grasp",
+    "GraspError",
+    "Lift",
+    "export_state",
+    "grasp_state",
+    "hand_mjcf",
+    "lift_state",
+    "load_grasp",
+    "load_scenario",
+    "scene_geometry",
+    "scripted_lift",
+    "shipped_grasps",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        return getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -50,8 +50,8 @@ from ..core.state import GraspState
 from ..polytopes.lifted import lifted_polytope
 from ..polytopes.projection import project_lp
 from ..polytopes.tvms import default_scale
+from ..sim.lift.trajectory import Lift
 from ..sim.scene import scene_geometry, scene_poses
-from ..sim.trajectory import Lift
 
 __all__ = [
     "APPLICATION_ID",

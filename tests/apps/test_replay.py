@@ -13,7 +13,7 @@ import pytest
 from mjtvm.apps.replay import SWEEP_MGS, SWEEP_MUS, ReplayOutput, run_replay, solve_state, time_replay
 from mjtvm.cli import main
 from mjtvm.errors import ParamError
-from mjtvm.sim.trajectory import lift_state, slide_directions
+from mjtvm.sim.lift.states import lift_state, slide_directions
 
 STATES = 4
 

@@ -6,7 +6,8 @@ import pytest
 
 from mjtvm import ParamError, tvmmp
 from mjtvm.apps.sweep import SweepPoint, grid, run_sweep
-from mjtvm.sim.trajectory import lift_state, scripted_lift
+from mjtvm.sim.lift.states import lift_state
+from mjtvm.sim.lift.trajectory import scripted_lift
 
 POINTS = grid(mus=(0.1, 0.5), mgs=(1.0, 2.0), states=(0, 3), num_states=6) + grid(
     variants=("S",), readings=("literal",), states=(1,), num_states=6
@@ -133,7 +134,7 @@ def test_resume_recomputes_the_rows_of_an_edited_grasp_file(tmp_path, capsys):
     import shutil
 
     from mjtvm.cli import main
-    from mjtvm.sim.graspfile import shipped_grasps
+    from mjtvm.sim.grasp.file import shipped_grasps
 
     shipped = shipped_grasps()["case2"]
     grasp = tmp_path / "mine.toml"

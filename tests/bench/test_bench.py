@@ -11,7 +11,7 @@ import pytest
 from mjtvm.bench import report as bench_report
 from mjtvm.bench import suite as bench_suite
 from mjtvm.cli import build_parser
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.paper_hand.scenario import load_scenario
 
 
 def _timings(doc: Any, path: str = "") -> list[tuple[str, float]]:

@@ -11,7 +11,7 @@ import pytest
 
 from mjtvm import load_state, tvmmp
 from mjtvm.cli import example_path, main
-from mjtvm.sim.graspfile import shipped_grasps
+from mjtvm.sim.grasp.file import shipped_grasps
 
 
 def test_solve_prints_the_result_schema(capsys):
@@ -73,7 +73,7 @@ def test_console_script_stdout_is_pure_json(words):
 def test_export_state_round_trips_through_solve(tmp_path, capsys):
     """The exported JSON is an ordinary mjtvm.state/1 file: solving it gives exactly the
     alphas of the state built in memory from MuJoCo."""
-    from mjtvm.sim.scenario import load_scenario
+    from mjtvm.sim.paper_hand.scenario import load_scenario
 
     assert main(["export-state", "case2", "--quiet"]) == 0
     path = tmp_path / "case2.json"
@@ -382,7 +382,7 @@ def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys
 
     monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep", no_work)
     monkeypatch.setattr("mjtvm.bench.suite.run_suite", no_work)
-    monkeypatch.setattr("mjtvm.sim.trajectory.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.sim.lift.trajectory.scripted_lift", no_work)
     monkeypatch.setattr("mjtvm.apps.replay.scripted_lift", no_work)
     monkeypatch.setattr("mjtvm.physics.verify.verify_lift", no_work)
     blocker = tmp_path / "file"

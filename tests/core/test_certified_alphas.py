@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from mjtvm import tvmmp
-from mjtvm.core.perturb import add_jacobian_roundoff, rescale, slide_contact
 from mjtvm.core.reference import reference_tvmmp
 from mjtvm.core.state import GraspState, load_state
 from mjtvm.polytopes.tvms import tvms
-from mjtvm.sim.graspfile import load_grasp
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.grasp.file import load_grasp
+from mjtvm.sim.paper_hand.scenario import load_scenario
+from tests.support.perturb import add_jacobian_roundoff, rescale, slide_contact
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"
 FORMS = [("highs", "eliminated"), ("highs", "literal"), ("clarabel", "eliminated")]

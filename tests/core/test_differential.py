@@ -13,7 +13,7 @@ stops with ``infeasible_inaccurate`` or ``user_limit`` instead of a verdict.
 
 Families (all seeds fixed; counts of states, reference LPs in brackets):
 
-* ``random``: 40 :func:`~mjtvm.core.perturb.random_case` states, planar and spatial, F/L/S/D
+* ``random``: 40 :func:`~tests.support.perturb.random_case` states, planar and spatial, F/L/S/D
   contacts, one or two REFS vertices, per-contact and shared slip [~300];
 * ``shipped``: pinch.json and the states of allegro-ik, allegro-sphere, gripper3-box, case1,
   case1-s and case2 (case1 has no RVDS: +-unit twists) [55];
@@ -38,7 +38,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mjtvm.core.perturb import (
+from mjtvm.core.reference import reference_alpha, reference_tvmmp
+from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.tvmmp import TvmmpResult, tvmmp
+from mjtvm.errors import SolverError
+from tests.support.perturb import (
     add_jacobian_roundoff,
     random_case,
     rescale,
@@ -46,10 +50,6 @@ from mjtvm.core.perturb import (
     scale_joint_column,
     slide_contact,
 )
-from mjtvm.core.reference import reference_alpha, reference_tvmmp
-from mjtvm.core.state import GraspState, load_state
-from mjtvm.core.tvmmp import TvmmpResult, tvmmp
-from mjtvm.errors import SolverError
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"
 SHIPPED = ("allegro-ik", "allegro-sphere", "gripper3-box", "case1", "case1-s", "case2")
@@ -96,7 +96,7 @@ def _with_rvds(state: GraspState) -> GraspState:
 @pytest.fixture(scope="module")
 def shipped() -> dict[str, GraspState]:
     """The shipped states, as ``mjtvm export-state`` builds them (load_scenario(...).state())."""
-    from mjtvm.sim.scenario import load_scenario  # MuJoCo only for these
+    from mjtvm.sim.paper_hand.scenario import load_scenario  # MuJoCo only for these
 
     out = {"pinch": load_state(EXAMPLES / "pinch.json")}
     for name in SHIPPED:
@@ -299,7 +299,8 @@ def lift_end() -> list[tuple[str, GraspState]]:
     """Case 2's lift to its reach limit (``stop_margin=0``: past the default margin, the
     fingers nearly stretched): the last 3 of 30 states, L-points and S-points (literal
     reading; the physical one has no balance there), mu 0.3, mg 1 N as ``mjtvm replay``."""
-    from mjtvm.sim.trajectory import lift_state, scripted_lift
+    from mjtvm.sim.lift.states import lift_state
+    from mjtvm.sim.lift.trajectory import scripted_lift
 
     lift = scripted_lift("case2", num_states=30, stop_margin=0.0)
     out = []

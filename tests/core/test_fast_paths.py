@@ -21,7 +21,7 @@ from mjtvm.core.assembly import _Coo, assemble
 from mjtvm.core.scaling import scale_lp
 from mjtvm.core.state import load_state
 from mjtvm.core.tvmmp import _Problem2
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.paper_hand.scenario import load_scenario
 
 from .test_solvers import mixed_scale
 from .test_units import rescale
@@ -136,8 +136,8 @@ def test_tuned_highs_options_give_the_default_alphas(states, box, monkeypatch):
     """Problem 2's HiGHS options (tvmmp.P2_HIGHS_OPTIONS: Devex dual edge weights) reach
     the same vertices as HiGHS' defaults along another path: the same statuses, alphas
     within 1e-9 relative (1e-11 measured), on the fixtures and on random states."""
+    from mjtvm.bench.synthetic import random_state
     from mjtvm.core import tvmmp as tvmmp_module
-    from mjtvm.core.synthetic import random_state
 
     cases = dict(states)
     for seed, types in enumerate(
@@ -157,7 +157,7 @@ def test_the_start_basis_gives_the_slack_basis_alphas(states, box, monkeypatch):
     """The first LP of a state starts from the torques basic in their rows
     (HighsSession.start_basis) rather than from HiGHS' slack basis: the same statuses and
     alphas within 1e-9 relative, on the fixtures and on random states."""
-    from mjtvm.core.synthetic import random_state
+    from mjtvm.bench.synthetic import random_state
 
     cases = dict(states)
     for seed, types in enumerate(

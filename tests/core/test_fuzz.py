@@ -17,8 +17,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mjtvm import MjtvmError, StateError, load_state, tvmmp
-from mjtvm.core.fuzz import mutate_bytes, mutate_document
-from mjtvm.sim.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import export_state
+from tests.support.fuzz import mutate_bytes, mutate_document
 
 EXAMPLES = resources.files("mjtvm.data").joinpath("examples")
 SCENARIOS = ("case1", "case1-s", "case2")

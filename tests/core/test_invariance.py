@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mjtvm import Contact, GraspState, tvmmp
-from mjtvm.core.synthetic import random_state
+from mjtvm.bench.synthetic import random_state
 
 from ..helpers import rotation
 

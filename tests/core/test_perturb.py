@@ -1,11 +1,12 @@
-"""The state generators of :mod:`mjtvm.core.perturb`: each changes what it says and nothing else."""
+"""The state generators of :mod:`tests.support.perturb`: each changes what it says and nothing else."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from mjtvm.core.perturb import (
+from mjtvm.core.tvmmp import tvmmp
+from tests.support.perturb import (
     add_jacobian_roundoff,
     random_case,
     rescale_joints,
@@ -13,7 +14,6 @@ from mjtvm.core.perturb import (
     scale_range,
     slide_contact,
 )
-from mjtvm.core.tvmmp import tvmmp
 
 
 def test_random_case_is_seeded() -> None:

@@ -7,7 +7,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mjtvm import Contact, tvmmp
-from mjtvm.core.synthetic import random_state
+from mjtvm.bench.synthetic import random_state
 
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 TYPES_FLD = st.sampled_from([("F", "L", "F", "L", "D"), ("F", "F", "F"), ("L", "F", "D", "F")])

@@ -13,11 +13,11 @@ import functools
 import numpy as np
 import pytest
 
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.contacts import Contact, tangent_basis
 from mjtvm.core.operation_range import default_operation_range
 from mjtvm.core.reference import pyramid_halfspaces, reference_alpha, reference_tvmmp
 from mjtvm.core.state import GraspState
-from mjtvm.core.synthetic import random_state
 from mjtvm.core.tvmmp import tvmmp
 
 RTOL, ATOL = 1e-6, 1e-8

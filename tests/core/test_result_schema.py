@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from mjtvm import tvmmp
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.state import load_state
-from mjtvm.core.synthetic import random_state
 from mjtvm.polytopes.tvms import tvms
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.paper_hand.scenario import load_scenario
 
 DATA = Path(__file__).resolve().parents[2] / "mjtvm" / "data"
 EXAMPLES = sorted((DATA / "examples").glob("*.json"))

@@ -11,11 +11,12 @@ import pytest
 import scipy.sparse as sp
 
 from mjtvm import tvmmp
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.state import load_state
-from mjtvm.core.synthetic import random_state
 from mjtvm.errors import SolverError
 from mjtvm.polytopes.tvms import tvms
-from mjtvm.sim.trajectory import lift_state, scripted_lift
+from mjtvm.sim.lift.states import lift_state
+from mjtvm.sim.lift.trajectory import scripted_lift
 
 from ..helpers import distance_to_hull
 
@@ -283,7 +284,7 @@ def test_pyramid_edges_and_mujoco_data_carry_exact_zeros():
     LPs beside O(1) entries where no equilibration can tell them from data."""
     from mjtvm import Contact, force_generators
     from mjtvm.bench.suite import scaling_hand
-    from mjtvm.sim.grasp import without_round_off
+    from mjtvm.sim.grasp.state import without_round_off
 
     contact = Contact("c", "F", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], np.ones((3, 1)), mu=0.5)
     edges = force_generators(contact, 16)

@@ -13,7 +13,7 @@ import jsonschema
 import pytest
 
 from mjtvm import StateError, load_state, tvmmp
-from mjtvm.sim.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import export_state
 
 DATA = resources.files("mjtvm.data")
 EXAMPLES = sorted(p.name for p in DATA.joinpath("examples").iterdir() if p.name.endswith(".json"))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from mjtvm import Contact, GraspState, ParamError, default_operation_range, tvmmp
+from mjtvm.bench.synthetic import random_state
 from mjtvm.core.assembly import grasp_map_transpose
-from mjtvm.core.synthetic import random_state
 
 from ..helpers import Q_MAX, T_MAX, G, max_speed
 

@@ -32,9 +32,9 @@ import pytest
 
 from mjtvm import tvmmp
 from mjtvm.core.contacts import Contact
-from mjtvm.core.perturb import rescale
 from mjtvm.core.state import GraspState, load_state
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.paper_hand.scenario import load_scenario
+from tests.support.perturb import rescale
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"
 FACTORS = (1e-6, 1e-3, 1.0, 1e3, 1e6)

@@ -16,8 +16,8 @@ from mjtvm.physics.motors import attach_dcmotors
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.simulate import rollout, sim_model
 from mjtvm.physics.witness import Drive, witness_drive
-from mjtvm.sim.grasp import grasp_state
-from mjtvm.sim.hand import DCMotor
+from mjtvm.sim.grasp.dcmotor import DCMotor
+from mjtvm.sim.grasp.state import grasp_state
 
 HALF = 0.03  # m: the box's half size
 # Finger a (x < 0): a vertical link from z = 0.02 to 0.1, then a horizontal one towards the box

@@ -15,10 +15,11 @@ from mjtvm.physics.motors import (
     motor_of_actuator,
     require_motors,
 )
-from mjtvm.sim.actuator import operation_range_from_actuator
-from mjtvm.sim.hand import DCMotor, _fmt
+from mjtvm.sim.grasp.actuator import operation_range_from_actuator
+from mjtvm.sim.grasp.dcmotor import DCMotor
+from mjtvm.sim.grasp.dcmotor import mjcf_numbers as _fmt
 
-HAND = Path(__file__).resolve().parents[2] / "mjtvm" / "models" / "paper_hand" / "four_finger_hand.xml"
+HAND = Path(__file__).resolve().parents[2] / "models" / "paper_hand" / "four_finger_hand.xml"
 SERVOS = """<mujoco>
   <default><position kp="5" ctrlrange="-1 1"/></default>
   <worldbody><body name="b"><joint name="a" axis="0 0 1"/><joint name="b" axis="0 1 0"/>

@@ -11,12 +11,15 @@ import pytest
 
 from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ParamError, StateError
+from mjtvm.physics.bisection import bisect
 from mjtvm.physics.simulate import SimSettings, rerun_data, rollout, sim_model
-from mjtvm.physics.verify import bisect, summarize, verify_lift
+from mjtvm.physics.verify import verify_lift
+from mjtvm.physics.verify_report import summarize
 from mjtvm.physics.witness import central_witness, witness_drive
-from mjtvm.sim.actuator import operation_range_from_actuator
-from mjtvm.sim.hand import DCMotor
-from mjtvm.sim.trajectory import Lift, lift_state, scripted_lift
+from mjtvm.sim.grasp.actuator import operation_range_from_actuator
+from mjtvm.sim.grasp.dcmotor import DCMotor
+from mjtvm.sim.lift.states import lift_state
+from mjtvm.sim.lift.trajectory import Lift, scripted_lift
 
 from ..helpers import Q_MAX, T_MAX
 

@@ -18,7 +18,7 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from mjtvm import SolverError, tvmmp
-from mjtvm.core.synthetic import random_state
+from mjtvm.bench.synthetic import random_state
 from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import inner_hull, outer_volume, ray_lengths
 from mjtvm.polytopes.budget import Budget, LimitReached, Limits

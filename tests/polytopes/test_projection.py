@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mjtvm import Contact, GraspState, assemble, default_operation_range
-from mjtvm.core.synthetic import random_state
+from mjtvm.bench.synthetic import random_state
 from mjtvm.polytopes.enumeration import force_form, project_cdd
 from mjtvm.polytopes.lifted import lifted_polytope
 from mjtvm.polytopes.projection import project_lp

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mjtvm.sim.scenario import load_scenario
+from mjtvm.sim.paper_hand.scenario import load_scenario
 from mjtvm.sim.scene import scene_geometry, scene_poses
 
 

@@ -15,7 +15,7 @@ from scipy.spatial import ConvexHull
 from mjtvm.apps.replay import ReplayOutput, run_replay
 from mjtvm.cli import main
 from mjtvm.polytopes.tvms import tvms
-from mjtvm.sim.trajectory import lift_state
+from mjtvm.sim.lift.states import lift_state
 from mjtvm.viewer.viz import Z_UNIT, hull_mesh, record_replay
 
 STATES = 4

@@ -1,0 +1,94 @@
+r"""alpha_sim of one pair (k, l): the largest fraction s of :math:`\alpha_{kl}` whose witness a MuJoCo
+rollout achieves, found by bisection on pass/fail rollouts (:func:`~mjtvm.physics.simulate.rollout`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.state import GraspState
+from ..core.tvmmp import tvmmp
+from ..errors import StateError
+from .simulate import SimSettings, rollout
+from .witness import WitnessKind, witness_drive
+
+_F64 = NDArray[np.float64]
+
+__all__ = ["Bisection", "alpha_sim", "bisect"]
+
+
+@dataclass(frozen=True)
+class Bisection:
+    """Largest passing value found, and whether it sits at a bracket end (censored)."""
+
+    value: float
+    below_bracket: bool
+    above_bracket: bool
+    evaluations: int
+
+
+def bisect(
+    passes: Callable[[float], bool], lo: float = 0.0, hi: float = 2.0, *, tol: float = 0.01
+) -> Bisection:
+    r"""Largest ``x`` in ``[lo, hi]`` with ``passes(x)``, assuming pass below / fail above a threshold.
+
+    Returns ``lo`` (``below_bracket``) if ``passes(lo)`` is False and ``hi``
+    (``above_bracket``) if ``passes(hi)`` is True; otherwise the last passing midpoint,
+    within ``tol`` of the threshold.
+    """
+    if not (lo < hi and tol > 0):
+        raise StateError("bracket", f"expected lo < hi and tol > 0, got {lo}, {hi}, {tol}")
+    if passes(hi):
+        return Bisection(hi, False, True, 1)
+    if not passes(lo):
+        return Bisection(lo, True, False, 2)
+    count = 2
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        count += 1
+        lo, hi = (mid, hi) if passes(mid) else (lo, mid)
+    return Bisection(lo, False, False, count)
+
+
+def alpha_sim(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    state: GraspState,
+    k: int,
+    l: int,
+    *,
+    result: Any = None,
+    settings: SimSettings | None = None,
+    witness: WitnessKind = "central",
+    bracket: tuple[float, float] = (0.0, 2.0),
+    tol: float = 0.01,
+    object_body: str = "object",
+) -> tuple[float, float, Bisection]:
+    r"""alpha_sim of pair (k, l): :math:`s^* \alpha_{kl}`, s* by :func:`bisect` on rollouts.
+
+    ``model`` from :func:`sim_model`; ``result``: the state's
+    :class:`~mjtvm.core.tvmmp.TvmmpResult` (solved here when omitted). Returns
+    ``(alpha_sim, alpha_kl, bisection)``.
+
+    Raises
+    ------
+    StateError
+        The pair is not optimal in the LP (no witness).
+    """
+    res = tvmmp(state) if result is None else result
+    if res.status[k][l] != "optimal":
+        raise StateError("pair", f"pair ({k}, {l}) is {res.status[k][l]}: no witness to simulate")
+    alpha, vertex = float(res.alpha[k, l]), res.witnesses[k][l]
+
+    def passes(s: float) -> bool:
+        drive = witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex)
+        return rollout(model, qpos, drive, settings=settings, object_body=object_body).passed
+
+    b = bisect(passes, *bracket, tol=tol)
+    return b.value * alpha, alpha, b

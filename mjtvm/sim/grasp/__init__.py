@@ -1,0 +1,39 @@
+r"""The grasp file and everything it loads: the ``mjtvm.grasp/1`` document and its checks, the
+MJCF model with the object, the configuration (keyframe, joint values or IK), the contacts
+MuJoCo detects, each joint's operation range (datasheet, ``<dcmotor>``, polygon) and the
+:class:`~mjtvm.core.state.GraspState` read from ``mjData``.
+"""
+
+from .actuator import operation_range_from_actuator
+from .checks import GraspError
+from .dcmotor import DCMotor
+from .document import SCHEMA, format_toml, read_grasp_document
+from .file import export_state, load_grasp, shipped_grasps
+from .ik import IkResult, IkTarget, geom_contact_target, solve_ik
+from .loaded import Grasp
+from .model import build_spec
+from .ranges import joint_ranges
+from .state import DetectedContact, detected_contacts, grasp_state, object_weight
+
+__all__ = [
+    "SCHEMA",
+    "DCMotor",
+    "DetectedContact",
+    "Grasp",
+    "GraspError",
+    "IkResult",
+    "IkTarget",
+    "build_spec",
+    "detected_contacts",
+    "export_state",
+    "format_toml",
+    "geom_contact_target",
+    "grasp_state",
+    "joint_ranges",
+    "load_grasp",
+    "object_weight",
+    "operation_range_from_actuator",
+    "read_grasp_document",
+    "shipped_grasps",
+    "solve_ik",
+]

@@ -1,0 +1,254 @@
+r"""A grasp of any MJCF hand, from a ``mjtvm.grasp/1`` file (``docs/grasp-format.md``).
+
+:func:`load_grasp` reads a grasp file (:mod:`mjtvm.sim.grasp.document`), loads the model it names,
+sets the configuration (a keyframe, joint values, or IK targets brought onto the object's
+surface), resolves the contact selections (geom name or label, body, geom id) against the
+model and each joint's operation range (:mod:`mjtvm.sim.grasp.ranges`). :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
+then gives the :class:`~mjtvm.core.state.GraspState` of
+:func:`~mjtvm.sim.grasp.state.grasp_state`.
+
+*Contacts that touch.* Geoms placed exactly touching are often reported by MuJoCo only once
+they penetrate; a grasp file's ``contact_tolerance`` (default 0.1 mm) counts a geom within
+that distance of the object as touching: MuJoCo's collision runs with that margin on the
+object's geoms for detection only (:func:`~mjtvm.sim.grasp.state.grasp_state`). Every selection
+must touch (else an error gives the nearest distance, from ``mj_geomDistance``) and every
+touching geom must be selected or ignored; :meth:`~mjtvm.sim.grasp.loaded.Grasp.contact_report` lists found vs
+expected.
+
+World frame, SI units.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from importlib import resources
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from ...core.state import GraspState
+from ...errors import ModelError
+from .checks import GraspError, key_of
+from .configure import solve_configuration
+from .document import read_grasp_document
+from .loaded import Grasp, weight_refs
+from .model import (
+    build_spec,
+    coupling,
+    geom_labels,
+    joint_id,
+    load_model,
+    names_of,
+    object_geoms,
+    set_object_pose,
+    suggest,
+)
+from .ranges import joint_ranges
+from .state import (
+    geom_id,
+    geom_label,
+    subtree,
+)
+
+__all__ = ["Grasp", "build_spec", "export_state", "load_grasp", "shipped_grasps"]
+
+_OBJ = mujoco.mjtObj
+_SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+# ------------------------------------------------------------------ loading
+def shipped_grasps() -> dict[str, Path]:
+    """Name -> path of every grasp file shipped in ``models/<hand>/`` (installed as ``mjtvm.models``)."""
+    root = Path(str(resources.files("mjtvm.models")))
+    return {p.stem: p for p in sorted(root.glob("*/*.toml"))}
+
+
+def _resolve(source: str | Path | Mapping[str, Any]) -> str | Path | Mapping[str, Any]:
+    """A shipped grasp's name becomes its path; paths and mappings pass."""
+    if isinstance(source, str) and not source.endswith((".toml", ".json")) and "/" not in source:
+        shipped = shipped_grasps()
+        if source not in shipped:
+            raise GraspError(
+                source, "", f"no such grasp file, and not a shipped grasp (shipped: {', '.join(shipped)})"
+            )
+        return shipped[source]
+    return source
+
+
+def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str) -> mujoco.MjData:
+    """``mjData`` at the configuration (keyframe, joint values or IK), after ``mj_forward``."""
+    data, config = mujoco.MjData(model), doc["configuration"]
+    if "keyframe" in config:
+        key = mujoco.mj_name2id(model, _OBJ.mjOBJ_KEY, config["keyframe"])
+        if key < 0:
+            keys = names_of(model, _OBJ.mjOBJ_KEY, model.nkey)
+            raise GraspError(file, "configuration.keyframe",
+                             f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})")  # fmt: skip
+        mujoco.mj_resetDataKeyframe(model, data, key)
+    values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
+    where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
+    for name, value in values.items():
+        data.qpos[model.jnt_qposadr[joint_id(model, name, file, f"{where}.{key_of(name)}")]] = value
+    set_object_pose(model, data, ob, doc["object"], file)
+    mujoco.mj_forward(model, data)
+    if "ik" in config:
+        data = solve_configuration(model, data, config["ik"], ob, file)
+    return data
+
+
+def _select(
+    model: mujoco.MjModel, sel: Mapping[str, Any], ob: int, file: str, field: str
+) -> tuple[str, list[int]]:
+    """The geoms of one selection (``geom``: name or label; ``body``: all its geoms; ``geom_id``)."""
+    kind, target = sel["select"], sel["target"]
+    if kind == "geom":
+        try:
+            ids = [geom_id(model, target)]
+        except ModelError as e:
+            raise GraspError(file, f"{field}.geom", f"{target!r} is not a geom of the model"
+                             f"{suggest(target, geom_labels(model))}") from e  # fmt: skip
+    elif kind == "body":
+        b = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, target)
+        if b < 0:
+            raise GraspError(file, f"{field}.body", f"{target!r} is not a body of the model"
+                             f"{suggest(target, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+        ids = [
+            g
+            for g in range(int(model.body_geomadr[b]), int(model.body_geomadr[b] + model.body_geomnum[b]))
+            if model.geom_contype[g] or model.geom_conaffinity[g]  # visual geoms never touch
+        ]
+        if not ids:
+            raise GraspError(file, f"{field}.body", f"body {target!r} has no geom that collides")
+    else:
+        if not 0 <= int(target) < model.ngeom:
+            raise GraspError(
+                file, f"{field}.geom_id", f"expected a geom id in [0, {model.ngeom}), got {target}"
+            )
+        ids = [int(target)]
+    inside = subtree(model, ob)
+    for g in ids:
+        if int(model.geom_bodyid[g]) in inside:
+            raise GraspError(file, field, f"geom {geom_label(model, g)!r} belongs to the object")
+    return f"{kind} {target!r}", ids
+
+
+def _default_joints(model: mujoco.MjModel, geoms: Sequence[int]) -> tuple[str, ...]:
+    """The hinge and slide joints on the chains from the world to the contact geoms' bodies."""
+    chain: set[int] = set()
+    for g in geoms:
+        b = int(model.geom_bodyid[g])
+        while b > 0:
+            chain.add(b)
+            b = int(model.body_parentid[b])
+    return tuple(
+        mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j)
+        for j in range(model.njnt)
+        if int(model.jnt_type[j]) in _SCALAR and int(model.jnt_bodyid[j]) in chain
+    )
+
+
+def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
+    r"""Read a grasp file (TOML or JSON), a shipped grasp by name, or a document; build the grasp.
+
+    A mapping's ``model`` path is taken relative to the working directory.
+
+    Raises
+    ------
+    GraspError
+        Any field that breaks the format or does not fit the model (unknown body, geom,
+        site, joint, keyframe or actuator, with the closest name; a joint without an
+        operation range, with how to give one; an unreachable IK target, with its residual).
+    """
+    doc, path = read_grasp_document(_resolve(source))
+    file = str(path) if path is not None else "grasp"
+    model, model_path = load_model(doc, path, file)
+    ob = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, doc["object"]["body"])
+    if ob <= 0:
+        name = doc["object"]["body"]
+        raise GraspError(file, "object.body", f"{name!r} is not a body of the model (other than the world)"
+                         f"{suggest(name, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+    if not object_geoms(model, ob):
+        raise GraspError(file, "object.body", f"body {doc['object']['body']!r} has no geom")
+    data = _configure(model, doc, ob, file)
+    types: dict[str, str] = {}
+    selections, mu, slides, geoms, preloads = [], {}, {}, [], {}
+    for i, entry in enumerate(doc["contacts"]):
+        what, ids = _select(model, entry, ob, file, f"contacts[{i}]")
+        labels = tuple(geom_label(model, g) for g in ids)
+        for g, label in zip(ids, labels, strict=True):
+            if label in types:
+                raise GraspError(
+                    file, f"contacts[{i}]", f"geom {label!r} is already selected by another contact"
+                )
+            types[label] = entry["type"]
+            coefficient = entry.get("mu", doc["mu"])
+            if coefficient is not None:
+                mu[label] = float(coefficient)
+            elif entry["type"] in ("F", "S"):
+                raise GraspError(file, f"contacts[{i}].mu", f"the {entry['type']} contact {what} needs a "
+                                 "friction coefficient: set mu at the top or in the contact")  # fmt: skip
+            if entry.get("preload"):
+                preloads[label] = float(entry["preload"])
+            if "slide" in entry:
+                s = np.array(entry["slide"], dtype=float)
+                slides[label] = tuple(float(x) for x in s / np.linalg.norm(s))
+            geoms.append(g)
+        selections.append((what, labels))
+    ignored = []
+    for i, sel in enumerate(doc["ignore"]):
+        _, ids = _select(model, sel, ob, file, f"ignore[{i}]")
+        ignored += [geom_label(model, g) for g in ids if geom_label(model, g) not in types]
+    if doc["joints"] is not None:
+        for k, name in enumerate(doc["joints"]):
+            joint_id(model, name, file, f"joints[{k}]")
+        joints = tuple(doc["joints"])
+    else:
+        joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
+        if not joints:
+            raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
+    if why := coupling(model, joints):
+        raise GraspError(
+            file, "joints",
+            f"{why}: mjtvm's state has independent joints (each its own torque and speed, eq. 19), "
+            "so a hand with coupled joints or closed chains (e.g. a linkage gripper) is not supported",
+        )  # fmt: skip
+    ranges, motors = joint_ranges(
+        model, joints, doc["ranges"], base=path.parent if path else None, file=file,
+        losses=doc["joint_losses"] == "fold",
+    )  # fmt: skip
+    rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
+    if rvds is not None:
+        rvds.setflags(write=False)
+    lift = doc["lift"]
+    bounds = dict(lift["bounds"]) if lift is not None else {}
+    for name in bounds:
+        joint_id(model, name, file, f"lift.bounds.{key_of(name)}")
+    return Grasp(
+        name=doc["name"], path=path, model_path=model_path, model=model, data=data,
+        object_body=doc["object"]["body"], joints=joints, contact_types=MappingProxyType(types),
+        selections=tuple(selections), mu=MappingProxyType(mu), slide_directions=MappingProxyType(slides),
+        refs=weight_refs(model, data, doc, doc["object"]["body"], file), rvds=rvds, ignored_geoms=tuple(ignored),
+        operation_ranges=MappingProxyType(ranges), motors=MappingProxyType(motors),
+        contact_tolerance=float(doc["contact_tolerance"]), friction_edges=int(doc["friction_edges"]),
+        slip=str(doc["slip"]), lift=None if lift is None else MappingProxyType(lift),
+        ik_bounds=MappingProxyType(bounds), document=MappingProxyType(doc),
+        preloads=MappingProxyType(preloads),
+    )  # fmt: skip
+
+
+def export_state(source: str | Path | Mapping[str, Any]) -> GraspState:
+    r"""The grasp state of a grasp file, a shipped grasp by name, or a document.
+
+    What ``mjtvm export-state`` prints: :meth:`~mjtvm.sim.grasp.loaded.Grasp.state` of
+    :func:`load_grasp`; :func:`~mjtvm.core.state.state_to_dict` gives its ``mjtvm.state/1`` document.
+
+    Raises
+    ------
+    GraspError
+        As :func:`load_grasp`; or a selection that does not touch, a touching geom nobody
+        selected, or an S contact without a slide direction.
+    """
+    return load_grasp(source).state()

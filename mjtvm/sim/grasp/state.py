@@ -1,0 +1,318 @@
+r"""Grasp states from a MuJoCo model: the coupling between a simulation and the TVM core.
+
+:func:`grasp_state` reads, at the configuration held in an ``mjData``, everything a
+:class:`~mjtvm.core.state.GraspState` needs: the contacts MuJoCo detects between the object and
+the rest of the model, their Jacobians, the joints' gravity torques and operation ranges,
+and the object's weight as the default REFS. Which contact is of which type (F, L, S, D) is
+grasp data keyed by geom label, never derived here; which geoms touch is :mod:`mjtvm.sim.grasp.touch`.
+
+Frames and units: world frame, SI. Contact normals point into the object; Jacobians map the
+state's joint velocities (rad/s) to the velocity (m/s) of the finger-side contact point.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping, Sequence
+from typing import Any, cast
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ...core.contacts import CONTACT_TYPES, Contact
+from ...core.operation_range import OperationRange, as_operation_range
+from ...core.state import GraspState, SlipMode
+from ...errors import ModelError
+from .actuator import operation_range_from_actuator
+from .touch import (
+    DetectedContact,
+    ancestors,
+    detected_contacts,
+    forward_touching,
+    geom_id,
+    geom_label,
+    model_id,
+    precise_collision,
+    subtree,
+    without_round_off,
+)
+
+# The contact detection lives in .touch; its names are re-exported here, where the grasp
+# state's callers have always found them.
+__all__ = [
+    "DetectedContact",
+    "detected_contacts",
+    "forward_touching",
+    "geom_id",
+    "geom_label",
+    "grasp_state",
+    "model_id",
+    "object_weight",
+    "precise_collision",
+    "subtree",
+    "without_round_off",
+]
+
+_OBJ = mujoco.mjtObj
+
+
+def object_weight(
+    model: mujoco.MjModel, data: mujoco.MjData, *, object_body: str = "object"
+) -> NDArray[np.float64]:
+    r"""``(6,)`` gravity wrench on the object subtree: [force (N); moment about its body origin (N m)].
+
+    Each body contributes ``(1 - gravcomp) * mass * gravity`` at its centre of mass
+    (``data.xipos``; call ``mj_kinematics`` or ``mj_forward`` first). World frame.
+    """
+    ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
+    origin = np.array(data.xpos[ob], dtype=float)
+    wrench = np.zeros(6)
+    for b in sorted(subtree(model, ob)):
+        force = (
+            (1.0 - float(model.body_gravcomp[b])) * float(model.body_mass[b]) * np.array(model.opt.gravity)
+        )
+        wrench[:3] += force
+        wrench[3:] += np.cross(np.array(data.xipos[b]) - origin, force)
+    return wrench
+
+
+def _check_geoms(model: mujoco.MjModel, mapping: Mapping[str, object] | None, what: str) -> None:
+    for key in mapping or {}:
+        try:
+            geom_id(model, key)
+        except ModelError as e:
+            raise ModelError(f"geom {key!r}", f"named in {what} but not in the model") from e
+
+
+def _state_joints(model: mujoco.MjModel, joints: Sequence[str] | None, inside: set[int]) -> list[int]:
+    scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    if joints is None:
+        ids = [
+            j
+            for j in range(model.njnt)
+            if int(model.jnt_type[j]) in scalar and int(model.jnt_bodyid[j]) not in inside
+        ]
+        if not ids:
+            raise ModelError("joints", "the model has no hinge or slide joint outside the object")
+        return ids
+    ids = []
+    for name in joints:
+        j = model_id(model, _OBJ.mjOBJ_JOINT, name, "joint")
+        if int(model.jnt_type[j]) not in scalar:
+            raise ModelError(f"joint {name!r}", "is not a hinge or slide joint")
+        if int(model.jnt_bodyid[j]) in inside:
+            raise ModelError(f"joint {name!r}", "moves the object, not a finger")
+        ids.append(j)
+    if not ids:
+        raise ModelError("joints", "expected at least one joint")
+    return ids
+
+
+def _joint_range(model: mujoco.MjModel, j: int, name: str) -> OperationRange:
+    drivers = [
+        a
+        for a in range(model.nactuator)
+        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+        and int(model.actuator_trnid[a, 0]) == j
+    ]
+    if len(drivers) != 1:
+        problem = "no actuator drives it" if not drivers else f"{len(drivers)} actuators drive it"
+        raise ModelError(f"joint {name!r}", f"{problem}; give its range in operation_ranges")
+    return operation_range_from_actuator(model, drivers[0])
+
+
+def grasp_state(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    *,
+    contact_types: Mapping[str, str],
+    mu: float | Mapping[str, float],
+    refs: ArrayLike | None = None,
+    rvds: ArrayLike | None = None,
+    slide_directions: Mapping[str, ArrayLike] | None = None,
+    object_body: str = "object",
+    joints: Sequence[str] | None = None,
+    operation_ranges: Mapping[str, OperationRange | ArrayLike] | None = None,
+    one_contact_per_body: bool = True,
+    friction_edges: int = 16,
+    slip: SlipMode = "per_contact",
+    contact_tolerance: float | None = None,
+) -> GraspState:
+    r"""The grasp state (space = 3) at the configuration ``data.qpos``.
+
+    Long only through its signature and parameter documentation (one keyword per option);
+    the body is a short sequence of the named steps below it in this module.
+
+    Works on a copy of ``data`` with zero velocities, after ``mj_forward``; ``data`` itself
+    is not modified.
+
+    Parameters
+    ----------
+    model, data
+        The compiled model and the configuration.
+    contact_types
+        Geom name -> ``"F"``, ``"L"``, ``"S"`` or ``"D"``: the type of a contact between the
+        object and that geom. Every geom touching the object needs an entry; entries of
+        geoms not in contact are ignored (e.g. a palm the object has left).
+    mu
+        Friction coefficient of every contact, or geom name -> coefficient (required for
+        the F and S contacts).
+    refs
+        ``(K, 6)`` REFS vertices [force; moment about the object origin]; default: the
+        object's weight, one vertex (e.g. [0, 0, -mg, 0, 0, 0]).
+    rvds
+        ``(R, 6)`` RVDS vertices or ``None``.
+    slide_directions
+        Geom name -> ``(3,)`` slide direction of its S contact (the object's contact-point
+        velocity relative to the finger's).
+    object_body
+        The object's body; its subtree is the object.
+    joints
+        The state's joints in order (hinge or slide); default: every hinge and slide joint
+        outside the object, in model order.
+    operation_ranges
+        Joint name -> operation range, replacing the range read from the joint's actuator.
+    one_contact_per_body
+        See :func:`detected_contacts`.
+    friction_edges, slip
+        Passed to :class:`~mjtvm.core.state.GraspState`.
+    contact_tolerance
+        A geom within this distance (m) of the object touches it (:func:`forward_touching`);
+        ``None``: the contacts MuJoCo reports.
+
+    Returns
+    -------
+    GraspState
+        ``object_position`` = the object body's origin (the sphere's centre); contacts named
+        by their geom (``"<geom>#<k>"`` for a further contact of the same geom), positions
+        MuJoCo's contact points, normals into the object, Jacobians ``(3, M)`` of the point
+        fixed to the touching body (all zeros for the world body); ``gravity_torque`` =
+        ``qfrc_bias - qfrc_passive`` at zero velocity, the joint torques that hold the
+        fingers still against gravity.
+
+    Raises
+    ------
+    ModelError
+        Unknown body, joint or geom names (in the model or in the mappings), a joint without
+        a single ``<dcmotor>``, a touching geom without type, an F/S contact without mu, an
+        S contact without slide direction, or no contact between the object and a finger.
+    """
+    ob = model_id(model, _OBJ.mjOBJ_BODY, object_body, "body")
+    joint_ids = _state_joints(model, joints, subtree(model, ob))
+    names = [mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j) for j in joint_ids]
+    dofs = np.array([int(model.jnt_dofadr[j]) for j in joint_ids])
+    overrides = dict(operation_ranges or {})
+    _check_mappings(model, contact_types, mu, slide_directions, overrides)
+    work = copy.copy(data)
+    work.qvel[:] = 0.0
+    mujoco.mj_forward(model, work)
+    detected = _detect_contacts(model, work, object_body, joint_ids, one_contact_per_body, contact_tolerance)
+    contacts = _contacts(model, work, detected, dofs, contact_types, mu, slide_directions)
+    ranges = tuple(
+        as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
+        for j, n in zip(joint_ids, names, strict=True)
+    )
+    gravity_torque = (work.qfrc_bias - work.qfrc_passive)[dofs]
+    if refs is None:
+        refs = object_weight(model, work, object_body=object_body)[None, :]
+    return GraspState(
+        space=3,
+        object_position=np.array(work.xpos[ob], dtype=float),
+        joint_names=tuple(names),
+        operation_ranges=ranges,
+        gravity_torque=gravity_torque,
+        contacts=tuple(contacts),
+        refs=cast(NDArray[np.float64], refs),  # GraspState validates and converts
+        rvds=cast(NDArray[np.float64] | None, rvds),
+        friction_edges=friction_edges,
+        slip=slip,
+    )
+
+
+def _check_mappings(
+    model: mujoco.MjModel,
+    contact_types: Mapping[str, str],
+    mu: float | Mapping[str, float],
+    slide_directions: Mapping[str, ArrayLike] | None,
+    operation_ranges: Mapping[str, Any],
+) -> None:
+    """The contact types are known and every geom and joint named in the mappings exists."""
+    for key, value in contact_types.items():
+        if value not in CONTACT_TYPES:
+            raise ModelError(
+                f"contact_types[{key!r}]", f"expected one of {', '.join(CONTACT_TYPES)}, got {value!r}"
+            )
+    _check_geoms(model, contact_types, "contact_types")
+    _check_geoms(model, mu if isinstance(mu, Mapping) else None, "mu")
+    _check_geoms(model, slide_directions, "slide_directions")
+    for key in operation_ranges:
+        model_id(model, _OBJ.mjOBJ_JOINT, key, "joint")
+
+
+def _detect_contacts(
+    model: mujoco.MjModel,
+    work: mujoco.MjData,
+    object_body: str,
+    joint_ids: Sequence[int],
+    one_per_body: bool,
+    tolerance: float | None,
+) -> list[DetectedContact]:
+    """The object's contacts (:func:`detected_contacts`); at least one must be on a finger
+    (a body moved by one of ``joint_ids``)."""
+    detected = detected_contacts(
+        model, work, object_body=object_body, one_per_body=one_per_body, tolerance=tolerance
+    )
+    moving = {int(model.jnt_bodyid[j]) for j in joint_ids}
+    if not any(ancestors(model, c.body) & moving for c in detected):
+        touching = sorted({c.geom for c in detected})
+        raise ModelError(
+            f"body {object_body!r}",
+            f"no contact between the object and the fingers (touching: {touching or 'nothing'})",
+        )
+    return detected
+
+
+def _contacts(
+    model: mujoco.MjModel,
+    work: mujoco.MjData,
+    detected: Sequence[DetectedContact],
+    dofs: NDArray[np.int64],
+    contact_types: Mapping[str, str],
+    mu: float | Mapping[str, float],
+    slide_directions: Mapping[str, ArrayLike] | None,
+) -> list[Contact]:
+    """The state's contacts: type, friction and slide direction from the mappings, and the
+    Jacobian ``(3, M)`` of the point fixed to the touching body over the state's ``dofs``."""
+    contacts: list[Contact] = []
+    seen: dict[str, int] = {}
+    jacp = np.zeros((3, model.nv))
+    for c in detected:
+        if c.geom not in contact_types:
+            raise ModelError(f"geom {c.geom!r}", "touches the object but has no entry in contact_types")
+        ctype = contact_types[c.geom]
+        seen[c.geom] = seen.get(c.geom, 0) + 1
+        name = c.geom if seen[c.geom] == 1 else f"{c.geom}#{seen[c.geom] - 1}"
+        coefficient = mu.get(c.geom) if isinstance(mu, Mapping) else mu
+        if coefficient is None and ctype in ("F", "S"):
+            raise ModelError(f"geom {c.geom!r}", f"its {ctype} contact needs a friction coefficient in mu")
+        slide = None
+        if ctype == "S":
+            if slide_directions is None or c.geom not in slide_directions:
+                raise ModelError(f"geom {c.geom!r}", "its S contact needs an entry in slide_directions")
+            slide = np.asarray(slide_directions[c.geom], dtype=float)
+        jacp[:] = 0.0
+        if c.body > 0:
+            mujoco.mj_jac(model, work, jacp, None, c.position, c.body)
+        contacts.append(
+            Contact(
+                name=name,
+                type=ctype,  # type: ignore[arg-type]  # checked against CONTACT_TYPES
+                position=c.position,
+                normal=c.normal,
+                jacobian=without_round_off(jacp[:, dofs]),
+                mu=None if coefficient is None else float(coefficient),
+                slide_direction=slide,
+            )
+        )
+    return contacts

@@ -1,0 +1,26 @@
+r"""The paper's four-finger hand (section 5, Fig. 4): its MJCF, the closed-form postures of a
+finger on the sphere, and the scenarios of Cases 1 and 2 with the generator of their grasp files.
+"""
+
+from .hand import DEFAULT_FINGER_JOINTS, HUMANLIKE_FINGER_JOINTS, finger_joint_names, hand_mjcf, model_files
+from .placement import finger1_tvmm_curve, make_documents, posture_grasp, solve_variant
+from .posture import FingerGeometry, FingerPosture
+from .scenario import SCENARIOS, export_state, load_scenario, read_scenario
+
+__all__ = [
+    "DEFAULT_FINGER_JOINTS",
+    "HUMANLIKE_FINGER_JOINTS",
+    "SCENARIOS",
+    "FingerGeometry",
+    "FingerPosture",
+    "export_state",
+    "finger1_tvmm_curve",
+    "finger_joint_names",
+    "hand_mjcf",
+    "load_scenario",
+    "make_documents",
+    "model_files",
+    "posture_grasp",
+    "read_scenario",
+    "solve_variant",
+]
