@@ -59,9 +59,7 @@ CALLS: list[tuple[str, str, Callable[[GraspState], Any]]] = [
     # (case, the parameter at fault, the call)
     ("tvmmp solver", "solver", lambda s: tvmmp(s, solver="x")),
     ("tvmmp box", "box", lambda s: tvmmp(s, box="x")),  # type: ignore[arg-type]
-    ("tvmmp without RVDS", "state", lambda s: tvmmp(s.with_(rvds=None))),
     ("assemble box", "box", lambda s: assemble(s, box="x")),  # type: ignore[arg-type]
-    ("pair_alpha without RVDS", "state", lambda s: pair_alpha(s.with_(rvds=None), 0, 0)),
     ("tvms method", "method", lambda s: tvms(s, method="x")),  # type: ignore[arg-type]
     ("tvms scale", "scale", lambda s: tvms(s, scale=[1.0, 2.0])),
     ("limits tolerance", "tolerance", lambda s: Limits(tolerance=1.0)),
@@ -82,6 +80,15 @@ def test_a_bad_argument_is_a_param_error_naming_it(pinch, name, call):
     assert err.value.name == name
     assert str(err.value).startswith(f"{name}: ")
     assert not isinstance(err.value, StateError)
+
+
+@pytest.mark.parametrize(
+    "call", [lambda s: tvmmp(s), lambda s: pair_alpha(s, 0, 0)], ids=["tvmmp", "pair_alpha"]
+)
+def test_a_state_without_rvds_is_incomplete_data_naming_its_field(pinch, call):
+    """Not a bad argument: the state (a file, for the CLI) lacks the field Problem 2 needs."""
+    with pytest.raises(StateError, match=r"^rvds: Problem 2 needs RVDS vertices"):
+        call(pinch.with_(rvds=None))
 
 
 def test_a_param_error_is_still_a_value_error_and_an_mjtvm_error():

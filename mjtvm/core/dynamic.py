@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ParamError
+from ..errors import ParamError, StateError
 from .result import Witness
 from .state import GraspState
 from .tvmmp import tvmmp
@@ -79,7 +79,7 @@ def pair_alpha(
     r""":math:`A(d)`: alpha of pair (k, l) (eq. 31) with ``offset`` (N m per joint) added to
     :math:`g_f` in the statics rows (eq. 19); ``(None, None)`` when the LP is infeasible."""
     if state.rvds is None:
-        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     g = state.gravity_torque if offset is None else state.gravity_torque + np.asarray(offset, dtype=float)
     one = state.with_(gravity_torque=g, refs=state.refs[k : k + 1], rvds=state.rvds[l : l + 1])
     res = tvmmp(one, solver=solver)

@@ -23,7 +23,7 @@ import cvxpy as cp
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ParamError, SolverError
+from ..errors import SolverError, StateError
 from .contacts import Contact, slide_unit, tangent_basis
 from .state import GraspState
 
@@ -174,7 +174,7 @@ def reference_alpha(
         solver fails.
     """
     if state.rvds is None:
-        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     problem = _build(state, state.refs[k], state.rvds[l])
     tight = {"CLARABEL": _CLARABEL_TOL, "HIGHS": _HIGHS_TOL}.get(solver.upper())
     attempts = [tight, {}] if tight is not None else [{}]
@@ -212,7 +212,7 @@ def reference_tvmmp(
         ``R`` statuses; the origin vertex is ``"skipped"`` (Supplement 3).
     """
     if state.rvds is None:
-        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     n_k, n_l = len(state.refs), len(state.rvds)
     alpha = np.full((n_k, n_l), np.nan)
     status = [["skipped"] * n_l for _ in range(n_k)]

@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..errors import ParamError, SolverError
+from ..errors import ParamError, SolverError, StateError
 from .assembly import Assembly, BoxForm, assemble
 from .certificate import Certificate, Certifier, clip
 from .result import (  # re-exported: the result types lived here
@@ -484,7 +484,7 @@ def _solve_pairs(problem: _Problem2, state: GraspState, witnesses: bool) -> _Pai
     whose RVDS is the origin only still checks each w_k (``l = -1``)."""
     refs, rvds = state.refs, state.rvds
     if rvds is None:  # checked by tvmmp() already; kept for callers of this step
-        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     n_k, n_l = refs.shape[0], rvds.shape[0]
     out = _Pairs.empty(n_k, n_l)
     nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
@@ -593,7 +593,7 @@ def tvmmp(
         When a solver fails (the failing pair is named).
     """
     if state.rvds is None:
-        raise ParamError("state", "Problem 2 needs RVDS vertices, but state.rvds is None")
+        raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     if solver not in SOLVERS:
         raise ParamError("solver", f"expected one of {SOLVERS}, got {solver!r}", solver)
     t0 = time.perf_counter()

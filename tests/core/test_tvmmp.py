@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mjtvm import Contact, GraspState, ParamError, default_operation_range, tvmmp
+from mjtvm import Contact, GraspState, StateError, default_operation_range, tvmmp
 from mjtvm.bench.synthetic import random_state
 from mjtvm.core.assembly import grasp_map_transpose
 
@@ -237,8 +237,9 @@ def test_origin_rvds_vertex_is_skipped():
 
 
 def test_problem_2_needs_rvds():
+    """A state without RVDS is incomplete data for Problem 2: the error names its field."""
     st = one_joint_state([link_contact()], [[0, -1, 0]], [[0, 1, 0]]).with_(rvds=None)
-    with pytest.raises(ParamError, match=r"^state: .*state.rvds is None"):
+    with pytest.raises(StateError, match=r"^rvds: Problem 2 needs RVDS vertices"):
         tvmmp(st)
 
 
