@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from .lp import DROP_REL, LinearProgram, LPSolution
 
 __all__ = [
+    "ScaledMatrix",
     "Scaling",
     "column_factor",
     "cost_scale",
@@ -264,3 +265,46 @@ def unscale(sol: LPSolution, s: Scaling) -> LPSolution:
     y = None if sol.row_dual is None else s.row * sol.row_dual / s.cost
     obj = None if sol.objective is None else sol.objective / s.cost
     return LPSolution("optimal", s.col * sol.x, obj, y)
+
+
+class ScaledMatrix:
+    """``diag(row) A diag(col)`` of one state, computed once, and the scaled ``[A | a]`` of each
+    alpha column ``a`` with :func:`~mjtvm.core.scaling.scale_lp`'s round-off rule (an entry at
+    most DROP_REL times the largest of its row, of its column, or 1 is dropped; the rows'
+    largest entries include the alpha column's)."""
+
+    def __init__(self, a: sp.csc_matrix, s: Scaling) -> None:
+        if not a.has_canonical_format:  # the assembly's matrix is canonical; copies stay exact
+            a = a.copy()
+            a.sum_duplicates()
+        m, n = a.shape
+        self.shape = (m, n)
+        self.indptr, self.indices = a.indptr, a.indices
+        self.cols = np.repeat(np.arange(n), np.diff(a.indptr))
+        self.data = a.data * s.row[a.indices] * s.col[self.cols]
+        self.mag = np.abs(self.data)
+        self.row_max = np.zeros(m)
+        np.maximum.at(self.row_max, a.indices, self.mag)
+        col_max = np.zeros(n)
+        np.maximum.at(col_max, self.cols, self.mag)
+        self.col_max_at = col_max[self.cols]
+        self.row = s.row
+
+    def with_column(
+        self, rows: NDArray[np.int64], values: NDArray[np.float64], factor: float
+    ) -> sp.csc_matrix:
+        """The scaled ``[A | a]`` with ``a[rows] = values`` (sorted rows, non-zero values)."""
+        m, n = self.shape
+        data_a = values * self.row[rows] * factor
+        mag_a = np.abs(data_a)
+        row_max = self.row_max.copy()
+        np.maximum.at(row_max, rows, mag_a)
+        ref = np.maximum(np.maximum(row_max[self.indices], self.col_max_at), 1.0)
+        keep = (self.mag > DROP_REL * ref) & (self.data != 0.0)
+        ref_a = np.maximum(np.maximum(row_max[rows], mag_a.max(initial=0.0)), 1.0)
+        keep_a = (mag_a > DROP_REL * ref_a) & (data_a != 0.0)
+        counts = np.append(np.bincount(self.cols[keep], minlength=n), np.count_nonzero(keep_a))
+        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(self.indptr.dtype)
+        data = np.concatenate([self.data[keep], data_a[keep_a]])
+        indices = np.concatenate([self.indices[keep], rows[keep_a]]).astype(self.indices.dtype)
+        return sp.csc_matrix((data, indices, indptr), shape=(m, n + 1))

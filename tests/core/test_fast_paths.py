@@ -18,9 +18,9 @@ import scipy.sparse as sp
 from mjtvm import ParamError, tvmmp
 from mjtvm.core import highs
 from mjtvm.core.assembly import _Coo, assemble
+from mjtvm.core.problem2 import StateLPs
 from mjtvm.core.scaling import scale_lp
 from mjtvm.core.state import load_state
-from mjtvm.core.tvmmp import _Problem2
 from mjtvm.sim.paper_hand.scenario import load_scenario
 
 from .test_solvers import mixed_scale
@@ -70,7 +70,7 @@ def test_repeated_entries_are_still_summed():
 
 def test_first_lp_equals_scale_lp(states):
     for state in states.values():
-        problem = _Problem2(state, "eliminated", "highs")
+        problem = StateLPs(state, "eliminated", "highs")
         for r in state.rvds:
             lp, s = problem.lp(state.refs[0], r)
             generic = scale_lp(lp, s)
@@ -133,11 +133,11 @@ def _one_lp():  # type: ignore[no-untyped-def]
 
 @pytest.mark.parametrize("box", ["eliminated", "literal"])
 def test_tuned_highs_options_give_the_default_alphas(states, box, monkeypatch):
-    """Problem 2's HiGHS options (tvmmp.P2_HIGHS_OPTIONS: Devex dual edge weights) reach
+    """Problem 2's HiGHS options (problem2.P2_HIGHS_OPTIONS: Devex dual edge weights) reach
     the same vertices as HiGHS' defaults along another path: the same statuses, alphas
     within 1e-9 relative (1e-11 measured), on the fixtures and on random states."""
     from mjtvm.bench.synthetic import random_state
-    from mjtvm.core import tvmmp as tvmmp_module
+    from mjtvm.core import problem2 as problem2_module
 
     cases = dict(states)
     for seed, types in enumerate(
@@ -145,7 +145,7 @@ def test_tuned_highs_options_give_the_default_alphas(states, box, monkeypatch):
     ):
         cases[f"random{seed}"] = random_state(seed, contact_types=types, num_refs=2)
     tuned = {name: tvmmp(state, box=box, witnesses=False) for name, state in cases.items()}
-    monkeypatch.setattr(tvmmp_module, "P2_HIGHS_OPTIONS", {})
+    monkeypatch.setattr(problem2_module, "P2_HIGHS_OPTIONS", {})
     for name, state in cases.items():
         default = tvmmp(state, box=box, witnesses=False)
         assert tuned[name].status == default.status, name
