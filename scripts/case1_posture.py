@@ -3,8 +3,8 @@ r"""Case 1's TVMM over finger 1's feasible postures, and the factors between our
 Usage: ``python scripts/case1_posture.py [OUT_PNG]`` (default ``docs/case1_tvmm_posture.png``).
 Plots :func:`mjtvm.sim.paper_hand.placement.finger1_tvmm_curve` (TVMM = the scaled 4-D affine volume of
 Problem 1, 1/s^4, against the elbow angle psi for fingertip contacts and against the contact's
-distance from link 2's joint for contacts on link 2) with the rule's posture, the posture the
-earlier IK start angles gave and the paper's 8.4e5 marked; prints the curve's extremes.
+distance from link 2's joint for contacts on link 2) with the rule's posture, the posture IK from
+hand-picked start angles gives and the paper's 8.4e5 marked; prints the curve's extremes.
 ``docs/paper-results.md`` explains it.
 """
 
@@ -22,7 +22,7 @@ import numpy as np
 from mjtvm.sim.paper_hand.placement import finger1_tvmm_curve
 
 PAPER = 8.4e5  # 1/s^4, Case 1, all F (section 5)
-PREVIOUS = 1.7436e6  # the earlier default: IK from hand-picked start angles, 4 mm capsules
+PREVIOUS = 1.7436e6  # at the posture IK from hand-picked start angles gives (4 mm capsules)
 
 
 def main(argv: list[str] | None = None) -> int:

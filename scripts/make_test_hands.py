@@ -1,4 +1,4 @@
-"""Find the "grasp" keyframes of the test hands in models (issue 14) by a small IK.
+"""Find the "grasp" keyframes of the test hands in models by a small IK.
 
 For each hand the chosen fingertip geoms are brought onto the object's surface
 (``mj_geomDistance`` = 0), every other hand geom is kept at least :data:`CLEARANCE` from the

@@ -1,4 +1,4 @@
-r"""Benchmarks of hands that mjtvm does not generate (issue 14): each shipped grasp file of the
+r"""Benchmarks of hands that mjtvm does not generate: each shipped grasp file of the
 test hands through the pipeline a user runs.
 
 Per grasp (``allegro-ik``: the hand-only Allegro, the grasp found by IK; ``allegro-sphere``: the

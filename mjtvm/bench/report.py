@@ -39,7 +39,7 @@ def auto_notes(report: dict[str, Any]) -> list[str]:
             f"pool start-up {start:.2f} s), so the lift, built once and serially before any state is solved, "
             "bounds the speed-up"
             + (f" (ceiling x{ceiling:.2f})" if ceiling else "")
-            + "; the rest is noise on a 2-core machine (x1.56-1.73 in three quiet runs, 2026-11-23)."
+            + "; the rest is noise on a 2-core machine (x1.56-1.73 in three quiet runs)."
         )
     lf = report.get("lift")
     if lf and t.get("lift") is False:

@@ -1,4 +1,4 @@
-r"""The project's benchmark run (issue 7, item 1): the paper's cases, the lift, the sweeps, scaling.
+r"""The project's benchmark run: the paper's cases, the lift, the sweeps, scaling.
 
 One run of :func:`run_suite` (``python scripts/bench.py`` or ``mjtvm bench``) measures, with
 medians over repeats and :func:`time.perf_counter`, the garbage collector enabled:
@@ -59,7 +59,7 @@ PAPER_S = {"case1_p1": 0.19, "case1_p2": 0.26, "case2_p1": 129.0, "case2_p2": 0.
 """The paper's times (s; MATLAB, Core Solo U1300 1.06 GHz)."""
 TARGETS_S = {"case1_p1": 0.05, "case2_p1": 2.0, "p2_state": 5e-3, "case2_p2_state": 1.5e-3, "lift": 1.0}
 """mjtvm's targets (s): ``p2_state`` for a Problem 2 state in general, ``case2_p2_state`` for
-Case 2's initial state (issue 15's benchmark target); the sweep target is a speed-up:
+Case 2's initial state; the sweep target is a speed-up:
 :data:`TARGET_SWEEP_SPEEDUP`."""
 P2_TARGET_KEYS = {"case1_p2": "p2_state", "case2_p2": "case2_p2_state"}
 """The target (a key of :data:`TARGETS_S`) of each Problem 2 row of the report."""

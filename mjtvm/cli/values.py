@@ -283,7 +283,7 @@ def _is_dir(path: Path, what: str) -> bool:
 
 
 def folder(text: str) -> str:
-    """An argparse type: an output folder (a ``.json``/``.csv`` path is the old file form)."""
+    """An argparse type: an output folder (a ``.json``/``.csv``/``.md`` file name is refused: the files are written inside it)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a folder, got ''")
     path = _path(text, "a folder")

@@ -11,7 +11,7 @@ A :class:`LinearProgram` is ``min c^T x`` s.t. ``row_lower <= A x <= row_upper``
 * ``"clarabel"``: the Clarabel interior-point solver, used as an independent
   cross-check and as the fallback when HiGHS cannot settle an LP.
 
-Scaling (a documented decision, issue 12): both backends see the LP after
+Scaling (a documented decision): both backends see the LP after
 :func:`equilibrate` -- rows and columns multiplied by powers of 2 (so the scaling itself
 is exact) chosen by mean-of-logs then Ruiz passes over ``|[A | b]|``, the right-hand
 sides taking part (their factor pinned at 1) so that a change of force or length unit,

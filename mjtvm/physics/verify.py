@@ -108,8 +108,12 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
     if motors:
         model = attach_dcmotors(grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path), motors)
-        if (model.nq, model.nv, model.nbody, model.ngeom) != (grasp.model.nq, grasp.model.nv,
-                                                               grasp.model.nbody, grasp.model.ngeom):  # fmt: skip
+        if (model.nq, model.nv, model.nbody, model.ngeom) != (
+            grasp.model.nq,
+            grasp.model.nv,
+            grasp.model.nbody,
+            grasp.model.ngeom,
+        ):
             raise ModelError(
                 f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
             )
@@ -143,14 +147,22 @@ def verify_state(
     variant, _, reading = run.partition("-")
     state = lift_state(lift, index, variant=variant, reading=reading or "physical", mu=mu, mg=mg)  # type: ignore[arg-type]
     if preload > 0:
-        state = state.with_(contacts=tuple(replace(c, preload=preload) if c.type == "L" else c
-                                           for c in state.contacts))  # fmt: skip
+        state = state.with_(
+            contacts=tuple(replace(c, preload=preload) if c.type == "L" else c for c in state.contacts)
+        )
     ob = lift.scenario.object_body
     model = sim_model(
         motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
     )
-    base = {"run": run, "state": index, "z": float(lift.z[index]), "s": float(lift.s[index]),
-            "x": float(getattr(lift, lift_x(lift))[index]), "mu": mu, "mg": mg}  # fmt: skip
+    base = {
+        "run": run,
+        "state": index,
+        "z": float(lift.z[index]),
+        "s": float(lift.s[index]),
+        "x": float(getattr(lift, lift_x(lift))[index]),
+        "mu": mu,
+        "mg": mg,
+    }
     try:
         res = tvmmp(state)
     except MjtvmError as e:
@@ -160,43 +172,117 @@ def verify_state(
         status = res.status[0][l]
         row: dict[str, Any] = {**base, "l": l, "status": status}
         if status == "optimal":
-            a_sim, alpha, b = alpha_sim(model, lift.qpos[index], state, 0, l, result=res, settings=settings,
-                                        witness=witness, object_body=ob)  # type: ignore[arg-type]  # fmt: skip
+            a_sim, alpha, b = alpha_sim(
+                model,
+                lift.qpos[index],
+                state,
+                0,
+                l,
+                result=res,
+                settings=settings,
+                witness=witness,  # type: ignore[arg-type]
+                object_body=ob,
+            )
             top = min(b.value + 0.01, 2.0)
-            fail = rollout(model, lift.qpos[index], witness_drive(state, 0, l, alpha, top, witness=witness,  # type: ignore[arg-type]
-                           vertex=res.witnesses[0][l]), settings=settings, object_body=ob)  # fmt: skip
-            chk = rollout(model, lift.qpos[index], witness_drive(state, 0, l, alpha, check_s, witness=witness,  # type: ignore[arg-type]
-                          vertex=res.witnesses[0][l]), settings=settings, object_body=ob)  # fmt: skip
+            fail = rollout(
+                model,
+                lift.qpos[index],
+                witness_drive(
+                    state,
+                    0,
+                    l,
+                    alpha,
+                    top,
+                    witness=witness,  # type: ignore[arg-type]
+                    vertex=res.witnesses[0][l],
+                ),
+                settings=settings,
+                object_body=ob,
+            )
+            chk = rollout(
+                model,
+                lift.qpos[index],
+                witness_drive(
+                    state,
+                    0,
+                    l,
+                    alpha,
+                    check_s,
+                    witness=witness,  # type: ignore[arg-type]
+                    vertex=res.witnesses[0][l],
+                ),
+                settings=settings,
+                object_body=ob,
+            )
             one = witness_drive(state, 0, l, alpha, 1.0, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
             demand = inertial_demand(model, lift.qpos[index], one, object_body=ob)
             j = int(np.argmax(demand))
-            row.update(alpha_lp=alpha, alpha_sim=a_sim, ratio=a_sim / alpha if alpha > 0 else math.nan,
-                       censored=b.above_bracket or b.below_bracket, evaluations=b.evaluations,
-                       fail_reason=fail.reason, fail_clamp=fail.clamp_fraction, pass_check=chk.passed,
-                       check_reason=chk.reason, inertia_max=float(demand[j]), inertia_joint=state.joint_names[j],
-                       settle_drift=chk.settle_drift)  # fmt: skip
+            row.update(
+                alpha_lp=alpha,
+                alpha_sim=a_sim,
+                ratio=a_sim / alpha if alpha > 0 else math.nan,
+                censored=b.above_bracket or b.below_bracket,
+                evaluations=b.evaluations,
+                fail_reason=fail.reason,
+                fail_clamp=fail.clamp_fraction,
+                pass_check=chk.passed,
+                check_reason=chk.reason,
+                inertia_max=float(demand[j]),
+                inertia_joint=state.joint_names[j],
+                settle_drift=chk.settle_drift,
+            )
             if dynamics:
-                row.update(_dynamic_row(model, lift.qpos[index], state, l, res, alpha, a_sim, witness,
-                                        settings, ob, check_s))  # fmt: skip
+                row.update(
+                    _dynamic_row(
+                        model, lift.qpos[index], state, l, res, alpha, a_sim, witness, settings, ob, check_s
+                    )
+                )
         rows.append(row)
     return rows
 
 
-def _dynamic_row(model: mujoco.MjModel, qpos: _F64, state: GraspState, l: int, res: Any, alpha: float,
-                 a_sim: float, witness: str, settings: SimSettings | None, ob: str,
-                 check_s: float) -> dict[str, Any]:  # fmt: skip
+def _dynamic_row(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    state: GraspState,
+    l: int,
+    res: Any,
+    alpha: float,
+    a_sim: float,
+    witness: str,
+    settings: SimSettings | None,
+    ob: str,
+    check_s: float,
+) -> dict[str, Any]:
     """The dynamic alpha of pair (0, l), its limit, alpha_sim / alpha_dyn and the check at
     ``check_s`` alpha_dyn (a rollout of the same drive at speed factor check_s alpha_dyn / alpha_kl)."""
     dyn = dynamic_pair(model, qpos, state, 0, l, result=res, witness=witness, object_body=ob)  # type: ignore[arg-type]
     a = dyn.alpha
-    out: dict[str, Any] = {"alpha_dyn": a, "ratio_dyn": a_sim / a if a > 0 else math.nan,
-                           "dyn_joint": state.joint_names[dyn.joint] if dyn.joint is not None else "",
-                           "dyn_term": dyn.term, "dyn_demand": float(np.max(np.abs(dyn.demand))),
-                           "dyn_lps": dyn.lps}  # fmt: skip
+    out: dict[str, Any] = {
+        "alpha_dyn": a,
+        "ratio_dyn": a_sim / a if a > 0 else math.nan,
+        "dyn_joint": state.joint_names[dyn.joint] if dyn.joint is not None else "",
+        "dyn_term": dyn.term,
+        "dyn_demand": float(np.max(np.abs(dyn.demand))),
+        "dyn_lps": dyn.lps,
+    }
     if a > 0:
         s = check_s * a / alpha
-        chk = rollout(model, qpos, witness_drive(state, 0, l, alpha, s, witness=witness,  # type: ignore[arg-type]
-                      vertex=res.witnesses[0][l]), settings=settings, object_body=ob)  # fmt: skip
+        chk = rollout(
+            model,
+            qpos,
+            witness_drive(
+                state,
+                0,
+                l,
+                alpha,
+                s,
+                witness=witness,  # type: ignore[arg-type]
+                vertex=res.witnesses[0][l],
+            ),
+            settings=settings,
+            object_body=ob,
+        )
         out.update(pass_check_dyn=chk.passed, check_dyn_reason=chk.reason)
     return out
 
@@ -258,8 +344,14 @@ def verify_lift(
     indices = state_indices(num_states, stride)
     lift = cached_lift(grasp, num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
-    opts = {"mu": mu, "mg": mg, "settings": asdict(st), "witness": witness, "dynamics": dynamics,
-            "preload": preload}  # fmt: skip
+    opts = {
+        "mu": mu,
+        "mg": mg,
+        "settings": asdict(st),
+        "witness": witness,
+        "dynamics": dynamics,
+        "preload": preload,
+    }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)
     tasks = [(str(grasp), num_states, i, r, opts) for r in runs for i in indices]
@@ -328,11 +420,19 @@ def slide_check(
     ez = np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])
     rows = []
     for i in indices:
-        states = {m: lift_state(lift, i, variant=v, reading=r, mu=mu, mg=mg).with_(rvds=ez)  # type: ignore[arg-type]
-                  for m, v, r in (("physical", "S", "physical"), ("literal", "S", "literal"),
-                                  ("frictionless", "L", "physical"))}  # fmt: skip
-        hats = {c.name.split("#")[0]: np.asarray(c.slide_direction) for c in states["physical"].contacts
-                if c.type == "S"}  # fmt: skip
+        states = {
+            m: lift_state(lift, i, variant=v, reading=r, mu=mu, mg=mg).with_(rvds=ez)  # type: ignore[arg-type]
+            for m, v, r in (
+                ("physical", "S", "physical"),
+                ("literal", "S", "literal"),
+                ("frictionless", "L", "physical"),
+            )
+        }
+        hats = {
+            c.name.split("#")[0]: np.asarray(c.slide_direction)
+            for c in states["physical"].contacts
+            if c.type == "S"
+        }
         alpha_l = float(tvmmp(states["frictionless"], witnesses=False).alpha[0, 0])
         v = min(speed, 0.5 * alpha_l)
         slip = {g: float(np.linalg.norm(s)) * v for g, s in zip(lift.geoms, lift.slips[i]) if g in hats}
@@ -341,22 +441,47 @@ def slide_check(
             ok = res_lp.status[0][0] == "optimal" and float(res_lp.alpha[0, 0]) >= v
             drive = witness_drive(state if ok else states["frictionless"], 0, 0, v, 1.0)
             kinds = {g: ("S" if mode == "literal" else "L") for g in hats}
-            drive = replace(drive, contacts=tuple((g, kinds.get(g, k)) for g, k in drive.contacts),
-                            slips={g: (slip[g] if mode == "literal" else 0.0, -h if mode == "literal" else h)
-                                   for g, h in hats.items()})  # fmt: skip
-            model = sim_model(motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings,
-                              object_body=lift.scenario.object_body)  # fmt: skip
+            drive = replace(
+                drive,
+                contacts=tuple((g, kinds.get(g, k)) for g, k in drive.contacts),
+                slips={
+                    g: (slip[g] if mode == "literal" else 0.0, -h if mode == "literal" else h)
+                    for g, h in hats.items()
+                },
+            )
+            model = sim_model(
+                motor_model(lift.scenario),
+                _types(state),
+                mu=mu,
+                mg=mg,
+                settings=settings,
+                object_body=lift.scenario.object_body,
+            )
             res = rollout(
                 model, lift.qpos[i], drive, settings=settings, object_body=lift.scenario.object_body
             )
             for g, hat in hats.items():
                 force, sl = res.friction[g]
-                rows.append({"state": i, "z": float(lift.z[i]), "mode": mode, "ff": mode if ok else "L",
-                             "geom": g, "speed": v, "slip_speed": slip[g], "friction_cos_phys": _cos(force, hat),
-                             "friction_z": float(force[2]), "friction_t": float(np.linalg.norm(force)),
-                             "slip_cos_phys": _cos(sl, hat), "slip_measured": float(np.linalg.norm(sl)),
-                             "speed_error": res.speed_error, "angle_error": res.angle_error,
-                             "passed": res.passed, "reason": res.reason})  # fmt: skip
+                rows.append(
+                    {
+                        "state": i,
+                        "z": float(lift.z[i]),
+                        "mode": mode,
+                        "ff": mode if ok else "L",
+                        "geom": g,
+                        "speed": v,
+                        "slip_speed": slip[g],
+                        "friction_cos_phys": _cos(force, hat),
+                        "friction_z": float(force[2]),
+                        "friction_t": float(np.linalg.norm(force)),
+                        "slip_cos_phys": _cos(sl, hat),
+                        "slip_measured": float(np.linalg.norm(sl)),
+                        "speed_error": res.speed_error,
+                        "angle_error": res.angle_error,
+                        "passed": res.passed,
+                        "reason": res.reason,
+                    }
+                )
     return rows
 
 

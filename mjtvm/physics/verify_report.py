@@ -82,11 +82,25 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             dr = sorted(r["ratio_dyn"] for r in ok if math.isfinite(r.get("ratio_dyn", math.nan)))
             dq = statistics.quantiles(dr, n=4) if len(dr) > 1 else [dr[0]] * 3 if dr else [math.nan] * 3
             feas = [r for r in ok if "pass_check_dyn" in r]
-            dyn = {"median_dyn": statistics.median(dr) if dr else math.nan, "q1_dyn": dq[0], "q3_dyn": dq[2],
-                   "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas), "dyn_feasible": len(feas)}  # fmt: skip
-        out[run] = {"pairs": len(ok), "states": len({r["state"] for r in ok}), "median": statistics.median(ratios),
-                    "q1": q[0], "q3": q[2], "min": ratios[0], "max": ratios[-1],
-                    "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["fail_reason"]) for r in worst],
-                    "fail_at_check": sum(not r["pass_check"] for r in ok),
-                    "censored": sum(bool(r["censored"]) for r in ok), "zero_alpha": zero, **dyn}  # fmt: skip
+            dyn = {
+                "median_dyn": statistics.median(dr) if dr else math.nan,
+                "q1_dyn": dq[0],
+                "q3_dyn": dq[2],
+                "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas),
+                "dyn_feasible": len(feas),
+            }
+        out[run] = {
+            "pairs": len(ok),
+            "states": len({r["state"] for r in ok}),
+            "median": statistics.median(ratios),
+            "q1": q[0],
+            "q3": q[2],
+            "min": ratios[0],
+            "max": ratios[-1],
+            "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["fail_reason"]) for r in worst],
+            "fail_at_check": sum(not r["pass_check"] for r in ok),
+            "censored": sum(bool(r["censored"]) for r in ok),
+            "zero_alpha": zero,
+            **dyn,
+        }
     return out

@@ -46,9 +46,9 @@ class SupportOracle:
         session = HighsSession(lp)
         session.set_option("simplex_strategy", 4)  # primal: only the costs change
         # The LP is equilibrated already (solvers.equilibrate; the cost factor follows each
-        # direction): HiGHS' own scaling stacked on it let the primal simplex stop 1.2e-4
+        # direction): HiGHS' own scaling stacked on it lets the primal simplex stop 1.2e-4
         # (relative) short of the optimum on Case 1-S's z-support, its reduced costs judged in
-        # units where 1e-9 was not small. Without it the tolerances mean what ours say.
+        # units where 1e-9 is not small. Without it the tolerances mean what ours say.
         session.set_option("simplex_scale_strategy", 0)
         return session
 

@@ -34,8 +34,8 @@ Two exact projections:
   point of :math:`S_{ov}` or yields a supporting hyperplane that cuts it off. When every
   vertex of O is certified, O is :math:`S_{ov}`. The LPs number about vertices +
   facets, and Qhull works on the facets (a few hundred on the Case 2 hand, whose 6-D
-  TVMS has 2044 vertices: triangulating those takes 250 000 simplices, which made the
-  earlier inner approximation take 47 s).
+  TVMS has 2044 vertices: triangulating those takes 250 000 simplices, so an inner
+  approximation built on the vertices takes 47 s).
 * :func:`~mjtvm.polytopes.enumeration.project_cdd` (the paper's way, the baseline): vertex
   enumeration of the lifted polytope with cddlib, projection of its vertices, convex hull
   (:func:`~mjtvm.polytopes.hull.reduce_points`).

@@ -82,13 +82,31 @@ def _csv_header(text: str) -> list[str]:
 
 def test_every_table_is_parsed() -> None:
     expected = {
-        "lift.csv", "lift-sweeps.csv", "lift.json", "lift.json:lift", "lift.json:record",
-        "lift.json:sweeps", "lift.json:timings", "sweep.json:row", "sweep.csv", "sweep.partial.json",
-        "verify.csv", "slide-check.csv", "gears.csv", "bench.json", "bench.json:machine",
-        "bench.json:settings", "bench.json:stats", "bench.json:problem1", "bench.json:problem2",
-        "bench.json:lift", "bench.json:sweeps", "bench.json:scaling", "bench.json:scaling.per_fingers",
+        "lift.csv",
+        "lift-sweeps.csv",
+        "lift.json",
+        "lift.json:lift",
+        "lift.json:record",
+        "lift.json:sweeps",
+        "lift.json:timings",
+        "sweep.json:row",
+        "sweep.csv",
+        "sweep.partial.json",
+        "verify.csv",
+        "slide-check.csv",
+        "gears.csv",
+        "bench.json",
+        "bench.json:machine",
+        "bench.json:settings",
+        "bench.json:stats",
+        "bench.json:problem1",
+        "bench.json:problem2",
+        "bench.json:lift",
+        "bench.json:sweeps",
+        "bench.json:scaling",
+        "bench.json:scaling.per_fingers",
         "bench.json:hands",
-    }  # fmt: skip
+    }
     assert set(TABLES) == expected
 
 
@@ -179,9 +197,16 @@ def test_verify_csv(tmp_path: Path, lift2: Any) -> None:
     from mjtvm.physics import verify
 
     rows = verify.verify_lift(
-        "case2", num_states=2, stride=1, runs=("L",), dynamics=True, out=tmp_path, name="verify",
-        progress=False, plot=False,
-    )  # fmt: skip
+        "case2",
+        num_states=2,
+        stride=1,
+        runs=("L",),
+        dynamics=True,
+        out=tmp_path,
+        name="verify",
+        progress=False,
+        plot=False,
+    )
     assert rows
     assert_documented("verify.csv", _header(tmp_path / "verify.csv"))
 

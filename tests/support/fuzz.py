@@ -49,7 +49,7 @@ NASTY_VALUES: tuple[Any, ...] = (
     "", "1.5", "nan", "F", "S", "x" * 300, "\ud800", "mjtvm.state/1",
     True, False, None,
     {}, {"a": 1}, {"0": 0.0}, [], [[]], [0.0], [1, 2], [[0.0, 0.0]], ["a", "b"], [None], [True, 1.0],
-)  # fmt: skip
+)  # fmt: skip  # a table: one row per kind of value (text, booleans and null, containers)
 
 
 # Values of the top-level slots that have their own rules (bounds, enumerations).

@@ -22,10 +22,28 @@ MAX_ITEMS = 256  # contacts, targets, joints, poses, wrenches, RVDS vertices
 MAX_DEPTH = 16  # a grasp document nests 6 levels (ranges.<pattern>.datasheet.<key>)
 
 _TOP = {
-    "schema", "name", "description", "notes", "source", "model", "object", "configuration", "joints",
-    "mu", "friction_edges", "slip", "contact_tolerance", "contacts", "ignore", "refs", "rvds",
-    "ranges", "lift", "supports", "joint_losses",
-}  # fmt: skip
+    "schema",
+    "name",
+    "description",
+    "notes",
+    "source",
+    "model",
+    "object",
+    "configuration",
+    "joints",
+    "mu",
+    "friction_edges",
+    "slip",
+    "contact_tolerance",
+    "contacts",
+    "ignore",
+    "refs",
+    "rvds",
+    "ranges",
+    "lift",
+    "supports",
+    "joint_losses",
+}
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}
 _REQUIRED = ("schema", "model", "object", "configuration", "contacts")
@@ -240,8 +258,12 @@ def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
         return {"keyframe": c.string(t["keyframe"], "configuration.keyframe")}
     if "qpos" in t:
         return {"qpos": c.number_map(t["qpos"], "configuration.qpos")}
-    ik = c.table(t["ik"], "configuration.ik", {"targets", "start", "bounds", "tolerance", "max_iterations"},
-                 ("targets",))  # fmt: skip
+    ik = c.table(
+        t["ik"],
+        "configuration.ik",
+        {"targets", "start", "bounds", "tolerance", "max_iterations"},
+        ("targets",),
+    )
     targets = ik["targets"]
     if not isinstance(targets, list) or not targets or len(targets) > MAX_ITEMS:
         raise c.fail("configuration.ik.targets", "expected a list of 1 or more targets")
@@ -254,10 +276,12 @@ def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
         kind = "geom" if "geom" in tt else "site"
         if kind == "site" and "point" not in tt:
             raise c.fail(f"{field}.point", "required for a site target (where the site goes, m)")
-        out_targets.append({
-            kind: c.string(tt[kind], f"{field}.{kind}"),
-            "point": c.vector(tt["point"], f"{field}.point", 3) if "point" in tt else None,
-        })  # fmt: skip
+        out_targets.append(
+            {
+                kind: c.string(tt[kind], f"{field}.{kind}"),
+                "point": c.vector(tt["point"], f"{field}.point", 3) if "point" in tt else None,
+            }
+        )
     return {
         "ik": {
             "targets": out_targets,
@@ -369,11 +393,14 @@ def _lift(c: _Checker, value: Any) -> dict[str, Any]:
         out["poses"] = []
         for i, p in enumerate(poses):
             pt = c.table(p, f"lift.poses[{i}]", {"position", "quaternion"}, ("position",))
-            out["poses"].append({
-                "position": c.vector(pt["position"], f"lift.poses[{i}].position", 3),
-                "quaternion": _quaternion(c, pt["quaternion"], f"lift.poses[{i}].quaternion")
-                if "quaternion" in pt else None,
-            })  # fmt: skip
+            out["poses"].append(
+                {
+                    "position": c.vector(pt["position"], f"lift.poses[{i}].position", 3),
+                    "quaternion": _quaternion(c, pt["quaternion"], f"lift.poses[{i}].quaternion")
+                    if "quaternion" in pt
+                    else None,
+                }
+            )
     out["height"] = c.number(t["height"], "lift.height", positive=True) if "height" in t else None
     out["stop_margin"] = (
         c.number(t["stop_margin"], "lift.stop_margin", low=0.0) if "stop_margin" in t else None

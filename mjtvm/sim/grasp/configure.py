@@ -26,8 +26,9 @@ _OBJ = mujoco.mjtObj
 POINT_TOLERANCE = 1e-3  # m: how close a geom's contact must come to its target point along the surface
 
 
-def _geom_target(model: mujoco.MjModel, work: mujoco.MjData, g: int, obj: Sequence[int], point: Any,
-                 file: str, field: str) -> tuple[IkTarget, float, float]:  # fmt: skip
+def _geom_target(
+    model: mujoco.MjModel, work: mujoco.MjData, g: int, obj: Sequence[int], point: Any, file: str, field: str
+) -> tuple[IkTarget, float, float]:
     """The IK target moving geom ``g``'s point nearest the object onto ``point`` (or onto the
     object's nearest surface point), its surface distance and its offset from ``point`` (m)."""
     d, best, fromto = np.inf, np.zeros(6), np.zeros(6)
@@ -72,23 +73,34 @@ def solve_configuration(
         if "site" in t:
             s = mujoco.mj_name2id(model, _OBJ.mjOBJ_SITE, t["site"])
             if s < 0:
-                raise GraspError(file, f"{field}.site", f"{t['site']!r} is not a site of the model"
-                                 f"{suggest(t['site'], names_of(model, _OBJ.mjOBJ_SITE, model.nsite))}")  # fmt: skip
+                raise GraspError(
+                    file,
+                    f"{field}.site",
+                    f"{t['site']!r} is not a site of the model"
+                    f"{suggest(t['site'], names_of(model, _OBJ.mjOBJ_SITE, model.nsite))}",
+                )
             resolved.append(("site", s, t["point"], field))
             continue
         try:
             resolved.append(("geom", geom_id(model, t["geom"]), t["point"], field))
         except ModelError as e:
             names = geom_labels(model)
-            raise GraspError(file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model"
-                             f"{suggest(t['geom'], names)}") from e  # fmt: skip
+            raise GraspError(
+                file, f"{field}.geom", f"{t['geom']!r} is not a geom of the model{suggest(t['geom'], names)}"
+            ) from e
     with precise_collision(model):
         return _settle_targets(model, data, resolved, obj, bounds, ik, file)
 
 
-def _settle_targets(model: mujoco.MjModel, data: mujoco.MjData, resolved: Sequence[tuple[str, int, Any, str]],
-                    obj: Sequence[int], bounds: Mapping[str, tuple[float, float]], ik: Mapping[str, Any],
-                    file: str) -> mujoco.MjData:  # fmt: skip
+def _settle_targets(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    resolved: Sequence[tuple[str, int, Any, str]],
+    obj: Sequence[int],
+    bounds: Mapping[str, tuple[float, float]],
+    ik: Mapping[str, Any],
+    file: str,
+) -> mujoco.MjData:
     """The rounds of :func:`_solve_configuration`: retarget, solve, until settled."""
     tol = float(ik["tolerance"])
     work = copy.copy(data)
@@ -99,8 +111,14 @@ def _settle_targets(model: mujoco.MjModel, data: mujoco.MjData, resolved: Sequen
             if kind == "site":
                 body = int(model.site_bodyid[k])
                 name = mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, body) or ""
-                targets.append(IkTarget(str(mujoco.mj_id2name(model, _OBJ.mjOBJ_SITE, k)), name,
-                                        np.array(model.site_pos[k]), np.array(point)))  # fmt: skip
+                targets.append(
+                    IkTarget(
+                        str(mujoco.mj_id2name(model, _OBJ.mjOBJ_SITE, k)),
+                        name,
+                        np.array(model.site_pos[k]),
+                        np.array(point),
+                    )
+                )
                 misses.append((float(np.linalg.norm(work.site_xpos[k] - np.array(point))) - tol, 0.0))
             else:
                 target, gap, offset = _geom_target(model, work, k, obj, point, file, field)
@@ -112,17 +130,27 @@ def _settle_targets(model: mujoco.MjModel, data: mujoco.MjData, resolved: Sequen
                 return work
         last = max(offsets)
         w = int(np.argmax([max(g, o - POINT_TOLERANCE) for g, o in misses]))
-        worst = (f"{resolved[w][3]}: does not settle on the object's surface in 30 rounds (surface "
-                 f"distance {1e3 * (gaps[w] + tol):.3g} mm, {1e3 * offsets[w]:.3g} mm from its point)")  # fmt: skip
-        result = solve_ik(model, work, targets, bounds=bounds, tolerance=tol,
-                          max_iterations=int(ik["max_iterations"]), strict=False)  # fmt: skip
+        worst = (
+            f"{resolved[w][3]}: does not settle on the object's surface in 30 rounds (surface "
+            f"distance {1e3 * (gaps[w] + tol):.3g} mm, {1e3 * offsets[w]:.3g} mm from its point)"
+        )
+        result = solve_ik(
+            model,
+            work,
+            targets,
+            bounds=bounds,
+            tolerance=tol,
+            max_iterations=int(ik["max_iterations"]),
+            strict=False,
+        )
         if float(np.max(result.residuals)) > 1e-4:  # far beyond the witness points' noise: out of reach
             w = int(np.argmax(result.residuals))
             raise GraspError(
-                file, resolved[w][3],
+                file,
+                resolved[w][3],
                 f"unreachable: residual {1e3 * float(result.residuals[w]):.3g} mm after {result.iterations} "
                 "iterations (joint limits, bounds, or too far)",
-            )  # fmt: skip
+            )
         work.qpos[:] = result.qpos
         mujoco.mj_forward(model, work)
     field, problem = worst.split(": ", 1)

@@ -117,18 +117,24 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
             {"name", "shape", "size", "position", "quaternion"},
             ("name", "shape", "size"),
         )
-        doc["supports"].append({
-            "name": c.string(t["name"], f"supports[{i}].name"),
-            "position": c.vector(t["position"], f"supports[{i}].position", 3) if "position" in t else [0.0] * 3,
-            "quaternion": _quaternion(c, t["quaternion"], f"supports[{i}].quaternion") if "quaternion" in t
-            else [1.0, 0.0, 0.0, 0.0],
-            **_shape(c, t, f"supports[{i}]", SUPPORT_SHAPES, mass=False),
-        })  # fmt: skip
+        doc["supports"].append(
+            {
+                "name": c.string(t["name"], f"supports[{i}].name"),
+                "position": c.vector(t["position"], f"supports[{i}].position", 3)
+                if "position" in t
+                else [0.0] * 3,
+                "quaternion": _quaternion(c, t["quaternion"], f"supports[{i}].quaternion")
+                if "quaternion" in t
+                else [1.0, 0.0, 0.0, 0.0],
+                **_shape(c, t, f"supports[{i}]", SUPPORT_SHAPES, mass=False),
+            }
+        )
     doc["configuration"] = _configuration(c, doc["configuration"])
     doc["joints"] = c.names(doc["joints"], "joints") if "joints" in doc else None
     doc["mu"] = c.number(doc["mu"], "mu", low=0.0) if "mu" in doc else None
-    doc["friction_edges"] = c.integer(doc.get("friction_edges", 16), "friction_edges", MIN_FRICTION_EDGES,
-                                      MAX_FRICTION_EDGES)  # fmt: skip
+    doc["friction_edges"] = c.integer(
+        doc.get("friction_edges", 16), "friction_edges", MIN_FRICTION_EDGES, MAX_FRICTION_EDGES
+    )
     doc["slip"] = doc.get("slip", "per_contact")
     if doc["slip"] not in ("per_contact", "shared"):
         raise c.fail("slip", f"expected 'per_contact' or 'shared', got {doc['slip']!r}")

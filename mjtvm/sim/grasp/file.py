@@ -85,8 +85,11 @@ def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str
         key = mujoco.mj_name2id(model, _OBJ.mjOBJ_KEY, config["keyframe"])
         if key < 0:
             keys = names_of(model, _OBJ.mjOBJ_KEY, model.nkey)
-            raise GraspError(file, "configuration.keyframe",
-                             f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})")  # fmt: skip
+            raise GraspError(
+                file,
+                "configuration.keyframe",
+                f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})",
+            )
         mujoco.mj_resetDataKeyframe(model, data, key)
     values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
     where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
@@ -108,13 +111,20 @@ def _select(
         try:
             ids = [geom_id(model, target)]
         except ModelError as e:
-            raise GraspError(file, f"{field}.geom", f"{target!r} is not a geom of the model"
-                             f"{suggest(target, geom_labels(model))}") from e  # fmt: skip
+            raise GraspError(
+                file,
+                f"{field}.geom",
+                f"{target!r} is not a geom of the model{suggest(target, geom_labels(model))}",
+            ) from e
     elif kind == "body":
         b = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, target)
         if b < 0:
-            raise GraspError(file, f"{field}.body", f"{target!r} is not a body of the model"
-                             f"{suggest(target, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+            raise GraspError(
+                file,
+                f"{field}.body",
+                f"{target!r} is not a body of the model"
+                f"{suggest(target, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}",
+            )
         ids = [
             g
             for g in range(int(model.body_geomadr[b]), int(model.body_geomadr[b] + model.body_geomnum[b]))
@@ -168,8 +178,12 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     ob = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, doc["object"]["body"])
     if ob <= 0:
         name = doc["object"]["body"]
-        raise GraspError(file, "object.body", f"{name!r} is not a body of the model (other than the world)"
-                         f"{suggest(name, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}")  # fmt: skip
+        raise GraspError(
+            file,
+            "object.body",
+            f"{name!r} is not a body of the model (other than the world)"
+            f"{suggest(name, names_of(model, _OBJ.mjOBJ_BODY, model.nbody))}",
+        )
     if not object_geoms(model, ob):
         raise GraspError(file, "object.body", f"body {doc['object']['body']!r} has no geom")
     data = _configure(model, doc, ob, file)
@@ -188,8 +202,12 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
             if coefficient is not None:
                 mu[label] = float(coefficient)
             elif entry["type"] in ("F", "S"):
-                raise GraspError(file, f"contacts[{i}].mu", f"the {entry['type']} contact {what} needs a "
-                                 "friction coefficient: set mu at the top or in the contact")  # fmt: skip
+                raise GraspError(
+                    file,
+                    f"contacts[{i}].mu",
+                    f"the {entry['type']} contact {what} needs a "
+                    "friction coefficient: set mu at the top or in the contact",
+                )
             if entry.get("preload"):
                 preloads[label] = float(entry["preload"])
             if "slide" in entry:
@@ -211,14 +229,19 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
             raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
     if why := coupling(model, joints):
         raise GraspError(
-            file, "joints",
+            file,
+            "joints",
             f"{why}: mjtvm's state has independent joints (each its own torque and speed, eq. 19), "
             "so a hand with coupled joints or closed chains (e.g. a linkage gripper) is not supported",
-        )  # fmt: skip
+        )
     ranges, motors = joint_ranges(
-        model, joints, doc["ranges"], base=path.parent if path else None, file=file,
+        model,
+        joints,
+        doc["ranges"],
+        base=path.parent if path else None,
+        file=file,
         losses=doc["joint_losses"] == "fold",
-    )  # fmt: skip
+    )
     rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
     if rvds is not None:
         rvds.setflags(write=False)
@@ -227,16 +250,30 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     for name in bounds:
         joint_id(model, name, file, f"lift.bounds.{key_of(name)}")
     return Grasp(
-        name=doc["name"], path=path, model_path=model_path, model=model, data=data,
-        object_body=doc["object"]["body"], joints=joints, contact_types=MappingProxyType(types),
-        selections=tuple(selections), mu=MappingProxyType(mu), slide_directions=MappingProxyType(slides),
-        refs=weight_refs(model, data, doc, doc["object"]["body"], file), rvds=rvds, ignored_geoms=tuple(ignored),
-        operation_ranges=MappingProxyType(ranges), motors=MappingProxyType(motors),
-        contact_tolerance=float(doc["contact_tolerance"]), friction_edges=int(doc["friction_edges"]),
-        slip=str(doc["slip"]), lift=None if lift is None else MappingProxyType(lift),
-        ik_bounds=MappingProxyType(bounds), document=MappingProxyType(doc),
+        name=doc["name"],
+        path=path,
+        model_path=model_path,
+        model=model,
+        data=data,
+        object_body=doc["object"]["body"],
+        joints=joints,
+        contact_types=MappingProxyType(types),
+        selections=tuple(selections),
+        mu=MappingProxyType(mu),
+        slide_directions=MappingProxyType(slides),
+        refs=weight_refs(model, data, doc, doc["object"]["body"], file),
+        rvds=rvds,
+        ignored_geoms=tuple(ignored),
+        operation_ranges=MappingProxyType(ranges),
+        motors=MappingProxyType(motors),
+        contact_tolerance=float(doc["contact_tolerance"]),
+        friction_edges=int(doc["friction_edges"]),
+        slip=str(doc["slip"]),
+        lift=None if lift is None else MappingProxyType(lift),
+        ik_bounds=MappingProxyType(bounds),
+        document=MappingProxyType(doc),
         preloads=MappingProxyType(preloads),
-    )  # fmt: skip
+    )
 
 
 def export_state(source: str | Path | Mapping[str, Any]) -> GraspState:

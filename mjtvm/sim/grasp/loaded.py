@@ -182,10 +182,14 @@ class Grasp:
         touching = self._touching()
         rows = []
         for (what, labels), entry in zip(self.selections, self.document["contacts"], strict=True):
-            rows.append({
-                "selection": what, "type": entry["type"], "found": [g for g in labels if g in touching],
-                "distance": self._nearest(labels),
-            })  # fmt: skip
+            rows.append(
+                {
+                    "selection": what,
+                    "type": entry["type"],
+                    "found": [g for g in labels if g in touching],
+                    "distance": self._nearest(labels),
+                }
+            )
         known = {g for _, labels in self.selections for g in labels} | set(self.ignored_geoms)
         for g, dist in touching.items():
             if g not in known:
@@ -208,18 +212,20 @@ class Grasp:
                 d = self._nearest(labels)
                 far = "more than 100 mm" if d is None else f"{1e3 * d:.3g} mm"
                 raise GraspError(
-                    self.file, f"contacts[{i}]",
+                    self.file,
+                    f"contacts[{i}]",
                     f"{what} does not touch the object: nearest distance {far} > "
                     f"contact_tolerance {1e3 * tol:.3g} mm",
-                )  # fmt: skip
+                )
         known = {g for _, labels in self.selections for g in labels} | set(self.ignored_geoms)
         for g, dist in touching.items():
             if g not in known:
                 raise GraspError(
-                    self.file, "contacts",
+                    self.file,
+                    "contacts",
                     f"geom {g!r} touches the object (distance {1e3 * dist:.3g} mm) but no "
                     "contact selects it: add it to contacts with a type, or to ignore",
-                )  # fmt: skip
+                )
 
     def state(
         self,
@@ -253,11 +259,19 @@ class Grasp:
                 raise GraspError(self.file, f"contacts[{i}].slide", f"required for the S contact {what}")
         options = {"friction_edges": self.friction_edges, "slip": self.slip, **options}
         state = grasp_state(
-            self.model, self.data, contact_types=types, mu=self.mu if mu is None else mu,
-            refs=self.refs if refs is None else refs, rvds=self.rvds if rvds is None else rvds,
-            slide_directions=slides, object_body=self.object_body, joints=self.joints,
-            operation_ranges=self.operation_ranges, contact_tolerance=self.contact_tolerance, **options,
-        )  # fmt: skip
+            self.model,
+            self.data,
+            contact_types=types,
+            mu=self.mu if mu is None else mu,
+            refs=self.refs if refs is None else refs,
+            rvds=self.rvds if rvds is None else rvds,
+            slide_directions=slides,
+            object_body=self.object_body,
+            joints=self.joints,
+            operation_ranges=self.operation_ranges,
+            contact_tolerance=self.contact_tolerance,
+            **options,
+        )
         ignored = set(self.ignored_geoms)
         pre = {**self.preloads, **(preloads or {})}
         kept = tuple(

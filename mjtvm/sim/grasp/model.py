@@ -15,17 +15,29 @@ from .document import GraspError
 from .state import subtree
 
 __all__ = [
-    "build_spec", "collision_bits", "coupling", "geom_labels", "joint_id", "load_model", "model_path_of", "names_of", "object_geoms",
-    "set_object_pose", "suggest",
-]  # fmt: skip
+    "build_spec",
+    "collision_bits",
+    "coupling",
+    "geom_labels",
+    "joint_id",
+    "load_model",
+    "model_path_of",
+    "names_of",
+    "object_geoms",
+    "set_object_pose",
+    "suggest",
+]
 
 _OBJ = mujoco.mjtObj
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 _GEOM_TYPES = {
-    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
-    "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
-    "box": mujoco.mjtGeom.mjGEOM_BOX, "plane": mujoco.mjtGeom.mjGEOM_PLANE,
-}  # fmt: skip
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+    "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+    "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+    "box": mujoco.mjtGeom.mjGEOM_BOX,
+    "plane": mujoco.mjtGeom.mjGEOM_PLANE,
+}
 
 
 def suggest(name: str, candidates: Sequence[str]) -> str:
@@ -69,21 +81,35 @@ def build_spec(doc: Mapping[str, Any], model_path: Path, file: str) -> mujoco.Mj
     obj = doc["object"]
     if obj["shape"] is not None:
         if spec.body(obj["body"]) is not None:
-            raise GraspError(file, "object.body", f"{obj['body']!r} is already a body of the model: "
-                             "drop shape, size and mass to use it, or choose another name")  # fmt: skip
+            raise GraspError(
+                file,
+                "object.body",
+                f"{obj['body']!r} is already a body of the model: "
+                "drop shape, size and mass to use it, or choose another name",
+            )
         # The added body's geom and free joint take its name too: MuJoCo refuses a repeated name.
         for kind, found in (("geom", spec.geom(obj["body"])), ("joint", spec.joint(obj["body"]))):
             if found is not None:
-                raise GraspError(file, "object.body", f"{obj['body']!r} is already a {kind} of the model: "
-                                 "the added object's body, geom and free joint take this name; choose another")  # fmt: skip
+                raise GraspError(
+                    file,
+                    "object.body",
+                    f"{obj['body']!r} is already a {kind} of the model: "
+                    "the added object's body, geom and free joint take this name; choose another",
+                )
         pos = obj["position"] or [0.0, 0.0, 0.0]
         quat = obj["quaternion"] or [1.0, 0.0, 0.0, 0.0]
         size = [*obj["size"], 0.0, 0.0][:3]
         try:
             body = spec.worldbody.add_body(name=obj["body"], pos=pos, quat=quat)
             body.add_freejoint(name=obj["body"])
-            body.add_geom(name=obj["body"], type=_GEOM_TYPES[obj["shape"]], size=size, mass=obj["mass"],
-                          contype=bits, conaffinity=bits)  # fmt: skip
+            body.add_geom(
+                name=obj["body"],
+                type=_GEOM_TYPES[obj["shape"]],
+                size=size,
+                mass=obj["mass"],
+                contype=bits,
+                conaffinity=bits,
+            )
         except ValueError as e:  # MuJoCo refuses the name
             raise GraspError(
                 file, "object.body", f"MuJoCo refuses {obj['body']!r}: {' '.join(str(e).split())}"
@@ -95,8 +121,15 @@ def build_spec(doc: Mapping[str, Any], model_path: Path, file: str) -> mujoco.Mj
         if spec.geom(sup["name"]) is not None:
             raise GraspError(file, f"supports[{i}].name", f"{sup['name']!r} is already a geom of the model")
         try:
-            spec.worldbody.add_geom(name=sup["name"], type=_GEOM_TYPES[sup["shape"]], size=sup["size"],
-                                    pos=sup["position"], quat=sup["quaternion"], contype=bits, conaffinity=bits)  # fmt: skip
+            spec.worldbody.add_geom(
+                name=sup["name"],
+                type=_GEOM_TYPES[sup["shape"]],
+                size=sup["size"],
+                pos=sup["position"],
+                quat=sup["quaternion"],
+                contype=bits,
+                conaffinity=bits,
+            )
         except ValueError as e:  # MuJoCo refuses the name
             raise GraspError(
                 file, f"supports[{i}].name", f"MuJoCo refuses {sup['name']!r}: {' '.join(str(e).split())}"

@@ -22,8 +22,14 @@ from ...errors import ModelError
 __all__ = ["CLOSED_FORM", "needs_exact_normal", "object_normal"]
 
 _G = mujoco.mjtGeom
-_S, _C, _E, _Y, _B, _P = (int(_G.mjGEOM_SPHERE), int(_G.mjGEOM_CAPSULE), int(_G.mjGEOM_ELLIPSOID),
-                          int(_G.mjGEOM_CYLINDER), int(_G.mjGEOM_BOX), int(_G.mjGEOM_PLANE))  # fmt: skip
+_S, _C, _E, _Y, _B, _P = (
+    int(_G.mjGEOM_SPHERE),
+    int(_G.mjGEOM_CAPSULE),
+    int(_G.mjGEOM_ELLIPSOID),
+    int(_G.mjGEOM_CYLINDER),
+    int(_G.mjGEOM_BOX),
+    int(_G.mjGEOM_PLANE),
+)
 #: Primitive pairs MuJoCo collides in closed form (engine_collision_driver's table): every plane
 #: pair, sphere with sphere, capsule, cylinder or box, capsule with capsule or box, box with box.
 CLOSED_FORM = {frozenset(p) for p in ((_S, _S), (_S, _C), (_S, _Y), (_S, _B), (_C, _C), (_C, _B), (_B, _B))}

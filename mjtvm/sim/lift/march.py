@@ -88,8 +88,16 @@ def _chain(model: mujoco.MjModel, body: int) -> set[int]:
 class Marcher:
     """The predictor-corrector of one lift (module docstring)."""
 
-    def __init__(self, grasp: GraspLike, motion: Motion, *, bounds: Mapping[str, tuple[float, float]],
-                 tolerance: float, max_iterations: int, stop_margin: float = 0.0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        grasp: GraspLike,
+        motion: Motion,
+        *,
+        bounds: Mapping[str, tuple[float, float]],
+        tolerance: float,
+        max_iterations: int,
+        stop_margin: float = 0.0,
+    ) -> None:
         self.grasp, self.model, self.motion = grasp, grasp.model, motion
         self.stop_margin = stop_margin
         self.scratch = mujoco.MjData(grasp.model)  # reused by the IK and the sampling: no allocations
@@ -102,8 +110,11 @@ class Marcher:
             raise ModelError(f"body {grasp.object_body!r}", "the lift needs the object on one free joint")
         self.padr = int(model.jnt_qposadr[free[0]])
         inside = _subtree(model, {ob})
-        objects = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in inside
-                   and int(model.geom_type[g]) in OBJECT_TYPES]  # fmt: skip
+        objects = [
+            g
+            for g in range(model.ngeom)
+            if int(model.geom_bodyid[g]) in inside and int(model.geom_type[g]) in OBJECT_TYPES
+        ]
         if not objects:
             raise ModelError(
                 f"body {grasp.object_body!r}", "no sphere, box, cylinder or capsule geom to lift"
@@ -169,11 +180,18 @@ class Marcher:
         p0 = 0.5 * (w.object_point + w.finger_point)  # MuJoCo's contact point: midway
         local = data.xmat[body].reshape(3, 3).T @ (p0 - data.xpos[body])
         return _Finger(
-            label, "F" if kind == "F" else "N", g, body, o, is_sphere(model, g),
+            label,
+            "F" if kind == "F" else "N",
+            g,
+            body,
+            o,
+            is_sphere(model, g),
             np.array([int(model.joint(j).dofadr[0]) for j in joints], dtype=int),
             np.array([grasp.joints.index(j) for j in joints], dtype=int),
-            p0 - self.c0, np.array(w.normal), local,
-        )  # fmt: skip
+            p0 - self.c0,
+            np.array(w.normal),
+            local,
+        )
 
     def _turn(self, data: mujoco.MjData) -> NDArray[np.float64] | None:
         """The object's rotation since the start (quaternion), ``None`` when it has not turned
@@ -271,19 +289,36 @@ class Marcher:
         where = f"s = {s + ds:.6f} (object at {np.array2string(self.pose(work)[:3], precision=6)} m)"
         retarget = [k for k, f in enumerate(self.fingers) if f.role == "N" and not f.sphere]
         for _ in range(_MAX_ROUNDS):
-            res = solve_ik(self.model, work, targets, joints=self.joint_names, bounds=self.bounds,
-                           tolerance=self.tol, max_iterations=self.max_it, strict=False,
-                           scratch=self.scratch)  # fmt: skip
+            res = solve_ik(
+                self.model,
+                work,
+                targets,
+                joints=self.joint_names,
+                bounds=self.bounds,
+                tolerance=self.tol,
+                max_iterations=self.max_it,
+                strict=False,
+                scratch=self.scratch,
+            )
             work.qpos[:] = res.qpos
             info["residual"] = np.array(res.residuals)
             if not res.converged:
                 w = int(np.argmax(res.residuals))
-                info["ok"], info["why"] = False, (f"IK of {targets[w].name!r} does not converge at {where} "
-                                                  f"(residual {res.residuals[w]:.3g} m > {self.tol:.3g} m)")  # fmt: skip
+                info["ok"], info["why"] = (
+                    False,
+                    (
+                        f"IK of {targets[w].name!r} does not converge at {where} "
+                        f"(residual {res.residuals[w]:.3g} m > {self.tol:.3g} m)"
+                    ),
+                )
                 return work, info
             mujoco.mj_kinematics(self.model, work)
-            gaps = {k: abs(witness(self.dmodel, work, self.fingers[k].object_geom,
-                                   self.fingers[k].geom_id).distance) for k in retarget}  # fmt: skip
+            gaps = {
+                k: abs(
+                    witness(self.dmodel, work, self.fingers[k].object_geom, self.fingers[k].geom_id).distance
+                )
+                for k in retarget
+            }
             for k, gap in gaps.items():
                 info["residual"][k] = max(info["residual"][k], gap)
             if all(gap <= self.tol for gap in gaps.values()):
@@ -291,8 +326,13 @@ class Marcher:
             targets = self.targets(work)
         else:
             k = max(gaps, key=lambda k: gaps[k])
-            info["ok"], info["why"] = False, (f"{self.fingers[k].geom!r} does not settle on the surface at "
-                                              f"{where} (distance {gaps[k]:.3g} m)")  # fmt: skip
+            info["ok"], info["why"] = (
+                False,
+                (
+                    f"{self.fingers[k].geom!r} does not settle on the surface at "
+                    f"{where} (distance {gaps[k]:.3g} m)"
+                ),
+            )
             return work, info
         if why := self.inadmissible(work):
             info["ok"], info["why"] = False, f"{why} at {where}"

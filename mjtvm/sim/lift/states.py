@@ -115,10 +115,19 @@ def lift_state(
             for c in detected_contacts(sc.model, data, object_body=sc.object_body, tolerance=TOUCH_TOL)
         }
         types = near | {g: "D" for g in (*lift.base, *sc.ignored_geoms)} | {g: "L" for g in roles}
-        base = grasp_state(sc.model, data, contact_types=types, mu=1.0, rvds=sc.rvds, refs=np.zeros((1, 6)),
-                           object_body=sc.object_body, joints=sc.joints,
-                           operation_ranges=getattr(sc, "operation_ranges", None),
-                           friction_edges=getattr(sc, "friction_edges", 16), contact_tolerance=TOUCH_TOL)  # fmt: skip
+        base = grasp_state(
+            sc.model,
+            data,
+            contact_types=types,
+            mu=1.0,
+            rvds=sc.rvds,
+            refs=np.zeros((1, 6)),
+            object_body=sc.object_body,
+            joints=sc.joints,
+            operation_ranges=getattr(sc, "operation_ranges", None),
+            friction_edges=getattr(sc, "friction_edges", 16),
+            contact_tolerance=TOUCH_TOL,
+        )
     friction = sc.mu if mu is None else float(mu)
     contacts = []
     for c in base.contacts:
@@ -131,8 +140,14 @@ def lift_state(
         coefficient = friction.get(geom) if isinstance(friction, Mapping) else friction
         if kind in ("F", "S") and coefficient is None:
             raise ModelError(f"geom {geom!r}", f"its {kind} contact needs a friction coefficient in mu")
-        contacts.append(replace(c, type=kind, mu=None if kind == "D" else float(coefficient),  # type: ignore[arg-type]
-                                slide_direction=slides[geom] if kind == "S" else None))  # fmt: skip
+        contacts.append(
+            replace(
+                c,
+                type=kind,
+                mu=None if kind == "D" else float(coefficient),  # type: ignore[arg-type]
+                slide_direction=slides[geom] if kind == "S" else None,
+            )
+        )
     if mg is None:
         refs = np.array(sc.refs, dtype=float)
     elif hasattr(sc, "weight_refs"):  # a grasp: its weight (along gravity, through its centre of mass) at mg

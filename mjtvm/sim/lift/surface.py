@@ -37,8 +37,12 @@ BACKOFF = 1e-3
 _FAR = 10.0  # m: distmax of the queries; anything farther is not a contact of a lift
 _GEOM = mujoco.mjtGeom
 #: Object geom types the lift moves fingers on.
-OBJECT_TYPES = (int(_GEOM.mjGEOM_SPHERE), int(_GEOM.mjGEOM_CAPSULE), int(_GEOM.mjGEOM_CYLINDER),
-                int(_GEOM.mjGEOM_BOX))  # fmt: skip
+OBJECT_TYPES = (
+    int(_GEOM.mjGEOM_SPHERE),
+    int(_GEOM.mjGEOM_CAPSULE),
+    int(_GEOM.mjGEOM_CYLINDER),
+    int(_GEOM.mjGEOM_BOX),
+)
 
 
 @dataclass(frozen=True, eq=False)

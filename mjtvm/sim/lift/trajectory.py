@@ -200,9 +200,12 @@ def _as_spec(value: LiftSpec | Mapping[str, Any] | None, grasp: GraspLike) -> Li
 
 
 def _motion_options(
-    grasp: GraspLike, direction: ArrayLike | None, twist: ArrayLike | None, poses: ArrayLike | None,
+    grasp: GraspLike,
+    direction: ArrayLike | None,
+    twist: ArrayLike | None,
+    poses: ArrayLike | None,
     height: float | None,
-) -> tuple[LiftSpec, Mapping[str, tuple[float, float]]]:  # fmt: skip
+) -> tuple[LiftSpec, Mapping[str, tuple[float, float]]]:
     """The lift's motion (arguments, else the grasp's ``lift``, else +z) and IK bounds."""
     given = [
         name for name, v in (("direction", direction), ("twist", twist), ("poses", poses)) if v is not None
@@ -213,8 +216,11 @@ def _motion_options(
     if direction is not None:
         motion = LiftSpec.from_direction(direction, height=height)
     elif twist is not None or poses is not None:
-        motion = LiftSpec(twist=None if twist is None else np.asarray(twist, dtype=float),
-                          poses=None if poses is None else np.asarray(poses, dtype=float), height=height)  # fmt: skip
+        motion = LiftSpec(
+            twist=None if twist is None else np.asarray(twist, dtype=float),
+            poses=None if poses is None else np.asarray(poses, dtype=float),
+            height=height,
+        )
     elif spec is not None:
         motion = spec if height is None else replace(spec, height=height)
     else:
@@ -280,8 +286,12 @@ def scripted_lift(
     """
     if isinstance(num_states, bool) or not isinstance(num_states, int) or num_states < 2:
         raise StateError("num_states", f"expected an integer >= 2, got {num_states!r}")
-    for name, value in (("max_step", max_step), ("tolerance", tolerance), ("limit_tolerance", limit_tolerance),
-                        ("height", 1.0 if height is None else height)):  # fmt: skip
+    for name, value in (
+        ("max_step", max_step),
+        ("tolerance", tolerance),
+        ("limit_tolerance", limit_tolerance),
+        ("height", 1.0 if height is None else height),
+    ):
         if not (math.isfinite(value) and value > 0):
             raise StateError(name, f"expected a positive length (m), got {value!r}")
     sc: GraspLike = load_scenario(grasp, variant=variant) if isinstance(grasp, str) else grasp
@@ -295,8 +305,9 @@ def scripted_lift(
         stop_margin = STOP_MARGIN if stop_margin is None else float(stop_margin)
     if not (math.isfinite(stop_margin) and 0.0 <= stop_margin < 1.0):
         raise StateError("stop_margin", f"expected a fraction in [0, 1), got {stop_margin!r}")
-    m = Marcher(sc, motion, bounds=bounds, tolerance=tolerance, max_iterations=max_iterations,
-                stop_margin=stop_margin)  # fmt: skip
+    m = Marcher(
+        sc, motion, bounds=bounds, tolerance=tolerance, max_iterations=max_iterations, stop_margin=stop_margin
+    )
     data = copy.copy(sc.data)
     if why := m.inadmissible(data):
         raise ModelError(f"grasp {sc.name!r}", f"initial state not admissible: {why}")
@@ -360,8 +371,23 @@ def _sample(m: Marcher, path: _Path, n: int, **meta: Any) -> Lift:
     for a in (grid, z, poses, twists, qpos, points, rates, slips, drift, residual, base_contact):
         a.setflags(write=False)
     return Lift(
-        scenario=sc, s=grid, z=z, poses=poses, twists=twists, qpos=qpos, joints=sc.joints,
-        geoms=tuple(f.geom for f in m.fingers), roles=tuple(f.role for f in m.fingers), points=points,
-        rates=rates, slips=slips, drift=drift, residual=residual, base=m.base, base_contact=base_contact,
-        touching=tuple(touching), marched=len(path) - 1, **meta,
-    )  # fmt: skip
+        scenario=sc,
+        s=grid,
+        z=z,
+        poses=poses,
+        twists=twists,
+        qpos=qpos,
+        joints=sc.joints,
+        geoms=tuple(f.geom for f in m.fingers),
+        roles=tuple(f.role for f in m.fingers),
+        points=points,
+        rates=rates,
+        slips=slips,
+        drift=drift,
+        residual=residual,
+        base=m.base,
+        base_contact=base_contact,
+        touching=tuple(touching),
+        marched=len(path) - 1,
+        **meta,
+    )

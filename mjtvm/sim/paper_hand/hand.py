@@ -143,17 +143,30 @@ def hand_mjcf(
     """
     sites = _check_finger_joints(finger_joints)
     bases, headings = _check_hand(
-        finger_bases, finger_headings, mg, link_length=link_length, link_mass=link_mass,
-        capsule_radius=capsule_radius, tip_radius=tip_radius, object_radius=object_radius,
-    )  # fmt: skip
+        finger_bases,
+        finger_headings,
+        mg,
+        link_length=link_length,
+        link_mass=link_mass,
+        capsule_radius=capsule_radius,
+        tip_radius=tip_radius,
+        object_radius=object_radius,
+    )
     motor = DCMotor.from_datasheet() if motor is None else motor
     out = _header(model_name, motor, friction)
     actuators: list[str] = []
     for f, (base, heading) in enumerate(zip(bases, headings, strict=True), start=1):
         body, acts = _finger_bodies(
-            f, base, float(heading), sites, motor, length=float(link_length), mass=float(link_mass),
-            capsule_radius=capsule_radius, tip_radius=tip_radius,
-        )  # fmt: skip
+            f,
+            base,
+            float(heading),
+            sites,
+            motor,
+            length=float(link_length),
+            mass=float(link_mass),
+            capsule_radius=capsule_radius,
+            tip_radius=tip_radius,
+        )
         out += body
         actuators += acts
     mass = mg / GRAVITY if mg > 0 else 1.0 / GRAVITY

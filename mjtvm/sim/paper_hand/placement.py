@@ -161,10 +161,14 @@ def _targets(model: mujoco.MjModel, doc: Mapping[str, Any]) -> list[IkTarget]:
             continue  # the palm: nothing to move
         targets.append(
             geom_contact_target(
-                model, c["geom"], _on_sphere(doc, c["paper"]), doc["object_position"],
-                along=c.get("along"), offset=c.get("offset"),
+                model,
+                c["geom"],
+                _on_sphere(doc, c["paper"]),
+                doc["object_position"],
+                along=c.get("along"),
+                offset=c.get("offset"),
             )
-        )  # fmt: skip
+        )
     return targets
 
 
@@ -212,8 +216,11 @@ def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e
             raise ModelError(
                 f"scenario {doc['name']!r}", f"the IK moved the rule's posture by {moved:.3g} rad"
             )
-        out["posture"] = {"rule": v["posture"]["rule"], "finger": int(v["posture"]["finger"]),
-                          "elbow": posture.elbow.tolist()}  # fmt: skip
+        out["posture"] = {
+            "rule": v["posture"]["rule"],
+            "finger": int(v["posture"]["finger"]),
+            "elbow": posture.elbow.tolist(),
+        }
     out["ik"] = {"iterations": result.iterations, "tolerance": tolerance, "residuals": residuals}
     out["contacts"] = contacts
     return out
@@ -311,7 +318,15 @@ def finger1_tvmm_curve(
             result = tvms(posture_grasp(doc, "default", p).state())
         except ModelError:  # e.g. link 1 or the tip touching too: not this grasp
             continue
-        rows.append({"contact": p.contact, "along": p.along, "parameter": p.parameter, "angles": p.angles,
-                     "elbow": p.elbow.tolist(), "dimension": result.dimension,
-                     "tvmm": result.affine_volume})  # fmt: skip
+        rows.append(
+            {
+                "contact": p.contact,
+                "along": p.along,
+                "parameter": p.parameter,
+                "angles": p.angles,
+                "elbow": p.elbow.tolist(),
+                "dimension": result.dimension,
+                "tvmm": result.affine_volume,
+            }
+        )
     return rows

@@ -54,9 +54,22 @@ SCHEMA = "mjtvm.scenario/1"
 SCENARIOS = ("case1", "case1-s", "case2")
 _OBJ = mujoco.mjtObj
 _REQUIRED = (
-    "schema", "name", "object_body", "object_position", "object_radius", "mg", "mu", "fingers",
-    "contact_types", "slide_directions", "ignored_geoms", "refs", "rvds", "contacts", "variants",
-)  # fmt: skip
+    "schema",
+    "name",
+    "object_body",
+    "object_position",
+    "object_radius",
+    "mg",
+    "mu",
+    "fingers",
+    "contact_types",
+    "slide_directions",
+    "ignored_geoms",
+    "refs",
+    "rvds",
+    "contacts",
+    "variants",
+)
 
 
 def scenario_path(name: str) -> Path:
@@ -188,17 +201,22 @@ def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
         "name": grasp_file_name(str(doc["name"]), variant)[:-5],
         "description": f"{doc.get('description', '')} Hand: {variant}.".strip(),
         "source": doc.get("source", ""),
-        "notes": [*doc.get("notes", []),
-                  "Written by scripts/make_scenarios.py from mjtvm/data/scenarios/"
-                  f"{doc['name']}.json (its IK solution); do not edit by hand."],
+        "notes": [
+            *doc.get("notes", []),
+            "Written by scripts/make_scenarios.py from mjtvm/data/scenarios/"
+            f"{doc['name']}.json (its IK solution); do not edit by hand.",
+        ],
         "model": str(v["model"]),
         "joints": joints,
         "mu": float(doc["mu"]),
-    }  # fmt: skip
+    }
     if doc["rvds"] is not None:
         out["rvds"] = [[float(x) for x in r] for r in doc["rvds"]]
-    out["object"] = {"body": doc["object_body"], "position": [float(x) for x in doc["object_position"]],
-                     "quaternion": [1.0, 0.0, 0.0, 0.0]}  # fmt: skip
+    out["object"] = {
+        "body": doc["object_body"],
+        "position": [float(x) for x in doc["object_position"]],
+        "quaternion": [1.0, 0.0, 0.0, 0.0],
+    }
     out["configuration"] = {"qpos": {k: float(x) for k, x in v["solution"]["qpos"].items()}}
     refs = np.array(doc["refs"], dtype=float)
     if refs.shape == (1, 6) and np.array_equal(refs[0, [0, 1, 3, 4, 5]], np.zeros(5)) and refs[0, 2] < 0:

@@ -64,8 +64,11 @@ def test_contact_tolerance_counts_a_small_gap_as_touching() -> None:
     state = load_grasp(lifted).state()
     assert [c.name for c in state.contacts] == ["f1_tip", "f2_tip", "f3_tip", "f4_tip"]
     tight = load_grasp({**lifted, "contact_tolerance": 1e-5})
-    with pytest.raises(GraspError, match=r"contacts\[\d\]: geom 'f\d_tip' does not touch the object: nearest "
-                       r"distance 0\.0\d+ mm > contact_tolerance 0\.01 mm"):  # fmt: skip
+    with pytest.raises(
+        GraspError,
+        match=r"contacts\[\d\]: geom 'f\d_tip' does not touch the object: nearest "
+        r"distance 0\.0\d+ mm > contact_tolerance 0\.01 mm",
+    ):
         tight.state()
 
 
@@ -129,34 +132,89 @@ def _contacts(*changes: tuple[int, dict[str, Any]]) -> list[dict[str, Any]]:
 @pytest.mark.parametrize(
     ("changes", "match"),
     [
-        ({"object": {"body": "objekt"}}, r"object\.body: 'objekt' is not a body of the model \(other than the world\) \(did you mean 'object'\?\)"),
-        ({"contacts": _contacts((1, {"geom": "f1_tipp", "type": "F"}))},
-         r"contacts\[1\]\.geom: 'f1_tipp' is not a geom of the model \(did you mean 'f1_tip'\?\)"),
-        ({"contacts": _contacts((1, {"body": "f9_link2", "type": "F"}))}, r"contacts\[1\]\.body: 'f9_link2' is not a body"),
-        ({"contacts": _contacts((1, {"geom_id": 999, "type": "F"}))}, r"contacts\[1\]\.geom_id: expected a geom id in \[0, "),
-        ({"contacts": _contacts((1, {"geom": "object", "type": "F"}))}, r"contacts\[1\]: geom 'object' belongs to the object"),
-        ({"contacts": _contacts((1, {"geom": "f1_tip", "type": "X"}))}, r"contacts\[1\]\.type: expected one of F, L, S, D, got 'X'"),
-        ({"contacts": _contacts((1, {"geom": "f1_tip", "body": "f1_link2", "type": "F"}))},
-         r"contacts\[1\]: expected exactly one of geom, body, geom_id, got 2"),
-        ({"contacts": _contacts((2, {"geom": "f2_tip", "type": "S"}))}, r"contacts\[2\]\.slide: required for the S contact"),
-        ({"contacts": _contacts((1, {"geom": "f1_tip", "type": "F", "slide": [1, 0, 0]}))},
-         r"contacts\[1\]\.slide: only an S contact has a slide direction"),
-        ({"contacts": _contacts((1, {"geom": "f2_tip", "type": "F"}))}, r"contacts\[2\]: geom 'f2_tip' is already selected"),
-        ({"contacts": _contacts()[:-1]}, r"contacts: geom 'f4_tip' touches the object \(distance .* mm\) but no contact selects it"),
-        ({"contacts": [*_contacts(), {"geom": "f2_link1", "type": "L"}]},
-         r"contacts\[5\]: geom 'f2_link1' does not touch the object: nearest distance [\d.]+ mm > contact_tolerance 0\.1 mm"),
+        (
+            {"object": {"body": "objekt"}},
+            r"object\.body: 'objekt' is not a body of the model \(other than the world\) \(did you mean 'object'\?\)",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "f1_tipp", "type": "F"}))},
+            r"contacts\[1\]\.geom: 'f1_tipp' is not a geom of the model \(did you mean 'f1_tip'\?\)",
+        ),
+        (
+            {"contacts": _contacts((1, {"body": "f9_link2", "type": "F"}))},
+            r"contacts\[1\]\.body: 'f9_link2' is not a body",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom_id": 999, "type": "F"}))},
+            r"contacts\[1\]\.geom_id: expected a geom id in \[0, ",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "object", "type": "F"}))},
+            r"contacts\[1\]: geom 'object' belongs to the object",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "f1_tip", "type": "X"}))},
+            r"contacts\[1\]\.type: expected one of F, L, S, D, got 'X'",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "f1_tip", "body": "f1_link2", "type": "F"}))},
+            r"contacts\[1\]: expected exactly one of geom, body, geom_id, got 2",
+        ),
+        (
+            {"contacts": _contacts((2, {"geom": "f2_tip", "type": "S"}))},
+            r"contacts\[2\]\.slide: required for the S contact",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "f1_tip", "type": "F", "slide": [1, 0, 0]}))},
+            r"contacts\[1\]\.slide: only an S contact has a slide direction",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "f2_tip", "type": "F"}))},
+            r"contacts\[2\]: geom 'f2_tip' is already selected",
+        ),
+        (
+            {"contacts": _contacts()[:-1]},
+            r"contacts: geom 'f4_tip' touches the object \(distance .* mm\) but no contact selects it",
+        ),
+        (
+            {"contacts": [*_contacts(), {"geom": "f2_link1", "type": "L"}]},
+            r"contacts\[5\]: geom 'f2_link1' does not touch the object: nearest distance [\d.]+ mm > contact_tolerance 0\.1 mm",
+        ),
         ({"joints": ["f1_yaw0", "f1_knuckle"]}, r"joints\[1\]: 'f1_knuckle' is not a joint of the model"),
         ({"joints": ["object"]}, r"joints\[0\]: joint 'object' is not a hinge or slide joint"),
-        ({"configuration": {"qpos": {"f1_yaw": 0.1}}}, r"configuration\.qpos\.f1_yaw: 'f1_yaw' is not a joint of the model \(did you mean 'f1_yaw\d'\?\)"),
-        ({"configuration": {"keyframe": "home"}}, r"configuration\.keyframe: 'home' is not a keyframe of the model \(has: none\)"),
-        ({"configuration": {"keyframe": "home", "qpos": {}}}, r"configuration: expected exactly one of keyframe, qpos, ik, got 2"),
-        ({"ranges": {"f1_*": {"dcmotor": True}}},
-         r"ranges\.f2_yaw0: no operation range for this joint: add \[ranges\.\"f2_yaw0\"\] \(or a glob pattern, or \"\*\"\)"),
+        (
+            {"configuration": {"qpos": {"f1_yaw": 0.1}}},
+            r"configuration\.qpos\.f1_yaw: 'f1_yaw' is not a joint of the model \(did you mean 'f1_yaw\d'\?\)",
+        ),
+        (
+            {"configuration": {"keyframe": "home"}},
+            r"configuration\.keyframe: 'home' is not a keyframe of the model \(has: none\)",
+        ),
+        (
+            {"configuration": {"keyframe": "home", "qpos": {}}},
+            r"configuration: expected exactly one of keyframe, qpos, ik, got 2",
+        ),
+        (
+            {"ranges": {"f1_*": {"dcmotor": True}}},
+            r"ranges\.f2_yaw0: no operation range for this joint: add \[ranges\.\"f2_yaw0\"\] \(or a glob pattern, or \"\*\"\)",
+        ),
         ({"ranges": {"*": {"actuator": True}}}, r"ranges\.\*\.speed_limit: required with actuator"),
-        ({"ranges": {"*": {"dcmotor": "f1_m0"}}}, r"ranges\.\*: joint 'f1_yaw0': actuator 'f1_m0' is not in the model"),
-        ({"ranges": {"*": {"datasheet": "maxon_re99"}}}, r"ranges\.\*: joint 'f1_yaw0': no shipped datasheet 'maxon_re99'"),
-        ({"ranges": {"*": {"polygon": [[0, 0], [1, 0], [0, -1]]}}}, r"ranges\.\*: joint 'f1_yaw0': polygon: "),
-        ({"ranges": {"*": {"datasheet": "maxon_re25_20w", "polygon": [[0, 0]]}}}, r"ranges\.\*: expected exactly one of"),
+        (
+            {"ranges": {"*": {"dcmotor": "f1_m0"}}},
+            r"ranges\.\*: joint 'f1_yaw0': actuator 'f1_m0' is not in the model",
+        ),
+        (
+            {"ranges": {"*": {"datasheet": "maxon_re99"}}},
+            r"ranges\.\*: joint 'f1_yaw0': no shipped datasheet 'maxon_re99'",
+        ),
+        (
+            {"ranges": {"*": {"polygon": [[0, 0], [1, 0], [0, -1]]}}},
+            r"ranges\.\*: joint 'f1_yaw0': polygon: ",
+        ),
+        (
+            {"ranges": {"*": {"datasheet": "maxon_re25_20w", "polygon": [[0, 0]]}}},
+            r"ranges\.\*: expected exactly one of",
+        ),
         ({"mu": -0.3}, r"mu: expected a number >= 0, got -0\.3"),
         ({"rvds": [[1, 0, 0]]}, r"rvds\[0\]: expected a list of 6 numbers"),
         ({"refs": {"weight": False, "mg": 2.0}}, r"refs\.mg: given with weight = false"),
@@ -168,7 +226,7 @@ def _contacts(*changes: tuple[int, dict[str, Any]]) -> list[dict[str, Any]]:
         ({"lift": {"direction": [0, 0, 0]}}, r"lift\.direction: expected a non-zero direction"),
         ({"lift": {"bounds": {"f9_yaw0": [0, 1]}}}, r"lift\.bounds\.f9_yaw0: 'f9_yaw0' is not a joint"),
     ],
-)  # fmt: skip
+)
 def test_every_wrong_field_is_named(changes: dict[str, Any], match: str) -> None:
     with pytest.raises(GraspError, match=match):
         load_grasp(_doc(**changes)).state()
@@ -180,25 +238,41 @@ _SPHERE = {"shape": "sphere", "size": [0.03], "mass": 0.1}
 @pytest.mark.parametrize(
     ("changes", "line"),
     [
-        ({"object": {"body": "f1_tip", **_SPHERE}},
-         "grasp: object.body: 'f1_tip' is already a geom of the model: the added object's body, geom and free "
-         "joint take this name; choose another"),
-        ({"object": {"body": "f1_yaw0", **_SPHERE}},
-         "grasp: object.body: 'f1_yaw0' is already a joint of the model: the added object's body, geom and free "
-         "joint take this name; choose another"),
-        ({"name": "\ud800"},
-         "grasp: name: expected a string of valid Unicode text, got a lone surrogate '\\ud800' in '\\ud800'"),
-        ({"contacts": _contacts((1, {"geom": "f1_\udc80", "type": "F"}))},
-         "grasp: contacts[1].geom: expected a string of valid Unicode text, got a lone surrogate '\\udc80' in "
-         "'f1_\\udc80'"),
-        ({"ranges": {"f\ud800*": {"dcmotor": True}}},
-         "grasp: ranges.'f\\ud800*': expected a key of valid Unicode text, got a lone surrogate '\\ud800' in "
-         "'f\\ud800*'"),
-        ({"object": {"body": "ob\x00ject"}}, "grasp: object.body: expected a string without NUL characters, got 'ob\\x00ject'"),
+        (
+            {"object": {"body": "f1_tip", **_SPHERE}},
+            "grasp: object.body: 'f1_tip' is already a geom of the model: the added object's body, geom and free "
+            "joint take this name; choose another",
+        ),
+        (
+            {"object": {"body": "f1_yaw0", **_SPHERE}},
+            "grasp: object.body: 'f1_yaw0' is already a joint of the model: the added object's body, geom and free "
+            "joint take this name; choose another",
+        ),
+        (
+            {"name": "\ud800"},
+            "grasp: name: expected a string of valid Unicode text, got a lone surrogate '\\ud800' in '\\ud800'",
+        ),
+        (
+            {"contacts": _contacts((1, {"geom": "f1_\udc80", "type": "F"}))},
+            "grasp: contacts[1].geom: expected a string of valid Unicode text, got a lone surrogate '\\udc80' in "
+            "'f1_\\udc80'",
+        ),
+        (
+            {"ranges": {"f\ud800*": {"dcmotor": True}}},
+            "grasp: ranges.'f\\ud800*': expected a key of valid Unicode text, got a lone surrogate '\\ud800' in "
+            "'f\\ud800*'",
+        ),
+        (
+            {"object": {"body": "ob\x00ject"}},
+            "grasp: object.body: expected a string without NUL characters, got 'ob\\x00ject'",
+        ),
         ({"fro\nbnicate": 1}, "grasp: 'fro\\nbnicate': unknown key (allowed: "),
-        ({"lift": {"bounds": {"f1\nyaw0": [0, 1]}}}, "grasp: lift.bounds.'f1\\nyaw0': 'f1\\nyaw0' is not a joint"),
+        (
+            {"lift": {"bounds": {"f1\nyaw0": [0, 1]}}},
+            "grasp: lift.bounds.'f1\\nyaw0': 'f1\\nyaw0' is not a joint",
+        ),
     ],
-)  # fmt: skip
+)
 def test_names_and_keys_stay_on_one_line(changes: dict[str, Any], line: str) -> None:
     """An added object named like a geom or joint, a lone surrogate or NUL in a string or key, a
     key with a newline: one error naming the field, on one line (``repr`` of the name)."""
@@ -216,7 +290,7 @@ def test_names_and_keys_stay_on_one_line(changes: dict[str, Any], line: str) -> 
         ({"fro\nbnicate": 1}, "'fro\\nbnicate': unknown key (allowed: "),
         ({"object": {"body": "f1_tip", **_SPHERE}}, "object.body: 'f1_tip' is already a geom of the model"),
     ],
-)  # fmt: skip
+)
 def test_grasp_file_errors_are_one_line_on_the_command_line(
     changes: dict[str, Any], line: str, tmp_path: Path
 ) -> None:
@@ -225,8 +299,9 @@ def test_grasp_file_errors_are_one_line_on_the_command_line(
     import sys
 
     path = _write(tmp_path, _doc(**changes), ".json")
-    proc = subprocess.run([sys.executable, "-m", "mjtvm.cli", "export-state", str(path)], capture_output=True,
-                          check=False)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "-m", "mjtvm.cli", "export-state", str(path)], capture_output=True, check=False
+    )
     assert proc.returncode == 2
     assert proc.stdout == b""
     err = proc.stderr.decode("utf-8")
@@ -334,17 +409,27 @@ def pincher_grasp(tmp_path: Path) -> dict[str, Any]:
     return {
         "schema": "mjtvm.grasp/1",
         "model": "pincher.xml",
-        "object": {"body": "can", "shape": "cylinder", "size": [0.03, 0.04], "mass": 0.1, "position": [0, 0, 0.12]},
-        "configuration": {"ik": {
-            "targets": [{"geom": "left_tip/geom1", "point": [-0.03, 0.0, 0.12]},
-                        {"geom": "right_tip/geom1", "point": [0.03, 0.0, 0.12]}],
-            "start": {"l0": 0.3, "l1": 0.5, "r0": -0.3, "r1": -0.5},
-        }},
+        "object": {
+            "body": "can",
+            "shape": "cylinder",
+            "size": [0.03, 0.04],
+            "mass": 0.1,
+            "position": [0, 0, 0.12],
+        },
+        "configuration": {
+            "ik": {
+                "targets": [
+                    {"geom": "left_tip/geom1", "point": [-0.03, 0.0, 0.12]},
+                    {"geom": "right_tip/geom1", "point": [0.03, 0.0, 0.12]},
+                ],
+                "start": {"l0": 0.3, "l1": 0.5, "r0": -0.3, "r1": -0.5},
+            }
+        },
         "mu": 0.8,
         "contacts": [{"body": "left_tip", "type": "F"}, {"body": "right_tip", "type": "F"}],
         "rvds": [[0, 0, 1, 0, 0, 0], [0, 0, -1, 0, 0, 0], [1, 0, 0, 0, 0, 0]],
         "ranges": {"*": {"actuator": True, "speed_limit": 5.0}},
-    }  # fmt: skip
+    }
 
 
 def test_a_hand_file_without_object_box_and_ellipsoid_tips(tmp_path: Path) -> None:
@@ -408,10 +493,12 @@ def test_added_object_and_supports_errors(tmp_path: Path) -> None:
     ("equality", "match"),
     [
         ('<joint name="mirror" joint1="l0" joint2="r0"/>', r"equality 'mirror' couples joints 'l0', 'r0'"),
-        ('<connect name="bar" body1="left_tip" body2="right_tip" anchor="0 0 0.03"/>',
-         r"equality 'bar' closes a chain between bodies 'left_tip', 'right_tip'"),
+        (
+            '<connect name="bar" body1="left_tip" body2="right_tip" anchor="0 0 0.03"/>',
+            r"equality 'bar' closes a chain between bodies 'left_tip', 'right_tip'",
+        ),
     ],
-)  # fmt: skip
+)
 def test_coupled_joints_are_refused(tmp_path: Path, equality: str, match: str) -> None:
     """A closed chain or a joint coupling (e.g. the 4-bar linkages of a parallel gripper) adds
     constraints the paper's LPs do not have: refused with the reason, not silently solved."""

@@ -185,33 +185,59 @@ def test_joint_ranges_and_bounds_are_respected(hand: mujoco.MjModel) -> None:
 @pytest.mark.parametrize(
     ("call", "match"),
     [
-        (lambda m, d: solve_ik(m, d, [IkTarget("t", "f9_link1", [0, 0, 0], [0, 0, 0])]),
-         "body 'f9_link1': not in the model"),
-        (lambda m, d: solve_ik(m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], joints=["f1_knuckle"]),
-         "joint 'f1_knuckle': not in the model"),
-        (lambda m, d: solve_ik(m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], joints=["object"]),
-         "joint 'object': is not a hinge or slide joint"),
-        (lambda m, d: solve_ik(m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])],
-                               bounds={"f1_knuckle": (0, 1)}),
-         "joint 'f1_knuckle': not in the model"),
-        (lambda m, d: solve_ik(m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])],
-                               bounds={"f2_yaw0": (0, 1)}),
-         "joint 'f2_yaw0': has a bound but is not among the joints solved for"),
-        (lambda m, d: solve_ik(m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])],
-                               bounds={"f1_yaw0": (1, 0)}),
-         r"joint 'f1_yaw0': empty range"),
+        (
+            lambda m, d: solve_ik(m, d, [IkTarget("t", "f9_link1", [0, 0, 0], [0, 0, 0])]),
+            "body 'f9_link1': not in the model",
+        ),
+        (
+            lambda m, d: solve_ik(
+                m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], joints=["f1_knuckle"]
+            ),
+            "joint 'f1_knuckle': not in the model",
+        ),
+        (
+            lambda m, d: solve_ik(m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], joints=["object"]),
+            "joint 'object': is not a hinge or slide joint",
+        ),
+        (
+            lambda m, d: solve_ik(
+                m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], bounds={"f1_knuckle": (0, 1)}
+            ),
+            "joint 'f1_knuckle': not in the model",
+        ),
+        (
+            lambda m, d: solve_ik(
+                m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], bounds={"f2_yaw0": (0, 1)}
+            ),
+            "joint 'f2_yaw0': has a bound but is not among the joints solved for",
+        ),
+        (
+            lambda m, d: solve_ik(
+                m, d, [IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0])], bounds={"f1_yaw0": (1, 0)}
+            ),
+            r"joint 'f1_yaw0': empty range",
+        ),
         (lambda m, d: solve_ik(m, d, []), "targets: expected at least one IK target"),
-        (lambda m, d: geom_contact_target(m, "f1_nail", [0, 0, 0], [0, 0, 0.1]), "geom 'f1_nail': not in the model"),
+        (
+            lambda m, d: geom_contact_target(m, "f1_nail", [0, 0, 0], [0, 0, 0.1]),
+            "geom 'f1_nail': not in the model",
+        ),
         (lambda m, d: geom_contact_target(m, "palm", [0, 0, 0], [0, 0, 0.1]), "expected a sphere"),
         (lambda m, d: geom_contact_target(m, "f1_link2", [0, 0, 0], [0, 0, 0.1]), "needs 0 <= along <= 0.1"),
         (lambda m, d: geom_contact_target(m, "f1_tip", [0, 0, 0.1], [0, 0, 0.1]), "at the sphere centre"),
         (lambda m, d: IkTarget("t", "f1_link1", [0, 0], [0, 0, 0]), "expected 3 finite numbers"),
-        (lambda m, d: IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0], tangent_axis=[1, 0, 0]),
-         "tangent_axis and centre go together"),
-        (lambda m, d: IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0], tangent_axis=[2, 0, 0], centre=[0, 0, 0]),
-         "unit vector"),
+        (
+            lambda m, d: IkTarget("t", "f1_link1", [0, 0, 0], [0, 0, 0], tangent_axis=[1, 0, 0]),
+            "tangent_axis and centre go together",
+        ),
+        (
+            lambda m, d: IkTarget(
+                "t", "f1_link1", [0, 0, 0], [0, 0, 0], tangent_axis=[2, 0, 0], centre=[0, 0, 0]
+            ),
+            "unit vector",
+        ),
     ],
-)  # fmt: skip
+)
 def test_errors(hand: mujoco.MjModel, call, match: str) -> None:
     with pytest.raises(ModelError, match=match):
         call(hand, mujoco.MjData(hand))

@@ -54,6 +54,13 @@ def test_which_pairs(scene) -> None:
     g = {n: m.geom(n).id for n in ("box", "cyl", "ell", "sph", "cap", "pln")}
     assert needs_exact_normal(m, g["cyl"], g["box"]) and needs_exact_normal(m, g["sph"], g["ell"])
     assert needs_exact_normal(m, g["box"], g["cyl"]) and needs_exact_normal(m, g["cyl"], g["cap"])
-    for a, b in (("sph", "sph"), ("sph", "cap"), ("box", "sph"), ("box", "box"), ("cap", "box"), ("box", "pln"),
-                 ("cyl", "sph")):  # fmt: skip
+    for a, b in (
+        ("sph", "sph"),
+        ("sph", "cap"),
+        ("box", "sph"),
+        ("box", "box"),
+        ("cap", "box"),
+        ("box", "pln"),
+        ("cyl", "sph"),
+    ):
         assert not needs_exact_normal(m, g[a], g[b]), (a, b)

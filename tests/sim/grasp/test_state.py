@@ -208,10 +208,18 @@ def test_options_pass_through(finger: mujoco.MjModel) -> None:
     data = _pose(finger, np.array([0.1, 0.5, 0.7, 0.2]))
     rvds = [[1, 1, 1, 0, 0, 0], [1, -1, 1, 0, 0, 0]]
     state = grasp_state(
-        finger, data, contact_types={"link2": "S"}, mu={"link2": 0.4}, object_body="ball",
-        refs=[[0, 0, -2, 0, 0, 0], [0, 0, -1, 0, 0, 0]], rvds=rvds, slide_directions={"link2": [1, 0, 0]},
-        joints=["pitch1", "pitch0"], operation_ranges={"pitch0": [[0, 0], [2, 0], [0, 10]]}, friction_edges=8,
-    )  # fmt: skip
+        finger,
+        data,
+        contact_types={"link2": "S"},
+        mu={"link2": 0.4},
+        object_body="ball",
+        refs=[[0, 0, -2, 0, 0, 0], [0, 0, -1, 0, 0, 0]],
+        rvds=rvds,
+        slide_directions={"link2": [1, 0, 0]},
+        joints=["pitch1", "pitch0"],
+        operation_ranges={"pitch0": [[0, 0], [2, 0], [0, 10]]},
+        friction_edges=8,
+    )
     full = grasp_state(finger, data, contact_types=TYPES, mu=0.3, object_body="ball")
     assert state.joint_names == ("pitch1", "pitch0")
     np.testing.assert_allclose(state.contacts[0].jacobian, full.contacts[0].jacobian[:, [2, 1]])
@@ -372,9 +380,13 @@ def test_joint_without_actuator() -> None:
     with pytest.raises(ModelError, match="joint 'yaw1': no actuator drives it"):
         grasp_state(model, data, contact_types=TYPES, mu=0.3, object_body="ball")
     state = grasp_state(
-        model, data, contact_types=TYPES, mu=0.3, object_body="ball",
+        model,
+        data,
+        contact_types=TYPES,
+        mu=0.3,
+        object_body="ball",
         operation_ranges={"yaw1": default_operation_range()},
-    )  # fmt: skip
+    )
     assert state.num_joints == 4
 
 

@@ -152,8 +152,11 @@ def test_slide_directions_of_the_two_readings_are_opposite(full: Lift) -> None:
 def test_lift_state_contacts_refs_and_cheap_retyping(short: Lift) -> None:
     state = lift_state(short, 2, variant="S", reading="literal", mu=0.5, mg=2.0)
     assert {c.name: (c.type, c.mu) for c in state.contacts} == {
-        "f1_tip": ("F", 0.5), "f2_tip": ("S", 0.5), "f3_tip": ("F", 0.5), "f4_tip": ("S", 0.5),
-    }  # fmt: skip
+        "f1_tip": ("F", 0.5),
+        "f2_tip": ("S", 0.5),
+        "f3_tip": ("F", 0.5),
+        "f4_tip": ("S", 0.5),
+    }
     assert state.refs.tolist() == [[0.0, 0.0, -2.0, 0.0, 0.0, 0.0]]
     assert np.array_equal(state.rvds, short.scenario.rvds)
     again = lift_state(short, 2, variant="S", reading="literal", mu=0.5, mg=2.0, base=lift_state(short, 2))
@@ -261,8 +264,14 @@ def _settle(model: mujoco.MjModel, data: mujoco.MjData, aims: dict[str, list[flo
     mujoco.mj_forward(model, data)
 
 
-def _grasp(obj: str, tips: dict[str, tuple[str, float, float, list[float]]], types: dict[str, str],
-           centre: float, table: bool, **extra: Any) -> _Grasp:  # fmt: skip
+def _grasp(
+    obj: str,
+    tips: dict[str, tuple[str, float, float, list[float]]],
+    types: dict[str, str],
+    centre: float,
+    table: bool,
+    **extra: Any,
+) -> _Grasp:
     fingers = "".join(_finger(n, x, z, 1.0 if x < 0 else -1.0, tip) for n, (tip, x, z, _) in tips.items())
     acts = "".join(_MOTOR.format(j=f"{n}{k}") for n in tips for k in (0, 1))
     floor = '<geom name="table" type="plane" size="0.5 0.5 0.01"/>' if table else ""
@@ -282,9 +291,20 @@ def _grasp(obj: str, tips: dict[str, tuple[str, float, float, list[float]]], typ
         )
     _settle(model, data, {g: aim for g, (_, _, _, aim) in {f"{n}_tip": v for n, v in tips.items()}.items()})
     return _Grasp(
-        "test", model, data, tuple(f"{n}{k}" for n in tips for k in (0, 1)), MappingProxyType(types), 0.5, {},
-        np.array([[0.0, 0.0, -1.0, 0.0, 0.0, 0.0]]), None, (), "object", {}, **extra,
-    )  # fmt: skip
+        "test",
+        model,
+        data,
+        tuple(f"{n}{k}" for n in tips for k in (0, 1)),
+        MappingProxyType(types),
+        0.5,
+        {},
+        np.array([[0.0, 0.0, -1.0, 0.0, 0.0, 0.0]]),
+        None,
+        (),
+        "object",
+        {},
+        **extra,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -292,11 +312,19 @@ def box() -> _Grasp:
     """A box on a table between a capsule-tipped F finger and a box-tipped L finger."""
     return _grasp(
         '<geom name="obj" type="box" size="0.03 0.03 0.03" mass="0.1"/>',
-        {"a": ('<geom name="a_tip" type="capsule" zaxis="0 1 0" size="0.006 0.01"/>', -0.12, 0.09,
-               [-0.036, 0.0, 0.04]),
-         "b": ('<geom name="b_tip" type="box" size="0.006 0.01 0.006"/>', 0.12, 0.09, [0.036, 0.0, 0.04])},
-        {"a_tip": "F", "b_tip": "L", "table": "D"}, 0.03, True,
-    )  # fmt: skip
+        {
+            "a": (
+                '<geom name="a_tip" type="capsule" zaxis="0 1 0" size="0.006 0.01"/>',
+                -0.12,
+                0.09,
+                [-0.036, 0.0, 0.04],
+            ),
+            "b": ('<geom name="b_tip" type="box" size="0.006 0.01 0.006"/>', 0.12, 0.09, [0.036, 0.0, 0.04]),
+        },
+        {"a_tip": "F", "b_tip": "L", "table": "D"},
+        0.03,
+        True,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -304,11 +332,24 @@ def cylinder() -> _Grasp:
     """A cylinder (axis y) in the air between a capsule-tipped F finger and an ellipsoid-tipped L finger."""
     return _grasp(
         '<geom name="obj" type="cylinder" size="0.03 0.02" zaxis="0 1 0" mass="0.1"/>',
-        {"a": ('<geom name="a_tip" type="capsule" zaxis="0 1 0" size="0.006 0.01"/>', -0.12, 0.12,
-               [-0.036, 0.0, 0.09]),
-         "c": ('<geom name="c_tip" type="ellipsoid" size="0.008 0.01 0.005"/>', 0.12, 0.12, [0.038, 0.0, 0.09])},
-        {"a_tip": "F", "c_tip": "L"}, 0.08, False,
-    )  # fmt: skip
+        {
+            "a": (
+                '<geom name="a_tip" type="capsule" zaxis="0 1 0" size="0.006 0.01"/>',
+                -0.12,
+                0.12,
+                [-0.036, 0.0, 0.09],
+            ),
+            "c": (
+                '<geom name="c_tip" type="ellipsoid" size="0.008 0.01 0.005"/>',
+                0.12,
+                0.12,
+                [0.038, 0.0, 0.09],
+            ),
+        },
+        {"a_tip": "F", "c_tip": "L"},
+        0.08,
+        False,
+    )
 
 
 def _check_contacts(grasp: _Grasp, lift: Lift, f_geom: str, l_geom: str) -> None:

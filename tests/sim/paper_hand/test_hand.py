@@ -196,8 +196,10 @@ def _one_joint(actuator: str, joint_extra: str = "") -> mujoco.MjModel:
 
 
 def test_range_without_saturation_is_a_triangle() -> None:
-    model = _one_joint('<dcmotor name="m" joint="j" gear="40" nominal="24 0.243 1001.12" input="vel" '
-                       'controller="0 0 0.001 0 0 24"/>')  # fmt: skip
+    model = _one_joint(
+        '<dcmotor name="m" joint="j" gear="40" nominal="24 0.243 1001.12" input="vel" '
+        'controller="0 0 0.001 0 0 24"/>'
+    )
     np.testing.assert_allclose(
         operation_range_from_actuator(model, 0).vertices, [[0, 0], [40 * 0.243, 0], [0, 1001.12 / 40]]
     )
@@ -219,10 +221,12 @@ def test_voltage_input_uses_its_ctrlrange_and_joint_force_limit() -> None:
     [
         ('<motor name="m" joint="j" gear="40"/>', "not a <dcmotor>"),
         ('<dcmotor name="m" joint="j" nominal="24 0.243 1001.12"/>', "no supply voltage"),
-        ('<dcmotor name="m" joint="j" nominal="24 0.243 1001.12" cogging="0.001 4 0" ctrlrange="-24 24"/>',
-         "cogging"),
+        (
+            '<dcmotor name="m" joint="j" nominal="24 0.243 1001.12" cogging="0.001 4 0" ctrlrange="-24 24"/>',
+            "cogging",
+        ),
     ],
-)  # fmt: skip
+)
 def test_range_from_actuator_errors(actuator: str, match: str) -> None:
     model = _one_joint(actuator)
     with pytest.raises(ModelError, match=match):

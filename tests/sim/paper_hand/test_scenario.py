@@ -244,10 +244,19 @@ def test_case1_s_translations_need_positive_xdot_and_zdot() -> None:
 def _s_alphas(state: GraspState, d: np.ndarray) -> dict[str, float]:
     dh = d / np.linalg.norm(d)
     directions = {
-        "d": dh, "d+y": dh + np.array([0, 1, 0]), "+y": [0, 1, 0], "-y": [0, -1, 0], "-d": -dh,
-        "xdot<0": [-dh[0], 0, dh[2]], "zdot<0": [dh[0], 0, -dh[2]], "+x": [1, 0, 0], "+z": [0, 0, 1],
-        "-x": [-1, 0, 0], "-z": [0, 0, -1], "x+z": [1, 0, 1],
-    }  # fmt: skip
+        "d": dh,
+        "d+y": dh + np.array([0, 1, 0]),
+        "+y": [0, 1, 0],
+        "-y": [0, -1, 0],
+        "-d": -dh,
+        "xdot<0": [-dh[0], 0, dh[2]],
+        "zdot<0": [dh[0], 0, -dh[2]],
+        "+x": [1, 0, 0],
+        "+z": [0, 0, 1],
+        "-x": [-1, 0, 0],
+        "-z": [0, 0, -1],
+        "x+z": [1, 0, 1],
+    }
     rvds = np.array([np.r_[v, 0, 0, 0] for v in directions.values()], dtype=float)
     result = tvmmp(state.with_(rvds=rvds))
     assert result.feasible and set(result.status[0]) == {"optimal"}
@@ -387,8 +396,9 @@ def test_case1_tvmm_against_finger1_posture() -> None:
     give 2.8e5 .. 8.7e5, branch B rising with the distance from the joint; the paper's 8.4e5 lies inside."""
     from mjtvm.polytopes.tvms import tvms
 
-    rows = finger1_tvmm_curve(tip_angles=np.radians([-90.0, -60.0, -40.0, -20.0, -5.0, 0.0]),
-                              alongs=[0.045, 0.055, 0.0625])  # fmt: skip
+    rows = finger1_tvmm_curve(
+        tip_angles=np.radians([-90.0, -60.0, -40.0, -20.0, -5.0, 0.0]), alongs=[0.045, 0.055, 0.0625]
+    )
     tip = {round(float(np.degrees(r["parameter"]))): r["tvmm"] for r in rows if r["contact"] == "tip"}
     assert set(tip) == {-90, -60, -40, -20, -5, 0}
     assert all(r["dimension"] == 4 for r in rows)
