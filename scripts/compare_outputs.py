@@ -40,12 +40,11 @@ TIMING_KEYS = frozenset({"timings", "assemble_s", "solve_s", "total_s", "wall_s"
 
 def _package_dirs() -> tuple[Path, Path]:
     """Return the installed package's examples folder and models folder."""
-    import mjtvm.models
-
     import mjtvm.data
+    from mjtvm.sim.grasp.file import models_root
 
     data = Path(mjtvm.data.__file__).resolve().parent
-    models = Path(next(iter(mjtvm.models.__path__))).resolve()
+    models = models_root().resolve()
     return data / "examples", models
 
 

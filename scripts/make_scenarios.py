@@ -15,10 +15,10 @@ equal this output.
 from __future__ import annotations
 
 import sys
-from importlib import resources
 from pathlib import Path
 
 from mjtvm.sim.grasp.document import format_toml
+from mjtvm.sim.grasp.file import models_root
 from mjtvm.sim.paper_hand.hand import model_files
 from mjtvm.sim.paper_hand.placement import make_documents, variant_model_text
 from mjtvm.sim.paper_hand.scenario import format_document, grasp_document, grasp_file_name, scenario_path
@@ -27,7 +27,7 @@ from mjtvm.sim.paper_hand.scenario import format_document, grasp_document, grasp
 def main(argv: list[str] | None = None) -> int:
     """Write every scenario source and grasp file; return the process exit code."""
     args = sys.argv[1:] if argv is None else argv
-    grasps = Path(args[0]) if args else Path(str(resources.files("mjtvm.models").joinpath("paper_hand")))
+    grasps = Path(args[0]) if args else models_root() / "paper_hand"
     docs = make_documents()
     for name, doc in docs.items():
         out = Path(args[0]) / f"{name}.json" if args else scenario_path(name)

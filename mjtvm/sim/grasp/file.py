@@ -53,17 +53,27 @@ from .state import (
     subtree,
 )
 
-__all__ = ["Grasp", "build_spec", "export_state", "load_grasp", "shipped_grasps"]
+__all__ = ["Grasp", "build_spec", "export_state", "load_grasp", "models_root", "shipped_grasps"]
 
 _OBJ = mujoco.mjtObj
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
 # ------------------------------------------------------------------ loading
+def models_root() -> Path:
+    """The folder of the shipped hands and grasp files: the installed package ``mjtvm.models``,
+    or the checkout's ``models/`` beside ``mjtvm/`` when mjtvm is imported from a source tree
+    (``pyproject.toml`` maps the top-level folder into the installed package only, so a test
+    run from the repository, which imports the checkout's ``mjtvm``, has no such package)."""
+    try:
+        return Path(str(resources.files("mjtvm.models")))
+    except ModuleNotFoundError:
+        return Path(__file__).resolve().parents[3] / "models"
+
+
 def shipped_grasps() -> dict[str, Path]:
-    """Name -> path of every grasp file shipped in ``models/<hand>/`` (installed as ``mjtvm.models``)."""
-    root = Path(str(resources.files("mjtvm.models")))
-    return {p.stem: p for p in sorted(root.glob("*/*.toml"))}
+    """Name -> path of every grasp file shipped in ``models/<hand>/`` (:func:`models_root`)."""
+    return {p.stem: p for p in sorted(models_root().glob("*/*.toml"))}
 
 
 def _resolve(source: str | Path | Mapping[str, Any]) -> str | Path | Mapping[str, Any]:

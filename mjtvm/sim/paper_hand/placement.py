@@ -15,7 +15,6 @@ World frame, SI units.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...errors import ModelError
-from ..grasp.file import load_grasp
+from ..grasp.file import load_grasp, models_root
 from ..grasp.ik import IkTarget, geom_contact_target, solve_ik
 from ..grasp.loaded import Grasp
 from ..grasp.state import detected_contacts
@@ -268,7 +267,7 @@ def posture_grasp(doc: Mapping[str, Any], variant: str, posture: FingerPosture, 
     every other joint keeps the solution's angle.
     """
     out = grasp_document(doc, variant)
-    out["model"] = str(Path(str(resources.files("mjtvm.models").joinpath("paper_hand"))) / out["model"])
+    out["model"] = str(models_root() / "paper_hand" / out["model"])
     out["configuration"]["qpos"].update(posture.angles)
     if posture.contact == "side":
         for entry in out["contacts"]:
