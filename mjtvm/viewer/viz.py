@@ -43,7 +43,8 @@ import rerun.blueprint as rrb
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from ..apps.replay import Record, ReplayOutput
+from ..apps.replay import ReplayOutput
+from ..apps.replay_records import Record
 from ..core.contacts import slide_unit
 from ..core.operation_range import OperationRange
 from ..core.state import GraspState
