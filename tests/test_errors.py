@@ -32,7 +32,7 @@ def _sweep_point(**kwargs: Any) -> Any:
 
 
 def _sweep_files(**kwargs: Any) -> Any:
-    from mjtvm.apps.sweep import SweepFiles
+    from mjtvm.apps.sweep_files import SweepFiles
 
     return SweepFiles(**kwargs)
 

@@ -1,0 +1,79 @@
+r"""The applications of Problem 2 along a lift: :mod:`mjtvm.apps.replay` (the replay and the
+Fig. 8/9 sweeps; its records and files in :mod:`mjtvm.apps.replay_records`),
+:mod:`mjtvm.apps.sweep` (parameter sweeps on a grid, a process pool or a Dask cluster; the
+files of ``mjtvm sweep`` in :mod:`mjtvm.apps.sweep_files`) and :mod:`mjtvm.apps.figures`.
+
+The names below are imported on first use: the replay loads matplotlib, which a sweep's
+workers do not need.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .replay import (
+        SCHEMA,
+        SWEEP_MG_MU,
+        SWEEP_MGS,
+        SWEEP_MU_MG,
+        SWEEP_MUS,
+        ReplayOutput,
+        grasp_defaults,
+        replay_lift,
+        run_replay,
+        sweep_lift,
+        time_replay,
+    )
+    from .replay_records import Record, solve_state
+    from .sweep import SweepPoint, grid, run_sweep
+    from .sweep_files import SweepFiles, run_sweep_files
+
+_HOMES = {
+    "SCHEMA": "replay",
+    "SWEEP_MGS": "replay",
+    "SWEEP_MG_MU": "replay",
+    "SWEEP_MUS": "replay",
+    "SWEEP_MU_MG": "replay",
+    "ReplayOutput": "replay",
+    "grasp_defaults": "replay",
+    "replay_lift": "replay",
+    "run_replay": "replay",
+    "sweep_lift": "replay",
+    "time_replay": "replay",
+    "Record": "replay_records",
+    "solve_state": "replay_records",
+    "SweepPoint": "sweep",
+    "grid": "sweep",
+    "run_sweep": "sweep",
+    "SweepFiles": "sweep_files",
+    "run_sweep_files": "sweep_files",
+}
+
+__all__ = [
+    "SCHEMA",
+    "SWEEP_MGS",
+    "SWEEP_MG_MU",
+    "SWEEP_MUS",
+    "SWEEP_MU_MG",
+    "Record",
+    "ReplayOutput",
+    "SweepFiles",
+    "SweepPoint",
+    "grasp_defaults",
+    "grid",
+    "replay_lift",
+    "run_replay",
+    "run_sweep",
+    "run_sweep_files",
+    "solve_state",
+    "sweep_lift",
+    "time_replay",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        return getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

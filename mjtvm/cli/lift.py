@@ -224,12 +224,12 @@ def grid_size(args: argparse.Namespace) -> int:
 
 
 _SWEEP_OPTIONS = {"mus": "--mu", "mgs": "--mg", "cluster": "--cluster", "states": "--state-indices"}
-"""The options of the :class:`~mjtvm.apps.sweep.SweepFiles` fields whose values only the run
+"""The options of the :class:`~mjtvm.apps.sweep_files.SweepFiles` fields whose values only the run
 can judge (the grasps' own mu and mg, a scheduler's answer)."""
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from ..apps.sweep import SweepFiles, run_sweep_files
+    from ..apps.sweep_files import SweepFiles, run_sweep_files
 
     size = grid_size(args)
     if size > MAX_GRID:  # the points are built before the first is solved

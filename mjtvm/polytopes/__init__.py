@@ -1,0 +1,176 @@
+r"""The velocity polytopes of Problem 1 without MuJoCo: the TVMS (:mod:`mjtvm.polytopes.tvms`),
+its projection and enumeration, the polar vertex enumeration (:mod:`mjtvm.polytopes.polar`),
+the point-set geometry (:mod:`mjtvm.polytopes.hull`), volumes, estimates and brackets.
+
+The names below are imported on first use, so that importing one module does not load the others.
+The functions named like their modules, :func:`~mjtvm.polytopes.tvms.tvms` and
+:func:`~mjtvm.polytopes.refine.refine`, are not among them (``mjtvm.polytopes.tvms`` is the module).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume, ray_lengths
+    from .budget import (
+        DEFAULT_CONFIDENCE,
+        DEFAULT_MEMORY_FRACTION,
+        Budget,
+        LimitReached,
+        Limits,
+        available_memory,
+        default_memory_budget,
+        rss_bytes,
+    )
+    from .enumeration import force_form, project_cdd
+    from .estimate import FIRST_BATCH, MIN_INSIDE, VolumeEstimate, clopper_pearson, estimate_volume
+    from .hull import (
+        CDD_REL_TOL,
+        ZERO_TOL,
+        cone_facets,
+        distinct,
+        incidence,
+        polish_vertices,
+        reduce_points,
+        span,
+        triangulate,
+        vertex_mask,
+    )
+    from .lattice import FaceLattice
+    from .lifted import Approximation, LiftedPolytope, Projection, ProjectionStatus, lifted_polytope
+    from .oracles import DistanceOracle, RayShooter, SupportOracle
+    from .polar import FLAT, PolarHull, polar_vertices
+    from .projection import REL_TOL, project_lp, twist_rows
+    from .refine import GROWTH, REFINE_SHARE, Cutter, Meter
+    from .tvms import CHARACTERISTIC_LENGTH, TVMS_SCHEMA, TvmsResult, TvmsTimings, default_scale
+    from .volume import facet_volume, hausdorff, hull_volume
+
+_HOMES = {
+    "Bracket": "bracket",
+    "InnerHull": "bracket",
+    "hausdorff_bound": "bracket",
+    "inner_hull": "bracket",
+    "outer_volume": "bracket",
+    "ray_lengths": "bracket",
+    "DEFAULT_CONFIDENCE": "budget",
+    "DEFAULT_MEMORY_FRACTION": "budget",
+    "Budget": "budget",
+    "LimitReached": "budget",
+    "Limits": "budget",
+    "available_memory": "budget",
+    "default_memory_budget": "budget",
+    "rss_bytes": "budget",
+    "force_form": "enumeration",
+    "project_cdd": "enumeration",
+    "FIRST_BATCH": "estimate",
+    "MIN_INSIDE": "estimate",
+    "VolumeEstimate": "estimate",
+    "clopper_pearson": "estimate",
+    "estimate_volume": "estimate",
+    "CDD_REL_TOL": "hull",
+    "ZERO_TOL": "hull",
+    "cone_facets": "hull",
+    "distinct": "hull",
+    "incidence": "hull",
+    "polish_vertices": "hull",
+    "reduce_points": "hull",
+    "span": "hull",
+    "triangulate": "hull",
+    "vertex_mask": "hull",
+    "FaceLattice": "lattice",
+    "Approximation": "lifted",
+    "LiftedPolytope": "lifted",
+    "Projection": "lifted",
+    "ProjectionStatus": "lifted",
+    "lifted_polytope": "lifted",
+    "DistanceOracle": "oracles",
+    "RayShooter": "oracles",
+    "SupportOracle": "oracles",
+    "FLAT": "polar",
+    "PolarHull": "polar",
+    "polar_vertices": "polar",
+    "REL_TOL": "projection",
+    "project_lp": "projection",
+    "twist_rows": "projection",
+    "GROWTH": "refine",
+    "REFINE_SHARE": "refine",
+    "Cutter": "refine",
+    "Meter": "refine",
+    "CHARACTERISTIC_LENGTH": "tvms",
+    "TVMS_SCHEMA": "tvms",
+    "TvmsResult": "tvms",
+    "TvmsTimings": "tvms",
+    "default_scale": "tvms",
+    "facet_volume": "volume",
+    "hausdorff": "volume",
+    "hull_volume": "volume",
+}
+
+__all__ = [
+    "CDD_REL_TOL",
+    "CHARACTERISTIC_LENGTH",
+    "DEFAULT_CONFIDENCE",
+    "DEFAULT_MEMORY_FRACTION",
+    "FIRST_BATCH",
+    "FLAT",
+    "GROWTH",
+    "MIN_INSIDE",
+    "REFINE_SHARE",
+    "REL_TOL",
+    "TVMS_SCHEMA",
+    "ZERO_TOL",
+    "Approximation",
+    "Bracket",
+    "Budget",
+    "Cutter",
+    "DistanceOracle",
+    "FaceLattice",
+    "InnerHull",
+    "LiftedPolytope",
+    "LimitReached",
+    "Limits",
+    "Meter",
+    "PolarHull",
+    "Projection",
+    "ProjectionStatus",
+    "RayShooter",
+    "SupportOracle",
+    "TvmsResult",
+    "TvmsTimings",
+    "VolumeEstimate",
+    "available_memory",
+    "clopper_pearson",
+    "cone_facets",
+    "default_memory_budget",
+    "default_scale",
+    "distinct",
+    "estimate_volume",
+    "facet_volume",
+    "force_form",
+    "hausdorff",
+    "hausdorff_bound",
+    "hull_volume",
+    "incidence",
+    "inner_hull",
+    "lifted_polytope",
+    "outer_volume",
+    "polar_vertices",
+    "polish_vertices",
+    "project_cdd",
+    "project_lp",
+    "ray_lengths",
+    "reduce_points",
+    "rss_bytes",
+    "span",
+    "triangulate",
+    "twist_rows",
+    "vertex_mask",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        return getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -32,8 +32,9 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .budget import Budget, LimitReached
-from .hull import JOGGLE, PolarHull
+from .hull import JOGGLE
 from .lattice import FaceLattice
+from .polar import PolarHull
 
 __all__ = ["Bracket", "InnerHull", "hausdorff_bound", "inner_hull", "outer_volume", "ray_lengths"]
 

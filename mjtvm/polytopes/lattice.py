@@ -1,7 +1,7 @@
 r"""Volume of a polytope from its face lattice, and uniform points in it (Problem 1's outer polytope).
 
 The outer polytope :math:`O = \{u : a_j^T u \le b_j\}` of the cutting planes comes with its
-vertex enumeration (:class:`~mjtvm.polytopes.hull.PolarHull`): Qhull's simplicial hull of the
+vertex enumeration (:class:`~mjtvm.polytopes.polar.PolarHull`): Qhull's simplicial hull of the
 joggled polar points, each simplex a vertex of O with the ``k`` rows through it. That is the
 combinatorics of a *simple* polytope (every vertex on ``k`` facets; where O is degenerate the
 joggle splits a vertex into copies at the same place), and it gives O's whole face lattice: a
@@ -98,7 +98,7 @@ class FaceLattice:
     corners, rows
         ``(n, k)`` O's vertices, one per simplex of the polar hull (copies of a degenerate
         vertex and flat simplices included), and ``(n, k)`` the indices of the rows through
-        each (:meth:`~mjtvm.polytopes.hull.PolarHull.lattice` solves them on the joggled rows).
+        each (:meth:`~mjtvm.polytopes.polar.PolarHull.lattice` solves them on the joggled rows).
     budget
         Checked between the levels; its memory reserved for the subsets of each level.
     """

@@ -30,7 +30,7 @@ Two exact projections:
   <= 6): a polytope O given by valid inequalities (support LPs' values, and the RVDS
   cone's facets when :math:`\dot r` is restricted to it), so O contains :math:`S_{ov}`; its
   vertices come from a convex hull of the polar points (Qhull,
-  :class:`~mjtvm.polytopes.hull.PolarHull`); a ray-shooting LP either certifies a vertex as a
+  :class:`~mjtvm.polytopes.polar.PolarHull`); a ray-shooting LP either certifies a vertex as a
   point of :math:`S_{ov}` or yields a supporting hyperplane that cuts it off. When every
   vertex of O is certified, O is :math:`S_{ov}`. The LPs number about vertices +
   facets, and Qhull works on the facets (a few hundred on the Case 2 hand, whose 6-D

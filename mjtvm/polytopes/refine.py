@@ -22,10 +22,11 @@ from ..errors import SolverError
 from .bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume
 from .budget import Budget, LimitReached, Limits
 from .estimate import VolumeEstimate, estimate_volume
-from .hull import PolarHull, polish_vertices
+from .hull import polish_vertices
 from .lattice import FaceLattice
 from .lifted import Approximation, Projection
 from .oracles import DistanceOracle, RayShooter, SupportOracle
+from .polar import PolarHull
 
 __all__ = ["GROWTH", "REFINE_SHARE", "Cutter", "Meter", "refine"]
 

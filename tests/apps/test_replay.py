@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mjtvm.apps.replay import SWEEP_MGS, SWEEP_MUS, ReplayOutput, run_replay, solve_state, time_replay
+from mjtvm.apps.replay import SWEEP_MGS, SWEEP_MUS, ReplayOutput, run_replay, time_replay
+from mjtvm.apps.replay_records import solve_state
 from mjtvm.cli import main
 from mjtvm.errors import ParamError
 from mjtvm.sim.lift.states import lift_state, slide_directions

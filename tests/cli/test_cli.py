@@ -310,12 +310,12 @@ def test_notes_are_read_into_the_table(tmp_path, monkeypatch, capsys):
 
 def test_a_grid_too_large_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
     """1000 x 10 x 30 points: refused before a lift is computed or a point is built."""
-    import mjtvm.apps.sweep
+    import mjtvm.apps.sweep_files
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("work started before the grid was checked")
 
-    monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep_files", no_work)
+    monkeypatch.setattr(mjtvm.apps.sweep_files, "run_sweep_files", no_work)
     mgs = ",".join(["1"] * 10)
     assert main(["sweep", "--mu", MUS, "--mg", mgs, "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err == (
@@ -373,14 +373,14 @@ def test_one_vocabulary_the_old_spellings_are_not_options(words, old, capsys):
 @pytest.mark.parametrize("command", [["sweep"], ["replay"], ["verify"], ["bench", "--quick"]])
 def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys, monkeypatch):
     import mjtvm.apps.replay  # imported before the patches below: they must not bind the stubs
-    import mjtvm.apps.sweep
+    import mjtvm.apps.sweep_files
     import mjtvm.bench.suite
     import mjtvm.physics.verify
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("work started before --out was checked")
 
-    monkeypatch.setattr(mjtvm.apps.sweep, "run_sweep", no_work)
+    monkeypatch.setattr(mjtvm.apps.sweep_files, "run_sweep", no_work)
     monkeypatch.setattr("mjtvm.bench.suite.run_suite", no_work)
     monkeypatch.setattr("mjtvm.sim.lift.trajectory.scripted_lift", no_work)
     monkeypatch.setattr("mjtvm.apps.replay.scripted_lift", no_work)

@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from mjtvm.apps.sweep import SweepFiles
+from mjtvm.apps.sweep_files import SweepFiles
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "outputs.md"
 _MARKER = re.compile(r"<!--\s*fields:\s*(\S+)\s*-->")
@@ -153,7 +153,7 @@ def _sweep_args(out: Path) -> SweepFiles:
 
 
 def test_sweep_files(tmp_path: Path) -> None:
-    from mjtvm.apps.sweep import run_sweep_files
+    from mjtvm.apps.sweep_files import run_sweep_files
 
     run_sweep_files(_sweep_args(tmp_path), emit=lambda _: None, notice=lambda _: None)
     rows = json.loads((tmp_path / "sweep.json").read_text(encoding="utf-8"))
@@ -166,18 +166,18 @@ def test_sweep_files(tmp_path: Path) -> None:
 
 def test_sweep_checkpoint(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The checkpoint a failing sweep leaves behind (the rows finished before the failure)."""
-    from mjtvm.apps import sweep
+    from mjtvm.apps import sweep_files
 
-    real = sweep.run_sweep
+    real = sweep_files.run_sweep
 
     def failing(points: Any, **kwargs: Any) -> Any:
         real(points, **kwargs)
         raise RuntimeError("stop after the rows")
 
-    monkeypatch.setattr(sweep, "CHECKPOINT_EVERY_S", 1e9)
-    monkeypatch.setattr(sweep, "run_sweep", failing)
+    monkeypatch.setattr(sweep_files, "CHECKPOINT_EVERY_S", 1e9)
+    monkeypatch.setattr(sweep_files, "run_sweep", failing)
     with pytest.raises(RuntimeError, match="stop after the rows"):
-        sweep.run_sweep_files(_sweep_args(tmp_path), emit=lambda _: None, notice=lambda _: None)
+        sweep_files.run_sweep_files(_sweep_args(tmp_path), emit=lambda _: None, notice=lambda _: None)
     doc = json.loads((tmp_path / "sweep.partial.json").read_text(encoding="utf-8"))
     assert_documented("sweep.partial.json", doc)
     assert doc["rows"]

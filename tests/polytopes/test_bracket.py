@@ -22,7 +22,7 @@ from mjtvm.bench.synthetic import random_state
 from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import inner_hull, outer_volume, ray_lengths
 from mjtvm.polytopes.budget import Budget, LimitReached, Limits
-from mjtvm.polytopes.hull import PolarHull
+from mjtvm.polytopes.polar import PolarHull
 from mjtvm.polytopes.tvms import tvms
 
 STATES = {

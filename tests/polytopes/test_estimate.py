@@ -24,7 +24,7 @@ from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import outer_volume
 from mjtvm.polytopes.budget import Budget, Limits
 from mjtvm.polytopes.estimate import VolumeEstimate, clopper_pearson, estimate_volume
-from mjtvm.polytopes.hull import PolarHull
+from mjtvm.polytopes.polar import PolarHull
 from mjtvm.polytopes.tvms import tvms
 
 

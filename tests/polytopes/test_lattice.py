@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 
-from mjtvm.polytopes.hull import PolarHull
+from mjtvm.polytopes.polar import PolarHull
 
 
 def cube(k: int) -> tuple[np.ndarray, np.ndarray]:

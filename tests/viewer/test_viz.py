@@ -16,7 +16,7 @@ from mjtvm.apps.replay import ReplayOutput, run_replay
 from mjtvm.cli import main
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.lift.states import lift_state
-from mjtvm.viewer.viz import Z_UNIT, hull_mesh, record_replay
+from mjtvm.viewer.viz import Z_UNIT, record_replay
 
 STATES = 4
 RUNS = ("L", "S_physical", "S_literal")  # S_physical: no solution at any of the 4 states (README)
@@ -168,20 +168,6 @@ def test_witness_points_show_the_saturated_joints(
             color = _cell(frame, f"/joints/{name}/{run}/witness:Points2D:colors", rec.index)
             assert (int(color[0]) == red) == (name in rec.saturated)
     assert any(rec.saturated for rec in out.records)
-
-
-def test_hull_mesh_solid_flat_and_degenerate() -> None:
-    cube = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
-    verts, tris = hull_mesh(np.vstack([cube, [[0.5, 0.5, 0.5]]]))  # type: ignore[misc]
-    assert len(verts) == 8 and len(tris) == 12
-    centre = verts.mean(axis=0)
-    for t in tris:  # outward
-        a, b, c = verts[t]
-        assert np.cross(b - a, c - a) @ (a - centre) > 0
-    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 0]], dtype=float)
-    verts, tris = hull_mesh(square)  # type: ignore[misc]
-    assert len(verts) == 4 and len(tris) == 2
-    assert hull_mesh(np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2]], dtype=float)) is None
 
 
 def test_cli_writes_a_recording(
