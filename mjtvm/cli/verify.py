@@ -205,6 +205,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     from ..core.files import check_output_dir, output_lock, write_files
     from ..physics import verify
     from ..physics.simulate import SimSettings
+    from ..physics.slide_check import slide_check
 
     if args.gears is not None:
         return _cmd_gears(args)
@@ -248,7 +249,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         if args.slide_check:
             lift = verify.cached_lift(args.grasp, args.states)
             indices = verify.state_indices(args.states, args.stride)
-            srows = verify.slide_check(lift, indices, mu=mu, mg=mg, settings=settings)
+            srows = slide_check(lift, indices, mu=mu, mg=mg, settings=settings)
             files[outdir / "slide-check.csv"] = verify.rows_csv(srows)
         write_files(files)
     _print_summary(verify.summarize(rows), wall, args.jobs, outdir / (args.name + ".csv"))

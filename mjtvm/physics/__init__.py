@@ -20,7 +20,8 @@ if TYPE_CHECKING:
     from .gears import gear_sweep
     from .motors import attach_dcmotors
     from .simulate import RolloutResult, SimSettings, rollout, sim_model
-    from .verify import slide_check, verify_lift, verify_state
+    from .slide_check import slide_check
+    from .verify import verify_lift, verify_state
     from .witness import witness_drive
 
 _HOMES = {
@@ -33,7 +34,7 @@ _HOMES = {
     "SimSettings": "simulate",
     "rollout": "simulate",
     "sim_model": "simulate",
-    "slide_check": "verify",
+    "slide_check": "slide_check",
     "verify_lift": "verify",
     "verify_state": "verify",
     "witness_drive": "witness",

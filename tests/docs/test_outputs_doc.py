@@ -213,8 +213,9 @@ def test_verify_csv(tmp_path: Path, lift2: Any) -> None:
 
 def test_slide_check_csv(lift2: Any) -> None:
     from mjtvm.physics import verify
+    from mjtvm.physics.slide_check import slide_check
 
-    rows = verify.slide_check(lift2, [0])
+    rows = slide_check(lift2, [0])
     assert rows
     assert_documented("slide-check.csv", _csv_header(verify.rows_csv(rows)))
 
