@@ -1,4 +1,4 @@
-r"""Equilibration of an LP by powers of 2 (a documented decision, issue 12).
+r"""Equilibration of an LP by powers of 2 (a documented decision: docs/result-format.md, Solver handling).
 
 Both backends see the LP after :func:`equilibrate` -- rows and columns multiplied by powers
 of 2 (so the scaling itself is exact) chosen by mean-of-logs then Ruiz passes over
