@@ -74,8 +74,9 @@ class StateLPs:
     """The LPs of one state: variables of the assembly, then ``alpha`` (last column).
 
     The equilibration (:func:`~mjtvm.core.solvers.equilibrate`) is computed once per state, on
-    ``[A | A_twist]`` with the largest REFS magnitudes as right-hand side; only the factor of
-    the alpha column is chosen per RVDS vertex (its entries are ``A_twist r_l``).
+    ``A`` with the largest REFS magnitudes as right-hand side (rows of twist coefficients
+    only are scaled to the twist's); only the factor of the alpha column is chosen per RVDS
+    vertex (its largest entry ``A_twist r_l`` brought to 1, :func:`~mjtvm.core.scaling.column_factor`).
     """
 
     def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
