@@ -144,6 +144,11 @@ class Certifier:
         ``(n,)`` the column lower bounds.
     col_ref, abs_a, row_groups
         As in :func:`certify`; ``abs_a`` must follow ``a`` if ``a`` changes.
+    dual_ref
+        ``(n,)`` the sizes a reduced cost of the wrong sign is weighed with (default
+        ``col_ref``): a force that is 0 in this solution may be large at another, while the
+        rows' violations are measured at ``col_ref`` (a physical force size would drown an
+        unbalanced weight in a state whose Jacobians are 1e-100).
     """
 
     def __init__(
@@ -154,8 +159,10 @@ class Certifier:
         col_ref: NDArray[np.float64] | None = None,
         abs_a: Matrix | None = None,
         row_groups: NDArray[np.int64] | None = None,
+        dual_ref: NDArray[np.float64] | None = None,
     ) -> None:
         self.a = a
+        self.dual_ref = col_ref if dual_ref is None else dual_ref
         self.abs_a = abs(a) if abs_a is None else abs_a
         self.col_lower = np.asarray(col_lower, dtype=float)
         self.lower_ok, self.lower0 = _finite(self.col_lower)
@@ -223,7 +230,8 @@ class Certifier:
         drop_cancellation(d, np.abs(c) + abs_a.T @ np.abs(y))
         cu_ok, cu = _finite(col_upper)
         wrong_col = ((d > 0.0) & ~self.lower_ok) | ((d < 0.0) & ~cu_ok)
-        moved += float(np.abs(d[wrong_col]) @ size[wrong_col])
+        dual_size = size if self.dual_ref is None else np.maximum(np.abs(xc), self.dual_ref)
+        moved += float(np.abs(d[wrong_col]) @ dual_size[wrong_col])
         d[wrong_col] = 0.0
         bound = float(
             np.maximum(y, 0.0) @ lower[1]

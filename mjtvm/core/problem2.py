@@ -54,19 +54,31 @@ P2_HIGHS_OPTIONS: dict[str, object] = {"simplex_dual_edge_weight_strategy": 1}
 
 
 def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
-    """``(n + 1,)`` the sizes the certificate measures a row's violation at where the solution
-    is ~0 (:func:`~mjtvm.core.certificate.certify`'s ``col_ref``): each joint's largest
-    speed and torque (its operation range) for the speeds, torques and the literal box's
-    variables; 0 elsewhere (forces, slip speeds, alpha: their own values). From the state,
-    never from the equilibration, which the certificate must not trust."""
+    """``(n + 1,)`` the sizes the certificate measures a row's violation, and a reduced cost
+    of the wrong sign, at where the solution is ~0 (:func:`~mjtvm.core.certificate.certify`'s
+    ``col_ref``): each joint's largest speed and torque (its operation range) for the
+    speeds, torques and the literal box's variables; for the force generators' weights the
+    larger of the weight and the largest torque over the largest Jacobian entry; for the
+    slip speeds the largest joint speed times that entry; alpha its own value. From the
+    state, never from the equilibration, which the certificate must not trust."""
     size = np.zeros(asm.num_variables + 1)
     speed = np.array([op.max_speed for op in state.operation_ranges])
     torque = np.array([op.max_torque for op in state.operation_ranges])
+    # A contact force is at most what the weight and the strongest joint through the largest
+    # Jacobian entry give; a slip speed at most the fastest joint through it.
+    jac = max((float(np.max(np.abs(c.jacobian), initial=0.0)) for c in state.contacts), default=0.0)
+    weight = float(np.max(np.linalg.norm(state.refs[:, : state.dim], axis=1), initial=0.0))
+    force = max(weight, float(torque.max(initial=0.0)) / jac if jac > 0.0 else 0.0)
+    slip = float(speed.max(initial=0.0)) * jac
     for name, sl in asm.blocks.items():
         if name.startswith("tau"):
             size[sl] = torque
         elif name.startswith("qd"):
             size[sl] = speed
+        elif name.startswith("lam"):
+            size[sl] = force
+        elif name == "rho":
+            size[sl] = slip
     return size
 
 
@@ -90,6 +102,10 @@ class StateLPs:
         self.col_upper = np.append(asm.col_upper, np.inf)
         self.kin = asm.kinematic_rows
         self.physical_sizes = _physical_sizes(state, asm)
+        self.force_like = np.zeros(asm.num_variables + 1, dtype=bool)  # the lam and rho columns
+        for name, sl in asm.blocks.items():
+            if name.startswith("lam") or name == "rho":
+                self.force_like[sl] = True
         twist = asm.A_twist.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
         self.twist_rows = twist[self.kin]
         self.abs_twist_rows = np.abs(self.twist_rows)
@@ -251,9 +267,9 @@ class StateLPs:
         """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
         if self._cert is None:
-            self._cert = Certifier(
-                a, self.col_lower, col_ref=self.physical_sizes, abs_a=abs_a, row_groups=self.asm.row_groups
-            )
+            primal = np.where(self.force_like, 0.0, self.physical_sizes)  # forces, slips: their own values
+            self._cert = Certifier(a, self.col_lower, col_ref=primal, abs_a=abs_a,
+                                   row_groups=self.asm.row_groups, dual_ref=self.physical_sizes)  # fmt: skip
         return self._cert
 
     def _bounds(
