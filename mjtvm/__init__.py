@@ -8,9 +8,9 @@ here (:func:`load_grasp`, :func:`export_state`, :class:`Grasp`, :class:`GraspErr
 :func:`shipped_grasps`) are imported on first use, so that ``import mjtvm`` does not load MuJoCo.
 """
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from ._lazy import lazy_attributes
 from .core.assembly import Assembly, assemble
 from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
 from .core.operation_range import OperationRange, default_operation_range, load_motor_data
@@ -63,7 +63,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    if name in _MUJOCO_NAMES:
-        return getattr(importlib.import_module(".sim.grasp", __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, dict.fromkeys(_MUJOCO_NAMES, "sim.grasp"))
