@@ -15,6 +15,7 @@ from .options import (
     grasp_option,
     lift_options,
     out_options,
+    states_option,
 )
 from .output import EXIT_OK, emit, warn
 from .values import (
@@ -194,13 +195,7 @@ def _sweep_grid(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--mg", type=numbers(0.0, MAX_FORCE), default=None, help="object weights (N) (default: the grasp's)"
     )
-    p.add_argument(
-        "--states",
-        type=integer(2, MAX_STATES, hint="state indices are --state-indices"),
-        default=30,
-        metavar="N",
-        help="number of states along the lift",
-    )
+    states_option(p, hint="state indices are --state-indices")
     p.add_argument(
         "--state-indices",
         type=integers(0, MAX_STATES - 1),

@@ -127,6 +127,17 @@ def hand_option(
     p.add_argument("--hand", default="default", help=help)
 
 
+def states_option(p: argparse.ArgumentParser, *, hint: str = "") -> None:
+    """``--states N``: the number of states along the lift (``hint``: added to its error)."""
+    p.add_argument(
+        "--states",
+        type=integer(2, MAX_STATES, hint=hint),
+        default=30,
+        metavar="N",
+        help="number of states along the lift",
+    )
+
+
 def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> None:
     """The scripted lift of ``replay``: grasp, hand, friction, weight, states, contacts, reading."""
     grasp_option(p, default="case2")
@@ -143,13 +154,7 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
         default=None,
         help="object weight (N) (default: the grasp's, 1 for case2)",
     )
-    p.add_argument(
-        "--states",
-        type=integer(2, MAX_STATES),
-        default=30,
-        metavar="N",
-        help="number of states along the lift",
-    )
+    states_option(p)
     p.add_argument(
         "--stop-margin",
         type=fraction,

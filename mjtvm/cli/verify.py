@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, grasp_option, out_options
+from .options import Parser, grasp_option, out_options, states_option
 from .output import EXIT_OK
 from .values import (
     CONTACTS,
@@ -53,13 +53,7 @@ def verify_parser() -> argparse.ArgumentParser:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
-    p.add_argument(
-        "--states",
-        type=integer(2, MAX_STATES),
-        default=30,
-        metavar="N",
-        help="number of states along the lift",
-    )
+    states_option(p)
     p.add_argument(
         "--stride",
         type=integer(1, MAX_STATES),
