@@ -21,6 +21,7 @@ import multiprocessing
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -180,37 +181,12 @@ def verify_state(
                 object_body=ob,
             )
             top = min(b.value + 0.01, 2.0)
-            fail = rollout(
-                model,
-                lift.qpos[index],
-                witness_drive(
-                    state,
-                    0,
-                    l,
-                    alpha,
-                    top,
-                    witness=witness,  # type: ignore[arg-type]
-                    vertex=res.witnesses[0][l],
-                ),
-                settings=settings,
-                object_body=ob,
-            )
-            chk = rollout(
-                model,
-                lift.qpos[index],
-                witness_drive(
-                    state,
-                    0,
-                    l,
-                    alpha,
-                    check_s,
-                    witness=witness,  # type: ignore[arg-type]
-                    vertex=res.witnesses[0][l],
-                ),
-                settings=settings,
-                object_body=ob,
-            )
-            one = witness_drive(state, 0, l, alpha, 1.0, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
+            # The witness drive of pair (0, l) at a scale of alpha: past the bisection, at the
+            # check's scale, and at alpha itself for the inertial demand.
+            drive = partial(witness_drive, state, 0, l, alpha, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
+            fail = rollout(model, lift.qpos[index], drive(top), settings=settings, object_body=ob)
+            chk = rollout(model, lift.qpos[index], drive(check_s), settings=settings, object_body=ob)
+            one = drive(1.0)
             demand = inertial_demand(model, lift.qpos[index], one, object_body=ob)
             j = int(np.argmax(demand))
             row.update(
