@@ -39,6 +39,7 @@ from .bounds import (
 from .contacts import Contact
 from .files import atomic_write
 from .operation_range import OperationRange
+from .schema import schema_problem
 
 __all__ = ["SCHEMA", "GraspState", "dump_state", "load_state", "parse_state", "state_to_dict"]
 
@@ -342,7 +343,7 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
     """
     if isinstance(source, Mapping):
         check_json_tree(source)
-        return parse_state(source)
+        return _gated(source)
     if isinstance(source, (bytes, bytearray)):
         text = _decode(bytes(source), "the state")
     elif isinstance(source, str) and source.lstrip().startswith("{"):
@@ -373,7 +374,17 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
     except ValueError as e:  # an integer literal of more than 4300 digits (int_max_str_digits)
         raise StateError("", f"malformed JSON: {str(e).split(':')[0]}") from e
     check_json_tree(data)
-    return parse_state(data)
+    return _gated(data)
+
+
+def _gated(data: Mapping[str, Any]) -> GraspState:
+    """The state, refused where ``state.schema.json`` refuses it (:mod:`mjtvm.core.schema`):
+    the field checks word the refusal when they see it; the schema has the last word."""
+    problem = schema_problem("state", data)
+    state = parse_state(data)
+    if problem is not None:
+        raise StateError(*problem)
+    return state
 
 
 def state_to_dict(state: GraspState) -> dict[str, Any]:

@@ -1,10 +1,12 @@
 """The shipped JSON Schema of ``mjtvm.state/1`` (``mjtvm/data/schema/state.schema.json``):
-every shipped state passes it, and the schema and ``load_state`` agree on invalid documents."""
+every shipped state passes it, and ``load_state`` refuses exactly what it refuses, plus the
+rules a schema cannot express (docs/state-format.md, "What only the loader checks")."""
 
 from __future__ import annotations
 
 import copy
 import json
+import re
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -159,3 +161,86 @@ def test_the_documented_example_is_valid(validator):
     assert result.status == (("optimal",) * 4,)
     assert result.alpha[0, 0] > 1.0 and result.alpha[0, 3] > 1.0
     assert result.alpha[0, 1] == 0.0 and result.alpha[0, 2] == 0.0 and result.tvmmp == 0.0
+
+
+# The rules only the loader checks (docs/state-format.md), as the loader words them.
+BEYOND_SCHEMA = re.compile(
+    r"(one per joint|one column per joint|rows of equal length|unit vector|"
+    r"the origin \[0, 0\] must be a vertex|not down-closed|not convex|repeated vertex|winding|"
+    r"tangent plane|orthogonal|non-zero|unique|finite)"
+)
+VALUES: list[Any] = [
+    "x",
+    0,
+    -1,
+    0.5,
+    2,
+    16.0,
+    1e300,
+    True,
+    None,
+    [],
+    {},
+    [0, 0, 0],
+    [[0, 0], [1, 0], [0, 2]],
+    "S",
+    "D",
+]
+EXTRA = {"slide_direction": [1, 0, 0], "preload": 1.0, "mu": 0.5, "zzz": 1, "friction_edges": 8}
+
+
+def _paths(node: Any, path: tuple[Any, ...] = ()) -> Any:
+    """Every key, and the first and last item of every list (the rest are alike)."""
+    yield path
+    items: Any = node.items() if isinstance(node, dict) else ()
+    if isinstance(node, list):
+        items = [(i, node[i]) for i in sorted({0, len(node) - 1}) if node]
+    for key, value in items:
+        yield from _paths(value, (*path, key))
+
+
+def _mutations(doc: dict[str, Any]) -> Any:
+    for path in _paths(doc):
+        node: Any = doc
+        for key in path:
+            node = node[key]
+        parents = []
+        if path:
+            for value in [*VALUES, "<deleted>"]:
+                out = copy.deepcopy(doc)
+                parent = out
+                for key in path[:-1]:
+                    parent = parent[key]
+                if value == "<deleted>":
+                    del parent[path[-1]]
+                else:
+                    parent[path[-1]] = copy.deepcopy(value)
+                parents.append(out)
+        if isinstance(node, dict):
+            for key, value in EXTRA.items():
+                if key not in node:
+                    out = copy.deepcopy(doc)
+                    target = out
+                    for k in path:
+                        target = target[k]
+                    target[key] = value
+                    parents.append(out)
+        yield from parents
+
+
+@pytest.mark.parametrize("name", ["pinch.json", "case1-s"])
+def test_load_state_refuses_what_the_schema_refuses_and_only_beyond_it_more(validator, name):
+    doc = example(name) if name.endswith(".json") else json.loads(json.dumps(export_state(name)))
+    counts = {"both accept": 0, "both refuse": 0, "beyond": 0}
+    for mutated in _mutations(doc):
+        schema_accepts = not list(validator.iter_errors(mutated))
+        try:
+            load_state(mutated)
+        except StateError as e:
+            assert "\n" not in str(e), str(e)
+            assert not schema_accepts or BEYOND_SCHEMA.search(e.problem), f"only the loader refuses: {e}"
+            counts["beyond" if schema_accepts else "both refuse"] += 1
+        else:
+            assert schema_accepts, "only the schema refuses"
+            counts["both accept"] += 1
+    assert min(counts.values()) > 0, counts

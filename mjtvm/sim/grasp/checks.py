@@ -58,10 +58,13 @@ class GraspError(ModelError):
         The grasp file (or ``"grasp"`` for a mapping).
     field
         The offending field, e.g. ``"contacts[2].geom"``.
+    beyond_schema
+        True when the broken rule is one JSON Schema cannot state
+        (:data:`mjtvm.sim.grasp.validate.BEYOND_SCHEMA`): the schema accepts the document.
     """
 
-    def __init__(self, file: str, field: str, problem: str) -> None:
-        self.file, self.field = file, field
+    def __init__(self, file: str, field: str, problem: str, *, beyond_schema: bool = False) -> None:
+        self.file, self.field, self.beyond_schema = file, field, beyond_schema
         super().__init__(f"{file}: {field}" if field else file, problem)
 
 
@@ -73,6 +76,10 @@ class _Checker:
 
     def fail(self, field: str, problem: str) -> GraspError:
         return GraspError(self.file, field, problem)
+
+    def beyond(self, field: str, problem: str) -> GraspError:
+        """A rule of :data:`~mjtvm.sim.grasp.validate.BEYOND_SCHEMA` broken."""
+        return GraspError(self.file, field, problem, beyond_schema=True)
 
     def table(
         self, value: Any, field: str, allowed: set[str], required: Sequence[str] = ()
@@ -140,7 +147,7 @@ class _Checker:
         for k, v in value.items():
             lo, hi = self.vector(v, f"{field}.{key_of(k)}", 2)
             if not lo < hi:
-                raise self.fail(f"{field}.{key_of(k)}", f"expected low < high, got [{lo:g}, {hi:g}]")
+                raise self.beyond(f"{field}.{key_of(k)}", f"expected low < high, got [{lo:g}, {hi:g}]")
             out[str(k)] = (lo, hi)
         return out
 
@@ -172,7 +179,7 @@ def _check_text(doc: Mapping[str, Any], c: _Checker) -> None:
     while stack:
         node, field, depth = stack.pop()
         if depth > MAX_DEPTH and isinstance(node, (Mapping, list)):  # also a mapping that holds itself
-            raise c.fail(field, f"nested deeper than {MAX_DEPTH} levels")
+            raise c.beyond(field, f"nested deeper than {MAX_DEPTH} levels")
         if isinstance(node, Mapping):
             for key, value in node.items():
                 name = f"{field}.{key_of(key)}" if field else key_of(key)
@@ -186,11 +193,11 @@ def _check_text(doc: Mapping[str, Any], c: _Checker) -> None:
 
 def _check_string(text: str, field: str, c: _Checker, what: str) -> None:
     if "\0" in text:
-        raise c.fail(field, f"expected a {what} without NUL characters, got {text[:40]!r}")
+        raise c.beyond(field, f"expected a {what} without NUL characters, got {text[:40]!r}")
     try:
         text.encode("utf-8")
     except UnicodeEncodeError as e:
-        raise c.fail(
+        raise c.beyond(
             field,
             f"expected a {what} of valid Unicode text, got a lone surrogate {text[e.start]!r} in {text[:40]!r}",
         ) from e
@@ -222,7 +229,7 @@ def _shape(
                 raise c.fail(f"{field}.{key}", "only with shape (a body to add)")
         return {"shape": None, "size": None, "mass": None} if mass else {}
     shape = t["shape"]
-    if shape not in shapes:
+    if not isinstance(shape, str) or shape not in shapes:
         raise c.fail(f"{field}.shape", f"expected one of {', '.join(shapes)}, got {shape!r}")
     n = shapes[shape]
     size = t.get("size")
@@ -245,7 +252,7 @@ def _quaternion(c: _Checker, value: Any, field: str) -> list[float]:
     q = c.vector(value, field, 4)
     norm = math.sqrt(sum(x * x for x in q))
     if abs(norm - 1.0) > 1e-6:
-        raise c.fail(field, f"expected a unit quaternion (w, x, y, z), got norm {norm:.6g}")
+        raise c.beyond(field, f"expected a unit quaternion (w, x, y, z), got norm {norm:.6g}")
     return [x / norm for x in q]
 
 
@@ -317,7 +324,7 @@ def _contacts(c: _Checker, value: Any) -> list[dict[str, Any]]:
                 raise c.fail(f"{field}.slide", "only an S contact has a slide direction")
             s["slide"] = c.vector(s["slide"], f"{field}.slide", 3)
             if math.sqrt(sum(x * x for x in s["slide"])) < 1e-12:
-                raise c.fail(f"{field}.slide", "expected a non-zero direction")
+                raise c.beyond(f"{field}.slide", "expected a non-zero direction")
         out.append(s)
     return out
 
@@ -332,7 +339,7 @@ def _refs(c: _Checker, value: Any) -> dict[str, Any]:
         raise c.fail("refs.mg", "given with weight = false")
     wrenches = c.vectors(t["wrenches"], "refs.wrenches", 6) if "wrenches" in t else [[0.0] * 6]
     if not weight and not any(any(w) for w in wrenches):
-        raise c.fail("refs", "no weight and no non-zero wrench: the REFS would be the origin only")
+        raise c.beyond("refs", "no weight and no non-zero wrench: the REFS would be the origin only")
     return {"weight": weight, "mg": mg, "wrenches": wrenches}
 
 
@@ -360,9 +367,10 @@ def _ranges(c: _Checker, value: Any) -> dict[str, dict[str, Any]]:
             t["speed_limit"] = c.number(t["speed_limit"], f"{field}.speed_limit", positive=True)
         elif source == "actuator":
             raise c.fail(f"{field}.speed_limit", "required with actuator (joint speed limit, rad/s)")
-        if source in ("dcmotor", "actuator") and not (t[source] is True or isinstance(t[source], str)):
+        named = isinstance(t[source], str) and 0 < len(t[source]) <= 1000
+        if source in ("dcmotor", "actuator") and not (t[source] is True or named):
             raise c.fail(f"{field}.{source}", f"expected true or an actuator name, got {_kind(t[source])}")
-        if source == "datasheet" and not isinstance(t["datasheet"], (str, Mapping)):
+        if source == "datasheet" and not (named or isinstance(t["datasheet"], Mapping)):
             raise c.fail(f"{field}.datasheet", "expected a datasheet name, a JSON path or a table")
         if source == "polygon":
             t["polygon"] = c.vectors(t["polygon"], f"{field}.polygon", 2)
@@ -379,12 +387,12 @@ def _lift(c: _Checker, value: Any) -> dict[str, Any]:
     if "direction" in t:
         d = c.vector(t["direction"], "lift.direction", 3)
         if math.sqrt(sum(x * x for x in d)) < 1e-12:
-            raise c.fail("lift.direction", "expected a non-zero direction")
+            raise c.beyond("lift.direction", "expected a non-zero direction")
         out["direction"] = d
     if "twist" in t:
         w = c.vector(t["twist"], "lift.twist", 6)
         if not any(w):
-            raise c.fail("lift.twist", "expected a non-zero twist")
+            raise c.beyond("lift.twist", "expected a non-zero twist")
         out["twist"] = w
     if "poses" in t:
         poses = t["poses"]

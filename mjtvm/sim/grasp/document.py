@@ -5,8 +5,9 @@ its structure field by field: unknown keys, wrong types, missing or conflicting 
 (one of ``keyframe``/``qpos``/``ik``; one selector per contact; one source per operation
 range) and numbers outside the format's bounds are each one :class:`GraspError` naming the
 field, e.g. ``contacts[2].type: expected one of F, L, S, D, got 'X'``. Names are checked
-against the model later (:mod:`mjtvm.sim.grasp.file`). The JSON Schema
-``mjtvm/data/schema/grasp.schema.json`` states the same structure for other tools.
+against the model later (:mod:`mjtvm.sim.grasp.file`). Every document is also validated
+with the JSON Schema ``mjtvm/data/schema/grasp.schema.json`` (:mod:`mjtvm.sim.grasp.validate`):
+what it refuses is refused, so the two cannot disagree.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from .checks import (
     _refs,
     _shape,
 )
+from .validate import schema_problem
 
 __all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
 
@@ -91,11 +93,28 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
     """
     raw, path, label = _load(source)
     c = _Checker(label)
-    _check_text(raw, c)
+    _check_text(raw, c)  # before the validator: it recurses as deep as the document
+    problem = schema_problem(raw)
+    doc = _normalise(raw, path, c)  # its refusal is worded for the field; the schema refuses too
+    if problem is not None:
+        raise GraspError(label, *problem)
+    return doc, path
+
+
+def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[str, Any]:
+    """The document with defaults filled in, selectors and numbers normalised; a
+    :class:`GraspError` for the first field breaking the format."""
     doc = dict(c.table(raw, "", _TOP, _REQUIRED))
     if doc["schema"] != SCHEMA:
         raise c.fail("schema", f"expected {SCHEMA!r}, got {doc['schema']!r}")
     doc["name"] = c.string(doc.get("name", path.stem if path else "grasp"), "name")
+    for key in ("description", "source"):
+        if key in doc and not isinstance(doc[key], str):
+            raise c.fail(key, f"expected a string, got {_kind(doc[key])}")
+    if "notes" in doc and not (
+        isinstance(doc["notes"], list) and all(isinstance(n, str) for n in doc["notes"])
+    ):
+        raise c.fail("notes", f"expected a list of strings, got {_kind(doc['notes'])}")
     doc["model"] = c.string(doc["model"], "model")
     obj = c.table(
         doc["object"], "object", {"body", "position", "quaternion", "shape", "size", "mass"}, ("body",)
@@ -153,7 +172,7 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
     if doc["joint_losses"] not in ("fold", "ignore"):
         raise c.fail("joint_losses", f"expected 'fold' or 'ignore', got {doc['joint_losses']!r}")
     doc["lift"] = _lift(c, doc["lift"]) if "lift" in doc else None
-    return doc, path
+    return doc
 
 
 def _toml_value(value: Any) -> str:

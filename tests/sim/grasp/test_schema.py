@@ -1,5 +1,6 @@
 """The shipped JSON Schema of ``mjtvm.grasp/1`` (``mjtvm/data/schema/grasp.schema.json``): every
-shipped grasp file passes it, and the schema and the loader agree on invalid documents."""
+shipped grasp file passes it, and the loader refuses exactly what it refuses, plus the rules of
+``BEYOND_SCHEMA`` (each refusal of those marked ``beyond_schema``)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import pytest
 
 from mjtvm.sim.grasp.document import GraspError, read_grasp_document
 from mjtvm.sim.grasp.file import shipped_grasps
+from mjtvm.sim.grasp.validate import schema_problem
 
 SCHEMA = json.loads(
     resources.files("mjtvm.data").joinpath("schema", "grasp.schema.json").read_text(encoding="utf-8")
@@ -136,3 +138,148 @@ def test_the_documented_example_is_a_valid_grasp_document(validator: jsonschema.
 def test_the_test_hands_grasps_pass_the_schema(validator: jsonschema.Draft202012Validator, name: str) -> None:
     doc = tomllib.loads(shipped_grasps()[name].read_text(encoding="utf-8"))
     assert not list(validator.iter_errors(doc))
+
+
+def _documented_example() -> dict[str, Any]:
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[3] / "docs" / "grasp-format.md").read_text(encoding="utf-8")
+    start = text.index("```toml\n") + len("```toml\n")
+    return tomllib.loads(text[start : text.index("```\n", start)])
+
+
+# Values of every JSON type, the format's enums and edges, put in place of every field.
+VALUES: list[Any] = [
+    "x",
+    "",
+    "F",
+    "S",
+    "D",
+    "plane",
+    "box",
+    "shared",
+    0,
+    -1,
+    0.5,
+    16.0,
+    1e300,
+    True,
+    False,
+    [],
+    {},
+    [0, 0, 0],
+    [1, 0, 0, 0],
+    [0, 0, 0, 0],
+    [[1, 0], [0, 1]],
+    [1, 2, 3, 4, 5, 6],
+    {"geom": "g"},
+]
+# Keys added to every table: each is legal somewhere, and paired with another key in some rule.
+EXTRA = {
+    "slide": [1, 0, 0],
+    "preload": 1.0,
+    "mg": 1.0,
+    "gear_ratio": 2.0,
+    "speed_limit": 1.0,
+    "twist": [0, 0, 1, 0, 0, 0],
+    "direction": [0, 0, 1],
+    "size": [0.01],
+    "mass": 0.1,
+    "shape": "box",
+    "point": [0, 0, 0],
+    "zzz": 1,
+}
+
+
+def _paths(node: Any, path: tuple[Any, ...] = ()) -> Any:
+    yield path
+    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+    for key, value in items:
+        yield from _paths(value, (*path, key))
+
+
+def _mutations(doc: dict[str, Any]) -> Any:
+    for path in _paths(doc):
+        node: Any = doc
+        for key in path:
+            node = node[key]
+        if path:
+            for value in VALUES:
+                yield _set(doc, path, value)
+            out = copy.deepcopy(doc)
+            parent = out
+            for key in path[:-1]:
+                parent = parent[key]
+            del parent[path[-1]]
+            yield out
+        if isinstance(node, dict):
+            for key, value in EXTRA.items():
+                if key not in node:
+                    yield _set(doc, (*path, key), value)
+
+
+@pytest.mark.parametrize("name", ["documented example", "allegro-ik", "case2"])
+def test_the_loader_refuses_what_the_schema_refuses_and_only_beyond_it_more(
+    validator: jsonschema.Draft202012Validator, name: str
+) -> None:
+    """Every field of a document set to values of every type, deleted, or joined by a key of a
+    paired rule: the schema refuses => the loader refuses (a one-line message naming a field);
+    the loader refuses a document the schema accepts only for a rule of ``BEYOND_SCHEMA``."""
+    doc = _documented_example() if name == "documented example" else _case(name)
+    counts = {"both accept": 0, "both refuse": 0, "beyond": 0}
+    for mutated in _mutations(doc):
+        schema_accepts = not list(validator.iter_errors(mutated))
+        try:
+            read_grasp_document(mutated)
+        except GraspError as e:
+            assert "\n" not in str(e) and e.field, str(e)
+            assert schema_accepts is not True or e.beyond_schema, f"only the loader refuses: {e}"
+            counts["beyond" if schema_accepts else "both refuse"] += 1
+        else:
+            assert schema_accepts, f"only the schema refuses: {schema_problem(mutated)}"
+            counts["both accept"] += 1
+    assert min(counts.values()) > 0, counts  # each side of the rule was exercised
+
+
+def _case(name: str) -> dict[str, Any]:
+    return tomllib.loads(shipped_grasps()[name].read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "field", "problem"),
+    [
+        (
+            ("object",),
+            {"body": "object", "shape": "box", "size": [0.1], "mass": 1.0},
+            "object.size",
+            "expected 3 to 3 items, got a list of 1",
+        ),
+        (("contacts", 0, "type"), "X", "contacts[0].type", "expected one of F, L, S, D, got the string 'X'"),
+        (
+            ("contacts", 0, "colour"),
+            "red",
+            "contacts[0].colour",
+            "unknown key (allowed: body, geom, geom_id, mu, preload, slide, type)",
+        ),
+        (("mu",), -1, "mu", "expected a number >= 0, got the number -1"),
+        (("friction_edges",), "16", "friction_edges", "expected an integer, got the string '16'"),
+        (("configuration",), {}, "configuration", "expected exactly one of keyframe / qpos / ik"),
+        (
+            ("refs",),
+            {"weight": False, "mg": 1.0, "wrenches": [[0, 0, 1, 0, 0, 0]]},
+            "refs.mg",
+            "only with weight = true",
+        ),
+        (
+            ("lift",),
+            {"direction": [0, 0, 1], "twist": [0, 0, 1, 0, 0, 0]},
+            "lift",
+            "expected at most one of direction, poses, twist",
+        ),
+        (("object",), {"body": "object", "shape": "box"}, "object.size", "required with shape"),
+    ],
+)
+def test_the_schema_error_is_worded_as_one_field_and_its_problem(
+    path: tuple[Any, ...], value: Any, field: str, problem: str
+) -> None:
+    assert schema_problem(_set(_case2(), path, value)) == (field, problem)
