@@ -16,6 +16,7 @@ import pytest
 
 from mjtvm import StateError, load_state, tvmmp
 from mjtvm.sim.paper_hand.scenario import export_state
+from tests.support.mutate import mutations
 
 DATA = resources.files("mjtvm.data")
 EXAMPLES = sorted(p.name for p in DATA.joinpath("examples").iterdir() if p.name.endswith(".json"))
@@ -189,50 +190,11 @@ VALUES: list[Any] = [
 EXTRA = {"slide_direction": [1, 0, 0], "preload": 1.0, "mu": 0.5, "zzz": 1, "friction_edges": 8}
 
 
-def _paths(node: Any, path: tuple[Any, ...] = ()) -> Any:
-    """Every key, and the first and last item of every list (the rest are alike)."""
-    yield path
-    items: Any = node.items() if isinstance(node, dict) else ()
-    if isinstance(node, list):
-        items = [(i, node[i]) for i in sorted({0, len(node) - 1}) if node]
-    for key, value in items:
-        yield from _paths(value, (*path, key))
-
-
-def _mutations(doc: dict[str, Any]) -> Any:
-    for path in _paths(doc):
-        node: Any = doc
-        for key in path:
-            node = node[key]
-        parents = []
-        if path:
-            for value in [*VALUES, "<deleted>"]:
-                out = copy.deepcopy(doc)
-                parent = out
-                for key in path[:-1]:
-                    parent = parent[key]
-                if value == "<deleted>":
-                    del parent[path[-1]]
-                else:
-                    parent[path[-1]] = copy.deepcopy(value)
-                parents.append(out)
-        if isinstance(node, dict):
-            for key, value in EXTRA.items():
-                if key not in node:
-                    out = copy.deepcopy(doc)
-                    target = out
-                    for k in path:
-                        target = target[k]
-                    target[key] = value
-                    parents.append(out)
-        yield from parents
-
-
 @pytest.mark.parametrize("name", ["pinch.json", "case1-s"])
 def test_load_state_refuses_what_the_schema_refuses_and_only_beyond_it_more(validator, name):
     doc = example(name) if name.endswith(".json") else json.loads(json.dumps(export_state(name)))
     counts = {"both accept": 0, "both refuse": 0, "beyond": 0}
-    for mutated in _mutations(doc):
+    for mutated in mutations(doc, VALUES, EXTRA, every_item=False):
         schema_accepts = not list(validator.iter_errors(mutated))
         try:
             load_state(mutated)

@@ -16,6 +16,7 @@ import pytest
 from mjtvm.sim.grasp.document import GraspError, read_grasp_document
 from mjtvm.sim.grasp.file import shipped_grasps
 from mjtvm.sim.grasp.validate import schema_problem
+from tests.support.mutate import mutations
 
 SCHEMA = json.loads(
     resources.files("mjtvm.data").joinpath("schema", "grasp.schema.json").read_text(encoding="utf-8")
@@ -191,33 +192,6 @@ EXTRA = {
 }
 
 
-def _paths(node: Any, path: tuple[Any, ...] = ()) -> Any:
-    yield path
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
-    for key, value in items:
-        yield from _paths(value, (*path, key))
-
-
-def _mutations(doc: dict[str, Any]) -> Any:
-    for path in _paths(doc):
-        node: Any = doc
-        for key in path:
-            node = node[key]
-        if path:
-            for value in VALUES:
-                yield _set(doc, path, value)
-            out = copy.deepcopy(doc)
-            parent = out
-            for key in path[:-1]:
-                parent = parent[key]
-            del parent[path[-1]]
-            yield out
-        if isinstance(node, dict):
-            for key, value in EXTRA.items():
-                if key not in node:
-                    yield _set(doc, (*path, key), value)
-
-
 @pytest.mark.parametrize("name", ["documented example", "allegro-ik", "case2"])
 def test_the_loader_refuses_what_the_schema_refuses_and_only_beyond_it_more(
     validator: jsonschema.Draft202012Validator, name: str
@@ -227,7 +201,7 @@ def test_the_loader_refuses_what_the_schema_refuses_and_only_beyond_it_more(
     the loader refuses a document the schema accepts only for a rule of ``BEYOND_SCHEMA``."""
     doc = _documented_example() if name == "documented example" else _case(name)
     counts = {"both accept": 0, "both refuse": 0, "beyond": 0}
-    for mutated in _mutations(doc):
+    for mutated in mutations(doc, VALUES, EXTRA):
         schema_accepts = not list(validator.iter_errors(mutated))
         try:
             read_grasp_document(mutated)
