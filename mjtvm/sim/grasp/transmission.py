@@ -1,0 +1,236 @@
+r"""How a MuJoCo model drives and constrains a grasp state's joints: actuator moments,
+equality-constraint rows, joint damping (issue 23, the extended eq. 19).
+
+At a configuration after ``mj_forward`` MuJoCo holds everything the extended torque balance
+needs, over the state's joints (their dofs, in the state's order, ``M`` of them):
+
+* ``actuator_moment`` (``A x nv``, sparse in MuJoCo >= 3.2: ``moment_rownnz``,
+  ``moment_rowadr``, ``moment_colind``): actuator ``a``'s speed is ``s_a = moment[a] @ qd``
+  (MuJoCo's ``actuator_velocity``) and its force ``u_a`` (``actuator_force``) gives the joint
+  torques ``moment.T @ u``. The moment includes the actuator's ``gear`` and, for a tendon
+  transmission, the tendon's coefficients (fixed tendon) or moment arms (spatial tendon), so
+  ``u`` and ``s`` are in the actuator's own units (N m and rad/s for a hinge or a fixed tendon
+  of hinges with coefficient 1; N and m/s for a slide).
+* the equality constraints' rows of MuJoCo's constraint Jacobian ``efc_J`` (the rows with
+  ``efc_type == mjCNSTR_EQUALITY``): a ``<joint>`` coupling gives one row ``e1 - p'(q2) e2``
+  (``p`` its polynomial, linearised at the state), a ``<connect>`` three rows (the difference
+  of the two bodies' point Jacobians at the anchor), a ``<weld>`` six, a ``<tendon>`` one.
+  The kinematic constraint is ``J_eq qd = 0``; its forces ``J_eq^T lambda`` (``lambda`` free)
+  enter the balance. Rows that are zero over the state's dofs are dropped (a connect whose
+  linkage moves in a plane has one), as are equalities that touch none of them.
+* ``dof_damping``: the passive torque ``-b qd`` of each joint (N m s/rad).
+
+An actuator drives the hand when its moment is nonzero on a state joint. The joint springs
+(``qfrc_spring``) are not part of the transmission: they are in the state's bias torque
+(gravity plus passive springs at the state, :func:`~mjtvm.sim.grasp.state.grasp_state`).
+
+:func:`is_independent` says when none of this is needed: every driving actuator a joint
+transmission on its own state joint, no equality, as in the paper (eq. 19 unchanged).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import ModelError
+from .touch import without_round_off
+
+__all__ = ["ModelTransmission", "actuator_moments", "equality_rows", "is_independent", "model_transmission"]
+
+_OBJ = mujoco.mjtObj
+_ROW_AXES = {
+    int(mujoco.mjtEq.mjEQ_CONNECT): ("x", "y", "z"),
+    int(mujoco.mjtEq.mjEQ_WELD): ("x", "y", "z", "rx", "ry", "rz"),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class ModelTransmission:
+    r"""The transmission of a model over a state's joints (module docstring).
+
+    Attributes
+    ----------
+    joint_names
+        The state's joints, ``M`` of them, in order (the columns below).
+    actuator_names, actuator_ids
+        The ``A`` actuators with a nonzero moment on a state joint, in model order (an
+        unnamed actuator is ``"actuator#<id>"``).
+    moment
+        ``(A, M)``: actuator speed ``s = moment @ qd``; joint torques ``moment.T @ u``.
+    constraint_names
+        One per row of ``constraint_jacobian``: the equality's name (``"equality#<id>"``
+        when unnamed), with ``"/x"`` ... ``"/rz"`` for the rows of a connect or weld.
+    constraint_jacobian
+        ``(C, M)``: ``J_eq qd = 0``, ``C`` may be 0.
+    joint_damping
+        ``(M,)`` N m s/rad (N s/m for a slide): MuJoCo's ``dof_damping``.
+    """
+
+    joint_names: tuple[str, ...]
+    actuator_names: tuple[str, ...]
+    actuator_ids: tuple[int, ...]
+    moment: NDArray[np.float64]
+    constraint_names: tuple[str, ...]
+    constraint_jacobian: NDArray[np.float64]
+    joint_damping: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        m = len(self.joint_names)
+        a, c = len(self.actuator_names), len(self.constraint_names)
+        if self.moment.shape != (a, m) or len(self.actuator_ids) != a:
+            raise ModelError("moment", f"expected shape ({a}, {m}), got {self.moment.shape}")
+        if self.constraint_jacobian.shape != (c, m):
+            raise ModelError(
+                "constraint_jacobian", f"expected shape ({c}, {m}), got {self.constraint_jacobian.shape}"
+            )
+        if self.joint_damping.shape != (m,):
+            raise ModelError("joint_damping", f"expected shape ({m},), got {self.joint_damping.shape}")
+        for x in (self.moment, self.constraint_jacobian, self.joint_damping):
+            x.setflags(write=False)
+
+
+def _name(model: mujoco.MjModel, kind: mujoco.mjtObj, i: int, what: str) -> str:
+    return mujoco.mj_id2name(model, kind, i) or f"{what}#{i}"
+
+
+def _outside(row: NDArray[np.float64], dofs: Sequence[int] | NDArray[np.int64]) -> list[int]:
+    """Dofs outside ``dofs`` where ``row`` is not (relatively) zero."""
+    scale = float(np.max(np.abs(row), initial=0.0))
+    inside = set(int(d) for d in dofs)
+    return [int(d) for d in np.flatnonzero(np.abs(row) > 1e-12 * scale) if int(d) not in inside]
+
+
+def _dof_names(model: mujoco.MjModel, dofs: Sequence[int]) -> str:
+    joints = sorted({int(model.dof_jntid[d]) for d in dofs})
+    return ", ".join(repr(_name(model, _OBJ.mjOBJ_JOINT, j, "joint")) for j in joints)
+
+
+def actuator_moments(
+    model: mujoco.MjModel, data: mujoco.MjData, dofs: Sequence[int]
+) -> tuple[list[int], NDArray[np.float64]]:
+    r"""The actuators with a nonzero moment on ``dofs`` and their moment rows ``(A, len(dofs))``.
+
+    ``data`` after ``mj_forward`` (or ``mj_transmission``). Dense ``(nu, nv)`` from MuJoCo's
+    sparse ``actuator_moment`` with ``mju_sparse2dense``.
+
+    Raises
+    ------
+    ModelError
+        An actuator that drives a state joint and also a joint outside ``dofs`` (its force
+        would move a joint the state holds still): the message names both.
+    """
+    dense = np.zeros((model.nu, model.nv))
+    if model.nu:
+        mujoco.mju_sparse2dense(
+            dense, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
+        )
+    cols = np.asarray(dofs, dtype=int)
+    ids = [a for a in range(model.nu) if np.any(dense[a, cols] != 0.0)]
+    for a in ids:
+        if extra := _outside(dense[a], cols):
+            raise ModelError(
+                f"actuator {_name(model, _OBJ.mjOBJ_ACTUATOR, a, 'actuator')!r}",
+                f"drives state joints and also {_dof_names(model, extra)}: add them to the state's joints",
+            )
+    return ids, np.array([without_round_off(dense[a, cols]) for a in ids]).reshape(len(ids), len(cols))
+
+
+def equality_rows(
+    model: mujoco.MjModel, data: mujoco.MjData, dofs: Sequence[int]
+) -> tuple[list[str], NDArray[np.float64]]:
+    r"""Names and rows ``(C, len(dofs))`` of the active equality constraints on ``dofs``.
+
+    The rows of ``efc_J`` with ``efc_type == mjCNSTR_EQUALITY`` (dense or sparse, as
+    ``mj_isSparse`` says), restricted to ``dofs``; rows zero there are dropped.
+
+    Raises
+    ------
+    ModelError
+        An equality that constrains a state joint together with a dof outside ``dofs`` (e.g. a
+        linkage joint missing from the joints list): the message names the constraint and the
+        joints to add.
+    """
+    cols = np.asarray(dofs, dtype=int)
+    nefc = int(data.nefc)
+    if nefc == 0:
+        return [], np.zeros((0, len(cols)))
+    if mujoco.mj_isSparse(model):
+        efc = np.zeros((nefc, model.nv))
+        mujoco.mju_sparse2dense(efc, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
+    else:
+        efc = np.array(data.efc_J[: nefc * model.nv]).reshape(nefc, model.nv)
+    names, rows = [], []
+    seen: dict[int, int] = {}
+    for r in range(nefc):
+        if int(data.efc_type[r]) != int(mujoco.mjtConstraint.mjCNSTR_EQUALITY):
+            continue
+        e = int(data.efc_id[r])
+        k = seen.get(e, 0)
+        seen[e] = k + 1
+        row = efc[r]
+        if not np.any(row[cols] != 0.0):
+            continue
+        label = _name(model, _OBJ.mjOBJ_EQUALITY, e, "equality")
+        if extra := _outside(row, cols):
+            raise ModelError(
+                f"equality {label!r}",
+                f"constrains state joints together with {_dof_names(model, extra)}: "
+                "add them to the state's joints",
+            )
+        axes = _ROW_AXES.get(int(model.eq_type[e]))
+        names.append(f"{label}/{axes[k]}" if axes else label)
+        rows.append(row[cols])
+    kept = [i for i, row in enumerate(rows) if np.any(without_round_off(row) != 0.0)]
+    jac = np.array([without_round_off(rows[i]) for i in kept]).reshape(len(kept), len(cols))
+    return [names[i] for i in kept], jac
+
+
+def model_transmission(
+    model: mujoco.MjModel, data: mujoco.MjData, joint_ids: Sequence[int]
+) -> ModelTransmission:
+    r"""The transmission over the joints ``joint_ids`` (hinge or slide) at ``data``.
+
+    ``data`` after ``mj_forward`` at the configuration (velocities do not matter: the moment
+    and the constraint rows depend on positions only).
+
+    Raises
+    ------
+    ModelError
+        As :func:`actuator_moments` and :func:`equality_rows`.
+    """
+    dofs = [int(model.jnt_dofadr[j]) for j in joint_ids]
+    ids, moment = actuator_moments(model, data, dofs)
+    names, jac = equality_rows(model, data, dofs)
+    return ModelTransmission(
+        joint_names=tuple(_name(model, _OBJ.mjOBJ_JOINT, j, "joint") for j in joint_ids),
+        actuator_names=tuple(_name(model, _OBJ.mjOBJ_ACTUATOR, a, "actuator") for a in ids),
+        actuator_ids=tuple(ids),
+        moment=moment,
+        constraint_names=tuple(names),
+        constraint_jacobian=jac,
+        joint_damping=np.array([float(model.dof_damping[d]) for d in dofs]),
+    )
+
+
+def is_independent(model: mujoco.MjModel, transmission: ModelTransmission, joint_ids: Sequence[int]) -> bool:
+    r"""True when the paper's independent joints apply (eq. 19 as written): no equality row, and
+    the driving actuators are joint transmissions on distinct state joints, one per joint at most.
+
+    Then the state keeps one operation range per joint (``transmission=None``), read as today.
+    """
+    if transmission.constraint_names:
+        return False
+    driven: set[int] = set()
+    for a in transmission.actuator_ids:
+        if int(model.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT):
+            return False
+        j = int(model.actuator_trnid[a, 0])
+        if j in driven or j not in set(joint_ids):
+            return False
+        driven.add(j)
+    return True
