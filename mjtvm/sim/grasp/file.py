@@ -21,6 +21,7 @@ World frame, SI units.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
@@ -37,7 +38,6 @@ from .document import read_grasp_document
 from .loaded import Grasp, weight_refs
 from .model import (
     build_spec,
-    coupling,
     geom_labels,
     joint_id,
     load_model,
@@ -46,16 +46,19 @@ from .model import (
     set_object_pose,
     suggest,
 )
-from .ranges import joint_ranges
+from .ranges import actuator_ranges, joint_ranges
 from .state import (
     geom_id,
     geom_label,
     subtree,
 )
+from .transmission import ModelTransmission, coupled_joints, is_independent, model_transmission
 
 __all__ = ["Grasp", "build_spec", "export_state", "load_grasp", "models_root", "shipped_grasps"]
 
 _OBJ = mujoco.mjtObj
+#: m or rad: an equality constraint's residual (``efc_pos``) allowed at a grasp's configuration.
+CONSTRAINT_TOLERANCE = 1e-6
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
@@ -170,6 +173,53 @@ def _default_joints(model: mujoco.MjModel, geoms: Sequence[int]) -> tuple[str, .
     )
 
 
+def _drive(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    doc: Mapping[str, Any],
+    joints: tuple[str, ...],
+    path: Path | None,
+    file: str,
+) -> tuple[ModelTransmission | None, dict[str, Any], dict[str, Any]]:
+    """The transmission (``None`` for the paper's independent joints) and the operation ranges
+    and motors: per joint without a transmission, per actuator with one."""
+    ids = [int(model.joint(n).id) for n in joints]
+    losses = doc["joint_losses"] == "fold"
+    base = path.parent if path else None
+    try:
+        transmission = model_transmission(model, data, ids)
+    except ModelError as e:
+        raise GraspError(file, "joints", str(e)) from e
+    for name, residual in zip(transmission.constraint_names, transmission.constraint_residual, strict=True):
+        if abs(residual) > CONSTRAINT_TOLERANCE:
+            raise GraspError(
+                file,
+                "configuration",
+                f"equality {name.split('/')[0]!r} is violated by {abs(residual):.3g} (m or rad) at the "
+                f"configuration (tolerance {CONSTRAINT_TOLERANCE:g}): give joint values that close it "
+                "(the IK moves joints independently and does not enforce equalities)",
+            )
+    if is_independent(model, transmission, ids):
+        ranges, motors = joint_ranges(model, joints, doc["ranges"], base=base, file=file, losses=losses)
+        return None, ranges, motors
+    if not transmission.actuator_names:
+        raise GraspError(file, "joints", "no actuator drives any of the joints")
+    dofs = tuple(int(model.jnt_dofadr[j]) for j in ids)
+    ranges, motors = actuator_ranges(
+        model,
+        transmission.actuator_names,
+        transmission.moment,
+        dofs,
+        doc["ranges"],
+        base=base,
+        file=file,
+        losses=losses,
+    )
+    if not losses:  # "ignore": the motors' ranges as they are, no damping in the balance either
+        transmission = replace(transmission, joint_damping=np.zeros(len(joints)))
+    return transmission, ranges, motors
+
+
 def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     r"""Read a grasp file (TOML or JSON), a shipped grasp by name, or a document; build the grasp.
 
@@ -237,21 +287,11 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
         if not joints:
             raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
-    if why := coupling(model, joints):
-        raise GraspError(
-            file,
-            "joints",
-            f"{why}: mjtvm's state has independent joints (each its own torque and speed, eq. 19), "
-            "so a hand with coupled joints or closed chains (e.g. a linkage gripper) is not supported",
+        joints = tuple(
+            mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j)
+            for j in coupled_joints(model, data, [int(model.joint(n).id) for n in joints])
         )
-    ranges, motors = joint_ranges(
-        model,
-        joints,
-        doc["ranges"],
-        base=path.parent if path else None,
-        file=file,
-        losses=doc["joint_losses"] == "fold",
-    )
+    transmission, ranges, motors = _drive(model, data, doc, joints, path, file)
     rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
     if rvds is not None:
         rvds.setflags(write=False)
@@ -276,6 +316,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         ignored_geoms=tuple(ignored),
         operation_ranges=MappingProxyType(ranges),
         motors=MappingProxyType(motors),
+        transmission=transmission,
         contact_tolerance=float(doc["contact_tolerance"]),
         friction_edges=int(doc["friction_edges"]),
         slip=str(doc["slip"]),

@@ -40,6 +40,7 @@ from .state import (
     object_weight,
     subtree,
 )
+from .transmission import ModelTransmission
 
 __all__ = ["Grasp"]
 
@@ -93,6 +94,11 @@ class Grasp:
     preloads
         Geom label -> minimum normal force (N) of its contact (a ``contacts`` entry's
         ``preload``; ``mjtvm.state/1``'s contact ``preload``).
+    transmission
+        How the model's actuators and equality constraints drive the joints
+        (:mod:`mjtvm.sim.grasp.transmission`), or ``None`` for the paper's independent joints
+        (each joint its own actuator, no equality). With a transmission, ``operation_ranges``
+        and ``motors`` are keyed by actuator name, in the actuator's units.
     """
 
     name: str
@@ -118,6 +124,7 @@ class Grasp:
     ik_bounds: Mapping[str, tuple[float, float]]
     document: Mapping[str, Any]
     preloads: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    transmission: ModelTransmission | None = None
 
     def with_options(
         self, *, mg: float | None = None, mu: float | Mapping[str, float] | None = None

@@ -17,7 +17,6 @@ from .state import subtree
 __all__ = [
     "build_spec",
     "collision_bits",
-    "coupling",
     "geom_labels",
     "joint_id",
     "load_model",
@@ -181,51 +180,6 @@ def set_object_pose(
 def object_geoms(model: mujoco.MjModel, ob: int) -> list[int]:
     inside = subtree(model, ob)
     return [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in inside]
-
-
-def coupling(model: mujoco.MjModel, joints: Sequence[str]) -> str | None:
-    r"""How the model couples the state's joints, or ``None``: an active ``<equality>`` on one of
-    them (a joint or tendon equality through it, or a connect or weld on a body it moves).
-
-    The TVM state has independent joints (eq. 19: one torque and one speed per joint, each in
-    its operation range); a closed chain or a coupling adds constraints (and forces) that the
-    paper's LPs do not have, so the measure of such a hand would be wrong: it is refused.
-    """
-    ids = {int(model.joint(j).id) for j in joints}
-    moved = {int(model.jnt_bodyid[j]) for j in ids}
-    below = set().union(*(subtree(model, b) for b in moved)) if moved else set()
-    t = mujoco.mjtEq
-    for e in range(model.neq):
-        if not model.eq_active0[e]:
-            continue
-        kind, a, b = int(model.eq_type[e]), int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
-        label = mujoco.mj_id2name(model, _OBJ.mjOBJ_EQUALITY, e) or f"#{e}"
-        if kind == int(t.mjEQ_JOINT) and ({a, b} & ids):
-            names = [mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j) for j in (a, b) if j >= 0]
-            return f"equality {label!r} couples joints {', '.join(map(repr, names))}"
-        if kind == int(t.mjEQ_TENDON):
-            for tendon in (a, b):
-                if tendon < 0:
-                    continue
-                for w in range(
-                    int(model.tendon_adr[tendon]), int(model.tendon_adr[tendon] + model.tendon_num[tendon])
-                ):
-                    if (
-                        int(model.wrap_type[w]) == int(mujoco.mjtWrap.mjWRAP_JOINT)
-                        and int(model.wrap_objid[w]) in ids
-                    ):
-                        return f"equality {label!r} constrains a tendon through joint {model.joint(int(model.wrap_objid[w])).name!r}"
-        if kind in (int(t.mjEQ_CONNECT), int(t.mjEQ_WELD)):
-            objtype = int(model.eq_objtype[e])
-            bodies = (
-                {a, b}
-                if objtype == int(_OBJ.mjOBJ_BODY)
-                else {int(model.site_bodyid[x]) for x in (a, b) if x >= 0}
-            )
-            if bodies & below:
-                names = [mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, x) or f"#{x}" for x in sorted(bodies)]
-                return f"equality {label!r} closes a chain between bodies {', '.join(map(repr, names))}"
-    return None
 
 
 def geom_labels(model: mujoco.MjModel) -> list[str]:

@@ -36,7 +36,7 @@ from .actuator import operation_range_from_actuator
 from .checks import GraspError, key_of
 from .dcmotor import DCMotor
 
-__all__ = ["joint_ranges", "range_entry"]
+__all__ = ["actuator_ranges", "joint_ranges", "range_entry"]
 
 _DATASHEET_KEYS = (
     "no_load_speed_rpm",
@@ -234,4 +234,122 @@ def joint_ranges(
                 )
             except MjtvmError as e:
                 raise fail(f"its damping and friction loss in the model leave no range: {e}") from e
+    return out, motors
+
+
+def _actuator_box(model: mujoco.MjModel, a: int, speed: float, fail: Any) -> OperationRange:
+    """|u| <= forcerange (capped by a driven joint's actuatorfrcrange / gear), |s| <= speed."""
+    if not model.actuator_forcelimited[a]:
+        raise fail("the actuator has no forcerange: give a datasheet or a polygon instead")
+    lo, hi = model.actuator_forcerange[a]
+    force = min(-float(lo), float(hi))
+    gear = abs(float(model.actuator_gear[a, 0]))
+    if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT) and gear > 0:
+        j = int(model.actuator_trnid[a, 0])
+        if model.jnt_actfrclimited[j]:
+            flo, fhi = model.jnt_actfrcrange[j]
+            force = min(force, -float(flo) / gear, float(fhi) / gear)
+    if not force > 0:
+        raise fail("the actuator's force range gives no positive force")
+    return OperationRange(np.array([[0.0, 0.0], [force, 0.0], [force, speed], [0.0, speed]]))
+
+
+def _output_to_actuator(rng: OperationRange, gear: float) -> OperationRange:
+    """A range at the gear's output (the joint or tendon the actuator pulls on) in the actuator's
+    units: MuJoCo's moment includes the gear g, so u = tau / g and s = g x speed."""
+    if gear == 1.0:
+        return rng
+    return OperationRange(np.asarray(rng.vertices) * np.array([1.0 / gear, gear]))
+
+
+def actuator_ranges(
+    model: mujoco.MjModel,
+    actuators: tuple[str, ...],
+    moment: np.ndarray,
+    dofs: tuple[int, ...],
+    ranges: Mapping[str, Mapping[str, Any]],
+    *,
+    base: Path | None,
+    file: str,
+    losses: bool = True,
+) -> tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]:
+    r"""Operation range and motor of each actuator of a transmission (``docs/grasp-format.md``).
+
+    The ranges are in the actuator's units: force ``u`` (MuJoCo's ``actuator_force``) and speed
+    ``s = moment @ qd`` (``actuator_velocity``), the moment including the actuator's gear. An
+    entry is found by the actuator's name as a joint's is (:func:`range_entry`). Sources:
+
+    * ``actuator = true`` (or the actuator's own name) + ``speed_limit``: the box
+      ``|u| <= forcerange``, ``|s| <= speed_limit`` (s in the actuator's units: for the Shadow
+      hand's tendon J2 + J1, rad/s of J2 + J1). **An approximation**, as for a joint;
+    * ``datasheet``: the motor behind its ``gear_ratio``, the range at the gear's output, i.e.
+      at the joint or tendon MuJoCo's actuator pulls on; converted with the actuator's MuJoCo
+      gear g (u = tau / g, s = g x speed; g = 1 for the shipped hands);
+    * ``dcmotor``: the model's ``<dcmotor>`` (a joint transmission only), converted likewise;
+    * ``polygon``: vertices (|u|, |s|) as given.
+
+    With ``losses`` the joints' friction loss is folded into the actuators' ranges: each
+    actuator's force must overcome ``max_j frictionloss_j / |moment_aj|`` over the joints it
+    moves (exact for an actuator on one joint, conservative for a tendon); a passive joint's
+    friction loss has no actuator to take it and is not modelled. The joints' damping is not
+    folded: the transmission carries it (``b qd`` in the balance).
+
+    Raises
+    ------
+    GraspError
+        An actuator without an entry (the message says how to give one), an ``actuator``
+        entry naming another actuator, or an entry that does not fit the model.
+    """
+    out: dict[str, OperationRange] = {}
+    motors: dict[str, DCMotor | str | None] = {}
+    hint = _HINT.replace("dcmotor = true, ", "dcmotor = true (joint actuators), ")
+    for row, name in enumerate(actuators):
+        found = range_entry(ranges, name)
+        if found is None:
+            raise GraspError(
+                file,
+                f"ranges.{key_of(name)}",
+                "no operation range for this actuator (the hand has coupled joints: ranges are "
+                "keyed by actuator): " + hint.format(j=json.dumps(name)[1:-1]),
+            )
+        key, entry = found
+        a = int(model.actuator(name).id)
+
+        def fail(problem: str, key: str = key, name: str = name) -> GraspError:
+            return GraspError(file, f"ranges.{key_of(key)}", f"actuator {name!r}: {problem}")
+
+        gear = abs(float(model.actuator_gear[a, 0])) or 1.0
+        source = entry["source"]
+        if source in ("actuator", "dcmotor") and isinstance(entry[source], str) and entry[source] != name:
+            raise fail(
+                f"names actuator {entry[source]!r}: a range keyed by actuator takes true or its own name"
+            )
+        if source == "dcmotor":
+            try:
+                out[name] = _output_to_actuator(operation_range_from_actuator(model, a), gear)
+            except MjtvmError as e:
+                raise fail(str(e)) from e
+            motors[name] = None
+        elif source == "datasheet":
+            rng, motors[name] = _from_datasheet(entry, base, fail)
+            out[name] = _output_to_actuator(rng, gear)
+        elif source == "actuator":
+            out[name] = _actuator_box(model, a, float(entry["speed_limit"]), fail)
+            motors[name] = "its range is an actuator's force range and a speed limit, not a motor model"
+        else:
+            try:
+                out[name] = OperationRange(np.array(entry["polygon"], dtype=float))
+            except MjtvmError as e:
+                raise fail(f"polygon: {e}") from e
+            motors[name] = "its range is a polygon, not a motor model"
+        arms = np.abs(moment[row])
+        friction = max(
+            (float(model.dof_frictionloss[d]) / r for d, r in zip(dofs, arms, strict=True) if r > 0),
+            default=0.0,
+        )
+        if losses and friction > 0:
+            try:
+                out[name] = out[name].with_losses(damping=0.0, friction=friction)
+            except MjtvmError as e:
+                raise fail(f"the friction loss of its joints in the model leaves no range: {e}") from e
     return out, motors

@@ -40,7 +40,16 @@ from numpy.typing import NDArray
 from ...errors import ModelError
 from .touch import without_round_off
 
-__all__ = ["ModelTransmission", "actuator_moments", "equality_rows", "is_independent", "model_transmission"]
+__all__ = [
+    "ModelTransmission",
+    "actuator_moments",
+    "coupled_joints",
+    "dense_efc_jacobian",
+    "dense_moment",
+    "equality_rows",
+    "is_independent",
+    "model_transmission",
+]
 
 _OBJ = mujoco.mjtObj
 _ROW_AXES = {
@@ -67,6 +76,9 @@ class ModelTransmission:
         when unnamed), with ``"/x"`` ... ``"/rz"`` for the rows of a connect or weld.
     constraint_jacobian
         ``(C, M)``: ``J_eq qd = 0``, ``C`` may be 0.
+    constraint_residual
+        ``(C,)`` MuJoCo's ``efc_pos`` of each row at the configuration (m or rad): how far the
+        configuration is from satisfying the constraint (0 for a closed linkage).
     joint_damping
         ``(M,)`` N m s/rad (N s/m for a slide): MuJoCo's ``dof_damping``.
     """
@@ -77,6 +89,7 @@ class ModelTransmission:
     moment: NDArray[np.float64]
     constraint_names: tuple[str, ...]
     constraint_jacobian: NDArray[np.float64]
+    constraint_residual: NDArray[np.float64]
     joint_damping: NDArray[np.float64]
 
     def __post_init__(self) -> None:
@@ -88,9 +101,13 @@ class ModelTransmission:
             raise ModelError(
                 "constraint_jacobian", f"expected shape ({c}, {m}), got {self.constraint_jacobian.shape}"
             )
+        if self.constraint_residual.shape != (c,):
+            raise ModelError(
+                "constraint_residual", f"expected shape ({c},), got {self.constraint_residual.shape}"
+            )
         if self.joint_damping.shape != (m,):
             raise ModelError("joint_damping", f"expected shape ({m},), got {self.joint_damping.shape}")
-        for x in (self.moment, self.constraint_jacobian, self.joint_damping):
+        for x in (self.moment, self.constraint_jacobian, self.constraint_residual, self.joint_damping):
             x.setflags(write=False)
 
 
@@ -110,12 +127,33 @@ def _dof_names(model: mujoco.MjModel, dofs: Sequence[int]) -> str:
     return ", ".join(repr(_name(model, _OBJ.mjOBJ_JOINT, j, "joint")) for j in joints)
 
 
+def dense_moment(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """``(nactuator, nv)`` MuJoCo's sparse ``actuator_moment`` as a dense matrix (``mju_sparse2dense``)."""
+    dense = np.zeros((model.nactuator, model.nv))
+    if model.nactuator:
+        mujoco.mju_sparse2dense(
+            dense, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
+        )
+    return dense
+
+
+def dense_efc_jacobian(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """``(nefc, nv)`` the constraint Jacobian ``efc_J``, dense or sparse as ``mj_isSparse`` says."""
+    nefc = int(data.nefc)
+    if mujoco.mj_isSparse(model):
+        efc = np.zeros((nefc, model.nv))
+        if nefc:
+            mujoco.mju_sparse2dense(efc, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
+        return efc
+    return np.array(data.efc_J[: nefc * model.nv]).reshape(nefc, model.nv)
+
+
 def actuator_moments(
     model: mujoco.MjModel, data: mujoco.MjData, dofs: Sequence[int]
 ) -> tuple[list[int], NDArray[np.float64]]:
     r"""The actuators with a nonzero moment on ``dofs`` and their moment rows ``(A, len(dofs))``.
 
-    ``data`` after ``mj_forward`` (or ``mj_transmission``). Dense ``(nu, nv)`` from MuJoCo's
+    ``data`` after ``mj_forward`` (or ``mj_transmission``). Dense ``(nactuator, nv)`` from MuJoCo's
     sparse ``actuator_moment`` with ``mju_sparse2dense``.
 
     Raises
@@ -124,13 +162,9 @@ def actuator_moments(
         An actuator that drives a state joint and also a joint outside ``dofs`` (its force
         would move a joint the state holds still): the message names both.
     """
-    dense = np.zeros((model.nu, model.nv))
-    if model.nu:
-        mujoco.mju_sparse2dense(
-            dense, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
-        )
+    dense = dense_moment(model, data)
     cols = np.asarray(dofs, dtype=int)
-    ids = [a for a in range(model.nu) if np.any(dense[a, cols] != 0.0)]
+    ids = [a for a in range(model.nactuator) if np.any(dense[a, cols] != 0.0)]
     for a in ids:
         if extra := _outside(dense[a], cols):
             raise ModelError(
@@ -142,8 +176,9 @@ def actuator_moments(
 
 def equality_rows(
     model: mujoco.MjModel, data: mujoco.MjData, dofs: Sequence[int]
-) -> tuple[list[str], NDArray[np.float64]]:
-    r"""Names and rows ``(C, len(dofs))`` of the active equality constraints on ``dofs``.
+) -> tuple[list[str], NDArray[np.float64], NDArray[np.float64]]:
+    r"""Names, rows ``(C, len(dofs))`` and residuals ``(C,)`` (``efc_pos``) of the active
+    equality constraints on ``dofs``.
 
     The rows of ``efc_J`` with ``efc_type == mjCNSTR_EQUALITY`` (dense or sparse, as
     ``mj_isSparse`` says), restricted to ``dofs``; rows zero there are dropped.
@@ -158,13 +193,9 @@ def equality_rows(
     cols = np.asarray(dofs, dtype=int)
     nefc = int(data.nefc)
     if nefc == 0:
-        return [], np.zeros((0, len(cols)))
-    if mujoco.mj_isSparse(model):
-        efc = np.zeros((nefc, model.nv))
-        mujoco.mju_sparse2dense(efc, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
-    else:
-        efc = np.array(data.efc_J[: nefc * model.nv]).reshape(nefc, model.nv)
-    names, rows = [], []
+        return [], np.zeros((0, len(cols))), np.zeros(0)
+    efc = dense_efc_jacobian(model, data)
+    names, rows, residuals = [], [], []
     seen: dict[int, int] = {}
     for r in range(nefc):
         if int(data.efc_type[r]) != int(mujoco.mjtConstraint.mjCNSTR_EQUALITY):
@@ -185,9 +216,10 @@ def equality_rows(
         axes = _ROW_AXES.get(int(model.eq_type[e]))
         names.append(f"{label}/{axes[k]}" if axes else label)
         rows.append(row[cols])
+        residuals.append(float(data.efc_pos[r]))
     kept = [i for i, row in enumerate(rows) if np.any(without_round_off(row) != 0.0)]
     jac = np.array([without_round_off(rows[i]) for i in kept]).reshape(len(kept), len(cols))
-    return [names[i] for i in kept], jac
+    return [names[i] for i in kept], jac, np.array([residuals[i] for i in kept])
 
 
 def model_transmission(
@@ -205,7 +237,7 @@ def model_transmission(
     """
     dofs = [int(model.jnt_dofadr[j]) for j in joint_ids]
     ids, moment = actuator_moments(model, data, dofs)
-    names, jac = equality_rows(model, data, dofs)
+    names, jac, residual = equality_rows(model, data, dofs)
     return ModelTransmission(
         joint_names=tuple(_name(model, _OBJ.mjOBJ_JOINT, j, "joint") for j in joint_ids),
         actuator_names=tuple(_name(model, _OBJ.mjOBJ_ACTUATOR, a, "actuator") for a in ids),
@@ -213,6 +245,7 @@ def model_transmission(
         moment=moment,
         constraint_names=tuple(names),
         constraint_jacobian=jac,
+        constraint_residual=residual,
         joint_damping=np.array([float(model.dof_damping[d]) for d in dofs]),
     )
 
@@ -234,3 +267,35 @@ def is_independent(model: mujoco.MjModel, transmission: ModelTransmission, joint
             return False
         driven.add(j)
     return True
+
+
+def coupled_joints(model: mujoco.MjModel, data: mujoco.MjData, joint_ids: Sequence[int]) -> list[int]:
+    r"""``joint_ids`` and, repeatedly, every hinge or slide joint an equality or a driving actuator
+    ties to them (a linkage's other joints, the other joints of a tendon), in model order.
+
+    A grasp file without a ``joints`` list starts from the joints that move its contacts; a
+    linkage's driver and coupler move no contact but carry the motion. ``data`` after
+    ``mj_forward``.
+    """
+    scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    efc = dense_efc_jacobian(model, data)
+    rows = [
+        *dense_moment(model, data),
+        *(efc[r] for r in range(len(efc)) if int(data.efc_type[r]) == equality),
+    ]
+    chosen = {int(j) for j in joint_ids}
+    grown = True
+    while grown:
+        grown = False
+        dofs = {int(model.jnt_dofadr[j]) for j in chosen}
+        for row in rows:
+            nz = {int(d) for d in np.flatnonzero(row)}
+            if not nz & dofs:
+                continue
+            for d in nz - dofs:
+                j = int(model.dof_jntid[d])
+                if int(model.jnt_type[j]) in scalar and j not in chosen:
+                    chosen.add(j)
+                    grown = True
+    return sorted(chosen)

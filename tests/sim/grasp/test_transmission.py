@@ -65,7 +65,7 @@ def test_shadow_actuator_speeds_are_the_derivative_of_actuator_lengths(seed: int
     tendon J2 + J1 for rh_A_FFJ0), for a random posture and joint velocity."""
     model, data, joints = _shadow(seed)
     t = model_transmission(model, data, joints)
-    assert len(t.actuator_names) == model.nu == 11
+    assert len(t.actuator_names) == model.nactuator == 11
     assert t.constraint_jacobian.shape == (0, 13)
     dofs = [int(model.jnt_dofadr[j]) for j in joints]
     qd = np.random.default_rng(seed + 10).normal(size=len(dofs))

@@ -1,0 +1,131 @@
+"""Grasp files of hands with coupled joints (issue 23): the Shadow hand's tendon-driven distal
+joints and the Robotiq 2F-85's linkages. Their transmissions, their operation ranges keyed by
+actuator (values derived by hand from the MJCF), the joints a linkage adds, and the errors."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mjtvm.sim.grasp.checks import GraspError
+from mjtvm.sim.grasp.file import load_grasp
+
+MODELS = Path(__file__).resolve().parents[3] / "models"
+SHADOW = MODELS / "shadow_hand" / "shadow_hand-sphere.toml"
+F85 = MODELS / "robotiq_2f85" / "robotiq_2f85-sphere.toml"
+
+
+def _doc(path: Path) -> dict[str, Any]:
+    doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    doc["model"] = str(path.parent / doc["model"])
+    return doc
+
+
+def test_shadow_grasp_is_driven_by_its_actuators() -> None:
+    """13 joints, 11 actuators (two on the tendons J2 + J1), no constraint; each range the box
+    |u| <= forcerange - frictionloss (1 - 0.01 N m; the thumb base 3 - 0.01, THJ4 2 - 0.01),
+    |s| <= 2 rad/s; damping 0.05 N m s/rad on every joint in the transmission."""
+    grasp = load_grasp(SHADOW)
+    t = grasp.transmission
+    assert t is not None
+    assert len(grasp.joints) == 13 and len(t.actuator_names) == 11 and t.constraint_names == ()
+    assert set(grasp.operation_ranges) == set(t.actuator_names)
+    torque = {name: 0.99 for name in t.actuator_names} | {"rh_A_THJ5": 2.99, "rh_A_THJ4": 1.99}
+    for name, rng in grasp.operation_ranges.items():
+        np.testing.assert_allclose(
+            rng.vertices, [[0, 0], [torque[name], 0], [torque[name], 2.0], [0, 2.0]], rtol=1e-15
+        )
+    np.testing.assert_array_equal(t.joint_damping, np.full(13, 0.05))
+    assert [c.split("#")[0] for c in grasp.contact_types] == ["ff_distal", "mf_distal", "th_distal"]
+
+
+def test_f85_grasp_has_one_actuator_and_the_linkage_rows() -> None:
+    grasp = load_grasp(F85)
+    t = grasp.transmission
+    assert t is not None
+    assert t.actuator_names == ("fingers_actuator",)
+    np.testing.assert_array_equal(
+        grasp.operation_ranges["fingers_actuator"].vertices, [[0, 0], [5, 0], [5, 1.25], [0, 1.25]]
+    )
+    assert len(t.constraint_names) == 5
+    assert np.max(np.abs(t.constraint_residual)) < 1e-15  # the file's joint values close the linkage
+
+
+def test_f85_default_joints_follow_the_linkage() -> None:
+    """Without a joints list the contacts' chains give the spring links and followers; the
+    connects and the driver coupling add the couplers and drivers: all eight, in model order."""
+    doc = _doc(F85)
+    del doc["joints"]
+    grasp = load_grasp(doc)
+    assert grasp.joints == tuple(_doc(F85)["joints"])
+
+
+def test_a_joint_left_out_of_a_linkage_is_named() -> None:
+    doc = _doc(F85)
+    doc["joints"] = [j for j in doc["joints"] if j != "left_coupler_joint"]
+    with pytest.raises(
+        GraspError,
+        match=r"joints: equality 'left_linkage': constrains state joints together with 'left_coupler_joint'",
+    ):
+        load_grasp(doc)
+
+
+def test_actuator_ranges_errors_name_the_actuator() -> None:
+    doc = _doc(F85)
+    doc["ranges"] = {"right_driver_joint": {"actuator": True, "speed_limit": 1.0}}
+    with pytest.raises(
+        GraspError,
+        match=r"ranges\.fingers_actuator: no operation range for this actuator \(the hand has coupled joints",
+    ):
+        load_grasp(doc)
+    doc["ranges"] = {"fingers_actuator": {"actuator": "other", "speed_limit": 1.0}}
+    with pytest.raises(
+        GraspError, match=r"ranges\.fingers_actuator: actuator 'fingers_actuator': names actuator 'other'"
+    ):
+        load_grasp(doc)
+    doc["ranges"] = {"*": {"dcmotor": True}}
+    with pytest.raises(GraspError, match=r"ranges\.\*: actuator 'fingers_actuator': .*is not a <dcmotor>"):
+        load_grasp(doc)
+
+
+def test_actuator_polygon_and_datasheet_ranges() -> None:
+    """A polygon is taken as given (actuator units); a datasheet behind its gear ratio is the
+    range at the tendon (MuJoCo gear 1): the maxon RE 25 at 100:1 gives 100 x 26.3 mN m
+    continuous (the friction loss of the drivers is 0 in the model)."""
+    doc = _doc(F85)
+    doc["ranges"] = {"fingers_actuator": {"polygon": [[0, 0], [2, 0], [0, 3]]}}
+    np.testing.assert_array_equal(
+        load_grasp(doc).operation_ranges["fingers_actuator"].vertices, [[0, 0], [2, 0], [0, 3]]
+    )
+    doc["ranges"] = {"fingers_actuator": {"datasheet": "maxon_re25_20w", "gear_ratio": 100}}
+    rng = load_grasp(doc).operation_ranges["fingers_actuator"]
+    assert float(np.max(rng.vertices[:, 0])) == pytest.approx(100 * 0.0263, rel=0.05)
+
+
+def test_joint_losses_ignore_drops_damping_and_friction() -> None:
+    doc = _doc(SHADOW)
+    doc["joint_losses"] = "ignore"
+    grasp = load_grasp(doc)
+    assert grasp.transmission is not None
+    np.testing.assert_array_equal(grasp.transmission.joint_damping, np.zeros(13))
+    assert float(np.max(grasp.operation_ranges["rh_A_FFJ0"].vertices[:, 0])) == 1.0
+
+
+def test_independent_hands_have_no_transmission() -> None:
+    """The paper's hands, the Allegro and the gripper3 keep per-joint ranges, unchanged."""
+    for name in ("allegro/allegro-sphere.toml", "gripper3/gripper3-box.toml", "paper_hand/case1.toml"):
+        grasp = load_grasp(MODELS / name)
+        assert grasp.transmission is None
+        assert set(grasp.operation_ranges) == set(grasp.joints)
+
+
+def test_shipped_documents_are_unchanged_by_loading() -> None:
+    doc = _doc(F85)
+    before = copy.deepcopy(doc)
+    load_grasp(doc)
+    assert doc == before
