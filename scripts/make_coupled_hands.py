@@ -1,0 +1,84 @@
+"""The 2F-85 grasp configuration of models/robotiq_2f85/robotiq_2f85-sphere.toml: the linkage
+closed exactly, the sphere touching both upper pads at their centres.
+
+For a driver angle theta the eight joints solve (Newton on central-difference Jacobians, to
+machine precision) the three equalities (two connects, the driver coupling) with both couplers
+at their stop (0 rad): each side's four-bar then has one solution. The pad's inner face (local
+-y of pad_box1, 4 mm from its centre) has a centre ``p`` and inward normal ``n``; a sphere on
+the gripper's axis touching it there has radius ``r = -p_y / n_y`` and centre ``p + r n``.
+theta is bisected until r = 25 mm. The Shadow hand's grasp is found by the grasp file's own IK.
+
+Usage::
+
+    python scripts/make_coupled_hands.py     # print the joint values and the sphere's centre
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+MODEL = Path(__file__).resolve().parents[1] / "models" / "robotiq_2f85" / "robotiq_2f85.xml"
+RADIUS = 0.025
+
+
+def closed_linkage(
+    model: mujoco.MjModel, data: mujoco.MjData, theta: float
+) -> tuple[NDArray[np.float64], float]:
+    """Joint values with both drivers at theta and both couplers at 0; the largest residual."""
+    couplers = [int(model.joint(f"{s}_coupler_joint").qposadr[0]) for s in ("right", "left")]
+    driver = int(model.joint("right_driver_joint").qposadr[0])
+
+    def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
+        data.qpos[:] = q
+        mujoco.mj_forward(model, data)
+        return np.array([*data.efc_pos[: data.ne], q[driver] - theta, *q[couplers]])
+
+    q = np.zeros(model.nq)
+    q[[int(model.joint(f"{s}_driver_joint").qposadr[0]) for s in ("right", "left")]] = theta
+    for _ in range(60):
+        r = residual(q)
+        if np.max(np.abs(r)) < 1e-15:
+            break
+        jac = np.zeros((len(r), model.nq))
+        for k in range(model.nq):
+            step = np.zeros(model.nq)
+            step[k] = 1e-7
+            jac[:, k] = (residual(q + step) - residual(q - step)) / 2e-7
+        q = q - np.linalg.lstsq(jac, r, rcond=None)[0]
+    return q, float(np.max(np.abs(residual(q))))
+
+
+def touching_sphere(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, NDArray[np.float64]]:
+    """Radius and centre of the sphere on the axis touching the right upper pad at its centre."""
+    g = int(model.geom("right_pad1").id)
+    rot = data.geom_xmat[g].reshape(3, 3)
+    normal = -rot[:, 1]
+    face = data.geom_xpos[g] + rot @ np.array([0.0, -float(model.geom_size[g, 1]), 0.0])
+    radius = -face[1] / normal[1]
+    return float(radius), face + radius * normal
+
+
+def main() -> None:
+    model = mujoco.MjModel.from_xml_path(str(MODEL))
+    data = mujoco.MjData(model)
+    lo, hi = 0.2, 0.5  # the radius falls as the gripper closes
+    for _ in range(60):
+        theta = (lo + hi) / 2
+        closed_linkage(model, data, theta)
+        if touching_sphere(model, data)[0] > RADIUS:
+            lo = theta
+        else:
+            hi = theta
+    q, worst = closed_linkage(model, data, theta)
+    radius, centre = touching_sphere(model, data)
+    print(f"theta {theta!r}  residual {worst:.3g}  radius {radius!r}  centre {centre.tolist()!r}")
+    for j in range(model.njnt):
+        print(f"{model.joint(j).name} = {float(q[model.jnt_qposadr[j]])!r}")
+
+
+if __name__ == "__main__":
+    main()
