@@ -1,12 +1,16 @@
 """The 2F-85 grasp configuration of models/robotiq_2f85/robotiq_2f85-sphere.toml: the linkage
-closed exactly, the sphere touching both upper pads at their centres.
+closed exactly, the sphere touching both lower pads at their centres.
 
 For a driver angle theta the eight joints solve (Newton on central-difference Jacobians, to
 machine precision) the three equalities (two connects, the driver coupling) with both couplers
-at their stop (0 rad): each side's four-bar then has one solution. The pad's inner face (local
--y of pad_box1, 4 mm from its centre) has a centre ``p`` and inward normal ``n``; a sphere on
-the gripper's axis touching it there has radius ``r = -p_y / n_y`` and centre ``p + r n``.
-theta is bisected until r = 25 mm. The Shadow hand's grasp is found by the grasp file's own IK.
+at :data:`COUPLER` (0.05 rad from their stop at 0, so that no joint limit holds the finger):
+each side's four-bar then has one solution. The lower pad's inner face (local -y of pad_box2,
+4 mm from its centre) has a centre ``p`` and inward normal ``n``; a sphere on the gripper's axis
+touching it there has radius ``r = -p_y / n_y`` and centre ``p + r n``. theta is bisected until
+r = 25 mm. Why the lower pads: a pinch on the upper pads with the couplers at their stop is
+held by the stop (the 2F-85's parallel mode), a force the state does not have (its LP finds no
+balance); on the lower pads the contacts, the actuator and the spring links balance each
+finger's two dofs. The Shadow hand's grasp is found by the grasp file's own IK.
 
 Usage::
 
@@ -23,19 +27,21 @@ from numpy.typing import NDArray
 
 MODEL = Path(__file__).resolve().parents[1] / "models" / "robotiq_2f85" / "robotiq_2f85.xml"
 RADIUS = 0.025
+COUPLER = -0.05  # rad, both couplers (range -1.57 to 0)
+PAD = "pad2"
 
 
 def closed_linkage(
     model: mujoco.MjModel, data: mujoco.MjData, theta: float
 ) -> tuple[NDArray[np.float64], float]:
-    """Joint values with both drivers at theta and both couplers at 0; the largest residual."""
+    """Joint values with both drivers at theta and both couplers at COUPLER; the largest residual."""
     couplers = [int(model.joint(f"{s}_coupler_joint").qposadr[0]) for s in ("right", "left")]
     driver = int(model.joint("right_driver_joint").qposadr[0])
 
     def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
         data.qpos[:] = q
         mujoco.mj_forward(model, data)
-        return np.array([*data.efc_pos[: data.ne], q[driver] - theta, *q[couplers]])
+        return np.array([*data.efc_pos[: data.ne], q[driver] - theta, *(q[couplers] - COUPLER)])
 
     q = np.zeros(model.nq)
     q[[int(model.joint(f"{s}_driver_joint").qposadr[0]) for s in ("right", "left")]] = theta
@@ -53,8 +59,8 @@ def closed_linkage(
 
 
 def touching_sphere(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, NDArray[np.float64]]:
-    """Radius and centre of the sphere on the axis touching the right upper pad at its centre."""
-    g = int(model.geom("right_pad1").id)
+    """Radius and centre of the sphere on the axis touching the right lower pad at its centre."""
+    g = int(model.geom(f"right_{PAD}").id)
     rot = data.geom_xmat[g].reshape(3, 3)
     normal = -rot[:, 1]
     face = data.geom_xpos[g] + rot @ np.array([0.0, -float(model.geom_size[g, 1]), 0.0])

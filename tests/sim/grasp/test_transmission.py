@@ -29,7 +29,7 @@ def _joint_ids(model: mujoco.MjModel, names: list[str] | None = None) -> list[in
 
 
 def _f85() -> tuple[mujoco.MjModel, mujoco.MjData, list[int]]:
-    """The 2F-85 at its grasp file's configuration (the linkage closed to 2e-16)."""
+    """The 2F-85 at its grasp file's configuration (the linkage closed to machine precision)."""
     model = mujoco.MjModel.from_xml_path(str(F85))
     data = mujoco.MjData(model)
     doc = tomllib.loads(F85_GRASP.read_text(encoding="utf-8"))
@@ -129,7 +129,7 @@ def test_f85_connect_rows_are_the_derivative_of_the_anchor_gap() -> None:
 
 
 def test_f85_four_bar_velocity_ratio() -> None:
-    """With the coupler at its stop (locked to the driver), each side is a four-bar: ground A-B
+    """With the coupler locked to the driver (qd = 0), each side is a four-bar: ground A-B
     (the driver's and the spring link's pivots), crank A-C (C the connect's anchor), coupler
     link C-D (D the follower's pivot) and rocker B-D. Rigid C-D gives
     (v_D - v_C) . (D - C) = 0 with v = w x r about the axis x: the spring link's rate per unit
@@ -147,7 +147,7 @@ def test_f85_four_bar_velocity_ratio() -> None:
         # qd = (driver 1, coupler 0, spring link r, follower f): solve for r and f.
         r, _ = np.linalg.solve(rows[:, [spr, fol]], -rows[:, drv])
         assert r == pytest.approx(ratio, rel=1e-12)
-        assert ratio == pytest.approx(1.0, abs=1e-3)  # nearly a parallelogram: the pads stay nearly parallel
+        assert 0.9 < ratio < 1.1  # close to a parallelogram: the rocker follows the crank
 
 
 def test_a_constraint_through_a_joint_outside_the_state_is_named() -> None:
