@@ -16,6 +16,7 @@ from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_bas
 from .core.operation_range import OperationRange, default_operation_range, load_motor_data
 from .core.state import GraspState
 from .core.state_file import dump_state, load_state, parse_state, state_to_dict
+from .core.transmission import Transmission
 from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .polytopes.tvms import TvmsResult, tvms
@@ -44,6 +45,7 @@ __all__ = [
     "SolverError",
     "StateError",
     "Timings",
+    "Transmission",
     "TvmmpResult",
     "TvmsResult",
     "Witness",
