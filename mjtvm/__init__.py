@@ -14,7 +14,9 @@ from ._lazy import lazy_attributes
 from .core.assembly import Assembly, assemble
 from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
 from .core.operation_range import OperationRange, default_operation_range, load_motor_data
-from .core.state import GraspState, dump_state, load_state, parse_state, state_to_dict
+from .core.state import GraspState
+from .core.state_file import dump_state, load_state, parse_state, state_to_dict
+from .core.transmission import Transmission
 from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .polytopes.tvms import TvmsResult, tvms
@@ -43,6 +45,7 @@ __all__ = [
     "SolverError",
     "StateError",
     "Timings",
+    "Transmission",
     "TvmmpResult",
     "TvmsResult",
     "Witness",

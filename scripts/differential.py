@@ -39,7 +39,8 @@ import numpy as np
 from tqdm import tqdm
 
 from mjtvm.core.reference import reference_tvmmp
-from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.state import GraspState
+from mjtvm.core.state_file import load_state
 from mjtvm.core.tvmmp import tvmmp
 
 # The test oracles live in tests/support, outside the installed package: import them from

@@ -12,7 +12,8 @@ import pytest
 from mjtvm import tvmmp
 from mjtvm.core.assembly import assemble
 from mjtvm.core.dynamic import pair_alpha
-from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.state import GraspState
+from mjtvm.core.state_file import load_state
 from mjtvm.errors import MjtvmError, ParamError, StateError
 from mjtvm.polytopes.budget import Limits
 from mjtvm.polytopes.tvms import tvms

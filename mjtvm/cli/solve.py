@@ -10,7 +10,8 @@ from pathlib import Path
 
 from ..core.bounds import MAX_FILE_BYTES
 from ..core.solvers import SOLVERS
-from ..core.state import GraspState, load_state
+from ..core.state import GraspState
+from ..core.state_file import load_state
 from ..core.tvmmp import tvmmp
 from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
@@ -159,7 +160,7 @@ def add_export_state(sub: Subparsers) -> None:
 
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
-    from ..core.state import state_to_dict
+    from ..core.state_file import state_to_dict
     from ..sim.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
     source = args.grasp_file or args.grasp

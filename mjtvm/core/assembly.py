@@ -20,6 +20,12 @@ Problem 1 can keep it as D free variables. The rows are
 
 Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
+
+With a :class:`~mjtvm.core.transmission.Transmission` ``tau_i`` holds the A actuator
+forces ``u_i`` and is followed by the C constraint forces ``eq_i`` (free); the torque rows
+read ``P^T u_i - J^T E lam_i + J_eq^T eq_i - b qd = g_f``, the operation ranges bound
+``(u_ia, P_a qd)``, and the C rows ``J_eq qd = 0`` come last. Without one every block is
+built as above (``P = I``), entry for entry.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from numpy.typing import NDArray
 from ..errors import ParamError
 from .contacts import force_generators, slide_unit, tangent_basis
 from .roundoff import drop_cancellation, drop_data_roundoff
+from .rows import Rows as _Rows
 from .state import GraspState
 
 __all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
@@ -66,49 +73,6 @@ def _product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float
     return drop_cancellation(a @ b, np.abs(a) @ np.abs(b))
 
 
-class _Coo:
-    """Accumulates (row, col, value) triplets block by block."""
-
-    def __init__(self) -> None:
-        self.rows: list[NDArray[np.int64]] = []
-        self.cols: list[NDArray[np.int64]] = []
-        self.vals: list[NDArray[np.float64]] = []
-
-    def add(self, row0: int, col0: int, block: NDArray[np.float64]) -> None:
-        block = np.atleast_2d(block)
-        # Only exact zeros are left out: which tiny entries are round-off depends on the
-        # scale of their row and column, decided after equilibration (solvers.scale_lp).
-        r, c = np.nonzero(block)
-        self.rows.append(r + row0)
-        self.cols.append(c + col0)
-        self.vals.append(block[r, c])
-
-    def add_entries(
-        self, rows: NDArray[np.int64], cols: NDArray[np.int64], values: NDArray[np.float64]
-    ) -> None:
-        keep = values != 0.0
-        self.rows.append(rows[keep])
-        self.cols.append(cols[keep])
-        self.vals.append(values[keep])
-
-    def build(self, shape: tuple[int, int]) -> sp.csc_matrix:
-        if not self.rows:
-            return sp.csc_matrix(shape)
-        rows, cols, vals = np.concatenate(self.rows), np.concatenate(self.cols), np.concatenate(self.vals)
-        # The blocks never overlap, so the canonical CSC is a sort by (column, row): built
-        # directly, it costs a tenth of scipy's COO conversion (Problem 2 assembles per state).
-        # Should an entry repeat, scipy sums the duplicates as before.
-        order = np.lexsort((rows, cols))
-        rows, cols = rows[order], cols[order]
-        if rows.size > 1 and np.any((np.diff(cols) == 0) & (np.diff(rows) == 0)):
-            return sp.csc_matrix((vals[order], (rows, cols)), shape=shape)
-        indptr = np.zeros(shape[1] + 1, dtype=np.int32)
-        np.cumsum(np.bincount(cols, minlength=shape[1]), out=indptr[1:])
-        out = sp.csc_matrix((vals[order], rows.astype(np.int32), indptr), shape=shape)
-        out.has_canonical_format = True
-        return out
-
-
 @dataclass(frozen=True, eq=False)
 class Assembly:
     r"""The constraint system ``row_lower <= A x + A_twist rdot <= row_upper`` of one state.
@@ -125,8 +89,9 @@ class Assembly:
     col_lower, col_upper
         ``(n,)`` variable bounds.
     blocks
-        Name -> ``slice`` of variables: ``lam[i]``, ``tau[i]`` per copy, ``qd``, ``rho``
-        and, in the literal form, ``tau_max``, ``tau_min``, ``qd_max``, ``qd_min``.
+        Name -> ``slice`` of variables: ``lam[i]``, ``tau[i]`` (and ``eq[i]`` with
+        constraints) per copy, ``qd``, ``rho`` and, in the literal form, ``tau_max``,
+        ``tau_min``, ``qd_max``, ``qd_min`` (per actuator).
     wrench_rows
         One ``slice`` of D rows per copy: the force-moment balance (eq. 20).
     torque_rows
@@ -182,54 +147,14 @@ class Assembly:
         return np.array([g @ lam[s] for g, s in zip(self.generators, self.generator_slices)])
 
 
-class _Rows:
-    """The rows of the system as they are appended: their triplets in ``A`` and ``A_twist``
-    and their bounds."""
-
-    def __init__(self) -> None:
-        self.coo, self.twist = _Coo(), _Coo()
-        self.lower: list[NDArray[np.float64]] = []
-        self.upper: list[NDArray[np.float64]] = []
-        self.groups: list[NDArray[np.int64]] = []
-        self.count = 0
-        self.num_groups = 0
-
-    def add(
-        self,
-        lo: NDArray[np.float64] | float,
-        hi: NDArray[np.float64] | float,
-        count: int,
-        *,
-        vector: bool = False,
-        join: bool = False,
-    ) -> int:
-        """Append ``count`` rows bounded by ``lo`` and ``hi``; the index of the first. With
-        ``vector`` the rows are the components of one vector (one row group, see
-        :attr:`Assembly.row_groups`); with ``join`` they join the last group."""
-        bounds = np.empty((2, count))
-        bounds[0], bounds[1] = lo, hi
-        self.lower.append(bounds[0])
-        self.upper.append(bounds[1])
-        if join:
-            self.groups.append(np.full(count, self.num_groups - 1))
-        elif vector:
-            self.groups.append(np.full(count, self.num_groups))
-            self.num_groups += 1
-        else:
-            self.groups.append(self.num_groups + np.arange(count))
-            self.num_groups += count
-        start = self.count
-        self.count += count
-        return start
-
-
 def _variables(
     state: GraspState, copies: int, box: BoxForm, n_gen: int, n_rho: int
 ) -> tuple[dict[str, slice], NDArray[np.float64], NDArray[np.float64]]:
     """The variable layout (module docstring) and the sign constraints on it: ``lam >= 0``
     (eq. 22, 24 in generator form), ``rho >= 0`` (eq. 13, 34) and, in the literal box,
     ``tau_max, qd_max >= 0 >= tau_min, qd_min`` (appendix A)."""
-    m = state.num_joints
+    m, a = state.num_joints, len(state.operation_ranges)
+    n_eq = 0 if state.transmission is None else state.transmission.num_constraints
     blocks: dict[str, slice] = {}
     col = 0
 
@@ -240,12 +165,14 @@ def _variables(
 
     for i in range(copies):
         take(f"lam[{i}]", n_gen)
-        take(f"tau[{i}]", m)
+        take(f"tau[{i}]", a)
+        if n_eq:
+            take(f"eq[{i}]", n_eq)
     take("qd", m)
     take("rho", n_rho)
     if box == "literal":
         for name in ("tau_max", "tau_min", "qd_max", "qd_min"):
-            take(name, m)
+            take(name, a)
     col_lower = np.full(col, -np.inf)
     col_upper = np.full(col, np.inf)
     for i in range(copies):
@@ -290,8 +217,13 @@ def _statics_rows(
         out.coo.add(r0, blocks[f"lam[{i}]"].start, wrench_map)
         r0 = out.add(state.gravity_torque, state.gravity_torque, m)
         torque_rows.append(slice(r0, r0 + m))
-        out.coo.add(r0, blocks[f"tau[{i}]"].start, np.eye(m))
+        t = state.transmission
+        out.coo.add(r0, blocks[f"tau[{i}]"].start, np.eye(m) if t is None else t.moment.T)
         out.coo.add(r0, blocks[f"lam[{i}]"].start, -torque_map)
+        if t is not None and t.constraint_jacobian is not None:
+            out.coo.add(r0, blocks[f"eq[{i}]"].start, t.constraint_jacobian.T)
+        if t is not None and t.joint_damping is not None:
+            out.coo.add(r0, blocks["qd"].start, -np.diag(t.joint_damping))
     return wrench_rows, torque_rows
 
 
@@ -335,15 +267,19 @@ def _kinematic_rows(
 def _range_rows_eliminated(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
     """The operation ranges (eq. 1-3) by the exact reduction: per copy i, row h of joint j
     is ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`)."""
-    m, qd0 = state.num_joints, blocks["qd"].start
+    qd0 = blocks["qd"].start
     hps = [op.mirrored_halfplanes for op in state.operation_ranges]
-    joint_of_row = np.repeat(np.arange(m), [len(hp) for hp in hps])
+    joint_of_row = np.repeat(np.arange(len(hps)), [len(hp) for hp in hps])
     hp_all = np.vstack(hps)
+    t = state.transmission
     for i in range(copies):
         r0 = out.add(-np.inf, hp_all[:, 2], len(hp_all))
         row_idx = r0 + np.arange(len(hp_all))
         out.coo.add_entries(row_idx, blocks[f"tau[{i}]"].start + joint_of_row, hp_all[:, 0])
-        out.coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
+        if t is None:
+            out.coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
+        else:  # the actuator's speed P_a qd
+            out.coo.add(r0, qd0, hp_all[:, 1:2] * t.moment[joint_of_row])
 
 
 def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
@@ -361,7 +297,10 @@ def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice],
             out.coo.add(r0, tmax, np.array([[-1.0], [0.0]]))
             out.coo.add(r0, tmin, np.array([[0.0], [1.0]]))
         r0 = out.add(-np.inf, 0.0, 2)
-        out.coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
+        if state.transmission is None:
+            out.coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
+        else:  # the actuator's speed P_a qd
+            out.coo.add(r0, qd0, np.outer([1.0, -1.0], state.transmission.moment[j]))
         out.coo.add(r0, qmax, np.array([[-1.0], [0.0]]))
         out.coo.add(r0, qmin, np.array([[0.0], [1.0]]))
         for a_t, a_q, b in op.halfplanes:
@@ -429,6 +368,10 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     else:
         _range_rows_literal(out, state, blocks, copies)
     _preload_rows(out, state, gens, gen_slices, blocks, copies)
+    t = state.transmission
+    if t is not None and t.constraint_jacobian is not None:  # J_eq qd = 0
+        r0 = out.add(0.0, 0.0, t.num_constraints)
+        out.coo.add(r0, blocks["qd"].start, t.constraint_jacobian)
     return Assembly(
         A=out.coo.build((out.count, len(col_lower))),
         A_twist=out.twist.build((out.count, state.twist_dim)),

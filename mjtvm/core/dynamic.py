@@ -131,8 +131,12 @@ def limiting_term(
     state: GraspState, torques: ArrayLike, speeds: ArrayLike, demand: ArrayLike
 ) -> tuple[int, str]:
     """The limiting joint of a solution (joint ``torques`` and ``speeds``, the ``demand`` included
-    in the torques) and its dominant term (:attr:`DynamicAlpha.term`)."""
+    in the torques) and its dominant term (:attr:`DynamicAlpha.term`). With a transmission,
+    the limiting actuator (its force and speed), the demand carried by the actuator forces
+    that balance it in the least-squares sense."""
     d = np.asarray(demand, dtype=float)
+    if state.transmission is not None:  # the actuator forces that carry the demand (least squares)
+        d = np.linalg.lstsq(state.transmission.moment.T, d, rcond=None)[0]
     tau, qd = np.asarray(torques, dtype=float), np.asarray(speeds, dtype=float)
     slack = []
     for op, t, q in zip(state.operation_ranges, tau, qd):
@@ -202,5 +206,5 @@ def dynamic_alpha(
     got, w, d = value(lo)
     if w is None or got is None:  # lo = 0 with a demand that is not 0 at rest
         return DynamicAlpha(0.0, a0, d, None, None, "", math.nan, lps, (lo, hi))
-    j, term = limiting_term(state, w.torques, w.speeds, d)
+    j, term = limiting_term(state, w.torques, w.range_speeds, d)
     return DynamicAlpha(lo, a0, d, w, j, term, got - lo, lps, (lo, hi))

@@ -8,7 +8,9 @@ shares nothing with :mod:`mjtvm.core.assembly` (only the schema's orientation ru
   :math:`V f \le 0` (eq. 24; with :math:`\mu = 0` the normal ray), :math:`f = n_f n` at L-points (eq. 22),
   :math:`f = n_f (n - \mu \hat s)` at S-points (eq. 16-17), none at D-points;
 * kinematics eq. (7)-(13) with :math:`G^T \dot r = v + \omega \times (p_C - p_O)`;
-* torques eq. (19), balance eq. (20);
+* torques eq. (19), balance eq. (20); with a transmission (:mod:`mjtvm.core.transmission`)
+  the joint torques are :math:`P^T u + J_{eq}^T \lambda - b \dot q`, the constraints
+  :math:`J_{eq} \dot q = 0` hold and the box bounds each actuator's :math:`(u, P \dot q)`;
 * the box of eq. (2) with its four variables per joint and each corner written as a
   convex combination of the vertices of :math:`P` mirrored into its quadrant.
 
@@ -80,8 +82,9 @@ def _g_transpose(position: NDArray[np.float64], p_o: NDArray[np.float64]) -> NDA
 
 
 def _box_constraints(state: GraspState, tau: cp.Expression, qd: cp.Expression) -> list[cp.Constraint]:
-    r"""Eq. (2)-(3) literally: box variables and four corners in the mirrored copies of P."""
-    m = state.num_joints
+    r"""Eq. (2)-(3) literally: box variables and four corners in the mirrored copies of P
+    (per operation range: a joint, or an actuator of a transmission)."""
+    m = len(state.operation_ranges)
     t_max, t_min, q_max, q_min = (cp.Variable(m) for _ in range(4))
     cons = [t_max >= 0, t_min <= 0, q_max >= 0, q_min <= 0]
     cons += [t_min <= tau, tau <= t_max, q_min <= qd, qd <= q_max]
@@ -141,8 +144,21 @@ def _build(state: GraspState, w: NDArray[np.float64], r_hat: NDArray[np.float64]
                     cons.append(t @ rel == -shared_rho * (t @ s_tan))
         wrench = wrench + gt.T @ f
         torque = torque + c.jacobian.T @ f
-    cons += [wrench == 0, tau == torque]
-    cons += _box_constraints(state, tau, qd)
+    cons.append(wrench == 0)
+    tr = state.transmission
+    if tr is None:
+        cons.append(tau == torque)
+        cons += _box_constraints(state, tau, qd)
+    else:
+        u = cp.Variable(len(tr.actuator_names))  # actuator forces
+        joint_torque = tr.moment.T @ u
+        if tr.constraint_jacobian is not None:
+            joint_torque = joint_torque + tr.constraint_jacobian.T @ cp.Variable(tr.num_constraints)
+            cons.append(tr.constraint_jacobian @ qd == 0)
+        if tr.joint_damping is not None:
+            joint_torque = joint_torque - cp.multiply(tr.joint_damping, qd)
+        cons.append(joint_torque == torque)
+        cons += _box_constraints(state, u, tr.moment @ qd)
     return cp.Problem(cp.Maximize(alpha), cons)
 
 

@@ -60,15 +60,20 @@ class Witness:
     forces
         ``(L, d)`` contact forces on the object (N), world frame.
     torques
-        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19).
+        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19); with a transmission the
+        ``(A,)`` actuator forces ``u`` (N or N m), one per operation range.
     speeds
         ``(M,)`` joint speeds :math:`\dot q` (rad/s).
     slip_speeds
         Slip speeds :math:`\rho` of the S-points (m/s), one per S-point or one shared.
     box
-        ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint.
-        With the eliminated form it is the smallest valid box
+        ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint
+        (``(A, 4)`` per actuator with a transmission, its force and speed). With the
+        eliminated form it is the smallest valid box
         ``[min(tau, 0), max(tau, 0), min(qd, 0), max(qd, 0)]``.
+    actuator_speeds
+        ``(A,)`` actuator speeds ``P qd`` (m/s or rad/s) with a transmission, else ``None``
+        (the joint speeds are the actuators').
     """
 
     alpha: float
@@ -78,10 +83,16 @@ class Witness:
     speeds: NDArray[np.float64]
     slip_speeds: NDArray[np.float64]
     box: NDArray[np.float64]
+    actuator_speeds: NDArray[np.float64] | None = None
+
+    @property
+    def range_speeds(self) -> NDArray[np.float64]:
+        """The speeds paired with :attr:`torques` in the operation ranges."""
+        return self.speeds if self.actuator_speeds is None else self.actuator_speeds
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
-        return {
+        out = {
             "alpha": finite_or_none(self.alpha),
             "twist": finite_floats(self.twist),
             "forces": finite_floats(self.forces),
@@ -90,6 +101,9 @@ class Witness:
             "slip_speeds": finite_floats(self.slip_speeds),
             "box": finite_floats(self.box),
         }
+        if self.actuator_speeds is not None:
+            out["actuator_speeds"] = finite_floats(self.actuator_speeds)
+        return out
 
 
 @dataclass(frozen=True)

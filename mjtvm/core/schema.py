@@ -1,7 +1,7 @@
 r"""The shipped JSON Schemas (``mjtvm/data/schema/*.schema.json``) as the loaders' gate.
 
 A format's schema is its one definition of structure, types, bounds and option pairs: the
-state loader (:func:`mjtvm.core.state.load_state`) and the grasp loader
+state loader (:func:`mjtvm.core.state_file.load_state`) and the grasp loader
 (:func:`mjtvm.sim.grasp.document.read_grasp_document`) refuse every document the schema
 refuses, so a tool that checks files with the schema refuses nothing mjtvm would accept. The
 loaders' own field checks run as well, because they normalise the document and word most

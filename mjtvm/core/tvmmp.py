@@ -60,12 +60,14 @@ def _witness(
 ) -> Witness:
     tau = x[asm.blocks["tau[0]"]]
     qd = x[asm.blocks["qd"]]
+    s = state.actuator_speeds(qd)  # qd itself without a transmission
     if asm.box == "literal":
         box = np.column_stack([x[asm.blocks[n]] for n in ("tau_min", "tau_max", "qd_min", "qd_max")])
     else:
-        box = np.column_stack([np.minimum(tau, 0), np.maximum(tau, 0), np.minimum(qd, 0), np.maximum(qd, 0)])
+        box = np.column_stack([np.minimum(tau, 0), np.maximum(tau, 0), np.minimum(s, 0), np.maximum(s, 0)])
     forces = asm.forces(x) if state.contacts else np.zeros((0, state.dim))
-    return Witness(alpha, alpha * r, forces, tau.copy(), qd.copy(), x[asm.blocks["rho"]].copy(), box)
+    act = None if state.transmission is None else s
+    return Witness(alpha, alpha * r, forces, tau.copy(), qd.copy(), x[asm.blocks["rho"]].copy(), box, act)
 
 
 @dataclass

@@ -12,7 +12,8 @@ import pytest
 
 from mjtvm import tvmmp
 from mjtvm.core.reference import reference_tvmmp
-from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.state import GraspState
+from mjtvm.core.state_file import load_state
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.grasp.file import load_grasp
 from mjtvm.sim.paper_hand.scenario import load_scenario

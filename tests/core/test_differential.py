@@ -39,7 +39,8 @@ import numpy as np
 import pytest
 
 from mjtvm.core.reference import reference_alpha, reference_tvmmp
-from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.state import GraspState
+from mjtvm.core.state_file import load_state
 from mjtvm.core.tvmmp import TvmmpResult, tvmmp
 from mjtvm.errors import SolverError
 from tests.support.perturb import (

@@ -17,10 +17,11 @@ import scipy.sparse as sp
 
 from mjtvm import ParamError, tvmmp
 from mjtvm.core import highs
-from mjtvm.core.assembly import _Coo, assemble
+from mjtvm.core.assembly import assemble
 from mjtvm.core.problem2 import StateLPs
+from mjtvm.core.rows import Coo
 from mjtvm.core.scaling import scale_lp
-from mjtvm.core.state import load_state
+from mjtvm.core.state_file import load_state
 from mjtvm.sim.paper_hand.scenario import load_scenario
 
 from .test_solvers import mixed_scale
@@ -62,7 +63,7 @@ def test_sorted_csc_is_scipys_conversion(states):
 
 
 def test_repeated_entries_are_still_summed():
-    coo = _Coo()
+    coo = Coo()
     coo.add(0, 0, np.array([[1.0, 2.0], [0.0, 3.0]]))
     coo.add(1, 1, np.array([[0.5]]))
     np.testing.assert_array_equal(coo.build((2, 2)).toarray(), [[1.0, 2.0], [0.0, 3.5]])

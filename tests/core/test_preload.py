@@ -13,7 +13,7 @@ import pytest
 
 from mjtvm.core.assembly import assemble
 from mjtvm.core.contacts import Contact
-from mjtvm.core.state import load_state, parse_state, state_to_dict
+from mjtvm.core.state_file import load_state, parse_state, state_to_dict
 from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import StateError
 

@@ -14,7 +14,7 @@ import pytest
 
 from mjtvm import tvmmp
 from mjtvm.bench.synthetic import random_state
-from mjtvm.core.state import load_state
+from mjtvm.core.state_file import load_state
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.paper_hand.scenario import load_scenario
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from mjtvm.core.assembly import assemble, grasp_map_transpose
 from mjtvm.core.roundoff import DROP_REL, drop_cancellation, drop_data_roundoff
-from mjtvm.core.state import load_state
+from mjtvm.core.state_file import load_state
 from tests.support.perturb import add_jacobian_roundoff
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples"

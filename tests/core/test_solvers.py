@@ -12,7 +12,7 @@ import scipy.sparse as sp
 
 from mjtvm import tvmmp
 from mjtvm.bench.synthetic import random_state
-from mjtvm.core.state import load_state
+from mjtvm.core.state_file import load_state
 from mjtvm.errors import SolverError
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.sim.lift.states import lift_state

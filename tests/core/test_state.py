@@ -63,7 +63,7 @@ CASES = [
     (("joints", 1, "gear"), 40, r"^joints\[1\]\.gear: unknown key"),
     (("refs",), DELETE, r"^refs: required key is missing"),
     (("contacts", 1, "jacobian"), DELETE, r"^contacts\[1\]\.jacobian: required key is missing"),
-    (("schema",), "mjtvm.state/2", r"^schema: expected 'mjtvm.state/1'"),
+    (("schema",), "mjtvm.state/3", r"^schema: expected 'mjtvm.state/1' or 'mjtvm.state/2'"),
     (("space",), 4, r"^space: expected 2 or 3"),
     (("object_position",), [0, 0], r"^object_position: expected 3 finite numbers"),
     (("refs",), [[0, 0, -1]], r"^refs: expected a non-empty list of vectors of 6 numbers"),

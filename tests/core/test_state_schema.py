@@ -37,7 +37,7 @@ def example(name: str = "pinch.json") -> dict[str, Any]:
 
 def test_schema_is_draft_2020_12(validator):
     assert validator.schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
-    assert validator.schema["properties"]["schema"] == {"const": "mjtvm.state/1"}
+    assert validator.schema["properties"]["schema"]["enum"] == ["mjtvm.state/1", "mjtvm.state/2"]
 
 
 @pytest.mark.parametrize("name", EXAMPLES)
@@ -95,7 +95,7 @@ INVALID = [
     # (path, value, the loader's field)
     (("frobnicate",), 1, "frobnicate"),
     (("refs",), _DELETE, "refs"),
-    (("schema",), "mjtvm.state/2", "schema"),
+    (("schema",), "mjtvm.state/3", "schema"),
     (("space",), 4, "space"),
     (("space",), True, "space"),
     (("object_position",), [0.0, 0.0], "object_position"),

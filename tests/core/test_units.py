@@ -32,7 +32,8 @@ import pytest
 
 from mjtvm import tvmmp
 from mjtvm.core.contacts import Contact
-from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.state import GraspState
+from mjtvm.core.state_file import load_state
 from mjtvm.sim.paper_hand.scenario import load_scenario
 from tests.support.perturb import rescale
 

@@ -38,6 +38,7 @@ EXPECTED = {
         "state.schema.json#",
         "state.schema.json#/$defs/joint",
         "state.schema.json#/$defs/contact",
+        "state.schema.json#/$defs/transmission",
     ],
     "result-format.md": ["result.schema.json#", "result.schema.json#/$defs/witness", "tvms.schema.json#"],
 }

@@ -232,7 +232,7 @@ def test_gears_csv(lift2: Any) -> None:
 def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     """The suite with each section on its smallest input (the report's structure is the same)."""
     from mjtvm.bench import cases, hands, scaling, suite
-    from mjtvm.core.state import load_state
+    from mjtvm.core.state_file import load_state
     from mjtvm.data import __file__ as data_init
 
     pinch = load_state(Path(data_init).parent / "examples" / "pinch.json")

@@ -331,7 +331,7 @@ def export_state(source: str | Path | Mapping[str, Any]) -> GraspState:
     r"""The grasp state of a grasp file, a shipped grasp by name, or a document.
 
     What ``mjtvm export-state`` prints: :meth:`~mjtvm.sim.grasp.loaded.Grasp.state` of
-    :func:`load_grasp`; :func:`~mjtvm.core.state.state_to_dict` gives its ``mjtvm.state/1`` document.
+    :func:`load_grasp`; :func:`~mjtvm.core.state_file.state_to_dict` gives its ``mjtvm.state/1`` document.
 
     Raises
     ------

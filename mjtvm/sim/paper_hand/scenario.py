@@ -31,7 +31,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from ...core.state import state_to_dict
+from ...core.state_file import state_to_dict
 from ...errors import ModelError
 from ..grasp.file import load_grasp
 from ..grasp.loaded import Grasp

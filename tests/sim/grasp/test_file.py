@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from mjtvm.core.operation_range import default_operation_range
-from mjtvm.core.state import state_to_dict
+from mjtvm.core.state_file import state_to_dict
 from mjtvm.sim.grasp.document import GraspError, format_toml, read_grasp_document
 from mjtvm.sim.grasp.file import load_grasp, shipped_grasps
 

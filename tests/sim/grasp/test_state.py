@@ -10,7 +10,7 @@ import pytest
 from scipy.optimize import least_squares
 
 from mjtvm.core.operation_range import default_operation_range
-from mjtvm.core.state import dump_state, load_state
+from mjtvm.core.state_file import dump_state, load_state
 from mjtvm.errors import ModelError
 from mjtvm.sim.grasp.state import detected_contacts, grasp_state, object_weight
 from mjtvm.sim.paper_hand.hand import finger_joint_names, hand_mjcf

@@ -13,7 +13,8 @@ import pytest
 
 from mjtvm.core.assembly import grasp_map_transpose
 from mjtvm.core.contacts import slide_unit
-from mjtvm.core.state import GraspState, load_state
+from mjtvm.core.state import GraspState
+from mjtvm.core.state_file import load_state
 from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ModelError
 from mjtvm.sim.grasp.document import format_toml
