@@ -264,7 +264,12 @@ class Grasp:
         for i, (what, labels) in enumerate(self.selections):
             if any(types.get(g) == "S" and g not in slides for g in labels):
                 raise GraspError(self.file, f"contacts[{i}].slide", f"required for the S contact {what}")
-        options = {"friction_edges": self.friction_edges, "slip": self.slip, **options}
+        options = {
+            "friction_edges": self.friction_edges,
+            "slip": self.slip,
+            "joint_damping": self.document["joint_losses"] == "fold",
+            **options,
+        }
         state = grasp_state(
             self.model,
             self.data,

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from ...core.contacts import CONTACT_TYPES, Contact
 from ...core.operation_range import OperationRange, as_operation_range
 from ...core.state import GraspState, SlipMode
+from ...core.transmission import Transmission
 from ...errors import ModelError
 from .actuator import operation_range_from_actuator
 from .touch import (
@@ -37,6 +38,7 @@ from .touch import (
     subtree,
     without_round_off,
 )
+from .transmission import is_independent, model_transmission
 
 # The contact detection lives in .touch; its names are re-exported here, where the grasp
 # state's callers have always found them.
@@ -138,6 +140,7 @@ def grasp_state(
     friction_edges: int = 16,
     slip: SlipMode = "per_contact",
     contact_tolerance: float | None = None,
+    joint_damping: bool = True,
 ) -> GraspState:
     r"""The grasp state (space = 3) at the configuration ``data.qpos``.
 
@@ -172,7 +175,9 @@ def grasp_state(
         The state's joints in order (hinge or slide); default: every hinge and slide joint
         outside the object, in model order.
     operation_ranges
-        Joint name -> operation range, replacing the range read from the joint's actuator.
+        Joint name -> operation range, replacing the range read from the joint's actuator;
+        with a transmission (below), actuator name -> operation range in the actuator's units,
+        one for every driving actuator.
     one_contact_per_body
         See :func:`detected_contacts`.
     friction_edges, slip
@@ -180,6 +185,9 @@ def grasp_state(
     contact_tolerance
         A geom within this distance (m) of the object touches it (:func:`forward_touching`);
         ``None``: the contacts MuJoCo reports.
+    joint_damping
+        With a transmission: the joints' ``dof_damping`` in the torque balance (``False``: none,
+        as a grasp file's ``joint_losses = "ignore"``).
 
     Returns
     -------
@@ -188,8 +196,14 @@ def grasp_state(
         by their geom (``"<geom>#<k>"`` for a further contact of the same geom), positions
         MuJoCo's contact points, normals into the object, Jacobians ``(3, M)`` of the point
         fixed to the touching body (all zeros for the world body); ``gravity_torque`` =
-        ``qfrc_bias - qfrc_passive`` at zero velocity, the joint torques that hold the
-        fingers still against gravity.
+        ``qfrc_bias - qfrc_passive`` at zero velocity, the bias torque: gravity plus the
+        passive springs at the state, the joint torques that hold the fingers still.
+        ``transmission``: read from MuJoCo at the configuration
+        (:func:`~mjtvm.sim.grasp.transmission.model_transmission`) unless every driving
+        actuator is a joint transmission on its own state joint and no equality acts on
+        them (:func:`~mjtvm.sim.grasp.transmission.is_independent`): then ``None`` and one
+        operation range per joint, as in the paper; else the moment matrix, the equality
+        rows and the damping, and one operation range per actuator.
 
     Raises
     ------
@@ -209,10 +223,7 @@ def grasp_state(
     mujoco.mj_forward(model, work)
     detected = _detect_contacts(model, work, object_body, joint_ids, one_contact_per_body, contact_tolerance)
     contacts = _contacts(model, work, detected, dofs, contact_types, mu, slide_directions)
-    ranges = tuple(
-        as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
-        for j, n in zip(joint_ids, names, strict=True)
-    )
+    transmission, ranges = _drive(model, work, joint_ids, names, overrides, joint_damping)
     gravity_torque = (work.qfrc_bias - work.qfrc_passive)[dofs]
     if refs is None:
         refs = object_weight(model, work, object_body=object_body)[None, :]
@@ -227,7 +238,42 @@ def grasp_state(
         rvds=cast(NDArray[np.float64] | None, rvds),
         friction_edges=friction_edges,
         slip=slip,
+        transmission=transmission,
     )
+
+
+def _drive(
+    model: mujoco.MjModel,
+    work: mujoco.MjData,
+    joint_ids: Sequence[int],
+    names: Sequence[str],
+    overrides: Mapping[str, OperationRange | ArrayLike],
+    damping: bool,
+) -> tuple[Transmission | None, tuple[OperationRange, ...]]:
+    """The state's transmission (``None`` for independent joints) and its operation ranges."""
+    found = model_transmission(model, work, joint_ids)
+    if is_independent(model, found, joint_ids):
+        return None, tuple(
+            as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
+            for j, n in zip(joint_ids, names, strict=True)
+        )
+    if not found.actuator_names:
+        raise ModelError("joints", "no actuator drives any of the state's joints")
+    for a in found.actuator_names:
+        if a not in overrides:
+            raise ModelError(
+                f"actuator {a!r}",
+                "drives coupled joints: give its range (actuator units) in operation_ranges",
+            )
+    b = found.joint_damping if damping and np.any(found.joint_damping > 0) else None
+    transmission = Transmission(
+        actuator_names=found.actuator_names,
+        moment=found.moment,
+        constraint_names=found.constraint_names,
+        constraint_jacobian=found.constraint_jacobian if found.constraint_names else None,
+        joint_damping=b,
+    )
+    return transmission, tuple(as_operation_range(overrides[a]) for a in found.actuator_names)
 
 
 def _check_mappings(
@@ -237,7 +283,7 @@ def _check_mappings(
     slide_directions: Mapping[str, ArrayLike] | None,
     operation_ranges: Mapping[str, Any],
 ) -> None:
-    """The contact types are known and every geom and joint named in the mappings exists."""
+    """The contact types are known and every geom, joint and actuator named in the mappings exists."""
     for key, value in contact_types.items():
         if value not in CONTACT_TYPES:
             raise ModelError(
@@ -247,7 +293,8 @@ def _check_mappings(
     _check_geoms(model, mu if isinstance(mu, Mapping) else None, "mu")
     _check_geoms(model, slide_directions, "slide_directions")
     for key in operation_ranges:
-        model_id(model, _OBJ.mjOBJ_JOINT, key, "joint")
+        if mujoco.mj_name2id(model, _OBJ.mjOBJ_ACTUATOR, key) < 0:
+            model_id(model, _OBJ.mjOBJ_JOINT, key, "joint")
 
 
 def _detect_contacts(

@@ -5,13 +5,20 @@ actuator (values derived by hand from the MJCF), the joints a linkage adds, and 
 from __future__ import annotations
 
 import copy
+import json
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 from typing import Any
 
+import mujoco
 import numpy as np
 import pytest
 
+from mjtvm import tvmmp
+from mjtvm.core.reference import reference_tvmmp
+from mjtvm.core.state_file import parse_state, state_to_dict
 from mjtvm.sim.grasp.checks import GraspError
 from mjtvm.sim.grasp.file import load_grasp
 
@@ -129,3 +136,97 @@ def test_shipped_documents_are_unchanged_by_loading() -> None:
     before = copy.deepcopy(doc)
     load_grasp(doc)
     assert doc == before
+
+
+# ----------------------------------------------------------------- states (mjtvm.state/2)
+@pytest.fixture(scope="module", params=["shadow", "f85"])
+def coupled(request: pytest.FixtureRequest) -> tuple[Any, Any]:
+    grasp = load_grasp(SHADOW if request.param == "shadow" else F85)
+    return grasp, grasp.state()
+
+
+def _moved(grasp: Any, qd: np.ndarray, h: float) -> mujoco.MjData:
+    data = mujoco.MjData(grasp.model)
+    data.qpos[:] = grasp.data.qpos
+    for name, v in zip(grasp.joints, qd, strict=True):
+        data.qpos[grasp.model.joint(name).qposadr[0]] += h * v
+    mujoco.mj_forward(grasp.model, data)
+    return data
+
+
+def test_state_carries_the_transmission(coupled: tuple[Any, Any]) -> None:
+    grasp, state = coupled
+    t = state.transmission
+    assert t is not None and t.actuator_names == grasp.transmission.actuator_names
+    np.testing.assert_array_equal(t.moment, grasp.transmission.moment)
+    assert len(state.operation_ranges) == len(t.actuator_names)
+    doc = state_to_dict(state)
+    assert doc["schema"] == "mjtvm.state/2"
+    again = parse_state(json.loads(json.dumps(doc)))
+    assert again.transmission is not None
+    np.testing.assert_array_equal(again.transmission.moment, t.moment)
+
+
+def test_contact_jacobians_and_actuator_speeds_against_finite_differences(coupled: tuple[Any, Any]) -> None:
+    """J qd is the rate of the contact point fixed to its body, and P qd the rate of MuJoCo's
+    actuator lengths (central differences of positions, h = 1e-6), for random joint speeds."""
+    grasp, state = coupled
+    model = grasp.model
+    h = 1e-6
+    ids = list(grasp.transmission.actuator_ids)
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        qd = rng.normal(size=state.num_joints)
+        plus, minus = _moved(grasp, qd, h), _moved(grasp, qd, -h)
+        for c in state.contacts:
+            g = int(model.geom(c.name.split("#")[0]).id)
+            b = int(model.geom_bodyid[g])
+            local = grasp.data.xmat[b].reshape(3, 3).T @ (c.position - grasp.data.xpos[b])
+            points = [d.xpos[b] + d.xmat[b].reshape(3, 3) @ local for d in (plus, minus)]
+            np.testing.assert_allclose(c.jacobian @ qd, (points[0] - points[1]) / (2 * h), atol=1e-8)
+        fd = (plus.actuator_length[ids] - minus.actuator_length[ids]) / (2 * h)
+        np.testing.assert_allclose(state.actuator_speeds(qd), fd, atol=1e-8)
+
+
+def test_bias_torque_includes_the_springs() -> None:
+    """The 2F-85's spring links: gravity_torque = qfrc_bias - qfrc_passive at rest, whose
+    passive part is the spring's stiffness x (q - springref) = 0.05 x (q - 2.62) N m."""
+    grasp = load_grasp(F85)
+    state = grasp.state()
+    model, data = grasp.model, grasp.data
+    for side in ("right", "left"):
+        j = model.joint(f"{side}_spring_link_joint")
+        k = grasp.joints.index(j.name)
+        q = float(data.qpos[j.qposadr[0]])
+        spring = -0.05 * (q - 2.62)
+        gravity = float(data.qfrc_bias[j.dofadr[0]])
+        assert state.gravity_torque[k] == pytest.approx(gravity - spring, abs=1e-12)
+
+
+def test_alphas_against_the_cvxpy_reference(coupled: tuple[Any, Any]) -> None:
+    """Every alpha of Problem 2 equals the independent cvxpy transcription (extended to
+    actuators and constraints); the values measured on 2026-11-25."""
+    grasp, state = coupled
+    result = tvmmp(state)
+    ref, status = reference_tvmmp(state)
+    assert all(s == "optimal" for row in status for s in row)
+    np.testing.assert_allclose(result.alpha, ref, rtol=1e-6, atol=1e-9)
+    expected = {"shadow_hand-sphere": 0.04598, "robotiq_2f85-sphere": 0.07142}[grasp.name]
+    assert result.tvmmp == pytest.approx(expected, abs=1e-5)
+
+
+@pytest.mark.parametrize("grasp", [SHADOW, F85])
+def test_cli_export_solve_tvms(tmp_path: Path, grasp: Path) -> None:
+    """The commands a user runs, as subprocesses: export-state, solve (the grasp file and the
+    exported mjtvm.state/2 file), tvms: exit 0."""
+    exe = Path(sys.executable).with_name("mjtvm")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mjtvm.cli"]
+    state_file = tmp_path / "state.json"
+    for words in (["export-state", str(grasp)], ["solve", str(grasp)], ["tvms", str(grasp)]):
+        proc = subprocess.run([*cmd, *words], capture_output=True, text=True, check=False, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        if words[0] == "export-state":
+            state_file.write_text(proc.stdout, encoding="utf-8")
+    proc = subprocess.run([*cmd, "solve", str(state_file)], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["tvmmp"] > 0
