@@ -115,8 +115,8 @@ def _saturated(state: GraspState, result: TvmmpResult) -> tuple[str, ...]:
     if w is None:
         return ()
     out = []
-    for name, rng, tau, qd in zip(
-        state.joint_names, state.operation_ranges, w.torques, w.speeds, strict=True
+    for name, rng, tau, qd in zip(  # joints, or the actuators of a transmission
+        state.actuator_names, state.operation_ranges, w.torques, w.range_speeds, strict=True
     ):
         if rng.max_speed_at(float(tau)) - abs(float(qd)) <= _EDGE_TOL * rng.max_speed:
             out.append(name)

@@ -98,9 +98,28 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     ----------
     grasp
         A :class:`~mjtvm.sim.grasp.loaded.Grasp` (``model``, ``model_path``, ``joints``, ``motors``).
+
+    Raises
+    ------
+    ModelError
+        A grasp with a transmission (coupled joints: not supported by the physics check), or a
+        joint without motor data.
     """
     if id(grasp) in _MODELS:
         return _MODELS[id(grasp)][1]
+    transmission = getattr(grasp, "transmission", None)
+    if transmission is not None:
+        t = transmission
+        tied = [n for n, row in zip(t.actuator_names, t.moment, strict=True) if (row != 0).sum() > 1]
+        labels = [f"actuator {n!r}" for n in tied] + [
+            f"equality {c.split('/')[0]!r}" for c in t.constraint_names
+        ]
+        raise ModelError(
+            (labels or [f"actuator {t.actuator_names[0]!r}"])[0],
+            "couples the hand's joints (a tendon, an equality or a linkage): the physics check drives "
+            "each joint by its own <dcmotor> and cannot yet drive actuators through the model's "
+            "transmission; export-state, solve, tvms and replay support this hand",
+        )
     model = grasp.model
     motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
     if motors:

@@ -52,13 +52,17 @@ from .state import (
     geom_label,
     subtree,
 )
-from .transmission import ModelTransmission, coupled_joints, is_independent, model_transmission
+from .transmission import (
+    ModelTransmission,
+    check_closed,
+    coupled_joints,
+    is_independent,
+    model_transmission,
+)
 
 __all__ = ["Grasp", "build_spec", "export_state", "load_grasp", "models_root", "shipped_grasps"]
 
 _OBJ = mujoco.mjtObj
-#: m or rad: an equality constraint's residual (``efc_pos``) allowed at a grasp's configuration.
-CONSTRAINT_TOLERANCE = 1e-6
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
@@ -190,15 +194,14 @@ def _drive(
         transmission = model_transmission(model, data, ids)
     except ModelError as e:
         raise GraspError(file, "joints", str(e)) from e
-    for name, residual in zip(transmission.constraint_names, transmission.constraint_residual, strict=True):
-        if abs(residual) > CONSTRAINT_TOLERANCE:
-            raise GraspError(
-                file,
-                "configuration",
-                f"equality {name.split('/')[0]!r} is violated by {abs(residual):.3g} (m or rad) at the "
-                f"configuration (tolerance {CONSTRAINT_TOLERANCE:g}): give joint values that close it "
-                "(the IK moves joints independently and does not enforce equalities)",
-            )
+    try:
+        check_closed(transmission)
+    except ModelError as e:
+        raise GraspError(
+            file,
+            "configuration",
+            f"{e}: the IK moves the joints independently and does not close a linkage",
+        ) from e
     if is_independent(model, transmission, ids):
         ranges, motors = joint_ranges(model, joints, doc["ranges"], base=base, file=file, losses=losses)
         return None, ranges, motors

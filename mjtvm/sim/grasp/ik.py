@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...errors import ModelError
 from .state import model_id
+from .transmission import equality_residual
 
 __all__ = ["IkResult", "IkTarget", "body_label", "geom_contact_target", "ik_residual", "solve_ik"]
 
@@ -394,13 +395,25 @@ def solve_ik(
         mujoco.mj_copyData(work, model, data)
     q = np.clip(np.array(work.qpos[adr], dtype=float), lo, hi)
 
+    # Active equalities on the moved joints (a linkage) are kept closed: their residuals are
+    # further rows of the least squares, held to the same tolerance as the targets.
+    closed = bool(model.neq) and len(equality_residual(model, work, dofs)[0]) > 0
+
     def evaluate(qv: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         work.qpos[adr] = qv
-        return ik_residual(model, work, targets, dofs)
+        e, jac = ik_residual(model, work, targets, dofs)
+        if not closed:
+            return e, jac
+        r, jr = equality_residual(model, work, dofs)
+        return np.concatenate([e, r]), np.vstack([jac, jr])
+
+    def worst(e: NDArray[np.float64]) -> float:
+        rows = sum(t.rows for t in targets)
+        return max(float(np.max(_per_target(e, targets))), float(np.max(np.abs(e[rows:]), initial=0.0)))
 
     e, jac = evaluate(q)
     mu, it = 1e-6, 0
-    while it < max_iterations and np.max(_per_target(e, targets)) > tolerance:
+    while it < max_iterations and worst(e) > tolerance:
         it += 1
         trial = np.clip(q + _damped_step(jac, e, q, (lo, hi), mu), lo, hi)
         e_trial, jac_trial = evaluate(trial)
@@ -412,12 +425,18 @@ def solve_ik(
                 break
     work.qpos[adr] = q
     residuals = _per_target(e, targets)
-    converged = bool(np.max(residuals) <= tolerance)
+    converged = worst(e) <= tolerance
     if strict and not converged:
-        worst = int(np.argmax(residuals))
+        if np.max(residuals) <= tolerance:
+            raise ModelError(
+                "equality constraints",
+                f"not closed: residual {worst(e):.3g} above the tolerance {tolerance:.3g} "
+                f"after {it} iterations",
+            )
+        w = int(np.argmax(residuals))
         raise ModelError(
-            f"IK target {targets[worst].name!r}",
-            f"unreachable: residual {residuals[worst]:.3g} m above the tolerance {tolerance:.3g} m "
+            f"IK target {targets[w].name!r}",
+            f"unreachable: residual {residuals[w]:.3g} m above the tolerance {tolerance:.3g} m "
             f"after {it} iterations",
         )
     qpos = np.array(work.qpos, dtype=float)

@@ -38,7 +38,7 @@ from .touch import (
     subtree,
     without_round_off,
 )
-from .transmission import is_independent, model_transmission
+from .transmission import check_closed, is_independent, model_transmission
 
 # The contact detection lives in .touch; its names are re-exported here, where the grasp
 # state's callers have always found them.
@@ -259,6 +259,7 @@ def _drive(
         )
     if not found.actuator_names:
         raise ModelError("joints", "no actuator drives any of the state's joints")
+    check_closed(found)
     for a in found.actuator_names:
         if a not in overrides:
             raise ModelError(

@@ -41,11 +41,14 @@ from ...errors import ModelError
 from .touch import without_round_off
 
 __all__ = [
+    "CONSTRAINT_TOLERANCE",
     "ModelTransmission",
     "actuator_moments",
+    "check_closed",
     "coupled_joints",
     "dense_efc_jacobian",
     "dense_moment",
+    "equality_residual",
     "equality_rows",
     "is_independent",
     "model_transmission",
@@ -299,3 +302,43 @@ def coupled_joints(model: mujoco.MjModel, data: mujoco.MjData, joint_ids: Sequen
                     chosen.add(j)
                     grown = True
     return sorted(chosen)
+
+
+#: m or rad: an equality constraint's residual (``efc_pos``) allowed in a grasp state.
+CONSTRAINT_TOLERANCE = 1e-6
+
+
+def check_closed(transmission: ModelTransmission, tolerance: float = CONSTRAINT_TOLERANCE) -> None:
+    """Every equality row of ``transmission`` holds at its configuration within ``tolerance``.
+
+    Raises
+    ------
+    ModelError
+        Naming the first violated equality and its residual: the state's constraint rows are
+        linearised about a configuration that must satisfy them.
+    """
+    for name, residual in zip(transmission.constraint_names, transmission.constraint_residual, strict=True):
+        if abs(residual) > tolerance:
+            raise ModelError(
+                f"equality {name.split('/')[0]!r}",
+                f"is violated by {abs(residual):.3g} (m or rad) at the configuration (tolerance "
+                f"{tolerance:g}): give joint values that close it",
+            )
+
+
+def equality_residual(
+    model: mujoco.MjModel, data: mujoco.MjData, dofs: Sequence[int] | NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    r"""``(R,)`` residuals (``efc_pos``) and ``(R, len(dofs))`` Jacobian rows of the active
+    equality constraints that involve ``dofs``, for an IK that keeps them closed.
+
+    Runs ``mj_fwdPosition`` on ``data`` (the constraint rows need it).
+    """
+    mujoco.mj_fwdPosition(model, data)
+    cols = np.asarray(dofs, dtype=int)
+    efc = dense_efc_jacobian(model, data)
+    equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    rows = [
+        r for r in range(int(data.nefc)) if int(data.efc_type[r]) == equality and np.any(efc[r, cols] != 0.0)
+    ]
+    return np.array([float(data.efc_pos[r]) for r in rows]), efc[rows][:, cols].reshape(len(rows), len(cols))

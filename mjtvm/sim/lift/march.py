@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from ...errors import ModelError
 from ..grasp.ik import IkTarget, body_label, ik_residual, solve_ik
 from ..grasp.state import detected_contacts, geom_id, geom_label
+from ..grasp.transmission import coupled_joints
 from .motion import Motion, rotate
 from .surface import OBJECT_TYPES, distance_model, is_sphere, witness
 
@@ -138,6 +139,9 @@ class Marcher:
         self.fingers, self.base = tuple(fingers), tuple(base)
         self.joint_names = tuple(grasp.joints[k] for f in fingers for k in f.cols)
         self.joint_names = tuple(dict.fromkeys(self.joint_names))  # fingers sharing a chain
+        if model.neq:  # a linkage: the joints its equalities tie to the fingers' move with them
+            tied = set(coupled_joints(model, data, [int(model.joint(j).id) for j in self.joint_names]))
+            self.joint_names = tuple(j for j in grasp.joints if int(model.joint(j).id) in tied)
         self.qadr = np.array([int(model.joint(j).qposadr[0]) for j in self.joint_names], dtype=int)
         self.qcols = np.array([grasp.joints.index(j) for j in self.joint_names], dtype=int)
         self.allowed = {f.geom for f in fingers} | set(base) | set(grasp.ignored_geoms)

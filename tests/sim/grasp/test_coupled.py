@@ -21,6 +21,8 @@ from mjtvm.core.reference import reference_tvmmp
 from mjtvm.core.state_file import parse_state, state_to_dict
 from mjtvm.sim.grasp.checks import GraspError
 from mjtvm.sim.grasp.file import load_grasp
+from mjtvm.sim.grasp.ik import IkTarget, solve_ik
+from mjtvm.sim.grasp.transmission import equality_residual
 
 MODELS = Path(__file__).resolve().parents[3] / "models"
 SHADOW = MODELS / "shadow_hand" / "shadow_hand-sphere.toml"
@@ -230,3 +232,46 @@ def test_cli_export_solve_tvms(tmp_path: Path, grasp: Path) -> None:
     proc = subprocess.run([*cmd, "solve", str(state_file)], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["tvmmp"] > 0
+
+
+def test_ik_keeps_the_linkage_closed() -> None:
+    """The IK moves the 2F-85's pads 1 mm down with the sphere and keeps every equality closed
+    (residual rows in its least squares): constraint residuals below its tolerance."""
+    grasp = load_grasp(F85)
+    model, data = grasp.model, grasp.data
+    targets = []
+    for side in ("right", "left"):
+        b = int(model.body(f"{side}_pad").id)
+        g = int(model.geom(f"{side}_pad2").id)
+        p = data.geom_xpos[g] + data.geom_xmat[g].reshape(3, 3) @ np.array([0.0, -0.004, 0.0])
+        local = data.xmat[b].reshape(3, 3).T @ (p - data.xpos[b])
+        targets.append(IkTarget(name=side, body=f"{side}_pad", point=local, position=p - [0, 0, 1e-3]))
+    result = solve_ik(model, data, targets, joints=list(grasp.joints), tolerance=1e-10)
+    moved = mujoco.MjData(model)
+    moved.qpos[:] = result.qpos
+    residual, _ = equality_residual(model, moved, [int(model.joint(j).dofadr[0]) for j in grasp.joints])
+    assert len(residual) == 5 and np.max(np.abs(residual)) <= 1e-10  # x rows: zero over the dofs
+    assert np.max(np.abs(result.qpos - data.qpos)) > 1e-3  # it moved
+
+
+@pytest.mark.parametrize("grasp", [SHADOW, F85])
+def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
+    """A short replay runs (exit 0, one row per state); verify refuses with one line naming the
+    coupling actuator (it drives joints, not actuators through the transmission: exit 2)."""
+    exe = Path(sys.executable).with_name("mjtvm")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mjtvm.cli"]
+    out = tmp_path / "replay"
+    words = ["replay", "--grasp", str(grasp), "--states", "3", "--no-sweeps", "--no-plots", "--quiet"]
+    proc = subprocess.run([*cmd, *words, "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    rows = (out / "lift.csv").read_text(encoding="utf-8").splitlines()
+    assert len(rows) == 1 + 3
+    proc = subprocess.run(
+        [*cmd, "verify", "--grasp", str(grasp), "--states", "2", "--quiet", "--out", str(tmp_path / "v")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().count("\n") == 0
+    assert "couples the hand's joints" in proc.stderr and "Traceback" not in proc.stderr

@@ -506,7 +506,7 @@ def test_a_violated_equality_is_refused(tmp_path: Path, equality: str, name: str
     )
     with pytest.raises(
         GraspError,
-        match=rf"configuration: equality '{name}' is violated by [0-9.]+ \(m or rad\) at the configuration",
+        match=rf"configuration: equality '{name}': is violated by [0-9.]+ \(m or rad\) at the configuration",
     ):
         load_grasp(_write(tmp_path, doc))
 
