@@ -200,7 +200,7 @@ def _drive(
         raise GraspError(
             file,
             "configuration",
-            f"{e}: the IK moves the joints independently and does not close a linkage",
+            f"{e}; or configure it by IK, which keeps the equalities closed",
         ) from e
     if is_independent(model, transmission, ids):
         ranges, motors = joint_ranges(model, joints, doc["ranges"], base=base, file=file, losses=losses)

@@ -497,10 +497,11 @@ def test_added_object_and_supports_errors(tmp_path: Path) -> None:
     ],
 )
 def test_a_violated_equality_is_refused(tmp_path: Path, equality: str, name: str) -> None:
-    """A joint coupling or a closed chain that the configuration does not satisfy (the IK moves
-    joints independently; a connect's second anchor is where the bodies were at qpos0): refused
-    naming the constraint and its residual, never solved as if it held."""
+    """A joint coupling or a closed chain that joint values given in the file do not satisfy (a
+    connect's second anchor is where the bodies were at qpos0): refused naming the constraint
+    and its residual, never solved as if it held."""
     doc = pincher_grasp(tmp_path)
+    doc["configuration"] = {"qpos": {"l0": 0.3, "l1": 0.5, "r0": -0.3, "r1": -0.5}}
     (tmp_path / "pincher.xml").write_text(
         PINCHER.replace("</mujoco>", f"<equality>{equality}</equality></mujoco>")
     )
