@@ -3,7 +3,9 @@ r"""A grasp of any MJCF hand, from a ``mjtvm.grasp/1`` file (``docs/grasp-format
 :func:`load_grasp` reads a grasp file (:mod:`mjtvm.sim.grasp.document`), loads the model it names,
 sets the configuration (a keyframe, joint values, or IK targets brought onto the object's
 surface), resolves the contact selections (geom name or label, body, geom id) against the
-model and each joint's operation range (:mod:`mjtvm.sim.grasp.ranges`). :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
+model and each joint's operation range (:mod:`mjtvm.sim.grasp.ranges`), or, when the model's
+actuators or equality constraints couple the joints, the transmission
+(:mod:`mjtvm.sim.grasp.transmission`) and each actuator's range. :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
 then gives the :class:`~mjtvm.core.state.GraspState` of
 :func:`~mjtvm.sim.grasp.state.grasp_state`.
 
@@ -232,8 +234,10 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     ------
     GraspError
         Any field that breaks the format or does not fit the model (unknown body, geom,
-        site, joint, keyframe or actuator, with the closest name; a joint without an
-        operation range, with how to give one; an unreachable IK target, with its residual).
+        site, joint, keyframe or actuator, with the closest name; a joint, or with coupled
+        joints an actuator, without an operation range, with how to give one; an unreachable
+        IK target, with its residual; an equality the configuration violates, or one that
+        ties a state joint to a joint the ``joints`` list leaves out).
     """
     doc, path = read_grasp_document(_resolve(source))
     file = str(path) if path is not None else "grasp"

@@ -16,13 +16,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm import tvmmp
+from mjtvm import OperationRange, tvmmp
 from mjtvm.core.reference import reference_tvmmp
 from mjtvm.core.state_file import parse_state, state_to_dict
 from mjtvm.sim.grasp.checks import GraspError
 from mjtvm.sim.grasp.file import load_grasp
 from mjtvm.sim.grasp.ik import IkTarget, solve_ik
-from mjtvm.sim.grasp.transmission import equality_residual
+from mjtvm.sim.grasp.ranges import actuator_ranges
+from mjtvm.sim.grasp.transmission import equality_residual, model_transmission
 
 MODELS = Path(__file__).resolve().parents[3] / "models"
 SHADOW = MODELS / "shadow_hand" / "shadow_hand-sphere.toml"
@@ -275,3 +276,29 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     assert proc.returncode == 2
     assert proc.stderr.strip().count("\n") == 0
     assert "couples the hand's joints" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_datasheet_range_through_a_mujoco_gear() -> None:
+    """MuJoCo's moment includes the actuator's gear g: a datasheet range at the tendon (torque
+    T, speed w) is (T / g, g w) in the actuator's units. Here g = 2 on a fixed tendon a + b:
+    the RE 25 behind 10:1 gives 263 mN m and 9560 rpm / 10 at the tendon."""
+    model = mujoco.MjModel.from_xml_string(
+        """<mujoco><worldbody><body><joint name="a"/><geom size=".1" mass="1"/>
+        <body pos="0 0 .2"><joint name="b"/><geom size=".1" mass="1"/></body></body></worldbody>
+        <tendon><fixed name="t"><joint joint="a" coef="1"/><joint joint="b" coef="1"/></fixed></tendon>
+        <actuator><motor name="m" tendon="t" gear="2"/></actuator></mujoco>"""
+    )
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    t = model_transmission(model, data, [0, 1])
+    np.testing.assert_array_equal(t.moment, [[2.0, 2.0]])
+    entry = {"source": "datasheet", "datasheet": "maxon_re25_20w", "gear_ratio": 10.0}
+    at_tendon = OperationRange.from_datasheet(
+        no_load_speed_rpm=9560.0,
+        nominal_speed_rpm=8330.0,
+        nominal_torque_mNm=26.3,
+        max_permissible_speed_rpm=14000.0,
+        gear_ratio=10.0,
+    )
+    ranges, _ = actuator_ranges(model, ("m",), t.moment, (0, 1), {"m": entry}, base=None, file="f")
+    np.testing.assert_allclose(ranges["m"].vertices, at_tendon.vertices * [0.5, 2.0], rtol=1e-15)
