@@ -4,13 +4,16 @@ wins, and each way a rule can be wrong is one error naming the field."""
 
 from __future__ import annotations
 
+import json
 import tomllib
+from pathlib import Path
 from typing import Any
 
 import pytest
 
+from mjtvm.cli import main
 from mjtvm.core.state import state_to_dict
-from mjtvm.sim.grasp.document import GraspError, read_grasp_document
+from mjtvm.sim.grasp.document import GraspError, format_toml, read_grasp_document
 from mjtvm.sim.grasp.file import load_grasp, shipped_grasps
 from mjtvm.sim.grasp.validate import schema_problem
 
@@ -148,3 +151,29 @@ def test_a_grasp_needs_contacts_or_contact_rules() -> None:
     assert schema_problem(_doc()) == ("contacts", "required (or contact_rules)")
     with pytest.raises(GraspError, match=r"contacts: required \(or contact_rules\)"):
         read_grasp_document(_doc())
+
+
+def test_every_link_sticking_is_diagnosed_and_a_rule_frees_it(tmp_path: Path, capsys: Any) -> None:
+    """Case 2 with one rule typing every touching geom F: the palm's F-point (a world geom: no
+    joint moves it) locks every RVDS vertex, and ``mjtvm solve`` says so; typing the palm D by a
+    rule before it frees the lift (alpha > 0), and export-state reports each rule."""
+    locked = tmp_path / "locked.toml"
+    locked.write_text(format_toml(_doc(contact_rules=[{"geom": "*", "type": "F"}])), encoding="utf-8")
+    assert main(["solve", str(locked), "--no-witnesses"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert doc["tvmmp"] == 0.0
+    assert [d["contacts"] for d in doc["diagnosis"]] == [["palm"]] * 4
+    assert err.count("is on a body no joint moves") == 4 and len(err.splitlines()) == 4
+    freed = tmp_path / "freed.toml"
+    rules = [{"geom": "palm", "type": "D"}, {"geom": "*", "type": "F"}]
+    freed.write_text(format_toml(_doc(contact_rules=rules)), encoding="utf-8")
+    assert main(["solve", str(freed), "--no-witnesses"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["tvmmp"] > 0.0 and "diagnosis" not in json.loads(out) and err == ""
+    assert main(["export-state", str(freed)]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "contact_rules[0] geom 'palm' D: palm, contact_rules[1] geom '*' F: f1_tip, f2_tip, f3_tip, f4_tip"
+        in err
+    )
