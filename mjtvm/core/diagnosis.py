@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
-from ..errors import SolverError
+from ..errors import ParamError, SolverError
 from .assembly import BoxForm, grasp_map_transpose
 from .contacts import Contact, slide_unit, tangent_basis
 from .problem2 import StateLPs
@@ -90,11 +90,15 @@ def kinematic_alpha(
 
     Raises
     ------
+    ParamError
+        When ``r`` is not a non-zero twist of the state's dimension.
     SolverError
         When HiGHS (scipy's ``linprog``) does not settle the LP.
     """
     contacts = state.contacts if contacts is None else contacts
     r = np.asarray(r, dtype=float)
+    if r.shape != (state.twist_dim,) or not np.all(np.isfinite(r)) or not np.any(r):
+        raise ParamError("r", f"expected a non-zero finite twist of {state.twist_dim} numbers", r)
     r = r / float(np.max(np.abs(r)))
     eq, ub, n_rho = _kinematic_rows(state, contacts, r)
     if not eq and not ub:

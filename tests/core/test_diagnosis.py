@@ -9,7 +9,7 @@ import jsonschema
 import numpy as np
 import pytest
 
-from mjtvm import Contact, GraspState, default_operation_range, tvmmp
+from mjtvm import Contact, GraspState, ParamError, default_operation_range, tvmmp
 from mjtvm.core.diagnosis import kinematic_alpha
 from mjtvm.core.operation_range import OperationRange
 from mjtvm.core.schema import load_schema
@@ -75,6 +75,22 @@ def test_a_sticking_point_on_the_palm_locks_the_lift_alone() -> None:
     (d,) = res.diagnosis
     assert (d.cause, d.contacts) == ("contacts", ("palm",))
     assert d.message.endswith("'palm' is on a body no joint moves")
+
+
+@pytest.mark.parametrize(("slide", "free"), [(1.0, True), (-1.0, False)])
+def test_a_sliding_point_allows_the_motion_along_its_slide_only(slide: float, free: bool) -> None:
+    r"""An S-point at A, the object translating sideways r = (1, 0, 0): its velocity relative
+    to the link's point is G^T r - J qd = (1, -A qd); the normal part is 0 with qd = 0 and
+    the tangential part (1, 0) must be rho s with rho >= 0 (eq. 13): possible for s = +x,
+    not for s = -x."""
+    tip = Contact("tip", "S", [A, 0.0], [0.0, 1.0], [[0.0], [A]], mu=0.3, slide_direction=[slide, 0.0])
+    alpha = kinematic_alpha(state([tip]), np.array([1.0, 0.0, 0.0]))
+    assert (alpha > 0.0) is free
+
+
+def test_the_kinematic_alpha_needs_a_twist() -> None:
+    with pytest.raises(ParamError, match="expected a non-zero finite twist of 3 numbers"):
+        kinematic_alpha(state([link_point("tip", A)]), np.zeros(3))
 
 
 def test_a_detaching_palm_point_does_not_lock_the_lift() -> None:
