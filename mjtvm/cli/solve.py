@@ -16,7 +16,7 @@ from ..core.tvmmp import tvmmp
 from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
-from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn_uncertified
+from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
@@ -135,9 +135,12 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     state = load_source(args.state, hand=args.hand, default=example_path())
-    result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses)
+    result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
     warn_uncertified(result)
+    for d in result.diagnosis:
+        k, l = d.pair
+        warn(f"alpha[{k}][{l}] = 0: {d.message}" if l >= 0 else d.message)
     return EXIT_OK
 
 

@@ -13,6 +13,7 @@ from .ik import IkResult, IkTarget, geom_contact_target, solve_ik
 from .loaded import Grasp
 from .model import build_spec
 from .ranges import joint_ranges
+from .rules import RuleMatch, expand_rules
 from .state import DetectedContact, detected_contacts, grasp_state, object_weight
 
 __all__ = [
@@ -23,8 +24,10 @@ __all__ = [
     "GraspError",
     "IkResult",
     "IkTarget",
+    "RuleMatch",
     "build_spec",
     "detected_contacts",
+    "expand_rules",
     "export_state",
     "format_toml",
     "geom_contact_target",

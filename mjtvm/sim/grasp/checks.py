@@ -37,6 +37,7 @@ _TOP = {
     "contact_tolerance",
     "contacts",
     "ignore",
+    "contact_rules",
     "refs",
     "rvds",
     "ranges",
@@ -46,7 +47,7 @@ _TOP = {
 }
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}
-_REQUIRED = ("schema", "model", "object", "configuration", "contacts")
+_REQUIRED = ("schema", "model", "object", "configuration")  # and contacts or contact_rules
 
 
 class GraspError(ModelError):

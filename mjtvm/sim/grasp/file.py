@@ -3,7 +3,9 @@ r"""A grasp of any MJCF hand, from a ``mjtvm.grasp/1`` file (``docs/grasp-format
 :func:`load_grasp` reads a grasp file (:mod:`mjtvm.sim.grasp.document`), loads the model it names,
 sets the configuration (a keyframe, joint values, or IK targets brought onto the object's
 surface), resolves the contact selections (geom name or label, body, geom id) against the
-model and each joint's operation range (:mod:`mjtvm.sim.grasp.ranges`). :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
+model, types by the file's ``contact_rules`` the touching geoms no entry selects
+(:mod:`mjtvm.sim.grasp.rules`) and finds each joint's operation range
+(:mod:`mjtvm.sim.grasp.ranges`). :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
 then gives the :class:`~mjtvm.core.state.GraspState` of
 :func:`~mjtvm.sim.grasp.state.grasp_state`.
 
@@ -47,6 +49,7 @@ from .model import (
     suggest,
 )
 from .ranges import joint_ranges
+from .rules import RuleMatch, expand_rules, touching_geoms
 from .state import (
     geom_id,
     geom_label,
@@ -229,6 +232,23 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     for i, sel in enumerate(doc["ignore"]):
         _, ids = _select(model, sel, ob, file, f"ignore[{i}]")
         ignored += [geom_label(model, g) for g in ids if geom_label(model, g) not in types]
+    rules: tuple[RuleMatch, ...] = ()
+    if doc["contact_rules"]:
+        touching = touching_geoms(model, data, doc["object"]["body"], doc["contact_tolerance"])
+        expansion = expand_rules(
+            model,
+            doc["contact_rules"],
+            touching,
+            taken={*types, *ignored},
+            object_body=ob,
+            mu=doc["mu"],
+            file=file,
+        )
+        types.update(expansion.types)
+        mu.update(expansion.mu)
+        ignored += expansion.ignored
+        geoms += [geom_id(model, label) for label in expansion.types]
+        rules = expansion.matches
     if doc["joints"] is not None:
         for k, name in enumerate(doc["joints"]):
             joint_id(model, name, file, f"joints[{k}]")
@@ -283,6 +303,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         ik_bounds=MappingProxyType(bounds),
         document=MappingProxyType(doc),
         preloads=MappingProxyType(preloads),
+        rule_matches=rules,
     )
 
 
