@@ -20,7 +20,7 @@ import mujoco
 from .checks import GraspError, key_of
 from .model import names_of, suggest
 
-__all__ = ["set_base_pose", "set_joint_values"]
+__all__ = ["hold_mocap_poses", "set_base_pose", "set_joint_values"]
 
 _OBJ = mujoco.mjtObj
 _JNT = mujoco.mjtJoint
@@ -113,3 +113,14 @@ def set_base_pose(model: mujoco.MjModel, data: mujoco.MjData, base: Mapping[str,
         data.qpos[adr : adr + 3] = position
     if quaternion is not None:
         data.qpos[adr + 3 : adr + 7] = quaternion
+
+
+def hold_mocap_poses(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Copy the mocap bodies' poses of ``data`` (a keyframe's ``mpos``/``mquat``, a posed
+    ``base``) into ``model.body_pos``/``body_quat``: every ``mjData`` made later from the
+    model and a ``qpos`` (the lift's states, a replay) starts its mocap bodies there."""
+    for b in range(model.nbody):
+        mocap = int(model.body_mocapid[b])
+        if mocap >= 0:
+            model.body_pos[b] = data.mocap_pos[mocap]
+            model.body_quat[b] = data.mocap_quat[mocap]

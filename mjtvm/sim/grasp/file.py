@@ -31,7 +31,7 @@ import numpy as np
 
 from ...core.state import GraspState
 from ...errors import ModelError
-from .base import set_base_pose, set_joint_values
+from .base import hold_mocap_poses, set_base_pose, set_joint_values
 from .checks import GraspError, key_of
 from .configure import solve_configuration
 from .document import read_grasp_document
@@ -107,6 +107,7 @@ def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str
     set_joint_values(model, data, values, file, where)
     if "base" in config:
         set_base_pose(model, data, config["base"], file)
+    hold_mocap_poses(model, data)
     set_object_pose(model, data, ob, doc["object"], file)
     mujoco.mj_forward(model, data)
     if "ik" in config:

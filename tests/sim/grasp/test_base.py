@@ -198,6 +198,26 @@ def test_moving_hand_and_object_together_moves_the_state_and_keeps_the_alphas(
     np.testing.assert_allclose(_alphas(_with_tangents(moved, pairs, R)), alphas, rtol=1e-11, atol=0)
 
 
+@pytest.mark.parametrize("how", ["base", "keyframe"])
+def test_a_posed_mocap_base_is_the_pose_of_every_later_mjdata(tmp_path: Path, how: str) -> None:
+    """The lift's states and a replay make their own mjData from the model and the qpos."""
+    base = {"body": "base", "position": SHIFT.tolist(), "quaternion": QUAT.tolist()}
+    xml = based_gripper("mocap", tmp_path, moved=True)
+    if how == "keyframe":  # the pose in the keyframe's mpos and mquat instead
+        text = xml.read_text(encoding="utf-8").replace(
+            '<key name="grasp" ', f'<key name="grasp" mpos="{_numbers(SHIFT)}" mquat="{_numbers(QUAT)}" '
+        )
+        xml.write_text(text, encoding="utf-8")
+    configuration = {"keyframe": "grasp", **({"base": base} if how == "base" else {})}
+    grasp = load_grasp(_doc(xml, configuration, _moved_object()))
+    np.testing.assert_allclose(grasp.data.xpos[grasp.model.body("base").id], SHIFT, rtol=0, atol=1e-15)
+    later = mujoco.MjData(grasp.model)
+    later.qpos[:] = grasp.data.qpos
+    mujoco.mj_forward(grasp.model, later)
+    np.testing.assert_array_equal(later.xpos, grasp.data.xpos)
+    np.testing.assert_array_equal(later.xquat, grasp.data.xquat)
+
+
 def _ik(base: dict[str, Any] | None) -> dict[str, Any]:
     opened = [q - 0.05 for q in KEY]  # each finger a little open: IK closes it onto the box
     tips = [{"geom": f"{f}_distal/geom1"} for f in ("f1", "f2", "fm")]
