@@ -256,3 +256,46 @@ def test_a_grasp_on_servos_solves_as_the_cvxpy_reference_does() -> None:
     alpha, _status = reference_tvmmp(state)
     np.testing.assert_allclose(np.asarray(result.alpha, dtype=float), alpha, rtol=1e-6, atol=1e-8)
     assert result.tvmmp is not None and result.tvmmp > 0
+
+
+@pytest.mark.parametrize("l", [0, 1])
+def test_a_pinch_on_servo_motors_moves_its_box_at_half_the_alpha_in_a_rollout(l: int) -> None:
+    """The physics check's pinch (tests/physics/test_any_hand.py) with XH430-W350-like servos
+    (motor-side figures behind the 353.5 gear, continuous torque 1.5 N m at the output): the
+    state's ranges, read back from the compiled <dcmotor>, are the servo's, and the rollout at
+    half the witness speed passes."""
+    from mjtvm.core.tvmmp import tvmmp
+    from mjtvm.physics.simulate import rollout, sim_model
+    from mjtvm.physics.witness import witness_drive
+    from mjtvm.sim.grasp.state import grasp_state
+    from tests.physics.test_any_hand import PINCH
+
+    g = 353.5
+    servo = ServoDatasheet.from_figures(
+        {
+            "voltage_V": 12.0,
+            "stall_torque_Nm": 3.4 / g,
+            "no_load_speed_rpm": 30.0 * g,
+            "gear_ratio": g,
+            "continuous_torque_Nm": 1.5 / g,
+            "rotor_inertia_kgm2": 1e-8,
+        }
+    )
+    xml = PINCH.replace(
+        '<geom type="capsule" fromto="-0.066', '<geom name="b_tip" type="capsule" fromto="-0.066'
+    )
+    model = attach_dcmotors(xml, dict.fromkeys(("a1", "a2", "b1", "b2", "c1", "c2"), servo.motor()))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    types = {"a_tip": "F", "b_tip": "F", "c_tip": "F"}
+    rvds = [[0, 0, 1, 0, 0, 0], [0, 0, -1, 0, 0, 0]]
+    state = grasp_state(model, data, contact_types=types, mu=0.8, rvds=rvds, object_body="box")
+    for rng in state.operation_ranges:
+        np.testing.assert_allclose(_vertices(rng), _vertices(servo.operation_range()), rtol=1e-9, atol=1e-12)
+    res = tvmmp(state)
+    assert res.status[0][l] == "optimal" and res.alpha[0, l] > 0
+    drive = witness_drive(state, 0, l, float(res.alpha[0, l]), 0.5)
+    out = rollout(
+        sim_model(model, types, mu=0.8, object_body="box"), data.qpos.copy(), drive, object_body="box"
+    )
+    assert out.passed, out.reason
