@@ -331,3 +331,15 @@ def test_a_free_joint_given_one_number_is_exit_2_and_one_line_on_the_command_lin
     err = proc.stderr.decode("utf-8")
     assert err.startswith(f"error: {path}: configuration.qpos.base: joint 'base' is a free joint"), err
     assert err.count("\n") == 1, err
+
+
+def test_a_ball_joint_in_qpos_points_to_the_keyframe(tmp_path: Path) -> None:
+    path = based_gripper("free", tmp_path)
+    text = path.read_text(encoding="utf-8").replace(
+        '<freejoint name="base"/>', '<joint name="base" type="ball"/>'
+    )
+    path.write_text(text.replace('qpos="0 0 0 1 0 0 0 ', 'qpos="1 0 0 0 '), encoding="utf-8")
+    with pytest.raises(
+        GraspError, match=r"configuration\.qpos\.base: joint 'base' is a ball joint: set it from a keyframe"
+    ):
+        load_grasp(_errors_doc(path, {"qpos": {"base": 0.1}}))
