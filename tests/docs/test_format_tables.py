@@ -32,6 +32,7 @@ EXPECTED = {
         "grasp.schema.json#",
         "grasp.schema.json#/properties/contacts/items",
         "grasp.schema.json#/properties/contact_rules/items",
+        "grasp.schema.json#/properties/configuration",
         "grasp.schema.json#/properties/refs",
         "grasp.schema.json#/properties/lift",
     ],

@@ -1,6 +1,6 @@
 r"""The grasp file and everything it loads: the ``mjtvm.grasp/1`` document and its checks, the
 MJCF model with the object, the configuration (keyframe, joint values or IK), the contacts
-MuJoCo detects, each joint's operation range (datasheet, ``<dcmotor>``, polygon) and the
+MuJoCo detects, each joint's operation range (a motor or servo datasheet, ``<dcmotor>``, polygon) and the
 :class:`~mjtvm.core.state.GraspState` read from ``mjData``.
 """
 
@@ -14,6 +14,7 @@ from .loaded import Grasp
 from .model import build_spec
 from .ranges import joint_ranges
 from .rules import RuleMatch, expand_rules
+from .servo import ServoDatasheet
 from .state import DetectedContact, detected_contacts, grasp_state, object_weight
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "IkResult",
     "IkTarget",
     "RuleMatch",
+    "ServoDatasheet",
     "build_spec",
     "detected_contacts",
     "expand_rules",

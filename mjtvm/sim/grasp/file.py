@@ -33,6 +33,7 @@ import numpy as np
 
 from ...core.state import GraspState
 from ...errors import ModelError
+from .base import hold_mocap_poses, set_base_pose, set_joint_values
 from .checks import GraspError, key_of
 from .configure import solve_configuration
 from .document import read_grasp_document
@@ -106,8 +107,10 @@ def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str
         mujoco.mj_resetDataKeyframe(model, data, key)
     values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
     where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
-    for name, value in values.items():
-        data.qpos[model.jnt_qposadr[joint_id(model, name, file, f"{where}.{key_of(name)}")]] = value
+    set_joint_values(model, data, values, file, where)
+    if "base" in config:
+        set_base_pose(model, data, config["base"], file)
+    hold_mocap_poses(model, data)
     set_object_pose(model, data, ob, doc["object"], file)
     mujoco.mj_forward(model, data)
     if "ik" in config:

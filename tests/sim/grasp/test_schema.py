@@ -115,6 +115,16 @@ EDGES = [
     (("name",), ""),
     (("name",), 7),
     (("model",), 7),
+    (("configuration", "qpos", "hand"), [0, 0, 0.1, 1, 0, 0, 0]),
+    (("configuration", "qpos", "hand"), [0, 0, 0.1, 1, 0, 0]),
+    (("configuration", "qpos", "hand"), [0, 0, 0.1, 1, 0, 0, "0"]),
+    (("configuration", "qpos", "hand"), [0, 0, 0.1, 1, 0, 0, 0, 0]),
+    (("configuration", "base"), {"body": "mount", "position": [0, 0, 0.1]}),
+    (("configuration", "base"), {"body": "mount", "quaternion": [1, 0, 0, 0]}),
+    (("configuration", "base"), {"body": "mount"}),
+    (("configuration", "base"), {"position": [0, 0, 0.1]}),
+    (("configuration", "base"), {"body": "mount", "position": [0, 0]}),
+    (("configuration", "base"), {"body": "mount", "position": [0, 0, 0], "pose": 1}),
 ]
 
 
