@@ -16,6 +16,7 @@ from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
 from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn_uncertified
+from .show import warn_contacts
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
@@ -126,7 +127,10 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
     if is_grasp_source(source):
         from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
-        return load_scenario(source, variant=hand).state()
+        grasp = load_scenario(source, variant=hand)
+        state = grasp.state()
+        warn_contacts(grasp)
+        return state
     if hand != "default":
         raise OptionError("--hand", "applies to the paper's shipped grasps, not to a state file")
     return load_state(source)
@@ -168,6 +172,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     grasp = load_scenario(source, variant=args.hand, mg=args.mg, mu=args.mu)
     state = grasp.state()
     if not args.quiet:
+        warn_contacts(grasp)
         report = ", ".join(
             f"{row['selection']} {row['type']}: " + (", ".join(row["found"]) or "not found")
             for row in grasp.contact_report()
