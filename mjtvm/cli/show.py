@@ -13,7 +13,7 @@ from ..errors import ModelError, OptionError
 from .lift import check_file_folder
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
 from .output import EXIT_OK, emit, warn
-from .values import integer, number, output_file, source
+from .values import MAX_INDENT, integer, number, output_file, source
 
 if TYPE_CHECKING:
     from ..sim.grasp.loaded import Grasp
@@ -59,7 +59,7 @@ def add_show(sub: Subparsers) -> None:
         "at least 1 mm)",
     )
     p.add_argument("--json", action="store_true", help="print the report as JSON instead of a table")
-    p.add_argument("--indent", type=integer(0, 8), default=1, help="JSON indentation (with --json)")
+    p.add_argument("--indent", type=integer(0, MAX_INDENT), default=1, help="JSON indentation (with --json)")
     p.add_argument(
         "--rrd",
         type=output_file,

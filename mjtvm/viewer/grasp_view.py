@@ -184,7 +184,7 @@ def record_grasp(
             [r.position for r in rows],
             colors=colors,
             radii=-4.0,
-            labels=[f"{r.geom} {r.type or '-'} {1e3 * r.distance:.3g} mm" for r in rows],
+            labels=[f"{r.geom} {r.type or '-'} {round(1e3 * r.distance, 6) + 0.0:.3g} mm" for r in rows],
         ),
         static=True,
     )
