@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from typing import TYPE_CHECKING, Any
 
@@ -66,6 +67,14 @@ def add_show(sub: Subparsers) -> None:
         default=None,
         metavar="FILE",
         help="write a rerun recording: the geoms, contact points, normals and friction cones",
+    )
+    p.add_argument(
+        "--png",
+        type=output_file,
+        default=None,
+        metavar="FILE",
+        help="write a picture by MuJoCo's renderer: three views around the object with the contact "
+        "points (headless: MUJOCO_GL=egl, set when unset)",
     )
     p.set_defaults(func=_cmd_show)
 
@@ -134,6 +143,8 @@ def _table(rows: list[ContactRow]) -> list[str]:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
+    if args.png is not None:  # MuJoCo picks its GL back end when imported: headless, EGL
+        os.environ.setdefault("MUJOCO_GL", "egl")
     from ..sim.grasp.report import NEAR_TOLERANCES, contact_rows
     from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only here
 
@@ -141,6 +152,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     if source is None:
         raise OptionError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
     check_file_folder(args.rrd, "--rrd")
+    check_file_folder(args.png, "--png")
     grasp = load_scenario(source, variant=args.hand)
     tol = grasp.contact_tolerance
     within = max(NEAR_TOLERANCES * tol, 1e-3) if args.within is None else 1e-3 * args.within
@@ -163,6 +175,8 @@ def _cmd_show(args: argparse.Namespace) -> int:
         warn(f"the grasp's state would be refused: {problem}")
     if args.rrd is not None:
         _record(grasp, rows, args.rrd)
+    if args.png is not None:
+        _picture(grasp, args.png)
     sys.stdout.flush()
     return EXIT_OK
 
@@ -174,4 +188,13 @@ def _record(grasp: Grasp, rows: list[ContactRow], path: str) -> None:
     record_grasp(
         path, geom_shapes(grasp.model, grasp.data, grasp.object_body), rows, grasp.mu, name=grasp.name
     )
+    print(f"wrote {path}", file=sys.stderr)
+
+
+def _picture(grasp: Grasp, path: str) -> None:
+    from matplotlib.image import imsave
+
+    from ..sim.grasp.picture import render_grasp
+
+    imsave(path, render_grasp(grasp.model, grasp.data, grasp.object_body, grasp.contact_tolerance))
     print(f"wrote {path}", file=sys.stderr)

@@ -114,8 +114,11 @@ def _read_stdin() -> bytes:
     return raw
 
 
-def load_source(source: str | None, *, hand: str = "default", default: str | None = None) -> GraspState:
-    """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo)."""
+def load_source(
+    source: str | None, *, hand: str = "default", default: str | None = None, warnings: bool = True
+) -> GraspState:
+    """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo; its
+    contact warnings on stderr unless ``warnings`` is false)."""
     if source == "-":
         return load_state(_read_stdin())
     if source is None:
@@ -129,7 +132,8 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
 
         grasp = load_scenario(source, variant=hand)
         state = grasp.state()
-        warn_contacts(grasp)
+        if warnings:
+            warn_contacts(grasp)
         return state
     if hand != "default":
         raise OptionError("--hand", "applies to the paper's shipped grasps, not to a state file")
@@ -228,7 +232,11 @@ def add_tvms(sub: Subparsers) -> None:
         "(volume_estimate; the cutting planes then stop at half of --time-limit); 0: none",
     )
     _indent_option(p)
-    p.add_argument("--quiet", action="store_true", help="no progress (LPs solved, volume bracket) on stderr")
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress (LPs solved, volume bracket) and no contact warnings on stderr",
+    )
     p.set_defaults(func=_cmd_tvms)
 
 
@@ -237,7 +245,7 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
 
     if args.grasp is not None and args.state is not None:
         raise OptionError("--grasp", "give STATE or --grasp, not both")
-    state = load_source(args.grasp or args.state, hand=args.hand)
+    state = load_source(args.grasp or args.state, hand=args.hand, warnings=not args.quiet)
     if args.no_rvds:
         state = state.with_(rvds=None)
     show = not args.quiet and args.method == "lp"

@@ -106,6 +106,22 @@ def test_show_writes_a_rerun_recording(tmp_path: Path, capsys: pytest.CaptureFix
     assert not any(c.startswith("/grasp/cones/3") for c in frame.columns)  # L: no cone
 
 
+def test_show_writes_a_picture_headless(tmp_path: Path) -> None:
+    """MuJoCo's renderer with EGL (set by --png when MUJOCO_GL is unset): three 480 x 480 views."""
+    from matplotlib.image import imread
+
+    png = tmp_path / "grasp.png"
+    proc = subprocess.run(
+        [*_console_script(), "show", "case2", "--png", str(png)], capture_output=True, text=True, check=False
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == f"wrote {png}\n"
+    image = imread(png)
+    assert image.shape[:2] == (480, 3 * 480)
+    for panel in np.split(image[..., :3], 3, axis=1):
+        assert float(panel.std()) > 0.05  # a scene, not a blank frame
+
+
 @pytest.mark.parametrize(
     ("words", "message"),
     [
