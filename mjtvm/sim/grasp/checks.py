@@ -35,6 +35,7 @@ _TOP = {
     "friction_edges",
     "slip",
     "contact_tolerance",
+    "max_penetration",
     "contacts",
     "ignore",
     "contact_rules",

@@ -32,6 +32,7 @@ from .dcmotor import DCMotor
 from .model import (
     build_spec,
 )
+from .report import check_penetration
 from .rules import RuleMatch, touching_geoms
 from .state import (
     geom_id,
@@ -210,13 +211,16 @@ class Grasp:
         return rows
 
     def check_contacts(self) -> None:
-        """Every selection touches the object and every touching geom is selected or ignored.
+        """Every selection touches the object, every touching geom is selected or ignored, and
+        no selected contact is deeper inside the object than the file's ``max_penetration``
+        (:func:`~mjtvm.sim.grasp.report.check_penetration`).
 
         Raises
         ------
         GraspError
             Naming the first selection that does not touch (with its nearest distance and the
-            tolerance) or the first touching geom that no selection names.
+            tolerance), the first touching geom that no selection names, or the first contact
+            too deep (with its geom, the object's geom and the depth).
         """
         tol = self.contact_tolerance
         touching = self._touching()  # the nearest distances are computed only for a message
@@ -239,6 +243,7 @@ class Grasp:
                     f"geom {g!r} touches the object (distance {1e3 * dist:.3g} mm) but no "
                     "contact selects it: add it to contacts with a type, to ignore, or to contact_rules",
                 )
+        check_penetration(self)
 
     def state(
         self,
@@ -261,8 +266,8 @@ class Grasp:
         Raises
         ------
         GraspError
-            A selection that does not touch, a touching geom nobody selected, or an S
-            contact without a slide direction.
+            A selection that does not touch, a touching geom nobody selected, a contact deeper
+            than ``max_penetration``, or an S contact without a slide direction.
         """
         self.check_contacts()
         types = {**{g: "D" for g in self.ignored_geoms}, **self.contact_types, **(contact_types or {})}
