@@ -14,6 +14,7 @@ from ._lazy import lazy_attributes
 from .core.assembly import Assembly, assemble
 from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
 from .core.operation_range import OperationRange, default_operation_range, load_motor_data
+from .core.result import Diagnosis
 from .core.state import GraspState
 from .core.state_file import dump_state, load_state, parse_state, state_to_dict
 from .core.transmission import Transmission
@@ -33,6 +34,7 @@ __all__ = [
     "CONTACT_TYPES",
     "Assembly",
     "Contact",
+    "Diagnosis",
     "Grasp",
     "GraspError",
     "GraspState",

@@ -20,6 +20,7 @@ from .output import (
     one_line,
     stdout_to_devnull,
 )
+from .show import add_show
 from .solve import add_export_state, add_solve, add_tvms
 from .verify import verify_parser
 
@@ -46,6 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_export_state(sub)
     add_replay(sub)
     add_tvms(sub)
+    add_show(sub)
     sub.add_parser(
         "verify",
         add_help=False,  # its options import MuJoCo: parsed by verify_parser() in main()

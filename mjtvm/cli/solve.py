@@ -16,7 +16,8 @@ from ..core.tvmmp import tvmmp
 from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
 from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
-from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn_uncertified
+from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
+from .show import warn_contacts
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
@@ -114,8 +115,11 @@ def _read_stdin() -> bytes:
     return raw
 
 
-def load_source(source: str | None, *, hand: str = "default", default: str | None = None) -> GraspState:
-    """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo)."""
+def load_source(
+    source: str | None, *, hand: str = "default", default: str | None = None, warnings: bool = True
+) -> GraspState:
+    """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo; its
+    contact warnings on stderr unless ``warnings`` is false)."""
     if source == "-":
         return load_state(_read_stdin())
     if source is None:
@@ -127,7 +131,11 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
     if is_grasp_source(source):
         from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
-        return load_scenario(source, variant=hand).state()
+        grasp = load_scenario(source, variant=hand)
+        state = grasp.state()
+        if warnings:
+            warn_contacts(grasp)
+        return state
     if hand != "default":
         raise OptionError("--hand", "applies to the paper's shipped grasps, not to a state file")
     return load_state(source)
@@ -135,9 +143,12 @@ def load_source(source: str | None, *, hand: str = "default", default: str | Non
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     state = load_source(args.state, hand=args.hand, default=example_path())
-    result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses)
+    result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
     warn_uncertified(result)
+    for d in result.diagnosis:
+        k, l = d.pair
+        warn(f"alpha[{k}][{l}] = 0: {d.message}" if l >= 0 else d.message)
     return EXIT_OK
 
 
@@ -169,6 +180,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     grasp = load_scenario(source, variant=args.hand, mg=args.mg, mu=args.mu)
     state = grasp.state()
     if not args.quiet:
+        warn_contacts(grasp)
         report = ", ".join(
             f"{row['selection']} {row['type']}: " + (", ".join(row["found"]) or "not found")
             for row in grasp.contact_report()
@@ -224,7 +236,11 @@ def add_tvms(sub: Subparsers) -> None:
         "(volume_estimate; the cutting planes then stop at half of --time-limit); 0: none",
     )
     _indent_option(p)
-    p.add_argument("--quiet", action="store_true", help="no progress (LPs solved, volume bracket) on stderr")
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress (LPs solved, volume bracket) and no contact warnings on stderr",
+    )
     p.set_defaults(func=_cmd_tvms)
 
 
@@ -233,7 +249,7 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
 
     if args.grasp is not None and args.state is not None:
         raise OptionError("--grasp", "give STATE or --grasp, not both")
-    state = load_source(args.grasp or args.state, hand=args.hand)
+    state = load_source(args.grasp or args.state, hand=args.hand, warnings=not args.quiet)
     if args.no_rvds:
         state = state.with_(rvds=None)
     show = not args.quiet and args.method == "lp"

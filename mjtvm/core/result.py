@@ -13,6 +13,8 @@ from .assembly import BoxForm
 
 __all__ = [
     "RESULT_SCHEMA",
+    "Diagnosis",
+    "DiagnosisCause",
     "PairStatus",
     "Timings",
     "TvmmpResult",
@@ -22,6 +24,7 @@ __all__ = [
 ]
 
 PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
+DiagnosisCause = Literal["contacts", "ranges", "balance", "unknown"]
 RESULT_SCHEMA = "mjtvm.result/1"
 
 
@@ -45,6 +48,42 @@ def _none_nan(x: Any) -> Any:
 def finite_or_none(x: float | None) -> float | None:
     """``x`` when finite, else ``None`` (JSON has no NaN or infinity)."""
     return None if x is None or not math.isfinite(x) else float(x)
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    r"""Why a pair's alpha is 0 or a REFS vertex cannot be balanced (:mod:`~mjtvm.core.diagnosis`).
+
+    Attributes
+    ----------
+    pair
+        ``(k, l)`` of an alpha 0; ``(k, -1)`` for a REFS vertex that cannot be balanced (every
+        pair of that ``k`` infeasible).
+    cause
+        ``"contacts"``: the kinematics of ``contacts`` alone lock the motion (eq. 11-13);
+        ``"ranges"``: the operation ranges of ``joints`` bind (eq. 19-20 with eq. 1);
+        ``"balance"``: no contact forces balance the REFS vertex, whatever the torques;
+        ``"unknown"``: neither found (an alpha at the solver's tolerance).
+    contacts, joints
+        The names of a minimal set of contacts (``"contacts"``) or joints (``"ranges"``).
+    message
+        One line in words.
+    """
+
+    pair: tuple[int, int]
+    cause: DiagnosisCause
+    contacts: tuple[str, ...]
+    joints: tuple[str, ...]
+    message: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "pair": list(self.pair),
+            "cause": self.cause,
+            "contacts": list(self.contacts),
+            "joints": list(self.joints),
+            "message": self.message,
+        }
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,6 +196,10 @@ class TvmmpResult:
         ``((k, l), message)`` for every LP on which a backend failed, the backends
         disagreed, or an answer failed its certificate (``l = -1``: the balance-only LP of
         a state without non-zero RVDS vertex).
+    diagnosis
+        Per alpha 0 and per REFS vertex that cannot be balanced, why
+        (:func:`~mjtvm.core.diagnosis.diagnose`); empty unless asked for (``tvmmp(...,
+        diagnose=True)``) and some alpha is 0 or some pair infeasible.
     """
 
     alpha: NDArray[np.float64]
@@ -172,6 +215,7 @@ class TvmmpResult:
     settled_by: tuple[tuple[str | None, ...], ...] = ()
     certified: tuple[tuple[bool | None, ...], ...] = ()
     notes: tuple[tuple[tuple[int, int], str], ...] = ()
+    diagnosis: tuple[Diagnosis, ...] = ()
 
     def uncertified(self) -> list[tuple[int, int]]:
         """The pairs whose answer is not certified (each has a note), in (k, l) order."""
@@ -207,6 +251,8 @@ class TvmmpResult:
                 "num_lps": self.timings.num_lps,
             },
         }
+        if self.diagnosis:
+            out["diagnosis"] = [d.to_dict() for d in self.diagnosis]
         if witnesses:
             out["witnesses"] = [[None if w is None else w.to_dict() for w in row] for row in self.witnesses]
         return out

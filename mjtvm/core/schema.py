@@ -142,6 +142,9 @@ def _explain(
         return field, f"expected {span} {what}, got {got}"
     if rule == "oneOf" and all(set(s) == {"required"} for s in value):
         return field, "expected exactly one of " + " / ".join(" + ".join(s["required"]) for s in value)
+    if rule == "anyOf" and all(set(s) == {"required"} for s in value):
+        keys = [k for s in value for k in s["required"]]
+        return join(keys[0]), f"required (or {', '.join(map(key, keys[1:]))})"
     if rule == "not" and "required" in value:
         return join(value["required"][0]), schema.get("description", "not allowed here")
     if rule == "not" and "anyOf" in value:

@@ -22,6 +22,7 @@ from ..errors import ParamError, SolverError, StateError
 from .assembly import Assembly, BoxForm
 from .certificate import clip
 from .problem2 import StateLPs, Verdict
+from .result import Diagnosis
 from .result import (  # re-exported: the result types lived here
     PairStatus as PairStatus,
 )
@@ -197,6 +198,7 @@ def tvmmp(
     solver: str = "highs",
     box: BoxForm = "eliminated",
     witnesses: bool = True,
+    diagnose: bool = False,
 ) -> TvmmpResult:
     r"""Solve Problem 2 (eq. 31-35) for one grasp state.
 
@@ -210,6 +212,9 @@ def tvmmp(
         ``"eliminated"`` (exact reduction of eq. 2, default) or ``"literal"``.
     witnesses
         Whether to keep the forces, torques, speeds and box of each optimal pair.
+    diagnose
+        Whether to say why an alpha is 0 or a pair infeasible (:mod:`~mjtvm.core.diagnosis`,
+        a few LPs per such pair; nothing when every alpha is > 0): the result's ``diagnosis``.
 
     Returns
     -------
@@ -235,6 +240,11 @@ def tvmmp(
         problem.session = None
     t2 = time.perf_counter()
     limiting, value = _limiting(pairs)
+    found: tuple[Diagnosis, ...] = ()
+    if diagnose and (not pairs.feasible or np.any(pairs.alpha == 0.0)):
+        from .diagnosis import diagnose as diagnose_pairs  # it solves Problem 2's LPs itself
+
+        found = diagnose_pairs(state, pairs.alpha, pairs.status, box=box, solver=solver)
     return TvmmpResult(
         alpha=pairs.alpha,
         status=tuple(tuple(s) for s in pairs.status),
@@ -249,4 +259,5 @@ def tvmmp(
         settled_by=tuple(tuple(b) for b in pairs.settled_by),
         certified=tuple(tuple(c) for c in pairs.certified),
         notes=tuple(pairs.notes),
+        diagnosis=found,
     )

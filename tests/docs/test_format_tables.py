@@ -31,6 +31,8 @@ EXPECTED = {
     "grasp-format.md": [
         "grasp.schema.json#",
         "grasp.schema.json#/properties/contacts/items",
+        "grasp.schema.json#/properties/contact_rules/items",
+        "grasp.schema.json#/properties/configuration",
         "grasp.schema.json#/properties/refs",
         "grasp.schema.json#/properties/lift",
     ],

@@ -106,6 +106,8 @@ def test_every_table_is_parsed() -> None:
         "bench.json:scaling",
         "bench.json:scaling.per_fingers",
         "bench.json:hands",
+        "show",  # tested in tests/cli/test_show.py
+        "show-contacts",
     }
     assert set(TABLES) == expected
 

@@ -295,3 +295,28 @@ def random_case(seed: int) -> tuple[str, GraspState]:
     if "S" in types and rng.uniform() < 0.25:
         state = state.with_(slip="shared")
     return f"random-{space}d-{''.join(types)}", state
+
+
+def random_transmission(state: GraspState, rng: np.random.Generator) -> GraspState:
+    """``state`` driven through a random transmission: M - 1 actuators (the last joint's
+    torque shared: a tendon over two joints), one coupling row between the first two joints,
+    small joint damping; each actuator's range the first ranges of ``state``."""
+    from mjtvm.core.transmission import Transmission
+
+    m = state.num_joints
+    a = max(1, m - 1)
+    moment = np.eye(a, m)
+    moment[a - 1, m - 1] = float(rng.uniform(0.3, 1.5))  # the last actuator pulls two joints
+    moment[: a - 1] *= rng.uniform(0.5, 2.0, size=(a - 1, 1))
+    rows, names = None, ()
+    if m >= 3:
+        rows, names = np.zeros((1, m)), ("coupling",)
+        rows[0, :2] = [1.0, -float(rng.uniform(0.5, 1.5))]
+    t = Transmission(
+        tuple(f"act{i}" for i in range(a)),
+        moment,
+        names,
+        rows,
+        rng.uniform(0.0, 0.01, size=m),
+    )
+    return state.with_(operation_ranges=state.operation_ranges[:a], transmission=t)

@@ -1,6 +1,6 @@
 r"""The grasp file and everything it loads: the ``mjtvm.grasp/1`` document and its checks, the
 MJCF model with the object, the configuration (keyframe, joint values or IK), the contacts
-MuJoCo detects, each joint's operation range (datasheet, ``<dcmotor>``, polygon) and the
+MuJoCo detects, each joint's operation range (a motor or servo datasheet, ``<dcmotor>``, polygon) and the
 :class:`~mjtvm.core.state.GraspState` read from ``mjData``.
 """
 
@@ -13,6 +13,8 @@ from .ik import IkResult, IkTarget, geom_contact_target, solve_ik
 from .loaded import Grasp
 from .model import build_spec
 from .ranges import joint_ranges
+from .rules import RuleMatch, expand_rules
+from .servo import ServoDatasheet
 from .state import DetectedContact, detected_contacts, grasp_state, object_weight
 
 __all__ = [
@@ -23,8 +25,11 @@ __all__ = [
     "GraspError",
     "IkResult",
     "IkTarget",
+    "RuleMatch",
+    "ServoDatasheet",
     "build_spec",
     "detected_contacts",
+    "expand_rules",
     "export_state",
     "format_toml",
     "geom_contact_target",

@@ -35,8 +35,10 @@ _TOP = {
     "friction_edges",
     "slip",
     "contact_tolerance",
+    "max_penetration",
     "contacts",
     "ignore",
+    "contact_rules",
     "refs",
     "rvds",
     "ranges",
@@ -46,7 +48,7 @@ _TOP = {
 }
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}
-_REQUIRED = ("schema", "model", "object", "configuration", "contacts")
+_REQUIRED = ("schema", "model", "object", "configuration")  # and contacts or contact_rules
 
 
 class GraspError(ModelError):
@@ -256,15 +258,57 @@ def _quaternion(c: _Checker, value: Any, field: str) -> list[float]:
     return [x / norm for x in q]
 
 
+def _qpos(c: _Checker, value: Any) -> dict[str, float | list[float]]:
+    """``configuration.qpos``: joint = a number (hinge, slide) or a free joint's 7 numbers."""
+    field = "configuration.qpos"
+    if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
+        raise c.fail(
+            field, f"expected a table of joint = number (or a free joint's 7 numbers), got {_kind(value)}"
+        )
+    out: dict[str, float | list[float]] = {}
+    for k, v in value.items():
+        name = f"{field}.{key_of(k)}"
+        if isinstance(v, list):
+            if len(v) != 7:
+                raise c.fail(
+                    name, f"expected a free joint's 7 numbers [x, y, z, qw, qx, qy, qz], got {_kind(v)}"
+                )
+            pose = c.vector(v, name, 7)
+            norm = math.sqrt(sum(x * x for x in pose[3:]))
+            if abs(norm - 1.0) > 1e-6:
+                raise c.beyond(
+                    name, f"expected a unit quaternion (w, x, y, z) in numbers 4 to 7, got norm {norm:.6g}"
+                )
+            out[str(k)] = pose[:3] + [x / norm for x in pose[3:]]
+        else:
+            out[str(k)] = c.number(v, name)
+    return out
+
+
+def _base(c: _Checker, value: Any) -> dict[str, Any]:
+    """``configuration.base``: the pose of a mocap body or of a body on a free joint."""
+    t = c.table(value, "configuration.base", {"body", "position", "quaternion"}, ("body",))
+    if "position" not in t and "quaternion" not in t:
+        raise c.fail("configuration.base", "expected position, quaternion or both")
+    return {
+        "body": c.string(t["body"], "configuration.base.body"),
+        "position": c.vector(t["position"], "configuration.base.position", 3) if "position" in t else None,
+        "quaternion": _quaternion(c, t["quaternion"], "configuration.base.quaternion")
+        if "quaternion" in t
+        else None,
+    }
+
+
 def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
-    t = c.table(value, "configuration", {"keyframe", "qpos", "ik"})
+    t = c.table(value, "configuration", {"keyframe", "qpos", "ik", "base"})
     chosen = [k for k in ("keyframe", "qpos", "ik") if k in t]
     if len(chosen) != 1:
         raise c.fail("configuration", f"expected exactly one of keyframe, qpos, ik, got {len(chosen)}")
+    base = {"base": _base(c, t["base"])} if "base" in t else {}
     if "keyframe" in t:
-        return {"keyframe": c.string(t["keyframe"], "configuration.keyframe")}
+        return {"keyframe": c.string(t["keyframe"], "configuration.keyframe"), **base}
     if "qpos" in t:
-        return {"qpos": c.number_map(t["qpos"], "configuration.qpos")}
+        return {"qpos": _qpos(c, t["qpos"]), **base}
     ik = c.table(
         t["ik"],
         "configuration.ik",
@@ -298,7 +342,8 @@ def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
             "max_iterations": c.integer(
                 ik.get("max_iterations", 200), "configuration.ik.max_iterations", 1, 10_000
             ),
-        }
+        },
+        **base,
     }
 
 

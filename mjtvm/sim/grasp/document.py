@@ -39,6 +39,7 @@ from .checks import (
     _refs,
     _shape,
 )
+from .rules import check_contact_rules
 from .validate import schema_problem
 
 __all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
@@ -83,8 +84,9 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
 
     The returned document is normalised: selectors as ``{"select": "geom"|"body"|"geom_id",
     "target": ...}``; numbers as floats; defaults filled in (``mu`` None, ``friction_edges``
-    16, ``slip`` ``"per_contact"``, ``contact_tolerance`` 1e-4 m, ``refs`` the weight,
-    ``rvds`` None, ``ranges`` {}, ``lift`` None, ``ignore`` []).
+    16, ``slip`` ``"per_contact"``, ``contact_tolerance`` 1e-4 m, ``max_penetration`` 1e-3 m,
+    ``refs`` the weight, ``rvds`` None, ``ranges`` {}, ``lift`` None, ``ignore``, ``contacts``
+    and ``contact_rules`` []).
 
     Raises
     ------
@@ -160,11 +162,17 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
     doc["contact_tolerance"] = c.number(doc.get("contact_tolerance", 1e-4), "contact_tolerance", low=0.0)
     if doc["contact_tolerance"] > 0.01:
         raise c.fail("contact_tolerance", f"expected at most 0.01 m, got {doc['contact_tolerance']:g}")
-    doc["contacts"] = _contacts(c, doc["contacts"])
+    doc["max_penetration"] = c.number(doc.get("max_penetration", 1e-3), "max_penetration", low=0.0)
+    if doc["max_penetration"] > 0.01:
+        raise c.fail("max_penetration", f"expected at most 0.01 m, got {doc['max_penetration']:g}")
+    if "contacts" not in doc and "contact_rules" not in doc:
+        raise c.fail("contacts", "required (or contact_rules)")
+    doc["contacts"] = _contacts(c, doc["contacts"]) if "contacts" in doc else []
     ignore = doc.get("ignore", [])
     if not isinstance(ignore, list) or len(ignore) > MAX_ITEMS:
         raise c.fail("ignore", f"expected a list of selections (geom, body or geom_id), got {_kind(ignore)}")
     doc["ignore"] = [c.selector(s, f"ignore[{i}]", set()) for i, s in enumerate(ignore)]
+    doc["contact_rules"] = check_contact_rules(c, doc["contact_rules"]) if "contact_rules" in doc else []
     doc["refs"] = _refs(c, doc.get("refs", {}))
     doc["rvds"] = c.vectors(doc["rvds"], "rvds", 6) if doc.get("rvds") is not None else None
     doc["ranges"] = _ranges(c, doc.get("ranges", {}))

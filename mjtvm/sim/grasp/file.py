@@ -3,9 +3,11 @@ r"""A grasp of any MJCF hand, from a ``mjtvm.grasp/1`` file (``docs/grasp-format
 :func:`load_grasp` reads a grasp file (:mod:`mjtvm.sim.grasp.document`), loads the model it names,
 sets the configuration (a keyframe, joint values, or IK targets brought onto the object's
 surface), resolves the contact selections (geom name or label, body, geom id) against the
-model and each joint's operation range (:mod:`mjtvm.sim.grasp.ranges`), or, when the model's
-actuators or equality constraints couple the joints, the transmission
-(:mod:`mjtvm.sim.grasp.transmission`) and each actuator's range. :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
+model, types by the file's ``contact_rules`` the touching geoms no entry selects
+(:mod:`mjtvm.sim.grasp.rules`) and finds each joint's operation range
+(:mod:`mjtvm.sim.grasp.ranges`), or, when the model's actuators or equality constraints
+couple the joints, the transmission (:mod:`mjtvm.sim.grasp.transmission`) and each
+actuator's range. :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
 then gives the :class:`~mjtvm.core.state.GraspState` of
 :func:`~mjtvm.sim.grasp.state.grasp_state`.
 
@@ -34,6 +36,7 @@ import numpy as np
 
 from ...core.state import GraspState
 from ...errors import ModelError
+from .base import hold_mocap_poses, set_base_pose, set_joint_values
 from .checks import GraspError, key_of
 from .configure import solve_configuration
 from .document import read_grasp_document
@@ -49,6 +52,7 @@ from .model import (
     suggest,
 )
 from .ranges import actuator_ranges, joint_ranges
+from .rules import RuleMatch, expand_rules, touching_geoms
 from .state import (
     geom_id,
     geom_label,
@@ -112,8 +116,10 @@ def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str
         mujoco.mj_resetDataKeyframe(model, data, key)
     values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
     where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
-    for name, value in values.items():
-        data.qpos[model.jnt_qposadr[joint_id(model, name, file, f"{where}.{key_of(name)}")]] = value
+    set_joint_values(model, data, values, file, where)
+    if "base" in config:
+        set_base_pose(model, data, config["base"], file)
+    hold_mocap_poses(model, data)
     set_object_pose(model, data, ob, doc["object"], file)
     mujoco.mj_forward(model, data)
     if "ik" in config:
@@ -286,6 +292,23 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     for i, sel in enumerate(doc["ignore"]):
         _, ids = _select(model, sel, ob, file, f"ignore[{i}]")
         ignored += [geom_label(model, g) for g in ids if geom_label(model, g) not in types]
+    rules: tuple[RuleMatch, ...] = ()
+    if doc["contact_rules"]:
+        touching = touching_geoms(model, data, doc["object"]["body"], doc["contact_tolerance"])
+        expansion = expand_rules(
+            model,
+            doc["contact_rules"],
+            touching,
+            taken={*types, *ignored},
+            object_body=ob,
+            mu=doc["mu"],
+            file=file,
+        )
+        types.update(expansion.types)
+        mu.update(expansion.mu)
+        ignored += expansion.ignored
+        geoms += [geom_id(model, label) for label in expansion.types]
+        rules = expansion.matches
     if doc["joints"] is not None:
         for k, name in enumerate(doc["joints"]):
             joint_id(model, name, file, f"joints[{k}]")
@@ -331,6 +354,7 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         ik_bounds=MappingProxyType(bounds),
         document=MappingProxyType(doc),
         preloads=MappingProxyType(preloads),
+        rule_matches=rules,
     )
 
 

@@ -15,7 +15,6 @@ World frame, SI units.
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -33,8 +32,9 @@ from .dcmotor import DCMotor
 from .model import (
     build_spec,
 )
+from .report import check_penetration
+from .rules import RuleMatch, touching_geoms
 from .state import (
-    detected_contacts,
     geom_id,
     grasp_state,
     object_weight,
@@ -67,7 +67,7 @@ class Grasp:
         The state's joints, in model order unless the file lists them.
     contact_types
         Geom label (:func:`~mjtvm.sim.grasp.state.geom_label`) -> ``"F"``, ``"L"``, ``"S"`` or
-        ``"D"``, every geom of every selection.
+        ``"D"``, every geom of every selection and every touching geom a rule typed.
     selections
         Per ``contacts`` entry of the file: its description and the labels it selects.
     mu, slide_directions
@@ -99,6 +99,9 @@ class Grasp:
         (:mod:`mjtvm.sim.grasp.transmission`), or ``None`` for the paper's independent joints
         (each joint its own actuator, no equality). With a transmission, ``operation_ranges``
         and ``motors`` are keyed by actuator name, in the actuator's units.
+    rule_matches
+        Per ``contact_rules`` entry: the touching geoms it typed (:mod:`mjtvm.sim.grasp.rules`);
+        those geoms are in ``contact_types`` (or ``ignored_geoms``), not in ``selections``.
     """
 
     name: str
@@ -125,6 +128,7 @@ class Grasp:
     document: Mapping[str, Any]
     preloads: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
     transmission: ModelTransmission | None = None
+    rule_matches: tuple[RuleMatch, ...] = ()
 
     def with_options(
         self, *, mg: float | None = None, mu: float | Mapping[str, float] | None = None
@@ -180,7 +184,8 @@ class Grasp:
         return str(self.path) if self.path is not None else "grasp"
 
     def contact_report(self) -> list[dict[str, Any]]:
-        r"""Found vs expected, one row per ``contacts`` entry and per touching geom nobody selected.
+        r"""Found vs expected, one row per ``contacts`` entry, per ``contact_rules`` entry and per
+        touching geom nobody selected.
 
         Each row: ``selection`` (as written), ``type``, ``found`` (labels touching the
         object within ``contact_tolerance``), ``distance`` (m, the smallest surface distance
@@ -197,20 +202,32 @@ class Grasp:
                     "distance": self._nearest(labels),
                 }
             )
-        known = {g for _, labels in self.selections for g in labels} | set(self.ignored_geoms)
+        for match in self.rule_matches:
+            rows.append(
+                {
+                    "selection": f"{match.field} {match.description}",
+                    "type": match.type,
+                    "found": list(match.labels),
+                    "distance": min((touching[g] for g in match.labels if g in touching), default=None),
+                }
+            )
+        known = set(self.contact_types) | set(self.ignored_geoms)
         for g, dist in touching.items():
             if g not in known:
                 rows.append({"selection": None, "type": None, "found": [g], "distance": dist})
         return rows
 
     def check_contacts(self) -> None:
-        """Every selection touches the object and every touching geom is selected or ignored.
+        """Every selection touches the object, every touching geom is selected or ignored, and
+        no selected contact is deeper inside the object than the file's ``max_penetration``
+        (:func:`~mjtvm.sim.grasp.report.check_penetration`).
 
         Raises
         ------
         GraspError
             Naming the first selection that does not touch (with its nearest distance and the
-            tolerance) or the first touching geom that no selection names.
+            tolerance), the first touching geom that no selection names, or the first contact
+            too deep (with its geom, the object's geom and the depth).
         """
         tol = self.contact_tolerance
         touching = self._touching()  # the nearest distances are computed only for a message
@@ -224,15 +241,16 @@ class Grasp:
                     f"{what} does not touch the object: nearest distance {far} > "
                     f"contact_tolerance {1e3 * tol:.3g} mm",
                 )
-        known = {g for _, labels in self.selections for g in labels} | set(self.ignored_geoms)
+        known = set(self.contact_types) | set(self.ignored_geoms)  # selections and rules
         for g, dist in touching.items():
             if g not in known:
                 raise GraspError(
                     self.file,
                     "contacts",
                     f"geom {g!r} touches the object (distance {1e3 * dist:.3g} mm) but no "
-                    "contact selects it: add it to contacts with a type, or to ignore",
+                    "contact selects it: add it to contacts with a type, to ignore, or to contact_rules",
                 )
+        check_penetration(self)
 
     def state(
         self,
@@ -255,8 +273,8 @@ class Grasp:
         Raises
         ------
         GraspError
-            A selection that does not touch, a touching geom nobody selected, or an S
-            contact without a slide direction.
+            A selection that does not touch, a touching geom nobody selected, a contact deeper
+            than ``max_penetration``, or an S contact without a slide direction.
         """
         self.check_contacts()
         types = {**{g: "D" for g in self.ignored_geoms}, **self.contact_types, **(contact_types or {})}
@@ -294,18 +312,7 @@ class Grasp:
         return state.with_(contacts=kept)
 
     def _touching(self) -> dict[str, float]:
-        work = copy.copy(self.data)
-        found = detected_contacts(
-            self.model,
-            work,
-            object_body=self.object_body,
-            one_per_body=True,
-            tolerance=self.contact_tolerance,
-        )  # as the state sees them: the deepest contact of each finger body
-        out: dict[str, float] = {}
-        for c in found:
-            out[c.geom] = min(out.get(c.geom, np.inf), c.distance)
-        return out
+        return touching_geoms(self.model, self.data, self.object_body, self.contact_tolerance)
 
     def _nearest(self, labels: Sequence[str]) -> float | None:
         """Smallest surface distance (m) between the labels' geoms and the object's, up to 0.1 m."""

@@ -5,11 +5,14 @@ that matches it, else ``"*"``. Four sources (``docs/grasp-format.md``):
 
 * ``dcmotor``: the model's ``<dcmotor>`` driving the joint
   (:func:`~mjtvm.sim.grasp.actuator.operation_range_from_actuator`), exact;
-* ``datasheet``: a motor datasheet entry (no-load speed, nominal point, max permissible
-  speed, gear ratio and efficiency) through
+* ``datasheet``: a motor datasheet entry, in maxon's form (no-load speed, nominal point, max
+  permissible speed, gear ratio and efficiency) through
   :meth:`~mjtvm.core.operation_range.OperationRange.from_datasheet`, exact for the motor's
-  continuous operation; the same entry gives the physics check its ``<dcmotor>``
-  (:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet`) when the gear is ideal;
+  continuous operation, or in the servo form (stall torque, no-load speed, optional gear,
+  continuous torque, rotor inertia) through :class:`~mjtvm.sim.grasp.servo.ServoDatasheet`;
+  the same entry gives the physics check its ``<dcmotor>``
+  (:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet`,
+  :meth:`~mjtvm.sim.grasp.servo.ServoDatasheet.motor`) when the gear is ideal;
 * ``actuator`` + ``speed_limit``: the box ``|tau| <= gear x forcerange``,
   ``|qdot| <= speed_limit`` of a (e.g. position) actuator. **An approximation**: a real
   motor's speed falls with torque (the datasheet's speed-torque line), so the box promises
@@ -35,8 +38,9 @@ from ...errors import MjtvmError
 from .actuator import operation_range_from_actuator
 from .checks import GraspError, key_of
 from .dcmotor import DCMotor
+from .servo import ServoDatasheet, is_servo_form
 
-__all__ = ["actuator_ranges", "joint_ranges", "range_entry"]
+__all__ = ["actuator_ranges", "joint_ranges", "range_entry", "shipped_datasheets"]
 
 _DATASHEET_KEYS = (
     "no_load_speed_rpm",
@@ -89,6 +93,11 @@ def _actuator(model: mujoco.MjModel, j: int, joint: str, value: Any, fail: Any) 
     return drivers[0]
 
 
+def shipped_datasheets() -> list[str]:
+    """The names of the datasheets shipped in ``mjtvm/data`` (``maxon_re25_20w``, ...)."""
+    return sorted(p.name[:-5] for p in resources.files("mjtvm.data").iterdir() if p.name.endswith(".json"))
+
+
 def datasheet(value: Any, base: Path | None, fail: Any) -> dict[str, Any]:
     """The datasheet figures of a ``datasheet`` value: a shipped name, a JSON path or a table."""
     if isinstance(value, Mapping):
@@ -97,7 +106,8 @@ def datasheet(value: Any, base: Path | None, fail: Any) -> dict[str, Any]:
     if not text.endswith(".json"):
         shipped = resources.files("mjtvm.data").joinpath(f"{text}.json")
         if not shipped.is_file():
-            raise fail(f"no shipped datasheet {text!r} (shipped: maxon_re25_20w; or give a .json path)")
+            names = ", ".join(shipped_datasheets())
+            raise fail(f"no shipped datasheet {text!r} (shipped: {names}; or give a .json path)")
         return dict(json.loads(shipped.read_text(encoding="utf-8")))
     path = Path(text) if base is None or Path(text).is_absolute() else base / text
     try:
@@ -125,6 +135,16 @@ def _from_datasheet(
     for k in ("gear_ratio", "gear_efficiency"):
         if k in entry:
             figures[k] = entry[k]
+    if is_servo_form(figures):
+        try:
+            servo = ServoDatasheet.from_figures(figures)
+        except MjtvmError as e:
+            raise fail(f"datasheet: {e}") from e
+        try:
+            servo_motor: DCMotor | str = servo.motor()
+        except MjtvmError as e:
+            servo_motor = f"its datasheet gives no <dcmotor> ({e})"
+        return servo.operation_range(), servo_motor
     missing = [k for k in _DATASHEET_KEYS if k not in figures]
     if missing:
         raise fail(f"datasheet lacks {', '.join(missing)}")

@@ -1,6 +1,7 @@
 r"""Which geoms touch the object, as MuJoCo reports them: labels for unnamed geoms, contact
-detection within a distance tolerance, MuJoCo's iterative collision run to a tight tolerance,
-exact normals where it would give approximate ones, and MuJoCo's round-off removed.
+detection within a distance tolerance (exact: every pair within it, checked against
+``mj_geomDistance``, :mod:`mjtvm.sim.grasp.pairs`), MuJoCo's iterative collision run to a tight
+tolerance, exact normals where it would give approximate ones, and MuJoCo's round-off removed.
 
 Frames and units: world frame, SI. Normals point into the object.
 """
@@ -17,6 +18,7 @@ from numpy.typing import NDArray
 
 from ...errors import ModelError
 from .normals import needs_exact_normal, object_normal
+from .pairs import GeomPair, near_pairs
 
 __all__ = [
     "CCD_TOLERANCE",
@@ -34,6 +36,11 @@ __all__ = [
 ]
 
 _OBJ = mujoco.mjtObj
+_G = mujoco.mjtGeom
+_PRIMITIVES = {
+    int(t)
+    for t in (_G.mjGEOM_SPHERE, _G.mjGEOM_CAPSULE, _G.mjGEOM_ELLIPSOID, _G.mjGEOM_CYLINDER, _G.mjGEOM_BOX)
+}
 
 
 #: m: the convergence tolerance of MuJoCo's iterative collision when a grasp is read.
@@ -75,6 +82,8 @@ class DetectedContact:
         ``(3,)`` unit normal pointing into the object, world frame.
     distance
         Signed distance between the surfaces (m); negative when they penetrate.
+    object_geom
+        Label of the object's geom it touches (:func:`geom_label`).
     """
 
     geom: str
@@ -82,6 +91,7 @@ class DetectedContact:
     position: NDArray[np.float64]
     normal: NDArray[np.float64]
     distance: float
+    object_geom: str = ""
 
 
 def model_id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: str) -> int:
@@ -139,21 +149,29 @@ def ancestors(model: mujoco.MjModel, body: int) -> set[int]:
 
 
 def forward_touching(model: mujoco.MjModel, data: mujoco.MjData, object_body: int, tolerance: float) -> None:
-    r"""``mj_forward`` with the object's geoms given a collision margin of ``tolerance`` (m).
+    r"""``mj_forward`` with the object's geoms given a collision margin of ``tolerance`` (m)
+    and MuJoCo's mid-phase off.
 
     MuJoCo reports a contact once the distance is below the larger margin of the pair (0
-    by default), so geoms placed exactly touching may be missed; with the margin, every geom
+    by default), so geoms placed exactly touching may be missed; with the margin, a geom
     within ``tolerance`` of the object is in ``data.contact`` (with its true distance). The
-    margins are restored afterwards: they serve detection only, the model is unchanged.
+    mid-phase culls with bounding volumes built at compile time without that margin (a pair
+    1.94 mm apart was missed at a 2 mm tolerance), so it is disabled: every pair the broad
+    phase passes reaches the narrow phase. What still escapes (an explicit ``<pair>``, whose
+    margin is its own) :func:`detected_contacts` adds from ``mj_geomDistance``. Margins and
+    flags are restored afterwards: they serve detection only, the model is unchanged.
     """
     geoms = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in subtree(model, object_body)]
     saved = model.geom_margin[geoms].copy()
+    flags = int(model.opt.disableflags)
     try:
         model.geom_margin[geoms] = np.maximum(saved, tolerance)
+        model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_MIDPHASE)
         with precise_collision(model):
             mujoco.mj_forward(model, data)
     finally:
         model.geom_margin[geoms] = saved
+        model.opt.disableflags = flags
 
 
 @contextlib.contextmanager
@@ -194,7 +212,11 @@ def detected_contacts(
     ----------
     tolerance
         Detect anew with :func:`forward_touching` (``data`` is updated) and keep the contacts
-        at a distance of at most ``tolerance`` (m). ``None``: the contacts MuJoCo reports.
+        at a distance of at most ``tolerance`` (m); a pair that MuJoCo's pipeline still did
+        not report while ``mj_geomDistance`` puts it within ``tolerance`` is added with its
+        witness points' midpoint and direction (:func:`~mjtvm.sim.grasp.pairs.pair_distance`),
+        so the contacts are exactly the pairs within ``tolerance``. ``None``: the contacts
+        MuJoCo reports.
     one_per_body
         Keep only the deepest contact of each body other than the world body. A convex link
         (a capsule with its fingertip sphere) touches a convex object at one point; when the
@@ -215,7 +237,11 @@ def detected_contacts(
     inside = subtree(model, ob)
     if tolerance is not None:
         forward_touching(model, data, ob, tolerance)
-    found: list[tuple[int, int, DetectedContact]] = []
+    found: list[tuple[int, int, DetectedContact, int]] = []
+    near = None
+    if tolerance is not None:
+        with precise_collision(model):
+            near = {(p.geom, p.object_geom): p for p in near_pairs(model, data, inside, tolerance)}
     for i in range(data.ncon):
         c = data.contact[i]
         if tolerance is not None and float(c.dist) > tolerance:
@@ -228,6 +254,8 @@ def detected_contacts(
         name = geom_label(model, other)
         normal = without_round_off(np.array(c.frame[:3], dtype=float) * (1.0 if in2 else -1.0))
         obj_geom = g2 if in2 else g1
+        if near is not None and (other, obj_geom) not in near:
+            continue  # within the tolerance by MuJoCo's contact, not by the pair's exact distance
         if needs_exact_normal(model, obj_geom, other):  # GJK/EPA normals: the object's exact one
             exact = object_normal(model, data, obj_geom, np.array(c.pos, dtype=float))
             normal = normal if exact is None else without_round_off(-exact)
@@ -237,10 +265,13 @@ def detected_contacts(
             position=np.array(c.pos, dtype=float),
             normal=normal / np.linalg.norm(normal),
             distance=float(c.dist),
+            object_geom=geom_label(model, obj_geom),
         )
-        found.append((other, i, contact))
+        found.append((other, i, contact, obj_geom))
+    if near is not None:
+        found += _missed_pairs(model, data, near, {(e[0], e[3]) for e in found})
     if one_per_body:
-        deepest: dict[int, tuple[int, int, DetectedContact]] = {}
+        deepest: dict[int, tuple[int, int, DetectedContact, int]] = {}
         kept = []
         for entry in found:
             body = entry[2].body
@@ -250,3 +281,49 @@ def detected_contacts(
                 deepest[body] = entry
         found = kept + list(deepest.values())
     return [entry[2] for entry in sorted(found, key=lambda e: (e[0], e[1]))]
+
+
+def _missed_pairs(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    near: dict[tuple[int, int], GeomPair],
+    reported: set[tuple[int, int]],
+) -> list[tuple[int, int, DetectedContact, int]]:
+    """The ``near`` pairs that ``data.contact`` lacks (none of its contacts of the pair within
+    the tolerance), as contacts after MuJoCo's (index ``ncon + k``), with the normal
+    convention of :func:`detected_contacts`."""
+    out: list[tuple[int, int, DetectedContact, int]] = []
+    for pair in near.values():
+        if (pair.geom, pair.object_geom) in reported:
+            continue
+        contact = DetectedContact(
+            geom=geom_label(model, pair.geom),
+            body=int(model.geom_bodyid[pair.geom]),
+            position=pair.position,
+            normal=_pair_normal(model, data, pair),
+            distance=pair.distance,
+            object_geom=geom_label(model, pair.object_geom),
+        )
+        out.append((pair.geom, int(data.ncon) + len(out), contact, pair.object_geom))
+    return out
+
+
+def _pair_normal(model: mujoco.MjModel, data: mujoco.MjData, pair: GeomPair) -> NDArray[np.float64]:
+    """The pair's normal into the object: the object's exact one where :func:`detected_contacts`
+    would take it, else the witness points' direction."""
+    exact = None
+    if needs_exact_normal(model, pair.object_geom, pair.geom) or pair.normal is None:
+        if int(model.geom_type[pair.object_geom]) in _PRIMITIVES:
+            exact = object_normal(model, data, pair.object_geom, pair.position)
+    if exact is not None:
+        normal = -exact
+    elif pair.normal is not None:
+        normal = pair.normal
+    else:
+        raise ModelError(
+            f"geom {geom_label(model, pair.geom)!r}",
+            f"touches the object's geom {geom_label(model, pair.object_geom)!r} exactly on an edge or "
+            "a mesh, where the contact normal is undefined: move it by a micrometre",
+        )
+    normal = without_round_off(normal)
+    return normal / np.linalg.norm(normal)

@@ -19,7 +19,7 @@ __all__ = ["BEYOND_SCHEMA", "schema_problem"]
 #: The rules of the format that JSON Schema cannot state, each checked by the field checks
 #: (``GraspError.beyond_schema`` is true for their refusals); docs/grasp-format.md lists them.
 BEYOND_SCHEMA = (
-    "a quaternion has norm 1 within 1e-6",
+    "a quaternion has norm 1 within 1e-6 (also a free joint's 7 numbers in configuration.qpos)",
     "a direction (contacts[].slide, lift.direction, lift.twist) is not zero",
     "a [low, high] pair (configuration.ik.bounds, lift.bounds) has low < high",
     "the REFS is more than the origin (weight, or a non-zero wrench)",
