@@ -127,6 +127,8 @@ def lift_state(
             operation_ranges=getattr(sc, "operation_ranges", None),
             friction_edges=getattr(sc, "friction_edges", 16),
             contact_tolerance=TOUCH_TOL,
+            # a grasp file's joint_losses = "ignore" leaves a transmission's damping out too
+            joint_damping=getattr(sc, "document", {}).get("joint_losses", "fold") == "fold",
         )
     friction = sc.mu if mu is None else float(mu)
     contacts = []
