@@ -177,3 +177,25 @@ def test_independent_hands_keep_the_paper_path(folder: str, xml: str) -> None:
     t = model_transmission(model, data, joints)
     assert is_independent(model, t, joints)
     assert t.constraint_names == ()
+
+
+def test_fixed_tendon_moment_arms_and_weld_rows() -> None:
+    """A fixed tendon with coefficients r1 = 0.3, r2 = 0.7 under a motor of gear 2 has the
+    moment row (0.6, 1.4) exactly; a weld of the second link to the world gives rows named
+    /x ... /rz, those zero over the two hinges dropped: both hinges turn about y and the links
+    stand along z, so only the translation along x and the rotation about y remain."""
+    model = mujoco.MjModel.from_xml_string(
+        """<mujoco><worldbody><body name="l1"><joint name="a" axis="0 1 0"/><geom size=".05" mass="1"/>
+        <body name="l2" pos="0 0 .2"><joint name="b" axis="0 1 0"/><geom size=".05" mass="1"/></body>
+        </body></worldbody>
+        <tendon><fixed name="t"><joint joint="a" coef="0.3"/><joint joint="b" coef="0.7"/></fixed></tendon>
+        <equality><weld name="w" body1="l2"/></equality>
+        <actuator><motor name="m" tendon="t" gear="2"/></actuator></mujoco>"""
+    )
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    t = model_transmission(model, data, [0, 1])
+    np.testing.assert_allclose(t.moment, [[0.6, 1.4]], rtol=1e-15)
+    assert t.constraint_names == ("w/x", "w/ry")
+    np.testing.assert_allclose(t.constraint_residual, 0.0, atol=1e-15)
+    assert not is_independent(model, t, [0, 1])
