@@ -110,14 +110,19 @@ class Marcher:
             raise ModelError(f"body {grasp.object_body!r}", "the lift needs the object on one free joint")
         self.padr = int(model.jnt_qposadr[free[0]])
         inside = _subtree(model, {ob})
+        # the object is moved by its body pose, whatever its geoms; fingers are kept on its
+        # colliding solids (a visual mesh, contype = conaffinity = 0, is not a surface)
         objects = [
             g
             for g in range(model.ngeom)
-            if int(model.geom_bodyid[g]) in inside and int(model.geom_type[g]) in OBJECT_TYPES
+            if int(model.geom_bodyid[g]) in inside
+            and int(model.geom_type[g]) in OBJECT_TYPES
+            and (int(model.geom_contype[g]) or int(model.geom_conaffinity[g]))
         ]
         if not objects:
             raise ModelError(
-                f"body {grasp.object_body!r}", "no sphere, box, cylinder or capsule geom to lift"
+                f"body {grasp.object_body!r}",
+                "no colliding sphere, capsule, ellipsoid, cylinder, box or mesh geom to lift",
             )
         data = copy.copy(grasp.data)
         mujoco.mj_kinematics(model, data)
