@@ -16,6 +16,8 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import ParamError
+
 __all__ = ["GeomGroup", "MeshGroup", "SceneGeometry", "ScenePoses", "scene_geometry", "scene_poses"]
 
 
@@ -75,8 +77,11 @@ class MeshGroup:
 
     def __post_init__(self) -> None:
         n = len(self.ids)
-        if not (len(self.names) == len(self.vertices) == len(self.triangles) == n and self.rgba.shape == (n, 4)):
-            raise ValueError(f"MeshGroup: {n} ids, but other fields of other lengths")
+        lengths = (len(self.names), len(self.vertices), len(self.triangles), len(self.rgba))
+        if any(k != n for k in lengths):
+            raise ParamError(
+                "MeshGroup", f"expected {n} names, vertex arrays, triangle arrays and colours", lengths
+            )
 
     def __len__(self) -> int:
         return len(self.ids)

@@ -131,7 +131,7 @@ class _Scene:
                     ),
                     static=True,
                 )
-        for k, name in enumerate(geo.meshes.names):  # each mesh piece in its geom's frame
+        for k in range(len(geo.meshes)):  # each mesh piece in its geom's frame
             rec.log(
                 f"scene/meshes/{k}",
                 rr.Mesh3D(

@@ -25,6 +25,7 @@ from scipy.spatial import ConvexHull
 import mjtvm
 from mjtvm.core.reference import reference_tvmmp
 from mjtvm.sim.grasp.file import load_grasp, shipped_grasps
+from mjtvm.sim.grasp.loaded import Grasp
 from mjtvm.sim.grasp.state import detected_contacts, geom_id
 
 NAME = "allegro-jenga"
@@ -32,7 +33,7 @@ PIECES = ("jenga_piece3", "jenga_piece9", "jenga_piece10", "jenga_piece11", "jen
 
 
 @pytest.fixture(scope="module")
-def grasp() -> mjtvm.sim.grasp.loaded.Grasp:  # type: ignore[name-defined]
+def grasp() -> Grasp:
     return load_grasp(NAME)
 
 
@@ -42,7 +43,7 @@ def _mesh_vertices(model: mujoco.MjModel, g: int) -> np.ndarray:
     return np.array(model.mesh_vert[v0 : v0 + n], dtype=float)
 
 
-def test_the_object_is_six_convex_mesh_pieces_cited_from_their_source(grasp) -> None:  # type: ignore[no-untyped-def]
+def test_the_object_is_six_convex_mesh_pieces_cited_from_their_source(grasp: Grasp) -> None:
     model = grasp.model
     ob = model.body("jenga").id
     geoms = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == ob]
@@ -65,7 +66,7 @@ def test_the_object_is_six_convex_mesh_pieces_cited_from_their_source(grasp) -> 
     assert touched == {"jenga_piece3", "jenga_piece13"}
 
 
-def test_grasp_jacobians_match_finite_differences(grasp) -> None:  # type: ignore[no-untyped-def]
+def test_grasp_jacobians_match_finite_differences(grasp: Grasp) -> None:
     """Each contact's (3, M) Jacobian = d(finger-fixed contact point)/dq, central differences."""
     state = grasp.state()
     model, data = grasp.model, mujoco.MjData(grasp.model)
@@ -90,7 +91,7 @@ def test_grasp_jacobians_match_finite_differences(grasp) -> None:  # type: ignor
         np.testing.assert_allclose(contact.jacobian, fd, atol=1e-8, err_msg=contact.name)
 
 
-def test_contacts_lie_on_the_mesh_surface_with_unit_normals_into_it(grasp) -> None:  # type: ignore[no-untyped-def]
+def test_contacts_lie_on_the_mesh_surface_with_unit_normals_into_it(grasp: Grasp) -> None:
     state = grasp.state()
     model, data = grasp.model, grasp.data
     for contact in state.contacts:
@@ -102,7 +103,7 @@ def test_contacts_lie_on_the_mesh_surface_with_unit_normals_into_it(grasp) -> No
         assert float(contact.normal @ (contact.position - tip)) > 0.0
 
 
-def test_grasp_alphas_match_the_cvxpy_reference(grasp) -> None:  # type: ignore[no-untyped-def]
+def test_grasp_alphas_match_the_cvxpy_reference(grasp: Grasp) -> None:
     state = grasp.state()
     result = mjtvm.tvmmp(state)
     alpha, _status = reference_tvmmp(state, solver="HIGHS")
@@ -205,10 +206,19 @@ def _icosphere(level: int) -> np.ndarray:
     """Unit-sphere vertices of an icosahedron whose triangles are split in four ``level`` times
     (12, 42, 162, ... vertices); each new vertex is an edge midpoint pushed onto the sphere."""
     t = (1 + 5**0.5) / 2
-    base = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t)]
+    base: list[tuple[float, float, float]] = [
+        (-1, t, 0),
+        (1, t, 0),
+        (-1, -t, 0),
+        (1, -t, 0),
+        (0, -1, t),
+        (0, 1, t),
+    ]
     base += [(0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
     v = [np.array(p, dtype=float) / np.linalg.norm(p) for p in base]
-    faces = [tuple(int(i) for i in f) for f in ConvexHull(np.array(v)).simplices]
+    faces: list[tuple[int, int, int]] = [
+        (int(a), int(b), int(c)) for a, b, c in ConvexHull(np.array(v)).simplices
+    ]
     for _ in range(level):
         index: dict[tuple[int, int], int] = {}
         for a, b, c in faces:
@@ -218,7 +228,7 @@ def _icosphere(level: int) -> np.ndarray:
                     m = v[e[0]] + v[e[1]]
                     index[key] = len(v)
                     v.append(m / np.linalg.norm(m))
-        split = []
+        split: list[tuple[int, int, int]] = []
         for a, b, c in faces:
             ab, bc, ca = (
                 index[(min(a, b), max(a, b))],
@@ -285,7 +295,8 @@ def _nearest_on_hull(hull: ConvexHull, points: np.ndarray, x: np.ndarray) -> np.
     triangles (each triangle's nearest point, by its barycentric region)."""
     best, best_d = None, np.inf
     for tri in hull.simplices:
-        p = _nearest_on_triangle(*points[tri], x)
+        a, b, c = points[tri]
+        p = _nearest_on_triangle(a, b, c, x)
         d = float(np.linalg.norm(p - x))
         if d < best_d:
             best, best_d = p, d
