@@ -329,3 +329,74 @@ def _nearest_on_triangle(a: np.ndarray, b: np.ndarray, c: np.ndarray, p: np.ndar
         return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))
     denom = 1.0 / (va + vb + vc)
     return a + ab * (vb * denom) + ac * (vc * denom)
+
+
+# ------------------------------------------------ an L finger passing from one piece to the next
+def _box_as_two_mesh_pieces(tmp_path: Path, split: float) -> Path:
+    """models/gripper3/gripper3.xml with its box object (half-sizes 50, 25, 30 mm) replaced by two
+    convex mesh pieces that fill the same box, cut at ``split`` (m, the object's frame)."""
+    source = shipped_grasps()["gripper3-box"].with_name("gripper3.xml")
+    text = source.read_text(encoding="utf-8")
+    box = '<geom name="object" type="box" size="0.05 0.025 0.03" mass="0.2" material="object" friction="0.8 0.01 0.0001"/>'
+    assert box in text
+
+    def cuboid(z0: float, z1: float) -> str:
+        corners = [(x, y, z) for x in (-0.05, 0.05) for y in (-0.025, 0.025) for z in (z0, z1)]
+        return " ".join(f"{c:.17g}" for p in corners for c in p)
+
+    pieces = (
+        f'<geom name="lower" type="mesh" mesh="lower" mass="{0.2 * (split + 0.03) / 0.06!r}" material="object" '
+        'friction="0.8 0.01 0.0001"/>'
+        f'<geom name="upper" type="mesh" mesh="upper" mass="{0.2 * (0.03 - split) / 0.06!r}" material="object" '
+        'friction="0.8 0.01 0.0001"/>'
+    )
+    assets = (
+        f'<mesh name="lower" vertex="{cuboid(-0.03, split)}"/><mesh name="upper" vertex="{cuboid(split, 0.03)}"/>'
+        "</asset>"
+    )
+    text = text.replace(box, pieces).replace("</asset>", assets, 1)
+    path = tmp_path / "gripper3_pieces.xml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_an_l_finger_slides_from_one_mesh_piece_onto_the_next(tmp_path: Path) -> None:
+    """gripper3-box's lift (3 cm up; the middle finger an L-point sliding 3 cm down the box's
+    -y face, relative to the box) with the box made of two mesh pieces cut 5 mm below the box's
+    centre: the L finger passes from the upper piece onto the lower one at s = 15 mm. The
+    object's surface is the box's, so the lift is the box's lift: the same joint values and
+    contact points within 1e-7 (the pieces' vertices are float32), and from the first state
+    off the table the same alphas."""
+    import tomllib
+
+    from mjtvm.sim.lift.states import lift_state
+    from mjtvm.sim.lift.trajectory import scripted_lift
+
+    doc = tomllib.loads(shipped_grasps()["gripper3-box"].read_text(encoding="utf-8"))
+    doc["model"] = str(shipped_grasps()["gripper3-box"].with_name("gripper3.xml"))
+    box = scripted_lift(load_grasp(doc), num_states=5)
+    doc["model"] = str(_box_as_two_mesh_pieces(tmp_path, -0.005))
+    pieces = scripted_lift(load_grasp(doc), num_states=5)
+    model = pieces.scenario.model
+    assert int(model.geom_type[model.geom("upper").id]) == int(mujoco.mjtGeom.mjGEOM_MESH)
+    np.testing.assert_allclose(pieces.s, box.s, atol=1e-12)
+    np.testing.assert_allclose(pieces.qpos, box.qpos, atol=1e-7)
+    np.testing.assert_allclose(pieces.points, box.points, atol=1e-7)
+    # the L finger's piece: the upper one at the start, the lower one at the end
+    data = mujoco.MjData(model)
+    ob = model.body("object").id
+    for i, piece in ((0, "upper"), (4, "lower")):
+        data.qpos[:] = pieces.qpos[i]
+        mujoco.mj_kinematics(model, data)
+        k = pieces.roles.index("N")
+        height = (data.xmat[ob].reshape(3, 3).T @ (pieces.points[i][k] - data.xpos[ob]))[2]
+        assert (height > -0.005) == (piece == "upper"), (i, height)
+        gap = mujoco.mj_geomDistance(
+            model, data, model.geom(piece).id, geom_id(model, pieces.geoms[k]), 1.0, None
+        )
+        assert abs(gap) < 1e-7
+    for i in range(1, 5):
+        a, b = mjtvm.tvmmp(lift_state(pieces, i)), mjtvm.tvmmp(lift_state(box, i))
+        np.testing.assert_allclose(
+            np.asarray(a.alpha, dtype=float), np.asarray(b.alpha, dtype=float), rtol=1e-6, atol=1e-9
+        )
