@@ -30,6 +30,7 @@ A minimal set is one of possibly several (the filter's order is the state's).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,6 +42,7 @@ from .contacts import Contact, slide_unit, tangent_basis
 from .problem2 import StateLPs
 from .result import Diagnosis, PairStatus
 from .state import GraspState
+from .transmission import joint_speed_limits
 
 __all__ = ["RELAX", "diagnose", "kinematic_alpha"]
 
@@ -55,6 +57,9 @@ def _kinematic_rows(
     """Equality and inequality rows over ``[u (M), rho (S), alpha]`` (``qd = speed * u``, as
     eq. 11-13 write them in :mod:`~mjtvm.core.assembly`) and the number of rho variables."""
     speed = np.array([op.max_speed for op in state.operation_ranges])
+    tr = state.transmission
+    if tr is not None:
+        speed = joint_speed_limits(tr.moment, speed)
     s_contacts = [c for c in contacts if c.type == "S"]
     n_rho = (1 if s_contacts else 0) if state.slip == "shared" else len(s_contacts)
     m = state.num_joints
@@ -76,6 +81,8 @@ def _kinematic_rows(
                 row = np.concatenate([t @ j, np.zeros(n_rho), [-(t @ gt_r)]])
                 row[m + (0 if state.slip == "shared" else k)] = t @ slide
                 eq.append(row)
+    if tr is not None and tr.constraint_jacobian is not None:  # J_eq qd = 0 (a coupling, a linkage)
+        eq += [np.concatenate([row * speed, np.zeros(n_rho + 1)]) for row in tr.constraint_jacobian]
     return eq, ub, n_rho
 
 
@@ -172,10 +179,10 @@ def _with_relaxed(state: GraspState, relaxed: set[int]) -> GraspState:
 def _binding_joints(state: GraspState, works: Callable[[GraspState], bool]) -> list[int] | None:
     """A minimal set of joints whose enlarged ranges make ``works(state)`` true (deletion
     filter), or ``None`` when enlarging every range does not."""
-    relaxed = set(range(state.num_joints))
+    relaxed = set(range(len(state.operation_ranges)))  # the joints, or a transmission's actuators
     if not works(_with_relaxed(state, relaxed)):
         return None
-    for j in range(state.num_joints):
+    for j in range(len(state.operation_ranges)):
         if works(_with_relaxed(state, relaxed - {j})):
             relaxed.discard(j)
     return sorted(relaxed)
@@ -209,6 +216,11 @@ def _zero_alpha(
     if locks[l]:
         names = tuple(c.name for c in locks[l])
         kinds = ", ".join(f"{c.name!r} ({c.type})" for c in locks[l])
+        tr = state.transmission
+        if tr is not None and tr.constraint_jacobian is not None:
+            free = state.with_(transmission=replace(tr, constraint_names=(), constraint_jacobian=None))
+            if kinematic_alpha(free, r, locks[l]) > 0.0:  # the joint couplings take part
+                kinds += f" with the equality constraints {_names(tr.constraint_names)}"
         return Diagnosis(
             (k, l),
             "contacts",
@@ -226,13 +238,14 @@ def _zero_alpha(
             (),
             "no contact locks the motion and no operation range binds (an alpha at the solver's tolerance)",
         )
-    names = tuple(state.joint_names[j] for j in joints)
+    names = tuple(state.actuator_names[j] for j in joints)
     return Diagnosis(
         (k, l),
         "ranges",
         (),
         names,
-        f"the operation ranges of {'joint' if len(names) == 1 else 'joints'} {_names(names)} bind: "
+        f"the operation ranges of {'joint' if state.transmission is None else 'actuator'}"
+        f"{'' if len(names) == 1 else 's'} {_names(names)} bind: "
         f"at the torques that balance REFS vertex {k} (eq. 19-20) they leave no speed for RVDS vertex {l}",
     )
 
@@ -251,16 +264,16 @@ def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnos
         )
     _, _, tau = _solve(_with_relaxed(state, set(joints)), w, r, box, solver)
     needs = ", ".join(
-        f"{state.joint_names[j]!r} (needs {abs(tau[j]):.4g} N m, has {state.operation_ranges[j].max_torque:.4g})"
+        f"{state.actuator_names[j]!r} (needs {abs(tau[j]):.4g} N m, has {state.operation_ranges[j].max_torque:.4g})"
         if tau is not None
-        else repr(state.joint_names[j])
+        else repr(state.actuator_names[j])
         for j in joints
     )
     return Diagnosis(
         (k, -1),
         "ranges",
         (),
-        tuple(state.joint_names[j] for j in joints),
+        tuple(state.actuator_names[j] for j in joints),
         f"REFS vertex {k} cannot be balanced: the torque limits of {needs} bind (eq. 19-20)",
     )
 

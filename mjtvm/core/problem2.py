@@ -36,6 +36,7 @@ from .solvers import (
     solve_clarabel,
 )
 from .state import GraspState
+from .transmission import joint_speed_limits
 
 __all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs", "Verdict"]
 
@@ -69,12 +70,8 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
         # Through the moment P: a joint's speed is at most the fastest |s_a / P_aj| of the
         # actuators moving it, its torque at most sum_a |P_aj| u_a; a passive joint's speed
         # (no actuator) is measured at the fastest of them all.
-        p = np.abs(state.transmission.moment)
-        with np.errstate(divide="ignore"):
-            ratio = np.where(p > 0.0, speed[:, None] / p, 0.0)
-        joint_speed = np.max(ratio, axis=0)
-        joint_speed = np.where(joint_speed > 0.0, joint_speed, float(joint_speed.max(initial=0.0)))
-        joint_torque = p.T @ torque
+        joint_speed = joint_speed_limits(state.transmission.moment, speed)
+        joint_torque = np.abs(state.transmission.moment).T @ torque
     # A contact force is at most what the weight and the strongest joint through the largest
     # Jacobian entry give; a slip speed at most the fastest joint through it.
     jac = max((float(np.max(np.abs(c.jacobian), initial=0.0)) for c in state.contacts), default=0.0)

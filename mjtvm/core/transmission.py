@@ -31,7 +31,7 @@ from ..errors import StateError
 from .bounds import MAX_JOINTS, MAX_NAME, describe, float_array
 from .operation_range import OperationRange
 
-__all__ = ["Transmission", "transmission_from_dict", "transmission_to_dict"]
+__all__ = ["Transmission", "joint_speed_limits", "transmission_from_dict", "transmission_to_dict"]
 
 MAX_CONSTRAINTS = 3 * MAX_JOINTS  # a weld is 6 rows; a hand closes few loops
 
@@ -131,6 +131,17 @@ class Transmission:
     def num_constraints(self) -> int:
         """C."""
         return len(self.constraint_names)
+
+
+def joint_speed_limits(moment: NDArray[np.float64], speeds: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(M,)`` a speed scale per joint: the fastest ``s_a / |P_aj|`` of the actuators moving
+    joint j (``speeds`` their largest speeds); a passive joint (no actuator moves it) the
+    fastest of them all. A size for measuring and normalising, not a bound of the LP."""
+    p = np.abs(moment)
+    with np.errstate(divide="ignore"):
+        ratio = np.where(p > 0.0, np.asarray(speeds, dtype=float)[:, None] / np.where(p > 0.0, p, 1.0), 0.0)
+    out = np.max(ratio, axis=0)
+    return np.where(out > 0.0, out, float(out.max(initial=0.0)))
 
 
 def transmission_to_dict(t: Transmission, ranges: Sequence[OperationRange]) -> dict[str, Any]:

@@ -131,6 +131,16 @@ class _Scene:
                     ),
                     static=True,
                 )
+        for k in range(len(geo.meshes)):  # each mesh piece in its geom's frame
+            rec.log(
+                f"scene/meshes/{k}",
+                rr.Mesh3D(
+                    vertex_positions=geo.meshes.vertices[k],
+                    triangle_indices=geo.meshes.triangles[k],
+                    albedo_factor=_rgb(geo.meshes.rgba[k]),
+                ),
+                static=True,
+            )
         if len(planes):
             rec.log(
                 "scene/palm",
@@ -146,7 +156,7 @@ class _Scene:
 
     def log(self, cols: _Columns, i: int) -> NDArray[np.float64]:
         """Add the geoms' poses at state ``i`` (their sizes and colours are static); returns the
-        object's centre."""
+        object body's origin."""
         poses, links = self.poses, self.geometry.links
         if len(links):
             # MuJoCo: a capsule's centre and axis z; rerun: from one end along z
@@ -161,7 +171,15 @@ class _Scene:
         for path, centres in (("scene/tips", poses.tip_pos[i]), ("scene/object", poses.object_pos[i])):
             if len(centres):
                 cols.add(path, rr.Ellipsoids3D, len(centres), centers=list(centres))
-        return np.array(poses.object_pos[i][0] if len(self.geometry.object) else np.zeros(3))
+        for k in range(len(self.geometry.meshes)):
+            cols.add(
+                f"scene/meshes/{k}",
+                rr.Transform3D,
+                1,
+                translation=[poses.mesh_pos[i, k]],
+                quaternion=[poses.mesh_quat[i, k][[1, 2, 3, 0]]],
+            )
+        return np.array(poses.object_origin[i])
 
 
 class _Columns:

@@ -6,12 +6,14 @@ r"""Rerun recording of the lift replay (``mjtvm replay --rrd FILE``); with :mod:
 are integer sequences, durations or timestamps). Entities (world frame, m; ``docs/rerun.md``):
 
 * ``/scene/palm`` (static), ``/scene/links`` (capsules), ``/scene/tips``, ``/scene/object``
-  (spheres): the MuJoCo geoms at each state's pose;
+  (spheres), ``/scene/meshes/<k>`` (each colliding mesh geom, e.g. an object's convex pieces:
+  its triangles, static, under a transform to the geom's pose): the MuJoCo geoms at each
+  state's pose;
 * ``/scene/<run>/contacts`` coloured by type (:data:`~mjtvm.viewer.drawing.TYPE_COLORS`), labelled ``geom type``;
   ``/scene/<run>/forces``: the contact forces of the limiting pair's witness
   (:data:`~mjtvm.viewer.drawing.FORCE_SCALE` m per N); ``/scene/<run>/slides``: S-point slide directions;
 * ``/scene/<run>/distribution`` and ``/scene/<run>/tvms``: convex-hull meshes of object
-  centre velocities (m/s) under a transform to the object centre scaled by
+  centre velocities (m/s) under a transform to the object's origin scaled by
   :data:`~mjtvm.viewer.drawing.VELOCITY_SCALE` m per m/s: the distribution polytope of Supplement 4 (the origin and
   :math:`\min_k \alpha_{kl} \hat r_l`, translational part) and the TVMS of Problem 1
   (:func:`~mjtvm.polytopes.tvms.tvms`, its vertices projected onto the translational coordinates), the

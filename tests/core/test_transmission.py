@@ -209,3 +209,23 @@ def test_operation_ranges_count_the_actuators() -> None:
     with pytest.raises(StateError, match=r"^joints: expected one operation range per actuator \(1\), got 4"):
         s.with_(transmission=Transmission(("a",), np.ones((1, 4))))
     assert isinstance(s.operation_ranges[0], OperationRange)
+
+
+def test_a_coupling_that_locks_the_motion_is_named() -> None:
+    """Finger 1 coupled 1:1 follows one direction only: the sideways RVDS of the pinch give
+    alpha 0, and the diagnosis names its contact together with the coupling."""
+    s = pinch()
+    r = s.operation_ranges
+    coupled = s.with_(
+        operation_ranges=(r[0], r[2], r[3]),
+        transmission=Transmission(
+            ("f1", "f2_pitch0", "f2_pitch1"),
+            np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]]),
+            ("f1_coupling",),
+            np.array([[1.0, -1.0, 0, 0]]),
+        ),
+    )
+    result = tvmmp(coupled, diagnose=True)
+    assert np.all(result.alpha == 0.0) and np.all(tvmmp(s).alpha > 0.0)
+    assert [d.contacts for d in result.diagnosis] == [("f1_tip",)] * 4
+    assert all("with the equality constraints 'f1_coupling'" in d.message for d in result.diagnosis)

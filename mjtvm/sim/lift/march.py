@@ -62,7 +62,7 @@ class _Finger:
     role: str  # "F" or "N"
     geom_id: int
     body: int
-    object_geom: int  # the object geom it touches (nearest at the start)
+    object_geom: int  # the object geom it touches (nearest at the start; an F-finger's for good)
     sphere: bool  # placed by its centre (module docstring)
     dofs: NDArray[np.int64]  # the finger's columns in the model's nv
     cols: NDArray[np.int64]  # the same in the lift's joints
@@ -111,15 +111,21 @@ class Marcher:
             raise ModelError(f"body {grasp.object_body!r}", "the lift needs the object on one free joint")
         self.padr = int(model.jnt_qposadr[free[0]])
         inside = _subtree(model, {ob})
+        # the object is moved by its body pose, whatever its geoms; fingers are kept on its
+        # colliding solids (a visual mesh, contype = conaffinity = 0, is not a surface)
         objects = [
             g
             for g in range(model.ngeom)
-            if int(model.geom_bodyid[g]) in inside and int(model.geom_type[g]) in OBJECT_TYPES
+            if int(model.geom_bodyid[g]) in inside
+            and int(model.geom_type[g]) in OBJECT_TYPES
+            and (int(model.geom_contype[g]) or int(model.geom_conaffinity[g]))
         ]
         if not objects:
             raise ModelError(
-                f"body {grasp.object_body!r}", "no sphere, box, cylinder or capsule geom to lift"
+                f"body {grasp.object_body!r}",
+                "no colliding sphere, capsule, ellipsoid, cylinder, box or mesh geom to lift",
             )
+        self.objects = tuple(objects)
         data = copy.copy(grasp.data)
         mujoco.mj_kinematics(model, data)
         self.c0, self.q0 = np.array(data.xpos[ob]), np.array(data.qpos[self.padr + 3 : self.padr + 7])
@@ -174,6 +180,17 @@ class Marcher:
         finger's three, the second of a planar finger's): 0 at a singular, stretched pose."""
         return np.array([sv[r - 1] for sv, r in zip(self._singular_values(data), self.rank0, strict=True)])
 
+    def _piece(self, data: mujoco.MjData, f: _Finger) -> int:
+        """The object geom the finger is on at ``data`` (geom poses done): an F-finger's from the
+        start, fixed to it; an L or S finger slides and may pass from one convex piece of the
+        object onto the next, so its piece is the nearest one now."""
+        if f.role == "F" or len(self.objects) == 1:
+            return f.object_geom
+        return min(
+            self.objects,
+            key=lambda o: float(mujoco.mj_geomDistance(self.dmodel, data, o, f.geom_id, 1.0, None)),
+        )
+
     def _finger(self, data: mujoco.MjData, label: str, kind: str, g: int, w: Any, o: int) -> _Finger:
         model, grasp = self.model, self.grasp
         body = int(model.geom_bodyid[g])
@@ -219,7 +236,7 @@ class Marcher:
         if f.role == "F" and not f.sphere:
             point = data.xpos[f.body] + data.xmat[f.body].reshape(3, 3) @ f.local
             return point, self._fixed(data, f)[1]
-        w = witness(self.dmodel, data, f.object_geom, f.geom_id)
+        w = witness(self.dmodel, data, self._piece(data, f), f.geom_id)
         return w.finger_point, w.normal
 
     def kinematics(self, data: mujoco.MjData, s: float) -> tuple[NDArray[np.float64], ...]:
@@ -253,22 +270,23 @@ class Marcher:
         if not f.sphere:
             if f.role == "F":
                 return IkTarget(f.geom, body, f.local, self._fixed(data, f)[0])
-            w = witness(self.dmodel, data, f.object_geom, f.geom_id)
+            w = witness(self.dmodel, data, self._piece(data, f), f.geom_id)
             xb, rb = data.xpos[f.body], data.xmat[f.body].reshape(3, 3)
             return IkTarget(f.geom, body, rb.T @ (w.finger_point - xb), w.object_point)
         r = float(model.geom_size[f.geom_id, 0])
-        if is_sphere(model, f.object_geom):  # Case 2's arithmetic: radial projection
-            c = np.array(data.geom_xpos[f.object_geom])
+        piece = self._piece(data, f)
+        if is_sphere(model, piece):  # Case 2's arithmetic: radial projection
+            c = np.array(data.geom_xpos[piece])
             if f.role == "F":
                 p = self._fixed(data, f)[0]
             else:
                 tip = np.array(data.geom_xpos[f.geom_id])
-                p = c + float(model.geom_size[f.object_geom, 0]) * (tip - c) / np.linalg.norm(tip - c)
+                p = c + float(model.geom_size[piece, 0]) * (tip - c) / np.linalg.norm(tip - c)
             n = (c - p) / float(np.linalg.norm(c - p))
         elif f.role == "F":
             p, n = self._fixed(data, f)
         else:
-            w = witness(self.dmodel, data, f.object_geom, f.geom_id)
+            w = witness(self.dmodel, data, piece, f.geom_id)
             p, n = w.object_point, w.normal
         return IkTarget(f.geom, body, np.array(model.geom_pos[f.geom_id]), p - r * n)
 
@@ -319,7 +337,9 @@ class Marcher:
             mujoco.mj_kinematics(self.model, work)
             gaps = {
                 k: abs(
-                    witness(self.dmodel, work, self.fingers[k].object_geom, self.fingers[k].geom_id).distance
+                    witness(
+                        self.dmodel, work, self._piece(work, self.fingers[k]), self.fingers[k].geom_id
+                    ).distance
                 )
                 for k in retarget
             }

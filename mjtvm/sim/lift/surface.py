@@ -1,7 +1,7 @@
 r"""Nearest points and normals between an object geom and a finger geom (``mj_geomDistance``).
 
 The lift (:mod:`mjtvm.sim.lift.trajectory`) keeps fingers on the object's surface; it needs, for a
-pair (object geom, finger geom) of primitive types, the signed surface distance, the two
+pair (object geom, finger geom), the signed surface distance, the two
 *witness points* (the nearest points, or the deepest ones when the geoms penetrate) and the
 contact normal. MuJoCo's ``mj_geomDistance`` gives the distance and the witness points; its
 normal is the direction between them, which is undefined when the surfaces touch (the case
@@ -36,12 +36,16 @@ __all__ = ["BACKOFF", "OBJECT_TYPES", "Witness", "distance_model", "is_sphere", 
 BACKOFF = 1e-3
 _FAR = 10.0  # m: distmax of the queries; anything farther is not a contact of a lift
 _GEOM = mujoco.mjtGeom
-#: Object geom types the lift moves fingers on.
+#: Object geom types the lift moves fingers on: every type ``mj_geomDistance`` measures as a
+#: convex solid, meshes included (MuJoCo collides a mesh as its convex hull, so an object made
+#: of convex pieces is one mesh geom per piece). Planes and height fields bound no solid.
 OBJECT_TYPES = (
     int(_GEOM.mjGEOM_SPHERE),
     int(_GEOM.mjGEOM_CAPSULE),
+    int(_GEOM.mjGEOM_ELLIPSOID),
     int(_GEOM.mjGEOM_CYLINDER),
     int(_GEOM.mjGEOM_BOX),
+    int(_GEOM.mjGEOM_MESH),
 )
 
 
