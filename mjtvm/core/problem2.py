@@ -281,8 +281,14 @@ class StateLPs:
         a, abs_a = self.pair_matrix(r)
         if self._cert is None:
             primal = np.where(self.force_like, 0.0, self.physical_sizes)  # forces, slips: their own values
-            self._cert = Certifier(a, self.col_lower, col_ref=primal, abs_a=abs_a,
-                                   row_groups=self.asm.row_groups, dual_ref=self.physical_sizes)  # fmt: skip
+            self._cert = Certifier(
+                a,
+                self.col_lower,
+                col_ref=primal,
+                abs_a=abs_a,
+                row_groups=self.asm.row_groups,
+                dual_ref=self.physical_sizes,
+            )
         return self._cert
 
     def _bounds(

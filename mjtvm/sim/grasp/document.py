@@ -30,16 +30,10 @@ from .checks import (
     GraspError,
     _check_text,
     _Checker,
-    _configuration,
-    _contacts,
     _kind,
-    _lift,
-    _quaternion,
-    _ranges,
-    _refs,
-    _shape,
 )
 from .rules import check_contact_rules
+from .sections import _configuration, _contacts, _lift, _quaternion, _ranges, _refs, _shape
 from .validate import schema_problem
 
 __all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
