@@ -20,9 +20,9 @@ from .core.state_file import dump_state, load_state, parse_state, state_to_dict
 from .core.transmission import Transmission
 from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
-from .polytopes.tvms import TvmsResult, tvms
 
 if TYPE_CHECKING:
+    from .polytopes.tvms import TvmsResult, tvms
     from .sim.grasp import Grasp, GraspError, export_state, load_grasp, shipped_grasps
 
 __version__ = "0.1.0"
@@ -68,4 +68,8 @@ __all__ = [
 ]
 
 
-__getattr__ = lazy_attributes(__name__, dict.fromkeys(_MUJOCO_NAMES, "sim.grasp"))
+# Problem 1 (scipy.spatial, cdd) is imported on first use too: `mjtvm solve` never needs it.
+__getattr__ = lazy_attributes(
+    __name__,
+    {**dict.fromkeys(_MUJOCO_NAMES, "sim.grasp"), "TvmsResult": "polytopes.tvms", "tvms": "polytopes.tvms"},
+)
