@@ -31,8 +31,12 @@ from ..errors import ModelError
 from ..sim.grasp.dcmotor import DCMotor
 
 __all__ = [
+    "BOX_SPEED_MARGIN",
     "CTRLSPEC",
+    "attach_actuator_dcmotors",
     "attach_dcmotors",
+    "box_motor",
+    "dcmotor_of_actuator",
     "dcmotor_of_joint",
     "joint_actuators",
     "motor_of_actuator",
@@ -74,6 +78,26 @@ def dcmotor_of_joint(model: mujoco.MjModel, joint: str) -> int | None:
     a = acts[0]
     dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
     return a if dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC else None
+
+
+def dcmotor_of_actuator(model: mujoco.MjModel, name: str) -> int:
+    """The id of the ``<dcmotor>`` with ``input="vel ff"`` named ``name`` (a transmission's actuator).
+
+    Raises
+    ------
+    ModelError
+        No actuator of that name, or not such a ``<dcmotor>``.
+    """
+    a = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+    if a < 0:
+        raise ModelError(f"actuator {name!r}", "not in the model")
+    dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
+    if not (dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC):
+        raise ModelError(
+            f"actuator {name!r}",
+            'expected a <dcmotor> with input="vel ff" (mjtvm.physics.motors.attach_actuator_dcmotors)',
+        )
+    return a
 
 
 def motor_of_actuator(model: mujoco.MjModel, actuator: int) -> DCMotor:
@@ -216,9 +240,104 @@ def _control_layout(spec: mujoco.MjSpec, joints: set[str]) -> tuple[list[tuple[i
     return [(int(m.actuator_ctrladr[a]), int(m.actuator_ctrlnum[a])) for a in range(m.nactuator)], moves
 
 
-def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> None:
-    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes it."""
-    act = spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+def attach_actuator_dcmotors(
+    source: mujoco.MjSpec | str | Path, motors: Mapping[str, DCMotor]
+) -> mujoco.MjModel:
+    r"""The model of ``source`` with each actuator of ``motors`` replaced by a ``<dcmotor>`` (compiled).
+
+    For a hand with a transmission (``docs/physics-check.md``): the new ``<dcmotor>`` keeps the
+    actuator's name and its transmission (the same joint, tendon, ...) and takes the gear
+    ``motor.gear x`` the actuator's own gear, so that its moment is ``motor.gear`` times the
+    actuator's row of ``P``: MuJoCo applies ``P^T u`` for a motor torque ``u / motor.gear`` and
+    its ``actuator_velocity`` is ``motor.gear x P qd``. Other attributes as
+    :func:`attach_dcmotors` (sensors of a replaced actuator removed, keyframe controls of the
+    kept actuators kept, the new ones at 0, after the kept ones in ``motors``' order).
+
+    Raises
+    ------
+    ModelError
+        Unparsable MJCF, an unknown actuator, or a model that does not compile after the change.
+    """
+    spec = _spec(source)
+    if not motors:
+        raise ModelError("motors", "expected at least one actuator -> DCMotor")
+    layout, _moves = _control_layout(spec, set())
+    index = {a.name: i for i, a in enumerate(spec.actuators) if a.name}
+    old = []
+    for name, motor in motors.items():
+        act = spec.actuator(name)
+        if act is None:
+            raise ModelError(f"actuator {name!r}", "not in the model")
+        if not isinstance(motor, DCMotor):
+            raise ModelError(f"motors[{name!r}]", f"expected a DCMotor, got {type(motor).__name__}")
+        old.append((name, act.trntype, act.target, float(act.gear[0]), motor))
+    gone = {index[n] for n in motors}
+    kept = [i for i in range(len(layout)) if i not in gone]
+    for sensor in list(spec.sensors):
+        if int(sensor.objtype) == int(mujoco.mjtObj.mjOBJ_ACTUATOR) and sensor.objname in motors:
+            spec.delete(sensor)
+    for name in motors:
+        spec.delete(spec.actuator(name))
+    for name, trntype, target, gear, motor in old:
+        _add_dcmotor(spec, name, target, motor, trntype=trntype, gear=motor.gear * gear)
+    for key in spec.keys:
+        ctrl = list(key.ctrl)
+        if ctrl:
+            kept_ctrl = [c for i in kept for c in ctrl[layout[i][0] : layout[i][0] + layout[i][1]]]
+            key.ctrl = kept_ctrl + [0.0] * (2 * len(motors))
+    try:
+        return spec.compile()
+    except ValueError as e:
+        raise ModelError(
+            "model", f"does not compile with the <dcmotor> actuators: {str(e).splitlines()[0]}"
+        ) from e
+
+
+BOX_SPEED_MARGIN = 0.1
+"""The box motor's no-load speed is ``1 + BOX_SPEED_MARGIN`` times the box's speed (:func:`box_motor`)."""
+
+
+def box_motor(max_force: float, max_speed: float, *, gear: float = 1.0) -> DCMotor:
+    r"""The ``<dcmotor>`` standing for an actuator's box range ``|u| <= max_force``, ``|s| <= max_speed``.
+
+    A DC motor's speed-torque line cannot be a box; this one contains it and is close to it:
+    saturation (continuous torque) ``max_force``, the line through the box's corner
+    ``(max_speed, max_force)`` with its no-load speed ``(1 + BOX_SPEED_MARGIN) max_speed``
+    (stall torque ``max_force (1 + m) / m``). The torque edge is the box's; past the speed
+    edge the force falls to 0 within 10 % more speed, so a rollout limited by the speed edge
+    may pass up to 10 % above alpha_kl. The speed loop's gain is ``max_force / max_speed``
+    (an error of the whole speed range asks the whole force); no rotor inertia (the box says
+    none; the joints' own armature stays in the model). Units: the actuator's (N m or N,
+    rad/s or m/s), ``gear`` 1 unless given. The voltage, 1 V, only scales R and K.
+    """
+    for name, value in (("max_force", max_force), ("max_speed", max_speed)):
+        if not (value > 0 and value < float("inf")):
+            raise ModelError(name, f"expected a positive finite number for a box motor, got {value!r}")
+    w0 = (1.0 + BOX_SPEED_MARGIN) * max_speed
+    return DCMotor(
+        voltage=1.0,
+        stall_torque=max_force * (1.0 + BOX_SPEED_MARGIN) / BOX_SPEED_MARGIN,
+        no_load_speed=w0,
+        max_continuous_torque=max_force,
+        gear=gear,
+        rotor_inertia=0.0,
+        velocity_gain=max_force / max_speed,
+    )
+
+
+def _add_dcmotor(
+    spec: mujoco.MjSpec,
+    name: str,
+    joint: str,
+    motor: DCMotor,
+    *,
+    trntype: mujoco.mjtTrn = mujoco.mjtTrn.mjTRN_JOINT,
+    gear: float | None = None,
+) -> None:
+    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes it, on the
+    transmission ``trntype`` to ``joint`` (a joint, tendon, ... name) with ``gear`` (default
+    ``motor.gear``)."""
+    act = spec.add_actuator(name=name, target=joint, trntype=trntype)
     # motorconst and resistance 0: the compiler derives K and R from `nominal`, as from the XML
     act.set_to_dcmotor(
         motorconst=[0.0, 0.0],
@@ -228,7 +347,7 @@ def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> 
         controller=[0.0, 0.0, motor.velocity_gain, 0.0, 0.0, motor.voltage],
         ctrlspec=CTRLSPEC,
     )
-    act.gear = [motor.gear, 0.0, 0.0, 0.0, 0.0, 0.0]
+    act.gear = [motor.gear if gear is None else gear, 0.0, 0.0, 0.0, 0.0, 0.0]
     act.armature = motor.rotor_inertia
     # a default class's <general ctrlrange/damping> would otherwise leak into the motor
     act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE

@@ -34,12 +34,13 @@ from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
-from ..errors import MjtvmError, ModelError, StateError
+from ..errors import MjtvmError, ModelError, ParamError, StateError
+from ..sim.grasp.dcmotor import DCMotor
 from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
-from .motors import attach_dcmotors, require_motors
+from .motors import CTRLSPEC, attach_actuator_dcmotors, attach_dcmotors, box_motor, require_motors
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .verify_report import plot_alpha, rows_csv, summarize
 from .witness import witness_drive
@@ -48,6 +49,7 @@ _F64 = NDArray[np.float64]
 
 __all__ = [
     "RUNS",
+    "actuator_motors",
     "alpha_sim",
     "bisect",
     "cached_lift",
@@ -88,6 +90,9 @@ def _grasp(grasp: str | Path) -> Any:
 def motor_model(grasp: Any) -> mujoco.MjModel:
     r"""The grasp's model with a ``<dcmotor>`` on every state joint, built once per grasp.
 
+    With a transmission: a ``<dcmotor>`` per actuator instead, on the actuator's own
+    transmission (:func:`actuator_motors`, :func:`~mjtvm.physics.motors.attach_actuator_dcmotors`).
+
     The model as is when each state joint already has one (``input="vel ff"``); otherwise
     the grasp's ``MjSpec`` (its MJCF file with the object and supports it adds) with the motors
     of ``grasp.motors`` attached
@@ -102,24 +107,14 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     Raises
     ------
     ModelError
-        A grasp with a transmission (coupled joints: not supported by the physics check), or a
-        joint without motor data.
+        A joint or actuator without motor data.
     """
     if id(grasp) in _MODELS:
         return _MODELS[id(grasp)][1]
-    transmission = getattr(grasp, "transmission", None)
-    if transmission is not None:
-        t = transmission
-        tied = [n for n, row in zip(t.actuator_names, t.moment, strict=True) if (row != 0).sum() > 1]
-        labels = [f"actuator {n!r}" for n in tied] + [
-            f"equality {c.split('/')[0]!r}" for c in t.constraint_names
-        ]
-        raise ModelError(
-            (labels or [f"actuator {t.actuator_names[0]!r}"])[0],
-            "couples the hand's joints (a tendon, an equality or a linkage): the physics check drives "
-            "each joint by its own <dcmotor> and cannot yet drive actuators through the model's "
-            "transmission; export-state, solve, tvms and replay support this hand",
-        )
+    if getattr(grasp, "transmission", None) is not None:
+        model = _actuator_model(grasp)
+        _MODELS[id(grasp)] = (grasp, model)
+        return model
     model = grasp.model
     motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
     if motors:
@@ -134,6 +129,69 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
                 f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
             )
     _MODELS[id(grasp)] = (grasp, model)  # the grasp is kept so that its id is not reused
+    return model
+
+
+def actuator_motors(grasp: Any) -> dict[str, DCMotor]:
+    r"""The ``<dcmotor>`` of each actuator of a grasp with a transmission (``docs/physics-check.md``).
+
+    A datasheet's motor as is; an ``actuator = true`` box (``|u| <= U``, ``|s| <= S``, ``U`` the
+    range's force plus the joints' friction share the range had taken off) the
+    :func:`~mjtvm.physics.motors.box_motor` of ``(U, S)``; an actuator that is already a
+    ``<dcmotor>`` with ``input="vel ff"`` nothing (it drives as is).
+
+    Raises
+    ------
+    ModelError
+        An unnamed actuator (its motor is found by name), a polygon range or a model
+        ``<dcmotor>`` without ``input="vel ff"``: one line naming the actuator.
+    """
+    t, model = grasp.transmission, grasp.model
+    dofs = np.array([int(model.joint(j).dofadr[0]) for j in t.joint_names])
+    out: dict[str, DCMotor] = {}
+    for a, name, row in zip(t.actuator_ids, t.actuator_names, t.moment, strict=True):
+        if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) != name:
+            raise ModelError(
+                f"actuator {name!r}", "has no name: the physics check finds its <dcmotor> by name"
+            )
+        entry = grasp.motors.get(name)
+        if isinstance(entry, DCMotor):
+            out[name] = entry
+            continue
+        dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
+        if entry is None and dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC:
+            continue
+        rng = grasp.operation_ranges[name]
+        if isinstance(entry, str) and rng.max_speed_at(rng.max_torque) >= rng.max_speed * (1 - 1e-12):
+            arms = np.abs(row)
+            friction = float(np.max(model.dof_frictionloss[dofs][arms > 0] / arms[arms > 0], initial=0.0))
+            out[name] = box_motor(rng.max_torque + friction, rng.max_speed)
+            continue
+        why = entry if isinstance(entry, str) else 'its <dcmotor> has no input="vel ff"'
+        raise ModelError(
+            f"actuator {name!r}",
+            f"{why}: the physics check needs a DC motor; give its [ranges] entry as a datasheet "
+            "with gear_efficiency = 1, or actuator = true with a speed_limit",
+        )
+    return out
+
+
+def _actuator_model(grasp: Any) -> mujoco.MjModel:
+    """The grasp's model with :func:`actuator_motors` attached on the actuators' own transmissions."""
+    motors = actuator_motors(grasp)
+    if not motors:
+        return grasp.model
+    source = grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path)
+    model = attach_actuator_dcmotors(source, motors)
+    if (model.nq, model.nv, model.nbody, model.ngeom) != (
+        grasp.model.nq,
+        grasp.model.nv,
+        grasp.model.nbody,
+        grasp.model.ngeom,
+    ):
+        raise ModelError(
+            f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
+        )
     return model
 
 
@@ -335,6 +393,10 @@ def verify_lift(
     indices = state_indices(num_states, stride)
     lift = cached_lift(grasp, num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
+    if dynamics and getattr(lift.scenario, "transmission", None) is not None:
+        raise ParamError(
+            "dynamics", "not available for a hand with a transmission (its limits are per joint)"
+        )
     opts = {
         "mu": mu,
         "mg": mg,
