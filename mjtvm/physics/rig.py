@@ -65,6 +65,7 @@ class Rig:
         if self.coupled:
             self.acts = np.array([dcmotor_of_actuator(m, a) for a in drive.actuators], dtype=int)
             self.gear = np.ones(len(self.acts))  # until bind()
+            self.moment = np.asarray(drive.moment, dtype=float)
             p = np.abs(np.asarray(drive.moment))
             fl = m.dof_frictionloss[self.dofs]
             self.friction = np.array([float(np.max(fl[row > 0] / row[row > 0], initial=0.0)) for row in p])
@@ -124,6 +125,14 @@ class Rig:
                     f"actuator {name!r}", "its <dcmotor> moves the joints unlike the state's moment row"
                 )
             self.gear[a] = c
+
+    def damping_share(self, qd: _F64) -> _F64:
+        """``(A,)`` actuator forces whose joint torques ``P^T u`` best match the joints' damping
+        ``b qd`` (least squares; with independent joints exactly ``b qd``)."""
+        tau = self.m.dof_damping[self.dofs] * qd
+        if not np.any(tau):
+            return np.zeros(len(self.acts))
+        return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
 
     def motor_moment(self, d: mujoco.MjData) -> _F64:
         """``(A, M)`` the motors' moment rows over the drive's joints at ``d`` (gear included)."""

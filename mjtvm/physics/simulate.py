@@ -233,7 +233,9 @@ def _settle(
         mujoco.mj_forward(m, d)
         rig.bind(d, drive)
     d.ctrl[rig.cadr] = 0.0
-    d.ctrl[rig.cadr + 1] = drive.torques / rig.gear
+    # with a transmission u carries the damping b qd of the witness's motion, absent at rest
+    hold = drive.torques - rig.damping_share(drive.speeds) if rig.coupled else drive.torques
+    d.ctrl[rig.cadr + 1] = hold / rig.gear
     mujoco.mj_forward(m, d)
     p0 = d.xpos[rig.ob].copy()
     if st.steps(st.settle):
@@ -289,11 +291,16 @@ def rollout(
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
         if rig.coupled:
-            # the LP's forces u already carry the joints' damping (b qd in the balance); each
-            # actuator's friction share was taken off its range (actuator_ranges), and its sign
-            # is the witness's speed's, not the tracked speed's (whose round-off flips at rest)
+            # the LP's forces u carry the damping b qd of the witness's speeds (in its balance):
+            # the tracked speeds' difference is added; each actuator's friction share was taken
+            # off its range (actuator_ranges), with the sign of the witness's speed, not the
+            # tracked speed's (whose round-off flips at rest)
             sp = rig.motor_speeds(d, qset)
-            ff = drive.torques + rig.friction * np.sign(drive.actuator_speeds)
+            ff = (
+                drive.torques
+                + rig.damping_share(qset - drive.speeds)
+                + rig.friction * np.sign(drive.actuator_speeds)
+            )
         else:
             # the joints' own damping and friction loss (passive torques of the model), which the
             # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)
