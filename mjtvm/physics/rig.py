@@ -134,6 +134,11 @@ class Rig:
             return np.zeros(len(self.acts))
         return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
 
+    @staticmethod
+    def damped(drive: Drive) -> _F64:
+        """The joint speeds whose damping the drive's forces carry (:attr:`Drive.damped_speeds`)."""
+        return drive.speeds if drive.damped_speeds is None else drive.damped_speeds
+
     def motor_moment(self, d: mujoco.MjData) -> _F64:
         """``(A, M)`` the motors' moment rows over the drive's joints at ``d`` (gear included)."""
         return dense_moment(self.m, d)[self.acts][:, self.dofs]

@@ -234,7 +234,7 @@ def _settle(
         rig.bind(d, drive)
     d.ctrl[rig.cadr] = 0.0
     # with a transmission u carries the damping b qd of the witness's motion, absent at rest
-    hold = drive.torques - rig.damping_share(drive.speeds) if rig.coupled else drive.torques
+    hold = drive.torques - rig.damping_share(rig.damped(drive)) if rig.coupled else drive.torques
     d.ctrl[rig.cadr + 1] = hold / rig.gear
     mujoco.mj_forward(m, d)
     p0 = d.xpos[rig.ob].copy()
@@ -298,7 +298,7 @@ def rollout(
             sp = rig.motor_speeds(d, qset)
             ff = (
                 drive.torques
-                + rig.damping_share(qset - drive.speeds)
+                + rig.damping_share(qset - rig.damped(drive))
                 + rig.friction * np.sign(drive.actuator_speeds)
             )
         else:

@@ -261,7 +261,7 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     """A short replay runs (exit 0, one row per state); so does a short verify, which drives the
     actuators through the transmission (docs/physics-check.md): one row per state and RVDS vertex.
     The 2F-85 (speed edge binding, box motor 10 % past it, twist tolerance 10 %): alpha_sim /
-    alpha_kl between 1 and 1.3 (measured 1.12 to 1.24), the check at 0.9 alpha_kl passes. The
+    alpha_kl between 1 and 1.3 (measured 1.11 to 1.24, central and vertex witness alike), the check at 0.9 alpha_kl passes. The
     Shadow hand's hold is not static in MuJoCo (docs/physics-check.md): no ratio is asserted."""
     exe = Path(sys.executable).with_name("mjtvm")
     cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mjtvm.cli"]
