@@ -147,3 +147,31 @@ def test_datasheet_motor_keeps_its_gear() -> None:
     )
     model = attach_actuator_dcmotors(TENDON, {"servo": motor})
     assert model.actuator_gear[0, 0] == pytest.approx(50.0 * G, rel=1e-15)
+
+
+def test_damping_share_of_a_tendon_in_closed_form() -> None:
+    """Least squares of P^T du = b qd with P = G (r1, r2): du = (r1 b1 q1 + r2 b2 q2) / (G (r1^2 + r2^2))."""
+    b1, b2, q = 0.3, 0.05, np.array([1.5, -0.8])
+    xml = TENDON.replace('<joint name="a" axis="0 0 1"/>', f'<joint name="a" axis="0 0 1" damping="{b1}"/>')
+    xml = xml.replace('<joint name="b" axis="0 1 0"/>', f'<joint name="b" axis="0 1 0" damping="{b2}"/>')
+    xml = xml.replace(
+        "</worldbody>", '<body name="object" pos="1 0 0"><freejoint/><geom size=".05"/></body></worldbody>'
+    )
+    xml = xml.replace('qpos="0.1 0.2"', 'qpos="0.1 0.2 1 0 0 1 0 0 0"')
+    model = attach_actuator_dcmotors(xml, {"servo": box_motor(2.0, 4.0)})
+    p = np.array([[G * R1, G * R2]])
+    drive = Drive(("a", "b"), q, np.zeros(1), np.zeros(6), (), actuators=("servo",), moment=p)
+    rig = Rig(model, drive, "object")
+    want = (R1 * b1 * q[0] + R2 * b2 * q[1]) / (G * (R1**2 + R2**2))
+    np.testing.assert_allclose(rig.damping_share(q), [want], rtol=1e-12)
+    assert Rig.damped(drive) is drive.speeds
+
+
+def test_gear_sweep_and_dynamics_refuse_a_transmission() -> None:
+    from mjtvm.physics.gears import gear_sweep
+    from mjtvm.physics.verify import verify_lift
+
+    with pytest.raises(ParamError, match="gears: not available for a hand with a transmission"):
+        gear_sweep(str(F85), (10.0,), num_states=2, states=(0,))
+    with pytest.raises(ParamError, match="dynamics: not available for a hand with a transmission"):
+        verify_lift(F85, num_states=2, dynamics=True, out=None, progress=False)
