@@ -17,6 +17,11 @@ is an operation range without a motor, and a datasheet with a gear efficiency ot
 cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`require_motors` refuses those,
 naming the joint and how to give motor data.
 
+A hand with a transmission (coupled joints, a linkage) is driven by actuator instead:
+:func:`attach_actuator_dcmotors` replaces each actuator of the state by a ``<dcmotor>`` of the
+same name on the same joint or tendon, and :func:`box_motor` stands for an ``actuator = true``
+box (the motor whose speed-torque line passes through the box's corner).
+
 Units: SI, motor side unless said otherwise (torques N m, speeds rad/s, inertia kg m^2).
 """
 

@@ -36,7 +36,9 @@ tangential slip above ``slip_tol`` x the object's travel (+ ``slip_floor``); a f
 more than ``lost_gap`` from the object; a motor torque at its saturation.
 
 Any hand: the model needs one ``<dcmotor>`` per state joint (found by its transmission;
-:mod:`mjtvm.physics.motors` attaches them to a hand with servos), finger geoms are keyed by
+:mod:`mjtvm.physics.motors` attaches them to a hand with servos), or, for a state with a
+transmission, one per actuator on the actuator's own joint or tendon (found by name; the
+drive's actuator forces fed forward, its actuator speeds the setpoints, ``docs/physics-check.md``), finger geoms are keyed by
 label (:func:`~mjtvm.sim.grasp.state.geom_label`), and contact points come from
 ``mj_geomDistance``, so fingertips and objects need not be spheres.
 """
