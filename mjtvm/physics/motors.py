@@ -29,8 +29,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import mujoco
+import numpy as np
 
 from ..errors import ModelError
 from ..sim.grasp.dcmotor import DCMotor
@@ -38,6 +40,8 @@ from ..sim.grasp.dcmotor import DCMotor
 __all__ = [
     "BOX_SPEED_MARGIN",
     "CTRLSPEC",
+    "actuator_model",
+    "actuator_motors",
     "attach_actuator_dcmotors",
     "attach_dcmotors",
     "box_motor",
@@ -387,3 +391,66 @@ def require_motors(
         why = motor if isinstance(motor, str) else 'no <dcmotor> with input="vel ff" drives it'
         raise ModelError(f"joint {joint!r}", f"{why}: the physics check needs a DC motor; {_NO_MOTOR}")
     return out
+
+
+def actuator_motors(grasp: Any) -> dict[str, DCMotor]:
+    r"""The ``<dcmotor>`` of each actuator of a grasp with a transmission (``docs/physics-check.md``).
+
+    A datasheet's motor as is; an ``actuator = true`` box (``|u| <= U``, ``|s| <= S``, ``U`` the
+    range's force plus the joints' friction share the range had taken off) the
+    :func:`~mjtvm.physics.motors.box_motor` of ``(U, S)``; an actuator that is already a
+    ``<dcmotor>`` with ``input="vel ff"`` nothing (it drives as is).
+
+    Raises
+    ------
+    ModelError
+        An unnamed actuator (its motor is found by name), a polygon range or a model
+        ``<dcmotor>`` without ``input="vel ff"``: one line naming the actuator.
+    """
+    t, model = grasp.transmission, grasp.model
+    dofs = np.array([int(model.joint(j).dofadr[0]) for j in t.joint_names])
+    out: dict[str, DCMotor] = {}
+    for a, name, row in zip(t.actuator_ids, t.actuator_names, t.moment, strict=True):
+        if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) != name:
+            raise ModelError(
+                f"actuator {name!r}", "has no name: the physics check finds its <dcmotor> by name"
+            )
+        entry = grasp.motors.get(name)
+        if isinstance(entry, DCMotor):
+            out[name] = entry
+            continue
+        dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
+        if entry is None and dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC:
+            continue
+        rng = grasp.operation_ranges[name]
+        if isinstance(entry, str) and rng.max_speed_at(rng.max_torque) >= rng.max_speed * (1 - 1e-12):
+            arms = np.abs(row)
+            friction = float(np.max(model.dof_frictionloss[dofs][arms > 0] / arms[arms > 0], initial=0.0))
+            out[name] = box_motor(rng.max_torque + friction, rng.max_speed)
+            continue
+        why = entry if isinstance(entry, str) else 'its <dcmotor> has no input="vel ff"'
+        raise ModelError(
+            f"actuator {name!r}",
+            f"{why}: the physics check needs a DC motor; give its [ranges] entry as a datasheet "
+            "with gear_efficiency = 1, or actuator = true with a speed_limit",
+        )
+    return out
+
+
+def actuator_model(grasp: Any) -> mujoco.MjModel:
+    """The grasp's model with :func:`actuator_motors` attached on the actuators' own transmissions."""
+    motors = actuator_motors(grasp)
+    if not motors:
+        return grasp.model
+    source = grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path)
+    model = attach_actuator_dcmotors(source, motors)
+    if (model.nq, model.nv, model.nbody, model.ngeom) != (
+        grasp.model.nq,
+        grasp.model.nv,
+        grasp.model.nbody,
+        grasp.model.ngeom,
+    ):
+        raise ModelError(
+            f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
+        )
+    return model

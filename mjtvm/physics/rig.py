@@ -139,6 +139,22 @@ class Rig:
         """The joint speeds whose damping the drive's forces carry (:attr:`Drive.damped_speeds`)."""
         return drive.speeds if drive.damped_speeds is None else drive.damped_speeds
 
+    def command(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:
+        """With a transmission: ``(A,)`` motor speed setpoints of the tracked joint speeds ``qset``
+        and ``(A,)`` feedforward forces (actuator units, before the motors' ratio).
+
+        The LP's forces ``u`` carry the damping ``b qd`` of the witness's speeds (its balance
+        has it): the damping of the tracked speeds' difference is added; each actuator's
+        friction share was taken off its range (``actuator_ranges``) and is added with the sign
+        of the witness's actuator speed, not the tracked one's (whose round-off flips at rest).
+        """
+        ff = (
+            drive.torques
+            + self.damping_share(qset - self.damped(drive))
+            + self.friction * np.sign(drive.actuator_speeds)
+        )
+        return self.motor_speeds(d, qset), ff
+
     def motor_moment(self, d: mujoco.MjData) -> _F64:
         """``(A, M)`` the motors' moment rows over the drive's joints at ``d`` (gear included)."""
         return dense_moment(self.m, d)[self.acts][:, self.dofs]

@@ -293,16 +293,7 @@ def rollout(
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
         if rig.coupled:
-            # the LP's forces u carry the damping b qd of the witness's speeds (in its balance):
-            # the tracked speeds' difference is added; each actuator's friction share was taken
-            # off its range (actuator_ranges), with the sign of the witness's speed, not the
-            # tracked speed's (whose round-off flips at rest)
-            sp = rig.motor_speeds(d, qset)
-            ff = (
-                drive.torques
-                + rig.damping_share(qset - rig.damped(drive))
-                + rig.friction * np.sign(drive.actuator_speeds)
-            )
+            sp, ff = rig.command(d, drive, qset)
         else:
             # the joints' own damping and friction loss (passive torques of the model), which the
             # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)

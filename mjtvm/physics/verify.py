@@ -35,12 +35,11 @@ from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, ModelError, ParamError, StateError
-from ..sim.grasp.dcmotor import DCMotor
 from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
-from .motors import CTRLSPEC, attach_actuator_dcmotors, attach_dcmotors, box_motor, require_motors
+from .motors import actuator_model, attach_dcmotors, require_motors
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .verify_report import plot_alpha, rows_csv, summarize
 from .witness import witness_drive
@@ -49,7 +48,6 @@ _F64 = NDArray[np.float64]
 
 __all__ = [
     "RUNS",
-    "actuator_motors",
     "alpha_sim",
     "bisect",
     "cached_lift",
@@ -91,7 +89,8 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     r"""The grasp's model with a ``<dcmotor>`` on every state joint, built once per grasp.
 
     With a transmission: a ``<dcmotor>`` per actuator instead, on the actuator's own
-    transmission (:func:`actuator_motors`, :func:`~mjtvm.physics.motors.attach_actuator_dcmotors`).
+    transmission (:func:`~mjtvm.physics.motors.actuator_motors`,
+    :func:`~mjtvm.physics.motors.attach_actuator_dcmotors`).
 
     The model as is when each state joint already has one (``input="vel ff"``); otherwise
     the grasp's ``MjSpec`` (its MJCF file with the object and supports it adds) with the motors
@@ -112,7 +111,7 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     if id(grasp) in _MODELS:
         return _MODELS[id(grasp)][1]
     if getattr(grasp, "transmission", None) is not None:
-        model = _actuator_model(grasp)
+        model = actuator_model(grasp)
         _MODELS[id(grasp)] = (grasp, model)
         return model
     model = grasp.model
@@ -129,69 +128,6 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
                 f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
             )
     _MODELS[id(grasp)] = (grasp, model)  # the grasp is kept so that its id is not reused
-    return model
-
-
-def actuator_motors(grasp: Any) -> dict[str, DCMotor]:
-    r"""The ``<dcmotor>`` of each actuator of a grasp with a transmission (``docs/physics-check.md``).
-
-    A datasheet's motor as is; an ``actuator = true`` box (``|u| <= U``, ``|s| <= S``, ``U`` the
-    range's force plus the joints' friction share the range had taken off) the
-    :func:`~mjtvm.physics.motors.box_motor` of ``(U, S)``; an actuator that is already a
-    ``<dcmotor>`` with ``input="vel ff"`` nothing (it drives as is).
-
-    Raises
-    ------
-    ModelError
-        An unnamed actuator (its motor is found by name), a polygon range or a model
-        ``<dcmotor>`` without ``input="vel ff"``: one line naming the actuator.
-    """
-    t, model = grasp.transmission, grasp.model
-    dofs = np.array([int(model.joint(j).dofadr[0]) for j in t.joint_names])
-    out: dict[str, DCMotor] = {}
-    for a, name, row in zip(t.actuator_ids, t.actuator_names, t.moment, strict=True):
-        if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) != name:
-            raise ModelError(
-                f"actuator {name!r}", "has no name: the physics check finds its <dcmotor> by name"
-            )
-        entry = grasp.motors.get(name)
-        if isinstance(entry, DCMotor):
-            out[name] = entry
-            continue
-        dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
-        if entry is None and dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC:
-            continue
-        rng = grasp.operation_ranges[name]
-        if isinstance(entry, str) and rng.max_speed_at(rng.max_torque) >= rng.max_speed * (1 - 1e-12):
-            arms = np.abs(row)
-            friction = float(np.max(model.dof_frictionloss[dofs][arms > 0] / arms[arms > 0], initial=0.0))
-            out[name] = box_motor(rng.max_torque + friction, rng.max_speed)
-            continue
-        why = entry if isinstance(entry, str) else 'its <dcmotor> has no input="vel ff"'
-        raise ModelError(
-            f"actuator {name!r}",
-            f"{why}: the physics check needs a DC motor; give its [ranges] entry as a datasheet "
-            "with gear_efficiency = 1, or actuator = true with a speed_limit",
-        )
-    return out
-
-
-def _actuator_model(grasp: Any) -> mujoco.MjModel:
-    """The grasp's model with :func:`actuator_motors` attached on the actuators' own transmissions."""
-    motors = actuator_motors(grasp)
-    if not motors:
-        return grasp.model
-    source = grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path)
-    model = attach_actuator_dcmotors(source, motors)
-    if (model.nq, model.nv, model.nbody, model.ngeom) != (
-        grasp.model.nq,
-        grasp.model.nv,
-        grasp.model.nbody,
-        grasp.model.ngeom,
-    ):
-        raise ModelError(
-            f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
-        )
     return model
 
 

@@ -19,13 +19,14 @@ from mjtvm.errors import ModelError, ParamError
 from mjtvm.physics.motors import (
     BOX_SPEED_MARGIN,
     CTRLSPEC,
+    actuator_motors,
     attach_actuator_dcmotors,
     box_motor,
     dcmotor_of_actuator,
 )
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.simulate import sim_model
-from mjtvm.physics.verify import _types, actuator_motors, cached_lift, motor_model
+from mjtvm.physics.verify import _types, cached_lift, motor_model
 from mjtvm.physics.witness import Drive, central_witness, witness_drive
 from mjtvm.sim.grasp.dcmotor import DCMotor
 from mjtvm.sim.grasp.transmission import dense_moment
