@@ -3,7 +3,9 @@ r"""The physics check: MuJoCo rollouts of TVMMP witnesses with the hand's ``<dcm
 :func:`verify_lift` compares alpha_sim (rollouts, :func:`alpha_sim`) with alpha_kl (the LP)
 along the lift; :func:`slide_check` settles the slide direction of S-points;
 :func:`dynamic_pair` adds the torque the witness motion needs beyond eq. (19);
-:func:`gear_sweep` varies the gear ratio; :func:`attach_dcmotors` gives any hand DC motors.
+:func:`gear_sweep` varies the gear ratio; :func:`attach_dcmotors` gives any hand DC motors,
+:func:`attach_actuator_dcmotors` the actuators of a hand with a transmission (:func:`box_motor`
+for a box range).
 
 The names below are imported on first use: the report's plots load matplotlib, which a
 rollout alone does not need.
@@ -19,7 +21,7 @@ if TYPE_CHECKING:
     from .bisection import Bisection, alpha_sim
     from .dynamic import dynamic_pair
     from .gears import gear_sweep
-    from .motors import attach_dcmotors
+    from .motors import attach_actuator_dcmotors, attach_dcmotors, box_motor
     from .simulate import RolloutResult, SimSettings, rollout, sim_model
     from .slide_check import slide_check
     from .verify import verify_lift, verify_state
@@ -31,6 +33,8 @@ _HOMES = {
     "dynamic_pair": "dynamic",
     "gear_sweep": "gears",
     "attach_dcmotors": "motors",
+    "attach_actuator_dcmotors": "motors",
+    "box_motor": "motors",
     "RolloutResult": "simulate",
     "SimSettings": "simulate",
     "rollout": "simulate",
@@ -46,7 +50,9 @@ __all__ = [
     "RolloutResult",
     "SimSettings",
     "alpha_sim",
+    "attach_actuator_dcmotors",
     "attach_dcmotors",
+    "box_motor",
     "dynamic_pair",
     "gear_sweep",
     "rollout",

@@ -60,6 +60,8 @@ def gear_sweep(
     if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
         raise ParamError("ratios", f"expected positive gear ratios, got {list(ratios)!r}", list(ratios))
     lift = cached_lift(grasp, num_states)
+    if getattr(lift.scenario, "transmission", None) is not None:
+        raise ParamError("gears", "not available for a hand with a transmission (it rescales joint motors)")
     ob = lift.scenario.object_body
     base = motor_model(lift.scenario)
     rows = []

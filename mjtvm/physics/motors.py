@@ -17,6 +17,11 @@ is an operation range without a motor, and a datasheet with a gear efficiency ot
 cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`require_motors` refuses those,
 naming the joint and how to give motor data.
 
+A hand with a transmission (coupled joints, a linkage) is driven by actuator instead:
+:func:`attach_actuator_dcmotors` replaces each actuator of the state by a ``<dcmotor>`` of the
+same name on the same joint or tendon, and :func:`box_motor` stands for an ``actuator = true``
+box (the motor whose speed-torque line passes through the box's corner).
+
 Units: SI, motor side unless said otherwise (torques N m, speeds rad/s, inertia kg m^2).
 """
 
@@ -24,15 +29,23 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import mujoco
+import numpy as np
 
 from ..errors import ModelError
 from ..sim.grasp.dcmotor import DCMotor
 
 __all__ = [
+    "BOX_SPEED_MARGIN",
     "CTRLSPEC",
+    "actuator_model",
+    "actuator_motors",
+    "attach_actuator_dcmotors",
     "attach_dcmotors",
+    "box_motor",
+    "dcmotor_of_actuator",
     "dcmotor_of_joint",
     "joint_actuators",
     "motor_of_actuator",
@@ -74,6 +87,26 @@ def dcmotor_of_joint(model: mujoco.MjModel, joint: str) -> int | None:
     a = acts[0]
     dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
     return a if dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC else None
+
+
+def dcmotor_of_actuator(model: mujoco.MjModel, name: str) -> int:
+    """The id of the ``<dcmotor>`` with ``input="vel ff"`` named ``name`` (a transmission's actuator).
+
+    Raises
+    ------
+    ModelError
+        No actuator of that name, or not such a ``<dcmotor>``.
+    """
+    a = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+    if a < 0:
+        raise ModelError(f"actuator {name!r}", "not in the model")
+    dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
+    if not (dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC):
+        raise ModelError(
+            f"actuator {name!r}",
+            'expected a <dcmotor> with input="vel ff" (mjtvm.physics.motors.attach_actuator_dcmotors)',
+        )
+    return a
 
 
 def motor_of_actuator(model: mujoco.MjModel, actuator: int) -> DCMotor:
@@ -216,9 +249,104 @@ def _control_layout(spec: mujoco.MjSpec, joints: set[str]) -> tuple[list[tuple[i
     return [(int(m.actuator_ctrladr[a]), int(m.actuator_ctrlnum[a])) for a in range(m.nactuator)], moves
 
 
-def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> None:
-    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes it."""
-    act = spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+def attach_actuator_dcmotors(
+    source: mujoco.MjSpec | str | Path, motors: Mapping[str, DCMotor]
+) -> mujoco.MjModel:
+    r"""The model of ``source`` with each actuator of ``motors`` replaced by a ``<dcmotor>`` (compiled).
+
+    For a hand with a transmission (``docs/physics-check.md``): the new ``<dcmotor>`` keeps the
+    actuator's name and its transmission (the same joint, tendon, ...) and takes the gear
+    ``motor.gear x`` the actuator's own gear, so that its moment is ``motor.gear`` times the
+    actuator's row of ``P``: MuJoCo applies ``P^T u`` for a motor torque ``u / motor.gear`` and
+    its ``actuator_velocity`` is ``motor.gear x P qd``. Other attributes as
+    :func:`attach_dcmotors` (sensors of a replaced actuator removed, keyframe controls of the
+    kept actuators kept, the new ones at 0, after the kept ones in ``motors``' order).
+
+    Raises
+    ------
+    ModelError
+        Unparsable MJCF, an unknown actuator, or a model that does not compile after the change.
+    """
+    spec = _spec(source)
+    if not motors:
+        raise ModelError("motors", "expected at least one actuator -> DCMotor")
+    layout, _moves = _control_layout(spec, set())
+    index = {a.name: i for i, a in enumerate(spec.actuators) if a.name}
+    old = []
+    for name, motor in motors.items():
+        act = spec.actuator(name)
+        if act is None:
+            raise ModelError(f"actuator {name!r}", "not in the model")
+        if not isinstance(motor, DCMotor):
+            raise ModelError(f"motors[{name!r}]", f"expected a DCMotor, got {type(motor).__name__}")
+        old.append((name, act.trntype, act.target, float(act.gear[0]), motor))
+    gone = {index[n] for n in motors}
+    kept = [i for i in range(len(layout)) if i not in gone]
+    for sensor in list(spec.sensors):
+        if int(sensor.objtype) == int(mujoco.mjtObj.mjOBJ_ACTUATOR) and sensor.objname in motors:
+            spec.delete(sensor)
+    for name in motors:
+        spec.delete(spec.actuator(name))
+    for name, trntype, target, gear, motor in old:
+        _add_dcmotor(spec, name, target, motor, trntype=trntype, gear=motor.gear * gear)
+    for key in spec.keys:
+        ctrl = list(key.ctrl)
+        if ctrl:
+            kept_ctrl = [c for i in kept for c in ctrl[layout[i][0] : layout[i][0] + layout[i][1]]]
+            key.ctrl = kept_ctrl + [0.0] * (2 * len(motors))
+    try:
+        return spec.compile()
+    except ValueError as e:
+        raise ModelError(
+            "model", f"does not compile with the <dcmotor> actuators: {str(e).splitlines()[0]}"
+        ) from e
+
+
+BOX_SPEED_MARGIN = 0.1
+"""The box motor's no-load speed is ``1 + BOX_SPEED_MARGIN`` times the box's speed (:func:`box_motor`)."""
+
+
+def box_motor(max_force: float, max_speed: float, *, gear: float = 1.0) -> DCMotor:
+    r"""The ``<dcmotor>`` standing for an actuator's box range ``|u| <= max_force``, ``|s| <= max_speed``.
+
+    A DC motor's speed-torque line cannot be a box; this one contains it and is close to it:
+    saturation (continuous torque) ``max_force``, the line through the box's corner
+    ``(max_speed, max_force)`` with its no-load speed ``(1 + BOX_SPEED_MARGIN) max_speed``
+    (stall torque ``max_force (1 + m) / m``). The torque edge is the box's; past the speed
+    edge the force falls to 0 within 10 % more speed, so a rollout limited by the speed edge
+    may pass up to 10 % above alpha_kl. The speed loop's gain is ``max_force / max_speed``
+    (an error of the whole speed range asks the whole force); no rotor inertia (the box says
+    none; the joints' own armature stays in the model). Units: the actuator's (N m or N,
+    rad/s or m/s), ``gear`` 1 unless given. The voltage, 1 V, only scales R and K.
+    """
+    for name, value in (("max_force", max_force), ("max_speed", max_speed)):
+        if not (value > 0 and value < float("inf")):
+            raise ModelError(name, f"expected a positive finite number for a box motor, got {value!r}")
+    w0 = (1.0 + BOX_SPEED_MARGIN) * max_speed
+    return DCMotor(
+        voltage=1.0,
+        stall_torque=max_force * (1.0 + BOX_SPEED_MARGIN) / BOX_SPEED_MARGIN,
+        no_load_speed=w0,
+        max_continuous_torque=max_force,
+        gear=gear,
+        rotor_inertia=0.0,
+        velocity_gain=max_force / max_speed,
+    )
+
+
+def _add_dcmotor(
+    spec: mujoco.MjSpec,
+    name: str,
+    joint: str,
+    motor: DCMotor,
+    *,
+    trntype: mujoco.mjtTrn = mujoco.mjtTrn.mjTRN_JOINT,
+    gear: float | None = None,
+) -> None:
+    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes it, on the
+    transmission ``trntype`` to ``joint`` (a joint, tendon, ... name) with ``gear`` (default
+    ``motor.gear``)."""
+    act = spec.add_actuator(name=name, target=joint, trntype=trntype)
     # motorconst and resistance 0: the compiler derives K and R from `nominal`, as from the XML
     act.set_to_dcmotor(
         motorconst=[0.0, 0.0],
@@ -228,7 +356,7 @@ def _add_dcmotor(spec: mujoco.MjSpec, name: str, joint: str, motor: DCMotor) -> 
         controller=[0.0, 0.0, motor.velocity_gain, 0.0, 0.0, motor.voltage],
         ctrlspec=CTRLSPEC,
     )
-    act.gear = [motor.gear, 0.0, 0.0, 0.0, 0.0, 0.0]
+    act.gear = [motor.gear if gear is None else gear, 0.0, 0.0, 0.0, 0.0, 0.0]
     act.armature = motor.rotor_inertia
     # a default class's <general ctrlrange/damping> would otherwise leak into the motor
     act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
@@ -263,3 +391,66 @@ def require_motors(
         why = motor if isinstance(motor, str) else 'no <dcmotor> with input="vel ff" drives it'
         raise ModelError(f"joint {joint!r}", f"{why}: the physics check needs a DC motor; {_NO_MOTOR}")
     return out
+
+
+def actuator_motors(grasp: Any) -> dict[str, DCMotor]:
+    r"""The ``<dcmotor>`` of each actuator of a grasp with a transmission (``docs/physics-check.md``).
+
+    A datasheet's motor as is; an ``actuator = true`` box (``|u| <= U``, ``|s| <= S``, ``U`` the
+    range's force plus the joints' friction share the range had taken off) the
+    :func:`~mjtvm.physics.motors.box_motor` of ``(U, S)``; an actuator that is already a
+    ``<dcmotor>`` with ``input="vel ff"`` nothing (it drives as is).
+
+    Raises
+    ------
+    ModelError
+        An unnamed actuator (its motor is found by name), a polygon range or a model
+        ``<dcmotor>`` without ``input="vel ff"``: one line naming the actuator.
+    """
+    t, model = grasp.transmission, grasp.model
+    dofs = np.array([int(model.joint(j).dofadr[0]) for j in t.joint_names])
+    out: dict[str, DCMotor] = {}
+    for a, name, row in zip(t.actuator_ids, t.actuator_names, t.moment, strict=True):
+        if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) != name:
+            raise ModelError(
+                f"actuator {name!r}", "has no name: the physics check finds its <dcmotor> by name"
+            )
+        entry = grasp.motors.get(name)
+        if isinstance(entry, DCMotor):
+            out[name] = entry
+            continue
+        dc = int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_DCMOTOR)
+        if entry is None and dc and int(model.actuator_ctrlspec[a]) == CTRLSPEC:
+            continue
+        rng = grasp.operation_ranges[name]
+        if isinstance(entry, str) and rng.max_speed_at(rng.max_torque) >= rng.max_speed * (1 - 1e-12):
+            arms = np.abs(row)
+            friction = float(np.max(model.dof_frictionloss[dofs][arms > 0] / arms[arms > 0], initial=0.0))
+            out[name] = box_motor(rng.max_torque + friction, rng.max_speed)
+            continue
+        why = entry if isinstance(entry, str) else 'its <dcmotor> has no input="vel ff"'
+        raise ModelError(
+            f"actuator {name!r}",
+            f"{why}: the physics check needs a DC motor; give its [ranges] entry as a datasheet "
+            "with gear_efficiency = 1, or actuator = true with a speed_limit",
+        )
+    return out
+
+
+def actuator_model(grasp: Any) -> mujoco.MjModel:
+    """The grasp's model with :func:`actuator_motors` attached on the actuators' own transmissions."""
+    motors = actuator_motors(grasp)
+    if not motors:
+        return grasp.model
+    source = grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path)
+    model = attach_actuator_dcmotors(source, motors)
+    if (model.nq, model.nv, model.nbody, model.ngeom) != (
+        grasp.model.nq,
+        grasp.model.nv,
+        grasp.model.nbody,
+        grasp.model.ngeom,
+    ):
+        raise ModelError(
+            f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
+        )
+    return model

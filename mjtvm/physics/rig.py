@@ -14,7 +14,8 @@ from numpy.typing import NDArray
 
 from ..errors import ModelError
 from ..sim.grasp.state import geom_id, model_id
-from .motors import dcmotor_of_joint
+from ..sim.grasp.transmission import dense_efc_jacobian, dense_moment
+from .motors import dcmotor_of_actuator, dcmotor_of_joint
 from .witness import Drive
 
 __all__ = ["Rig", "finger_contacts", "geom_force", "twist_errors", "unit"]
@@ -43,6 +44,13 @@ class Rig:
         origin + ``geom_rbound``). For a sphere centred on its body: its radius.
     fingers
         Per drive contact: (label, geom id, body id, columns of the drive's joints moving it, type).
+    coupled
+        The drive has a transmission (:attr:`Drive.actuators`): ``acts`` are the actuators'
+        ``<dcmotor>`` s (found by name), ``gear`` their ratio ``c`` to the state's moment rows
+        (set by :meth:`bind`: motor moment = ``c x P``, so motor torque ``u / c`` and motor speed
+        ``c x P qd``), ``friction`` each actuator's share of its joints' friction loss,
+        ``max_j frictionloss_j / |P_aj|`` (what :func:`~mjtvm.sim.grasp.ranges.actuator_ranges`
+        takes off its range).
     """
 
     def __init__(self, model: mujoco.MjModel, drive: Drive, object_body: str) -> None:
@@ -53,8 +61,17 @@ class Rig:
         self.fadr = int(m.jnt_dofadr[m.body_jntadr[self.ob]])
         jids = [model_id(m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in drive.joints]
         self.dofs = np.array([int(m.jnt_dofadr[j]) for j in jids])
-        self.acts = np.array([_motor(m, j) for j in drive.joints], dtype=int)
-        self.gear = m.actuator_gear[self.acts, 0].copy()
+        self.coupled = bool(drive.actuators)
+        if self.coupled:
+            self.acts = np.array([dcmotor_of_actuator(m, a) for a in drive.actuators], dtype=int)
+            self.gear = np.ones(len(self.acts))  # until bind()
+            self.moment = np.asarray(drive.moment, dtype=float)
+            p = np.abs(np.asarray(drive.moment))
+            fl = m.dof_frictionloss[self.dofs]
+            self.friction = np.array([float(np.max(fl[row > 0] / row[row > 0], initial=0.0)) for row in p])
+        else:
+            self.acts = np.array([_motor(m, j) for j in drive.joints], dtype=int)
+            self.gear = m.actuator_gear[self.acts, 0].copy()
         self.cadr = m.actuator_ctrladr[self.acts].copy()
         self.fmax = m.actuator_forcerange[self.acts, 1].copy()
         self.r_k, self.kd, self.vmax = (m.actuator_gainprm[self.acts, i].copy() for i in (0, 6, 7))
@@ -89,8 +106,81 @@ class Rig:
             n = unit(d.geom_xpos[og] - on_f)
         return float(dist), og, on_f, on_o, n
 
+    def bind(self, d: mujoco.MjData, drive: Drive) -> None:
+        """With a transmission: each motor's ratio ``c`` to the state's moment row, from MuJoCo's
+        moment at ``d`` (after ``mj_forward`` at the state's configuration).
+
+        Raises
+        ------
+        ModelError
+            A motor whose moment is not a multiple of the state's row (not the same transmission).
+        """
+        if not self.coupled or drive.moment is None:
+            return
+        mm, p = self.motor_moment(d), np.asarray(drive.moment)
+        for a, name in enumerate(drive.actuators):
+            c = float(mm[a] @ p[a]) / float(p[a] @ p[a])
+            if not (c > 0 and np.allclose(mm[a], c * p[a], rtol=1e-6, atol=1e-9 * float(np.abs(p[a]).max()))):
+                raise ModelError(
+                    f"actuator {name!r}", "its <dcmotor> moves the joints unlike the state's moment row"
+                )
+            self.gear[a] = c
+
+    def damping_share(self, qd: _F64) -> _F64:
+        """``(A,)`` actuator forces whose joint torques ``P^T u`` best match the joints' damping
+        ``b qd`` (least squares; with independent joints exactly ``b qd``)."""
+        tau = self.m.dof_damping[self.dofs] * qd
+        if not np.any(tau):
+            return np.zeros(len(self.acts))
+        return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
+
+    @staticmethod
+    def damped(drive: Drive) -> _F64:
+        """The joint speeds whose damping the drive's forces carry (:attr:`Drive.damped_speeds`)."""
+        return drive.speeds if drive.damped_speeds is None else drive.damped_speeds
+
+    def command(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:
+        """With a transmission: ``(A,)`` motor speed setpoints of the tracked joint speeds ``qset``
+        and ``(A,)`` feedforward forces (actuator units, before the motors' ratio).
+
+        The LP's forces ``u`` carry the damping ``b qd`` of the witness's speeds (its balance
+        has it): the damping of the tracked speeds' difference is added; each actuator's
+        friction share was taken off its range (``actuator_ranges``) and is added with the sign
+        of the witness's actuator speed, not the tracked one's (whose round-off flips at rest).
+        """
+        ff = (
+            drive.torques
+            + self.damping_share(qset - self.damped(drive))
+            + self.friction * np.sign(drive.actuator_speeds)
+        )
+        return self.motor_speeds(d, qset), ff
+
+    def motor_moment(self, d: mujoco.MjData) -> _F64:
+        """``(A, M)`` the motors' moment rows over the drive's joints at ``d`` (gear included)."""
+        return dense_moment(self.m, d)[self.acts][:, self.dofs]
+
+    def motor_speeds(self, d: mujoco.MjData, qd: _F64) -> _F64:
+        """``(A,)`` the motors' speed setpoints (``actuator_velocity`` units) of joint speeds ``qd``."""
+        return self.motor_moment(d) @ qd
+
+    def equality_rows(self, d: mujoco.MjData) -> _F64:
+        """``(C, M)`` the equality constraints' rows of ``efc_J`` over the drive's joints at ``d``
+        (those of its last forward pass: for a rollout step, the configuration one step before)."""
+        eq = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+        rows = [r for r in range(int(d.nefc)) if int(d.efc_type[r]) == eq]
+        if not rows:
+            return np.zeros((0, len(self.dofs)))
+        return dense_efc_jacobian(self.m, d)[rows][:, self.dofs]
+
     def setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
-        """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5)."""
+        """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5).
+
+        With a transmission the correction is one least-squares solve over every finger's rows
+        in the null space of the equality rows (:meth:`equality_rows`), so the speeds keep
+        ``J_eq qd = 0``; without, finger by finger (the fingers' joints are disjoint).
+        """
+        if self.coupled:
+            return self._coupled_setpoints(d, drive)
         q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
         for label, g, body, cols, kind in self.fingers:
             _dist, _og, p, _po, n = self.nearest(d, g)
@@ -106,6 +196,37 @@ class Rig:
                     tang = hat - (hat @ n) * n
                     want = want - rho * tang / max(float(np.linalg.norm(tang)), 1e-12)
                 q[cols] += np.linalg.lstsq(jm, want - jm @ q[cols], rcond=None)[0]
+        return q
+
+    def _coupled_setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
+        q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
+        rows, rhs = [], []
+        for label, g, body, cols, kind in self.fingers:
+            _dist, _og, p, _po, n = self.nearest(d, g)
+            mujoco.mj_jac(self.m, d, self.jac, None, p, body)
+            jm = np.zeros((3, len(q)))
+            jm[:, cols] = self.jac[:, self.dofs[cols]]
+            want = v + np.cross(w, p - c)
+            if kind == "L":
+                rows.append((n @ jm)[None, :])
+                rhs.append(np.array([n @ want]))
+                continue
+            if kind == "S" and label in drive.slips:
+                rho, hat = drive.slips[label]
+                tang = hat - (hat @ n) * n
+                want = want - rho * tang / max(float(np.linalg.norm(tang)), 1e-12)
+            rows.append(jm)
+            rhs.append(want)
+        jeq = self.equality_rows(d)
+        null = np.eye(len(q))
+        if len(jeq):
+            q -= np.linalg.pinv(jeq) @ (jeq @ q)
+            _u, sv, vt = np.linalg.svd(jeq)
+            rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)))
+            null = vt[rank:].T
+        if rows and null.shape[1]:
+            a = np.vstack(rows)
+            q += null @ np.linalg.lstsq(a @ null, np.concatenate(rhs) - a @ q, rcond=None)[0]
         return q
 
 

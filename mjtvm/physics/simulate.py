@@ -36,7 +36,9 @@ tangential slip above ``slip_tol`` x the object's travel (+ ``slip_floor``); a f
 more than ``lost_gap`` from the object; a motor torque at its saturation.
 
 Any hand: the model needs one ``<dcmotor>`` per state joint (found by its transmission;
-:mod:`mjtvm.physics.motors` attaches them to a hand with servos), finger geoms are keyed by
+:mod:`mjtvm.physics.motors` attaches them to a hand with servos), or, for a state with a
+transmission, one per actuator on the actuator's own joint or tendon (found by name; the
+drive's actuator forces fed forward, its actuator speeds the setpoints, ``docs/physics-check.md``), finger geoms are keyed by
 label (:func:`~mjtvm.sim.grasp.state.geom_label`), and contact points come from
 ``mj_geomDistance``, so fingertips and objects need not be spheres.
 """
@@ -193,16 +195,17 @@ class RolloutResult:
     gap
         Largest finger-object distance (m; negative = penetration throughout).
     saturated
-        Joints whose motor reached its torque saturation.
+        Joints (actuators, with a transmission) whose motor reached its torque saturation.
     clamp_fraction
-        Fraction of (step, joint) pairs with the drive voltage at Vmax (speed-torque line).
+        Fraction of (step, motor) pairs with the drive voltage at Vmax (speed-torque line).
     settle_drift
         Object displacement during the settle phase (m).
     friction
         Per L/S geom: its mean tangential force on the object (N) and the mean slip of the
         object's contact point relative to the finger's (m/s) over the window, world frame.
     joints
-        The driven joints (the column order of the trace's ``qvel`` and ``torque``).
+        The driven joints (the column order of the trace's ``qvel`` and ``torque``, the joint
+        torques ``qfrc_actuator`` with a transmission).
     trace
         Per-step arrays when requested (:func:`rerun_data`), else empty.
     """
@@ -228,8 +231,13 @@ def _settle(
     time; returns the data and how far the object drifted (m)."""
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
+    if rig.coupled:  # the motors' ratio to the state's moment rows, at the state
+        mujoco.mj_forward(m, d)
+        rig.bind(d, drive)
     d.ctrl[rig.cadr] = 0.0
-    d.ctrl[rig.cadr + 1] = drive.torques / rig.gear
+    # with a transmission u carries the damping b qd of the witness's motion, absent at rest
+    hold = drive.torques - rig.damping_share(rig.damped(drive)) if rig.coupled else drive.torques
+    d.ctrl[rig.cadr + 1] = hold / rig.gear
     mujoco.mj_forward(m, d)
     p0 = d.xpos[rig.ob].copy()
     if st.steps(st.settle):
@@ -261,6 +269,10 @@ def rollout(
     """
     st = settings or SimSettings()
     rig, m = Rig(model, drive, object_body), model
+    if rig.coupled and st.inertial_ff:
+        raise ParamError(
+            "inertial_ff", "not available for a hand with a transmission (joint torques, not actuator forces)"
+        )
     d, drift = _settle(m, qpos, rig, drive, st)
     _start(d, rig, drive, st)
     fa, tw = rig.fadr, drive.twist
@@ -277,24 +289,29 @@ def rollout(
     clamped, reason, gap_geom = 0, "", ""
     trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
     f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
+    names = drive.actuators or drive.joints
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
-        # the joints' own damping and friction loss (passive torques of the model), which the
-        # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)
-        ff = drive.torques + m.dof_damping[rig.dofs] * qset + m.dof_frictionloss[rig.dofs] * np.sign(qset)
+        if rig.coupled:
+            sp, ff = rig.command(d, drive, qset)
+        else:
+            # the joints' own damping and friction loss (passive torques of the model), which the
+            # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)
+            sp = qset * rig.gear
+            ff = drive.torques + m.dof_damping[rig.dofs] * qset + m.dof_frictionloss[rig.dofs] * np.sign(qset)
         if st.inertial_ff and pred is not None:
             ff += _inertial(m, d, pred, rig, drive, qset)
-        d.ctrl[rig.cadr] = qset * rig.gear
+        d.ctrl[rig.cadr] = sp
         d.ctrl[rig.cadr + 1] = ff / rig.gear
         mujoco.mj_step(m, d)
         if step < n0:
             continue
         lvel = d.actuator_velocity[rig.acts]
-        tau_cmd = rig.kd * (qset * rig.gear - lvel) + ff / rig.gear
+        tau_cmd = rig.kd * (sp - lvel) + ff / rig.gear
         clamped += int(np.sum(np.abs(rig.r_k / rig.kt * tau_cmd + rig.kt * lvel) > rig.vmax * (1 + 1e-9)))
         force = d.actuator_force[rig.acts]
         for j in np.nonzero(np.abs(force) >= rig.fmax * (1 - 1e-9))[0]:
-            saturated.add(drive.joints[j])
+            saturated.add(names[j])
         v = d.qvel[fa : fa + 3]
         om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
         now = np.r_[v, rig.radius * om]
@@ -308,7 +325,7 @@ def rollout(
                 ("object_pos", d.xpos[rig.ob].copy()),
                 ("twist", now.copy()),
                 ("qvel", d.qvel[rig.dofs].copy()),
-                ("torque", force * rig.gear),
+                ("torque", d.qfrc_actuator[rig.dofs].copy() if rig.coupled else force * rig.gear),
                 ("gap", gaps),
             ):
                 trace[key].append(val)

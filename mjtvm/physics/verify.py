@@ -34,12 +34,12 @@ from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
-from ..errors import MjtvmError, ModelError, StateError
+from ..errors import MjtvmError, ModelError, ParamError, StateError
 from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
-from .motors import attach_dcmotors, require_motors
+from .motors import actuator_model, attach_dcmotors, require_motors
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .verify_report import plot_alpha, rows_csv, summarize
 from .witness import witness_drive
@@ -88,6 +88,10 @@ def _grasp(grasp: str | Path) -> Any:
 def motor_model(grasp: Any) -> mujoco.MjModel:
     r"""The grasp's model with a ``<dcmotor>`` on every state joint, built once per grasp.
 
+    With a transmission: a ``<dcmotor>`` per actuator instead, on the actuator's own
+    transmission (:func:`~mjtvm.physics.motors.actuator_motors`,
+    :func:`~mjtvm.physics.motors.attach_actuator_dcmotors`).
+
     The model as is when each state joint already has one (``input="vel ff"``); otherwise
     the grasp's ``MjSpec`` (its MJCF file with the object and supports it adds) with the motors
     of ``grasp.motors`` attached
@@ -102,24 +106,14 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     Raises
     ------
     ModelError
-        A grasp with a transmission (coupled joints: not supported by the physics check), or a
-        joint without motor data.
+        A joint or actuator without motor data.
     """
     if id(grasp) in _MODELS:
         return _MODELS[id(grasp)][1]
-    transmission = getattr(grasp, "transmission", None)
-    if transmission is not None:
-        t = transmission
-        tied = [n for n, row in zip(t.actuator_names, t.moment, strict=True) if (row != 0).sum() > 1]
-        labels = [f"actuator {n!r}" for n in tied] + [
-            f"equality {c.split('/')[0]!r}" for c in t.constraint_names
-        ]
-        raise ModelError(
-            (labels or [f"actuator {t.actuator_names[0]!r}"])[0],
-            "couples the hand's joints (a tendon, an equality or a linkage): the physics check drives "
-            "each joint by its own <dcmotor> and cannot yet drive actuators through the model's "
-            "transmission; export-state, solve, tvms and replay support this hand",
-        )
+    if getattr(grasp, "transmission", None) is not None:
+        model = actuator_model(grasp)
+        _MODELS[id(grasp)] = (grasp, model)
+        return model
     model = grasp.model
     motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
     if motors:
@@ -335,6 +329,10 @@ def verify_lift(
     indices = state_indices(num_states, stride)
     lift = cached_lift(grasp, num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
+    if dynamics and getattr(lift.scenario, "transmission", None) is not None:
+        raise ParamError(
+            "dynamics", "not available for a hand with a transmission (its limits are per joint)"
+        )
     opts = {
         "mu": mu,
         "mg": mg,

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..core.assembly import assemble
 from ..core.state import GraspState
+from ..core.transmission import joint_speed_limits
 from ..errors import ParamError, SolverError
 
 __all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
@@ -32,7 +33,11 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
 
     Minimises :math:`\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2` over the
     constraints of :func:`~mjtvm.core.assembly.assemble` with :math:`\dot r = \alpha \hat r_l`;
-    returns ``speeds``, ``torques``, ``forces`` and ``slip_speeds``.
+    returns ``speeds``, ``torques``, ``forces`` and ``slip_speeds`` (and ``actuator_speeds``
+    ``P qd`` with a transmission). With a transmission the ranges bound actuators and
+    :math:`\omega_{0j}` is joint j's fastest speed through them
+    (:func:`~mjtvm.core.transmission.joint_speed_limits`): the weight stays per joint speed;
+    ``torques`` are then the actuator forces ``u``.
 
     Raises
     ------
@@ -56,6 +61,9 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     b = np.concatenate([hi[eq], cu[ceq], hi[up], -lo[dn], cu[cup], -cl[cdn]])
     weight = np.zeros(n + 1)
     w0 = np.array([rng.max_speed for rng in state.operation_ranges])
+    t = state.transmission
+    if t is not None:  # ranges per actuator, speeds per joint: each joint's fastest speed
+        w0 = joint_speed_limits(t.moment, w0)
     weight[asm.blocks["qd"]] = 1.0 / w0**2
     weight[asm.blocks["lam[0]"]] = 1.0 / max(float(np.linalg.norm(w)), 1e-3) ** 2
     cones = [
@@ -69,12 +77,15 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     if status not in ("Solved", "AlmostSolved"):
         raise SolverError("clarabel", status, (k, l))
     x = np.array(res.x)
-    return {
+    out = {
         "speeds": x[asm.blocks["qd"]],
         "torques": x[asm.blocks["tau[0]"]],
         "forces": asm.forces(x),
         "slip_speeds": x[asm.blocks["rho"]],
     }
+    if t is not None:
+        out["actuator_speeds"] = t.moment @ out["speeds"]
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,6 +105,17 @@ class Drive:
         label is :func:`~mjtvm.sim.grasp.state.geom_label` (a name, or ``"<body>/geom<n>"``).
     slips
         S geom label -> (slip speed rho (m/s), unit slide direction (3,)) of eq. (13).
+    actuators
+        With a transmission: the A actuators (the state's ``transmission.actuators``), each
+        driven by the ``<dcmotor>`` of that name on the model actuator's own transmission;
+        ``torques`` are then their ``(A,)`` forces ``u`` (N m or N, actuator units). Empty
+        for the paper's independent joints.
+    moment
+        ``(A, M)`` the state's moment matrix ``P`` (actuator speeds ``P qd``), or ``None``.
+    damped_speeds
+        With a transmission: ``(M,)`` the joint speeds whose damping ``b qd`` the forces
+        ``torques`` carry (the LP's balance has it): the witness's at the alpha it was solved
+        for, before the speed factor. ``None``: ``speeds``.
     """
 
     joints: tuple[str, ...]
@@ -102,6 +124,25 @@ class Drive:
     twist: _F64
     contacts: tuple[tuple[str, str], ...]
     slips: Mapping[str, tuple[float, _F64]] = field(default_factory=dict)
+    actuators: tuple[str, ...] = ()
+    moment: _F64 | None = None
+    damped_speeds: _F64 | None = None
+
+    def __post_init__(self) -> None:
+        na = len(self.actuators) if self.actuators else len(self.joints)
+        if np.shape(self.speeds) != (len(self.joints),) or np.shape(self.torques) != (na,):
+            raise ParamError(
+                "drive", f"expected {len(self.joints)} joint speeds and {na} torques (one per actuator)"
+            )
+        if self.actuators and (self.moment is None or self.moment.shape != (na, len(self.joints))):
+            raise ParamError("drive.moment", f"expected shape ({na}, {len(self.joints)})")
+        if self.damped_speeds is not None and np.shape(self.damped_speeds) != (len(self.joints),):
+            raise ParamError("drive.damped_speeds", f"expected {len(self.joints)} joint speeds")
+
+    @property
+    def actuator_speeds(self) -> _F64:
+        """``(A,)`` ``P qd`` with a transmission, else the joint speeds."""
+        return self.speeds if self.moment is None else self.moment @ self.speeds
 
 
 def witness_drive(
@@ -125,10 +166,12 @@ def witness_drive(
         sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7))
         gain = s / frac if frac > 0 else 0.0
         speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
+        damped = sol["speeds"]
     elif witness == "vertex":
         if vertex is None:
             raise ParamError("vertex", "the 'vertex' drive needs the pair's Witness")
         speeds, torques, rho = vertex.speeds * s, vertex.torques, vertex.slip_speeds * s
+        damped = vertex.speeds
     else:
         raise ParamError("witness", f"expected 'central' or 'vertex', got {witness!r}", witness)
     contacts, slips, i_s = [], {}, 0
@@ -141,6 +184,7 @@ def witness_drive(
             rate = float(rho[min(i_s, len(rho) - 1)]) if len(rho) else 0.0
             slips[geom] = (rate, np.asarray(c.slide_direction, dtype=float))
             i_s += 1
+    t = state.transmission
     return Drive(
         state.joint_names,
         np.asarray(speeds, float),
@@ -148,6 +192,9 @@ def witness_drive(
         s * alpha * np.asarray(state.rvds[l], float),
         tuple(contacts),
         slips,
+        actuators=() if t is None else t.actuator_names,
+        moment=None if t is None else t.moment,
+        damped_speeds=None if t is None else np.asarray(damped, float),
     )
 
 
