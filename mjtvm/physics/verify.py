@@ -110,6 +110,7 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     """
     if id(grasp) in _MODELS:
         return _MODELS[id(grasp)][1]
+    _refuse_floating_base(grasp.model, grasp.joints)
     if getattr(grasp, "transmission", None) is not None:
         model = actuator_model(grasp)
         _MODELS[id(grasp)] = (grasp, model)
@@ -129,6 +130,28 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
             )
     _MODELS[id(grasp)] = (grasp, model)  # the grasp is kept so that its id is not reused
     return model
+
+
+def _refuse_floating_base(model: mujoco.MjModel, joints: Sequence[str]) -> None:
+    """A hand on a free joint or a mocap body is refused: the rollouts rebuild the model from
+    its file (a mocap pose is lost) and hold no base (a free base falls), so alpha_sim would
+    measure another hand."""
+    for name in joints:
+        body = int(model.jnt_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)])
+        while body > 0:
+            free = any(
+                model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE
+                for j in range(model.body_jntadr[body], model.body_jntadr[body] + model.body_jntnum[body])
+            )
+            if free or model.body_mocapid[body] >= 0:
+                what = "on a free joint" if free else "a mocap body"
+                label = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body)
+                raise ModelError(
+                    f"body {label!r}",
+                    f"the hand's base is {what}: the physics check is for fixed-base hands "
+                    "(export-state, solve, tvms and replay support it)",
+                )
+            body = int(model.body_parentid[body])
 
 
 def _types(state: Any) -> dict[str, str]:

@@ -343,3 +343,17 @@ def test_a_ball_joint_in_qpos_points_to_the_keyframe(tmp_path: Path) -> None:
         GraspError, match=r"configuration\.qpos\.base: joint 'base' is a ball joint: set it from a keyframe"
     ):
         load_grasp(_errors_doc(path, {"qpos": {"base": 0.1}}))
+
+
+@pytest.mark.parametrize(("kind", "what"), [("free", "on a free joint"), ("mocap", "a mocap body")])
+def test_the_physics_check_refuses_a_hand_on_a_floating_base(tmp_path: Path, kind: str, what: str) -> None:
+    """The rollouts rebuild the model from its file and hold no base: a free base would fall
+    and a mocap pose be lost, so alpha_sim would be another hand's."""
+    from mjtvm.errors import ModelError
+    from mjtvm.physics.verify import motor_model
+
+    grasp = load_grasp(_doc(based_gripper(kind, tmp_path), {"keyframe": "grasp"}, OBJECT))
+    with pytest.raises(
+        ModelError, match=rf"^body 'base': the hand's base is {what}: the physics check is for fixed-base"
+    ):
+        motor_model(grasp)
