@@ -136,7 +136,28 @@ def contact_warnings(grasp: Grasp) -> list[str]:
                 f"contacts[{i}]: geom {c.geom!r} is {-1e3 * c.distance:.3g} mm inside the object's geom "
                 f"{c.object_geom!r} (max_penetration {1e3 * limit:.3g} mm)"
             )
-    return out + _ik_warnings(grasp)
+    return out + _ik_warnings(grasp) + _self_overlaps(grasp)
+
+
+def _self_overlaps(grasp: Grasp) -> list[str]:
+    """One line per pair of hand geoms (neither the object's nor the world's) that overlap
+    deeper than :data:`REPORTED_PENETRATION` at the configuration: a contact no LP sees, whose
+    force the physics check would feel."""
+    model = grasp.model
+    inside = subtree(model, model.body(grasp.object_body).id)
+    data = mujoco.MjData(model)
+    data.qpos[:] = grasp.data.qpos
+    data.mocap_pos[:], data.mocap_quat[:] = grasp.data.mocap_pos, grasp.data.mocap_quat
+    mujoco.mj_forward(model, data)
+    out = []
+    for c in data.contact[: data.ncon]:
+        bodies = (int(model.geom_bodyid[c.geom1]), int(model.geom_bodyid[c.geom2]))
+        if c.dist < -REPORTED_PENETRATION and not any(b in inside or b == 0 for b in bodies):
+            out.append(
+                f"hand geoms {geom_label(model, int(c.geom1))!r} and {geom_label(model, int(c.geom2))!r} "
+                f"overlap by {_mm(-c.dist)} mm: a contact of the hand with itself, which no LP sees"
+            )
+    return out
 
 
 def _mm(d: float) -> str:

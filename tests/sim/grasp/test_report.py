@@ -108,3 +108,17 @@ def test_ignored_and_shadowed_rows_say_why() -> None:
     rows = {r.geom: r for r in contact_rows(load_grasp("case1"))}
     assert (rows["palm"].type, rows["palm"].selected, rows["palm"].why) == ("ignore", False, "ignored")
     assert rows["f1_link2"].why == "a deeper contact of its body is kept"
+
+
+def test_hand_geoms_that_overlap_each_other_are_reported() -> None:
+    """The shipped Shadow grasp's first and middle fingers overlap at the configuration (a
+    contact no LP sees, which the physics check feels); the paper's Case 2 hand does not."""
+    from mjtvm.sim.grasp.file import load_grasp
+    from mjtvm.sim.grasp.report import contact_warnings
+
+    lines = [w for w in contact_warnings(load_grasp("shadow_hand-sphere")) if w.startswith("hand geoms")]
+    assert lines == [
+        "hand geoms 'ff_middle' and 'mf_middle' overlap by 0.172 mm: a contact of the hand with itself, which no LP sees",
+        "hand geoms 'ff_distal' and 'mf_middle' overlap by 0.267 mm: a contact of the hand with itself, which no LP sees",
+    ]
+    assert not [w for w in contact_warnings(load_grasp("case2")) if w.startswith("hand geoms")]
