@@ -97,13 +97,25 @@ class GraspMeasures:
         if not (math.isfinite(self.torque_scale) and self.torque_scale > 0.0):
             raise ParamError("torque_scale", f"expected a finite number > 0 (m), got {self.torque_scale!r}")
         if self.torque_scale_source not in ("bounding_radius", "given"):
-            raise ParamError("torque_scale_source", f"expected 'bounding_radius' or 'given', got {self.torque_scale_source!r}")
-        for name in ("closure_margin", "epsilon_l1", "epsilon_linf", "epsilon_linf_gap", "grasp_sigma_min", "manipulability"):
+            raise ParamError(
+                "torque_scale_source",
+                f"expected 'bounding_radius' or 'given', got {self.torque_scale_source!r}",
+            )
+        for name in (
+            "closure_margin",
+            "epsilon_l1",
+            "epsilon_linf",
+            "epsilon_linf_gap",
+            "grasp_sigma_min",
+            "manipulability",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ParamError(name, f"expected a finite number >= 0, got {value!r}")
         if not (math.isnan(self.velocity_volume) or self.velocity_volume >= 0.0):
-            raise ParamError("velocity_volume", f"expected a number >= 0, inf or nan, got {self.velocity_volume!r}")
+            raise ParamError(
+                "velocity_volume", f"expected a number >= 0, inf or nan, got {self.velocity_volume!r}"
+            )
         if self.force_closure and self.epsilon_l1 < 0.0:
             raise ParamError("epsilon_l1", "expected >= 0 with force closure")
 

@@ -38,7 +38,9 @@ def _twist_scale(state: GraspState, rho: float) -> NDArray[np.float64]:
     return np.concatenate([np.ones(d), np.full(state.twist_dim - d, rho)])
 
 
-def contact_kinematics(state: GraspState, torque_scale: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def contact_kinematics(
+    state: GraspState, torque_scale: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(A, B)``: the equality constraints ``A qd = B t`` of the module docstring on the joint
     speeds ``qd`` (``(c, M)``) and the scaled twist ``t`` (``(c, D)``), the transmission's
     ``J_eq qd = 0`` last (``B`` rows 0)."""
@@ -108,7 +110,9 @@ def speed_only_state(state: GraspState) -> GraspState:
     (:func:`velocity_polytope`). The contact forces may then all be 0, which leaves every
     torque at 0, where the (down-closed) ranges allow their largest speed."""
     boxes = tuple(
-        OperationRange(np.array([[0.0, 0.0], [r.max_torque, 0.0], [r.max_torque, r.max_speed], [0.0, r.max_speed]]))
+        OperationRange(
+            np.array([[0.0, 0.0], [r.max_torque, 0.0], [r.max_torque, r.max_speed], [0.0, r.max_speed]])
+        )
         for r in state.operation_ranges
     )
     t = state.transmission

@@ -38,6 +38,7 @@ RANK_REL_TOL = 1e-9  # singular values below this x the largest count as 0
 LINF_REL_TOL = 1e-9  # the L-infinity epsilon's bracket, relative to the largest wrench
 _LINF_MAX_ROUNDS = 400
 _LINF_SEED_DIRECTIONS = 64
+_LINF_FACETS_PER_ROUND = 16
 
 
 def default_torque_scale(state: GraspState) -> float:
@@ -142,6 +143,8 @@ def closure_margin(wrenches: NDArray[np.float64]) -> float:
 
 
 def _hull(points: NDArray[np.float64]) -> ConvexHull:
+    """Qhull's hull; where it gives up on nearly degenerate input (many wrenches of the
+    pyramids' edges lie on common facets), joggled by Qhull's "QJ" (about 1e-11 relative)."""
     try:
         return ConvexHull(points)
     except QhullError:
@@ -161,16 +164,19 @@ def epsilon_l1(wrenches: NDArray[np.float64]) -> float:
     return max(0.0, float(np.min(-eq[:, -1])))
 
 
-def _support(groups: list[NDArray[np.float64]], u: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
-    """The support value and point of the Minkowski sum of the sets conv(0, group) in ``u``."""
-    value, point = 0.0, np.zeros_like(u)
+def _supports(
+    groups: list[NDArray[np.float64]], u: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`_support` of ``(n, D)`` directions at once: ``(n,)`` values, ``(n, D)`` points."""
+    values, points = np.zeros(u.shape[0]), np.zeros_like(u)
     for w in groups:
         s = u @ w
-        k = int(np.argmax(s))
-        if s[k] > 0.0:
-            value += float(s[k])
-            point = point + w[:, k]
-    return value, point
+        k = np.argmax(s, axis=1)
+        best = s[np.arange(u.shape[0]), k]
+        on = best > 0.0
+        values += np.where(on, best, 0.0)
+        points += np.where(on[:, None], w[:, k].T, 0.0)
+    return values, points
 
 
 def epsilon_linf(groups: list[NDArray[np.float64]]) -> tuple[float, float]:
@@ -208,33 +214,23 @@ def epsilon_linf(groups: list[NDArray[np.float64]]) -> tuple[float, float]:
     tol = LINF_REL_TOL * size
     rng = np.random.default_rng(0)  # fixed seed directions: results are reproducible
     seeds = np.vstack([np.eye(big_d), -np.eye(big_d), rng.normal(size=(_LINF_SEED_DIRECTIONS, big_d))])
-    upper = np.inf
-    points = []
-    for u in seeds:
-        u = u / np.linalg.norm(u)
-        h, p = _support(groups, u)
-        upper = min(upper, h)
-        points.append(p)
-    hull = ConvexHull(np.array(points), incremental=True)
+    h0, p0 = _supports(groups, seeds / np.linalg.norm(seeds, axis=1, keepdims=True))
+    upper = float(h0.min())
+    points = list(p0)
     lower = 0.0
     for _ in range(_LINF_MAX_ROUNDS):
-        eq = hull.equations
+        eq = _hull(np.array(points)).equations
         dist = -eq[:, -1]
         lower = float(max(0.0, dist.min()))
         if upper - lower <= tol:
             break
-        added = []
-        for f in np.argsort(dist)[:8]:  # the nearest facets, a few per hull update
-            a = eq[f, :-1]
-            h, p = _support(groups, a)
-            upper = min(upper, h)
-            if h > dist[f] + tol:
-                added.append(p)
+        near = np.argsort(dist)[:_LINF_FACETS_PER_ROUND]  # the nearest facets per hull update
+        h, p = _supports(groups, eq[near, :-1])
+        upper = min(upper, float(h.min()))
+        added = list(p[h > dist[near] + tol])
         if not added:
-            lower = float(max(0.0, dist.min()))
             break
-        hull.add_points(np.array(added))
+        points.extend(added)
     else:
-        lower = float(max(0.0, (-hull.equations[:, -1]).min()))
-    hull.close()
+        lower = float(max(0.0, (-_hull(np.array(points)).equations[:, -1]).min()))
     return lower, max(0.0, float(upper - lower))
