@@ -97,7 +97,7 @@ def manipulability(state: GraspState, torque_scale: float) -> tuple[float, bool]
     if basis.shape[1] < big_d:
         return 0.0, True
     # Q = range(nq), nq injective here (nq z = 0 gives B t = 0, so t = 0, so z = 0).
-    u, s, vt = np.linalg.svd(nq, full_matrices=False)
+    _, s, vt = np.linalg.svd(nq, full_matrices=False)
     k_q = nt @ vt.T / s  # t = nt z with nq z = u s vt z = qd: z = vt^T s^-1 (u^T qd)
     w = float(np.sqrt(max(0.0, np.linalg.det(k_q @ k_q.T))))
     return w, True
