@@ -35,7 +35,9 @@ def pushers(
         if i == 2 and joints == 4:
             jac[:, 3] = L[3] * np.array(n)
         cs.append(Contact(f"c{i}", kind, p, n, jac, mu=0.5))  # type: ignore[arg-type]
-    ranges = tuple(_range(S[i]) for i in range(joints if transmission is None else len(transmission.actuator_names)))
+    ranges = tuple(
+        _range(S[i]) for i in range(joints if transmission is None else len(transmission.actuator_names))
+    )
     return GraspState(
         space=2,
         object_position=np.zeros(2),
@@ -101,6 +103,7 @@ def test_velocity_prism_in_closed_form_and_by_monte_carlo() -> None:
     by the membership LP (exists |qd| <= S with A qd = B t) of uniform samples."""
     state = pushers(joints=4)
     vol, dim, verts = velocity_polytope(state, RHO)
+    assert dim == 3
     expected = 8 * RHO * L[0] * S[0] * L[1] * S[1] * (L[2] * S[2] + L[3] * S[3])
     assert vol == pytest.approx(expected, rel=1e-9)
     a, b = contact_kinematics(state, RHO)

@@ -112,7 +112,9 @@ def test_grasp_matrix_of_two_contacts_by_hand() -> None:
     half = classic_measures(antipodal_disk(0.5), torque_scale=0.1, polytope=False)
     assert half.torque_scale_source == "given"
     assert half.grasp_sigma_min == pytest.approx(np.sqrt(2.0) / 2.0, rel=1e-12)
-    assert grasp_matrix(antipodal_disk(0.5, kind="L"), 0.05) == pytest.approx(np.array([[-1, 1], [0, 0], [0, 0]]))
+    assert grasp_matrix(antipodal_disk(0.5, kind="L"), 0.05) == pytest.approx(
+        np.array([[-1, 1], [0, 0], [0, 0]])
+    )
 
 
 def _minkowski_epsilon(groups: list[np.ndarray]) -> float:
@@ -152,7 +154,9 @@ def test_l1_epsilon_by_lp_membership_and_sampled_support() -> None:
     def inside(point: np.ndarray) -> bool:
         n = w.shape[1]
         a_eq = np.vstack([w, np.ones((1, n))])
-        res = linprog(np.zeros(n), A_eq=a_eq, b_eq=np.append(point, 1.0), bounds=[(0, None)] * n, method="highs")
+        res = linprog(
+            np.zeros(n), A_eq=a_eq, b_eq=np.append(point, 1.0), bounds=[(0, None)] * n, method="highs"
+        )
         return res.status == 0
 
     assert all(inside(eps * (1 - 1e-7) * u) for u in dirs[:40])
