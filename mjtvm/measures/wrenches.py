@@ -38,7 +38,7 @@ RANK_REL_TOL = 1e-9  # singular values below this x the largest count as 0
 LINF_REL_TOL = 1e-9  # the L-infinity epsilon's bracket, relative to the largest wrench
 _LINF_MAX_ROUNDS = 400
 _LINF_SEED_DIRECTIONS = 64
-_LINF_FACETS_PER_ROUND = 16
+_LINF_FACETS_PER_ROUND = 8
 
 
 def default_torque_scale(state: GraspState) -> float:
@@ -164,6 +164,34 @@ def epsilon_l1(wrenches: NDArray[np.float64]) -> float:
     return max(0.0, float(np.min(-eq[:, -1])))
 
 
+class _Hull:
+    """A growing point set's hull: Qhull's incremental mode while it copes, rebuilt from all
+    the points (:func:`_hull`) once it gives up on nearly degenerate input."""
+
+    def __init__(self, points: NDArray[np.float64]) -> None:
+        self.points = points
+        self.hull: ConvexHull | None = None
+        try:
+            self.hull = ConvexHull(points, incremental=True)
+        except QhullError:
+            self.hull = None
+
+    def add(self, new: NDArray[np.float64]) -> None:
+        self.points = np.vstack([self.points, new])
+        if self.hull is not None:
+            try:
+                self.hull.add_points(new)
+            except QhullError:
+                self.hull.close()
+                self.hull = None
+
+    def equations(self) -> NDArray[np.float64]:
+        """``(f, D + 1)`` the facets ``[a, b]``, ``a.x + b <= 0`` inside, ``|a| = 1``."""
+        if self.hull is not None:
+            return np.asarray(self.hull.equations)
+        return np.asarray(_hull(self.points).equations)
+
+
 def _supports(
     groups: list[NDArray[np.float64]], u: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -217,9 +245,10 @@ def epsilon_linf(groups: list[NDArray[np.float64]]) -> tuple[float, float]:
     h0, p0 = _supports(groups, seeds / np.linalg.norm(seeds, axis=1, keepdims=True))
     upper = float(h0.min())
     points = list(p0)
+    hull = _Hull(np.array(points))
     lower = 0.0
     for _ in range(_LINF_MAX_ROUNDS):
-        eq = _hull(np.array(points)).equations
+        eq = hull.equations()
         dist = -eq[:, -1]
         lower = float(max(0.0, dist.min()))
         if upper - lower <= tol:
@@ -227,10 +256,10 @@ def epsilon_linf(groups: list[NDArray[np.float64]]) -> tuple[float, float]:
         near = np.argsort(dist)[:_LINF_FACETS_PER_ROUND]  # the nearest facets per hull update
         h, p = _supports(groups, eq[near, :-1])
         upper = min(upper, float(h.min()))
-        added = list(p[h > dist[near] + tol])
-        if not added:
+        added = p[h > dist[near] + tol]
+        if not len(added):
             break
-        points.extend(added)
+        hull.add(added)
     else:
-        lower = float(max(0.0, (-_hull(np.array(points)).equations[:, -1]).min()))
+        lower = float(max(0.0, (-hull.equations()[:, -1]).min()))
     return lower, max(0.0, float(upper - lower))
