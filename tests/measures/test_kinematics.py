@@ -136,3 +136,62 @@ def test_f_contacts_no_joint_can_follow_tangentially_lock_the_object() -> None:
     consistent motions shrink (no qd moves the object tangentially at the contacts)."""
     w_f, determined = manipulability(pushers(kind="F"), RHO)
     assert determined and w_f == 0.0
+
+
+def _spatial_fingers(seed: int) -> GraspState:
+    """Three 3-joint fingers (random Jacobians) on F contacts at 120 degrees on a sphere of
+    radius 0.04 m: B (9 x 6) has full column rank, Q = {qd : A qd in range(B)} is 6-dimensional."""
+    rng = np.random.default_rng(seed)
+    cs = []
+    for k in range(3):
+        th = 2.0 * np.pi * k / 3.0
+        p = 0.04 * np.array([np.cos(th), np.sin(th), 0.3 * (k - 1)])
+        jac = np.zeros((3, 9))
+        jac[:, 3 * k : 3 * k + 3] = 0.05 * rng.normal(size=(3, 3))
+        cs.append(Contact(f"c{k}", "F", p, -p / np.linalg.norm(p), jac, mu=0.5))
+    return GraspState(
+        space=3,
+        object_position=np.zeros(3),
+        joint_names=tuple(f"j{i}" for i in range(9)),
+        operation_ranges=tuple(_range(4.0) for _ in range(9)),
+        gravity_torque=np.zeros(9),
+        contacts=tuple(cs),
+        refs=np.zeros((1, 6)),
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_spatial_manipulability_by_the_projector_form(seed: int) -> None:
+    """Independently: the consistent joint speeds are the null space of (I - B B^+) A (scipy),
+    K = B^+ A on them, w = sqrt(det(K N (K N)^T)) with N orthonormal."""
+    from scipy.linalg import null_space
+
+    state = _spatial_fingers(seed)
+    rho = 0.04
+    a, b = contact_kinematics(state, rho)
+    b_pinv = np.linalg.pinv(b)
+    n = null_space((np.eye(b.shape[0]) - b @ b_pinv) @ a)
+    assert n.shape[1] == 6
+    k = b_pinv @ a @ n
+    expected = np.sqrt(np.linalg.det(k @ k.T))
+    w, determined = manipulability(state, rho)
+    assert determined
+    assert w == pytest.approx(expected, rel=1e-8)
+    # The twist's angular part scales by rho: w scales by rho^3 in space.
+    w2, _ = manipulability(state, 2 * rho)
+    assert w2 == pytest.approx(8 * w, rel=1e-8)
+
+
+def test_the_shipped_pinch_is_no_force_closure_and_leaves_the_spin_free() -> None:
+    """Two point contacts cannot resist a torque about the line through them (rank 5), and
+    the object spins about it with the hand at rest: the twist is not determined and the
+    velocity polytope is unbounded."""
+    from importlib import resources
+
+    from mjtvm import load_state
+
+    state = load_state(resources.files("mjtvm.data").joinpath("examples/pinch.json"))
+    m = classic_measures(state)
+    assert not m.force_closure and m.grasp_rank == 5 and m.epsilon_l1 == 0.0 and m.epsilon_linf == 0.0
+    assert not m.twist_determined and m.manipulability == 0.0
+    assert m.velocity_volume == float("inf")
