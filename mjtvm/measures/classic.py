@@ -58,7 +58,7 @@ class GraspMeasures:
         Ferrari-Canny's L1 epsilon (N per N of total normal force; 0 without closure).
     epsilon_linf
         Ferrari-Canny's L-infinity epsilon (N per N of the largest normal force; 0 without
-        closure), a certified lower bound.
+        closure), a lower bound up to Qhull's round-off.
     epsilon_linf_gap
         Its bracket's width: the true value is at most ``epsilon_linf + epsilon_linf_gap``.
     grasp_sigma_min
@@ -72,7 +72,8 @@ class GraspMeasures:
         Whether the contact kinematics determine the object twist from the joint speeds.
     velocity_volume
         The kinematic velocity polytope's volume ((m/s)^D in scaled twists; ``inf`` when
-        unbounded, 0 below full dimension); ``nan`` when not computed.
+        unbounded, 0 below full dimension); ``nan`` when not computed or when its
+        projection stopped at the memory budget.
     velocity_dimension
         Its dimension (-1 when empty or not computed).
     """
@@ -116,8 +117,6 @@ class GraspMeasures:
             raise ParamError(
                 "velocity_volume", f"expected a number >= 0, inf or nan, got {self.velocity_volume!r}"
             )
-        if self.force_closure and self.epsilon_l1 < 0.0:
-            raise ParamError("epsilon_l1", "expected >= 0 with force closure")
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as JSON values (``inf`` and ``nan`` as ``None``, ``docs/measures.md``)."""

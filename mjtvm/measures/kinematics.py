@@ -139,16 +139,19 @@ def velocity_polytope(state: GraspState, torque_scale: float) -> tuple[float, in
     -------
     (volume, dimension, vertices)
         The volume of the scaled twists' hull ((m/s)^D; 0 below full dimension, ``inf``
-        when unbounded: the object moves with the hand at rest), the dimension of the
-        polytope (-1 when empty) and its ``(n, D)`` vertices in scaled twists.
+        when unbounded: the object moves with the hand at rest, ``nan`` when the projection
+        stopped at its memory budget), the dimension of the polytope (-1 when empty) and
+        its ``(n, D)`` vertices in scaled twists.
     """
     proj = project_lp(lifted_polytope(speed_only_state(state), rvds_cone=False))
     big_d = state.twist_dim
     if proj.status == "unbounded":
         return float("inf"), big_d, np.zeros((0, big_d))
-    if proj.status != "bounded":
+    if proj.status not in ("bounded", "approximate"):
         return 0.0, -1, np.zeros((0, big_d))
     verts = proj.vertices * _twist_scale(state, torque_scale)
     dim = int(proj.dimension) if proj.dimension is not None else -1
+    if proj.status == "approximate":  # the memory budget stopped the exact projection
+        return float("nan"), dim, verts
     vol = hull_volume(verts) if dim == big_d else 0.0
     return vol, dim, verts
