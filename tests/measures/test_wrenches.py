@@ -184,3 +184,18 @@ def test_epsilons_are_invariant_under_scaling_the_object() -> None:
 def test_bad_torque_scale_is_one_line(bad: object) -> None:
     with pytest.raises(ParamError, match=r"torque_scale.*expected a (finite )?number > 0"):
         classic_measures(antipodal_disk(0.5), torque_scale=bad, polytope=False)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("dim", [3, 6])
+def test_closure_lp_agrees_with_the_hull_on_random_wrenches(dim: int) -> None:
+    """The margin LP with the rank and the hull's facet distances are two tests of "the
+    origin strictly inside": on random wrench sets, some shifted off the origin, they agree."""
+    rng = np.random.default_rng(11)
+    seen = set()
+    for trial in range(40):
+        w = rng.normal(size=(dim, 3 * dim)) + rng.uniform(0.0, 2.0) * rng.normal(size=(dim, 1))
+        inside = closure_margin(w) > 1e-9
+        eps = epsilon_l1(w)
+        assert inside == (eps > 1e-9), trial
+        seen.add(inside)
+    assert seen == {True, False}
