@@ -195,3 +195,17 @@ def test_the_shipped_pinch_is_no_force_closure_and_leaves_the_spin_free() -> Non
     assert not m.force_closure and m.grasp_rank == 5 and m.epsilon_l1 == 0.0 and m.epsilon_linf == 0.0
     assert not m.twist_determined and m.manipulability == 0.0
     assert m.velocity_volume == float("inf")
+
+
+def test_a_d_point_halves_the_polytope_and_leaves_the_manipulability() -> None:
+    """A D-point of the fixed base at (-1, 0), normal (1, 0) into the object: eq. (12) reads
+    -n^T (v + omega x r) <= 0, i.e. v_x >= 0; the first pusher gives v_x = -L0 qd_0, so only
+    qd_0 <= 0 remains: half the parallelepiped. Yoshikawa's measure uses the equalities only."""
+    base = pushers()
+    d_point = Contact("base", "D", [-1.0, 0.0], [1.0, 0.0], np.zeros((2, 3)))
+    state = base.with_(contacts=(*base.contacts, d_point))
+    vol, _, verts = velocity_polytope(state, RHO)
+    full, _, _ = velocity_polytope(base, RHO)
+    assert vol == pytest.approx(full / 2.0, rel=1e-9)
+    assert verts[:, 0].min() == pytest.approx(0.0, abs=1e-12)
+    assert manipulability(state, RHO) == manipulability(base, RHO)
