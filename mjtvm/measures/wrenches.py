@@ -144,7 +144,8 @@ def closure_margin(wrenches: NDArray[np.float64]) -> float:
 
 def _hull(points: NDArray[np.float64]) -> ConvexHull:
     """Qhull's hull; where it gives up on nearly degenerate input (many wrenches of the
-    pyramids' edges lie on common facets), joggled by Qhull's "QJ" (about 1e-11 relative)."""
+    pyramids' edges lie on common facets), joggled by Qhull's "QJ" (about 1e-11 relative,
+    more on its retries)."""
     try:
         return ConvexHull(points)
     except QhullError:
