@@ -118,7 +118,7 @@ def closure_margin(wrenches: NDArray[np.float64]) -> float:
     the uniform weights balance, > 0 exactly when the origin is a strictly positive
     combination of all the wrenches. With ``rank W = D`` that is force closure: the wrenches
     then positively span the wrench space, i.e. the origin lies strictly inside their convex
-    hull (Murray, Li & Sastry 1994, prop. 5.2). Solved by HiGHS (``scipy.optimize.linprog``).
+    hull (Murray, Li & Sastry 1994, ch. 5). Solved by HiGHS (``scipy.optimize.linprog``).
     """
     big_d, n = wrenches.shape
     if n == 0:
