@@ -25,6 +25,7 @@ from ..errors import ParamError, SolverError
 __all__ = [
     "LINF_REL_TOL",
     "RANK_REL_TOL",
+    "checked_torque_scale",
     "closure_margin",
     "default_torque_scale",
     "epsilon_l1",
