@@ -209,3 +209,24 @@ def test_a_d_point_halves_the_polytope_and_leaves_the_manipulability() -> None:
     assert vol == pytest.approx(full / 2.0, rel=1e-9)
     assert verts[:, 0].min() == pytest.approx(0.0, abs=1e-12)
     assert manipulability(state, RHO) == manipulability(base, RHO)
+
+
+def test_s_contacts_constrain_the_manipulability_by_their_normal_as_l_contacts() -> None:
+    """An S-point's slip is free (a variable rho >= 0 of eq. 13): only its normal row is an
+    equality, so Yoshikawa's measure of the pushers as S contacts is that of L contacts."""
+    base = pushers()
+    sliding = base.with_(
+        contacts=tuple(
+            Contact(
+                c.name,
+                "S",
+                c.position,
+                c.normal,
+                c.jacobian,
+                mu=0.3,
+                slide_direction=[-c.normal[1], c.normal[0]],
+            )
+            for c in base.contacts
+        )
+    )
+    assert manipulability(sliding, RHO)[0] == pytest.approx(manipulability(base, RHO)[0], rel=1e-12)
