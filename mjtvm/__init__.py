@@ -5,7 +5,9 @@ ranges, contacts, Problem 2 (TVMMP, :func:`tvmmp`) and Problem 1 (TVMS, :func:`t
 MuJoCo coupling (:mod:`mjtvm.sim`: ``grasp``, ``lift``, ``paper_hand``; :mod:`mjtvm.physics`)
 and the rerun recording (:mod:`mjtvm.viewer`) live in their own packages. The grasp-file names
 here (:func:`load_grasp`, :func:`export_state`, :class:`Grasp`, :class:`GraspError`,
-:func:`shipped_grasps`) are imported on first use, so that ``import mjtvm`` does not load MuJoCo.
+:func:`shipped_grasps`) are imported on first use, so that ``import mjtvm`` does not load MuJoCo;
+so are the classic grasp measures (:func:`classic_measures`, :class:`GraspMeasures`,
+:mod:`mjtvm.measures`), which a solve does not need.
 """
 
 from typing import TYPE_CHECKING
@@ -22,6 +24,7 @@ from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 
 if TYPE_CHECKING:
+    from .measures import GraspMeasures, classic_measures
     from .polytopes.tvms import TvmsResult, tvms
     from .sim.grasp import Grasp, GraspError, export_state, load_grasp, shipped_grasps
 
@@ -29,6 +32,8 @@ __version__ = "0.1.0"
 
 # Names of the MuJoCo layer, imported by __getattr__ on first use.
 _MUJOCO_NAMES = frozenset({"Grasp", "GraspError", "export_state", "load_grasp", "shipped_grasps"})
+# The classic measures (mjtvm.measures), imported on first use too.
+_MEASURE_NAMES = frozenset({"GraspMeasures", "classic_measures"})
 
 __all__ = [
     "CONTACT_TYPES",
@@ -37,6 +42,7 @@ __all__ = [
     "Diagnosis",
     "Grasp",
     "GraspError",
+    "GraspMeasures",
     "GraspState",
     "MjtvmError",
     "ModelError",
@@ -52,6 +58,7 @@ __all__ = [
     "TvmsResult",
     "Witness",
     "assemble",
+    "classic_measures",
     "default_operation_range",
     "dump_state",
     "export_state",
@@ -68,8 +75,14 @@ __all__ = [
 ]
 
 
-# Problem 1 (scipy.spatial, cdd) is imported on first use too: `mjtvm solve` never needs it.
+# Problem 1 (scipy.spatial, cdd) and the classic measures are imported on first use too:
+# `mjtvm solve` needs neither.
 __getattr__ = lazy_attributes(
     __name__,
-    {**dict.fromkeys(_MUJOCO_NAMES, "sim.grasp"), "TvmsResult": "polytopes.tvms", "tvms": "polytopes.tvms"},
+    {
+        **dict.fromkeys(_MUJOCO_NAMES, "sim.grasp"),
+        **dict.fromkeys(_MEASURE_NAMES, "measures"),
+        "TvmsResult": "polytopes.tvms",
+        "tvms": "polytopes.tvms",
+    },
 )
