@@ -1,0 +1,172 @@
+"""``mjtvm rank``: the rows, the summary, failures as rows, resume (mjtvm.apps.rank, rank_files)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import mjtvm.apps.rank
+from mjtvm.apps.rank_files import RankFiles, run_rank_files
+from mjtvm.core.tvmmp import tvmmp
+from mjtvm.sim.grasp.file import load_grasp
+
+ROOT = Path(__file__).resolve().parents[2]
+GRASP = str(ROOT / "models" / "shadow_hand" / "shadow_hand-sphere.toml")
+DATASET = ROOT / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz"
+
+
+def _mjtvm() -> list[str]:
+    script = Path(sys.executable).with_name("mjtvm")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "mjtvm.cli"]
+
+
+def test_rank_command_on_the_example_dataset(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [*_mjtvm(), "rank", GRASP, str(DATASET), "--out", str(tmp_path), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    rows = json.loads((tmp_path / "rank.json").read_text())
+    n = len(np.load(DATASET)["id"])
+    assert len(rows) == n == 36
+    assert (tmp_path / "rank.csv").read_text().count("\n") == n + 1
+    for suffix in ("-objects.png", "-tvmmp.png"):
+        assert (tmp_path / f"rank{suffix}").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # The summary's counts are the rows'.
+    solved = [r for r in rows if r["failure"] is None]
+    positive = [r for r in solved if r["tvmmp"] is not None and r["tvmmp"] > 0]
+    assert f"rank: {n} grasps: {len(positive)} with TVMMP > 0" in proc.stderr
+    assert "failed: " in proc.stderr and len(positive) >= 10
+    # The generator's broken grasps (the last four) fail with their reason; the others evaluate.
+    broken = {r["id"]: r for r in rows if r["id"].endswith(("-open", "-closed"))}
+    assert len(broken) == 4
+    for r in broken.values():
+        expected = "no contact" if r["id"].endswith("-open") else "penetration"
+        assert r["failure"] == expected and r["reason"] and r["tvmmp"] is None
+    assert all(r["contacts"] == 3 for r in solved)
+    # An infeasible grasp says why: the diagnosis of its pair.
+    for r in solved:
+        if r["tvmmp"] is None:
+            assert r["reason"].startswith("pair [") and not r["feasible"]
+
+
+def test_a_row_is_the_grasp_files_tvmmp_at_that_configuration(tmp_path: Path) -> None:
+    # Row 1 of the example, rebuilt as a grasp file (its joint values, palm pose, sphere pose
+    # and radius) and solved by load_grasp: the same TVMMP as the row.
+    z = np.load(DATASET)
+    rows = mjtvm.apps.rank.rank_rows(GRASP, _entries()[1:2], progress=False)
+    g = z["grasp_qpos"][1]
+    from mjtvm.sim.grasp.batch import hand_joints
+
+    base = load_grasp(GRASP)
+    names = hand_joints(base.model, "ball")
+    s = float(z["obj_scale"][1])
+    doc: dict[str, Any] = {
+        "schema": "mjtvm.grasp/1",
+        "model": str(ROOT / "models" / "shadow_hand" / "shadow_right_3f.xml"),
+        "mu": 0.6,
+        "rvds": [list(map(float, r)) for r in base.rvds],
+        "object": {
+            "body": "ball",
+            "shape": "sphere",
+            "size": [0.025 * s],
+            "mass": 0.08 * s**3,
+            "position": [float(x) for x in z["obj_pose"][1][:3]],
+        },
+        "configuration": {"qpos": {n: float(v) for n, v in zip(names, g[7:], strict=True)}},
+        "contacts": [{"geom": n, "type": "F"} for n in ("ff_distal", "mf_distal", "th_distal")],
+        "ranges": {"rh_A_*": {"actuator": True, "speed_limit": 2.0}},
+    }
+    assert np.allclose(
+        g[:7],
+        [*base.data.xpos[base.model.body("rh_palm").id], *base.data.xquat[base.model.body("rh_palm").id]],
+    )
+    expected = tvmmp(load_grasp(doc).state(), witnesses=False).tvmmp
+    assert expected is not None and rows[0]["tvmmp"] == pytest.approx(expected, rel=1e-9)
+
+
+def _entries() -> list[Any]:
+    from mjtvm.apps.rank_files import read_datasets
+
+    return read_datasets(GRASP, [str(DATASET)])
+
+
+def test_interrupted_and_resumed_is_identical(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    whole = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "whole", quiet=True)
+    run_rank_files(whole, notice=lambda _: None)
+    calls = {"n": 0}
+    real = mjtvm.apps.rank.rank_row
+
+    def interrupted(batch: Any, entry: Any) -> dict[str, Any]:
+        calls["n"] += 1
+        if calls["n"] > 15:
+            raise KeyboardInterrupt
+        return real(batch, entry)
+
+    monkeypatch.setattr(mjtvm.apps.rank, "rank_row", interrupted)
+    part = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True)
+    with pytest.raises(KeyboardInterrupt):
+        run_rank_files(part, notice=lambda _: None)
+    saved = json.loads((tmp_path / "part" / "rank.partial.json").read_text())["rows"]
+    assert len(saved) == 15
+    monkeypatch.setattr(mjtvm.apps.rank, "rank_row", real)
+    calls["n"] = 0
+    resumed = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True, resume=True)
+    run_rank_files(resumed, notice=lambda _: None)
+    for name in ("rank.json", "rank.csv", "rank.parquet"):
+        assert (tmp_path / "part" / name).read_bytes() == (tmp_path / "whole" / name).read_bytes(), name
+    assert not (tmp_path / "part" / "rank.partial.json").exists()
+
+
+def test_malformed_dataset_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    z = dict(np.load(DATASET))
+    z["grasp_qpos"] = z["grasp_qpos"].copy()
+    z["grasp_qpos"][5, 10] = np.nan
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **z)
+    proc = subprocess.run(
+        [*_mjtvm(), "rank", GRASP, str(bad), "--out", str(tmp_path / "o"), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f"error: {bad}: grasp 5: grasp_qpos: expected finite numbers, got nan at position 10"
+    ]
+
+
+_ORB = """<mujoco model="orb">
+  <worldbody>
+    <body name="orb"><freejoint/><geom name="orb" type="sphere" size="0.025" mass="0.08"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_object_file_per_grasp_and_two_processes(tmp_path: Path) -> None:
+    # The same sphere given as an object file (obj_path, relative to the dataset) in place of
+    # the grasp file's: every alpha the same; two local processes give the rows of one.
+    (tmp_path / "orb.xml").write_text(_ORB)
+    z = {k: v[:6] for k, v in np.load(DATASET).items()}
+    np.savez(tmp_path / "a.npz", **z)
+    np.savez(tmp_path / "b.npz", **z, obj_path=np.array(["orb.xml"] * 6))
+    from mjtvm.apps.rank_files import read_datasets
+
+    a = mjtvm.apps.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "a.npz")]), progress=False)
+    b = mjtvm.apps.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "b.npz")]), progress=False)
+    assert [r["object"] for r in b] == ["orb"] * 6 and [r["object"] for r in a] == ["ball"] * 6
+    assert [r["alpha"] for r in a] == [r["alpha"] for r in b]
+    assert sum(r["tvmmp"] is not None for r in a) >= 3
+    two = mjtvm.apps.rank.rank_rows(
+        GRASP, read_datasets(GRASP, [str(tmp_path / "a.npz")]), jobs=2, progress=False
+    )
+    assert two == a
