@@ -142,7 +142,7 @@ def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     in the caller's CSV."""
     flat = []
     for r in rows:
-        out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting", "inputs")}
+        out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting")}
         out["limiting_k"], out["limiting_l"] = r["limiting"] if r["limiting"] is not None else (None, None)
         for k, line in enumerate(r["alpha"] or ()):
             for l, a in enumerate(line):
