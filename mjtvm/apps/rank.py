@@ -29,8 +29,6 @@ from ..core.tvmmp import tvmmp
 from ..errors import ModelError, ParamError, SolverError, StateError
 from ..sim.grasp.batch import BatchModels
 from ..sim.grasp.dataset import DatasetGrasp
-from ..sim.grasp.document import read_grasp_document
-from ..sim.grasp.file import shipped_grasps
 from ..sim.grasp.report import kept_contacts
 from .sweep import CONNECT_TIMEOUT_S, _check_scheduler, _forks, _init_worker, _stop
 
@@ -55,8 +53,7 @@ def batch_models(grasp: str) -> BatchModels:
         The grasp file does not read.
     """
     if grasp not in _BATCHES:
-        doc, path = read_grasp_document(shipped_grasps().get(grasp, grasp))
-        _BATCHES[grasp] = BatchModels(doc, path)
+        _BATCHES[grasp] = BatchModels.from_file(grasp)
     return _BATCHES[grasp]
 
 

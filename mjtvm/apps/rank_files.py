@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParamError, StateError
+from ..sim.grasp import GraspError
 from ..sim.grasp.batch import hand_joints
-from ..sim.grasp.checks import GraspError
 from ..sim.grasp.dataset import DatasetGrasp, read_dataset
 from .rank import batch_models, rank_rows
 from .sweep_files import _model_files, _stderr

@@ -31,7 +31,8 @@ import numpy as np
 
 from .checks import GraspError
 from .dataset import ROOT_SIZE, DatasetGrasp
-from .file import grasp_from_model
+from .document import read_grasp_document
+from .file import grasp_from_model, shipped_grasps
 from .loaded import Grasp
 from .model import build_spec, model_path_of
 
@@ -145,6 +146,18 @@ class BatchModels:
         self.model_path = model_path_of(doc, path, self.file)
         self._models: dict[tuple[str | None, float, bool], mujoco.MjModel] = {}
         self._roots: dict[tuple[str | None, float, bool], str | None] = {}
+
+    @classmethod
+    def from_file(cls, source: str | Path) -> BatchModels:
+        """The batch models of a grasp file, or of a shipped grasp by name.
+
+        Raises
+        ------
+        GraspError
+            The file does not read or breaks the format.
+        """
+        doc, path = read_grasp_document(shipped_grasps().get(str(source), source))
+        return cls(doc, path)
 
     def model(self, obj_path: str | None = None, scale: float = 1.0, *, root: bool = False) -> mujoco.MjModel:
         """The compiled model for an object file and scale; ``root``: with a posable root body.
