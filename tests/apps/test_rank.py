@@ -170,3 +170,27 @@ def test_object_file_per_grasp_and_two_processes(tmp_path: Path) -> None:
         GRASP, read_datasets(GRASP, [str(tmp_path / "a.npz")]), jobs=2, progress=False
     )
     assert two == a
+
+
+def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
+    # The generator's mesh mode (two convex pieces per object, one object file per grasp):
+    # every grasp it closes by IK is evaluated with its three fingertip contacts on the mesh,
+    # the broken ones fail with their reason.
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "make_rank_dataset", ROOT / "scripts" / "make_rank_dataset.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    arrays = module.make(8, 2, 5, mesh=2, folder=tmp_path / "d-objects")
+    np.savez(tmp_path / "d.npz", **arrays)
+    from mjtvm.apps.rank_files import read_datasets
+
+    rows = mjtvm.apps.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "d.npz")]), progress=False)
+    assert {r["object"] for r in rows} == {"ellipsoid0", "ellipsoid1"}
+    good, bad = rows[:6], rows[6:]
+    assert all(r["failure"] is None and r["contacts"] == 3 and r["penetration"] < 1e-4 for r in good)
+    assert [r["failure"] for r in bad] == ["no contact", "penetration"]
+    assert any(r["tvmmp"] for r in good)
