@@ -194,3 +194,39 @@ def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
     assert all(r["failure"] is None and r["contacts"] == 3 and r["penetration"] < 1e-4 for r in good)
     assert [r["failure"] for r in bad] == ["no contact", "penetration"]
     assert any(r["tvmmp"] for r in good)
+
+
+def test_qpos_layout_gives_the_rows_of_grasp_qpos(tmp_path: Path) -> None:
+    # The same grasps as the model's whole qpos (N x nq: the hand's joints and the object's
+    # free joint; the palm is fixed, so its pose is the model's, as in the example): the same rows.
+    from mjtvm.apps.rank_files import read_datasets
+
+    z = {k: v[:5] for k, v in np.load(DATASET).items()}
+    batch = mjtvm.apps.rank.batch_models(GRASP)
+    model = batch.model()
+    from mjtvm.sim.grasp.batch import hand_joints
+
+    names = hand_joints(model, "ball")
+    qpos = np.zeros((5, model.nq))
+    for i in range(5):
+        for n, v in zip(names, z["grasp_qpos"][i][7:], strict=True):
+            qpos[i, model.joint(n).qposadr[0]] = v
+        adr = model.joint("ball").qposadr[0]
+        qpos[i, adr : adr + 7] = z["obj_pose"][i]
+    np.savez(tmp_path / "q.npz", qpos=qpos, obj_scale=z["obj_scale"], id=z["id"])
+    np.savez(tmp_path / "g.npz", **z)
+    a = mjtvm.apps.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "g.npz")]), progress=False)
+    b = mjtvm.apps.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "q.npz")]), progress=False)
+    assert [r["alpha"] for r in a] == [r["alpha"] for r in b]
+    assert sum(r["tvmmp"] is not None for r in a) >= 3
+
+
+def test_dask_gives_the_same_rows() -> None:
+    import distributed  # the "cluster" extra, part of the "test" extra: never skipped
+
+    entries = _entries()[:8]
+    serial = mjtvm.apps.rank.rank_rows(GRASP, entries, progress=False)
+    with distributed.Client(
+        processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+    ) as client:
+        assert mjtvm.apps.rank.rank_rows(GRASP, entries, cluster=client, progress=False) == serial
