@@ -99,9 +99,13 @@ def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
     Raises
     ------
     GraspError
-        A malformed grasp (naming its file, index and field), or an id used twice.
+        A malformed grasp (naming its file, index and field), an id used twice, a grasp file
+        without RVDS, or a root pose (``grasp_qpos``) for a model whose hand root cannot be
+        found or posed.
     """
     batch = batch_models(grasp)
+    if batch.doc["rvds"] is None:
+        raise GraspError(batch.file, "rvds", "mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices")
     model = batch.model()
     num_joints = len(hand_joints(model, batch.doc["object"]["body"]))
     entries: list[DatasetGrasp] = []
@@ -117,6 +121,8 @@ def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
                 )
             seen[e.id] = e
             entries.append(e)
+    if any(e.root is not None for e in entries):
+        batch.model(root=True)  # a hand root that cannot be posed is the command's error, not every row's
     return entries
 
 

@@ -230,3 +230,25 @@ def test_dask_gives_the_same_rows() -> None:
         processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
     ) as client:
         assert mjtvm.apps.rank.rank_rows(GRASP, entries, cluster=client, progress=False) == serial
+
+
+def test_grasp_file_without_rvds_is_refused_up_front(tmp_path: Path) -> None:
+    import tomllib
+
+    from mjtvm.sim.grasp import format_toml
+
+    doc = tomllib.loads(Path(GRASP).read_text())
+    del doc["rvds"]
+    doc["model"] = str(Path(GRASP).parent / doc["model"])
+    grasp = tmp_path / "g.toml"
+    grasp.write_text(format_toml(doc))
+    proc = subprocess.run(
+        [*_mjtvm(), "rank", str(grasp), str(DATASET), "--out", str(tmp_path / "o"), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f"error: {grasp}: rvds: mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices"
+    ]
