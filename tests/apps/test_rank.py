@@ -252,3 +252,31 @@ def test_grasp_file_without_rvds_is_refused_up_front(tmp_path: Path) -> None:
     assert proc.stderr.strip().splitlines() == [
         f"error: {grasp}: rvds: mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices"
     ]
+
+
+def test_contact_rules_type_each_grasps_own_contacts(tmp_path: Path) -> None:
+    # With contact_rules instead of named contacts, each grasp's touching geoms are typed by
+    # the rule: the evaluated grasps get the alphas of the named F contacts, and the grasp with
+    # its first finger opened (a failure with named contacts) is evaluated on the two left.
+    import tomllib
+
+    from mjtvm.sim.grasp import format_toml
+
+    doc = tomllib.loads(Path(GRASP).read_text())
+    del doc["contacts"]
+    doc["contact_rules"] = [{"body": "*distal*", "type": "F"}]
+    doc["model"] = str(Path(GRASP).parent / doc["model"])
+    grasp = tmp_path / "rules.toml"
+    grasp.write_text(format_toml(doc))
+    z = np.load(DATASET)
+    keep = [1, 2, 3, len(z["id"]) - 4]  # three evaluated, one "-open"
+    np.savez(tmp_path / "d.npz", **{k: v[keep] for k, v in z.items()})
+    from mjtvm.apps.rank_files import read_datasets
+
+    named = mjtvm.apps.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "d.npz")]), progress=False)
+    ruled = mjtvm.apps.rank.rank_rows(
+        str(grasp), read_datasets(str(grasp), [str(tmp_path / "d.npz")]), progress=False
+    )
+    assert [r["alpha"] for r in ruled[:3]] == [r["alpha"] for r in named[:3]]
+    assert named[3]["failure"] == "no contact" and ruled[3]["id"].endswith("-open")
+    assert ruled[3]["failure"] is None and ruled[3]["contacts"] == 2
