@@ -1,7 +1,8 @@
 r"""The applications of Problem 2 along a lift: :mod:`mjtvm.apps.replay` (the replay and the
 Fig. 8/9 sweeps; its records and files in :mod:`mjtvm.apps.replay_records`),
 :mod:`mjtvm.apps.sweep` (parameter sweeps on a grid, a process pool or a Dask cluster; the
-files of ``mjtvm sweep`` in :mod:`mjtvm.apps.sweep_files`) and :mod:`mjtvm.apps.figures`.
+files of ``mjtvm sweep`` in :mod:`mjtvm.apps.sweep_files`), :mod:`mjtvm.apps.rank` (a grasp dataset ranked by TVMMP; the
+files of ``mjtvm rank`` in :mod:`mjtvm.apps.rank_files`) and :mod:`mjtvm.apps.figures`.
 
 The names below are imported on first use: the replay loads matplotlib, which a sweep's
 workers do not need.
@@ -14,6 +15,8 @@ from typing import TYPE_CHECKING
 from .._lazy import lazy_attributes
 
 if TYPE_CHECKING:
+    from .rank import rank_row, rank_rows
+    from .rank_files import RankFiles, run_rank_files
     from .replay import (
         SCHEMA,
         SWEEP_MG_MU,
@@ -45,6 +48,10 @@ _HOMES = {
     "time_replay": "replay",
     "Record": "replay_records",
     "solve_state": "replay_records",
+    "rank_row": "rank",
+    "rank_rows": "rank",
+    "RankFiles": "rank_files",
+    "run_rank_files": "rank_files",
     "SweepPoint": "sweep",
     "grid": "sweep",
     "run_sweep": "sweep",
@@ -58,13 +65,17 @@ __all__ = [
     "SWEEP_MG_MU",
     "SWEEP_MUS",
     "SWEEP_MU_MG",
+    "RankFiles",
     "Record",
     "ReplayOutput",
     "SweepFiles",
     "SweepPoint",
     "grasp_defaults",
     "grid",
+    "rank_row",
+    "rank_rows",
     "replay_lift",
+    "run_rank_files",
     "run_replay",
     "run_sweep",
     "run_sweep_files",

@@ -20,6 +20,7 @@ from .output import (
     one_line,
     stdout_to_devnull,
 )
+from .rank import add_rank
 from .show import add_show
 from .solve import add_export_state, add_solve, add_tvms
 from .verify import verify_parser
@@ -54,6 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="check TVMMP along the lift against MuJoCo rollouts with the dcmotor actuators",
     )
     add_sweep(sub)
+    add_rank(sub)
     add_bench(sub)
     return parser
 

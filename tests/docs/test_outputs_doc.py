@@ -92,6 +92,9 @@ def test_every_table_is_parsed() -> None:
         "sweep.json:row",
         "sweep.csv",
         "sweep.partial.json",
+        "rank.json:row",
+        "rank.csv",
+        "rank.partial.json",
         "verify.csv",
         "slide-check.csv",
         "gears.csv",
@@ -185,6 +188,45 @@ def test_sweep_checkpoint(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
     assert doc["rows"]
     for row in doc["rows"]:
         assert_documented("sweep.json:row", row)
+
+
+# ------------------------------------------------------------------ mjtvm rank
+def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rows of evaluated, infeasible and failed grasps; the Parquet file's columns; the checkpoint."""
+    import numpy as np
+
+    from mjtvm.apps import rank, rank_files
+
+    root = Path(__file__).resolve().parents[2]
+    z = np.load(root / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz")
+    rows = [0, 1, len(z["id"]) - 2, len(z["id"]) - 1]  # infeasible, evaluated, the two broken
+    np.savez(tmp_path / "d.npz", **{k: v[rows] for k, v in z.items()})
+    grasp = str(root / "models" / "shadow_hand" / "shadow_hand-sphere.toml")
+    run = rank_files.RankFiles(
+        grasp=grasp, datasets=(str(tmp_path / "d.npz"),), out=tmp_path, plots=False, quiet=True
+    )
+    rank_files.run_rank_files(run, emit=lambda _: None, notice=lambda _: None)
+    written = json.loads((tmp_path / "rank.json").read_text(encoding="utf-8"))
+    assert {r["failure"] for r in written} == {None, "no contact", "penetration"}
+    for row in written:
+        assert_documented("rank.json:row", row)
+    assert_documented("rank.csv", _header(tmp_path / "rank.csv"))
+    import pyarrow.parquet as pq
+
+    assert pq.read_table(tmp_path / "rank.parquet").column_names == _header(tmp_path / "rank.csv")
+
+    def failing(*args: Any, **kwargs: Any) -> Any:
+        kwargs["on_rows"](rank.rank_rows(*args, **{**kwargs, "on_rows": None}))
+        raise RuntimeError("stop after the rows")
+
+    monkeypatch.setattr(rank_files, "CHECKPOINT_EVERY_S", 1e9)
+    monkeypatch.setattr(rank_files, "rank_rows", failing)
+    with pytest.raises(RuntimeError, match="stop after the rows"):
+        rank_files.run_rank_files(run, emit=lambda _: None, notice=lambda _: None)
+    doc = json.loads((tmp_path / "rank.partial.json").read_text(encoding="utf-8"))
+    assert_documented("rank.partial.json", doc)
+    for row in doc["rows"]:
+        assert_documented("rank.json:row", row)
 
 
 # ------------------------------------------------------------------ mjtvm verify

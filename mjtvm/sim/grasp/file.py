@@ -66,7 +66,15 @@ from .transmission import (
     model_transmission,
 )
 
-__all__ = ["Grasp", "build_spec", "export_state", "load_grasp", "models_root", "shipped_grasps"]
+__all__ = [
+    "Grasp",
+    "build_spec",
+    "export_state",
+    "grasp_from_model",
+    "load_grasp",
+    "models_root",
+    "shipped_grasps",
+]
 
 _OBJ = mujoco.mjtObj
 _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
@@ -248,6 +256,27 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
     doc, path = read_grasp_document(_resolve(source))
     file = str(path) if path is not None else "grasp"
     model, model_path = load_model(doc, path, file)
+    return grasp_from_model(doc, path, model, model_path)
+
+
+def grasp_from_model(
+    doc: Mapping[str, Any], path: Path | None, model: mujoco.MjModel, model_path: Path
+) -> Grasp:
+    r"""The grasp of a normalised document (:func:`~mjtvm.sim.grasp.document.read_grasp_document`)
+    on a compiled model: what :func:`load_grasp` does after compiling the model.
+
+    A batch (``mjtvm rank``) compiles each (object, scale) once and builds every grasp of a
+    dataset on it, each from the file's document with its own ``configuration`` and ``object``
+    pose. ``model`` is the document's model (:func:`~mjtvm.sim.grasp.model.build_spec`
+    compiled, possibly edited); a mocap base's pose is written into it
+    (:func:`~mjtvm.sim.grasp.base.hold_mocap_poses`).
+
+    Raises
+    ------
+    GraspError
+        As :func:`load_grasp`, for everything but the model file.
+    """
+    file = str(path) if path is not None else "grasp"
     ob = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, doc["object"]["body"])
     if ob <= 0:
         name = doc["object"]["body"]

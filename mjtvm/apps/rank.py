@@ -1,0 +1,273 @@
+r"""Rank a grasp dataset by TVMMP: one row per grasp, in this process, a local pool or on Dask.
+
+:func:`rank_row` evaluates one :class:`~mjtvm.sim.grasp.dataset.DatasetGrasp` on the grasp
+file's model (:class:`~mjtvm.sim.grasp.batch.BatchModels`): the contacts MuJoCo finds, the
+deepest penetration, the grasp state, Problem 2 (:func:`~mjtvm.core.tvmmp.tvmmp` with
+``diagnose=True``, which says why an alpha is 0 or a pair infeasible). A grasp that cannot be
+evaluated (no contact where the file expects one, a finger too deep, a solver failure, a bad
+base) is a row with ``failure`` and ``reason``: it never stops the batch. :func:`rank_rows`
+runs the rows serially, on ``jobs`` local processes (forked on Linux after the model is
+compiled, as :mod:`mjtvm.apps.sweep` does) or on a Dask cluster; rows come back in the
+dataset's order whichever way ran them. The files of ``mjtvm rank`` are
+:mod:`mjtvm.apps.rank_files`.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import warnings
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from ..core.state import GraspState
+from ..core.tvmmp import tvmmp
+from ..errors import ModelError, ParamError, SolverError, StateError
+from ..sim.grasp.batch import BatchModels
+from ..sim.grasp.dataset import DatasetGrasp
+from ..sim.grasp.report import kept_contacts
+from .sweep import CONNECT_TIMEOUT_S, _check_scheduler, _forks, _init_worker, _stop
+
+__all__ = ["FAILURES", "batch_models", "rank_row", "rank_rows"]
+
+FAILURES = ("no contact", "penetration", "grasp", "state", "solver")
+"""The values of a failed row's ``failure``: a selection that does not touch the object, a
+finger deeper than ``max_penetration``, another grasp-file or configuration error (an untyped
+touching geom, an equality the configuration breaks, an unusable root), a state the core refuses, a
+solver that fails."""
+
+_BATCHES: dict[str, BatchModels] = {}
+"""Grasp file -> its compiled models, per process (a worker compiles each model once)."""
+
+
+def batch_models(grasp: str) -> BatchModels:
+    """The :class:`~mjtvm.sim.grasp.batch.BatchModels` of a grasp file, cached in this process.
+
+    Raises
+    ------
+    GraspError
+        The grasp file does not read.
+    """
+    if grasp not in _BATCHES:
+        _BATCHES[grasp] = BatchModels.from_file(grasp)
+    return _BATCHES[grasp]
+
+
+def _classify(error: Exception) -> str:
+    text = str(error)
+    if isinstance(error, SolverError):
+        return "solver"
+    if "does not touch the object" in text:
+        return "no contact"
+    if "max_penetration" in text:
+        return "penetration"
+    return "grasp" if isinstance(error, ModelError) else "state"
+
+
+def _classic_columns(state: GraspState) -> dict[str, Any]:
+    """The classic measures of the state (issue 24, deliverable 3: ``classic_measures(state)``).
+
+    The one place where they join the row: once ``classic_measures`` lands, its dataclass's
+    fields are returned here (``docs/outputs.md`` lists them as "added by the classic
+    measures"). Until then a row has none.
+    """
+    return {}
+
+
+def _object_name(entry: DatasetGrasp, batch: BatchModels) -> str:
+    if entry.obj_path is not None:
+        return Path(entry.obj_path).stem
+    return str(batch.doc["object"]["body"])
+
+
+def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
+    r"""The row of one grasp: evaluated, or failed with its reason.
+
+    Returns
+    -------
+    dict
+        ``id``, ``source``, ``index``, ``object``, ``scale``, ``contacts`` (contacts of the
+        state, or found before it failed), ``penetration`` (m, the deepest contact's depth
+        inside the object, 0 when none penetrates), ``feasible``, ``tvmmp``, ``alpha``
+        (K x R, ``None`` where not optimal), ``status`` (K x R), ``limiting`` ([k, l]),
+        ``certified``, ``failure`` (one of :data:`FAILURES`, or ``None``) and ``reason``
+        (the error of a failed grasp, the diagnosis of a zero or infeasible TVMMP, else
+        ``None``); ``docs/outputs.md`` documents each.
+    """
+    row: dict[str, Any] = {
+        "id": entry.id,
+        "source": Path(entry.source).name,
+        "index": entry.index,
+        "object": _object_name(entry, batch),
+        "scale": entry.obj_scale,
+        "contacts": None,
+        "penetration": None,
+        "feasible": False,
+        "tvmmp": None,
+        "limiting": None,
+        "alpha": None,
+        "status": None,
+        "certified": None,
+        "failure": None,
+        "reason": None,
+    }
+    try:
+        grasp = batch.grasp(entry)
+        ignored = set(grasp.ignored_geoms)
+        found = [c for c in kept_contacts(grasp) if c.geom not in ignored]
+        row["contacts"] = len(found)
+        row["penetration"] = max([0.0, *(-float(c.distance) for c in found)])
+        state = grasp.state()
+        row["contacts"] = len(state.contacts)
+        result = tvmmp(state, witnesses=False, diagnose=True)
+        # ----- classic measures (deliverable 3) join here, one call on the same state -----
+        classic = _classic_columns(state)
+    except (ModelError, StateError, SolverError) as e:
+        row["failure"] = _classify(e)
+        row["reason"] = " ".join(str(e).split())
+        return row
+    doc = result.to_dict(witnesses=False)
+    row.update({key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")})
+    row["certified"] = all(c is not False for line in doc["certified"] for c in line)
+    if result.diagnosis and (result.tvmmp is None or result.tvmmp <= 0.0):
+        limiting = result.limiting
+        first = next(
+            (d for d in result.diagnosis if limiting is not None and tuple(d.pair) == tuple(limiting)), None
+        )
+        chosen = first or result.diagnosis[0]
+        row["reason"] = f"pair {list(chosen.pair)}: {chosen.cause}: {' '.join(chosen.message.split())}"
+    row.update(classic)
+    return row
+
+
+def _solve_chunk(grasp: str, entries: Sequence[DatasetGrasp]) -> list[dict[str, Any]]:
+    """The rows of some grasps of one grasp file (runs in a worker)."""
+    batch = batch_models(grasp)
+    return [rank_row(batch, e) for e in entries]
+
+
+def _chunks(entries: Sequence[DatasetGrasp], parts: int) -> list[list[DatasetGrasp]]:
+    n = max(1, min(len(entries), parts))
+    return [list(entries[i::n]) for i in range(n)]
+
+
+def rank_rows(
+    grasp: str,
+    entries: Iterable[DatasetGrasp],
+    *,
+    jobs: int = 1,
+    cluster: Any = None,
+    progress: bool = True,
+    done: Mapping[str, dict[str, Any]] | None = None,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+) -> list[dict[str, Any]]:
+    r"""The row of every grasp (:func:`rank_row`), in the order of ``entries``.
+
+    Parameters
+    ----------
+    grasp
+        The grasp file.
+    entries
+        The dataset's grasps (ids unique).
+    jobs
+        Local worker processes (1 = in this process).
+    cluster
+        A Dask scheduler address or a ``distributed.Client``; overrides ``jobs``.
+    progress
+        Show a tqdm progress bar over the grasps to evaluate.
+    done
+        Rows already computed, by id: not evaluated again, returned as given.
+    on_rows
+        Called in this process with the rows of every finished task (checkpointing).
+
+    Raises
+    ------
+    ParamError
+        ``jobs`` below 1 or an unreachable ``cluster``.
+    GraspError
+        The grasp file does not read, or its model does not compile.
+    """
+    if jobs < 1:
+        raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
+    items = list(entries)
+    table: dict[str, dict[str, Any]] = dict(done or {})
+    todo = [e for e in items if e.id not in table]
+    batch_models(grasp).model()  # compiled before any fork, and its errors are the command's
+    bar = tqdm(total=len(todo), desc="rank", unit="grasp", disable=not progress)
+
+    def finished(rows: list[dict[str, Any]]) -> None:
+        table.update((r["id"], r) for r in rows)
+        if on_rows is not None:
+            on_rows(rows)
+        bar.update(len(rows))
+
+    try:
+        if not todo:
+            pass
+        elif cluster is not None:
+            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished)
+        elif jobs == 1:
+            for e in todo:
+                finished(_solve_chunk(grasp, [e]))
+        else:
+            _run_pool(grasp, _chunks(todo, 8 * jobs), jobs, finished)
+    finally:
+        bar.close()
+    return [table[e.id] for e in items]
+
+
+def _run_pool(
+    grasp: str, tasks: list[list[DatasetGrasp]], jobs: int, finished: Callable[[list[dict[str, Any]]], None]
+) -> None:
+    """The tasks on ``jobs`` local processes: forked on Linux (the compiled model inherited),
+    else started from a forkserver (each worker compiles it)."""
+    fork = _forks()
+    context = multiprocessing.get_context("fork" if fork else "forkserver")
+    pool = ProcessPoolExecutor(
+        max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
+    )
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
+            futures = [pool.submit(_solve_chunk, grasp, task) for task in tasks]
+        for f in futures:
+            finished(f.result())
+    except BaseException:
+        _stop(pool)
+        raise
+    pool.shutdown()
+
+
+def _run_dask(
+    grasp: str,
+    tasks: list[list[DatasetGrasp]],
+    cluster: Any,
+    finished: Callable[[list[dict[str, Any]]], None],
+) -> None:
+    """The tasks on a Dask cluster (the grasp file and the dataset's object files must be
+    readable by the workers at the same paths)."""
+    try:
+        from distributed import Client, as_completed
+    except ImportError as e:  # pragma: no cover - depends on the optional extra
+        raise ParamError("cluster", 'Dask is not installed: pip install "mjtvm[cluster]"') from e
+    if isinstance(cluster, Client):
+        client = cluster
+    else:
+        _check_scheduler(cluster, CONNECT_TIMEOUT_S)
+        try:
+            client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError, ValueError) as e:
+            raise ParamError(
+                "cluster", f"cannot reach a Dask scheduler at {cluster} within {CONNECT_TIMEOUT_S:g} s ({e})"
+            ) from e
+    try:
+        futures = client.map(_solve_chunk, [grasp] * len(tasks), tasks, pure=False)
+        for fut in as_completed(futures):
+            finished(fut.result())
+    finally:
+        if client is not cluster:
+            client.close()

@@ -1,0 +1,62 @@
+"""``mjtvm rank``: rank a grasp dataset by TVMMP (``docs/cli.md``, ``docs/datasets.md``)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .options import Subparsers, command, out_options
+from .output import EXIT_OK, emit
+from .values import MAX_JOBS, cluster_address, input_file, integer, source
+
+__all__ = ["add_rank"]
+
+_HELP = "rank a dataset of grasp configurations by TVMMP: one row per grasp, CSV, JSON, plots"
+_DESCRIPTION = (
+    "Evaluate every grasp of the datasets (.npz, .npy, per-grasp .npy dicts, .csv: docs/datasets.md) "
+    "with the grasp file's model, contact rules, ranges, REFS and RVDS; write NAME.json, NAME.csv, "
+    "NAME.parquet (with pyarrow), NAME-objects.png and NAME-tvmmp.png, and a summary on stderr. "
+    "A grasp that fails is a row with its reason."
+)
+
+
+def add_rank(sub: Subparsers) -> None:
+    """``mjtvm rank GRASP DATASET...``."""
+    p = command(sub, "rank", _HELP, _DESCRIPTION)
+    p.add_argument(
+        "grasp", type=source, metavar="GRASP", help="a mjtvm.grasp/1 file or a shipped grasp's name"
+    )
+    p.add_argument("datasets", type=input_file, nargs="+", metavar="DATASET", help="dataset files")
+    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
+    p.add_argument(
+        "--cluster",
+        type=cluster_address,
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help="Dask scheduler address (overrides --jobs; connection timeout 10 s)",
+    )
+    out_options(p, name="rank")
+    p.add_argument(
+        "--resume", action="store_true", help="keep the finished rows of NAME.partial.json / NAME.json"
+    )
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_rank)
+
+
+def _cmd_rank(args: argparse.Namespace) -> int:
+    from ..apps.rank_files import RankFiles, run_rank_files
+
+    run = RankFiles(
+        grasp=args.grasp,
+        datasets=tuple(str(p) for p in args.datasets),
+        out=args.out,
+        name=args.name,
+        jobs=args.jobs,
+        cluster=args.cluster,
+        resume=args.resume,
+        quiet=args.quiet,
+        plots=not args.no_plots,
+    )
+    for path in run_rank_files(run, emit=emit):
+        emit(f"wrote {path}")
+    return EXIT_OK

@@ -1,0 +1,176 @@
+"""The example grasp dataset of ``mjtvm rank`` (docs/datasets.md): perturbed Shadow hand grasps.
+
+Each grasp starts from models/shadow_hand/shadow_hand-sphere.toml (the tendon-coupled Shadow
+hand, three fingertips on a sphere): the sphere's radius is scaled by a random factor in
+[0.9, 1.1] (its mass by the cube, as ``mjtvm rank`` scales it), its centre moved by up to 4 mm
+along each axis, the IK's start joint values perturbed by up to 0.15 rad, and the grasp file's
+own IK closes the three fingertips onto the sphere. A grasp whose IK fails is drawn again. The
+last ``--broken`` grasps are made to fail on purpose, half with one finger joint opened by
+0.1 rad (a fingertip off the sphere: ``no contact``) and half closed by 0.1 rad (a fingertip
+inside it: ``penetration``), so that the dataset shows failure rows.
+
+Stored per grasp (``.npz``): ``grasp_qpos`` (the palm's world pose, then the 13 hand joints in
+model order), ``obj_pose`` (the sphere's centre and orientation), ``obj_scale``, ``id``. The
+random generator is seeded: the same command writes the same file.
+
+With ``--mesh K`` the objects are K procedurally made mesh objects instead (written beside
+the dataset, in ``<stem>-objects/``): an ellipsoid of semi-axes 25 mm times a random factor in
+[0.85, 1.15] each, 0.08 kg, as two convex pieces (its upper and lower halves, each a mesh of
+points on the surface: MuJoCo collides the convex hull), each grasp on one of them
+(``obj_path``, scale 1), the fingertips closed onto it by the same IK.
+
+Usage::
+
+    python scripts/make_rank_dataset.py                      # 36 grasps (4 broken)
+    python scripts/make_rank_dataset.py -n 240 --mesh 6 --out /tmp/mesh/big.npz  # mesh objects
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from mjtvm.errors import ModelError
+from mjtvm.sim.grasp.batch import hand_joints
+from mjtvm.sim.grasp.file import load_grasp
+
+ROOT = Path(__file__).resolve().parents[1]
+GRASP = ROOT / "models" / "shadow_hand" / "shadow_hand-sphere.toml"
+OUT = ROOT / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz"
+ROOT_BODY = "rh_palm"
+
+
+def _document(rng: np.random.Generator) -> tuple[dict, float]:
+    doc = tomllib.loads(GRASP.read_text(encoding="utf-8"))
+    doc["model"] = str(GRASP.parent / doc["model"])
+    scale = float(rng.uniform(0.9, 1.1))
+    obj = dict(doc["object"])
+    obj["size"] = [obj["size"][0] * scale]
+    obj["mass"] = obj["mass"] * scale**3
+    obj["position"] = [float(x) for x in np.asarray(obj["position"]) + rng.uniform(-0.004, 0.004, 3)]
+    config = dict(doc["configuration"])
+    ik = dict(config["ik"])
+    ik["start"] = {k: v + float(rng.uniform(-0.15, 0.15)) for k, v in ik["start"].items()}
+    config["ik"] = ik
+    doc["object"], doc["configuration"] = obj, config
+    return doc, scale
+
+
+_PIECE = '<mesh name="{name}" vertex="{vertex}"/>'
+
+
+def _ellipsoid_pieces(rng: np.random.Generator) -> list[str]:
+    """Two ``<mesh>`` elements: the upper and lower halves of a random ellipsoid (points only)."""
+    axes = 0.025 * rng.uniform(0.85, 1.15, 3)
+    lat = np.linspace(0.0, np.pi / 2, 5)
+    lon = np.linspace(0.0, 2 * np.pi, 12, endpoint=False)
+    meshes = []
+    for sign, name in ((1.0, "upper"), (-1.0, "lower")):
+        pts = [[0.0, 0.0, sign * axes[2]]]
+        for t in lat[:-1]:
+            for p in lon:
+                pts.append(
+                    [
+                        axes[0] * np.cos(t) * np.cos(p),
+                        axes[1] * np.cos(t) * np.sin(p),
+                        sign * axes[2] * np.sin(t),
+                    ]
+                )
+        vertex = "  ".join(" ".join(f"{x:.6f}" for x in q) for q in pts)
+        meshes.append(_PIECE.format(name=f"piece_{name}", vertex=vertex))
+    return meshes
+
+
+def _object_xml(meshes: list[str], include: str = "") -> str:
+    """An MJCF of the object (body ``ball`` on a free joint, two 0.04 kg pieces), with the
+    hand included when ``include`` names its file."""
+    geoms = "".join(
+        f'<geom name="piece_{n}" type="mesh" mesh="piece_{n}" mass="0.04"/>' for n in ("upper", "lower")
+    )
+    head = f'<include file="{include}"/>' if include else ""
+    return (
+        f'<mujoco model="ellipsoid">{head}<asset>{"".join(meshes)}</asset><worldbody>'
+        f'<body name="ball"><freejoint name="ball"/>{geoms}</body></worldbody></mujoco>\n'
+    )
+
+
+def make(n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = None) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    scenes: list[tuple[str, str]] = []  # (scene file for the IK, object file relative to the dataset)
+    if mesh:
+        assert folder is not None
+        folder.mkdir(parents=True, exist_ok=True)
+        for k in range(mesh):
+            meshes = _ellipsoid_pieces(rng)
+            (folder / f"ellipsoid{k}.xml").write_text(_object_xml(meshes))
+            scene = folder / f"ellipsoid{k}-scene.xml"
+            scene.write_text(_object_xml(meshes, str(GRASP.parent / "shadow_right_3f.xml")))
+            scenes.append((str(scene), f"{folder.name}/ellipsoid{k}.xml"))
+    rows_path: list[str] = []
+    rows: dict[str, list] = {"grasp_qpos": [], "obj_pose": [], "obj_scale": [], "id": []}
+    tries = 0
+    while len(rows["id"]) < n:
+        tries += 1
+        if tries > 5 * n:
+            raise SystemExit(f"only {len(rows['id'])} of {tries} IK runs closed the grasp")
+        doc, scale = _document(rng)
+        if scenes:  # the mesh object in place of the sphere, at the sphere's place
+            scene, relative = scenes[len(rows["id"]) % len(scenes)]
+            doc["model"], scale = scene, 1.0
+            doc["object"] = {"body": "ball", "position": doc["object"]["position"]}
+        try:
+            grasp = load_grasp(doc)
+            grasp.check_contacts()
+        except ModelError:
+            continue
+        model, data = grasp.model, grasp.data
+        names = hand_joints(model, doc["object"]["body"])
+        joints = np.array([data.qpos[model.joint(j).qposadr[0]] for j in names])
+        i = len(rows["id"])
+        kind = "ok"
+        if i >= n - broken:  # a finger joint opened (off the sphere) or closed (into it)
+            kind = "open" if (i - (n - broken)) % 2 == 0 else "closed"
+            k = names.index("rh_FFJ3")
+            joints[k] += -0.1 if kind == "open" else 0.1
+        palm, ball = model.body(ROOT_BODY).id, model.body(doc["object"]["body"]).id
+        rows["grasp_qpos"].append(np.concatenate([data.xpos[palm], data.xquat[palm], joints]))
+        rows["obj_pose"].append(np.concatenate([data.xpos[ball], data.xquat[ball]]))
+        rows["obj_scale"].append(scale)
+        if scenes:
+            rows_path.append(relative)
+        rows["id"].append(
+            f"shadow-{'mesh' if scenes else 'sphere'}-{i:03d}" + ("" if kind == "ok" else f"-{kind}")
+        )
+    extra = {"obj_path": np.array(rows_path)} if scenes else {}
+    return {
+        **extra,
+        "grasp_qpos": np.array(rows["grasp_qpos"]),
+        "obj_pose": np.array(rows["obj_pose"]),
+        "obj_scale": np.array(rows["obj_scale"]),
+        "id": np.array(rows["id"]),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("-n", type=int, default=36, help="grasps")
+    parser.add_argument("--broken", type=int, default=4, help="grasps made to fail (the last ones)")
+    parser.add_argument("--seed", type=int, default=24)
+    parser.add_argument("--mesh", type=int, default=0, help="mesh objects (0: the sphere, scaled)")
+    parser.add_argument("--out", type=Path, default=OUT)
+    args = parser.parse_args()
+    t0 = time.perf_counter()
+    folder = args.out.parent / f"{args.out.stem}-objects"
+    arrays = make(args.n, args.broken, args.seed, args.mesh, folder)
+    np.savez_compressed(args.out, **arrays)
+    print(
+        f"wrote {args.out}: {args.n} grasps in {time.perf_counter() - t0:.1f} s, {args.out.stat().st_size} bytes"
+    )
+
+
+if __name__ == "__main__":
+    main()
