@@ -68,14 +68,26 @@ def _classify(error: Exception) -> str:
     return "grasp" if isinstance(error, ModelError) else "state"
 
 
-def _classic_columns(state: GraspState) -> dict[str, Any]:
-    """The classic measures of the state (issue 24, deliverable 3: ``classic_measures(state)``).
+#: The classic measures a row carries (:class:`~mjtvm.measures.GraspMeasures`'s fields): all
+#: but the kinematic velocity polytope, whose support LPs cost 1-3.5 s a grasp on a 16-joint
+#: hand (``mjtvm.classic_measures(state)`` computes it).
+CLASSIC_COLUMNS = (
+    "force_closure",
+    "epsilon_l1",
+    "epsilon_linf",
+    "grasp_sigma_min",
+    "manipulability",
+    "torque_scale",
+)
 
-    The one place where they join the row: once ``classic_measures`` lands, its dataclass's
-    fields are returned here (``docs/outputs.md`` lists them as "added by the classic
-    measures"). Until then a row has none.
-    """
-    return {}
+
+def _classic_columns(state: GraspState) -> dict[str, Any]:
+    """The classic measures of the state the TVMMP was computed on
+    (:func:`~mjtvm.measures.classic_measures`, without the velocity polytope)."""
+    from ..measures import classic_measures
+
+    doc = classic_measures(state, polytope=False).to_dict()
+    return {key: doc[key] for key in CLASSIC_COLUMNS}
 
 
 def _object_name(entry: DatasetGrasp, batch: BatchModels) -> str:
@@ -96,7 +108,8 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         (K x R, ``None`` where not optimal), ``status`` (K x R), ``limiting`` ([k, l]),
         ``certified``, ``failure`` (one of :data:`FAILURES`, or ``None``) and ``reason``
         (the error of a failed grasp, the diagnosis of a zero or infeasible TVMMP, else
-        ``None``); ``docs/outputs.md`` documents each.
+        ``None``), then the :data:`CLASSIC_COLUMNS` (``None`` for a failed grasp);
+        ``docs/outputs.md`` documents each.
     """
     row: dict[str, Any] = {
         "id": entry.id,
@@ -114,6 +127,7 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         "certified": None,
         "failure": None,
         "reason": None,
+        **dict.fromkeys(CLASSIC_COLUMNS),
     }
     try:
         grasp = batch.grasp(entry)
@@ -124,7 +138,6 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         state = grasp.state()
         row["contacts"] = len(state.contacts)
         result = tvmmp(state, witnesses=False, diagnose=True)
-        # ----- classic measures (deliverable 3) join here, one call on the same state -----
         classic = _classic_columns(state)
     except (ModelError, StateError, SolverError) as e:
         row["failure"] = _classify(e)

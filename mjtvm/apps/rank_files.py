@@ -4,7 +4,7 @@ the checkpoint and ``--resume``.
 :func:`run_rank_files` reads the datasets (:func:`~mjtvm.sim.grasp.dataset.read_dataset`),
 ranks them (:func:`~mjtvm.apps.rank.rank_rows`) into ``NAME.json``, ``NAME.csv``,
 ``NAME.parquet`` (when ``pyarrow`` imports), ``NAME-objects.png`` (TVMMP per object) and
-``NAME-tvmmp.png`` (the TVMMP histogram), keeping every finished row in
+``NAME-tvmmp.png`` (the TVMMP histogram), ``NAME-epsilon.png`` (TVMMP against the epsilon), keeping every finished row in
 ``NAME.partial.json`` while it runs, as ``mjtvm sweep`` does (:mod:`mjtvm.apps.sweep_files`).
 """
 
@@ -228,7 +228,7 @@ def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
 
 def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
     """``objects``: TVMMP per object (every evaluated grasp a point, failed grasps left out);
-    ``tvmmp``: the histogram of TVMMP. PNG bytes."""
+    ``tvmmp``: the histogram of TVMMP; ``epsilon``: TVMMP against the L1 epsilon. PNG bytes."""
     from .figures import lift_axes
 
     solved = [r for r in rows if r["failure"] is None]
@@ -250,6 +250,14 @@ def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
     ax.set_ylabel("grasps", fontsize=8)
     ax.set_title("TVMMP histogram", fontsize=9)
     out["tvmmp"] = _png(fig)
+    fig, ax = lift_axes(4.5, 3.2)
+    pairs = [(r["epsilon_l1"], r["tvmmp"] or 0.0) for r in solved if r.get("epsilon_l1") is not None]
+    ax.plot([e for e, _ in pairs], [v for _, v in pairs], "o", ms=3, alpha=0.7)
+    ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
+    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
+    ax.set_title(f"TVMMP against the epsilon ({len(pairs)} grasps)", fontsize=9)
+    ax.grid(alpha=0.3)
+    out["epsilon"] = _png(fig)
     return out
 
 

@@ -89,8 +89,17 @@ def test_a_row_is_the_grasp_files_tvmmp_at_that_configuration(tmp_path: Path) ->
         g[:7],
         [*base.data.xpos[base.model.body("rh_palm").id], *base.data.xquat[base.model.body("rh_palm").id]],
     )
-    expected = tvmmp(load_grasp(doc).state(), witnesses=False).tvmmp
+    state = load_grasp(doc).state()
+    expected = tvmmp(state, witnesses=False).tvmmp
     assert expected is not None and rows[0]["tvmmp"] == pytest.approx(expected, rel=1e-9)
+    # The classic measures of the row are those of the same state.
+    from mjtvm.apps.rank import CLASSIC_COLUMNS
+    from mjtvm.measures import classic_measures
+
+    measures = classic_measures(state, polytope=False).to_dict()
+    assert rows[0]["force_closure"] is True
+    for key in CLASSIC_COLUMNS:
+        assert rows[0][key] == pytest.approx(measures[key], rel=1e-9), key
 
 
 def _entries() -> list[Any]:
