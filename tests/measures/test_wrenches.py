@@ -199,3 +199,19 @@ def test_closure_lp_agrees_with_the_hull_on_random_wrenches(dim: int) -> None:
         assert inside == (eps > 1e-9), trial
         seen.add(inside)
     assert seen == {True, False}
+
+
+def test_a_nearly_degenerate_wrench_set_does_not_end_the_process() -> None:
+    """A Shadow grasp of ``mjtvm rank``'s mesh dataset (``make_rank_dataset.py -n 240 --mesh 6``,
+    grasp 159): Qhull's incremental mode ended the process there with exit code 7 (a facet
+    wider than its precision allows) instead of raising; the L-inf epsilon's growing hull is
+    rebuilt from all its points instead."""
+    from pathlib import Path
+
+    from mjtvm import load_state
+    from mjtvm.measures import classic_measures
+
+    state = load_state(Path(__file__).parent / "data" / "qhull-wide-shadow.json")
+    m = classic_measures(state, polytope=False)
+    assert m.force_closure and m.epsilon_linf > m.epsilon_l1 > 0.0
+    assert m.epsilon_linf_gap < 1e-12 * m.epsilon_linf + 1e-15
