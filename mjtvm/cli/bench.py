@@ -82,7 +82,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _steps(quick: bool) -> int:
     """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
-    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
+    return (3 if quick else 4) + 4  # the cases; the lift, the sweeps, the scaling, the dataset scale
 
 
 def _read_notes(path: Path | None) -> list[str]:
