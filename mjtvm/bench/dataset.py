@@ -15,7 +15,9 @@ command. Measured here:
 * the same batches **on 2 processes** (:func:`_pool_batch`): a forked (Linux; else forkserver)
   pool of 2 workers, each solving half of the batch (the states are pickled to the workers),
   the pool's start-up included; the speed-up is the serial median over this median, and
-  every alpha must equal the serial run's to the bit;
+  every alpha must equal the serial run's to the bit. Each solving process's CPU time is
+  recorded too: its share of a core (CPU time over the run's wall time) tells a pool that
+  does not scale from a machine that other jobs load;
 * **``mjtvm solve STATE.json`` as a process** (:func:`bench_cli`): the wall time of
   ``python -m mjtvm.cli solve STATE.json`` (one 6-LP state of the batch written with
   :func:`~mjtvm.core.state_file.dump_state`), and of ``python -c "import mjtvm"`` alone, medians
@@ -100,8 +102,16 @@ def _solve_all(states: Sequence[GraspState]) -> list[NDArrayList]:
     return [tvmmp(s, witnesses=False).alpha.tolist() for s in states]
 
 
-def _pool_batch(states: Sequence[GraspState], jobs: int) -> tuple[float, list[NDArrayList]]:
-    """Wall time of the batch on a new pool of ``jobs`` workers (start-up included) and the alphas."""
+def _solve_chunk(states: Sequence[GraspState]) -> tuple[list[NDArrayList], float]:
+    """A worker's part: the alphas of its states and the CPU time it took (s)."""
+    c0 = time.process_time()
+    alphas = _solve_all(states)
+    return alphas, time.process_time() - c0
+
+
+def _pool_batch(states: Sequence[GraspState], jobs: int) -> tuple[float, list[float], list[NDArrayList]]:
+    """Wall time of the batch on a new pool of ``jobs`` workers (start-up included), each
+    worker's CPU time, and the alphas."""
     from ..apps.sweep import _forks
 
     chunks = [list(states[i::jobs]) for i in range(jobs)]
@@ -110,12 +120,12 @@ def _pool_batch(states: Sequence[GraspState], jobs: int) -> tuple[float, list[ND
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
         with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-            parts = list(pool.map(_solve_all, chunks))
+            parts = list(pool.map(_solve_chunk, chunks))
     wall = time.perf_counter() - t0
     alphas: list[NDArrayList] = [[] for _ in states]
-    for i, part in enumerate(parts):
+    for i, (part, _) in enumerate(parts):
         alphas[i::jobs] = part
-    return wall, alphas
+    return wall, [cpu for _, cpu in parts], alphas
 
 
 def bench_batch(
@@ -139,19 +149,30 @@ def bench_batch(
     instrumented = time.perf_counter() - t0
     per_jobs: dict[str, Any] = {}
     for j in jobs:
-        runs = []
+        runs, cpu = [], []  # cpu: per run, the CPU time of each process that solved
         for _ in range(max(repeats, 1)):
             if j == 1:
-                t0 = time.perf_counter()
+                t0, c0 = time.perf_counter(), time.process_time()
                 alphas = _solve_all(states)
                 runs.append(time.perf_counter() - t0)
+                cpu.append([time.process_time() - c0])
             else:
-                wall, alphas = _pool_batch(states, j)
+                wall, worker_cpu, alphas = _pool_batch(states, j)
                 runs.append(wall)
+                cpu.append(worker_cpu)
             if alphas != reference:
                 raise RuntimeError(f"the batch on {j} process(es) gave different alphas")
         st = stats(runs)
-        per_jobs[str(j)] = {"runs_s": runs, **st, "grasps_per_s": num_states / st["median_s"]}
+        # The share of a core each solving process had over the run: below 1 on a machine
+        # that other jobs load, whatever mjtvm does.
+        share = [sum(c) / (len(c) * w) for c, w in zip(cpu, runs, strict=True)]
+        per_jobs[str(j)] = {
+            "runs_s": runs,
+            **st,
+            "grasps_per_s": num_states / st["median_s"],
+            "cpu_s": [sum(c) for c in cpu],
+            "core_share": share,
+        }
     out: dict[str, Any] = {
         "states": num_states,
         "joints": states[0].num_joints,

@@ -97,8 +97,11 @@ def _dataset_notes(report: dict[str, Any]) -> list[str]:
             f"Batch on {ds['jobs']} processes x{six['speedup'][str(ds['jobs'])]:.2f} < "
             f"x{ds['targets']['batch_speedup_2']} (runs "
             + ", ".join(f"{x:.2f}" for x in two["runs_s"])
-            + " s, pool start-up included): the serial run uses one core (its CPU time equals its wall "
-            "time), so on a 2-core machine the rest is the other jobs' load; see the machine line."
+            + " s, pool start-up included); each process's share of a core: serial "
+            + ", ".join(f"{x:.2f}" for x in six["per_jobs"]["1"]["core_share"])
+            + f", {ds['jobs']} processes "
+            + ", ".join(f"{x:.2f}" for x in two["core_share"])
+            + " (below 1: the machine's other jobs took the rest)."
         )
     if not met["solve_process"]:
         c = ds["cli"]
