@@ -108,8 +108,8 @@ def test_table_and_notes(report: dict[str, Any]) -> None:
         "a note",
         "machine:",
         "ratios (time)",
-        "Batch P2, 4 x 22j/5c, six wrenches (36 LPs)",
-        "six wrenches, 2 proc incl. pool start",
+        "Batch P2, 22j/5c, 36 LPs:",
+        "on 2 proc, pool start incl.:",
         "mjtvm solve STATE.json, as a process",
         'python -c "import mjtvm"',
     ):
