@@ -25,6 +25,10 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
   with the tracemalloc peak and the process's ``ru_maxrss``;
 * **hands mjtvm does not generate** (:mod:`mjtvm.bench.hands`): each test hand's grasp file
   loaded, its state, Problem 2 and its lift;
+* **dataset scale** (:mod:`mjtvm.bench.dataset`): batches of 200 synthetic 22-joint,
+  five-contact states with a six-direction RVDS, Problem 2 with one REFS vertex (6 LPs) and
+  with six (36 LPs) as grasps/s on one process, the 36-LP batch on 2 processes, and
+  ``mjtvm solve STATE.json`` and ``import mjtvm`` as processes (``--quick``: one repeat);
 * **Problem 1 at scale** (:func:`~mjtvm.bench.problem1.bench_p1_scale`, not with ``--quick``):
   Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
   the 16-finger hand, each in a fresh process with its peak resident memory.
@@ -183,6 +187,7 @@ def run_suite(
     lift: bool = True,
     sweeps: bool = True,
     hands: Sequence[str] = HANDS,
+    dataset: bool = True,
     scale: bool = True,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
@@ -245,6 +250,11 @@ def run_suite(
     if hands:
         say(f"hands: {', '.join(hands)}")
         report["hands"] = bench_hands(hands, repeats=max(1, repeats // 10))
+    if dataset:
+        from .dataset import bench_dataset
+
+        say("dataset scale: batches of 200 states, mjtvm solve as a process")
+        report["dataset"] = bench_dataset(repeats=1 if quick else 3, cli_repeats=3 if quick else 7)
     report["targets"] = _targets(report)
     report["total_wall_s"] = time.perf_counter() - t_start
     return report
@@ -266,4 +276,6 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
         out["sweep_speedup_2"] = report["sweeps"]["speedup"]["2"] >= TARGET_SWEEP_SPEEDUP
     if "scaling" in report:
         out["scaling_p2_at_most_linear"] = report["scaling"]["p2_at_most_linear"]
+    if "dataset" in report:
+        out.update({f"dataset_{k}": v for k, v in report["dataset"]["met"].items()})
     return out

@@ -20,6 +20,7 @@ from ..core.assembly import grasp_map_transpose
 from ..core.contacts import Contact, force_generators
 from ..core.operation_range import OperationRange, default_operation_range
 from ..core.state import GraspState
+from ..errors import ParamError
 
 __all__ = ["PAPER_RVDS", "random_state"]
 
@@ -34,14 +35,15 @@ def _random_contacts(
     p_o: NDArray[np.float64],
     radius: float,
     m: int,
-    fingers: int,
-    joints_per_finger: int,
+    offsets: Sequence[int],
     contact_types: Sequence[str],
     mu: float,
 ) -> list[Contact]:
     """Contacts at random points of the sphere, normals into the object; contact i on
-    finger ``i % fingers`` with a random Jacobian in that finger's columns only, D
-    contacts on the fixed base (below, zero Jacobian), S contacts with a random slide."""
+    finger ``i % fingers`` with a random Jacobian in that finger's columns only (finger f's
+    joints are columns ``offsets[f]:offsets[f + 1]``), D contacts on the fixed base (below,
+    zero Jacobian), S contacts with a random slide."""
+    fingers = len(offsets) - 1
     d = len(p_o)
     contacts = []
     for i, ctype in enumerate(contact_types):
@@ -53,8 +55,8 @@ def _random_contacts(
         jac = np.zeros((d, m))
         if ctype != "D":
             finger = i % fingers
-            cols = slice(finger * joints_per_finger, (finger + 1) * joints_per_finger)
-            jac[:, cols] = 0.1 * rng.normal(size=(d, joints_per_finger))
+            cols = slice(offsets[finger], offsets[finger + 1])
+            jac[:, cols] = 0.1 * rng.normal(size=(d, cols.stop - cols.start))
         slide = None
         if ctype == "S":
             slide = rng.normal(size=d)
@@ -97,7 +99,7 @@ def random_state(
     *,
     space: int = 3,
     fingers: int = 4,
-    joints_per_finger: int = 4,
+    joints_per_finger: int | Sequence[int] = 4,
     contact_types: Sequence[str] = ("F", "L", "F", "L", "D"),
     num_refs: int = 1,
     num_rvds: int = 4,
@@ -107,6 +109,7 @@ def random_state(
     operation_range: OperationRange | None = None,
     friction_edges: int = 16,
     radius: float = 0.1,
+    rvds: NDArray[np.float64] | None = None,
 ) -> GraspState:
     r"""A random grasp state, feasible by construction (see the module docstring).
 
@@ -117,13 +120,17 @@ def random_state(
     space
         2 or 3.
     fingers, joints_per_finger
-        Hand size: M = fingers x joints_per_finger.
+        Hand size: M = fingers x joints_per_finger, or ``sum(joints_per_finger)`` when it is
+        one count per finger (``len(joints_per_finger) == fingers``).
     contact_types
         One type per contact; contact i lies on finger ``i % fingers``, except D
         contacts, which are on the fixed base (zero Jacobian).
     num_refs, num_rvds
         Number of REFS and RVDS vertices. The RVDS is the paper's (eq. 37) when
         ``space == 3`` and ``num_rvds == 4``, random directions otherwise.
+    rvds
+        ``(L, D)`` RVDS vertices given explicitly (``num_rvds`` is then ignored); drawn after
+        the contacts and REFS, so the rest of the state is the same as without it.
     mu
         Friction coefficient of every contact.
     load
@@ -134,22 +141,32 @@ def random_state(
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     d = space
     big_d = 3 if d == 2 else 6
-    m = fingers * joints_per_finger
+    per_finger = (
+        [joints_per_finger] * fingers if isinstance(joints_per_finger, int) else list(joints_per_finger)
+    )
+    if len(per_finger) != fingers:
+        raise ParamError("joints_per_finger", f"expected {fingers} counts, got {len(per_finger)}", per_finger)
+    offsets = np.concatenate([[0], np.cumsum(per_finger)]).astype(int).tolist()
+    m = offsets[-1]
+    finger_of = np.repeat(np.arange(fingers), per_finger)
+    index_in = np.arange(m) - np.asarray(offsets[:-1])[finger_of]
     op = operation_range or default_operation_range()
     p_o = np.zeros(d)
     p_o[-1] = radius
-    contacts = _random_contacts(rng, p_o, radius, m, fingers, joints_per_finger, contact_types, mu)
+    contacts = _random_contacts(rng, p_o, radius, m, offsets, contact_types, mu)
     g_f = gravity_scale * rng.uniform(-1, 1, size=m)
     budget = load * op.max_torque - np.abs(g_f)
     refs = _balanced_refs(rng, contacts, p_o, budget, num_refs, friction_edges)
-    if d == 3 and num_rvds == 4:
+    if rvds is not None:
+        rvds = np.array(rvds, dtype=float)
+    elif d == 3 and num_rvds == 4:
         rvds = PAPER_RVDS.copy()
     else:
         rvds = rng.normal(size=(num_rvds, big_d))
     return GraspState(
         space=d,
         object_position=p_o,
-        joint_names=tuple(f"f{j // joints_per_finger + 1}_j{j % joints_per_finger}" for j in range(m)),
+        joint_names=tuple(f"f{finger_of[j] + 1}_j{index_in[j]}" for j in range(m)),
         operation_ranges=(op,) * m,
         gravity_torque=g_f,
         contacts=tuple(contacts),

@@ -27,11 +27,12 @@ from .values import (
 __all__ = ["add_arguments", "add_bench"]
 
 
-_HELP = "the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling"
+_HELP = "the benchmark run: paper cases vs cvxpy/cdd, the lift, the sweeps on 1 and 2 processes, scaling, datasets"
 _DESCRIPTION = (
     "Time the paper's cases (Problem 1 and 2) against the cvxpy and cdd baselines, the full lift, "
-    "the Fig. 9 sweeps on 1 and 2 processes and synthetic hands of 2-16 fingers; write NAME.json "
-    "and NAME.md to --out."
+    "the Fig. 9 sweeps on 1 and 2 processes, synthetic hands of 2-16 fingers and the dataset scale "
+    "(grasps/s of batches of 22-joint states, mjtvm solve as a process); write NAME.json and NAME.md "
+    "to --out."
 )
 
 
@@ -82,7 +83,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _steps(quick: bool) -> int:
     """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
-    return (3 if quick else 4) + 3  # the cases; the lift, the sweeps, the scaling
+    return (3 if quick else 4) + 4  # the cases; the lift, the sweeps, the scaling, the dataset scale
 
 
 def _read_notes(path: Path | None) -> list[str]:

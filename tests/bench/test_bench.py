@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from mjtvm.bench import dataset as bench_dataset
 from mjtvm.bench import report as bench_report
 from mjtvm.bench import suite as bench_suite
 from mjtvm.cli import build_parser
@@ -48,8 +49,10 @@ def report() -> dict[str, Any]:
         sweeps=False,
         scaling_fingers=(2, 4),
         hands=("gripper3-box",),
+        dataset=False,
         progress=False,
     )
+    doc["dataset"] = bench_dataset.bench_dataset(num_states=4, repeats=1, cli_repeats=1)
     doc["lift"] = bench_suite.bench_lift(repeats=1, num_states=3)
     doc["sweeps"] = bench_suite.bench_sweeps(jobs=(1, 2), repeats=1, num_states=2)
     doc["targets"] = bench_suite._targets(doc)
@@ -73,6 +76,20 @@ def test_report_structure_and_positive_timings(report: dict[str, Any]) -> None:
     assert (hand["joints"], hand["contacts"], hand["rvds"]) == (9, 7, 5)  # 4 table contacts, 3 fingers
     assert set(doc["targets"]) >= {"case1_p1", "case1_p2", "case2_p2", "lift", "sweep_speedup_2"}
     assert {"cpu", "python", "packages"} <= set(doc["machine"])
+    ds = doc["dataset"]
+    for key, refs in (("batch_weight", 1), ("batch_six_wrenches", 6)):
+        b = ds[key]
+        assert (b["joints"], b["contacts"], b["refs"], b["rvds"]) == (22, 5, refs, 6)
+        assert (
+            b["lps_per_grasp"] == refs * 6 and b["feasible"] == b["states"] == 4
+        )  # feasible by construction
+        assert 0 < b["highs_run_s"] < b["instrumented_s"]
+    assert (
+        set(ds["batch_six_wrenches"]["per_jobs"]) == {"1", "2"}
+        and ds["batch_six_wrenches"]["speedup"]["2"] > 0
+    )
+    assert set(ds["met"]) == set(ds["targets"])
+    assert {f"dataset_{k}" for k in ds["met"]} <= set(doc["targets"])
     times = _timings(doc)
     assert len(times) > 30
     bad = [(k, v) for k, v in times if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0)]
@@ -91,6 +108,10 @@ def test_table_and_notes(report: dict[str, Any]) -> None:
         "a note",
         "machine:",
         "ratios (time)",
+        "Batch P2, 22j/5c, 36 LPs:",
+        "on 2 proc, pool start incl.:",
+        "mjtvm solve STATE.json, as a process",
+        'python -c "import mjtvm"',
     ):
         assert text in table
     assert all(isinstance(n, str) for n in bench_report.auto_notes(report))
@@ -134,3 +155,26 @@ def test_case2_problem2_has_its_own_target():
     targets = bench_suite._targets({"cases": {"case1_p2": row, "case2_p2": row}})
     assert targets == {"case1_p2": True, "case2_p2": False}
     assert bench_suite.TARGETS_S["case2_p2_state"] == 1.5e-3
+
+
+def test_random_state_per_finger_joints() -> None:
+    """Per-finger joint counts: each contact's Jacobian lives in its finger's columns only, and
+    equal counts give the state of the single count (same draws, same names)."""
+    from mjtvm.bench.synthetic import random_state
+    from mjtvm.errors import ParamError
+
+    state = bench_dataset.dataset_state(3, num_refs=2)
+    assert state.num_joints == 22 and len(state.contacts) == 5
+    offsets = [0, 4, 8, 12, 17, 22]
+    for f, c in enumerate(state.contacts):
+        outside = np.delete(c.jacobian, np.arange(offsets[f], offsets[f + 1]), axis=1)
+        assert np.all(outside == 0) and np.any(c.jacobian != 0)
+    assert state.joint_names[12:18] == ("f4_j0", "f4_j1", "f4_j2", "f4_j3", "f4_j4", "f5_j0")
+    np.testing.assert_array_equal(state.rvds, bench_dataset.SIX_RVDS)
+    one, per = random_state(5, joints_per_finger=3), random_state(5, joints_per_finger=(3, 3, 3, 3))
+    assert one.joint_names == per.joint_names
+    np.testing.assert_array_equal(one.refs, per.refs)
+    for a, b in zip(one.contacts, per.contacts, strict=True):
+        np.testing.assert_array_equal(a.jacobian, b.jacobian)
+    with pytest.raises(ParamError, match="joints_per_finger: expected 4 counts, got 3"):
+        random_state(0, joints_per_finger=(3, 3, 3))

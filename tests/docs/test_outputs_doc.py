@@ -109,6 +109,9 @@ def test_every_table_is_parsed() -> None:
         "bench.json:scaling",
         "bench.json:scaling.per_fingers",
         "bench.json:hands",
+        "bench.json:dataset",
+        "bench.json:dataset.batch",
+        "bench.json:dataset.cli",
         "show",  # tested in tests/cli/test_show.py
         "show-contacts",
     }
@@ -275,7 +278,7 @@ def test_gears_csv(lift2: Any) -> None:
 # ------------------------------------------------------------------ mjtvm bench
 def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     """The suite with each section on its smallest input (the report's structure is the same)."""
-    from mjtvm.bench import cases, hands, scaling, suite
+    from mjtvm.bench import cases, dataset, hands, scaling, suite
     from mjtvm.core.state_file import load_state
     from mjtvm.data import __file__ as data_init
 
@@ -300,6 +303,10 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(
         suite, "bench_hands", lambda h, **_: hands.bench_hands(("gripper3-box",), repeats=1, lift_repeats=1)
     )
+    real_dataset = dataset.bench_dataset
+    monkeypatch.setattr(
+        dataset, "bench_dataset", lambda **_: real_dataset(num_states=4, repeats=1, cli_repeats=1)
+    )
     report = suite.run_suite(scale=False, progress=False)
     report["notes"] = []  # added by the command (mjtvm.cli.bench) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
@@ -313,6 +320,10 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     assert_documented("bench.json:scaling", report["scaling"])
     for entry in report["scaling"]["per_fingers"].values():
         assert_documented("bench.json:scaling.per_fingers", entry)
+    assert_documented("bench.json:dataset", report["dataset"])
+    for key in ("batch_weight", "batch_six_wrenches"):
+        assert_documented("bench.json:dataset.batch", report["dataset"][key])
+    assert_documented("bench.json:dataset.cli", report["dataset"]["cli"])
     for entry in report["hands"].values():
         assert_documented("bench.json:hands", entry)
         assert_documented("bench.json:stats", entry["load"])
