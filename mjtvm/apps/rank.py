@@ -30,7 +30,7 @@ from ..errors import ModelError, ParamError, SolverError, StateError
 from ..sim.grasp.batch import BatchModels
 from ..sim.grasp.dataset import DatasetGrasp
 from ..sim.grasp.report import kept_contacts
-from .sweep import CONNECT_TIMEOUT_S, _check_scheduler, _forks, _init_worker, _stop
+from .sweep import _forks, _init_worker, _stop, dask_client
 
 __all__ = ["FAILURES", "batch_models", "rank_row", "rank_rows"]
 
@@ -263,24 +263,9 @@ def _run_dask(
 ) -> None:
     """The tasks on a Dask cluster (the grasp file and the dataset's object files must be
     readable by the workers at the same paths)."""
-    try:
-        from distributed import Client, as_completed
-    except ImportError as e:  # pragma: no cover - depends on the optional extra
-        raise ParamError("cluster", 'Dask is not installed: pip install "mjtvm[cluster]"') from e
-    if isinstance(cluster, Client):
-        client = cluster
-    else:
-        _check_scheduler(cluster, CONNECT_TIMEOUT_S)
-        try:
-            client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
-        except (OSError, TimeoutError, ValueError) as e:
-            raise ParamError(
-                "cluster", f"cannot reach a Dask scheduler at {cluster} within {CONNECT_TIMEOUT_S:g} s ({e})"
-            ) from e
-    try:
+    with dask_client(cluster) as client:
+        from distributed import as_completed
+
         futures = client.map(_solve_chunk, [grasp] * len(tasks), tasks, pure=False)
         for fut in as_completed(futures):
             finished(fut.result())
-    finally:
-        if client is not cluster:
-            client.close()

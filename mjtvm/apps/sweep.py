@@ -32,8 +32,9 @@ import signal
 import sys
 import time
 import warnings
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from typing import Any
@@ -417,28 +418,43 @@ def _check_scheduler(address: str, timeout: float) -> None:
         ) from e
 
 
-def _run_dask(
-    tasks: list[tuple[_Key, list[int]]], cluster: Any, finished: Callable[[list[dict[str, Any]]], None]
-) -> None:
+@contextmanager
+def dask_client(cluster: Any) -> Iterator[Any]:
+    """A Dask client of ``cluster``: a ``distributed.Client`` as it is, or a scheduler address
+    checked (:func:`_check_scheduler`), connected, and closed on exit.
+
+    Raises
+    ------
+    ParamError
+        Dask is not installed, or no Dask scheduler answers at the address.
+    """
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError as e:  # pragma: no cover - depends on the optional extra
         raise ParamError("cluster", 'Dask is not installed: pip install "mjtvm[cluster]"') from e
     if isinstance(cluster, Client):
-        client = cluster
-    else:
-        _check_scheduler(cluster, CONNECT_TIMEOUT_S)
-        try:
-            client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
-        except (OSError, TimeoutError, ValueError) as e:
-            raise ParamError(
-                "cluster",
-                f"cannot reach a Dask scheduler at {cluster} within {CONNECT_TIMEOUT_S:g} s ({e})",
-            ) from e
+        yield cluster
+        return
+    _check_scheduler(cluster, CONNECT_TIMEOUT_S)
     try:
+        client = Client(cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
+    except (OSError, TimeoutError, ValueError) as e:
+        raise ParamError(
+            "cluster",
+            f"cannot reach a Dask scheduler at {cluster} within {CONNECT_TIMEOUT_S:g} s ({e})",
+        ) from e
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+def _run_dask(
+    tasks: list[tuple[_Key, list[int]]], cluster: Any, finished: Callable[[list[dict[str, Any]]], None]
+) -> None:
+    from distributed import as_completed
+
+    with dask_client(cluster) as client:
         futures = client.map(_solve_group, [k for k, _ in tasks], [s for _, s in tasks], pure=False)
         for fut in as_completed(futures):
             finished(fut.result())
-    finally:
-        if client is not cluster:
-            client.close()
