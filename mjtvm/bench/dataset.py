@@ -26,7 +26,7 @@ command. Measured here:
   scipy.sparse, highspy, jsonschema``, the modules ``solve`` needs). The paper's 0.2 s per state (MATLAB, one
   Problem 2 state) stands beside them.
 
-The targets (:data:`TARGETS`) come from issue 24; a miss is reported, never hidden.
+The targets (:data:`TARGETS`) are the dataset-scale goals; a miss is reported, never hidden.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 r"""How a MuJoCo model drives and constrains a grasp state's joints: actuator moments,
-equality-constraint rows, joint damping (issue 23, the extended eq. 19).
+equality-constraint rows, joint damping (the extended eq. 19).
 
 At a configuration after ``mj_forward`` MuJoCo holds everything the extended torque balance
 needs, over the state's joints (their dofs, in the state's order, ``M`` of them):
