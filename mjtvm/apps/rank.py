@@ -14,11 +14,12 @@ dataset's order whichever way ran them. The files of ``mjtvm rank`` are
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
@@ -68,6 +69,9 @@ def _classify(error: Exception) -> str:
     return "grasp" if isinstance(error, ModelError) else "state"
 
 
+#: Grasps per task of a process pool, at most: what an interruption can lose per worker.
+TASK_GRASPS = 20
+
 #: The classic measures a row carries (:class:`~mjtvm.measures.GraspMeasures`'s fields): all
 #: but the kinematic velocity polytope, whose support LPs cost 1-3.5 s a grasp on a 16-joint
 #: hand (``mjtvm.classic_measures(state)`` computes it).
@@ -75,6 +79,7 @@ CLASSIC_COLUMNS = (
     "force_closure",
     "epsilon_l1",
     "epsilon_linf",
+    "epsilon_linf_gap",
     "grasp_sigma_min",
     "manipulability",
     "torque_scale",
@@ -138,7 +143,6 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         state = grasp.state()
         row["contacts"] = len(state.contacts)
         result = tvmmp(state, witnesses=False, diagnose=True)
-        classic = _classic_columns(state)
     except (ModelError, StateError, SolverError) as e:
         row["failure"] = _classify(e)
         row["reason"] = " ".join(str(e).split())
@@ -153,7 +157,11 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         )
         chosen = first or result.diagnosis[0]
         row["reason"] = f"pair {list(chosen.pair)}: {chosen.cause}: {' '.join(chosen.message.split())}"
-    row.update(classic)
+    try:
+        row.update(_classic_columns(state))
+    except Exception as e:  # Qhull, a solver: the TVMMP stands, the measures are flagged as missing
+        why = f"classic measures not computed: {type(e).__name__}: {' '.join(str(e).split())[:200]}"
+        row["reason"] = why if row["reason"] is None else f"{row['reason']}; {why}"
     return row
 
 
@@ -227,7 +235,8 @@ def rank_rows(
             for e in todo:
                 finished(_solve_chunk(grasp, [e]))
         else:
-            _run_pool(grasp, _chunks(todo, 8 * jobs), jobs, finished)
+            # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
+            _run_pool(grasp, _chunks(todo, max(8 * jobs, math.ceil(len(todo) / TASK_GRASPS))), jobs, finished)
     finally:
         bar.close()
     return [table[e.id] for e in items]
@@ -247,7 +256,7 @@ def _run_pool(
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
             futures = [pool.submit(_solve_chunk, grasp, task) for task in tasks]
-        for f in futures:
+        for f in as_completed(futures):
             finished(f.result())
     except BaseException:
         _stop(pool)

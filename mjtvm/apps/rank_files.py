@@ -75,7 +75,7 @@ class RankFiles:
     quiet
         No progress bar.
     plots
-        Write the two PNG figures.
+        Write the three PNG figures.
     """
 
     grasp: str
@@ -126,7 +126,7 @@ def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
     return entries
 
 
-def inputs_digest(grasp: str, datasets: Sequence[str]) -> str:
+def inputs_digest(grasp: str, datasets: Sequence[str], entries: Sequence[DatasetGrasp] = ()) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
     the dataset files and the object files they name. ``--resume`` keeps a row only if its
     ``inputs`` equals this."""
@@ -135,7 +135,9 @@ def inputs_digest(grasp: str, datasets: Sequence[str]) -> str:
     batch = batch_models(grasp)
     h = hashlib.sha256(f"mjtvm {__version__}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
+    objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
     files = _model_files(batch.model_path) + [Path(p) for p in datasets]
+    files += [f for p in objects for f in _model_files(Path(p))]
     for path in files:
         h.update(f"{path.name}\n".encode())
         h.update(hashlib.sha256(path.read_bytes()).digest())
@@ -306,7 +308,7 @@ def run_rank_files(
     from ..core.files import check_output_dir, output_lock, write_files
 
     entries = read_datasets(run.grasp, run.datasets)
-    digest = inputs_digest(run.grasp, run.datasets)
+    digest = inputs_digest(run.grasp, run.datasets, entries)
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
     checkpoint = outdir / f"{run.name}.partial.json"

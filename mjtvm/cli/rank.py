@@ -14,7 +14,7 @@ _HELP = "rank a dataset of grasp configurations by TVMMP: one row per grasp, CSV
 _DESCRIPTION = (
     "Evaluate every grasp of the datasets (.npz, .npy, per-grasp .npy dicts, .csv: docs/datasets.md) "
     "with the grasp file's model, contact rules, ranges, REFS and RVDS; write NAME.json, NAME.csv, "
-    "NAME.parquet (with pyarrow), NAME-objects.png and NAME-tvmmp.png, and a summary on stderr. "
+    "NAME.parquet (with pyarrow), NAME-objects.png, NAME-tvmmp.png and NAME-epsilon.png, and a summary on stderr. "
     "A grasp that fails is a row with its reason."
 )
 

@@ -110,7 +110,7 @@ def report_document(
     return {
         "grasp": grasp.name,
         "contact_tolerance": grasp.contact_tolerance,
-        "max_penetration": float(grasp.document.get("max_penetration", 1e-3)),
+        "max_penetration": float(grasp.document["max_penetration"]),  # the loader's default filled in
         "within": within,
         "contacts": [_row(r) for r in rows],
         "warnings": contact_warnings(grasp),

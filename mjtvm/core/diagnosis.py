@@ -231,12 +231,14 @@ def _zero_alpha(
         )
     joints = _binding_joints(state, lambda s: _solve(s, w, r, box, solver)[1] > 0.0)
     if not joints:
+        why = (
+            "an alpha at the solver's tolerance"
+            if joints is not None
+            else "enlarging every operation range does not lift it: the statics of the passive joints, "
+            "the constraint forces or the damping"
+        )
         return Diagnosis(
-            (k, l),
-            "unknown",
-            (),
-            (),
-            "no contact locks the motion and no operation range binds (an alpha at the solver's tolerance)",
+            (k, l), "unknown", (), (), f"no contact locks the motion and no operation range binds ({why})"
         )
     names = tuple(state.actuator_names[j] for j in joints)
     return Diagnosis(
@@ -263,8 +265,9 @@ def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnos
             "cones, eq. 20-24), whatever the joint torques",
         )
     _, _, tau = _solve(_with_relaxed(state, set(joints)), w, r, box, solver)
+    unit = "N m" if state.transmission is None else "N or N m"  # a tendon's force is in N
     needs = ", ".join(
-        f"{state.actuator_names[j]!r} (needs {abs(tau[j]):.4g} N m, has {state.operation_ranges[j].max_torque:.4g})"
+        f"{state.actuator_names[j]!r} (needs {abs(tau[j]):.4g} {unit}, has {state.operation_ranges[j].max_torque:.4g})"
         if tau is not None
         else repr(state.actuator_names[j])
         for j in joints

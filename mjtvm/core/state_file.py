@@ -209,7 +209,7 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
     except json.JSONDecodeError as e:
         raise StateError("", f"malformed JSON at line {e.lineno} column {e.colno}: {e.msg}") from e
     except RecursionError as e:
-        raise StateError("", "malformed state: JSON nested too deep (a state needs at most 5 levels)") from e
+        raise StateError("", "malformed state: JSON nested too deep (a state needs at most 6 levels)") from e
     except ValueError as e:  # an integer literal of more than 4300 digits (int_max_str_digits)
         raise StateError("", f"malformed JSON: {str(e).split(':')[0]}") from e
     check_json_tree(data)

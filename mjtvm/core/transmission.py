@@ -134,13 +134,15 @@ class Transmission:
 
 
 def joint_speed_limits(moment: NDArray[np.float64], speeds: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(M,)`` a speed scale per joint: the fastest ``s_a / |P_aj|`` of the actuators moving
-    joint j (``speeds`` their largest speeds); a passive joint (no actuator moves it) the
-    fastest of them all. A size for measuring and normalising, not a bound of the LP."""
+    """``(M,)`` a speed scale per joint: ``s_a / |P_aj|`` of the actuator with the largest
+    moment on joint j (``speeds`` the actuators' largest speeds), so that a round-off or a
+    minor moment arm on another actuator does not blow the scale up; a passive joint (no
+    actuator moves it) the fastest of the others. A size for measuring and normalising, not a
+    bound of the LP."""
     p = np.abs(moment)
-    with np.errstate(divide="ignore"):
-        ratio = np.where(p > 0.0, np.asarray(speeds, dtype=float)[:, None] / np.where(p > 0.0, p, 1.0), 0.0)
-    out = np.max(ratio, axis=0)
+    strongest = np.argmax(p, axis=0)
+    arm = p[strongest, np.arange(p.shape[1])]
+    out = np.where(arm > 0.0, np.asarray(speeds, dtype=float)[strongest] / np.where(arm > 0.0, arm, 1.0), 0.0)
     return np.where(out > 0.0, out, float(out.max(initial=0.0)))
 
 

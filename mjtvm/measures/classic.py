@@ -165,8 +165,8 @@ def classic_measures(
     """
     rho = checked_torque_scale(state, torque_scale)
     groups = primitive_wrenches(state, rho)
-    allw = np.hstack(groups)
     big_d = state.twist_dim
+    allw = np.hstack([np.zeros((big_d, 0)), *groups])  # no contact: no wrench
     margin = closure_margin(allw)
     closure = scaled_rank(allw) == big_d and margin > CLOSURE_TOL
     eps_inf, gap = epsilon_linf(groups) if closure else (0.0, 0.0)

@@ -150,7 +150,11 @@ def _hull(points: NDArray[np.float64]) -> ConvexHull:
     try:
         return ConvexHull(points)
     except QhullError:
+        pass
+    try:
         return ConvexHull(points, qhull_options="QJ")
+    except QhullError as e:
+        raise SolverError("qhull", " ".join(str(e).split())[:200] or "QhullError") from e
 
 
 def epsilon_l1(wrenches: NDArray[np.float64]) -> float:

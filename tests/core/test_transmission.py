@@ -229,3 +229,14 @@ def test_a_coupling_that_locks_the_motion_is_named() -> None:
     assert np.all(result.alpha == 0.0) and np.all(tvmmp(s).alpha > 0.0)
     assert [d.contacts for d in result.diagnosis] == [("f1_tip",)] * 4
     assert all("with the equality constraints 'f1_coupling'" in d.message for d in result.diagnosis)
+
+
+def test_round_off_in_the_moment_matrix_leaves_the_answers_certified() -> None:
+    """P = I + 1e-15 off the diagonal: the joint speed scale of the certificate comes from each
+    joint's strongest actuator, so the tiny arms do not inflate it (they made 3 of 4 alphas
+    uncertified when the scale was the fastest s_a / |P_aj|)."""
+    s = pinch()
+    p = np.eye(4) + 1e-15 * (1.0 - np.eye(4))
+    result = tvmmp(s.with_(transmission=Transmission(s.joint_names, p)))
+    assert np.all(result.certified) and not result.notes
+    np.testing.assert_allclose(result.alpha, _alphas(s), rtol=1e-12)

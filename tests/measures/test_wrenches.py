@@ -215,3 +215,14 @@ def test_a_nearly_degenerate_wrench_set_does_not_end_the_process() -> None:
     m = classic_measures(state, polytope=False)
     assert m.force_closure and m.epsilon_linf > m.epsilon_l1 > 0.0
     assert m.epsilon_linf_gap < 1e-12 * m.epsilon_linf + 1e-15
+
+
+def test_a_state_without_contacts_has_no_closure_and_no_crash() -> None:
+    from importlib import resources
+
+    from mjtvm import load_state
+    from mjtvm.measures import classic_measures
+
+    pinch = load_state(resources.files("mjtvm.data").joinpath("examples/pinch.json").read_text())
+    m = classic_measures(pinch.with_(contacts=()), polytope=False)
+    assert (m.force_closure, m.num_wrenches, m.epsilon_l1, m.grasp_rank) == (False, 0, 0.0, 0)

@@ -1,4 +1,4 @@
-"""The physics check on hands with a transmission (issue 23): a ``<dcmotor>`` per actuator on the
+"""The physics check on hands with a transmission: a ``<dcmotor>`` per actuator on the
 actuator's own transmission, the box motor, the central witness and the tracked speeds.
 
 Closed forms: MuJoCo applies ``moment^T force`` through a tendon (``qfrc_actuator``), the

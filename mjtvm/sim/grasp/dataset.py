@@ -22,6 +22,7 @@ index and the field.
 from __future__ import annotations
 
 import csv
+import pickle
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -259,9 +260,18 @@ def read_dataset(path: str | Path, *, nq: int, num_joints: int) -> list[DatasetG
             raise GraspError(
                 str(p), "", f"expected a .npz, .npy or .csv dataset, got {suffix or 'no suffix'!r}"
             )
-    except (OSError, ValueError, EOFError) as e:
-        if isinstance(e, GraspError):
-            raise
+    except GraspError:
+        raise
+    # A damaged pickle or zip, an over-long CSV field, a pickle naming a missing class:
+    except (
+        OSError,
+        ValueError,
+        EOFError,
+        pickle.UnpicklingError,
+        csv.Error,
+        AttributeError,
+        ImportError,
+    ) as e:
         raise GraspError(str(p), "", f"cannot read the dataset ({' '.join(str(e).split())[:200]})") from e
     if not rows:
         raise GraspError(str(p), "", "no grasps in the file")

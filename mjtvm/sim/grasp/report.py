@@ -98,25 +98,31 @@ def _max_penetration(grasp: Grasp) -> float:
     return float(grasp.document.get("max_penetration", 1e-3))
 
 
-def _selection_of(grasp: Grasp, label: str) -> int | None:
-    return next((i for i, (_, labels) in enumerate(grasp.selections) if label in labels), None)
+def _field_of(grasp: Grasp, label: str) -> str | None:
+    """The field that types the geom ``label``: ``contacts[i]``, or ``contact_rules[j]`` for a
+    geom a rule typed; None for an ignored or untyped geom."""
+    i = next((i for i, (_, labels) in enumerate(grasp.selections) if label in labels), None)
+    if i is not None:
+        return f"contacts[{i}]"
+    return next((m.field for m in grasp.rule_matches if m.type != "ignore" and label in m.labels), None)
 
 
 def check_penetration(grasp: Grasp) -> None:
-    """No selected contact of the state is deeper inside the object than ``max_penetration``.
+    """No contact of the state (selected, or typed by a rule) is deeper inside the object than
+    ``max_penetration``.
 
     Raises
     ------
     GraspError
-        ``contacts[i]``: naming the geom, the object's geom and the depth.
+        ``contacts[i]`` or ``contact_rules[j]``: naming the geom, the object's geom and the depth.
     """
     limit = _max_penetration(grasp)
     for c in kept_contacts(grasp):
-        i = _selection_of(grasp, c.geom)
-        if i is not None and -c.distance > limit:
+        field = _field_of(grasp, c.geom)
+        if field is not None and -c.distance > limit:
             raise GraspError(
                 grasp.file,
-                f"contacts[{i}]",
+                field,
                 f"geom {c.geom!r} is {-1e3 * c.distance:.3g} mm inside the object's geom "
                 f"{c.object_geom!r} > max_penetration {1e3 * limit:.3g} mm: move the finger out "
                 "(or raise max_penetration)",
@@ -130,10 +136,10 @@ def contact_warnings(grasp: Grasp) -> list[str]:
     out = []
     limit = _max_penetration(grasp)
     for c in kept_contacts(grasp):
-        i = _selection_of(grasp, c.geom)
-        if i is not None and -c.distance > REPORTED_PENETRATION:
+        field = _field_of(grasp, c.geom)
+        if field is not None and -c.distance > REPORTED_PENETRATION:
             out.append(
-                f"contacts[{i}]: geom {c.geom!r} is {-1e3 * c.distance:.3g} mm inside the object's geom "
+                f"{field}: geom {c.geom!r} is {-1e3 * c.distance:.3g} mm inside the object's geom "
                 f"{c.object_geom!r} (max_penetration {1e3 * limit:.3g} mm)"
             )
     return out + _ik_warnings(grasp) + _self_overlaps(grasp)

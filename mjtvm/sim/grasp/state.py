@@ -252,7 +252,19 @@ def _drive(
 ) -> tuple[Transmission | None, tuple[OperationRange, ...]]:
     """The state's transmission (``None`` for independent joints) and its operation ranges."""
     found = model_transmission(model, work, joint_ids)
-    if is_independent(model, found, joint_ids):
+    independent = is_independent(model, found, joint_ids)
+    keys = set(names) if independent else set(found.actuator_names)
+    for key in sorted(set(overrides) - keys):  # a range under a name this path never reads
+        raise ModelError(
+            f"operation_ranges[{key!r}]",
+            "names no "
+            + (
+                "joint of the state (each joint is driven by its own actuator here: key the ranges by joint)"
+                if independent
+                else "actuator driving the state's coupled joints (key the ranges by actuator)"
+            ),
+        )
+    if independent:
         return None, tuple(
             as_operation_range(overrides[n]) if n in overrides else _joint_range(model, j, n)
             for j, n in zip(joint_ids, names, strict=True)

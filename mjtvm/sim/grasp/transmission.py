@@ -165,7 +165,10 @@ def actuator_moments(
         An actuator that drives a state joint and also a joint outside ``dofs`` (its force
         would move a joint the state holds still): the message names both.
     """
-    dense = dense_moment(model, data)
+    # Round-off (a shared ancestor's ~1e-17 arm) is no moment: it must not pull joints in.
+    dense = np.array([without_round_off(row) for row in dense_moment(model, data)]).reshape(
+        model.nactuator, model.nv
+    )
     cols = np.asarray(dofs, dtype=int)
     ids = [a for a in range(model.nactuator) if np.any(dense[a, cols] != 0.0)]
     for a in ids:
@@ -206,7 +209,7 @@ def equality_rows(
         e = int(data.efc_id[r])
         k = seen.get(e, 0)
         seen[e] = k + 1
-        row = efc[r]
+        row = without_round_off(efc[r])  # a shared ancestor's ~1e-17 column is no coupling
         if not np.any(row[cols] != 0.0):
             continue
         label = _name(model, _OBJ.mjOBJ_EQUALITY, e, "equality")
@@ -284,8 +287,11 @@ def coupled_joints(model: mujoco.MjModel, data: mujoco.MjData, joint_ids: Sequen
     equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
     efc = dense_efc_jacobian(model, data)
     rows = [
-        *dense_moment(model, data),
-        *(efc[r] for r in range(len(efc)) if int(data.efc_type[r]) == equality),
+        without_round_off(row)
+        for row in (
+            *dense_moment(model, data),
+            *(efc[r] for r in range(len(efc)) if int(data.efc_type[r]) == equality),
+        )
     ]
     chosen = {int(j) for j in joint_ids}
     grown = True
@@ -339,6 +345,8 @@ def equality_residual(
     efc = dense_efc_jacobian(model, data)
     equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
     rows = [
-        r for r in range(int(data.nefc)) if int(data.efc_type[r]) == equality and np.any(efc[r, cols] != 0.0)
+        r
+        for r in range(int(data.nefc))
+        if int(data.efc_type[r]) == equality and np.any(without_round_off(efc[r])[cols] != 0.0)
     ]
     return np.array([float(data.efc_pos[r]) for r in rows]), efc[rows][:, cols].reshape(len(rows), len(cols))

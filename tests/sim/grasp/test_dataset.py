@@ -130,3 +130,21 @@ def test_object_scale_compiles_once_and_scales_size_and_mass() -> None:
     g1, g2 = m1.geom("ball"), m2.geom("ball")
     assert g2.size[0] == pytest.approx(1.2 * g1.size[0]) and g1.size[0] == pytest.approx(0.025)
     assert m2.body("ball").mass[0] == pytest.approx(0.08 * 1.2**3)  # the same density
+
+
+def test_a_damaged_file_is_one_line(tmp_path: Path) -> None:
+    """A truncated pickled per-grasp .npy and a CSV field beyond the csv module's limit: one
+    GraspError naming the file, not a traceback."""
+    from mjtvm.sim.grasp.checks import GraspError
+    from mjtvm.sim.grasp.dataset import read_dataset
+
+    whole = tmp_path / "whole.npy"
+    np.save(whole, {"grasp_qpos": np.zeros(10)}, allow_pickle=True)
+    cut = tmp_path / "cut.npy"
+    cut.write_bytes(whole.read_bytes()[:-20])
+    with pytest.raises(GraspError, match=r"cut\.npy: cannot read the dataset"):
+        read_dataset(cut, nq=10, num_joints=3)
+    wide = tmp_path / "wide.csv"
+    wide.write_text("grasp_qpos\n" + "1" * 200_000 + "\n", encoding="utf-8")
+    with pytest.raises(GraspError, match=r"wide\.csv: cannot read the dataset"):
+        read_dataset(wide, nq=10, num_joints=3)

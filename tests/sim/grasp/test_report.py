@@ -122,3 +122,18 @@ def test_hand_geoms_that_overlap_each_other_are_reported() -> None:
         "hand geoms 'ff_distal' and 'mf_middle' overlap by 0.267 mm: a contact of the hand with itself, which no LP sees",
     ]
     assert not [w for w in contact_warnings(load_grasp("case2")) if w.startswith("hand geoms")]
+
+
+def test_a_contact_typed_by_a_rule_is_checked_for_penetration_too() -> None:
+    """The palm typed D by a rule instead of a contacts entry: the same 1.5 mm refused, named
+    by the rule's field; within the limit, the penetration is reported under that field."""
+    doc = _sunk()
+    doc["contacts"] = doc["contacts"][1:]  # the palm's entry goes; a rule types it
+    doc["contact_rules"] = [{"geom": "palm", "type": "D"}]
+    with pytest.raises(
+        GraspError, match=r"^grasp: contact_rules\[0\]: geom 'palm' is 1\.5 mm inside the object's geom"
+    ):
+        load_grasp(doc).state()
+    doc["max_penetration"] = 2e-3
+    warnings = contact_warnings(load_grasp(doc))
+    assert any(w.startswith("contact_rules[0]: geom 'palm' is 1.5 mm inside") for w in warnings), warnings

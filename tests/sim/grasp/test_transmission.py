@@ -199,3 +199,28 @@ def test_fixed_tendon_moment_arms_and_weld_rows() -> None:
     assert t.constraint_names == ("w/x", "w/ry")
     np.testing.assert_allclose(t.constraint_residual, 0.0, atol=1e-15)
     assert not is_independent(model, t, [0, 1])
+
+
+def test_round_off_of_a_shared_ancestor_does_not_couple_it() -> None:
+    """A wrist hinge on the 2F-85's base: its columns of the linkage's connect rows are the
+    ~1e-17 cross products of its axis and a zero lever arm, round-off that once pulled the
+    whole linkage into a state of the wrist alone ("constrains state joints together with")."""
+    import tomllib
+    from pathlib import Path
+
+    import mujoco
+
+    from mjtvm.sim.grasp.transmission import model_transmission
+
+    root = Path(__file__).resolve().parents[3] / "models" / "robotiq_2f85"
+    spec = mujoco.MjSpec.from_file(str(root / "robotiq_2f85.xml"))
+    spec.body("base").add_joint(name="wrist", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0])
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    doc = tomllib.loads((root / "robotiq_2f85-sphere.toml").read_text(encoding="utf-8"))
+    for name, value in doc["configuration"]["qpos"].items():
+        data.qpos[model.jnt_qposadr[model.joint(name).id]] = value
+    data.qpos[model.jnt_qposadr[model.joint("wrist").id]] = 0.3
+    mujoco.mj_forward(model, data)
+    found = model_transmission(model, data, [model.joint("wrist").id])
+    assert found.constraint_names == ()
