@@ -187,7 +187,10 @@ def grasp_state(
         ``None``: the contacts MuJoCo reports.
     joint_damping
         With a transmission: the joints' ``dof_damping`` in the torque balance (``False``: none,
-        as a grasp file's ``joint_losses = "ignore"``).
+        as a grasp file's ``joint_losses = "ignore"``). Without one (each joint its own
+        actuator's) this function puts no damping anywhere: the operation ranges given are
+        used as they are, and a grasp file folds the model's damping and friction loss into
+        them beforehand (:func:`~mjtvm.sim.grasp.ranges.joint_ranges`, ``joint_losses``).
 
     Returns
     -------
