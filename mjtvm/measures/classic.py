@@ -76,6 +76,10 @@ class GraspMeasures:
         projection stopped at the memory budget.
     velocity_dimension
         Its dimension (-1 when empty or not computed).
+    velocity_status
+        ``"bounded"``, ``"unbounded"`` (the object moves with the hand at rest: volume
+        ``inf``), ``"incomplete"`` (the projection stopped at its memory budget: ``nan``) or
+        ``"skipped"`` (``polytope=False``): what a ``null`` volume in JSON means.
     """
 
     torque_scale: float
@@ -93,6 +97,7 @@ class GraspMeasures:
     twist_determined: bool
     velocity_volume: float
     velocity_dimension: int
+    velocity_status: str = "skipped"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.torque_scale) and self.torque_scale > 0.0):
@@ -113,6 +118,11 @@ class GraspMeasures:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ParamError(name, f"expected a finite number >= 0, got {value!r}")
+        if self.velocity_status not in ("bounded", "unbounded", "incomplete", "skipped"):
+            raise ParamError(
+                "velocity_status",
+                f"expected 'bounded', 'unbounded', 'incomplete' or 'skipped', got {self.velocity_status!r}",
+            )
         if not (math.isnan(self.velocity_volume) or self.velocity_volume >= 0.0):
             raise ParamError(
                 "velocity_volume", f"expected a number >= 0, inf or nan, got {self.velocity_volume!r}"
@@ -174,9 +184,10 @@ def classic_measures(
     sv = np.linalg.svd(g, compute_uv=False) if g.size else np.zeros(0)
     sigma_min = float(sv[big_d - 1]) if sv.size >= big_d else 0.0
     w, determined = manipulability(state, rho)
-    volume, dim = (float("nan"), -1)
+    volume, dim, status = (float("nan"), -1, "skipped")
     if polytope:
         volume, dim, _ = velocity_polytope(state, rho)
+        status = "unbounded" if math.isinf(volume) else "incomplete" if math.isnan(volume) else "bounded"
     return GraspMeasures(
         torque_scale=rho,
         torque_scale_source="bounding_radius" if torque_scale is None else "given",
@@ -193,4 +204,5 @@ def classic_measures(
         twist_determined=determined,
         velocity_volume=volume,
         velocity_dimension=dim,
+        velocity_status=status,
     )

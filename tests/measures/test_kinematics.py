@@ -230,3 +230,17 @@ def test_s_contacts_constrain_the_manipulability_by_their_normal_as_l_contacts()
         )
     )
     assert manipulability(sliding, RHO)[0] == pytest.approx(manipulability(base, RHO)[0], rel=1e-12)
+
+
+def test_the_velocity_status_tells_the_nulls_apart() -> None:
+    """The pinch's object moves with the hand at rest (an unbounded velocity polytope: inf,
+    null in JSON), a skipped polytope is nan (null too): the status says which."""
+    from importlib import resources
+
+    from mjtvm import load_state
+    from mjtvm.measures import classic_measures
+
+    pinch = load_state(resources.files("mjtvm.data").joinpath("examples/pinch.json").read_text())
+    full, skipped = classic_measures(pinch), classic_measures(pinch, polytope=False)
+    assert (full.velocity_status, full.to_dict()["velocity_volume"]) == ("unbounded", None)
+    assert (skipped.velocity_status, skipped.to_dict()["velocity_volume"]) == ("skipped", None)
