@@ -14,7 +14,6 @@ import csv
 import hashlib
 import io
 import json
-import time
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -23,10 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParamError, StateError
+from ..errors import ParamError
 from ..sim.grasp import GraspError
 from ..sim.grasp.batch import hand_joints
 from ..sim.grasp.dataset import DatasetGrasp, read_dataset
+from .checkpoint import RowCheckpoint
 from .rank import batch_models, rank_rows
 from .sweep_files import _model_files, _stderr
 
@@ -269,18 +269,6 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-        rows = doc["rows"] if checkpoint else doc
-        if checkpoint and doc.get("schema") != CHECKPOINT_SCHEMA:
-            raise ValueError(f"schema {doc.get('schema')!r}, expected {CHECKPOINT_SCHEMA!r}")
-        [str(r["id"]) for r in rows]
-    except (OSError, ValueError, TypeError, KeyError) as e:
-        raise StateError(str(path), f"cannot read the finished rows ({e}); run again without --resume") from e
-    return list(rows)
-
-
 def run_rank_files(
     run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
 ) -> list[Path]:
@@ -312,39 +300,17 @@ def run_rank_files(
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
     checkpoint = outdir / f"{run.name}.partial.json"
+    ck: RowCheckpoint[str] = RowCheckpoint(
+        checkpoint,
+        CHECKPOINT_SCHEMA,
+        key=lambda r: str(r["id"]),
+        digest=lambda _: digest,
+        every_s=CHECKPOINT_EVERY_S,
+        again="run again without --resume",
+    )
     with output_lock(outdir):
         wanted = {e.id for e in entries}
-        done: dict[str, dict[str, Any]] = {}
-        changed: set[str] = set()
-        if run.resume:
-            for path, is_checkpoint in ((out_json, False), (checkpoint, True)):
-                if path.exists():
-                    for r in _read_rows(path, checkpoint=is_checkpoint):
-                        if r["id"] not in wanted:
-                            continue
-                        if r.get("inputs") == digest:
-                            done[r["id"]] = r
-                        else:
-                            changed.add(r["id"])
-            changed -= done.keys()
-            if changed:
-                notice(f"resume: {len(changed)} rows recomputed: inputs changed")
-            if not run.quiet:
-                emit(f"resume: {len(done)} of {len(wanted)} rows already finished")
-        finished = dict(done)
-        last = time.monotonic()
-
-        def save() -> None:
-            doc = {"schema": CHECKPOINT_SCHEMA, "rows": list(finished.values())}
-            write_files({checkpoint: json.dumps(doc, indent=1) + "\n"})
-
-        def on_rows(rows: list[dict[str, Any]]) -> None:
-            nonlocal last
-            finished.update((r["id"], {**r, "inputs": digest}) for r in rows)
-            if time.monotonic() - last >= CHECKPOINT_EVERY_S:
-                save()
-                last = time.monotonic()
-
+        done = ck.resume(out_json, wanted, quiet=run.quiet, emit=emit, notice=notice) if run.resume else {}
         try:
             rows = rank_rows(
                 run.grasp,
@@ -353,13 +319,12 @@ def run_rank_files(
                 cluster=run.cluster,
                 progress=not run.quiet,
                 done=done,
-                on_rows=on_rows,
+                on_rows=ck.record,
             )
         except BaseException:
-            if len(finished) > len(done):
-                save()
+            ck.save_new()  # no finished work is lost to an interrupt or a failure
             raise
-        rows = [{**r, "inputs": digest} for r in rows]
+        rows = [ck.tagged(r) for r in rows]
         files: dict[Path, bytes | str] = {
             out_json: json.dumps(rows, indent=1) + "\n",
             out_csv: rows_csv(rows),

@@ -14,15 +14,15 @@ import json
 import os
 import re
 import sys
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import ParamError, StateError
+from ..errors import ParamError
+from .checkpoint import RowCheckpoint
 from .replay import grasp_defaults
-from .sweep import _base, _key, _lift, _RowKey, grid, run_sweep
+from .sweep import _base, _key, _lift, grid, run_sweep
 
 __all__ = ["SweepFiles", "run_sweep_files"]
 
@@ -97,18 +97,6 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     writer.writeheader()
     writer.writerows(flat)
     return buf.getvalue()
-
-
-def _read_rows(path: Path, *, checkpoint: bool) -> list[dict[str, Any]]:
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-        rows = doc["rows"] if checkpoint else doc
-        if checkpoint and doc.get("schema") != CHECKPOINT_SCHEMA:
-            raise ValueError(f"schema {doc.get('schema')!r}, expected {CHECKPOINT_SCHEMA!r}")
-        [_key(r) for r in rows]
-    except (OSError, ValueError, TypeError, KeyError) as e:
-        raise StateError(str(path), f"cannot read the finished rows ({e}); run again without resuming") from e
-    return list(rows)
 
 
 _BUILT_FROM: dict[tuple[str, str, int], str] = {}
@@ -220,9 +208,6 @@ def run_sweep_files(
         mu0, mg0 = defaults.pop()
         mus, mgs = (mu0,) if mus is None else mus, (mg0,) if mgs is None else mgs
 
-    def tagged(row: dict[str, Any]) -> dict[str, Any]:
-        return {**row, "inputs": digests[row["scenario"], row["hand"]]}
-
     with output_lock(outdir):
         points = grid(
             scenarios=run.scenarios,
@@ -235,47 +220,28 @@ def run_sweep_files(
             num_states=run.num_states,
         )
         wanted = {_key(p) for p in points}
-        done: dict[_RowKey, dict[str, Any]] = {}
-        changed: set[_RowKey] = set()
-        if run.resume:
-            for path, is_checkpoint in ((out_json, False), (checkpoint, True)):
-                if path.exists():
-                    for r in _read_rows(path, checkpoint=is_checkpoint):
-                        key = _key(r)
-                        if key not in wanted:
-                            continue
-                        if r.get("inputs") == digests[key[0], key[1]]:
-                            done[key] = r
-                        else:
-                            changed.add(key)
-            changed -= done.keys()  # e.g. stale in NAME.json, solved again in the checkpoint
-            if changed:
-                notice(f"resume: {len(changed)} rows recomputed: inputs changed")
-            if not run.quiet:
-                emit(f"resume: {len(done)} of {len(wanted)} rows already finished")
-        finished = dict(done)
-        last = time.monotonic()
-
-        def save() -> None:
-            doc = {"schema": CHECKPOINT_SCHEMA, "rows": list(finished.values())}
-            write_files({checkpoint: json.dumps(doc, indent=1) + "\n"})
-
-        def on_rows(rows: list[dict[str, Any]]) -> None:
-            nonlocal last
-            finished.update((_key(r), tagged(r)) for r in rows)
-            if time.monotonic() - last >= CHECKPOINT_EVERY_S:
-                save()
-                last = time.monotonic()
-
+        ck = RowCheckpoint(
+            checkpoint,
+            CHECKPOINT_SCHEMA,
+            key=_key,
+            digest=lambda r: digests[r["scenario"], r["hand"]],
+            every_s=CHECKPOINT_EVERY_S,
+            again="run again without resuming",
+        )
+        done = ck.resume(out_json, wanted, quiet=run.quiet, emit=emit, notice=notice) if run.resume else {}
         try:
             rows = run_sweep(
-                points, jobs=run.jobs, cluster=run.cluster, progress=not run.quiet, done=done, on_rows=on_rows
+                points,
+                jobs=run.jobs,
+                cluster=run.cluster,
+                progress=not run.quiet,
+                done=done,
+                on_rows=ck.record,
             )
         except BaseException:
-            if len(finished) > len(done):  # no finished work is lost to an interrupt or a failure
-                save()
+            ck.save_new()  # no finished work is lost to an interrupt or a failure
             raise
-        rows = [tagged(r) for r in rows]
+        rows = [ck.tagged(r) for r in rows]
         doubtful = sum(r.get("certified") is False for r in rows)
         if doubtful:
             notice(
