@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rerun as rr
@@ -77,25 +78,18 @@ def _log_shapes(rec: rr.RecordingStream, root: str, shapes: Sequence[GeomShape],
     for kind, group in by_kind.items():
         path = f"{root}/{kind}"
         colors, labels = [_rgb(s.rgba) for s in group], [s.label for s in group]
-        if kind in ("box", "plane"):
-            half = [s.size if kind == "box" else [s.size[0] or 1.0, s.size[1] or 1.0, 5e-4] for s in group]
+        if kind in ("box", "plane", "sphere", "ellipsoid"):  # a half-size box or ellipsoid
+            half: list[Any]
+            if kind == "box" or kind == "ellipsoid":
+                half = [s.size for s in group]
+            elif kind == "plane":
+                half = [[s.size[0] or 1.0, s.size[1] or 1.0, 5e-4] for s in group]
+            else:
+                half = [np.repeat(s.size[:1], 3) for s in group]
+            archetype = rr.Boxes3D if kind in ("box", "plane") else rr.Ellipsoids3D
             rec.log(
                 path,
-                rr.Boxes3D(
-                    half_sizes=half,
-                    centers=[s.position for s in group],
-                    quaternions=[_xyzw(s.quaternion) for s in group],
-                    fill_mode=fill,
-                    colors=colors,
-                    labels=labels,
-                ),
-                static=True,
-            )
-        elif kind in ("sphere", "ellipsoid"):
-            half = [np.repeat(s.size[:1], 3) if kind == "sphere" else s.size for s in group]
-            rec.log(
-                path,
-                rr.Ellipsoids3D(
+                archetype(
                     half_sizes=half,
                     centers=[s.position for s in group],
                     quaternions=[_xyzw(s.quaternion) for s in group],
