@@ -174,6 +174,11 @@ class OperationRange:
 
     # ------------------------------------------------------------ constructors
     @classmethod
+    def box(cls, torque: float, speed: float) -> OperationRange:
+        """The box ``|tau| <= torque, |qd| <= speed`` (N m, rad/s; or an actuator's units)."""
+        return cls(np.array([[0.0, 0.0], [torque, 0.0], [torque, speed], [0.0, speed]]))
+
+    @classmethod
     def from_datasheet(
         cls,
         *,

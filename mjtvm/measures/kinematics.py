@@ -109,12 +109,7 @@ def speed_only_state(state: GraspState) -> GraspState:
     that Problem 1's polytope is the set of twists of joint speeds within those speeds
     (:func:`velocity_polytope`). The contact forces may then all be 0, which leaves every
     torque at 0, where the (down-closed) ranges allow their largest speed."""
-    boxes = tuple(
-        OperationRange(
-            np.array([[0.0, 0.0], [r.max_torque, 0.0], [r.max_torque, r.max_speed], [0.0, r.max_speed]])
-        )
-        for r in state.operation_ranges
-    )
+    boxes = tuple(OperationRange.box(r.max_torque, r.max_speed) for r in state.operation_ranges)
     t = state.transmission
     if t is not None and t.joint_damping is not None:
         t = Transmission(t.actuator_names, t.moment, t.constraint_names, t.constraint_jacobian, None)

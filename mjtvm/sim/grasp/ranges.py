@@ -164,18 +164,23 @@ def _from_datasheet(
     return rng, motor
 
 
-def _box(model: mujoco.MjModel, a: int, j: int, speed: float, fail: Any) -> OperationRange:
-    """gear x forcerange (capped by the joint's actuatorfrcrange) by the speed limit: a box."""
+def _force_limit(model: mujoco.MjModel, a: int, fail: Any) -> float:
+    """The largest force (or torque) of actuator ``a`` both ways: its ``forcerange``."""
     if not model.actuator_forcelimited[a]:
         raise fail("the actuator has no forcerange: give a datasheet or a polygon instead")
     lo, hi = model.actuator_forcerange[a]
-    torque = abs(float(model.actuator_gear[a, 0])) * min(-float(lo), float(hi))
+    return min(-float(lo), float(hi))
+
+
+def _box(model: mujoco.MjModel, a: int, j: int, speed: float, fail: Any) -> OperationRange:
+    """gear x forcerange (capped by the joint's actuatorfrcrange) by the speed limit: a box."""
+    torque = abs(float(model.actuator_gear[a, 0])) * _force_limit(model, a, fail)
     if model.jnt_actfrclimited[j]:
         flo, fhi = model.jnt_actfrcrange[j]
         torque = min(torque, -float(flo), float(fhi))
     if not torque > 0:
         raise fail("the actuator's force range gives no positive torque")
-    return OperationRange(np.array([[0.0, 0.0], [torque, 0.0], [torque, speed], [0.0, speed]]))
+    return OperationRange.box(torque, speed)
 
 
 def joint_ranges(
@@ -259,10 +264,7 @@ def joint_ranges(
 
 def _actuator_box(model: mujoco.MjModel, a: int, speed: float, fail: Any) -> OperationRange:
     """|u| <= forcerange (capped by a driven joint's actuatorfrcrange / gear), |s| <= speed."""
-    if not model.actuator_forcelimited[a]:
-        raise fail("the actuator has no forcerange: give a datasheet or a polygon instead")
-    lo, hi = model.actuator_forcerange[a]
-    force = min(-float(lo), float(hi))
+    force = _force_limit(model, a, fail)
     gear = abs(float(model.actuator_gear[a, 0]))
     if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT) and gear > 0:
         j = int(model.actuator_trnid[a, 0])
@@ -271,7 +273,7 @@ def _actuator_box(model: mujoco.MjModel, a: int, speed: float, fail: Any) -> Ope
             force = min(force, -float(flo) / gear, float(fhi) / gear)
     if not force > 0:
         raise fail("the actuator's force range gives no positive force")
-    return OperationRange(np.array([[0.0, 0.0], [force, 0.0], [force, speed], [0.0, speed]]))
+    return OperationRange.box(force, speed)
 
 
 def _output_to_actuator(rng: OperationRange, gear: float) -> OperationRange:
