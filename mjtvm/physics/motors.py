@@ -47,9 +47,11 @@ __all__ = [
     "box_motor",
     "dcmotor_of_actuator",
     "dcmotor_of_joint",
+    "grasp_source",
     "joint_actuators",
     "motor_of_actuator",
     "require_motors",
+    "same_model",
 ]
 
 CTRLSPEC = int(mujoco.mjtCtrlInput.mjINPUT_VEL) | int(mujoco.mjtCtrlInput.mjINPUT_FF)
@@ -216,17 +218,7 @@ def attach_dcmotors(
         if name in taken:
             raise ModelError(f"actuator {name!r}", "already in the model; pass another name_format")
         _add_dcmotor(spec, name, joint, motors[joint])
-    for key in spec.keys:
-        ctrl = list(key.ctrl)
-        if ctrl:  # an unset ctrl stays unset (the compiler fills it)
-            old = [c for i in kept for c in ctrl[layout[i][0] : layout[i][0] + layout[i][1]]]
-            key.ctrl = old + [0.0] * (2 * len(motors))
-    try:
-        return spec.compile()
-    except ValueError as e:
-        raise ModelError(
-            "model", f"does not compile with the <dcmotor> actuators: {str(e).splitlines()[0]}"
-        ) from e
+    return _compile(spec, layout, kept, len(motors))
 
 
 def _control_layout(spec: mujoco.MjSpec, joints: set[str]) -> tuple[list[tuple[int, int]], list[bool]]:
@@ -289,11 +281,19 @@ def attach_actuator_dcmotors(
         spec.delete(spec.actuator(name))
     for name, trntype, target, gear, motor in old:
         _add_dcmotor(spec, name, target, motor, trntype=trntype, gear=motor.gear * gear)
+    return _compile(spec, layout, kept, len(motors))
+
+
+def _compile(
+    spec: mujoco.MjSpec, layout: list[tuple[int, int]], kept: list[int], added: int
+) -> mujoco.MjModel:
+    """The spec compiled, each keyframe's controls those of the ``kept`` actuators (``layout``:
+    their (start, count) in the old controls) followed by 0 for the ``added`` dcmotors' two."""
     for key in spec.keys:
         ctrl = list(key.ctrl)
-        if ctrl:
-            kept_ctrl = [c for i in kept for c in ctrl[layout[i][0] : layout[i][0] + layout[i][1]]]
-            key.ctrl = kept_ctrl + [0.0] * (2 * len(motors))
+        if ctrl:  # an unset ctrl stays unset (the compiler fills it)
+            old = [c for i in kept for c in ctrl[layout[i][0] : layout[i][0] + layout[i][1]]]
+            key.ctrl = old + [0.0] * (2 * added)
     try:
         return spec.compile()
     except ValueError as e:
@@ -442,8 +442,18 @@ def actuator_model(grasp: Any) -> mujoco.MjModel:
     motors = actuator_motors(grasp)
     if not motors:
         return grasp.model
-    source = grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path)
-    model = attach_actuator_dcmotors(source, motors)
+    return same_model(grasp, attach_actuator_dcmotors(grasp_source(grasp), motors))
+
+
+def grasp_source(grasp: Any) -> mujoco.MjSpec | Path:
+    """What the motors are attached to: the grasp's ``MjSpec`` (its MJCF with the object and
+    supports it adds), or its model file."""
+    return grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path)
+
+
+def same_model(grasp: Any, model: mujoco.MjModel) -> mujoco.MjModel:
+    """``model`` when it has the grasp model's coordinates, bodies and geoms (only actuators
+    were added); else a :class:`ModelError`."""
     if (model.nq, model.nv, model.nbody, model.ngeom) != (
         grasp.model.nq,
         grasp.model.nv,

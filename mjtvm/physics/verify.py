@@ -39,7 +39,7 @@ from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
-from .motors import actuator_model, attach_dcmotors, require_motors
+from .motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .verify_report import plot_alpha, rows_csv, summarize
 from .witness import witness_drive
@@ -118,16 +118,7 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     model = grasp.model
     motors = require_motors(model, grasp.joints, getattr(grasp, "motors", {}))
     if motors:
-        model = attach_dcmotors(grasp.spec() if hasattr(grasp, "spec") else Path(grasp.model_path), motors)
-        if (model.nq, model.nv, model.nbody, model.ngeom) != (
-            grasp.model.nq,
-            grasp.model.nv,
-            grasp.model.nbody,
-            grasp.model.ngeom,
-        ):
-            raise ModelError(
-                f"model {str(grasp.model_path)!r}", "differs from the grasp's model after attaching motors"
-            )
+        model = same_model(grasp, attach_dcmotors(grasp_source(grasp), motors))
     _MODELS[id(grasp)] = (grasp, model)  # the grasp is kept so that its id is not reused
     return model
 
