@@ -15,11 +15,7 @@ dataset's order whichever way ran them. The files of ``mjtvm rank`` are
 from __future__ import annotations
 
 import math
-import multiprocessing
-import os
-import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +27,7 @@ from ..errors import ModelError, ParamError, SolverError, StateError
 from ..sim.grasp.batch import BatchModels
 from ..sim.grasp.dataset import DatasetGrasp
 from ..sim.grasp.report import kept_contacts
-from .sweep import _forks, _init_worker, _stop, dask_client
+from .sweep import _forks, dask_client, run_calls
 
 __all__ = ["FAILURES", "batch_models", "rank_row", "rank_rows"]
 
@@ -245,23 +241,11 @@ def rank_rows(
 def _run_pool(
     grasp: str, tasks: list[list[DatasetGrasp]], jobs: int, finished: Callable[[list[dict[str, Any]]], None]
 ) -> None:
-    """The tasks on ``jobs`` local processes: forked on Linux (the compiled model inherited),
-    else started from a forkserver (each worker compiles it)."""
-    fork = _forks()
-    context = multiprocessing.get_context("fork" if fork else "forkserver")
-    pool = ProcessPoolExecutor(
-        max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
+    """The tasks on ``jobs`` local processes, read as they finish: forked on Linux (the
+    compiled model inherited), else started from a forkserver (each worker compiles it)."""
+    run_calls(
+        [(_solve_chunk, (grasp, task)) for task in tasks], jobs, finished, fork=_forks(), in_order=False
     )
-    try:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
-            futures = [pool.submit(_solve_chunk, grasp, task) for task in tasks]
-        for f in as_completed(futures):
-            finished(f.result())
-    except BaseException:
-        _stop(pool)
-        raise
-    pool.shutdown()
 
 
 def _run_dask(

@@ -33,7 +33,7 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from functools import lru_cache
@@ -48,7 +48,7 @@ from ..errors import ParamError
 from ..sim.lift.states import READINGS, VARIANTS, lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 
-__all__ = ["SweepPoint", "grid", "run_sweep"]
+__all__ = ["SweepPoint", "dask_client", "grid", "run_calls", "run_sweep"]
 
 
 @dataclass(frozen=True)
@@ -361,16 +361,31 @@ def _run_pool(
         calls = [(_solve_many, (groups,)) for groups in _fork_tasks(tasks, jobs)]
     else:
         calls = [(_solve_group, (key, states)) for key, states in tasks]
+    run_calls(calls, jobs, finished, fork=fork)
+
+
+def run_calls(
+    calls: Sequence[tuple[Callable[..., list[dict[str, Any]]], tuple[Any, ...]]],
+    jobs: int,
+    finished: Callable[[list[dict[str, Any]]], None],
+    *,
+    fork: bool,
+    in_order: bool = True,
+) -> None:
+    """Each ``fn(*args)`` of ``calls`` on ``jobs`` local processes (forked, or started from a
+    forkserver), its rows passed to ``finished`` in the order of ``calls`` or, without
+    ``in_order``, as they finish. On an interrupt or a failure the pending calls are cancelled
+    and the workers ended (:func:`_stop`)."""
     context = multiprocessing.get_context("fork" if fork else "forkserver")
     pool = ProcessPoolExecutor(
         max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
     )
     try:
         with warnings.catch_warnings():
-            # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see above).
+            # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see _run_pool).
             warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
             futures = [pool.submit(fn, *args) for fn, args in calls]
-        for f in futures:
+        for f in futures if in_order else as_completed(futures):
             finished(f.result())
     except BaseException:
         _stop(pool)
