@@ -48,6 +48,21 @@ def _along(state: GraspState, columns: list[int]) -> GraspState:
     return state.with_(rvds=np.array([[*v, 0, 0, 0], [*-v, 0, 0, 0]]))
 
 
+def _f1_coupled(s: GraspState) -> GraspState:
+    """The pinch with finger 1's joints coupled 1:1 (``J_eq = [1, -1]``) and driven by one
+    actuator on its first joint (that joint's range); finger 2's joints as they were."""
+    r = s.operation_ranges
+    return s.with_(
+        operation_ranges=(r[0], r[2], r[3]),
+        transmission=Transmission(
+            ("f1", "f2_pitch0", "f2_pitch1"),
+            np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]]),
+            ("f1_coupling",),
+            np.array([[1.0, -1.0, 0, 0]]),
+        ),
+    )
+
+
 def _alphas(state: GraspState) -> np.ndarray:
     r = tvmmp(state)
     assert np.all(r.certified)
@@ -59,17 +74,8 @@ def test_a_finger_coupled_one_to_one_is_the_one_joint_finger_with_the_summed_col
     constraint force cancels and u = (j1 + j2)^T f + g1 + g2 -- the one-joint finger whose
     Jacobian column is j1 + j2 and whose gravity torque is g1 + g2."""
     s = _along(pinch(), [0, 1])
-    r = s.operation_ranges
-    coupled = s.with_(
-        operation_ranges=(r[0], r[2], r[3]),
-        transmission=Transmission(
-            ("f1", "f2_pitch0", "f2_pitch1"),
-            np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]]),
-            ("f1_coupling",),
-            np.array([[1.0, -1.0, 0, 0]]),
-        ),
-    )
-    g = s.gravity_torque
+    coupled = _f1_coupled(s)
+    r, g = s.operation_ranges, s.gravity_torque
     reduced = _with_columns(
         s,
         [[0, 1], [2], [3]],
@@ -215,16 +221,7 @@ def test_a_coupling_that_locks_the_motion_is_named() -> None:
     """Finger 1 coupled 1:1 follows one direction only: the sideways RVDS of the pinch give
     alpha 0, and the diagnosis names its contact together with the coupling."""
     s = pinch()
-    r = s.operation_ranges
-    coupled = s.with_(
-        operation_ranges=(r[0], r[2], r[3]),
-        transmission=Transmission(
-            ("f1", "f2_pitch0", "f2_pitch1"),
-            np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]]),
-            ("f1_coupling",),
-            np.array([[1.0, -1.0, 0, 0]]),
-        ),
-    )
+    coupled = _f1_coupled(s)
     result = tvmmp(coupled, diagnose=True)
     assert np.all(result.alpha == 0.0) and np.all(tvmmp(s).alpha > 0.0)
     assert [d.contacts for d in result.diagnosis] == [("f1_tip",)] * 4

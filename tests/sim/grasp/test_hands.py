@@ -20,7 +20,7 @@ import pytest
 import mjtvm
 from mjtvm.core.reference import reference_tvmmp
 from mjtvm.sim.grasp.file import load_grasp
-from mjtvm.sim.grasp.state import geom_id
+from tests.support.finite_diff import contact_jacobians_fd
 
 MODELS = Path(__file__).resolve().parents[3] / "models"
 _OBJ = mujoco.mjtObj
@@ -214,35 +214,14 @@ def test_grasp_file_names_exist_in_the_model(hand: tuple[Hand, mujoco.MjModel]) 
 
 
 # ---------------------------------------------------------------------- through the grasp loader
-def _contact_body(model: mujoco.MjModel, name: str) -> int:
-    return int(model.geom_bodyid[geom_id(model, name.split("#")[0])])
-
-
 def test_grasp_jacobians_match_finite_differences(hand: tuple[Hand, mujoco.MjModel]) -> None:
     """Each contact's (3, M) Jacobian = d(finger-fixed contact point)/dq, central differences."""
     spec, _ = hand
     grasp = load_grasp(spec.grasp)
     state = grasp.state()
-    model, data = grasp.model, mujoco.MjData(grasp.model)
-    data.qpos[:] = grasp.data.qpos
-    mujoco.mj_kinematics(model, data)
-    h = 1e-6
+    fd = contact_jacobians_fd(grasp.model, grasp.data.qpos, state)
     for contact in state.contacts:
-        body = _contact_body(model, contact.name)
-        rot0 = data.xmat[body].reshape(3, 3).copy()
-        local = rot0.T @ (contact.position - data.xpos[body])
-        fd = np.zeros((3, len(state.joint_names)))
-        for col, name in enumerate(state.joint_names):
-            adr = int(model.jnt_qposadr[mujoco.mj_name2id(model, _OBJ.mjOBJ_JOINT, name)])
-            points = []
-            for step in (h, -h):
-                d = mujoco.MjData(model)
-                d.qpos[:] = data.qpos
-                d.qpos[adr] += step
-                mujoco.mj_kinematics(model, d)
-                points.append(d.xpos[body] + d.xmat[body].reshape(3, 3) @ local)
-            fd[:, col] = (points[0] - points[1]) / (2 * h)
-        np.testing.assert_allclose(contact.jacobian, fd, atol=1e-8, err_msg=contact.name)
+        np.testing.assert_allclose(contact.jacobian, fd[contact.name], atol=1e-8, err_msg=contact.name)
 
 
 def test_grasp_alphas_match_the_cvxpy_reference(hand: tuple[Hand, mujoco.MjModel]) -> None:

@@ -27,6 +27,7 @@ from mjtvm.core.reference import reference_tvmmp
 from mjtvm.sim.grasp.file import load_grasp, shipped_grasps
 from mjtvm.sim.grasp.loaded import Grasp
 from mjtvm.sim.grasp.state import detected_contacts, geom_id
+from tests.support.finite_diff import contact_jacobians_fd
 
 NAME = "allegro-jenga"
 PIECES = ("jenga_piece3", "jenga_piece9", "jenga_piece10", "jenga_piece11", "jenga_piece13", "jenga_piece15")
@@ -69,26 +70,10 @@ def test_the_object_is_six_convex_mesh_pieces_cited_from_their_source(grasp: Gra
 def test_grasp_jacobians_match_finite_differences(grasp: Grasp) -> None:
     """Each contact's (3, M) Jacobian = d(finger-fixed contact point)/dq, central differences."""
     state = grasp.state()
-    model, data = grasp.model, mujoco.MjData(grasp.model)
-    data.qpos[:] = grasp.data.qpos
-    mujoco.mj_kinematics(model, data)
-    h = 1e-6
     assert len(state.contacts) == 4
+    fd = contact_jacobians_fd(grasp.model, grasp.data.qpos, state)
     for contact in state.contacts:
-        body = int(model.geom_bodyid[geom_id(model, contact.name.split("#")[0])])
-        local = data.xmat[body].reshape(3, 3).T @ (contact.position - data.xpos[body])
-        fd = np.zeros((3, len(state.joint_names)))
-        for col, name in enumerate(state.joint_names):
-            adr = int(model.joint(name).qposadr[0])
-            points = []
-            for step in (h, -h):
-                d = mujoco.MjData(model)
-                d.qpos[:] = data.qpos
-                d.qpos[adr] += step
-                mujoco.mj_kinematics(model, d)
-                points.append(d.xpos[body] + d.xmat[body].reshape(3, 3) @ local)
-            fd[:, col] = (points[0] - points[1]) / (2 * h)
-        np.testing.assert_allclose(contact.jacobian, fd, atol=1e-8, err_msg=contact.name)
+        np.testing.assert_allclose(contact.jacobian, fd[contact.name], atol=1e-8, err_msg=contact.name)
 
 
 def test_contacts_lie_on_the_mesh_surface_with_unit_normals_into_it(grasp: Grasp) -> None:
