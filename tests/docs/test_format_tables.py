@@ -118,15 +118,20 @@ def disagreements(schema: dict[str, Any], node: dict[str, Any], names: list[str]
     top = {n.split(".", 1)[0] for n in names}
     out = [f"{where}: documented, not in the schema: {k!r}" for k in sorted(top - props.keys())]
     out += [f"{where}: in the schema, not documented: {k!r}" for k in sorted(props.keys() - top)]
+    for parent, rest in _nested(names):
+        if parent in props:
+            out += disagreements(schema, props[parent], rest, f"{where}/properties/{parent}")
+    return out
+
+
+def _nested(names: list[str]) -> list[tuple[str, list[str]]]:
+    """The dotted names ``a.b`` grouped by their first part: ``[("a", ["b", ...]), ...]``, sorted."""
     nested: dict[str, list[str]] = {}
     for n in names:
         if "." in n:
             parent, rest = n.split(".", 1)
             nested.setdefault(parent, []).append(rest)
-    for parent, rest in sorted(nested.items()):
-        if parent in props:
-            out += disagreements(schema, props[parent], rest, f"{where}/properties/{parent}")
-    return out
+    return sorted(nested.items())
 
 
 def required_disagreements(
@@ -144,12 +149,7 @@ def required_disagreements(
     out += [
         f"{where}: required by the schema, not documented as required: {k!r}" for k in sorted(required - top)
     ]
-    nested: dict[str, list[str]] = {}
-    for n in names:
-        if "." in n:
-            parent, rest = n.split(".", 1)
-            nested.setdefault(parent, []).append(rest)
-    for parent, rest in sorted(nested.items()):
+    for parent, rest in _nested(names):
         if parent in props:
             out += required_disagreements(schema, props[parent], rest, f"{where}/properties/{parent}")
     return out
