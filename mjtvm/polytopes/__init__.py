@@ -1,5 +1,7 @@
 r"""The velocity polytopes of Problem 1 without MuJoCo: the TVMS (:mod:`mjtvm.polytopes.tvms`),
 its projection and enumeration, the polar vertex enumeration (:mod:`mjtvm.polytopes.polar`),
+the velocity and force polytopes of a Jacobian (:mod:`mjtvm.polytopes.capacity`, zonotopes:
+:mod:`mjtvm.polytopes.zonotope`),
 the point-set geometry (:mod:`mjtvm.polytopes.hull`), volumes, estimates and brackets.
 
 The names below are imported on first use, so that importing one module does not load the others.
@@ -25,6 +27,7 @@ if TYPE_CHECKING:
         default_memory_budget,
         rss_bytes,
     )
+    from .capacity import DUPLICATE_TOL, CapacityPolytope, force_polytope, velocity_polytope
     from .enumeration import force_form, project_cdd
     from .estimate import FIRST_BATCH, MIN_INSIDE, VolumeEstimate, clopper_pearson, estimate_volume
     from .hull import (
@@ -47,6 +50,7 @@ if TYPE_CHECKING:
     from .refine import GROWTH, REFINE_SHARE, Cutter, Meter
     from .tvms import CHARACTERISTIC_LENGTH, TVMS_SCHEMA, TvmsResult, TvmsTimings, default_scale
     from .volume import facet_volume, hausdorff, hull_volume
+    from .zonotope import MAX_CANDIDATES, PLANE_TOL, RANK_TOL, Zonotope, zonotope
 
 _HOMES = {
     "Bracket": "bracket",
@@ -55,6 +59,10 @@ _HOMES = {
     "inner_hull": "bracket",
     "outer_volume": "bracket",
     "ray_lengths": "bracket",
+    "CapacityPolytope": "capacity",
+    "DUPLICATE_TOL": "capacity",
+    "force_polytope": "capacity",
+    "velocity_polytope": "capacity",
     "DEFAULT_CONFIDENCE": "budget",
     "DEFAULT_MEMORY_FRACTION": "budget",
     "Budget": "budget",
@@ -107,6 +115,11 @@ _HOMES = {
     "facet_volume": "volume",
     "hausdorff": "volume",
     "hull_volume": "volume",
+    "MAX_CANDIDATES": "zonotope",
+    "PLANE_TOL": "zonotope",
+    "RANK_TOL": "zonotope",
+    "Zonotope": "zonotope",
+    "zonotope": "zonotope",
 }
 
 __all__ = [
@@ -114,10 +127,14 @@ __all__ = [
     "CHARACTERISTIC_LENGTH",
     "DEFAULT_CONFIDENCE",
     "DEFAULT_MEMORY_FRACTION",
+    "DUPLICATE_TOL",
     "FIRST_BATCH",
     "FLAT",
     "GROWTH",
+    "MAX_CANDIDATES",
     "MIN_INSIDE",
+    "PLANE_TOL",
+    "RANK_TOL",
     "REFINE_SHARE",
     "REL_TOL",
     "TVMS_SCHEMA",
@@ -125,6 +142,7 @@ __all__ = [
     "Approximation",
     "Bracket",
     "Budget",
+    "CapacityPolytope",
     "Cutter",
     "DistanceOracle",
     "FaceLattice",
@@ -141,6 +159,7 @@ __all__ = [
     "TvmsResult",
     "TvmsTimings",
     "VolumeEstimate",
+    "Zonotope",
     "available_memory",
     "clopper_pearson",
     "cone_facets",
@@ -150,6 +169,7 @@ __all__ = [
     "estimate_volume",
     "facet_volume",
     "force_form",
+    "force_polytope",
     "hausdorff",
     "hausdorff_bound",
     "hull_volume",
@@ -167,7 +187,9 @@ __all__ = [
     "span",
     "triangulate",
     "twist_rows",
+    "velocity_polytope",
     "vertex_mask",
+    "zonotope",
 ]
 
 
