@@ -5,8 +5,8 @@ the velocity and force polytopes of a Jacobian (:mod:`mjtvm.polytopes.capacity`,
 the point-set geometry (:mod:`mjtvm.polytopes.hull`), volumes, estimates and brackets.
 
 The names below are imported on first use, so that importing one module does not load the others.
-The functions named like their modules, :func:`~mjtvm.polytopes.tvms.tvms` and
-:func:`~mjtvm.polytopes.refine.refine`, are not among them (``mjtvm.polytopes.tvms`` is the module).
+The functions named like their modules, :func:`~mjtvm.polytopes.tvms.tvms`,
+:func:`~mjtvm.polytopes.refine.refine` and :func:`~mjtvm.polytopes.zonotope.zonotope`, are not among them (``mjtvm.polytopes.tvms`` is the module).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     from .refine import GROWTH, REFINE_SHARE, Cutter, Meter
     from .tvms import CHARACTERISTIC_LENGTH, TVMS_SCHEMA, TvmsResult, TvmsTimings, default_scale
     from .volume import facet_volume, hausdorff, hull_volume
-    from .zonotope import MAX_CANDIDATES, PLANE_TOL, RANK_TOL, Zonotope, zonotope
+    from .zonotope import MAX_CANDIDATES, PLANE_TOL, RANK_TOL, Zonotope
 
 _HOMES = {
     "Bracket": "bracket",
@@ -119,7 +119,6 @@ _HOMES = {
     "PLANE_TOL": "zonotope",
     "RANK_TOL": "zonotope",
     "Zonotope": "zonotope",
-    "zonotope": "zonotope",
 }
 
 __all__ = [
@@ -189,7 +188,6 @@ __all__ = [
     "twist_rows",
     "velocity_polytope",
     "vertex_mask",
-    "zonotope",
 ]
 
 
