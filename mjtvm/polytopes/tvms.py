@@ -1,6 +1,9 @@
 r"""Problem 1: the TVMS :math:`S_{ov}` and the TVMM (eq. 26-29, 34), the ``mjtvm.tvms/1`` document.
 
-:func:`tvms` builds the lifted polytope (:func:`~mjtvm.polytopes.lifted.lifted_polytope`),
+When no force binds (:mod:`~mjtvm.polytopes.speed_box`: no wrench to balance, gravity
+torques that leave every joint its full speed, F and L contacts, a twist subspace),
+:math:`S_{ov}` is the image of the joint-speed box, a zonotope, computed directly without an
+LP (``method="auto"``, the default). Otherwise :func:`tvms` builds the lifted polytope (:func:`~mjtvm.polytopes.lifted.lifted_polytope`),
 projects it onto the twist space (:func:`~mjtvm.polytopes.projection.project_lp`, or the paper's
 vertex enumeration :func:`~mjtvm.polytopes.enumeration.project_cdd` as the baseline) and measures
 it: the D-dimensional volume (eq. 28-29, by Qhull), 0 unless :math:`S_{ov}` is full-dimensional,
@@ -31,6 +34,7 @@ from .enumeration import project_cdd
 from .estimate import VolumeEstimate
 from .lifted import Projection, ProjectionStatus, lifted_polytope
 from .projection import REL_TOL, project_lp
+from .speed_box import BoxImage, speed_box_projection
 from .volume import facet_volume, hull_volume
 
 __all__ = [
@@ -45,7 +49,8 @@ __all__ = [
 
 TVMS_SCHEMA = "mjtvm.tvms/1"
 CHARACTERISTIC_LENGTH = 0.1  #: m: the paper's object radius; linear twist parts are divided by it
-Method = Literal["lp", "cdd"]
+Method = Literal["auto", "lp", "cdd", "zonotope"]
+Solved = Literal["lp", "cdd", "zonotope"]  #: how a result was computed
 Facets = tuple[NDArray[np.float64], NDArray[np.float64]]
 
 
@@ -89,7 +94,9 @@ class TvmsResult:
     unbounded_direction
         ``(D,)`` a unit twist along which :math:`S_{ov}` is unbounded, or ``None``.
     method, rvds_cone
-        The projection (``"lp"`` or ``"cdd"``) and whether the RVDS cone restricted it.
+        How :math:`S_{ov}` was computed (``"lp"``, ``"cdd"``, or ``"zonotope"``: the image of
+        the joint-speed box, :mod:`~mjtvm.polytopes.speed_box`) and whether the RVDS cone
+        restricted it.
     timings
         :class:`TvmsTimings`.
     lifted_vertices
@@ -123,7 +130,7 @@ class TvmsResult:
     scale: NDArray[np.float64]
     affine_volume: float | None
     unbounded_direction: NDArray[np.float64] | None
-    method: Method
+    method: Solved
     rvds_cone: bool
     timings: TvmsTimings
     lifted_vertices: int | None = None
@@ -285,10 +292,43 @@ def _brackets(
     return _d_volume(aff, proj.dimension, weights), aff, approx.hausdorff
 
 
+def _box_image_result(
+    state: GraspState, image: BoxImage, weights: NDArray[np.float64], rvds_cone: bool
+) -> TvmsResult:
+    """The result of :func:`tvms` from the image of the joint-speed box: exact, its volume by
+    Shephard's sum, the alphas from its facets as on the LP path."""
+    t0 = time.perf_counter()
+    proj = image.projection
+    affine = image.affine_volume
+    volume = float(_d_volume(np.array(affine), proj.dimension, weights))
+    alpha = None
+    if state.rvds is not None:
+        rays = _ray_lengths(proj, np.asarray(state.rvds, dtype=float), proj.facets)
+        alpha = np.column_stack([rays, rays])
+    t1 = time.perf_counter()
+    return TvmsResult(
+        status="bounded",
+        bounded=True,
+        dimension=proj.dimension,
+        vertices=proj.vertices,
+        volume=volume,
+        scale=weights,
+        affine_volume=affine,
+        unbounded_direction=None,
+        method="zonotope",
+        rvds_cone=rvds_cone and state.rvds is not None,
+        timings=TvmsTimings(0.0, proj.seconds, t1 - t0, proj.seconds + t1 - t0, 0),
+        volume_bracket=np.array([volume, volume]),
+        affine_volume_bracket=np.array([affine, affine]),
+        hausdorff_gap=0.0,
+        alpha_bracket=alpha,
+    )
+
+
 def tvms(
     state: GraspState,
     *,
-    method: Method = "lp",
+    method: Method = "auto",
     scale: ArrayLike | None = None,
     rvds_cone: bool = True,
     box: BoxForm = "eliminated",
@@ -306,9 +346,11 @@ def tvms(
         The grasp state; all its REFS vertices are balanced at once, with one common
         :math:`\dot q` and box.
     method
-        ``"lp"`` (support LPs, :func:`~mjtvm.polytopes.projection.project_lp`, default) or ``"cdd"``
+        ``"lp"`` (support LPs, :func:`~mjtvm.polytopes.projection.project_lp`), ``"cdd"``
         (vertex enumeration of the lifted polytope,
-        :func:`~mjtvm.polytopes.enumeration.project_cdd`).
+        :func:`~mjtvm.polytopes.enumeration.project_cdd`), ``"zonotope"`` (the image of the
+        joint-speed box when no force binds, :func:`~mjtvm.polytopes.speed_box.speed_box_projection`:
+        no LP) or ``"auto"`` (default): ``"zonotope"`` when its condition holds, else ``"lp"``.
     scale
         ``(D,)`` positive factors for ``affine_volume`` (default :func:`default_scale`:
         diag(10, 10, 10, 1, 1, 1) in space). They also scale the working coordinates of
@@ -345,17 +387,24 @@ def tvms(
     Raises
     ------
     ParamError
-        A malformed ``scale`` or an unknown ``method``.
+        A malformed ``scale``, an unknown ``method``, or ``method="zonotope"`` where forces
+        bind (the message says which condition fails).
     SolverError
         When HiGHS, Qhull or cddlib fails.
     """
-    if method not in ("lp", "cdd"):
-        raise ParamError("method", f"expected 'lp' or 'cdd', got {method!r}", method)
+    if method not in ("auto", "lp", "cdd", "zonotope"):
+        raise ParamError("method", f"expected 'auto', 'lp', 'cdd' or 'zonotope', got {method!r}", method)
     weights = default_scale(state) if scale is None else _check_scale(scale, state.twist_dim)
+    if method in ("auto", "zonotope"):
+        image, why = speed_box_projection(state, weights, rvds_cone)
+        if image is not None:
+            return _box_image_result(state, image, weights, rvds_cone)
+        if method == "zonotope":
+            raise ParamError("method", f"expected a state whose forces cannot bind for 'zonotope': {why}")
     t0 = time.perf_counter()
     poly = lifted_polytope(state, rvds_cone=rvds_cone, box=box)
     t1 = time.perf_counter()
-    if method == "lp":
+    if method in ("auto", "lp"):
         limits = Limits(
             tolerance=tolerance,
             time_limit=time_limit,
@@ -391,7 +440,7 @@ def tvms(
         scale=weights,
         affine_volume=affine,
         unbounded_direction=proj.unbounded_direction,
-        method=method,
+        method="cdd" if method == "cdd" else "lp",
         rvds_cone=poly.cone,
         timings=TvmsTimings(t1 - t0, t2 - t1, t3 - t2, t3 - t0, proj.num_lps),
         lifted_vertices=proj.lifted_vertices,

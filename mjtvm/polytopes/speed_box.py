@@ -1,0 +1,175 @@
+r"""Problem 1 when no force binds: the TVMS is the image of the joint-speed box, a zonotope.
+
+:math:`S_{ov}` (eq. 26) couples the twist to the forces only through the joint speeds' box:
+joint j may turn at :math:`|\dot q_j| \le` the speed its operation range allows at its
+torque. When one set of forces balances every REFS vertex with every torque in the range
+that still allows the joint's full speed :math:`\dot q_{max,j}` (the vertex of :math:`P_j`
+on the speed axis), every joint speed in the box :math:`B = \prod_j [-\dot q_{max,j},
+\dot q_{max,j}]` is feasible with those forces, and none outside it is (down-closure, eq. 1),
+so the statics drop out: :math:`S_{ov} = \{\dot r \in V : A_q \dot q = A_r \dot r,\ \dot q \in B\}`.
+
+**The condition** (:func:`speed_box_projection`; all of it, else the LP projection runs):
+
+1. *no contact force is needed*: every REFS vertex is 0 and no contact has a preload, so
+   the zero forces balance them, leaving each torque at the gravity torque :math:`g_j`;
+2. *no other force helps*: either the gravity torques leave every joint its full speed,
+   :math:`(|g_j|, \dot q_{max,j}) \in P_j` (to 1e-12 relative), or the state has one
+   contact, whose force must then be 0 (a point force balances no wrench but 0); the box's
+   half-widths are the speeds at :math:`g_j`,
+   :meth:`~mjtvm.core.operation_range.OperationRange.max_speed_at`, as on the LP path;
+3. no transmission (its damping puts the speeds in the torque rows) and only F and L contacts
+   (equalities :math:`A_q \dot q = A_r \dot r`, eq. 7 and 9; an S contact's slip and a D
+   contact's inequality are not images of the box);
+4. the twist space ``V`` is a linear subspace: all of :math:`R^D` without the RVDS cone, or
+   the cone of an RVDS whose every vertex's negative is a vertex too (translations:
+   :math:`\pm e_x, \pm e_y, \pm e_z`);
+5. the kinematics fix the twist and leave the joints free: :math:`A_r` is injective on ``V``
+   and :math:`\mathrm{range}(A_q) \subseteq A_r V` (rank decisions at
+   :data:`~mjtvm.polytopes.zonotope.RANK_TOL` relative).
+
+Then :math:`S_{ov} = \{T \dot q : \dot q \in B\}` with :math:`T = E (A_r E)^+ A_q` (``E`` an
+orthonormal basis of ``V``), a zonotope (:func:`~mjtvm.polytopes.zonotope.zonotope`). One
+fingertip F-contact with the translations as RVDS is the classic velocity polytope
+:math:`\{J \dot q : \dot q \in B\}` of the fingertip's Jacobian (pycapacity's
+``velocity_polytope``). Conditions 1-2 are sufficient, not necessary, for forces not to
+bind (internal forces that keep the torques small would also do; an LP would decide it).
+Where forces cannot bind, :math:`S_{ov}` has the same vertices on both paths; the LP path
+finds them to its 1e-9 tolerance, this one to round-off.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.assembly import grasp_map_transpose
+from ..core.state import GraspState
+from ..errors import ParamError
+from .lifted import Projection
+from .zonotope import RANK_TOL, zonotope
+
+__all__ = ["FULL_SPEED_TOL", "BoxImage", "speed_box", "speed_box_map", "speed_box_projection"]
+
+FULL_SPEED_TOL = 1e-12  #: a joint keeps its full speed at its gravity torque to this relative slack
+
+
+def speed_box(state: GraspState) -> tuple[NDArray[np.float64] | None, str]:
+    """``(M,)`` the joint speeds' half-widths when no contact force binds (conditions 1-3 of the
+    module docstring), else ``None`` and why not."""
+    if state.transmission is not None:
+        return None, "a transmission couples the joints"
+    if np.any(state.refs != 0.0):
+        return None, "a REFS wrench needs contact forces"
+    for c in state.contacts:
+        if c.preload > 0.0:
+            return None, f"contact {c.name!r} has a preload"
+        if c.type not in ("F", "L"):
+            return None, f"contact {c.name!r} is a {c.type} contact (only F and L kinematics are equalities)"
+    ranges = state.operation_ranges
+    at_g = np.array([r.max_speed_at(g) for r, g in zip(ranges, state.gravity_torque, strict=True)])
+    if np.any(at_g < 0.0):
+        return None, "a gravity torque exceeds its joint's torque"
+    if len(state.contacts) != 1:
+        top = np.array([r.max_speed for r in ranges])
+        slow = np.flatnonzero(at_g < top * (1.0 - FULL_SPEED_TOL))
+        if len(slow):
+            return None, f"the gravity torque of joint {state.joint_names[slow[0]]!r} lowers its speed"
+    return at_g, ""
+
+
+def _twist_space(state: GraspState, rvds_cone: bool) -> NDArray[np.float64] | None:
+    """``(D, k)`` orthonormal basis of the twist space (condition 4), ``None`` if the RVDS cone
+    is not a subspace."""
+    big_d = state.twist_dim
+    if not rvds_cone or state.rvds is None:
+        return np.eye(big_d)
+    r = np.asarray(state.rvds, dtype=float)
+    r = r[np.any(r != 0.0, axis=1)]
+    if not len(r):
+        return np.zeros((big_d, 0))
+    size = np.linalg.norm(r, axis=1)
+    gap = np.linalg.norm(r[:, None, :] + r[None, :, :], axis=2)  # |r_i + r_j|: 0 for a pair
+    if not np.all(np.min(gap, axis=1) <= RANK_TOL * size):
+        return None
+    u, sv, _ = np.linalg.svd(r.T, full_matrices=False)
+    return np.asarray(u[:, : int(np.sum(sv > RANK_TOL * sv[0]))])
+
+
+def speed_box_map(state: GraspState, rvds_cone: bool) -> tuple[NDArray[np.float64] | None, str]:
+    r"""``(D, M)`` the map :math:`T = E (A_r E)^+ A_q` with :math:`S_{ov} = T B` (conditions 3-5
+    of the module docstring; 1-2 are :func:`speed_box`), else ``None`` and why not."""
+    e = _twist_space(state, rvds_cone)
+    if e is None:
+        return None, "the RVDS cone is not a linear subspace"
+    aq, ar = [], []
+    for c in state.contacts:
+        sel = np.eye(state.dim) if c.type == "F" else c.normal.reshape(1, -1)
+        aq.append(sel @ c.jacobian)
+        ar.append(sel @ grasp_map_transpose(c.position, state.object_position))
+    if not aq or not e.shape[1]:
+        return None, "no contact kinematics" if e.shape[1] else "the twist space is {0}"
+    a_q, b = np.vstack(aq), np.vstack(ar) @ e
+    u, sv, vt = np.linalg.svd(b, full_matrices=False)
+    if sv[-1] <= RANK_TOL * sv[0]:
+        return None, "the contacts leave the object free to move"
+    proj = u.T @ a_q
+    if np.linalg.norm(a_q - u @ proj) > RANK_TOL * max(float(np.linalg.norm(a_q)), 1e-300):
+        return None, "the contact kinematics restrict the joint speeds"
+    return e @ (vt.T @ (proj / sv[:, None])), ""
+
+
+@dataclass(frozen=True, eq=False)
+class BoxImage:
+    """:math:`S_{ov}` as the image of the joint-speed box.
+
+    Attributes
+    ----------
+    projection
+        The :class:`~mjtvm.polytopes.lifted.Projection` the LP path would return (status
+        ``"bounded"``, vertices in twist coordinates, ``basis`` and ``facets`` as there;
+        ``method = "zonotope"``, no LP).
+    affine_volume
+        Its volume inside the affine hull in the scaled coordinates ``weights * rdot``
+        (Shephard's sum, :mod:`~mjtvm.polytopes.zonotope`).
+    """
+
+    projection: Projection
+    affine_volume: float
+
+
+def speed_box_projection(
+    state: GraspState, weights: NDArray[np.float64], rvds_cone: bool
+) -> tuple[BoxImage | None, str]:
+    """:math:`S_{ov}` of ``state`` as a :class:`BoxImage` in the scaled coordinates
+    ``weights * rdot`` when the module docstring's condition holds and the enumeration fits
+    :data:`~mjtvm.polytopes.zonotope.MAX_CANDIDATES`; else ``None`` and why not."""
+    t0 = time.perf_counter()
+    box, why = speed_box(state)
+    if box is None:
+        return None, why
+    t, why = speed_box_map(state, rvds_cone)
+    if t is None:
+        return None, why
+    try:
+        z = zonotope(np.zeros(state.twist_dim), weights[:, None] * t * box)
+    except ParamError as e:  # the arrays are finite: only the enumeration's size is refused
+        return None, str(e)
+    rows = z.normals * weights
+    norm = np.linalg.norm(rows, axis=1)
+    facets = (rows / norm[:, None], z.offsets / norm) if z.dimension >= 2 else None
+    proj = Projection(
+        status="bounded",
+        vertices=z.vertices / weights,
+        dimension=z.dimension,
+        basis=z.basis,
+        metric=weights,
+        unbounded_direction=None,
+        num_lps=0,
+        seconds=time.perf_counter() - t0,
+        method="zonotope",
+        facets=facets,
+    )
+    return BoxImage(proj, z.affine_volume), ""
