@@ -113,7 +113,7 @@ def speed_box_map(state: GraspState, rvds_cone: bool) -> tuple[NDArray[np.float6
         return None, "no contact kinematics" if e.shape[1] else "the twist space is {0}"
     a_q, b = np.vstack(aq), np.vstack(ar) @ e
     u, sv, vt = np.linalg.svd(b, full_matrices=False)
-    if sv[-1] <= RANK_TOL * sv[0]:
+    if len(sv) < b.shape[1] or sv[-1] <= RANK_TOL * sv[0]:  # A_r not injective on V
         return None, "the contacts leave the object free to move"
     proj = u.T @ a_q
     if np.linalg.norm(a_q - u @ proj) > RANK_TOL * max(float(np.linalg.norm(a_q)), 1e-300):
