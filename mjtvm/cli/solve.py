@@ -201,7 +201,13 @@ def add_tvms(sub: Subparsers) -> None:
     grasp_option(p, default=None, help="a grasp instead of STATE: " + GRASP_HELP)
     hand_option(p)
     p.add_argument("--no-rvds", action="store_true", help="ignore the state's RVDS (no cone restriction)")
-    p.add_argument("--method", choices=("lp", "cdd"), default="lp", help="LP projection or cdd enumeration")
+    p.add_argument(
+        "--method",
+        choices=("auto", "lp", "cdd", "zonotope"),
+        default="auto",
+        help="auto: the joint-speed box's image when no force binds, else lp; lp: LP projection; "
+        "cdd: vertex enumeration; zonotope: the box's image or exit 2",
+    )
     p.add_argument(
         "--time-limit",
         type=number(0.0, MAX_SECONDS, strict=True),
@@ -252,7 +258,7 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
     state = load_source(args.grasp or args.state, hand=args.hand, warnings=not args.quiet)
     if args.no_rvds:
         state = state.with_(rvds=None)
-    show = not args.quiet and args.method == "lp"
+    show = not args.quiet and args.method in ("auto", "lp")
     with lp_progress(show, "tvms"), bracket_progress(show) as progress:
         result = tvms(
             state,

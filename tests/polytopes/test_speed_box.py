@@ -171,3 +171,19 @@ def test_two_contacts_that_move_together_with_squeezing_forces() -> None:
     twin = Contact("twin", "F", np.array([0.0, 0.0, 0.02]), np.array([0.0, 0.0, -1.0]), c.jacobian, mu=0.5)
     both = state.with_(contacts=(c, twin))
     assert_same_result(tvms(both), tvms(both, method="lp"))
+
+
+def test_command_line_takes_the_zonotope_by_default(tmp_path, capsys) -> None:
+    """`mjtvm tvms STATE`: method auto gives the zonotope; --method zonotope on a loaded grasp
+    is one line naming the option's field, exit 2."""
+    from mjtvm.cli import main
+    from mjtvm.core.state_file import state_to_dict
+
+    path = tmp_path / "tip.json"
+    path.write_text(json.dumps(state_to_dict(fingertip_state(4))))
+    assert main(["tvms", str(path), "--quiet"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["method"] == "zonotope" and len(doc["vertices"]) == 14
+    assert main(["tvms", "case1", "--method", "zonotope", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "method" in err[0] and "REFS wrench" in err[0]
