@@ -15,6 +15,7 @@ is the velocity polytope of the fingertip's Jacobian. Both return a :class:`Capa
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,6 +23,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import ParamError, SolverError
 from .hull import distinct
+from .volume import hull_volume
 from .zonotope import RANK_TOL, zonotope
 
 __all__ = ["DUPLICATE_TOL", "CapacityPolytope", "force_polytope", "velocity_polytope"]
@@ -43,18 +45,28 @@ class CapacityPolytope:
         hull when ``dimension < m``).
     dimension
         Dimension of the affine hull.
-    volume
-        The m-dimensional volume (0 when ``dimension < m``).
-    affine_volume
-        The volume inside the affine hull (``dimension``-dimensional).
+    known_volume
+        The volume inside the affine hull when the construction gives it (a zonotope's sum),
+        ``None`` to measure it on first use of :attr:`affine_volume` (one Qhull hull).
     """
 
     vertices: NDArray[np.float64]
     normals: NDArray[np.float64]
     offsets: NDArray[np.float64]
     dimension: int
-    volume: float
-    affine_volume: float
+    known_volume: float | None = None
+
+    @cached_property
+    def affine_volume(self) -> float:
+        """The volume inside the affine hull (``dimension``-dimensional; the length in 1-D)."""
+        if self.known_volume is not None:
+            return self.known_volume
+        return hull_volume(self.vertices) if self.dimension >= 2 else float(np.ptp(self.vertices))
+
+    @property
+    def volume(self) -> float:
+        """The m-dimensional volume (0 when ``dimension < m``)."""
+        return self.affine_volume if self.dimension == self.vertices.shape[1] else 0.0
 
 
 def _jacobian(jacobian: ArrayLike) -> NDArray[np.float64]:
@@ -119,7 +131,7 @@ def velocity_polytope(jacobian: ArrayLike, qd_min: ArrayLike, qd_max: ArrayLike)
     j = _jacobian(jacobian)
     low, high = _limits("qd_min", "qd_max", qd_min, qd_max, j.shape[1], strict=False)
     z = zonotope(j @ ((low + high) / 2), j * ((high - low) / 2))
-    return CapacityPolytope(z.vertices, z.normals, z.offsets, z.dimension, z.volume, z.affine_volume)
+    return CapacityPolytope(z.vertices, z.normals, z.offsets, z.dimension, z.affine_volume)
 
 
 def _interior_point(
@@ -159,7 +171,8 @@ def force_polytope(jacobian: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike) 
     An intersection of ``n`` slabs. With a point ``p`` strictly inside (the origin when
     :math:`\tau_{min} < 0 < \tau_{max}`, else the Chebyshev centre), its vertices are the
     facets of the hull of the polar points :math:`a_i / (b_i - a_i^T p)` (one Qhull hull of
-    ``2 n`` points), each then solved exactly from its ``m`` active rows.
+    ``2 n`` points), each then solved exactly from its ``m`` active rows. Its volume is
+    measured when first asked for (:attr:`CapacityPolytope.affine_volume`: one more hull).
 
     Parameters
     ----------
@@ -195,10 +208,7 @@ def force_polytope(jacobian: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike) 
     if m == 1:  # an interval: the tightest bound on each side
         a, b = rows[:, 0], bounds
         ends = np.array([np.max(b[a < 0] / a[a < 0]), np.min(b[a > 0] / a[a > 0])])
-        length = float(ends[1] - ends[0])
-        return CapacityPolytope(
-            ends[:, None], np.array([[-1.0], [1.0]]), ends * [-1.0, 1.0], 1, length, length
-        )
+        return CapacityPolytope(ends[:, None], np.array([[-1.0], [1.0]]), ends * [-1.0, 1.0], 1)
     try:
         hull = ConvexHull(rows / slack[:, None])
     except QhullError as e:
@@ -209,5 +219,4 @@ def force_polytope(jacobian: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike) 
     verts = distinct(verts, DUPLICATE_TOL * float(np.max(np.abs(verts - p))))
     face = np.unique(active)
     norm = np.linalg.norm(rows[face], axis=1)
-    volume = float(ConvexHull(verts).volume)
-    return CapacityPolytope(verts, rows[face] / norm[:, None], bounds[face] / norm, m, volume, volume)
+    return CapacityPolytope(verts, rows[face] / norm[:, None], bounds[face] / norm, m)

@@ -46,14 +46,66 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.assembly import grasp_map_transpose
+from ..core.operation_range import OperationRange
 from ..core.state import GraspState
 from ..errors import ParamError
 from .lifted import Projection
 from .zonotope import RANK_TOL, zonotope
 
-__all__ = ["FULL_SPEED_TOL", "BoxImage", "speed_box", "speed_box_map", "speed_box_projection"]
+__all__ = [
+    "FULL_SPEED_TOL",
+    "BoxImage",
+    "ray_lengths_in",
+    "speed_box",
+    "speed_box_map",
+    "speed_box_projection",
+]
 
 FULL_SPEED_TOL = 1e-12  #: a joint keeps its full speed at its gravity torque to this relative slack
+
+
+def _speeds_at(ranges: tuple[OperationRange, ...], torques: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(M,)`` :meth:`~mjtvm.core.operation_range.OperationRange.max_speed_at` of each joint's
+    torque, the same arithmetic, once per distinct range (a hand's joints often share one)."""
+    out = np.empty(len(ranges))
+    t = np.abs(torques)
+    groups: dict[int, list[int]] = {}
+    for j, r in enumerate(ranges):
+        groups.setdefault(id(r), []).append(j)
+    for joints in groups.values():
+        r = ranges[joints[0]]
+        hp = r.halfplanes[r.halfplanes[:, 1] > 0.0]
+        tj = t[joints]
+        best = np.min(
+            (hp[:, 2][:, None] - hp[:, 0][:, None] * tj) / hp[:, 1][:, None], axis=0, initial=r.max_speed
+        )
+        out[joints] = np.where(tj > r.max_torque * (1 + 1e-12), -np.inf, best)
+    return out
+
+
+def ray_lengths_in(proj: Projection, rays: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``max alpha`` with ``alpha r`` in :math:`S_{ov}` for each row ``r`` of ``(R, D)`` ``rays``
+    (Problem 2's alphas with one REFS vertex), from the facets of a :class:`BoxImage`'s
+    projection: ``nan`` for a zero row, 0 for a ray leaving the linear hull at once, ``inf``
+    where no facet stops it (the rule of the LP path's ``tvms._ray_lengths``, all rays at once)."""
+    w, basis = proj.metric, proj.basis
+    s = rays * w
+    size = np.linalg.norm(s, axis=1)
+    out = np.full(len(rays), np.inf)
+    if proj.facets is not None and basis is not None:
+        rate = rays @ proj.facets[0].T
+        ratio = np.full(rate.shape, np.inf)
+        np.divide(np.maximum(proj.facets[1], 0.0), rate, out=ratio, where=rate > 1e-300)
+        out = np.min(ratio, axis=1, initial=np.inf)
+    else:  # a point or a segment: between the vertices (or the origin)
+        for i, r in enumerate(s):
+            along = proj.vertices * w @ r / max(float(size[i]) ** 2, 1e-300)
+            out[i] = max(float(np.max(along, initial=0.0)), 0.0)
+    if basis is not None:
+        off = np.linalg.norm(s - (s @ basis.T) @ basis, axis=1) > 1e-9 * size
+        out[off] = 0.0
+    out[size == 0.0] = np.nan
+    return out
 
 
 def speed_box(state: GraspState) -> tuple[NDArray[np.float64] | None, str]:
@@ -69,7 +121,7 @@ def speed_box(state: GraspState) -> tuple[NDArray[np.float64] | None, str]:
         if c.type not in ("F", "L"):
             return None, f"contact {c.name!r} is a {c.type} contact (only F and L kinematics are equalities)"
     ranges = state.operation_ranges
-    at_g = np.array([r.max_speed_at(g) for r, g in zip(ranges, state.gravity_torque, strict=True)])
+    at_g = _speeds_at(ranges, state.gravity_torque)
     if np.any(at_g < 0.0):
         return None, "a gravity torque exceeds its joint's torque"
     if len(state.contacts) != 1:

@@ -34,7 +34,7 @@ from .enumeration import project_cdd
 from .estimate import VolumeEstimate
 from .lifted import Projection, ProjectionStatus, lifted_polytope
 from .projection import REL_TOL, project_lp
-from .speed_box import BoxImage, speed_box_projection
+from .speed_box import BoxImage, ray_lengths_in, speed_box_projection
 from .volume import facet_volume, hull_volume
 
 __all__ = [
@@ -303,7 +303,7 @@ def _box_image_result(
     volume = float(_d_volume(np.array(affine), proj.dimension, weights))
     alpha = None
     if state.rvds is not None:
-        rays = _ray_lengths(proj, np.asarray(state.rvds, dtype=float), proj.facets)
+        rays = ray_lengths_in(proj, np.asarray(state.rvds, dtype=float))
         alpha = np.column_stack([rays, rays])
     t1 = time.perf_counter()
     return TvmsResult(

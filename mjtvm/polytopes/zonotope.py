@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from itertools import combinations, product
 
 import numpy as np
@@ -112,12 +113,31 @@ def _cofactor_normals(sub: NDArray[np.float64]) -> NDArray[np.float64]:
     k = sub.shape[1]
     if k == 2:
         return np.stack([sub[:, 1, 0], -sub[:, 0, 0]], axis=1)
-    if k == 3:
-        return np.cross(sub[:, :, 0], sub[:, :, 1])
+    if k == 3:  # the cross product, written out (np.cross moves axes: slower on small arrays)
+        a, b = sub[:, :, 0], sub[:, :, 1]
+        return np.stack(
+            [
+                a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+                a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+            ],
+            axis=1,
+        )
     rows = np.arange(k)
     return np.stack(
         [(-1) ** j * np.linalg.det(sub[:, rows != j, :]) for j in range(k)], axis=1
     )  # Laplace expansion of det([x, sub]) along x
+
+
+@lru_cache(maxsize=64)
+def _subsets(n: int, size: int) -> tuple[NDArray[np.intp], NDArray[np.int8]]:
+    """The ``size``-subsets of ``range(n)`` as rows, and the ``2^size`` sign choices (cached:
+    a hand's fingers ask for the same few)."""
+    subsets = np.array(list(combinations(range(n), size)), dtype=np.intp).reshape(-1, size)
+    choices = np.array(list(product((-1, 1), repeat=size)), dtype=np.int8).reshape(-1, size)
+    subsets.setflags(write=False)
+    choices.setflags(write=False)
+    return subsets, choices
 
 
 def _faces(
@@ -135,10 +155,10 @@ def _faces(
             np.abs(g[0]).sum(keepdims=True),
             2.0 * float(np.abs(g).sum()),
         )
-    subsets = np.array(list(combinations(range(n), k - 1)), dtype=np.intp)
+    subsets, choices = _subsets(n, k - 1)
     normals = _cofactor_normals(np.transpose(g[:, subsets], (1, 0, 2)))
-    area = np.linalg.norm(normals, axis=1)
-    gnorm = np.linalg.norm(g, axis=0)
+    area = np.sqrt(np.einsum("ij,ij->i", normals, normals))
+    gnorm = np.sqrt(np.einsum("ij,ij->j", g, g))
     spans = area > RANK_TOL * np.prod(gnorm[subsets], axis=1)  # the k - 1 span a hyperplane
     subsets, normals, area = subsets[spans], normals[spans] / area[spans, None], area[spans]
     dots = normals @ g
@@ -146,7 +166,6 @@ def _faces(
     generic = np.count_nonzero(inside, axis=1) == k - 1
     width = np.abs(dots).sum(axis=1)
     # Generic facets: the signs off the hyperplane, then the 2^(k-1) choices on its generators.
-    choices = np.array(list(product((-1, 1), repeat=k - 1)), dtype=np.int8)
     base = np.where(inside[generic], 0, np.sign(dots[generic])).astype(np.int8)
     signs = np.repeat(base, len(choices), axis=0)
     rows = np.arange(len(signs))[:, None]
