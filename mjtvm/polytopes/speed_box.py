@@ -90,19 +90,20 @@ def ray_lengths_in(proj: Projection, rays: NDArray[np.float64]) -> NDArray[np.fl
     where no facet stops it (the rule of the LP path's ``tvms._ray_lengths``, all rays at once)."""
     w, basis = proj.metric, proj.basis
     s = rays * w
-    size = np.linalg.norm(s, axis=1)
+    size = np.sqrt(np.einsum("ij,ij->i", s, s))
     out = np.full(len(rays), np.inf)
     if proj.facets is not None and basis is not None:
         rate = rays @ proj.facets[0].T
         ratio = np.full(rate.shape, np.inf)
         np.divide(np.maximum(proj.facets[1], 0.0), rate, out=ratio, where=rate > 1e-300)
-        out = np.min(ratio, axis=1, initial=np.inf)
+        out = ratio.min(axis=1, initial=np.inf)
     else:  # a point or a segment: between the vertices (or the origin)
         for i, r in enumerate(s):
             along = proj.vertices * w @ r / max(float(size[i]) ** 2, 1e-300)
             out[i] = max(float(np.max(along, initial=0.0)), 0.0)
     if basis is not None:
-        off = np.linalg.norm(s - (s @ basis.T) @ basis, axis=1) > 1e-9 * size
+        rest = s - (s @ basis.T) @ basis
+        off = np.sqrt(np.einsum("ij,ij->i", rest, rest)) > 1e-9 * size
         out[off] = 0.0
     out[size == 0.0] = np.nan
     return out
@@ -139,9 +140,16 @@ def _twist_space(state: GraspState, rvds_cone: bool) -> NDArray[np.float64] | No
     if not rvds_cone or state.rvds is None:
         return np.eye(big_d)
     r = np.asarray(state.rvds, dtype=float)
-    r = r[np.any(r != 0.0, axis=1)]
+    nonzero = r != 0.0
+    count = nonzero.sum(axis=1)
+    r = r[count > 0]
     if not len(r):
         return np.zeros((big_d, 0))
+    if (count <= 1).all():  # +-e_i only: a subspace iff each axis has both signs
+        axis = nonzero[count > 0].argmax(axis=1)
+        signs = np.sign(r[np.arange(len(r)), axis])
+        pos, neg = set(axis[signs > 0].tolist()), set(axis[signs < 0].tolist())
+        return np.eye(big_d)[:, sorted(pos)] if pos == neg else None
     size = np.linalg.norm(r, axis=1)
     gap = np.linalg.norm(r[:, None, :] + r[None, :, :], axis=2)  # |r_i + r_j|: 0 for a pair
     if not np.all(np.min(gap, axis=1) <= RANK_TOL * size):
@@ -210,7 +218,7 @@ def speed_box_projection(
     except ParamError as e:  # the arrays are finite: only the enumeration's size is refused
         return None, str(e)
     rows = z.normals * weights
-    norm = np.linalg.norm(rows, axis=1)
+    norm = np.sqrt(np.einsum("ij,ij->i", rows, rows))
     facets = (rows / norm[:, None], z.offsets / norm) if z.dimension >= 2 else None
     proj = Projection(
         status="bounded",

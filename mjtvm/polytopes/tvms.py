@@ -300,11 +300,11 @@ def _box_image_result(
     t0 = time.perf_counter()
     proj = image.projection
     affine = image.affine_volume
-    volume = float(_d_volume(np.array(affine), proj.dimension, weights))
+    volume = affine / float(np.prod(weights)) if proj.dimension == len(weights) else 0.0  # _d_volume
     alpha = None
     if state.rvds is not None:
         rays = ray_lengths_in(proj, np.asarray(state.rvds, dtype=float))
-        alpha = np.column_stack([rays, rays])
+        alpha = np.stack([rays, rays], axis=1)
     t1 = time.perf_counter()
     return TvmsResult(
         status="bounded",

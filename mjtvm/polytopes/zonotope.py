@@ -87,13 +87,14 @@ class Zonotope:
 def _merged(gens: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(m, n')``: zero columns dropped (below :data:`RANK_TOL` x the largest), parallel ones added
     (aligned to the first of their direction)."""
-    norms = np.linalg.norm(gens, axis=0)
+    norms = np.sqrt(np.einsum("ij,ij->j", gens, gens))
     big = float(norms.max(initial=0.0))
     if big == 0.0:
         return np.zeros((gens.shape[0], 0))
     keep = norms > RANK_TOL * big
     g, norms = gens[:, keep], norms[keep]
-    cos = (g / norms).T @ (g / norms)
+    unit = g / norms
+    cos = unit.T @ unit
     parallel = np.abs(cos) >= 1.0 - PLANE_TOL**2 / 2  # angle below PLANE_TOL
     np.fill_diagonal(parallel, True)
     if np.count_nonzero(parallel) == len(norms):  # only the diagonal: nothing to merge
@@ -159,12 +160,15 @@ def _faces(
     normals = _cofactor_normals(np.transpose(g[:, subsets], (1, 0, 2)))
     area = np.sqrt(np.einsum("ij,ij->i", normals, normals))
     gnorm = np.sqrt(np.einsum("ij,ij->j", g, g))
-    spans = area > RANK_TOL * np.prod(gnorm[subsets], axis=1)  # the k - 1 span a hyperplane
-    subsets, normals, area = subsets[spans], normals[spans] / area[spans, None], area[spans]
+    spans = area > RANK_TOL * gnorm[subsets].prod(axis=1)  # the k - 1 span a hyperplane
+    if not spans.all():
+        subsets, normals, area = subsets[spans], normals[spans], area[spans]
+    normals = normals / area[:, None]
     dots = normals @ g
-    inside = np.abs(dots) <= PLANE_TOL * gnorm
-    generic = np.count_nonzero(inside, axis=1) == k - 1
-    width = np.abs(dots).sum(axis=1)
+    size = np.abs(dots)
+    inside = size <= PLANE_TOL * gnorm
+    generic = inside.sum(axis=1) == k - 1
+    width = size.sum(axis=1)
     # Generic facets: the signs off the hyperplane, then the 2^(k-1) choices on its generators.
     base = np.where(inside[generic], 0, np.sign(dots[generic])).astype(np.int8)
     signs = np.repeat(base, len(choices), axis=0)
@@ -173,7 +177,7 @@ def _faces(
     # The pyramids over the facet pair: 2 x (1/k) x width x 2^(k-1) area.
     volume = 2.0**k / k * float(width[generic] @ area[generic])
     parts, kept_normals, kept_width = [signs], [normals[generic]], [width[generic]]
-    if not np.all(generic):
+    if not generic.all():
         # A hyperplane with more than k - 1 generators: its facets are (k-1)-zonotopes of them,
         # found once per (k-1)-subset: one each.
         planes, first = np.unique(inside[~generic], axis=0, return_index=True)
@@ -189,21 +193,24 @@ def _faces(
             volume += 2.0 / k * float(width[j]) * sub_volume
     half = np.vstack(parts)
     return (
-        _distinct_rows(np.vstack([half, -half])),
+        _distinct_rows(half),
         np.vstack(kept_normals),
         np.concatenate(kept_width),
         volume,
     )
 
 
-def _distinct_rows(signs: NDArray[np.int8]) -> NDArray[np.int8]:
-    """The distinct rows of a ``(r, n)`` +-1 array (as integer keys when ``n <= 62``: a sort of
-    ``r`` integers instead of ``r`` rows)."""
-    n = signs.shape[1]
+def _distinct_rows(half: NDArray[np.int8]) -> NDArray[np.int8]:
+    """The distinct rows of the +-1 rows ``half`` and of their negatives (as integer keys when
+    ``n <= 62``, a negative's key being the complement of the row's: a sort of integers
+    instead of rows)."""
+    n = half.shape[1]
     if n > 62:
-        return np.unique(signs, axis=0)
-    keys = (signs > 0).astype(np.int64) @ (np.int64(1) << np.arange(n, dtype=np.int64))
-    return signs[np.unique(keys, return_index=True)[1]]
+        return np.unique(np.vstack([half, -half]), axis=0)
+    bits = np.int64(1) << np.arange(n, dtype=np.int64)
+    keys = (half > 0).astype(np.int64) @ bits
+    keys = np.unique(np.concatenate([keys, (bits.sum() - keys)]))
+    return (((keys[:, None] & bits) != 0) * 2 - 1).astype(np.int8)
 
 
 def _check_size(n: int, k: int) -> None:
