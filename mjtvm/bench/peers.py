@@ -83,8 +83,14 @@ def fingertip_state(joints: int, seed: int = 0) -> GraspState:
 
 
 def _pycapacity() -> Any:
+    """``pycapacity.robot``, or ``None`` when it is not installed (it imports numpy.matlib, which
+    warns: silenced)."""
+    import warnings
+
     try:
-        import pycapacity.robot as robot
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PendingDeprecationWarning)
+            import pycapacity.robot as robot
     except ImportError:
         return None
     return robot

@@ -65,7 +65,39 @@ def auto_notes(report: dict[str, Any]) -> list[str]:
             "would need a warmer start across RVDS vertices or a smaller LP (fewer friction-cone edges)."
         )
     notes += _dataset_notes(report)
+    notes += _peer_notes(report)
     return notes
+
+
+def _peer_notes(report: dict[str, Any]) -> list[str]:
+    """The rows slower than pycapacity (:mod:`mjtvm.bench.peers`), with this run's split."""
+    pe = report.get("peers")
+    if not pe or pe.get("met") is not False:
+        return []
+    slow = [
+        f"{n} joints {key} x{r[key]['ratio']:.2f}"
+        for n, r in pe["fingers"].items()
+        for key in ("tvms", "function", "force")
+        if r[key]["ratio"] < pe["target_ratio"]
+    ]
+    ex = pe["four_link_example"]
+    slow += [
+        f"four-link {k} x{ex[k]['ratio']:.2f}"
+        for k in ("velocity", "force")
+        if ex[k]["ratio"] < pe["target_ratio"]
+    ]
+    split = "; ".join(
+        f"{n} joints: tvms {1e6 * r['tvms']['ours_s']:.0f} us of which the zonotope itself "
+        f"{1e6 * r['function']['ours_s']:.0f} us"
+        for n, r in pe["fingers"].items()
+    )
+    return [
+        "Slower than pycapacity: "
+        + ", ".join(slow)
+        + f". {split}: the rest of tvms is the condition's checks, the kinematic map (SVDs), the "
+        "alphas and the result; every step is numpy on arrays of a few dozen numbers, so the time "
+        "is per-call overhead (a few us per numpy call), not arithmetic."
+    ]
 
 
 def _dataset_notes(report: dict[str, Any]) -> list[str]:
@@ -330,6 +362,37 @@ def _dataset_rows(report: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _peer_rows(report: dict[str, Any]) -> list[str]:
+    """Velocity and force polytopes against pycapacity, the same run, interleaved (mjtvm.bench.peers)."""
+    pe = report.get("peers")
+    if not pe:
+        return []
+    target = f">= x{pe['target_ratio']:.1f}"
+
+    def row(label: str, pair: dict[str, Any]) -> str:
+        peer = "pycapacity -" if pair["peer_s"] is None else f"pycapacity {_ms(pair['peer_s'])}"
+        ratio = "-" if pair["ratio"] is None else f"x{pair['ratio']:.2f}"
+        met = None if pair["ratio"] is None else pair["ratio"] >= pe["target_ratio"]
+        return _row(label[:44], pair["ours_s"], peer, ratio, None, target, _met(met))
+
+    lines = []
+    for n, r in pe["fingers"].items():
+        lines.append(row(f"Velocity polytope {n}j: tvms ({r['method']})", r["tvms"]))
+        lines.append(row(f"Velocity polytope {n}j: velocity_polytope", r["function"]))
+        lines.append(row(f"Force polytope {n}j: force_polytope", r["force"]))
+    ex = pe["four_link_example"]
+    lines.append(row("pycapacity's four-link robot: velocity", ex["velocity"]))
+    lines.append(row("pycapacity's four-link robot: force", ex["force"]))
+    lp = "; ".join(
+        f"{n}j {_ms(r['lp']['median_s'])} ({r['lp']['num_lps']} LPs)" for n, r in pe["fingers"].items()
+    )
+    agree = max(r["vs_lp"]["hausdorff_rel"] for r in pe["fingers"].values())
+    lines.append(
+        f"peers: the same TVMS by LPs (method='lp'): {lp}; zonotope vs LP vertices within {agree:.1e} relative"
+    )
+    return lines
+
+
 def _footer(report: dict[str, Any], notes: Sequence[str]) -> list[str]:
     """What the figures are, the notes, the machine and the run's wall time."""
     m = report["machine"]
@@ -352,7 +415,7 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
     notes and the machine."""
     lines = [_HEAD, "-" * len(_HEAD)]
     lines += _case_rows(report) + _lift_rows(report) + _sweep_rows(report) + _scaling_rows(report)
-    lines += _hand_rows(report) + _dataset_rows(report)
+    lines += _hand_rows(report) + _dataset_rows(report) + _peer_rows(report)
     if "problem1_scale" in report:
         from .problem1 import format_scale_table
 

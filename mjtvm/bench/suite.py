@@ -29,6 +29,9 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
   five-contact states with a six-direction RVDS, Problem 2 with one REFS vertex (6 LPs) and
   with six (36 LPs) as grasps/s on one process, the 36-LP batch on 2 processes, and
   ``mjtvm solve STATE.json`` and ``import mjtvm`` as processes (``--quick``: one repeat);
+* **peers** (:mod:`mjtvm.bench.peers`): velocity and force polytopes of one fingertip of 3, 4,
+  7 and 12 joints and pycapacity's four-link example against pycapacity (when installed),
+  pairs interleaved, as ratios (target: at least as fast);
 * **Problem 1 at scale** (:func:`~mjtvm.bench.problem1.bench_p1_scale`, not with ``--quick``):
   Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
   the 16-finger hand, each in a fresh process with its peak resident memory.
@@ -188,6 +191,7 @@ def run_suite(
     sweeps: bool = True,
     hands: Sequence[str] = HANDS,
     dataset: bool = True,
+    peers: bool = True,
     scale: bool = True,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
@@ -243,6 +247,11 @@ def run_suite(
     if scaling_fingers:
         say(f"scaling: {', '.join(map(str, scaling_fingers))} fingers")
         report["scaling"] = bench_scaling(scaling_fingers, repeats=max(1, repeats // 2), p1_repeats=5)
+    if peers:
+        from . import peers as bench_peers
+
+        say("peers: velocity and force polytopes against pycapacity")
+        report["peers"] = bench_peers.bench_peers(repeats=max(5, repeats // 4), lp_repeats=1 if quick else 3)
     if scale and not quick:
         from .problem1 import bench_p1_scale
 
@@ -278,4 +287,6 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
         out["scaling_p2_at_most_linear"] = report["scaling"]["p2_at_most_linear"]
     if "dataset" in report:
         out.update({f"dataset_{k}": v for k, v in report["dataset"]["met"].items()})
+    if report.get("peers", {}).get("met") is not None:
+        out["peers_pycapacity"] = report["peers"]["met"]
     return out

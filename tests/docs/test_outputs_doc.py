@@ -112,6 +112,10 @@ def test_every_table_is_parsed() -> None:
         "bench.json:dataset",
         "bench.json:dataset.batch",
         "bench.json:dataset.cli",
+        "bench.json:peers",
+        "bench.json:peers.finger",
+        "bench.json:peers.pair",
+        "bench.json:peers.agreement",
         "show",  # tested in tests/cli/test_show.py
         "show-contacts",
     }
@@ -278,7 +282,7 @@ def test_gears_csv(lift2: Any) -> None:
 # ------------------------------------------------------------------ mjtvm bench
 def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     """The suite with each section on its smallest input (the report's structure is the same)."""
-    from mjtvm.bench import cases, dataset, hands, scaling, suite
+    from mjtvm.bench import cases, dataset, hands, peers, scaling, suite
     from mjtvm.core.state_file import load_state
     from mjtvm.data import __file__ as data_init
 
@@ -307,6 +311,8 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(
         dataset, "bench_dataset", lambda **_: real_dataset(num_states=4, repeats=1, cli_repeats=1)
     )
+    real_peers = peers.bench_peers
+    monkeypatch.setattr(peers, "bench_peers", lambda **_: real_peers((3,), repeats=1, lp_repeats=1))
     report = suite.run_suite(scale=False, progress=False)
     report["notes"] = []  # added by the command (mjtvm.cli.bench) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
@@ -324,6 +330,17 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     for key in ("batch_weight", "batch_six_wrenches"):
         assert_documented("bench.json:dataset.batch", report["dataset"][key])
     assert_documented("bench.json:dataset.cli", report["dataset"]["cli"])
+    assert_documented("bench.json:peers", report["peers"])
+    finger = report["peers"]["fingers"]["3"]
+    assert_documented("bench.json:peers.finger", finger)
+    for pair in (
+        finger["tvms"],
+        finger["function"],
+        finger["force"],
+        report["peers"]["four_link_example"]["force"],
+    ):
+        assert_documented("bench.json:peers.pair", pair)
+    assert_documented("bench.json:peers.agreement", finger["vs_lp"])
     for entry in report["hands"].values():
         assert_documented("bench.json:hands", entry)
         assert_documented("bench.json:stats", entry["load"])
