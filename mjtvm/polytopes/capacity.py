@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from itertools import product
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -76,7 +77,7 @@ def _jacobian(jacobian: ArrayLike) -> NDArray[np.float64]:
         raise ParamError("jacobian", "expected an (m, n) array of numbers", jacobian) from e
     if j.ndim != 2 or 0 in j.shape:
         raise ParamError("jacobian", f"expected an (m, n) array with m, n >= 1, got shape {j.shape}")
-    if not np.all(np.isfinite(j)):
+    if not np.isfinite(j).all():
         raise ParamError("jacobian", "expected finite numbers")
     return j
 
@@ -91,11 +92,11 @@ def _limits(
             a = np.asarray(v, dtype=float).reshape(-1)
         except (TypeError, ValueError) as e:
             raise ParamError(name, f"expected {n} numbers (one per joint)", v) from e
-        if a.shape != (n,) or not np.all(np.isfinite(a)):
+        if a.shape != (n,) or not np.isfinite(a).all():
             raise ParamError(name, f"expected {n} finite numbers (one per joint)", v)
         out.append(a)
     bad = out[0] >= out[1] if strict else out[0] > out[1]
-    if np.any(bad):
+    if bad.any():
         i = int(np.flatnonzero(bad)[0])
         rel = "<" if strict else "<="
         raise ParamError(name_min, f"expected {name_min} {rel} {name_max} for every joint; joint {i} is not")
@@ -203,6 +204,11 @@ def force_polytope(jacobian: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike) 
         raise ParamError("jacobian", f"expected rank {m} (a force that no joint feels is unbounded)")
     rows = np.vstack([j.T, -j.T])
     bounds = np.concatenate([high, -low])
+    norm = np.sqrt(np.einsum("ij,ij->i", rows, rows))
+    if n == m:  # J^-T [tau_min, tau_max]: a parallelepiped, every corner a vertex
+        corners = np.array(list(product(*zip(low, high, strict=True))))
+        verts = np.linalg.solve(j.T, corners.T).T
+        return CapacityPolytope(verts, rows / norm[:, None], bounds / norm, m)
     p = _interior_point(rows, bounds, j)
     slack = bounds - rows @ p
     if m == 1:  # an interval: the tightest bound on each side
@@ -216,7 +222,8 @@ def force_polytope(jacobian: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike) 
     active = np.asarray(hull.simplices)
     verts = np.linalg.solve(rows[active], bounds[active][:, :, None])[:, :, 0]
     # A vertex with more than m active rows is one facet of several simplices: keep one.
-    verts = distinct(verts, DUPLICATE_TOL * float(np.max(np.abs(verts - p))))
-    face = np.unique(active)
-    norm = np.linalg.norm(rows[face], axis=1)
-    return CapacityPolytope(verts, rows[face] / norm[:, None], bounds[face] / norm, m)
+    tol = DUPLICATE_TOL * float(np.abs(verts - p).max())
+    if ((rows @ verts.T >= (bounds - tol * norm)[:, None]).sum(axis=0) > m).any():
+        verts = distinct(verts, tol)
+    face = hull.vertices  # the polar points on the hull: the rows that are facets
+    return CapacityPolytope(verts, rows[face] / norm[face, None], bounds[face] / norm[face], m)

@@ -3,7 +3,8 @@ r"""Problem 1: the TVMS :math:`S_{ov}` and the TVMM (eq. 26-29, 34), the ``mjtvm
 When no force binds (:mod:`~mjtvm.polytopes.speed_box`: no wrench to balance, gravity
 torques that leave every joint its full speed, F and L contacts, a twist subspace),
 :math:`S_{ov}` is the image of the joint-speed box, a zonotope, computed directly without an
-LP (``method="auto"``, the default). Otherwise :func:`tvms` builds the lifted polytope (:func:`~mjtvm.polytopes.lifted.lifted_polytope`),
+LP (``method="auto"``, the default). Otherwise :func:`tvms` builds the lifted polytope
+(:func:`~mjtvm.polytopes.lifted.lifted_polytope`),
 projects it onto the twist space (:func:`~mjtvm.polytopes.projection.project_lp`, or the paper's
 vertex enumeration :func:`~mjtvm.polytopes.enumeration.project_cdd` as the baseline) and measures
 it: the D-dimensional volume (eq. 28-29, by Qhull), 0 unless :math:`S_{ov}` is full-dimensional,
@@ -300,7 +301,7 @@ def _box_image_result(
     t0 = time.perf_counter()
     proj = image.projection
     affine = image.affine_volume
-    volume = affine / float(np.prod(weights)) if proj.dimension == len(weights) else 0.0  # _d_volume
+    volume = affine / float(np.prod(weights)) if proj.dimension == len(weights) else 0.0  # eq. 29
     alpha = None
     if state.rvds is not None:
         rays = ray_lengths_in(proj, np.asarray(state.rvds, dtype=float))
@@ -395,13 +396,13 @@ def tvms(
     if method not in ("auto", "lp", "cdd", "zonotope"):
         raise ParamError("method", f"expected 'auto', 'lp', 'cdd' or 'zonotope', got {method!r}", method)
     weights = default_scale(state) if scale is None else _check_scale(scale, state.twist_dim)
+    t0 = time.perf_counter()  # the condition's check counts as assembling when it fails
     if method in ("auto", "zonotope"):
         image, why = speed_box_projection(state, weights, rvds_cone)
         if image is not None:
             return _box_image_result(state, image, weights, rvds_cone)
         if method == "zonotope":
             raise ParamError("method", f"expected a state whose forces cannot bind for 'zonotope': {why}")
-    t0 = time.perf_counter()
     poly = lifted_polytope(state, rvds_cone=rvds_cone, box=box)
     t1 = time.perf_counter()
     if method in ("auto", "lp"):

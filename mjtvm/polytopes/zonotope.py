@@ -247,7 +247,7 @@ def zonotope(center: ArrayLike, generators: ArrayLike) -> Zonotope:
     g = np.asarray(generators, dtype=float)
     if c.ndim != 1 or g.ndim != 2 or g.shape[0] != c.shape[0] or not c.size:
         raise ParamError("generators", f"expected an (m, n) array with m = len(center) >= 1, got {g.shape}")
-    if not (np.all(np.isfinite(c)) and np.all(np.isfinite(g))):
+    if not (np.isfinite(c).all() and np.isfinite(g).all()):
         raise ParamError("generators", "expected finite numbers")
     m = c.shape[0]
     merged = _merged(g)

@@ -203,3 +203,11 @@ def test_same_vertices_as_pycapacity() -> None:
         # pycapacity rounds the torques of its vertices to 1e-7.
         assert len(theirs_f) == len(ours_f)
         assert hausdorff(ours_f, theirs_f) <= 1e-6 * np.abs(ours_f).max()
+
+
+def test_force_polytope_with_a_vertex_on_three_limits() -> None:
+    """|f_x| <= 1, |f_y| <= 1, |f_x + f_y| <= 2: the square, whose corners +-(1, 1) lie on three
+    limits each (Qhull's two simplices there give one vertex)."""
+    p = force_polytope(np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]]), [-1.0, -1.0, -2.0], [1.0, 1.0, 2.0])
+    assert_same_points(p.vertices, np.array([[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]]))
+    assert p.volume == pytest.approx(4.0, rel=1e-12)
