@@ -156,6 +156,15 @@ def _faces(
             np.abs(g[0]).sum(keepdims=True),
             2.0 * float(np.abs(g).sum()),
         )
+    if n == k:  # a parallelepiped: every sign vector, facets along the dual basis
+        dual = np.linalg.inv(g)  # dual[i] . g_j = delta_ij
+        size = np.sqrt(np.einsum("ij,ij->i", dual, dual))
+        return (
+            _subsets(k, k)[1].copy(),
+            dual / size[:, None],
+            1.0 / size,
+            2.0**k * abs(float(np.linalg.det(g))),
+        )
     subsets, choices = _subsets(n, k - 1)
     normals = _cofactor_normals(np.transpose(g[:, subsets], (1, 0, 2)))
     area = np.sqrt(np.einsum("ij,ij->i", normals, normals))
