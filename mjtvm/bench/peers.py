@@ -176,11 +176,10 @@ def _finger(joints: int, repeats: int, lp_repeats: int, robot: Any) -> dict[str,
         "vs_peer": None,
         "force_vs_peer": None,
     }
-    if robot is not None:
-        row["vs_peer"] = _agreement(result.vertices[:, :3], np.asarray(velocity().vertices).T)  # type: ignore[misc]
+    if velocity is not None and force is not None:
+        row["vs_peer"] = _agreement(result.vertices[:, :3], np.asarray(velocity().vertices).T)
         row["force_vs_peer"] = _agreement(
-            force_polytope(jac, -torque, torque).vertices,
-            np.asarray(force().vertices).T,  # type: ignore[misc]
+            force_polytope(jac, -torque, torque).vertices, np.asarray(force().vertices).T
         )
     return row
 
@@ -210,14 +209,12 @@ def _own_example(repeats: int, robot: Any) -> dict[str, Any]:
         "velocity": _pair(lambda: velocity_polytope(jac, -lim, lim), velocity, repeats),
         "force": _pair(lambda: force_polytope(jac, -lim, lim), force, repeats),
     }
-    if robot is not None:
+    if velocity is not None and force is not None:
         out["velocity_vs_peer"] = _agreement(
-            velocity_polytope(jac, -lim, lim).vertices,
-            np.asarray(velocity().vertices).T,  # type: ignore[misc]
+            velocity_polytope(jac, -lim, lim).vertices, np.asarray(velocity().vertices).T
         )
         out["force_vs_peer"] = _agreement(
-            force_polytope(jac, -lim, lim).vertices,
-            np.asarray(force().vertices).T,  # type: ignore[misc]
+            force_polytope(jac, -lim, lim).vertices, np.asarray(force().vertices).T
         )
     return out
 

@@ -267,10 +267,10 @@ def zonotope(center: ArrayLike, generators: ArrayLike) -> Zonotope:
         u, k = np.zeros((m, 0)), 0
     basis = u[:, :k].T
     if k == 0:
+        no_facets = np.zeros((0, m)), np.zeros(0)
         return Zonotope(
-            c, merged, 0, basis, c[None, :], np.zeros((1, merged.shape[1]), np.int8),
-            np.zeros((0, m)), np.zeros(0), 0.0,
-        )  # fmt: skip
+            c, merged, 0, basis, c[None, :], np.zeros((1, merged.shape[1]), np.int8), *no_facets, 0.0
+        )
     _check_size(merged.shape[1], k)
     local = basis @ merged
     signs, normals, width, volume = _faces(local)

@@ -187,3 +187,17 @@ def test_command_line_takes_the_zonotope_by_default(tmp_path, capsys) -> None:
     assert main(["tvms", "case1", "--method", "zonotope", "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "method" in err[0] and "REFS wrench" in err[0]
+
+
+def test_speeds_at_gravity_torques_match_the_operation_range() -> None:
+    """The box's half-widths (one vectorised pass per distinct range) equal
+    OperationRange.max_speed_at to the bit, and -inf beyond the largest torque."""
+    from mjtvm.core.operation_range import default_operation_range
+    from mjtvm.polytopes.speed_box import _speeds_at
+
+    motor, box = default_operation_range(), OperationRange.box(2.0, 10.0)
+    ranges = (motor, box, motor, box, motor)
+    torques = np.array([0.0, -1.5, 0.7, 2.5, -1.052])
+    expected = [r.max_speed_at(t) for r, t in zip(ranges, torques, strict=True)]
+    assert _speeds_at(ranges, torques).tolist() == expected
+    assert expected[3] == -np.inf and expected[1] == 10.0
