@@ -211,3 +211,47 @@ def test_force_polytope_with_a_vertex_on_three_limits() -> None:
     p = force_polytope(np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]]), [-1.0, -1.0, -2.0], [1.0, 1.0, 2.0])
     assert_same_points(p.vertices, np.array([[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]]))
     assert p.volume == pytest.approx(4.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_degenerate_integer_generators_against_the_corner_images(seed: int) -> None:
+    """Small integer generators: zero, parallel and coplanar ones everywhere, spans of every
+    dimension. Vertices (as many), facets and volume against the hull of the corner images
+    inside their span."""
+    rng = np.random.default_rng(seed)
+    for _ in range(25):
+        m, n = int(rng.integers(2, 5)), int(rng.integers(1, 8))
+        g = rng.integers(-2, 3, size=(m, n)).astype(float)
+        c = rng.integers(-2, 3, size=m).astype(float)
+        z = zonotope(c, g)
+        assert z.dimension == (np.linalg.matrix_rank(g) if g.any() else 0)
+        if z.dimension == 0:
+            assert z.vertices.tolist() == [c.tolist()]
+            continue
+        local = (corner_images(c, g) - c) @ z.basis.T
+        ours = (z.vertices - c) @ z.basis.T
+        if z.dimension == 1:
+            assert np.sort(ours[:, 0]) == pytest.approx([local.min(), local.max()], abs=1e-12)
+            continue
+        verts, vol = hull_vertices(local)
+        assert_same_points(ours, verts)
+        assert z.affine_volume == pytest.approx(vol, rel=1e-9)
+        assert (z.offsets[:, None] - z.normals @ z.vertices.T).min() >= -1e-9
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_degenerate_integer_jacobians_force_polytope(seed: int) -> None:
+    rng = np.random.default_rng(50 + seed)
+    for _ in range(20):
+        m = int(rng.integers(2, 4))
+        n = int(rng.integers(m, 7))
+        j = rng.integers(-2, 3, size=(m, n)).astype(float)
+        low, high = -rng.integers(1, 4, size=n).astype(float), rng.integers(1, 4, size=n).astype(float)
+        if np.linalg.matrix_rank(j) < m:
+            with pytest.raises(ParamError, match=r"^jacobian: expected rank"):
+                force_polytope(j, low, high)
+            continue
+        p = force_polytope(j, low, high)
+        expected = force_brute_force(j, low, high)
+        assert_same_points(p.vertices, expected)
+        assert p.volume == pytest.approx(ConvexHull(expected).volume, rel=1e-9)
