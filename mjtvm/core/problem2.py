@@ -154,7 +154,12 @@ class StateLPs:
         self._abs_dense: NDArray[np.float64] | None = None
         self._cert: Certifier | None = None  # _certifier's
         self._column: tuple[bytes, NDArray[np.float64]] | None = None  # column's last
-        self._last: tuple[NDArray[np.float64], float] = (np.full(state.twist_dim, np.nan), np.nan)
+        # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
+        self._last: tuple[NDArray[np.float64], NDArray[np.float64], float] = (
+            np.full(state.twist_dim, np.nan),
+            np.full(state.twist_dim, np.nan),
+            np.nan,
+        )
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without
@@ -236,13 +241,15 @@ class StateLPs:
                 self.session = self._session(w, r, alpha_max)
             else:
                 ses = self.session
-                ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
-                # The bounds only change with k (set_column re-sends alpha's when it rescales).
+                # The column changes with l, the bounds with k (set_column re-sends alpha's
+                # bounds when it rescales).
+                if not np.array_equal(r, self._last[1]):
+                    ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
                 if not np.array_equal(w, self._last[0]):
                     ses.set_row_bounds(self.wrench_rows, -w, -w)
-                if alpha_max != self._last[1]:
+                if alpha_max != self._last[2]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
-            self._last = (w, alpha_max)
+            self._last = (w, r, alpha_max)
             return Settled(self.session.solve(duals=True), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
