@@ -154,6 +154,10 @@ class StateLPs:
         self._abs_dense: NDArray[np.float64] | None = None
         self._cert: Certifier | None = None  # _certifier's
         self._column: tuple[bytes, NDArray[np.float64]] | None = None  # column's last
+        self._zero: tuple[bytes, float] | None = None  # zero_alpha's last
+        # _bounds' answers per (w, alpha_max): one per REFS vertex, asked again for every l.
+        self._bounds_of: dict[tuple[bytes, float], tuple[NDArray[np.float64], ...]] = {}
+        self._matrix_of: bytes | None = None  # the r whose column pair_matrix holds
         # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
         self._last: tuple[NDArray[np.float64], NDArray[np.float64], float] = (
             np.full(state.twist_dim, np.nan),
@@ -181,8 +185,11 @@ class StateLPs:
         tolerance) of 0 in the equilibrated twist variables (the columns of ``A_twist``,
         whose factors follow the units of the state): such an alpha is reported as 0, the
         same in every unit system."""
-        big = float(np.max(np.abs(r) / self.twist_scale, initial=0.0))
-        return ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA
+        key = r.tobytes()  # asked by the certificate and by tvmmp, for each LP of an l
+        if self._zero is None or self._zero[0] != key:
+            big = float((np.abs(r) / self.twist_scale).max(initial=0.0))
+            self._zero = (key, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
+        return self._zero[1]
 
     def lp(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
@@ -267,10 +274,13 @@ class StateLPs:
             self._dense[:, :n] = self.asm.A.toarray()
             self._abs_dense = np.abs(self._dense)
         assert self._abs_dense is not None
-        col = np.zeros(self._dense.shape[0])
-        col[self.kin] = self.column(r)
-        self._dense[:, -1] = col
-        self._abs_dense[:, -1] = np.abs(col)
+        key = r.tobytes()
+        if self._matrix_of != key:
+            col = np.zeros(self._dense.shape[0])
+            col[self.kin] = self.column(r)
+            self._dense[:, -1] = col
+            self._abs_dense[:, -1] = np.abs(col)
+            self._matrix_of = key
         return self._dense, self._abs_dense
 
     def certify(
@@ -301,10 +311,17 @@ class StateLPs:
     def _bounds(
         self, w: NDArray[np.float64], alpha_max: float
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The row bounds of pair (w, .) and the column upper bounds with ``alpha <= alpha_max``."""
-        lower, upper = self.asm.statics_bounds(w)
-        cu = self.col_upper.copy()
-        cu[-1] = alpha_max
+        """The row bounds of pair (w, .) and the column upper bounds with ``alpha <= alpha_max``
+        (read only: kept for the LPs of the same w)."""
+        key = (w.tobytes(), alpha_max)
+        if key not in self._bounds_of:
+            lower, upper = self.asm.statics_bounds(w)
+            cu = self.col_upper.copy()
+            cu[-1] = alpha_max
+            for a in (lower, upper, cu):
+                a.setflags(write=False)
+            self._bounds_of[key] = (lower, upper, cu)
+        lower, upper, cu = self._bounds_of[key]
         return lower, upper, cu
 
     def proves_infeasible(
