@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..errors import SolverError
@@ -118,7 +117,7 @@ class StateLPs:
         for name, sl in asm.blocks.items():
             if name.startswith("lam") or name == "rho":
                 self.force_like[sl] = True
-        twist = asm.A_twist.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
+        twist = asm.twist_csc.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
         self.twist_rows = twist[self.kin]
         self.abs_twist_rows = np.abs(self.twist_rows)
         self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
@@ -126,13 +125,13 @@ class StateLPs:
         rhs = np.fmax(
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
-        s = equilibrate(asm.A, rhs=rhs)
+        s = equilibrate(asm.csc, rhs=rhs)
         # The twist columns are scaled after the rows, each so that its largest entry is 1:
         # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
         # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
         # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
-        has_a = np.bincount(asm.A.indices, minlength=asm.A.shape[0]) > 0
+        has_a = np.bincount(asm.csc.indices, minlength=asm.csc.shape[0]) > 0
         tw_max = np.max(np.abs(twist[has_a] * s.row[has_a, None]), axis=0, initial=0.0)
         self.twist_scale = np.where(
             tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
@@ -148,7 +147,7 @@ class StateLPs:
             row[only_twist] = np.exp2(np.clip(np.round(-np.log2(big)), -400.0, 400.0))
             s = replace(s, row=row)
         self.row_scale, self.col_scale = s.row, s.col
-        self._scaled_a = ScaledMatrix(asm.A, s)
+        self._scaled_a = ScaledMatrix(asm.csc, s)
         self.session: HighsSession | None = None
         self._dense: NDArray[np.float64] | None = None  # pair_matrix's
         self._abs_dense: NDArray[np.float64] | None = None
@@ -195,8 +194,10 @@ class StateLPs:
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
     ) -> tuple[LinearProgram, Scaling]:
         """The LP of pair (w, r) and its scaling (the alpha factor from its column)."""
+        import scipy.sparse as sp  # the fallbacks' and Clarabel's LP only (module csc)
+
         kin_col = self.column(r)
-        col = np.zeros(self.asm.A.shape[0])
+        col = np.zeros(self.asm.csc.shape[0])
         col[self.kin] = kin_col
         lower, upper = self.asm.statics_bounds(w)
         cu = self.col_upper.copy()
@@ -269,9 +270,9 @@ class StateLPs:
         Dense: a state's LP has a few hundred rows and columns, where numpy's dense products
         cost a fraction of scipy's sparse ones (both arrays are the state's, overwritten)."""
         if self._dense is None:
-            m, n = self.asm.A.shape
+            m, n = self.asm.csc.shape
             self._dense = np.zeros((m, n + 1))
-            self._dense[:, :n] = self.asm.A.toarray()
+            self._dense[:, :n] = self.asm.csc.toarray()
             self._abs_dense = np.abs(self._dense)
         assert self._abs_dense is not None
         key = r.tobytes()
