@@ -29,6 +29,9 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
   five-contact states with a six-direction RVDS, Problem 2 with one REFS vertex (6 LPs) and
   with six (36 LPs) as grasps/s on one process, the 36-LP batch on 2 processes, and
   ``mjtvm solve STATE.json`` and ``import mjtvm`` as processes (``--quick``: one repeat);
+* **Problem 2 against its solver's floor** (:mod:`mjtvm.bench.floor`): per state, the wall
+  time of Problem 2 over its time inside HiGHS ``run()`` in the same calls, on Case 2, Case 1,
+  the ``allegro-ik`` grasp and the 22-joint dataset hand (6 and 36 LPs);
 * **Problem 1 at scale** (:func:`~mjtvm.bench.problem1.bench_p1_scale`, not with ``--quick``):
   Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
   the 16-finger hand, each in a fresh process with its peak resident memory.
@@ -188,6 +191,7 @@ def run_suite(
     sweeps: bool = True,
     hands: Sequence[str] = HANDS,
     dataset: bool = True,
+    floor: bool = True,
     scale: bool = True,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
@@ -255,6 +259,10 @@ def run_suite(
 
         say("dataset scale: batches of 200 states, mjtvm solve as a process")
         report["dataset"] = bench_dataset(repeats=1 if quick else 3, cli_repeats=3 if quick else 7)
+    if floor:
+        from .floor import bench_floor
+
+        report["floor"] = bench_floor(repeats=max(10, repeats // 2), say=say)
     report["targets"] = _targets(report)
     report["total_wall_s"] = time.perf_counter() - t_start
     return report
@@ -278,4 +286,6 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
         out["scaling_p2_at_most_linear"] = report["scaling"]["p2_at_most_linear"]
     if "dataset" in report:
         out.update({f"dataset_{k}": v for k, v in report["dataset"]["met"].items()})
+    if "floor" in report:
+        out.update({f"floor_{k}": v["met"] for k, v in report["floor"]["states"].items()})
     return out

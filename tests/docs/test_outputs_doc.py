@@ -112,6 +112,8 @@ def test_every_table_is_parsed() -> None:
         "bench.json:dataset",
         "bench.json:dataset.batch",
         "bench.json:dataset.cli",
+        "bench.json:floor",
+        "bench.json:floor.state",
         "show",  # tested in tests/cli/test_show.py
         "show-contacts",
     }
@@ -307,6 +309,10 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(
         dataset, "bench_dataset", lambda **_: real_dataset(num_states=4, repeats=1, cli_repeats=1)
     )
+    from mjtvm.bench import floor
+
+    real_floor = floor.bench_floor
+    monkeypatch.setattr(floor, "bench_floor", lambda **_: real_floor(repeats=1, warmup=0))
     report = suite.run_suite(scale=False, progress=False)
     report["notes"] = []  # added by the command (mjtvm.cli.bench) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
@@ -324,6 +330,9 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     for key in ("batch_weight", "batch_six_wrenches"):
         assert_documented("bench.json:dataset.batch", report["dataset"][key])
     assert_documented("bench.json:dataset.cli", report["dataset"]["cli"])
+    assert_documented("bench.json:floor", report["floor"])
+    for entry in report["floor"]["states"].values():
+        assert_documented("bench.json:floor.state", entry)
     for entry in report["hands"].values():
         assert_documented("bench.json:hands", entry)
         assert_documented("bench.json:stats", entry["load"])
