@@ -32,6 +32,9 @@ medians over repeats and :func:`time.perf_counter`, the garbage collector enable
 * **peers** (:mod:`mjtvm.bench.peers`): velocity and force polytopes of one fingertip of 3, 4,
   7 and 12 joints and pycapacity's four-link example against pycapacity (when installed),
   pairs interleaved, as ratios (target: at least as fast);
+* **Problem 2 against its solver's floor** (:mod:`mjtvm.bench.floor`): per state, the wall
+  time of Problem 2 over its time inside HiGHS ``run()`` in the same calls, on Case 2, Case 1,
+  the ``allegro-ik`` grasp and the 22-joint dataset hand (6 and 36 LPs);
 * **Problem 1 at scale** (:func:`~mjtvm.bench.problem1.bench_p1_scale`, not with ``--quick``):
   Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
   the 16-finger hand, each in a fresh process with its peak resident memory.
@@ -192,6 +195,7 @@ def run_suite(
     hands: Sequence[str] = HANDS,
     dataset: bool = True,
     peers: bool = True,
+    floor: bool = True,
     scale: bool = True,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
@@ -264,6 +268,10 @@ def run_suite(
 
         say("dataset scale: batches of 200 states, mjtvm solve as a process")
         report["dataset"] = bench_dataset(repeats=1 if quick else 3, cli_repeats=3 if quick else 7)
+    if floor:
+        from .floor import bench_floor
+
+        report["floor"] = bench_floor(repeats=max(10, repeats // 2), say=say)
     report["targets"] = _targets(report)
     report["total_wall_s"] = time.perf_counter() - t_start
     return report
@@ -289,4 +297,6 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
         out.update({f"dataset_{k}": v for k, v in report["dataset"]["met"].items()})
     if report.get("peers", {}).get("met") is not None:
         out["peers_pycapacity"] = report["peers"]["met"]
+    if "floor" in report:
+        out.update({f"floor_{k}": v["met"] for k, v in report["floor"]["states"].items()})
     return out

@@ -83,9 +83,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _steps(quick: bool) -> int:
     """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
-    return (
-        3 if quick else 4
-    ) + 5  # the cases; the lift, the sweeps, the scaling, the peers, the dataset scale
+    cases = 3 if quick else 4
+    return cases + 5  # the lift, the sweeps, the scaling, the peers, the dataset scale
 
 
 def _read_notes(path: Path | None) -> list[str]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from importlib import metadata
+from typing import Any
 
 from ..errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 from .bench import add_bench
@@ -29,10 +29,23 @@ __all__ = ["build_parser", "main"]
 
 
 def _version() -> str:
+    from importlib import metadata  # with the email parser it reads: ~15 ms every command would pay
+
     try:
         return metadata.version("mjtvm")
     except metadata.PackageNotFoundError:  # pragma: no cover - run from a source tree
         return "unknown"
+
+
+class _VersionAction(argparse.Action):
+    """``--version``: argparse's version action, the version read only when asked for."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str = argparse.SUPPRESS, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: Any) -> None:
+        print(f"mjtvm {_version()}")
+        parser.exit()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -42,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands. "
         "Exit codes: 0 ok, 2 bad input, 3 solver trouble, 130 interrupted (docs/cli.md).",
     )
-    parser.add_argument("--version", action="version", version=f"mjtvm {_version()}")
+    parser.add_argument("--version", action=_VersionAction, help="show the version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     add_solve(sub)
     add_export_state(sub)

@@ -31,18 +31,22 @@ built as above (``P = I``), entry for entry.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from itertools import pairwise
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..errors import ParamError
 from .contacts import force_generators, slide_unit, tangent_basis
+from .csc import Csc
 from .roundoff import drop_cancellation, drop_data_roundoff
 from .rows import Rows as _Rows
 from .state import GraspState
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 __all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
 
@@ -79,10 +83,11 @@ class Assembly:
 
     Attributes
     ----------
-    A
-        ``(m, n)`` CSC matrix over the variables listed in the module docstring.
-    A_twist
-        ``(m, D)`` CSC matrix: the coefficients of the object twist ``rdot``.
+    csc
+        ``(m, n)`` the matrix ``A`` over the variables listed in the module docstring
+        (:class:`~mjtvm.core.csc.Csc`; :attr:`A` is the same as a scipy matrix).
+    twist_csc
+        ``(m, D)`` the coefficients of the object twist ``rdot`` (:attr:`A_twist` as scipy's).
     row_lower, row_upper
         ``(m,)`` row bounds; the statics rows of copy i hold ``-w`` once
         :meth:`statics_bounds` is applied.
@@ -110,8 +115,8 @@ class Assembly:
         of the frame mixes the components (:mod:`~mjtvm.core.certificate`).
     """
 
-    A: sp.csc_matrix
-    A_twist: sp.csc_matrix
+    csc: Csc
+    twist_csc: Csc
     row_lower: NDArray[np.float64]
     row_upper: NDArray[np.float64]
     col_lower: NDArray[np.float64]
@@ -129,7 +134,17 @@ class Assembly:
     @property
     def num_variables(self) -> int:
         """n, the number of variables before the twist."""
-        return int(self.A.shape[1])
+        return int(self.csc.shape[1])
+
+    @cached_property
+    def A(self) -> sp.csc_matrix:
+        """``(m, n)`` the constraint matrix as a scipy sparse matrix (:attr:`csc`'s arrays)."""
+        return self.csc.to_scipy()
+
+    @cached_property
+    def A_twist(self) -> sp.csc_matrix:
+        """``(m, D)`` the twist's coefficients as a scipy sparse matrix (:attr:`twist_csc`'s arrays)."""
+        return self.twist_csc.to_scipy()
 
     def statics_bounds(
         self, wrenches: NDArray[np.float64]
@@ -373,8 +388,8 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         r0 = out.add(0.0, 0.0, t.num_constraints)
         out.coo.add(r0, blocks["qd"].start, t.constraint_jacobian)
     return Assembly(
-        A=out.coo.build((out.count, len(col_lower))),
-        A_twist=out.twist.build((out.count, state.twist_dim)),
+        csc=out.coo.build((out.count, len(col_lower))),
+        twist_csc=out.twist.build((out.count, state.twist_dim)),
         row_lower=np.concatenate(out.lower),
         row_upper=np.concatenate(out.upper),
         col_lower=col_lower,

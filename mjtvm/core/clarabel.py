@@ -7,10 +7,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..errors import SolverError
+from .csc import scipy_matrix
 from .lp import LinearProgram, LPSolution
 from .scaling import Scaling, cost_scale, lp_scaling, pow2, scale_lp, unscale
 
@@ -22,8 +22,9 @@ _CLARABEL_OK = {"Solved": "optimal", "PrimalInfeasible": "infeasible", "DualInfe
 def _solve_clarabel(lp: LinearProgram) -> LPSolution:
     """Clarabel on ``lp`` as given (callers pass it equilibrated)."""
     import clarabel
+    import scipy.sparse as sp  # here, not at import: Problem 2's HiGHS path never needs it (csc)
 
-    a = sp.csc_matrix(lp.A)
+    a = sp.csc_matrix(scipy_matrix(lp.A))
     eq = np.isfinite(lp.row_lower) & np.isfinite(lp.row_upper) & (lp.row_lower == lp.row_upper)
     up = np.isfinite(lp.row_upper) & ~eq
     lo = np.isfinite(lp.row_lower) & ~eq
@@ -80,6 +81,8 @@ def _solve_clarabel(lp: LinearProgram) -> LPSolution:
 
 def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSolution:
     """Clarabel on the equilibrated ``lp`` (:func:`lp_scaling` unless ``scaling``), unscaled."""
+    import scipy.sparse as sp
+
     s = lp_scaling(lp) if scaling is None else scaling
     slp1 = scale_lp(lp, s)
     first = _solve_clarabel(slp1)
@@ -101,7 +104,7 @@ def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSo
     # "optimal" can be off by 1e-2.)
     xs = np.abs(first.x)
     col = s.col * pow2(np.maximum(xs, 2.0**-10 * max(float(xs.max()), 1e-300)))
-    a = sp.csr_matrix(abs(sp.csr_matrix(lp.A) @ sp.diags(col)))
+    a = sp.csr_matrix(abs(sp.csr_matrix(scipy_matrix(lp.A)) @ sp.diags(col)))
     row_max = a.max(axis=1).toarray().ravel() if a.shape[1] else np.zeros(a.shape[0])
     row = np.where(row_max > 0, pow2(1.0 / np.where(row_max > 0, row_max, 1.0)), 1.0)
     s2 = Scaling(row, col, cost_scale(np.asarray(lp.c, dtype=float), col))
@@ -125,7 +128,7 @@ def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSo
 
 def _violation(lp: LinearProgram, x: NDArray[np.float64]) -> float:
     """Largest violation of ``lp``'s rows and bounds by ``x``."""
-    ax = lp.A @ x
+    ax = scipy_matrix(lp.A) @ x
     with np.errstate(invalid="ignore"):
         parts = [lp.row_lower - ax, ax - lp.row_upper, lp.col_lower - x, x - lp.col_upper]
     return float(max(np.max(np.nan_to_num(p, nan=0.0, neginf=0.0), initial=0.0) for p in parts))

@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .roundoff import DROP_REL
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+
+    from .csc import Csc
 
 __all__ = ["DROP_REL", "FEASIBILITY_TOL", "LPSolution", "LPStatus", "LinearProgram"]
 
@@ -19,10 +23,13 @@ FEASIBILITY_TOL = 1e-9
 
 @dataclass(frozen=True, eq=False)
 class LinearProgram:
-    """``min c^T x`` s.t. ``row_lower <= A x <= row_upper`` and ``col_lower <= x <= col_upper``."""
+    """``min c^T x`` s.t. ``row_lower <= A x <= row_upper`` and ``col_lower <= x <= col_upper``.
+
+    ``A`` is a scipy sparse matrix, or a :class:`~mjtvm.core.csc.Csc` where only HiGHS reads
+    it (Problem 2's session)."""
 
     c: NDArray[np.float64]
-    A: sp.csc_matrix
+    A: sp.csc_matrix | Csc
     row_lower: NDArray[np.float64]
     row_upper: NDArray[np.float64]
     col_lower: NDArray[np.float64]

@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..errors import SolverError
@@ -118,7 +117,7 @@ class StateLPs:
         for name, sl in asm.blocks.items():
             if name.startswith("lam") or name == "rho":
                 self.force_like[sl] = True
-        twist = asm.A_twist.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
+        twist = asm.twist_csc.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
         self.twist_rows = twist[self.kin]
         self.abs_twist_rows = np.abs(self.twist_rows)
         self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
@@ -126,13 +125,13 @@ class StateLPs:
         rhs = np.fmax(
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
-        s = equilibrate(asm.A, rhs=rhs)
+        s = equilibrate(asm.csc, rhs=rhs)
         # The twist columns are scaled after the rows, each so that its largest entry is 1:
         # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
         # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
         # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
-        has_a = np.bincount(asm.A.indices, minlength=asm.A.shape[0]) > 0
+        has_a = np.bincount(asm.csc.indices, minlength=asm.csc.shape[0]) > 0
         tw_max = np.max(np.abs(twist[has_a] * s.row[has_a, None]), axis=0, initial=0.0)
         self.twist_scale = np.where(
             tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
@@ -148,13 +147,22 @@ class StateLPs:
             row[only_twist] = np.exp2(np.clip(np.round(-np.log2(big)), -400.0, 400.0))
             s = replace(s, row=row)
         self.row_scale, self.col_scale = s.row, s.col
-        self._scaled_a = ScaledMatrix(asm.A, s)
+        self._scaled_a = ScaledMatrix(asm.csc, s)
         self.session: HighsSession | None = None
         self._dense: NDArray[np.float64] | None = None  # pair_matrix's
         self._abs_dense: NDArray[np.float64] | None = None
         self._cert: Certifier | None = None  # _certifier's
         self._column: tuple[bytes, NDArray[np.float64]] | None = None  # column's last
-        self._last: tuple[NDArray[np.float64], float] = (np.full(state.twist_dim, np.nan), np.nan)
+        self._zero: tuple[bytes, float] | None = None  # zero_alpha's last
+        # _bounds' answers per (w, alpha_max): one per REFS vertex, asked again for every l.
+        self._bounds_of: dict[tuple[bytes, float], tuple[NDArray[np.float64], ...]] = {}
+        self._matrix_of: bytes | None = None  # the r whose column pair_matrix holds
+        # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
+        self._last: tuple[NDArray[np.float64], NDArray[np.float64], float] = (
+            np.full(state.twist_dim, np.nan),
+            np.full(state.twist_dim, np.nan),
+            np.nan,
+        )
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without
@@ -176,15 +184,20 @@ class StateLPs:
         tolerance) of 0 in the equilibrated twist variables (the columns of ``A_twist``,
         whose factors follow the units of the state): such an alpha is reported as 0, the
         same in every unit system."""
-        big = float(np.max(np.abs(r) / self.twist_scale, initial=0.0))
-        return ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA
+        key = r.tobytes()  # asked by the certificate and by tvmmp, for each LP of an l
+        if self._zero is None or self._zero[0] != key:
+            big = float((np.abs(r) / self.twist_scale).max(initial=0.0))
+            self._zero = (key, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
+        return self._zero[1]
 
     def lp(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
     ) -> tuple[LinearProgram, Scaling]:
         """The LP of pair (w, r) and its scaling (the alpha factor from its column)."""
+        import scipy.sparse as sp  # the fallbacks' and Clarabel's LP only (module csc)
+
         kin_col = self.column(r)
-        col = np.zeros(self.asm.A.shape[0])
+        col = np.zeros(self.asm.csc.shape[0])
         col[self.kin] = kin_col
         lower, upper = self.asm.statics_bounds(w)
         cu = self.col_upper.copy()
@@ -236,13 +249,15 @@ class StateLPs:
                 self.session = self._session(w, r, alpha_max)
             else:
                 ses = self.session
-                ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
-                # The bounds only change with k (set_column re-sends alpha's when it rescales).
+                # The column changes with l, the bounds with k (set_column re-sends alpha's
+                # bounds when it rescales).
+                if not np.array_equal(r, self._last[1]):
+                    ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
                 if not np.array_equal(w, self._last[0]):
                     ses.set_row_bounds(self.wrench_rows, -w, -w)
-                if alpha_max != self._last[1]:
+                if alpha_max != self._last[2]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
-            self._last = (w, alpha_max)
+            self._last = (w, r, alpha_max)
             return Settled(self.session.solve(duals=True), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
@@ -255,15 +270,18 @@ class StateLPs:
         Dense: a state's LP has a few hundred rows and columns, where numpy's dense products
         cost a fraction of scipy's sparse ones (both arrays are the state's, overwritten)."""
         if self._dense is None:
-            m, n = self.asm.A.shape
+            m, n = self.asm.csc.shape
             self._dense = np.zeros((m, n + 1))
-            self._dense[:, :n] = self.asm.A.toarray()
+            self._dense[:, :n] = self.asm.csc.toarray()
             self._abs_dense = np.abs(self._dense)
         assert self._abs_dense is not None
-        col = np.zeros(self._dense.shape[0])
-        col[self.kin] = self.column(r)
-        self._dense[:, -1] = col
-        self._abs_dense[:, -1] = np.abs(col)
+        key = r.tobytes()
+        if self._matrix_of != key:
+            col = np.zeros(self._dense.shape[0])
+            col[self.kin] = self.column(r)
+            self._dense[:, -1] = col
+            self._abs_dense[:, -1] = np.abs(col)
+            self._matrix_of = key
         return self._dense, self._abs_dense
 
     def certify(
@@ -294,10 +312,17 @@ class StateLPs:
     def _bounds(
         self, w: NDArray[np.float64], alpha_max: float
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The row bounds of pair (w, .) and the column upper bounds with ``alpha <= alpha_max``."""
-        lower, upper = self.asm.statics_bounds(w)
-        cu = self.col_upper.copy()
-        cu[-1] = alpha_max
+        """The row bounds of pair (w, .) and the column upper bounds with ``alpha <= alpha_max``
+        (read only: kept for the LPs of the same w)."""
+        key = (w.tobytes(), alpha_max)
+        if key not in self._bounds_of:
+            lower, upper = self.asm.statics_bounds(w)
+            cu = self.col_upper.copy()
+            cu[-1] = alpha_max
+            for a in (lower, upper, cu):
+                a.setflags(write=False)
+            self._bounds_of[key] = (lower, upper, cu)
+        lower, upper, cu = self._bounds_of[key]
         return lower, upper, cu
 
     def proves_infeasible(

@@ -12,13 +12,16 @@ Coefficients are dropped only when they are round-off: in the equilibrated LP, a
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from .csc import Csc, as_csc
 from .lp import DROP_REL, LinearProgram, LPSolution
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 __all__ = [
     "ScaledMatrix",
@@ -61,7 +64,9 @@ def pow2(x: NDArray[np.float64] | float) -> Any:
     return np.exp2(np.round(np.log2(x)))
 
 
-def equilibrate(a: sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passes: int = _PASSES) -> Scaling:
+def equilibrate(
+    a: Csc | sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passes: int = _PASSES
+) -> Scaling:
     r"""Row and column powers of 2 bringing the entries of ``|[A | rhs]|`` close to 1.
 
     In log2 (any magnitude within floating point is fine): first ``_MEAN_PASSES``
@@ -111,10 +116,15 @@ class _LogEntries(NamedTuple):
     c_counts: NDArray[np.int64]
 
 
-def _log_entries(a: sp.spmatrix, rhs: NDArray[np.float64] | None) -> _LogEntries:
+def _log_entries(a: Csc | sp.spmatrix, rhs: NDArray[np.float64] | None) -> _LogEntries:
     """The statistics of :func:`equilibrate`: the entries of ``|[A | rhs]|`` in log2."""
     m, n = a.shape
-    csc_in = a if isinstance(a, sp.csc_matrix) else sp.csc_matrix(a)  # read only: no copy needed
+    if isinstance(a, Csc):
+        csc_in: Any = a
+    else:
+        import scipy.sparse as sp
+
+        csc_in = a if isinstance(a, sp.csc_matrix) else sp.csc_matrix(a)  # read only: no copy needed
     cols = np.repeat(np.arange(n), np.diff(csc_in.indptr))
     keep = csc_in.data != 0.0
     rows, cols, vals = csc_in.indices[keep], cols[keep], np.abs(csc_in.data[keep])
@@ -227,7 +237,9 @@ def lp_scaling(lp: LinearProgram) -> Scaling:
 def scale_lp(lp: LinearProgram, s: Scaling) -> LinearProgram:
     """The equilibrated LP ``(g col c, diag(row) A diag(col), row * bounds, bounds / col)``,
     round-off dropped (module docstring)."""
-    a = sp.csc_matrix(lp.A)
+    import scipy.sparse as sp
+
+    a = lp.A.to_scipy() if isinstance(lp.A, Csc) else sp.csc_matrix(lp.A)
     a.sum_duplicates()
     counts = np.diff(a.indptr)
     cols = np.repeat(np.arange(a.shape[1]), counts)
@@ -273,10 +285,8 @@ class ScaledMatrix:
     most DROP_REL times the largest of its row, of its column, or 1 is dropped; the rows'
     largest entries include the alpha column's)."""
 
-    def __init__(self, a: sp.csc_matrix, s: Scaling) -> None:
-        if not a.has_canonical_format:  # the assembly's matrix is canonical; copies stay exact
-            a = a.copy()
-            a.sum_duplicates()
+    def __init__(self, a: Csc | sp.csc_matrix, s: Scaling) -> None:
+        a = as_csc(a)  # canonical (the assembly's matrix is already)
         m, n = a.shape
         self.shape = (m, n)
         self.indptr, self.indices = a.indptr, a.indices
@@ -290,9 +300,7 @@ class ScaledMatrix:
         self.col_max_at = col_max[self.cols]
         self.row = s.row
 
-    def with_column(
-        self, rows: NDArray[np.int64], values: NDArray[np.float64], factor: float
-    ) -> sp.csc_matrix:
+    def with_column(self, rows: NDArray[np.int64], values: NDArray[np.float64], factor: float) -> Csc:
         """The scaled ``[A | a]`` with ``a[rows] = values`` (sorted rows, non-zero values)."""
         m, n = self.shape
         data_a = values * self.row[rows] * factor
@@ -307,4 +315,4 @@ class ScaledMatrix:
         indptr = np.concatenate([[0], np.cumsum(counts)]).astype(self.indptr.dtype)
         data = np.concatenate([self.data[keep], data_a[keep_a]])
         indices = np.concatenate([self.indices[keep], rows[keep_a]]).astype(self.indices.dtype)
-        return sp.csc_matrix((data, indices, indptr), shape=(m, n + 1))
+        return Csc(data, indices, indptr, (m, n + 1))

@@ -112,17 +112,25 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
 
     With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
     exactly when w_k cannot be balanced; then every l of this k is (no more LPs). A state
-    whose RVDS is the origin only still checks each w_k (``l = -1``)."""
+    whose RVDS is the origin only still checks each w_k (``l = -1``).
+
+    The pairs are solved RVDS vertex by RVDS vertex (l outer, k inner): from one k to the
+    next only the balance rows' bounds change, which leaves the last basis dual feasible,
+    so the dual simplex goes on from it; a new l changes the alpha column, which is in the
+    basis whenever alpha > 0. With six test wrenches and six RVDS vertices on the 22-joint
+    dataset hand this halves the time inside HiGHS (k outer: a new column every LP)."""
     refs, rvds = state.refs, state.rvds
     if rvds is None:  # checked by tvmmp() already; kept for callers of this step
         raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     n_k, n_l = refs.shape[0], rvds.shape[0]
     out = _Pairs.empty(n_k, n_l)
     nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
-    for k in range(n_k):
-        todo = nonzero if nonzero else [None]
-        for l in todo:
-            r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+    unbalanced: set[int] = set()  # the k whose w_k no contact forces balance
+    for l in nonzero if nonzero else [None]:
+        r = rvds[l] if l is not None else np.zeros(state.twist_dim)
+        for k in range(n_k):
+            if k in unbalanced:
+                continue
             pair = (k, -1 if l is None else l)
             verdict = _solve_pair(problem, refs[k], r, pair)
             settled = verdict.settled
@@ -132,11 +140,14 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
                 out.notes.append((pair, settled.note))
             if sol.status == "infeasible":
                 out.feasible = False
+                unbalanced.add(k)
                 for ll in nonzero:
                     out.status[k][ll] = "infeasible"
                     out.settled_by[k][ll] = settled.solver
                     out.certified[k][ll] = verdict.certified
-                break
+                    out.alpha[k, ll] = np.nan
+                    out.witnesses[k][ll] = None
+                continue
             if l is None:
                 continue
             out.status[k][l] = sol.status
@@ -153,6 +164,7 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
                 out.alpha[k, l] = a
                 if witnesses:
                     out.witnesses[k][l] = _witness(problem.asm, state, x, a, rvds[l])
+    out.notes.sort(key=lambda note: note[0])  # in (k, l) order, whatever the solving order
     return out
 
 

@@ -178,3 +178,17 @@ def test_random_state_per_finger_joints() -> None:
         np.testing.assert_array_equal(a.jacobian, b.jacobian)
     with pytest.raises(ParamError, match="joints_per_finger: expected 4 counts, got 3"):
         random_state(0, joints_per_finger=(3, 3, 3))
+
+
+def test_floor_measures_each_state_with_its_lps() -> None:
+    """The floor rows: each state's LPs (Case 2: 4, Case 1 with 8 RVDS vertices: 8, the Allegro
+    grasp's 6, the dataset hand 6 and 36), its time inside HiGHS within its wall time."""
+    from mjtvm.bench.floor import TARGET_RATIO, bench_floor
+
+    doc = json.loads(json.dumps(bench_floor(repeats=2, warmup=1)))
+    assert doc["target_ratio"] == TARGET_RATIO == 1.5
+    lps = {name: r["lps"] for name, r in doc["states"].items()}
+    assert lps == {"case2": 4, "case1": 8, "allegro-ik": 6, "dataset-6": 6, "dataset-36": 36}
+    for r in doc["states"].values():
+        assert r["highs_runs"] >= r["lps"] and 0 < r["highs_run_s"] < r["total_s"]
+        assert r["ratio_p10"] <= r["ratio"] <= r["ratio_p90"] and r["met"] == (r["ratio"] <= 1.5)

@@ -116,6 +116,8 @@ def test_every_table_is_parsed() -> None:
         "bench.json:peers.finger",
         "bench.json:peers.pair",
         "bench.json:peers.agreement",
+        "bench.json:floor",
+        "bench.json:floor.state",
         "show",  # tested in tests/cli/test_show.py
         "show-contacts",
     }
@@ -313,6 +315,10 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     )
     real_peers = peers.bench_peers
     monkeypatch.setattr(peers, "bench_peers", lambda **_: real_peers((3,), repeats=1, lp_repeats=1))
+    from mjtvm.bench import floor
+
+    real_floor = floor.bench_floor
+    monkeypatch.setattr(floor, "bench_floor", lambda **_: real_floor(repeats=1, warmup=0))
     report = suite.run_suite(scale=False, progress=False)
     report["notes"] = []  # added by the command (mjtvm.cli.bench) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
@@ -341,6 +347,9 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     ):
         assert_documented("bench.json:peers.pair", pair)
     assert_documented("bench.json:peers.agreement", finger["vs_lp"])
+    assert_documented("bench.json:floor", report["floor"])
+    for entry in report["floor"]["states"].values():
+        assert_documented("bench.json:floor.state", entry)
     for entry in report["hands"].values():
         assert_documented("bench.json:hands", entry)
         assert_documented("bench.json:stats", entry["load"])
