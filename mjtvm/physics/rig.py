@@ -134,6 +134,12 @@ class Rig:
             return np.zeros(len(self.acts))
         return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
 
+    def hold_torques(self, drive: Drive) -> _F64:
+        """The feedforward that holds the state at rest (settle, hold test): the drive's torques;
+        with a transmission its forces ``u`` less the share of the damping ``b qd`` they carry
+        for the witness's motion, absent at rest."""
+        return drive.torques - self.damping_share(self.damped(drive)) if self.coupled else drive.torques
+
     @staticmethod
     def damped(drive: Drive) -> _F64:
         """The joint speeds whose damping the drive's forces carry (:attr:`Drive.damped_speeds`)."""

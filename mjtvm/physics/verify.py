@@ -39,8 +39,10 @@ from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
+from .hold import HoldResult, hold_row, hold_test
 from .motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
+from .verdict import verdict
 from .verify_report import plot_alpha, rows_csv, summarize
 from .witness import witness_drive
 
@@ -161,8 +163,12 @@ def verify_state(
     check_s: float = 0.9,
     dynamics: bool = False,
     preload: float = 0.0,
+    hold_time: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
+
+    First the hold test (:func:`~mjtvm.physics.hold.hold_test`, ``hold_time`` s, default a
+    rollout's length): a state that does not hold at rest gets its verdict and no rollout.
 
     ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
@@ -192,10 +198,13 @@ def verify_state(
     except MjtvmError as e:
         return [{**base, "l": -1, "status": f"solver: {e}"}]
     rows = []
+    hold = _hold(model, lift.qpos[index], state, res, settings, ob, hold_time)
     for l in range(len(state.rvds if state.rvds is not None else [])):
         status = res.status[0][l]
         row: dict[str, Any] = {**base, "l": l, "status": status}
-        if status == "optimal":
+        if status == "optimal" and hold is not None:
+            row.update(hold_row(hold), alpha_lp=float(res.alpha[0, l]))
+        if status == "optimal" and (hold is None or hold.held):
             a_sim, alpha, b = alpha_sim(
                 model,
                 lift.qpos[index],
@@ -220,7 +229,7 @@ def verify_state(
                 alpha_lp=alpha,
                 alpha_sim=a_sim,
                 ratio=a_sim / alpha if alpha > 0 else math.nan,
-                censored=b.above_bracket or b.below_bracket,
+                verdict=verdict(b, fail, actuators=state.transmission is not None),
                 evaluations=b.evaluations,
                 fail_reason=fail.reason,
                 fail_clamp=fail.clamp_fraction,
@@ -238,6 +247,24 @@ def verify_state(
                 )
         rows.append(row)
     return rows
+
+
+def _hold(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    state: GraspState,
+    res: Any,
+    settings: SimSettings | None,
+    ob: str,
+    hold_time: float | None,
+) -> HoldResult | None:
+    """The hold test of the state (:mod:`~mjtvm.physics.hold`) with the central witness at alpha = 0
+    (the same for every RVDS vertex); ``None`` when no pair has a witness."""
+    optimal = [l for l, status in enumerate(res.status[0]) if status == "optimal"]
+    if not optimal:
+        return None
+    drive = witness_drive(state, 0, optimal[0], float(res.alpha[0, optimal[0]]), 0.0, witness="central")
+    return hold_test(model, qpos, drive, settings=settings, object_body=ob, duration=hold_time)
 
 
 def _dynamic_row(
@@ -305,6 +332,7 @@ def verify_lift(
     witness: str = "central",
     dynamics: bool = False,
     preload: float = 0.0,
+    hold_time: float | None = None,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -324,7 +352,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of :data:`RUNS`.
-    dynamics, preload
+    dynamics, preload, hold_time
         As in :func:`verify_state`.
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -354,6 +382,7 @@ def verify_lift(
         "witness": witness,
         "dynamics": dynamics,
         "preload": preload,
+        "hold_time": hold_time,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)
