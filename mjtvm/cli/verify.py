@@ -54,7 +54,7 @@ def verify_parser() -> argparse.ArgumentParser:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
-    states_option(p)
+    states_option(p, minimum=1)
     p.add_argument(
         "--stride",
         type=integer(1, MAX_STATES),
@@ -225,7 +225,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         from ..apps.replay import grasp_defaults
 
-        mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
+        mu, mg = grasp_defaults(verify.checked_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         t0 = time.perf_counter()
         rows = verify.verify_lift(
             args.grasp,

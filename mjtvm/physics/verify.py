@@ -53,8 +53,10 @@ __all__ = [
     "alpha_sim",
     "bisect",
     "cached_lift",
+    "checked_lift",
     "motor_model",
     "plot_alpha",
+    "present_runs",
     "rows_csv",
     "runs_of",
     "state_indices",
@@ -76,6 +78,31 @@ def cached_lift(grasp: str | Path, num_states: int) -> Lift:
     if key not in _LIFTS:
         _LIFTS[key] = scripted_lift(_grasp(grasp), num_states=num_states)
     return _LIFTS[key]
+
+
+def checked_lift(grasp: str | Path, num_states: int) -> Lift:
+    """The lift the check runs: :func:`cached_lift`, or the grasp's own state alone when its
+    file has no ``[lift]`` (there is no motion to sample)."""
+    one = getattr(_scenario(grasp), "lift", ...) is None
+    return cached_lift(grasp, 1 if one else num_states)
+
+
+def present_runs(lift: Lift, runs: Sequence[str]) -> list[str]:
+    """The ``runs`` that differ on this lift: without an L/S finger (every finger an F-point)
+    the variants are the same grasp, checked once as ``L``; without a ``[lift]`` there is no
+    motion to give an S-point's slide direction, so ``L`` only."""
+    if "N" not in lift.roles or getattr(lift.scenario, "lift", ...) is None:
+        return ["L"]
+    return list(runs)
+
+
+def _scenario(grasp: str | Path) -> Any:
+    loaded = _grasp(grasp)
+    if isinstance(loaded, str):
+        from ..sim.paper_hand.scenario import load_scenario
+
+        return load_scenario(loaded)
+    return loaded
 
 
 def _grasp(grasp: str | Path) -> Any:
@@ -368,8 +395,9 @@ def verify_lift(
 
         check_output_dir(out, option="out")
     st = settings or SimSettings()
+    lift = checked_lift(grasp, num_states)
+    num_states, runs = lift.num_states, present_runs(lift, runs)
     indices = state_indices(num_states, stride)
-    lift = cached_lift(grasp, num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
     if dynamics and getattr(lift.scenario, "transmission", None) is not None:
         raise ParamError(
