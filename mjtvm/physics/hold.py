@@ -95,6 +95,11 @@ class HoldResult:
         headed within one more rollout.
     duration, bound
         The hold's length (s) and the bound on :attr:`reach` (m).
+    rotor_inertia
+        The largest rotor inertia of the state's motors reflected through their gear (kg m^2
+        at a joint, or in the units of the actuator's transmission): MuJoCo's actuator
+        ``armature`` x gear^2; 0 when the motor data give none (a servo datasheet without
+        ``rotor_inertia_kgm2``).
     """
 
     held: bool
@@ -106,6 +111,7 @@ class HoldResult:
     contacts: tuple[ContactHold, ...]
     duration: float
     bound: float
+    rotor_inertia: float = 0.0
 
     @property
     def lets_go(self) -> ContactHold | None:
@@ -215,6 +221,9 @@ def hold_test(
         contacts=tuple(contacts),
         duration=n_all * st.timestep,
         bound=st.lost_gap,
+        rotor_inertia=float(
+            np.max(m.actuator_armature[rig.acts] * m.actuator_gear[rig.acts, 0] ** 2, initial=0.0)
+        ),
     )
 
 
@@ -251,6 +260,7 @@ def hold_row(hold: HoldResult) -> dict[str, Any]:
         "hold_reach": hold.reach,
         "hold_rotation": hold.rotation,
         "hold_contact": c.label if c is not None else "",
+        "rotor_inertia": hold.rotor_inertia,
     }
     if not hold.held:
         row["verdict"] = hold.message()

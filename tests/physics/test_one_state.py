@@ -76,3 +76,35 @@ def test_a_grasp_with_l_fingers_keeps_its_variants(grasp: str) -> None:
     lift = verify.checked_lift(grasp, 2)
     assert lift.num_states == 2
     assert verify.present_runs(lift, verify.RUNS) == list(verify.RUNS)
+
+
+def _servo_grasp(tmp_path: Path, datasheet: str) -> Path:
+    """allegro-ik with every joint a DYNAMIXEL XH430-W350 (the servo datasheet form)."""
+    text = (MODELS / "allegro" / "allegro-ik.toml").read_text(encoding="utf-8")
+    text = text.replace(
+        'model = "allegro_right_hand.xml"', f'model = "{MODELS / "allegro" / "allegro_right_hand.xml"}"'
+    )
+    text = text.replace('datasheet = "maxon_re25_20w"\ngear_ratio = 27', f"datasheet = {datasheet}")
+    assert f"datasheet = {datasheet}" in text
+    grasp = tmp_path / "servo.toml"
+    grasp.write_text(text, encoding="utf-8")
+    return grasp
+
+
+@pytest.mark.parametrize(
+    ("datasheet", "rotor"),
+    [
+        ('"dynamixel_xh430_w350"', 0.0),  # the shipped sheet publishes no rotor inertia
+        (
+            "{ voltage_V = 12.0, stall_torque_Nm = 3.4, no_load_speed_rpm = 30.0, rotor_inertia_kgm2 = 0.002 }",
+            0.002,
+        ),
+    ],
+)
+def test_servo_ranges_with_the_motor_of_their_datasheet(tmp_path: Path, datasheet: str, rotor: float) -> None:
+    """The servo form's triangle range (a polygon) with the <dcmotor> of the same line; the
+    rotor inertia is the sheet's (figures at the output: gear 1), stated in every row."""
+    _stdout, rows = _verify(tmp_path, "--grasp", str(_servo_grasp(tmp_path, datasheet)), "--states", "1")
+    assert len(rows) == 6
+    _checked(rows)
+    assert {float(r["rotor_inertia"]) for r in rows} == {rotor}
