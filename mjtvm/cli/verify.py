@@ -22,6 +22,7 @@ from .values import (
     MAX_FORCE,
     MAX_GEAR,
     MAX_JOBS,
+    MAX_LAUNCH,
     MAX_MU,
     MAX_SCALE,
     MAX_SIM_SECONDS,
@@ -118,6 +119,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="SECONDS",
         help="length of the hold test at rest before the speeds (default: a rollout's, settle + "
         "startup + window)",
+    )
+    p.add_argument(
+        "--launch",
+        type=number(0.0, MAX_LAUNCH, strict=True),
+        default=None,
+        metavar="M",
+        help="also launch every pair from rest and report the speed reached within M metres "
+        "(e.g. 0.01; docs/physics-check.md, 'From rest')",
     )
     p.add_argument(
         "--gears",
@@ -239,6 +248,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             dynamics=args.dynamics,
             preload=args.preload,
             hold_time=args.hold,
+            launch_distance=args.launch,
             jobs=args.jobs,
             start_method=args.start_method,
             out=None,

@@ -161,6 +161,21 @@ class Rig:
         )
         return self.motor_speeds(d, qset), ff
 
+    def controls(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:
+        """``(A,)`` speed setpoints (actuator-length units) and feedforward torques (joint side,
+        before the motors' gear) of the tracked joint speeds ``qset`` (a rollout's step 5).
+
+        With a transmission :meth:`command`; without, ``qset`` x gear and the drive's torques
+        plus the joints' own damping and friction loss at ``qset`` (passive torques of the
+        model, which the grasp's operation ranges leave out of the torque budget,
+        ``OperationRange.with_losses``).
+        """
+        if self.coupled:
+            return self.command(d, drive, qset)
+        m = self.m
+        ff = drive.torques + m.dof_damping[self.dofs] * qset + m.dof_frictionloss[self.dofs] * np.sign(qset)
+        return qset * self.gear, ff
+
     def motor_moment(self, d: mujoco.MjData) -> _F64:
         """``(A, M)`` the motors' moment rows over the drive's joints at ``d`` (gear included)."""
         return dense_moment(self.m, d)[self.acts][:, self.dofs]

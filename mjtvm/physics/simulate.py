@@ -60,7 +60,7 @@ from ..sim.grasp.state import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
 
-__all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "sim_model"]
+__all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "settle", "sim_model"]
 
 _F64 = NDArray[np.float64]
 
@@ -229,7 +229,7 @@ class RolloutResult:
     trace: Mapping[str, _F64] = field(default_factory=dict, repr=False)
 
 
-def _settle(
+def settle(
     m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive, st: SimSettings
 ) -> tuple[mujoco.MjData, float]:
     """Step 3: the configuration ``qpos`` held by the drive's feed-forward torques for the settle
@@ -276,7 +276,7 @@ def rollout(
         raise ParamError(
             "inertial_ff", "not available for a hand with a transmission (joint torques, not actuator forces)"
         )
-    d, drift = _settle(m, qpos, rig, drive, st)
+    d, drift = settle(m, qpos, rig, drive, st)
     _start(d, rig, drive, st)
     fa, tw = rig.fadr, drive.twist
     target = np.r_[tw[:3], rig.radius * tw[3:]]
@@ -295,13 +295,7 @@ def rollout(
     names = drive.actuators or drive.joints
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
-        if rig.coupled:
-            sp, ff = rig.command(d, drive, qset)
-        else:
-            # the joints' own damping and friction loss (passive torques of the model), which the
-            # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)
-            sp = qset * rig.gear
-            ff = drive.torques + m.dof_damping[rig.dofs] * qset + m.dof_frictionloss[rig.dofs] * np.sign(qset)
+        sp, ff = rig.controls(d, drive, qset)
         if st.inertial_ff and pred is not None:
             ff += _inertial(m, d, pred, rig, drive, qset)
         d.ctrl[rig.cadr] = sp

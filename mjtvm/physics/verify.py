@@ -40,6 +40,7 @@ from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
 from .hold import HoldResult, hold_row, hold_test
+from .launch import launch_row
 from .motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
 from .verdict import verdict
@@ -191,11 +192,14 @@ def verify_state(
     dynamics: bool = False,
     preload: float = 0.0,
     hold_time: float | None = None,
+    launch_distance: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
 
     First the hold test (:func:`~mjtvm.physics.hold.hold_test`, ``hold_time`` s, default a
     rollout's length): a state that does not hold at rest gets its verdict and no rollout.
+    ``launch_distance`` (m): also the launch from rest of every pair
+    (:func:`~mjtvm.physics.launch.launch`).
 
     ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
@@ -266,6 +270,8 @@ def verify_state(
                 inertia_joint=state.joint_names[j],
                 settle_drift=chk.settle_drift,
             )
+            if launch_distance is not None:
+                row.update(launch_row(model, lift.qpos[index], one, launch_distance, settings, ob))
             if dynamics:
                 row.update(
                     _dynamic_row(
@@ -360,6 +366,7 @@ def verify_lift(
     dynamics: bool = False,
     preload: float = 0.0,
     hold_time: float | None = None,
+    launch_distance: float | None = None,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -379,7 +386,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of :data:`RUNS`.
-    dynamics, preload, hold_time
+    dynamics, preload, hold_time, launch_distance
         As in :func:`verify_state`.
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -411,6 +418,7 @@ def verify_lift(
         "dynamics": dynamics,
         "preload": preload,
         "hold_time": hold_time,
+        "launch_distance": launch_distance,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)

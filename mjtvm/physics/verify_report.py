@@ -65,7 +65,8 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs and their
-    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``); pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``), and so are
+    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), with a launch
+    the median of launch_speed / alpha_kl and the launches that reached their distance; pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``), and so are
     the states that do not hold at rest (``not_held``: no speed tested)."""
     out: dict[str, dict[str, Any]] = {}
     for run in dict.fromkeys(r["run"] for r in rows):
@@ -94,6 +95,10 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
                 "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas),
                 "dyn_feasible": len(feas),
             }
+        if any("launch_speed" in r for r in ok):
+            lr = [r["launch_speed"] / r["alpha_lp"] for r in ok if r["alpha_lp"] > 0]
+            dyn["launch_median"] = statistics.median(lr) if lr else math.nan
+            dyn["launch_reached"] = sum(r["launch_verdict"] == "reached" for r in ok)
         out[run] = {
             "pairs": len(ok),
             "states": len({r["state"] for r in ok}),
