@@ -34,12 +34,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.state import GraspState
 from ..errors import ParamError
 from .rig import Rig
 from .simulate import SimSettings
-from .witness import Drive
+from .witness import Drive, witness_drive
 
-__all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test"]
+__all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test", "state_hold"]
 
 _F64 = NDArray[np.float64]
 
@@ -225,6 +226,27 @@ def hold_test(
             np.max(m.actuator_armature[rig.acts] * m.actuator_gear[rig.acts, 0] ** 2, initial=0.0)
         ),
     )
+
+
+def state_hold(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    state: GraspState,
+    result: Any,
+    *,
+    settings: SimSettings | None = None,
+    object_body: str = "object",
+    duration: float | None = None,
+) -> HoldResult | None:
+    """The hold test of a grasp state with the central witness at alpha = 0 (the same for every
+    RVDS vertex: no twist to produce); ``None`` when no pair of ``result`` (the state's
+    :class:`~mjtvm.core.tvmmp.TvmmpResult`) has a witness."""
+    optimal = [l for l, status in enumerate(result.status[0]) if status == "optimal"]
+    if not optimal:
+        return None
+    l = optimal[0]
+    drive = witness_drive(state, 0, l, float(result.alpha[0, l]), 0.0, witness="central")
+    return hold_test(model, qpos, drive, settings=settings, object_body=object_body, duration=duration)
 
 
 def _anchor(d: mujoco.MjData, rig: Rig, g: int, body: int) -> tuple[_F64, _F64, _F64]:

@@ -39,7 +39,7 @@ from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
-from .hold import HoldResult, hold_row, hold_test
+from .hold import hold_row, state_hold
 from .launch import launch_row
 from .motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
@@ -229,7 +229,9 @@ def verify_state(
     except MjtvmError as e:
         return [{**base, "l": -1, "status": f"solver: {e}"}]
     rows = []
-    hold = _hold(model, lift.qpos[index], state, res, settings, ob, hold_time)
+    hold = state_hold(
+        model, lift.qpos[index], state, res, settings=settings, object_body=ob, duration=hold_time
+    )
     for l in range(len(state.rvds if state.rvds is not None else [])):
         status = res.status[0][l]
         row: dict[str, Any] = {**base, "l": l, "status": status}
@@ -280,24 +282,6 @@ def verify_state(
                 )
         rows.append(row)
     return rows
-
-
-def _hold(
-    model: mujoco.MjModel,
-    qpos: _F64,
-    state: GraspState,
-    res: Any,
-    settings: SimSettings | None,
-    ob: str,
-    hold_time: float | None,
-) -> HoldResult | None:
-    """The hold test of the state (:mod:`~mjtvm.physics.hold`) with the central witness at alpha = 0
-    (the same for every RVDS vertex); ``None`` when no pair has a witness."""
-    optimal = [l for l, status in enumerate(res.status[0]) if status == "optimal"]
-    if not optimal:
-        return None
-    drive = witness_drive(state, 0, optimal[0], float(res.alpha[0, optimal[0]]), 0.0, witness="central")
-    return hold_test(model, qpos, drive, settings=settings, object_body=ob, duration=hold_time)
 
 
 def _dynamic_row(
