@@ -127,14 +127,16 @@ def hand_option(
     p.add_argument("--hand", default="default", help=help)
 
 
-def states_option(p: argparse.ArgumentParser, *, hint: str = "") -> None:
-    """``--states N``: the number of states along the lift (``hint``: added to its error)."""
+def states_option(p: argparse.ArgumentParser, *, hint: str = "", minimum: int = 2) -> None:
+    """``--states N``: the number of states along the lift (``hint``: added to its error;
+    ``minimum``: 1 where one state, the grasp's own, is a check of its own)."""
     p.add_argument(
         "--states",
-        type=integer(2, MAX_STATES, hint=hint),
+        type=integer(minimum, MAX_STATES, hint=hint),
         default=30,
         metavar="N",
-        help="number of states along the lift",
+        help="number of states along the lift"
+        + (" (1: the grasp's own state, no lift)" if minimum == 1 else ""),
     )
 
 

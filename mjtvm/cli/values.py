@@ -19,6 +19,7 @@ __all__ = [
     "MAX_GRID",
     "MAX_INDENT",
     "MAX_JOBS",
+    "MAX_LAUNCH",
     "MAX_LIST",
     "MAX_MEMORY",
     "MAX_MU",
@@ -69,6 +70,7 @@ MIN_GEAR, MAX_GEAR = (
     10_000.0,
 )  # --gears: a reduction (a tiny ratio scales the torques past the state bounds)
 MAX_SCALE = 1_000.0  # verify --armature-scale
+MAX_LAUNCH = 1.0  # m: verify --launch, the stated distance of a launch from rest
 MAX_SIM_SECONDS = 1.0  # verify --window, --startup: 4000 MuJoCo steps of 0.25 ms per rollout
 MAX_MEMORY = 2**50  # --memory: 1 PiB
 MAX_LIST = 1_000  # entries of one comma-separated list

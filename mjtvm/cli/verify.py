@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
+import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -21,6 +22,7 @@ from .values import (
     MAX_FORCE,
     MAX_GEAR,
     MAX_JOBS,
+    MAX_LAUNCH,
     MAX_MU,
     MAX_SCALE,
     MAX_SIM_SECONDS,
@@ -53,7 +55,7 @@ def verify_parser() -> argparse.ArgumentParser:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
-    states_option(p)
+    states_option(p, minimum=1)
     p.add_argument(
         "--stride",
         type=integer(1, MAX_STATES),
@@ -109,6 +111,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=0.0,
         metavar="N",
         help="minimum normal force (N) of every L contact (the state's contact preload)",
+    )
+    p.add_argument(
+        "--hold",
+        type=number(0.0, MAX_SIM_SECONDS, strict=True),
+        default=None,
+        metavar="SECONDS",
+        help="length of the hold test at rest before the speeds (default: a rollout's, settle + "
+        "startup + window)",
+    )
+    p.add_argument(
+        "--launch",
+        type=number(0.0, MAX_LAUNCH, strict=True),
+        default=None,
+        metavar="M",
+        help="also launch every pair from rest and report the speed reached within M metres "
+        "(e.g. 0.01; docs/physics-check.md, 'From rest')",
     )
     p.add_argument(
         "--gears",
@@ -216,7 +234,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         from ..apps.replay import grasp_defaults
 
-        mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
+        mu, mg = grasp_defaults(verify.checked_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         t0 = time.perf_counter()
         rows = verify.verify_lift(
             args.grasp,
@@ -229,6 +247,8 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             witness=args.witness,
             dynamics=args.dynamics,
             preload=args.preload,
+            hold_time=args.hold,
+            launch_distance=args.launch,
             jobs=args.jobs,
             start_method=args.start_method,
             out=None,
@@ -246,6 +266,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             srows = slide_check(lift, indices, mu=mu, mg=mg, settings=settings)
             files[outdir / "slide-check.csv"] = verify.rows_csv(srows)
         write_files(files)
+    _print_holds(rows, args.grasp)
     _print_summary(verify.summarize(rows), wall, args.jobs, outdir / (args.name + ".csv"))
     if args.slide_check:
         _print_slide_check(srows)
@@ -257,12 +278,25 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _print_holds(rows: Sequence[dict[str, Any]], grasp: str) -> None:
+    """One line on stderr per (run, state) that does not hold at rest: its check stopped there."""
+    seen: set[tuple[str, int]] = set()
+    for r in rows:
+        key = (r["run"], r["state"])
+        if r.get("held") is False and key not in seen:
+            seen.add(key)
+            print(f"mjtvm verify: {grasp} state {r['state']} ({r['run']}) {r['verdict']}", file=sys.stderr)
+
+
 def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, csv_path: Path) -> None:
     for run_name, s in summary.items():
+        verdicts = s.pop("verdicts", {})
         print(
             f"{run_name}: "
             + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
         )
+        if verdicts:
+            print(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
     print(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
 
 

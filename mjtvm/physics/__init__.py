@@ -1,7 +1,9 @@
 r"""The physics check: MuJoCo rollouts of TVMMP witnesses with the hand's ``<dcmotor>`` actuators.
 
 :func:`verify_lift` compares alpha_sim (rollouts, :func:`alpha_sim`) with alpha_kl (the LP)
-along the lift; :func:`slide_check` settles the slide direction of S-points;
+along the lift, after the hold test at rest (:mod:`~mjtvm.physics.hold`), with a verdict in
+words per pair (:mod:`~mjtvm.physics.verdict`) and optionally a launch from rest
+(:mod:`~mjtvm.physics.launch`); :func:`slide_check` settles the slide direction of S-points;
 :func:`dynamic_pair` adds the torque the witness motion needs beyond eq. (19);
 :func:`gear_sweep` varies the gear ratio; :func:`attach_dcmotors` gives any hand DC motors,
 :func:`attach_actuator_dcmotors` the actuators of a hand with a transmission (:func:`box_motor`

@@ -134,6 +134,12 @@ class Rig:
             return np.zeros(len(self.acts))
         return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
 
+    def hold_torques(self, drive: Drive) -> _F64:
+        """The feedforward that holds the state at rest (settle, hold test): the drive's torques;
+        with a transmission its forces ``u`` less the share of the damping ``b qd`` they carry
+        for the witness's motion, absent at rest."""
+        return drive.torques - self.damping_share(self.damped(drive)) if self.coupled else drive.torques
+
     @staticmethod
     def damped(drive: Drive) -> _F64:
         """The joint speeds whose damping the drive's forces carry (:attr:`Drive.damped_speeds`)."""
@@ -154,6 +160,21 @@ class Rig:
             + self.friction * np.sign(drive.actuator_speeds)
         )
         return self.motor_speeds(d, qset), ff
+
+    def controls(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:
+        """``(A,)`` speed setpoints (actuator-length units) and feedforward torques (joint side,
+        before the motors' gear) of the tracked joint speeds ``qset`` (a rollout's step 5).
+
+        With a transmission :meth:`command`; without, ``qset`` x gear and the drive's torques
+        plus the joints' own damping and friction loss at ``qset`` (passive torques of the
+        model, which the grasp's operation ranges leave out of the torque budget,
+        ``OperationRange.with_losses``).
+        """
+        if self.coupled:
+            return self.command(d, drive, qset)
+        m = self.m
+        ff = drive.torques + m.dof_damping[self.dofs] * qset + m.dof_frictionloss[self.dofs] * np.sign(qset)
+        return qset * self.gear, ff
 
     def motor_moment(self, d: mujoco.MjData) -> _F64:
         """``(A, M)`` the motors' moment rows over the drive's joints at ``d`` (gear included)."""

@@ -60,7 +60,7 @@ from ..sim.grasp.state import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
 
-__all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "sim_model"]
+__all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "settle", "sim_model"]
 
 _F64 = NDArray[np.float64]
 
@@ -206,6 +206,10 @@ class RolloutResult:
     joints
         The driven joints (the column order of the trace's ``qvel`` and ``torque``, the joint
         torques ``qfrc_actuator`` with a transmission).
+    failure
+        The first violation's kind (``"twist magnitude"``, ``"twist direction"``, ``"moves at
+        rest"``, ``"slip"``, ``"contact lost"``, ``"torque limit"``; ``""`` when passed) and
+        where (the geom, or the saturated joints or actuators; ``""`` for the twist).
     trace
         Per-step arrays when requested (:func:`rerun_data`), else empty.
     """
@@ -221,10 +225,11 @@ class RolloutResult:
     settle_drift: float
     friction: Mapping[str, tuple[_F64, _F64]]
     joints: tuple[str, ...] = ()
+    failure: tuple[str, str] = ("", "")
     trace: Mapping[str, _F64] = field(default_factory=dict, repr=False)
 
 
-def _settle(
+def settle(
     m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive, st: SimSettings
 ) -> tuple[mujoco.MjData, float]:
     """Step 3: the configuration ``qpos`` held by the drive's feed-forward torques for the settle
@@ -235,9 +240,7 @@ def _settle(
         mujoco.mj_forward(m, d)
         rig.bind(d, drive)
     d.ctrl[rig.cadr] = 0.0
-    # with a transmission u carries the damping b qd of the witness's motion, absent at rest
-    hold = drive.torques - rig.damping_share(rig.damped(drive)) if rig.coupled else drive.torques
-    d.ctrl[rig.cadr + 1] = hold / rig.gear
+    d.ctrl[rig.cadr + 1] = rig.hold_torques(drive) / rig.gear
     mujoco.mj_forward(m, d)
     p0 = d.xpos[rig.ob].copy()
     if st.steps(st.settle):
@@ -273,7 +276,7 @@ def rollout(
         raise ParamError(
             "inertial_ff", "not available for a hand with a transmission (joint torques, not actuator forces)"
         )
-    d, drift = _settle(m, qpos, rig, drive, st)
+    d, drift = settle(m, qpos, rig, drive, st)
     _start(d, rig, drive, st)
     fa, tw = rig.fadr, drive.twist
     target = np.r_[tw[:3], rig.radius * tw[3:]]
@@ -286,19 +289,13 @@ def rollout(
     ssum = {f[0]: np.zeros(3) for f in rig.fingers if f[4] != "F"}
     worst = {"speed": 0.0, "angle": 0.0, "gap": -np.inf}
     saturated: set[str] = set()
-    clamped, reason, gap_geom = 0, "", ""
+    clamped, reason, gap_geom, failure = 0, "", "", ["", ""]
     trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
     f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
     names = drive.actuators or drive.joints
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
-        if rig.coupled:
-            sp, ff = rig.command(d, drive, qset)
-        else:
-            # the joints' own damping and friction loss (passive torques of the model), which the
-            # grasp's operation ranges leave out of the torque budget (OperationRange.with_losses)
-            sp = qset * rig.gear
-            ff = drive.torques + m.dof_damping[rig.dofs] * qset + m.dof_frictionloss[rig.dofs] * np.sign(qset)
+        sp, ff = rig.controls(d, drive, qset)
         if st.inertial_ff and pred is not None:
             ff += _inertial(m, d, pred, rig, drive, qset)
         d.ctrl[rig.cadr] = sp
@@ -330,7 +327,7 @@ def rollout(
             ):
                 trace[key].append(val)
         if not reason:
-            reason = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom)
+            reason, *failure = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom)
             if reason:
                 reason = f"{reason} at t = {1e3 * (step + 1 - n0) * st.timestep:.2f} ms"
     nwin = max(1, n1 - n0)
@@ -347,6 +344,7 @@ def rollout(
         settle_drift=drift,
         friction=friction,
         joints=drive.joints,
+        failure=(failure[0], failure[1]),
         trace={k: np.array(v, dtype=float) for k, v in trace.items()} if record else {},
     )
 
@@ -359,21 +357,23 @@ def _violation(
     saturated: set[str],
     tnorm: float,
     gap_geom: str,
-) -> str:
+) -> tuple[str, str, str]:
+    """The first violated criterion as (text, kind, where) (:attr:`RolloutResult.failure`)."""
     if tnorm > 0 and worst["speed"] > st.speed_tol:
-        return f"twist magnitude off by {100 * worst['speed']:.1f} %"
+        return f"twist magnitude off by {100 * worst['speed']:.1f} %", "twist magnitude", ""
     if tnorm == 0 and worst["speed"] > st.slip_floor / max(st.window, 1e-12):
-        return f"object moves at {worst['speed']:.3g} m/s"
+        return f"object moves at {worst['speed']:.3g} m/s", "moves at rest", ""
     if worst["angle"] > st.angle_tol:
-        return f"twist direction off by {worst['angle']:.1f} deg"
+        return f"twist direction off by {worst['angle']:.1f} deg", "twist direction", ""
     for geom, dist in slip.items():
         if dist > slip_tol:
-            return f"{geom} slips {1e3 * dist:.3f} mm"
+            return f"{geom} slips {1e3 * dist:.3f} mm", "slip", geom
     if worst["gap"] > st.lost_gap:
-        return f"contact lost ({gap_geom} {1e3 * worst['gap']:.2f} mm)"
+        return f"contact lost ({gap_geom} {1e3 * worst['gap']:.2f} mm)", "contact lost", gap_geom
     if saturated:
-        return f"torque saturated ({', '.join(sorted(saturated))})"
-    return ""
+        names = ", ".join(sorted(saturated))
+        return f"torque saturated ({names})", "torque limit", names
+    return "", "", ""
 
 
 def _inertial(

@@ -39,8 +39,11 @@ from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
 from .dynamic import dynamic_pair
+from .hold import hold_row, state_hold
+from .launch import launch_row
 from .motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from .simulate import SimSettings, inertial_demand, rollout, sim_model
+from .verdict import verdict
 from .verify_report import plot_alpha, rows_csv, summarize
 from .witness import witness_drive
 
@@ -51,8 +54,10 @@ __all__ = [
     "alpha_sim",
     "bisect",
     "cached_lift",
+    "checked_lift",
     "motor_model",
     "plot_alpha",
+    "present_runs",
     "rows_csv",
     "runs_of",
     "state_indices",
@@ -74,6 +79,31 @@ def cached_lift(grasp: str | Path, num_states: int) -> Lift:
     if key not in _LIFTS:
         _LIFTS[key] = scripted_lift(_grasp(grasp), num_states=num_states)
     return _LIFTS[key]
+
+
+def checked_lift(grasp: str | Path, num_states: int) -> Lift:
+    """The lift the check runs: :func:`cached_lift`, or the grasp's own state alone when its
+    file has no ``[lift]`` (there is no motion to sample)."""
+    one = getattr(_scenario(grasp), "lift", ...) is None
+    return cached_lift(grasp, 1 if one else num_states)
+
+
+def present_runs(lift: Lift, runs: Sequence[str]) -> list[str]:
+    """The ``runs`` that differ on this lift: without an L/S finger (every finger an F-point)
+    the variants are the same grasp, checked once as ``L``; without a ``[lift]`` there is no
+    motion to give an S-point's slide direction, so ``L`` only."""
+    if "N" not in lift.roles or getattr(lift.scenario, "lift", ...) is None:
+        return ["L"]
+    return list(runs)
+
+
+def _scenario(grasp: str | Path) -> Any:
+    loaded = _grasp(grasp)
+    if isinstance(loaded, str):
+        from ..sim.paper_hand.scenario import load_scenario
+
+        return load_scenario(loaded)
+    return loaded
 
 
 def _grasp(grasp: str | Path) -> Any:
@@ -161,8 +191,15 @@ def verify_state(
     check_s: float = 0.9,
     dynamics: bool = False,
     preload: float = 0.0,
+    hold_time: float | None = None,
+    launch_distance: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
+
+    First the hold test (:func:`~mjtvm.physics.hold.hold_test`, ``hold_time`` s, default a
+    rollout's length): a state that does not hold at rest gets its verdict and no rollout.
+    ``launch_distance`` (m): also the launch from rest of every pair
+    (:func:`~mjtvm.physics.launch.launch`).
 
     ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
@@ -192,10 +229,15 @@ def verify_state(
     except MjtvmError as e:
         return [{**base, "l": -1, "status": f"solver: {e}"}]
     rows = []
+    hold = state_hold(
+        model, lift.qpos[index], state, res, settings=settings, object_body=ob, duration=hold_time
+    )
     for l in range(len(state.rvds if state.rvds is not None else [])):
         status = res.status[0][l]
         row: dict[str, Any] = {**base, "l": l, "status": status}
-        if status == "optimal":
+        if status == "optimal" and hold is not None:
+            row.update(hold_row(hold), alpha_lp=float(res.alpha[0, l]))
+        if status == "optimal" and (hold is None or hold.held):
             a_sim, alpha, b = alpha_sim(
                 model,
                 lift.qpos[index],
@@ -220,7 +262,7 @@ def verify_state(
                 alpha_lp=alpha,
                 alpha_sim=a_sim,
                 ratio=a_sim / alpha if alpha > 0 else math.nan,
-                censored=b.above_bracket or b.below_bracket,
+                verdict=verdict(b, fail, actuators=state.transmission is not None),
                 evaluations=b.evaluations,
                 fail_reason=fail.reason,
                 fail_clamp=fail.clamp_fraction,
@@ -230,6 +272,8 @@ def verify_state(
                 inertia_joint=state.joint_names[j],
                 settle_drift=chk.settle_drift,
             )
+            if launch_distance is not None:
+                row.update(launch_row(model, lift.qpos[index], one, launch_distance, settings, ob))
             if dynamics:
                 row.update(
                     _dynamic_row(
@@ -305,6 +349,8 @@ def verify_lift(
     witness: str = "central",
     dynamics: bool = False,
     preload: float = 0.0,
+    hold_time: float | None = None,
+    launch_distance: float | None = None,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -324,7 +370,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of :data:`RUNS`.
-    dynamics, preload
+    dynamics, preload, hold_time, launch_distance
         As in :func:`verify_state`.
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -340,8 +386,9 @@ def verify_lift(
 
         check_output_dir(out, option="out")
     st = settings or SimSettings()
+    lift = checked_lift(grasp, num_states)
+    num_states, runs = lift.num_states, present_runs(lift, runs)
     indices = state_indices(num_states, stride)
-    lift = cached_lift(grasp, num_states)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
     if dynamics and getattr(lift.scenario, "transmission", None) is not None:
         raise ParamError(
@@ -354,6 +401,8 @@ def verify_lift(
         "witness": witness,
         "dynamics": dynamics,
         "preload": preload,
+        "hold_time": hold_time,
+        "launch_distance": launch_distance,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)

@@ -8,6 +8,7 @@ import csv
 import io
 import math
 import statistics
+from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
@@ -63,16 +64,21 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs, s = 0.9
-    failures; pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``)."""
+    r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs and their
+    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), with a launch
+    the median of launch_speed / alpha_kl and the launches that reached their distance; pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``), and so are
+    the states that do not hold at rest (``not_held``: no speed tested)."""
     out: dict[str, dict[str, Any]] = {}
     for run in dict.fromkeys(r["run"] for r in rows):
         ok = [r for r in rows if r["run"] == run and r["status"] == "optimal"]
+        # a state that does not hold at rest has no speed tested (mjtvm.physics.hold)
+        loose = {r["state"] for r in ok if r.get("held") is False}
+        ok = [r for r in ok if r["state"] not in loose]
         # alpha_kl = 0 (the hand cannot move the object along r_l at all) has no ratio
         zero = sum(1 for r in ok if not math.isfinite(r["ratio"]))
         ok = [r for r in ok if math.isfinite(r["ratio"])]
         if not ok:
-            out[run] = {"pairs": 0, "zero_alpha": zero}
+            out[run] = {"pairs": 0, "zero_alpha": zero, "not_held": len(loose)}
             continue
         ratios = sorted(r["ratio"] for r in ok)
         q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [ratios[0]] * 3
@@ -89,6 +95,10 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
                 "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas),
                 "dyn_feasible": len(feas),
             }
+        if any("launch_speed" in r for r in ok):
+            lr = [r["launch_speed"] / r["alpha_lp"] for r in ok if r["alpha_lp"] > 0]
+            dyn["launch_median"] = statistics.median(lr) if lr else math.nan
+            dyn["launch_reached"] = sum(r["launch_verdict"] == "reached" for r in ok)
         out[run] = {
             "pairs": len(ok),
             "states": len({r["state"] for r in ok}),
@@ -97,10 +107,11 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "q3": q[2],
             "min": ratios[0],
             "max": ratios[-1],
-            "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["fail_reason"]) for r in worst],
+            "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["verdict"]) for r in worst],
             "fail_at_check": sum(not r["pass_check"] for r in ok),
-            "censored": sum(bool(r["censored"]) for r in ok),
+            "verdicts": dict(Counter(r["verdict"] for r in ok).most_common()),
             "zero_alpha": zero,
+            "not_held": len(loose),
             **dyn,
         }
     return out

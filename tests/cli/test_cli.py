@@ -210,7 +210,7 @@ MUS = ",".join(["0.5"] * 1000)
         (["tvms", "--indent", "17"], "error: --indent: expected an integer in [0, 16], got '17'"),
         (["replay", "--states", "99999999999999999999"],
          "error: --states: expected an integer in [2, 10000], got '99999999999999999999'"),
-        (["verify", "--states", "10001"], "error: --states: expected an integer in [2, 10000], got '10001'"),
+        (["verify", "--states", "10001"], "error: --states: expected an integer in [1, 10000], got '10001'"),
         (["verify", "--stride", "10001"], "error: --stride: expected an integer in [1, 10000], got '10001'"),
         (["replay", "--tvms-every", "1e308"], "error: --tvms-every: expected an integer in [0, 10000], got '1e308'"),
         (["sweep", "--state-indices", "0,10000"],

@@ -255,6 +255,7 @@ def test_verify_csv(tmp_path: Path, lift2: Any) -> None:
         stride=1,
         runs=("L",),
         dynamics=True,
+        launch_distance=0.002,
         out=tmp_path,
         name="verify",
         progress=False,

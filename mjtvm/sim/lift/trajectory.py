@@ -258,7 +258,8 @@ def scripted_lift(
         A shipped scenario name and hand variant (``"default"``, ``"humanlike"``), or a grasp
         at its initial state: a :class:`~mjtvm.sim.paper_hand.scenario.Scenario` or a grasp file's ``Grasp``.
     num_states
-        N >= 2, evenly spaced in s from the start to the end of the lift.
+        N >= 2, evenly spaced in s from the start to the end of the lift; 1: the grasp's own
+        state alone, nothing marched (its ``rates`` and ``slips`` those of the motion at s = 0).
     direction, twist, poses
         At most one: the object's motion (:mod:`mjtvm.sim.lift.motion`): ``(3,)`` a direction
         (normalised), ``(6,)`` a twist :math:`(v, \omega)` about the object's origin (world
@@ -284,8 +285,8 @@ def scripted_lift(
         A grasp the lift cannot move, an initial state not admissible, or a ``height``
         beyond reach (naming the failing finger).
     """
-    if isinstance(num_states, bool) or not isinstance(num_states, int) or num_states < 2:
-        raise StateError("num_states", f"expected an integer >= 2, got {num_states!r}")
+    if isinstance(num_states, bool) or not isinstance(num_states, int) or num_states < 1:
+        raise StateError("num_states", f"expected an integer >= 1, got {num_states!r}")
     for name, value in (
         ("max_step", max_step),
         ("tolerance", tolerance),
@@ -314,6 +315,8 @@ def scripted_lift(
     mujoco.mj_kinematics(sc.model, data)
     res0 = m.drift(data, m.targets(data))
     path: _Path = [(0.0, data, {"drift": np.zeros(len(m.fingers)), "residual": res0})]
+    if num_states == 1:  # the grasp's own state: nothing to march
+        return _sample(m, path, 1, limit="one state", max_step=max_step, tolerance=tolerance)
     length = spec.height if spec.height is not None else motion.length
     limit = f"requested height {spec.height} m" if spec.height is not None else "the last pose"
     while path[-1][0] < length:

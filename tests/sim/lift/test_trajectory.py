@@ -174,7 +174,7 @@ def test_humanlike_hand_lifts_too() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "field"),
     [
-        ({"num_states": 1}, "num_states"),
+        ({"num_states": 0}, "num_states"),
         ({"num_states": 2.5}, "num_states"),
         ({"height": -0.01}, "height"),
         ({"max_step": 0.0}, "max_step"),
@@ -184,6 +184,14 @@ def test_bad_lift_options(kwargs: dict, field: str) -> None:
     with pytest.raises(StateError) as err:
         scripted_lift(**kwargs)
     assert err.value.field == field
+
+
+def test_one_state_is_the_grasp_itself(short: Lift) -> None:
+    """num_states = 1: the grasp's own state, nothing marched (the physics check of one state)."""
+    one = scripted_lift(num_states=1)
+    assert one.num_states == 1 and one.marched == 0 and one.s.tolist() == [0.0]
+    assert np.array_equal(one.qpos[0], short.qpos[0]) and one.touching[0] == short.touching[0]
+    assert np.allclose(one.rates[0], short.rates[0], atol=1e-12)
 
 
 def test_bad_state_options(short: Lift) -> None:
