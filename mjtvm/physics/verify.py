@@ -255,7 +255,18 @@ def _dynamic_row(
 ) -> dict[str, Any]:
     """The dynamic alpha of pair (0, l), its limit, alpha_sim / alpha_dyn and the check at
     ``check_s`` alpha_dyn (a rollout of the same drive at speed factor check_s alpha_dyn / alpha_kl)."""
-    dyn = dynamic_pair(model, qpos, state, 0, l, result=res, witness=witness, object_body=ob)  # type: ignore[arg-type]
+    st = settings or SimSettings()  # the demand along the span the rollout checks
+    dyn = dynamic_pair(
+        model,
+        qpos,
+        state,
+        0,
+        l,
+        result=res,
+        witness=witness,
+        object_body=ob,
+        window=st.startup + st.window,  # type: ignore[arg-type]
+    )
     a = dyn.alpha
     out: dict[str, Any] = {
         "alpha_dyn": a,
