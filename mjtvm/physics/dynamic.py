@@ -75,8 +75,11 @@ def _set_motion(m: mujoco.MjModel, d: mujoco.MjData, rig: Rig, drive: Drive, qpo
     """``d`` at ``qpos`` moving with the drive's twist and tracked joint speeds; returns those speeds."""
     d.qpos[:] = qpos
     d.qvel[:] = 0.0
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
+    if rig.coupled:  # the equality rows the setpoints keep (Rig.equality_rows) are those of a forward pass
+        mujoco.mj_forward(m, d)
+    else:
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
     fa, tw = rig.fadr, drive.twist
     d.qvel[fa : fa + 3] = tw[:3]
     d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ tw[3:]
