@@ -14,6 +14,16 @@ each finger's contact point follows the object (F: all of its velocity, L: the n
 S: eq. 13 with the witness's slip). Its acceleration at the state's configuration is a
 central difference of those setpoints along the motion (:func:`joint_demand`).
 
+A rollout checks a span of motion (``startup + window``, 7 ms by default), not an instant,
+and near a stretched finger the demand grows within it. :func:`window_demand` integrates the
+same motion kinematically over such a span and keeps each joint's largest and least demand;
+with a ``window`` (:func:`dynamic_pair`) both must fit the joint's operation range with the
+torque of eq. (19) (:mod:`mjtvm.core.dynamic`, "Demands along a window"). The demand covers
+every driven joint, those of fingers whose witness force is zero included: their motors alone
+must accelerate them. With a transmission the demand is per joint and joins the balance
+``P^T u - J^T f + J_eq^T lambda - b qd = g_f + d`` (:mod:`mjtvm.core.transmission`); the
+motion keeps the equality rows of a forward pass at each configuration.
+
 :func:`dynamic_pair` hands this demand, as a function of alpha, to the simulator-free core
 (:func:`~mjtvm.core.dynamic.dynamic_alpha`), which bisects over LPs for
 :math:`\alpha^{dyn}_{kl}`. The joint speeds grow as alpha and the demand as alpha^2; the

@@ -263,9 +263,9 @@ def _dynamic_row(
         0,
         l,
         result=res,
-        witness=witness,
+        witness=witness,  # type: ignore[arg-type]
         object_body=ob,
-        window=st.startup + st.window,  # type: ignore[arg-type]
+        window=st.startup + st.window,
     )
     a = dyn.alpha
     out: dict[str, Any] = {
