@@ -51,7 +51,8 @@ of each joint's demand over the window (:func:`mjtvm.physics.dynamic.window_dema
 feasible iff eq. (31) is feasible with *each* of them, :math:`\min_i A(d_i(\alpha)) \ge \alpha`
 (one LP per vector, each with its own forces, as the forces of the motion change along it). The
 feasible alphas are then the intersection of the intervals of the vectors, again an interval,
-and the bisection above applies unchanged.
+and the bisection above applies unchanged. (A window's demand is not :math:`\alpha^2 h`: at a
+higher speed the window covers more of the path; there the interval property is assumed.)
 """
 
 from __future__ import annotations
