@@ -133,3 +133,27 @@ def test_a_demand_of_the_wrong_shape_is_refused() -> None:
 
     with pytest.raises(ParamError, match=r"demand: expected \(1,\) or \(n, 1\) joint torques"):
         dynamic_alpha(pusher(0.5), 0, 0, lambda a: np.zeros((2, 3)))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_constant_demand_vectors_against_the_cvxpy_reference(seed: int) -> None:
+    """A constant demand of two vectors (+d and -d, a window's two ends): alpha is feasible iff
+    both loaded LPs reach it, so alpha_dyn = min_i A(d_i), each A solved independently by the
+    cvxpy transcription of eq. (31) (mjtvm.core.reference) on the state with g_f + d_i."""
+    from mjtvm.bench.synthetic import random_state
+    from mjtvm.core.reference import reference_alpha
+
+    state = random_state(seed)
+    rng = np.random.default_rng(seed)
+    tmax = np.array([op.max_torque for op in state.operation_ranges])
+    d = 0.05 * tmax * rng.choice([-1.0, 1.0], size=state.num_joints)
+    refs = []
+    for vec in (d, -d):
+        status, a = reference_alpha(state.with_(gravity_torque=state.gravity_torque + vec), 0, 0)
+        assert status == "optimal" and a is not None
+        refs.append(a)
+    res = dynamic_alpha(
+        state, 0, 0, lambda a: np.vstack([d, -d]) if a > 0 else np.zeros(state.num_joints), rtol=1e-8
+    )
+    assert res.alpha == pytest.approx(min(refs), rel=1e-6)
+    assert res.alpha < res.alpha_static  # the demand costs speed here
