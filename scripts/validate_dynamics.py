@@ -26,6 +26,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from mjtvm.errors import MjtvmError
 from mjtvm.physics.verify import verify_lift
 
 # hand -> the runs checked: Case 2's fingers 2 and 4 as L-points and as S-points (literal reading,
@@ -123,17 +124,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     if unknown:
         print(f"hands: expected names among {sorted(HANDS)}, got {unknown}", file=sys.stderr)
         return 2
+    try:
+        results = validate(hands, args.states, args.stride, args.jobs, args.out)
+    except MjtvmError as e:  # bad input (states, stride, jobs, out): one line, exit 2
+        print(f"error: {' '.join(str(e).split())}", file=sys.stderr)
+        return 2
+    text = table(results)
+    print(text)
+    (args.out / "validate-dynamics.md").write_text(text, encoding="utf-8")
+    return 0
+
+
+def validate(
+    hands: Sequence[str], states: int, stride: int, jobs: int, out: Path
+) -> dict[tuple[str, str], dict[str, Any]]:
+    """Run verify --dynamics on each hand and summarize each run (module docstring)."""
     results: dict[tuple[str, str], dict[str, Any]] = {}
     for hand in hands:
         t0 = time.perf_counter()
         rows = verify_lift(
             hand,
-            num_states=args.states,
-            stride=args.stride,
+            num_states=states,
+            stride=stride,
             runs=HANDS[hand],
             dynamics=True,
-            jobs=args.jobs,
-            out=args.out,
+            jobs=jobs,
+            out=out,
             name=f"dyn-{hand}",
             progress=False,
             plot=False,
@@ -147,10 +163,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 f"limiting terms {s['terms']}, {time.perf_counter() - t0:.0f} s",
                 flush=True,
             )
-    text = table(results)
-    print(text)
-    (args.out / "validate-dynamics.md").write_text(text, encoding="utf-8")
-    return 0
+    return results
 
 
 if __name__ == "__main__":  # the guard matters: verify's worker processes re-import this file
