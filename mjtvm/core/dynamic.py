@@ -41,6 +41,18 @@ work, :math:`A(d(\alpha_{kl})) > \alpha_{kl}`) the bracket is extended by doubli
 :math:`|A(d(\alpha^{dyn})) - \alpha^{dyn}|` is within the tolerance when A and d are
 continuous (the fixed point of :math:`\alpha \mapsto A(d(\alpha))`); :attr:`DynamicAlpha.residual`
 reports it.
+
+Demands along a window
+----------------------
+A state's demand is that of one instant; the motion that checks it lasts a window, along which
+:math:`M(q)\ddot q + c` changes with the configuration (near a stretched finger it grows like
+:math:`1/\cos^3 q`). A demand may therefore return several vectors ``(n, M)``, e.g. the extremes
+of each joint's demand over the window (:func:`mjtvm.physics.dynamic.window_demand`): alpha is
+feasible iff eq. (31) is feasible with *each* of them, :math:`\min_i A(d_i(\alpha)) \ge \alpha`
+(one LP per vector, each with its own forces, as the forces of the motion change along it). The
+feasible alphas are then the intersection of the intervals of the vectors, again an interval,
+and the bisection above applies unchanged. (A window's demand is not :math:`\alpha^2 h`: at a
+higher speed the window covers more of the path; there the interval property is assumed.)
 """
 
 from __future__ import annotations
@@ -60,7 +72,8 @@ from .tvmmp import tvmmp
 __all__ = ["TERMS", "Demand", "DynamicAlpha", "dynamic_alpha", "limiting_term", "pair_alpha", "quadratic"]
 
 Demand = Callable[[float], ArrayLike]
-"""alpha -> ``(M,)`` extra joint torque (N m) the motion at speed alpha along r_l needs."""
+"""alpha -> ``(M,)`` extra joint torque (N m) the motion at speed alpha along r_l needs, or
+``(n, M)``: n such torques that must each be met (module docstring, "Demands along a window")."""
 TERMS = ("gravity/grasp", "speed", "inertia")
 """The parts of a joint's operation range a witness uses: the torque of eq. (19) (gravity and
 contact forces), the joint speed, and the extra (inertial) demand."""
@@ -100,7 +113,8 @@ class DynamicAlpha:
     alpha_static
         :math:`\alpha_{kl}` (no demand), or ``nan``.
     demand
-        ``(M,)`` the demand at :math:`\alpha^{dyn}` (N m).
+        ``(M,)`` the demand at :math:`\alpha^{dyn}` (N m); of a demand with several vectors, the
+        one whose LP gives the least alpha (the binding one).
     witness
         The LP's solution with that demand (its alpha is :math:`A(d(\alpha^{dyn}))`), or None.
     joint
@@ -113,7 +127,7 @@ class DynamicAlpha:
     residual
         :math:`A(d(\alpha^{dyn})) - \alpha^{dyn}` (>= 0; small at a fixed point).
     lps
-        Number of LPs solved; ``bracket`` the final bisection bracket.
+        Number of LPs solved (one per demand vector and candidate); ``bracket`` the final bisection bracket.
     """
 
     alpha: float
@@ -165,7 +179,8 @@ def dynamic_alpha(
     state
         The grasp state (REFS vertex ``k``, RVDS vertex ``l``).
     demand
-        alpha -> ``(M,)`` extra joint torque (N m); ``d(0)`` should be 0.
+        alpha -> ``(M,)`` extra joint torque (N m), or ``(n, M)`` torques each to be met
+        (module docstring); ``d(0)`` should be 0.
     rtol
         Bracket width relative to :math:`\alpha_{kl}` at which the bisection stops.
     max_lps
@@ -184,11 +199,22 @@ def dynamic_alpha(
         return DynamicAlpha(math.nan, math.nan, np.zeros(m), None, None, "", math.nan, lps, (0.0, 0.0))
 
     def value(a: float) -> tuple[float | None, Witness | None, NDArray[np.float64]]:
+        """min over the demand's vectors of A(d_i(a)), that LP's witness and vector (None: one
+        of them is infeasible)."""
         nonlocal lps
-        lps += 1
-        d = np.asarray(demand(a), dtype=float).reshape(m)
-        got, w = pair_alpha(state, k, l, d, solver=solver)
-        return got, w, d
+        rows = np.asarray(demand(a), dtype=float)
+        if rows.ndim > 2 or rows.shape[-1] != m:
+            raise ParamError("demand", f"expected ({m},) or (n, {m}) joint torques, got shape {rows.shape}")
+        vecs = rows.reshape(-1, m)
+        low, wit, dv = math.inf, None, vecs[0]
+        for d in vecs:
+            lps += 1
+            got, w = pair_alpha(state, k, l, d, solver=solver)
+            if got is None:
+                return None, None, d
+            if got < low:
+                low, wit, dv = got, w, d
+        return low, wit, dv
 
     def feasible(a: float) -> bool:
         got = value(a)[0]

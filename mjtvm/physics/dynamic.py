@@ -14,6 +14,16 @@ each finger's contact point follows the object (F: all of its velocity, L: the n
 S: eq. 13 with the witness's slip). Its acceleration at the state's configuration is a
 central difference of those setpoints along the motion (:func:`joint_demand`).
 
+A rollout checks a span of motion (``startup + window``, 7 ms by default), not an instant,
+and near a stretched finger the demand grows within it. :func:`window_demand` integrates the
+same motion kinematically over such a span and keeps each joint's largest and least demand;
+with a ``window`` (:func:`dynamic_pair`) both must fit the joint's operation range with the
+torque of eq. (19) (:mod:`mjtvm.core.dynamic`, "Demands along a window"). The demand covers
+every driven joint, those of fingers whose witness force is zero included: their motors alone
+must accelerate them. With a transmission the demand is per joint and joins the balance
+``P^T u - J^T f + J_eq^T lambda - b qd = g_f + d`` (:mod:`mjtvm.core.transmission`); the
+motion keeps the equality rows of a forward pass at each configuration.
+
 :func:`dynamic_pair` hands this demand, as a function of alpha, to the simulator-free core
 (:func:`~mjtvm.core.dynamic.dynamic_alpha`), which bisects over LPs for
 :math:`\alpha^{dyn}_{kl}`. The joint speeds grow as alpha and the demand as alpha^2; the
@@ -39,7 +49,7 @@ from .rig import Rig
 from .simulate import _gravity
 from .witness import Drive, WitnessKind, central_witness, witness_drive
 
-__all__ = ["JointDemand", "demand_of", "dynamic_pair", "joint_demand"]
+__all__ = ["JointDemand", "demand_of", "dynamic_pair", "joint_demand", "window_demand"]
 
 _F64 = NDArray[np.float64]
 
@@ -75,8 +85,11 @@ def _set_motion(m: mujoco.MjModel, d: mujoco.MjData, rig: Rig, drive: Drive, qpo
     """``d`` at ``qpos`` moving with the drive's twist and tracked joint speeds; returns those speeds."""
     d.qpos[:] = qpos
     d.qvel[:] = 0.0
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
+    if rig.coupled:  # the equality rows the setpoints keep (Rig.equality_rows) are those of a forward pass
+        mujoco.mj_forward(m, d)
+    else:
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
     fa, tw = rig.fadr, drive.twist
     d.qvel[fa : fa + 3] = tw[:3]
     d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ tw[3:]
@@ -111,7 +124,13 @@ def joint_demand(
     m = model
     rig = rig or Rig(m, drive, object_body)
     h = m.opt.timestep if step is None else step
-    d, probe = mujoco.MjData(m), mujoco.MjData(m)
+    return _demand_at(m, mujoco.MjData(m), mujoco.MjData(m), rig, drive, qpos, h)[0]
+
+
+def _demand_at(
+    m: mujoco.MjModel, d: mujoco.MjData, probe: mujoco.MjData, rig: Rig, drive: Drive, qpos: _F64, h: float
+) -> tuple[JointDemand, _F64]:
+    """The demand at ``qpos`` (:func:`joint_demand`) and the full ``qvel`` of the motion there."""
     speeds = _set_motion(m, d, rig, drive, qpos)
     qvel = d.qvel.copy()
     ahead = []
@@ -128,7 +147,42 @@ def joint_demand(
     out = np.zeros(m.nv)
     mujoco.mj_mulM(m, d, out, full)
     bias = d.qfrc_bias - _gravity(m, probe, np.asarray(qpos, dtype=float))
-    return JointDemand(out[rig.dofs].copy(), bias[rig.dofs].copy(), acc, speeds)
+    return JointDemand(out[rig.dofs].copy(), bias[rig.dofs].copy(), acc, speeds), qvel
+
+
+def window_demand(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    drive: Drive,
+    duration: float,
+    *,
+    object_body: str = "object",
+    rig: Rig | None = None,
+) -> _F64:
+    r"""``(2, M)``: each joint's largest and least demand :math:`M\ddot q + c` along the motion.
+
+    The drive's motion (object at its twist, joints at the tracked setpoints) is integrated
+    kinematically from ``qpos`` for ``duration`` (s) in steps of the model's time step
+    (``mj_integratePos``), and :func:`joint_demand` taken at every configuration passed,
+    ``qpos`` and the last included. Row 0 is the per-joint maximum, row 1 the minimum (N m):
+    the operation range bounds :math:`|\tau_j|`, so both ends of each joint's demand must fit
+    (:mod:`mjtvm.core.dynamic`, "Demands along a window"). ``duration = 0``: the demand at
+    ``qpos`` twice.
+    """
+    if not (math.isfinite(duration) and duration >= 0):
+        raise ParamError("duration", f"expected a finite number of seconds >= 0, got {duration!r}", duration)
+    m = model
+    rig = rig or Rig(m, drive, object_body)
+    h = m.opt.timestep
+    d, probe = mujoco.MjData(m), mujoco.MjData(m)
+    q = np.array(qpos, dtype=float)
+    totals = []
+    for _ in range(round(duration / h) + 1):
+        dem, qvel = _demand_at(m, d, probe, rig, drive, q, h)
+        totals.append(dem.total)
+        mujoco.mj_integratePos(m, q, qvel, h)
+    arr = np.array(totals)
+    return np.vstack([arr.max(axis=0), arr.min(axis=0)])
 
 
 def demand_of(
@@ -142,13 +196,16 @@ def demand_of(
     witness: WitnessKind = "central",
     vertex: Any = None,
     object_body: str = "object",
+    window: float = 0.0,
 ) -> Any:
     r"""The demand :math:`a \mapsto M\ddot q + c` of pair (k, l) for :func:`~mjtvm.core.dynamic.dynamic_alpha`.
 
     At a candidate alpha ``a`` the motion is the rollout's drive at speed factor
     ``a / alpha_kl`` (:func:`~mjtvm.physics.witness.witness_drive`: the central witness at
     ``min(a, alpha_kl)``, its speeds scaled above), so the demand is the torque the check at
-    that speed needs. Zero at ``a = 0``.
+    that speed needs. Zero at ``a = 0``. ``window`` (s) > 0: the ``(2, M)`` extremes of that
+    demand along the motion's first ``window`` seconds (:func:`window_demand`), else the demand
+    at ``qpos``.
     """
     rig: list[Rig] = []
 
@@ -158,6 +215,8 @@ def demand_of(
         drive = witness_drive(state, k, l, alpha_kl, a / alpha_kl, witness=witness, vertex=vertex)
         if not rig:
             rig.append(Rig(model, drive, object_body))
+        if window > 0:
+            return window_demand(model, qpos, drive, window, rig=rig[0])
         return joint_demand(model, qpos, drive, object_body=object_body, rig=rig[0]).total
 
     return demand
@@ -174,12 +233,15 @@ def dynamic_pair(
     witness: WitnessKind = "central",
     object_body: str = "object",
     rtol: float = 1e-3,
+    window: float = 0.0,
 ) -> DynamicAlpha:
     r""":math:`\alpha^{dyn}_{kl}` of one pair of a MuJoCo grasp state (module docstring).
 
     ``model`` from :func:`~mjtvm.physics.simulate.sim_model` (the grasp's model with its
     motors), ``qpos`` the state's configuration, ``result`` the state's quasi-static
-    :class:`~mjtvm.core.tvmmp.TvmmpResult` (solved here when omitted).
+    :class:`~mjtvm.core.tvmmp.TvmmpResult` (solved here when omitted). ``window`` (s): the
+    demand is taken along the motion's first ``window`` seconds (:func:`demand_of`); a
+    rollout's is its ``startup + window``, the span over which it is checked.
 
     Raises
     ------
@@ -193,7 +255,16 @@ def dynamic_pair(
     if not math.isfinite(alpha):
         raise ParamError("k, l", f"pair ({k}, {l}) has alpha {alpha}")
     demand = demand_of(
-        model, qpos, state, k, l, alpha, witness=witness, vertex=res.witnesses[k][l], object_body=object_body
+        model,
+        qpos,
+        state,
+        k,
+        l,
+        alpha,
+        witness=witness,
+        vertex=res.witnesses[k][l],
+        object_body=object_body,
+        window=window,
     )
     dyn = dynamic_alpha(state, k, l, demand, rtol=rtol)
     if dyn.alpha > 0 and dyn.witness is not None:

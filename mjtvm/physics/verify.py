@@ -34,7 +34,7 @@ from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
-from ..errors import MjtvmError, ModelError, ParamError, StateError
+from ..errors import MjtvmError, ModelError, StateError
 from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
 from .bisection import alpha_sim, bisect
@@ -299,12 +299,23 @@ def _dynamic_row(
 ) -> dict[str, Any]:
     """The dynamic alpha of pair (0, l), its limit, alpha_sim / alpha_dyn and the check at
     ``check_s`` alpha_dyn (a rollout of the same drive at speed factor check_s alpha_dyn / alpha_kl)."""
-    dyn = dynamic_pair(model, qpos, state, 0, l, result=res, witness=witness, object_body=ob)  # type: ignore[arg-type]
+    st = settings or SimSettings()  # the demand along the span the rollout checks
+    dyn = dynamic_pair(
+        model,
+        qpos,
+        state,
+        0,
+        l,
+        result=res,
+        witness=witness,  # type: ignore[arg-type]
+        object_body=ob,
+        window=st.startup + st.window,
+    )
     a = dyn.alpha
     out: dict[str, Any] = {
         "alpha_dyn": a,
         "ratio_dyn": a_sim / a if a > 0 else math.nan,
-        "dyn_joint": state.joint_names[dyn.joint] if dyn.joint is not None else "",
+        "dyn_joint": _limit_names(state)[dyn.joint] if dyn.joint is not None else "",
         "dyn_term": dyn.term,
         "dyn_demand": float(np.max(np.abs(dyn.demand))),
         "dyn_lps": dyn.lps,
@@ -328,6 +339,12 @@ def _dynamic_row(
         )
         out.update(pass_check_dyn=chk.passed, check_dyn_reason=chk.reason)
     return out
+
+
+def _limit_names(state: GraspState) -> tuple[str, ...]:
+    """What the operation ranges bound: the actuators with a transmission, else the joints."""
+    t = state.transmission
+    return state.joint_names if t is None else t.actuator_names
 
 
 def _task(args: tuple[str, int, int, str, dict[str, Any]]) -> list[dict[str, Any]]:
@@ -390,10 +407,6 @@ def verify_lift(
     num_states, runs = lift.num_states, present_runs(lift, runs)
     indices = state_indices(num_states, stride)
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
-    if dynamics and getattr(lift.scenario, "transmission", None) is not None:
-        raise ParamError(
-            "dynamics", "not available for a hand with a transmission (its limits are per joint)"
-        )
     opts = {
         "mu": mu,
         "mg": mg,

@@ -111,3 +111,49 @@ def test_a_demand_beyond_the_motor_gives_zero() -> None:
     res = dynamic_alpha(pusher(0.5), 0, 0, lambda a: [2.0 * T])  # a constant demand above T
     assert res.alpha == 0.0 and res.witness is None
     assert math.isnan(dynamic_alpha(pusher(0.5, f0=20.0), 0, 0, quadratic([0.0])).alpha)  # no quasi-static
+
+
+def test_several_demand_vectors_must_each_be_met() -> None:
+    """A demand of shape (n, M) (e.g. a joint's extremes along a window): alpha is feasible iff
+    each vector's LP is, so alpha_dyn is that of the largest inertia (the closed form)."""
+    hs = [c * math.sin(0.5) / (L**2 * math.cos(0.5) ** 3) for c in (1.73e-3, 1e-2)]
+
+    def both(a: float) -> np.ndarray:
+        return a * a * np.array([[hs[0]], [hs[1]]])
+
+    res = dynamic_alpha(pusher(0.5), 0, 0, both, rtol=1e-7)
+    assert res.alpha == pytest.approx(closed_form(0.5, 1e-2)[1], rel=1e-6)
+    assert res.demand[0] == pytest.approx(hs[1] * res.alpha**2, rel=1e-9)  # the binding vector
+    one = dynamic_alpha(pusher(0.5), 0, 0, quadratic([hs[1]]), rtol=1e-7)
+    assert res.lps == 2 * one.lps - 1  # two LPs per candidate, one for alpha_kl
+
+
+def test_a_demand_of_the_wrong_shape_is_refused() -> None:
+    from mjtvm.errors import ParamError
+
+    with pytest.raises(ParamError, match=r"demand: expected \(1,\) or \(n, 1\) joint torques"):
+        dynamic_alpha(pusher(0.5), 0, 0, lambda a: np.zeros((2, 3)))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_constant_demand_vectors_against_the_cvxpy_reference(seed: int) -> None:
+    """A constant demand of two vectors (+d and -d, a window's two ends): alpha is feasible iff
+    both loaded LPs reach it, so alpha_dyn = min_i A(d_i), each A solved independently by the
+    cvxpy transcription of eq. (31) (mjtvm.core.reference) on the state with g_f + d_i."""
+    from mjtvm.bench.synthetic import random_state
+    from mjtvm.core.reference import reference_alpha
+
+    state = random_state(seed)
+    rng = np.random.default_rng(seed)
+    tmax = np.array([op.max_torque for op in state.operation_ranges])
+    d = 0.05 * tmax * rng.choice([-1.0, 1.0], size=state.num_joints)
+    refs = []
+    for vec in (d, -d):
+        status, a = reference_alpha(state.with_(gravity_torque=state.gravity_torque + vec), 0, 0)
+        assert status == "optimal" and a is not None
+        refs.append(a)
+    res = dynamic_alpha(
+        state, 0, 0, lambda a: np.vstack([d, -d]) if a > 0 else np.zeros(state.num_joints), rtol=1e-8
+    )
+    assert res.alpha == pytest.approx(min(refs), rel=1e-6)
+    assert res.alpha < res.alpha_static  # the demand costs speed here

@@ -19,7 +19,7 @@ from mjtvm.core.contacts import Contact
 from mjtvm.core.dynamic import dynamic_alpha, quadratic
 from mjtvm.core.operation_range import OperationRange
 from mjtvm.core.state import GraspState
-from mjtvm.physics.dynamic import demand_of, dynamic_pair, joint_demand
+from mjtvm.physics.dynamic import demand_of, dynamic_pair, joint_demand, window_demand
 from mjtvm.physics.witness import Drive
 
 L, R_TIP, HALF = 0.1, 0.005, 0.02
@@ -126,6 +126,47 @@ def test_dynamic_pair_matches_the_closed_form_alpha() -> None:
     assert dyn.alpha == pytest.approx(ref.alpha, rel=3e-3)
 
 
+def window_end(q: float, v: float, span: float) -> float:
+    """q after ``span`` s of the push: the tip's x = l sin q moves at v."""
+    return math.asin(math.sin(q) + v * span / L)
+
+
+@pytest.mark.parametrize(("q", "span"), [(0.6, 0.007), (0.9, 0.007), (0.9, 0.02)])
+def test_window_demand_spans_the_demand_along_the_push(q: float, span: float) -> None:
+    # qdd = v^2 s / (l^2 c^3) grows with q: the largest demand is at the window's end, the least at its start
+    m, qpos = model(q)
+    v = 0.5
+    hi, lo = window_demand(m, qpos, drive(q, v), span)
+    q1 = window_end(q, v, span)
+    assert hi[0] == pytest.approx(closed_form_h(q1, I_ROTOR) * v**2, rel=3e-3)
+    assert lo[0] == pytest.approx(closed_form_h(q, I_ROTOR) * v**2, rel=2e-3)
+    assert hi[0] > lo[0] * (1 + 0.9 * (closed_form_h(q1, 1.0) / closed_form_h(q, 1.0) - 1))
+    same = window_demand(m, qpos, drive(q, v), 0.0)
+    assert same[0, 0] == same[1, 0] == pytest.approx(joint_demand(m, qpos, drive(q, v)).total[0], rel=1e-12)
+
+
+def test_dynamic_pair_over_a_window_matches_the_closed_form() -> None:
+    """The LP at q0 (speed a / (l c0), pushing torque l c0 F0) with the demand at the window's end
+    q1(a): (l c0 F0 + I a^2 s1 / (l^2 c1^3)) / T + a / (l c0 W) = 1, solved by brentq here."""
+    from scipy.optimize import brentq
+
+    q, span = 0.9, 0.007
+    m, qpos = model(q)
+    c = math.cos(q)
+
+    def slack(a: float) -> float:
+        return L * c * 2.0 + closed_form_h(window_end(q, a, span), I_ROTOR) * a * a + a / (L * c * 30.0) - 1.0
+
+    expected = brentq(slack, 1e-6, L * c * 30 * (1 - 2 * L * c))
+    dyn = dynamic_pair(m, qpos, state(q), 0, 0, object_body="object", rtol=1e-6, window=span)
+    instant = dynamic_pair(m, qpos, state(q), 0, 0, object_body="object", rtol=1e-6)
+    assert dyn.alpha == pytest.approx(expected, rel=3e-3)
+    assert dyn.alpha < instant.alpha * (1 - 1e-2)  # the window costs speed here
+    assert dyn.demand[0] == pytest.approx(
+        closed_form_h(window_end(q, dyn.alpha, span), I_ROTOR) * dyn.alpha**2, rel=3e-3
+    )
+
+
 def test_zero_rotor_inertia_reduces_to_the_quasi_static_alpha() -> None:
     m, qpos = model(0.6, armature=0.0)
     dyn = dynamic_pair(m, qpos, state(0.6), 0, 0, object_body="object", rtol=1e-5)
@@ -155,3 +196,23 @@ def test_verify_options_parse() -> None:
     assert (args.dynamics, args.preload, args.gears) == (True, 0.5, (20.0, 40.0))
     with pytest.raises(SystemExit):
         verify_parser().parse_args(["--gears", "0,40"])
+
+
+def test_verify_takes_the_demand_along_the_rollouts_span(monkeypatch: pytest.MonkeyPatch) -> None:
+    """verify's dynamic alpha uses the span its rollouts check (startup + window), whatever they are."""
+    import mjtvm.physics.verify as verify
+    from mjtvm.core.dynamic import DynamicAlpha
+    from mjtvm.physics.simulate import SimSettings
+
+    seen: list[float] = []
+
+    def fake(*args: object, window: float = -1.0, **kw: object) -> DynamicAlpha:
+        seen.append(window)
+        return DynamicAlpha(0.0, 1.0, np.zeros(1), None, None, "", math.nan, 1, (0.0, 0.0))
+
+    monkeypatch.setattr(verify, "dynamic_pair", fake)
+    settings = SimSettings(startup=0.001, window=0.004)
+    row = verify._dynamic_row(None, None, state(0.6), 0, None, 1.0, 1.0, "central", settings, "object", 0.9)
+    assert seen == [pytest.approx(0.005, rel=1e-12)] and row["alpha_dyn"] == 0.0
+    verify._dynamic_row(None, None, state(0.6), 0, None, 1.0, 1.0, "central", None, "object", 0.9)
+    assert seen[-1] == pytest.approx(0.007, rel=1e-12)  # SimSettings' defaults: 2 ms + 5 ms

@@ -168,11 +168,39 @@ def test_damping_share_of_a_tendon_in_closed_form() -> None:
     assert Rig.damped(drive) is drive.speeds
 
 
-def test_gear_sweep_and_dynamics_refuse_a_transmission() -> None:
+def test_gear_sweep_refuses_a_transmission() -> None:
     from mjtvm.physics.gears import gear_sweep
-    from mjtvm.physics.verify import verify_lift
 
     with pytest.raises(ParamError, match="gears: not available for a hand with a transmission"):
         gear_sweep(str(F85), (10.0,), num_states=2, states=(0,))
-    with pytest.raises(ParamError, match="dynamics: not available for a hand with a transmission"):
-        verify_lift(F85, num_states=2, dynamics=True, out=None, progress=False)
+
+
+def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
+    """The dynamic alpha of the 2F-85 (tendon actuator, linkage): the motion whose demand it takes
+    keeps MuJoCo's equality rows J_eq qd = 0 at the state; alpha_dyn is a fixed point of
+    alpha -> A(d(alpha)) (eq. 31 with the binding demand), at most alpha_kl when the demand costs
+    torque, and the limit is named per actuator."""
+    from mjtvm.core.dynamic import pair_alpha
+    from mjtvm.physics.dynamic import dynamic_pair, joint_demand
+
+    lift = cached_lift(F85, 2)
+    grasp = lift.scenario
+    state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
+    model = sim_model(motor_model(grasp), _types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body)
+    res = tvmmp(state)
+    alpha = float(res.alpha[0, 0])
+    drive = witness_drive(state, 0, 0, alpha, 1.0)
+    dem = joint_demand(model, lift.qpos[0], drive, object_body=grasp.object_body)
+    data = mujoco.MjData(model)
+    data.qpos[:] = lift.qpos[0]
+    mujoco.mj_forward(model, data)
+    rows = Rig(model, drive, grasp.object_body).equality_rows(data)
+    assert rows.shape[0] > 0
+    assert np.max(np.abs(rows @ dem.speeds)) <= 1e-9 * np.max(np.abs(dem.speeds))
+    dyn = dynamic_pair(
+        model, lift.qpos[0], state, 0, 0, result=res, object_body=grasp.object_body, window=0.007
+    )
+    assert 0 < dyn.alpha <= alpha * (1 + 1e-3)
+    got = pair_alpha(state, 0, 0, dyn.demand)[0]
+    assert got is not None and 0 <= got - dyn.alpha <= 2e-3 * alpha
+    assert dyn.joint == 0  # the one actuator (fingers_actuator), not joint 0

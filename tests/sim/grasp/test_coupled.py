@@ -270,7 +270,18 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     rows = (out / "lift.csv").read_text(encoding="utf-8").splitlines()
     assert len(rows) == 1 + 3
-    words = ["verify", "--grasp", str(grasp), "--states", "2", "--contacts", "L", "--reading", "physical"]
+    words = [
+        "verify",
+        "--grasp",
+        str(grasp),
+        "--states",
+        "2",
+        "--contacts",
+        "L",
+        "--reading",
+        "physical",
+        "--dynamics",
+    ]
     proc = subprocess.run(
         [*cmd, *words, "--quiet", "--no-plots", "--out", str(tmp_path / "v")],
         capture_output=True,
@@ -285,14 +296,9 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     assert all(r["status"] == "optimal" and float(r["alpha_lp"]) > 0 for r in found)
     if grasp == F85:
         assert all(1.0 <= float(r["ratio"]) <= 1.3 and r["pass_check"] == "True" for r in found)
-    proc = subprocess.run(
-        [*cmd, *words, "--dynamics", "--quiet", "--out", str(tmp_path / "d")],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert proc.returncode == 2 and proc.stderr.strip().count("\n") == 0, proc.stderr
-    assert "dynamics" in proc.stderr and "transmission" in proc.stderr
+    # --dynamics: the dynamic alpha of each pair, its limit named per actuator (docs/dynamics.md)
+    prefix = "fingers_actuator" if grasp == F85 else "rh_A_"
+    assert all(float(r["alpha_dyn"]) > 0 and r["dyn_joint"].startswith(prefix) for r in found), found
 
 
 def test_datasheet_range_through_a_mujoco_gear() -> None:

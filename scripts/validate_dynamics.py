@@ -1,0 +1,170 @@
+r"""alpha_dyn as a prediction: the three-hand validation of docs/dynamics.md ("Validation").
+
+For each hand, over its scripted lift, ``mjtvm verify --dynamics``
+(:func:`~mjtvm.physics.verify.verify_lift`): per pair (state, RVDS vertex) alpha_kl, alpha_sim
+(rollout bisection), alpha_dyn (eq. 31 with the demand M qdd + c along the rollout's checked
+span) and one rollout at 0.9 alpha_dyn. Per hand and run it prints the median (and quartiles)
+of alpha_sim / alpha_dyn, the pairs failing at 0.9 alpha_dyn with their causes (the rollout's
+first violation, grouped), and whether the targets hold: median in [0.9, 1.1], at most 10 %
+failing. Nothing is tuned here: the settings are the rollout's defaults (SimSettings).
+
+Usage: ``python scripts/validate_dynamics.py [--states 30] [--stride 1] [--jobs 1]
+[--out results/validate-dynamics] [--hands case2,allegro-ik,robotiq_2f85-sphere]``. Writes
+``OUT/dyn-<hand>.csv`` (verify's columns, docs/outputs.md) and ``OUT/validate-dynamics.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import statistics
+import sys
+import time
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from mjtvm.errors import MjtvmError
+from mjtvm.physics.verify import verify_lift
+
+# hand -> the runs checked: Case 2's fingers 2 and 4 as L-points and as S-points (literal reading,
+# docs/dynamics.md's table); the other hands have F-points only, so one run
+HANDS: dict[str, tuple[str, ...]] = {
+    "case2": ("L", "S-literal"),
+    "allegro-ik": ("L",),
+    "robotiq_2f85-sphere": ("L",),
+    "shadow_hand-sphere": ("L",),
+}
+DEFAULT_HANDS = ("case2", "allegro-ik", "robotiq_2f85-sphere")
+MEDIAN_BAND, MAX_FAILING = (0.9, 1.1), 0.10
+
+
+def cause(reason: str) -> str:
+    """The class of a rollout's first violation (simulate._violation's wording, time stripped)."""
+    for pattern, label in (
+        (r"^torque saturated", "torque saturated"),
+        (r"^contact lost", "contact lost"),
+        (r" slips ", "F-point slip"),
+        (r"^twist magnitude", "twist magnitude"),
+        (r"^twist direction", "twist direction"),
+        (r"^object moves", "object moves at rest"),
+    ):
+        if re.search(pattern, reason):
+            return label
+    return reason or "passed"
+
+
+def hand_summary(rows: Sequence[dict[str, Any]], run: str) -> dict[str, Any]:
+    """Medians, failures and their causes of one run's rows."""
+    ok = [r for r in rows if r["run"] == run and r["status"] == "optimal" and "alpha_dyn" in r]
+    ratios = sorted(r["ratio_dyn"] for r in ok if math.isfinite(r["ratio_dyn"]))
+    fails = [r for r in ok if r.get("pass_check_dyn") is False]
+    q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [math.nan] * 3
+    med = statistics.median(ratios) if ratios else math.nan
+    frac = len(fails) / len(ok) if ok else math.nan
+    causes = Counter(cause(r.get("check_dyn_reason", "")) for r in fails)
+    states = sorted({int(r["state"]) for r in fails})
+    return {
+        "pairs": len(ok),
+        "no_alpha_dyn": len(ok) - len(ratios),
+        "median": med,
+        "q1": q[0],
+        "q3": q[2],
+        "sim_kl": statistics.median(r["ratio"] for r in ok) if ok else math.nan,
+        "dyn_kl": statistics.median(r["alpha_dyn"] / r["alpha_lp"] for r in ok) if ok else math.nan,
+        "within_10pct": sum(1 for x in ratios if 0.9 <= x <= 1.1),
+        "above_1.1": sum(1 for x in ratios if x > 1.1),
+        "failing": len(fails),
+        "failing_fraction": frac,
+        "causes": dict(causes.most_common()),
+        "failing_states": states,
+        "terms": dict(Counter(r["dyn_term"] for r in ok).most_common()),
+        "median_met": MEDIAN_BAND[0] <= med <= MEDIAN_BAND[1],
+        "failing_met": frac <= MAX_FAILING,
+    }
+
+
+def table(results: dict[tuple[str, str], dict[str, Any]]) -> str:
+    """The validation table (markdown)."""
+    head = (
+        "| hand | run | pairs | alpha_sim / alpha_kl median | alpha_dyn / alpha_kl median "
+        "| **alpha_sim / alpha_dyn** median (IQR) | within +-10 % | failing at 0.9 alpha_dyn | causes |\n"
+        "|---|---|---|---|---|---|---|---|---|\n"
+    )
+    lines = []
+    for (hand, run), s in results.items():
+        med = f"**{s['median']:.3f}** ({s['q1']:.3f}-{s['q3']:.3f})" + (
+            "" if s["median_met"] else " (not met)"
+        )
+        fail = f"{s['failing']} / {s['pairs']} ({100 * s['failing_fraction']:.0f} %)" + (
+            "" if s["failing_met"] else " (not met)"
+        )
+        causes = ", ".join(f"{k}: {v}" for k, v in s["causes"].items()) or "-"
+        lines.append(
+            f"| {hand} | {run} | {s['pairs']} | {s['sim_kl']:.3f} | {s['dyn_kl']:.3f} | {med} "
+            f"| {s['within_10pct']} | {fail} | {causes} |"
+        )
+    return head + "\n".join(lines) + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--states", type=int, default=30, help="states along each lift (default: 30)")
+    ap.add_argument("--stride", type=int, default=1, help="check every N-th state and the last (default: 1)")
+    ap.add_argument("--jobs", type=int, default=1, help="worker processes (default: 1)")
+    ap.add_argument("--out", type=Path, default=Path("results/validate-dynamics"), help="output folder")
+    ap.add_argument(
+        "--hands", default=",".join(DEFAULT_HANDS), help=f"comma-separated, among {sorted(HANDS)}"
+    )
+    args = ap.parse_args(argv)
+    hands = [h for h in args.hands.split(",") if h]
+    unknown = [h for h in hands if h not in HANDS]
+    if unknown:
+        print(f"hands: expected names among {sorted(HANDS)}, got {unknown}", file=sys.stderr)
+        return 2
+    try:
+        results = validate(hands, args.states, args.stride, args.jobs, args.out)
+    except MjtvmError as e:  # bad input (states, stride, jobs, out): one line, exit 2
+        print(f"error: {' '.join(str(e).split())}", file=sys.stderr)
+        return 2
+    text = table(results)
+    print(text)
+    (args.out / "validate-dynamics.md").write_text(text, encoding="utf-8")
+    return 0
+
+
+def validate(
+    hands: Sequence[str], states: int, stride: int, jobs: int, out: Path
+) -> dict[tuple[str, str], dict[str, Any]]:
+    """Run verify --dynamics on each hand and summarize each run (module docstring)."""
+    results: dict[tuple[str, str], dict[str, Any]] = {}
+    for hand in hands:
+        t0 = time.perf_counter()
+        rows = verify_lift(
+            hand,
+            num_states=states,
+            stride=stride,
+            runs=HANDS[hand],
+            dynamics=True,
+            jobs=jobs,
+            out=out,
+            name=f"dyn-{hand}",
+            progress=False,
+            plot=False,
+        )
+        for run in HANDS[hand]:
+            results[hand, run] = s = hand_summary(rows, run)
+            print(
+                f"{hand} {run}: {s['pairs']} pairs, alpha_sim/alpha_dyn median {s['median']:.3f} "
+                f"(IQR {s['q1']:.3f}-{s['q3']:.3f}), failing at 0.9 alpha_dyn {s['failing']} "
+                f"({100 * s['failing_fraction']:.1f} %), causes {s['causes']}, states {s['failing_states']}, "
+                f"limiting terms {s['terms']}, {time.perf_counter() - t0:.0f} s",
+                flush=True,
+            )
+    return results
+
+
+if __name__ == "__main__":  # the guard matters: verify's worker processes re-import this file
+    raise SystemExit(main())
