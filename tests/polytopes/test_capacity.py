@@ -187,6 +187,7 @@ def test_bad_arguments_name_the_field() -> None:
 
 def test_same_vertices_as_pycapacity() -> None:
     import pycapacity.robot as pycapacity  # a test dependency ([test] extra): never skipped
+
     for n in (3, 4, 7, 12):
         rng = np.random.default_rng(200 + n)
         j = rng.normal(size=(3, n))

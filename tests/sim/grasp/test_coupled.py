@@ -261,7 +261,9 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     actuators through the transmission (docs/physics-check.md): one row per state and RVDS vertex.
     The 2F-85 (speed edge binding, box motor 10 % past it, twist tolerance 10 %): alpha_sim /
     alpha_kl between 1 and 1.3 (measured 1.11 to 1.24, central and vertex witness alike), the check at 0.9 alpha_kl passes. The
-    Shadow hand's hold is not static in MuJoCo (docs/physics-check.md): no ratio is asserted."""
+    Shadow hand's hold is not static in MuJoCo (docs/physics-check.md): no ratio is asserted;
+    its state 0 does not hold at rest (the hold test: one stderr line, no rollout, no dynamic
+    alpha), its state 1 does."""
     exe = Path(sys.executable).with_name("mjtvm")
     cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mjtvm.cli"]
     out = tmp_path / "replay"
@@ -296,9 +298,18 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     assert all(r["status"] == "optimal" and float(r["alpha_lp"]) > 0 for r in found)
     if grasp == F85:
         assert all(1.0 <= float(r["ratio"]) <= 1.3 and r["pass_check"] == "True" for r in found)
-    # --dynamics: the dynamic alpha of each pair, its limit named per actuator (docs/dynamics.md)
+    held = [r for r in found if r["held"] == "True"]
+    if grasp == F85:
+        assert held == found
+    else:
+        assert [r["held"] for r in found] == ["False"] * nrvds + ["True"] * nrvds
+        assert proc.stderr.count("does not hold at rest") == 1
+        assert all(
+            r["alpha_dyn"] == "" and r["verdict"].startswith("does not hold at rest") for r in found[:nrvds]
+        )
+    # --dynamics: the dynamic alpha of each pair held, its limit named per actuator (docs/dynamics.md)
     prefix = "fingers_actuator" if grasp == F85 else "rh_A_"
-    assert all(float(r["alpha_dyn"]) > 0 and r["dyn_joint"].startswith(prefix) for r in found), found
+    assert all(float(r["alpha_dyn"]) > 0 and r["dyn_joint"].startswith(prefix) for r in held), held
 
 
 def test_datasheet_range_through_a_mujoco_gear() -> None:
