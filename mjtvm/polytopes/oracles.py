@@ -150,7 +150,9 @@ class RayShooter:
         v *= p
         mag *= p
         if not np.isfinite(v).all():
-            raise SolverError("highs", "changeCoeff: an equilibrated coefficient overflows (data span too wide)")
+            raise SolverError(
+                "highs", "changeCoeff: an equilibrated coefficient overflows (data span too wide)"
+            )
         # The largest entry is now about 1: none reaches HiGHS' upper limit (1e15), and the
         # drop leaves none at or below its lower one (1e-12 <= DROP_REL x ref).
         ref = np.maximum(np.maximum(self._row_max, float(mag.max())), 1.0)
