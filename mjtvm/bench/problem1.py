@@ -205,7 +205,7 @@ def format_tvms_table(report: dict[str, Any]) -> str:
 
 #: name: (state, tvms keyword arguments, target (s, MiB) or None)
 SCALE_CASES: dict[str, tuple[str, dict[str, Any], tuple[float, float] | None]] = {
-    "case2 exact": ("case2", {"rvds_cone": False}, (0.5, 2048.0)),
+    "case2 exact": ("case2", {"rvds_cone": False}, (1.0, 2048.0)),
     "allegro 3-D exact": ("allegro:3", {}, None),
     "allegro 4-D exact": ("allegro:4", {}, None),
     "allegro 5-D 1 %": ("allegro:5", {"tolerance": 0.01, "time_limit": 60.0}, (60.0, 2048.0)),

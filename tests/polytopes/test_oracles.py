@@ -49,6 +49,23 @@ def test_a_ray_leaves_through_the_expected_edge(parallelogram):
     assert t == pytest.approx(1.0, abs=1e-12)
 
 
+def test_a_ray_is_measured_in_the_length_of_its_direction(parallelogram):
+    """The t column is rescaled for each direction (a power of 2 per ray): the same ray through
+    the edge qd_1 = s_1, asked with directions 1e-9 to 1e9 times as long and alternating so that
+    each LP starts from the last one's factor, leaves at t = 1 / (2 lambda) for J (2 lambda s_1, 0)
+    and reaches the end of every direction that stays inside."""
+    poly, _, rows, s = parallelogram
+    shooter = RayShooter(poly, rows, np.zeros(2))
+    expected = np.linalg.inv(J).T @ [1.0, 0.0]
+    for length in (1.0, 1e-9, 1e9, 3.0, 1e-3, 1e6, 1.0):
+        t, normal = shooter(J @ [2 * s[0] * length, 0.0])
+        if length >= 1.0:
+            assert t == pytest.approx(0.5 / length, rel=1e-9)
+            np.testing.assert_allclose(normal, expected / np.linalg.norm(expected), atol=1e-9)
+        else:  # the end J (2 length s_1, 0) lies inside
+            assert t == pytest.approx(1.0, abs=1e-12)
+
+
 def test_distance_and_separating_hyperplane(parallelogram):
     """A point beyond the corner J (s_1, s_2): its max-norm distance to the parallelogram,
     computed independently by a grid over the boundary, and a hyperplane that separates it

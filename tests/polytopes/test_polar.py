@@ -7,7 +7,10 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial import ConvexHull, QhullError
 
+import mjtvm.polytopes.polar as polar_module
+from mjtvm.errors import SolverError
 from mjtvm.polytopes.polar import PolarHull, polar_vertices
 from mjtvm.polytopes.volume import hausdorff
 
@@ -66,3 +69,46 @@ def test_polar_vertices_of_a_degenerate_pyramid():
     verts = polar_vertices(a, b, np.array([0.0, 0.0, 0.2]), TOL)
     expected = np.array([[1, 1, 0], [1, -1, 0], [-1, 1, 0], [-1, -1, 0], [0, 0, 1.0]])
     assert len(verts) == 5 and hausdorff(verts, expected) <= 1e-12
+
+
+class _FlakyQhull:
+    """scipy's ConvexHull where incremental hulls (all of them) and the first ``scratch``
+    hulls made from scratch stop on a QhullError, as Qhull's incremental mode can (scipy
+    issue #4974) and as a from-scratch hull can on unlucky points."""
+
+    def __init__(self, scratch: int) -> None:
+        self.scratch, self.calls = scratch, 0
+
+    def __call__(self, points, incremental=False, **kwargs):
+        self.calls += 1
+        if incremental or self.scratch > 0:
+            self.scratch -= 0 if incremental else 1
+            raise QhullError("QH6106 qhull precision error: Vertex sets are the same")
+        return ConvexHull(points, **kwargs)
+
+
+@pytest.mark.parametrize("scratch", [0, 1, 2])
+def test_polar_hull_survives_qhull_errors(monkeypatch, scratch):
+    """Incremental hulls that always fail, and from-scratch hulls that fail ``scratch`` times
+    (the points are then joggled anew, 10 and 100 times as much): the same vertices as
+    without errors (solved on the exact rows), before and after a cut, and the face lattice
+    of the joggled points still gives the cube's volume 2^k (the joggle's order, relative)."""
+    k = 4
+    a, b = cube_rows(k)
+    flaky = _FlakyQhull(scratch)
+    monkeypatch.setattr(polar_module, "ConvexHull", flaky)
+    hull = PolarHull(a, b, np.full(k, -0.01), TOL)
+    assert hausdorff(hull.new_vertices(), cube_vertices(k)) <= 1e-12
+    hull.add(np.ones((1, k)) / math.sqrt(k), np.array([(k - 1) / math.sqrt(k)]))
+    assert hausdorff(hull.new_vertices(), np.ones(k) - np.eye(k)) <= 1e-12
+    assert flaky.calls >= 4  # an incremental attempt and a hull from scratch each time
+    monkeypatch.setattr(polar_module, "ConvexHull", _FlakyQhull(scratch))
+    cube = PolarHull(a, b, np.full(k, -0.01), TOL)
+    assert cube.lattice().volume == pytest.approx(2.0**k, rel=1e-6)
+
+
+def test_polar_hull_reports_qhull_failing_on_every_joggle(monkeypatch):
+    monkeypatch.setattr(polar_module, "ConvexHull", _FlakyQhull(3))
+    a, b = cube_rows(3)
+    with pytest.raises(SolverError, match="qhull"):
+        PolarHull(a, b, np.zeros(3), TOL).vertices()
