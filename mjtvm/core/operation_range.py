@@ -52,16 +52,18 @@ class OperationRange:
 
     def __post_init__(self) -> None:
         v, u, scale = validated_vertices(self.vertices)
+        v = v.copy()  # the range's own, read only: what is derived from it is cached
+        v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
         object.__setattr__(self, "_halfplanes", halfplanes(u, scale))
 
     # ------------------------------------------------------------------ views
-    @property
+    @cached_property
     def max_torque(self) -> float:
         """Largest absolute torque (N m), reached at zero speed."""
         return float(np.max(self.vertices[:, 0]))
 
-    @property
+    @cached_property
     def max_speed(self) -> float:
         """Largest absolute speed (rad/s), reached at zero torque."""
         return float(np.max(self.vertices[:, 1]))
