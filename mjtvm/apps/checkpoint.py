@@ -125,3 +125,26 @@ class RowCheckpoint(Generic[K]):
         """On an interrupt or a failure: write the rows finished since the start, if any."""
         if len(self.finished) > len(self.done):
             self.save()
+
+    def run(
+        self,
+        solve: Callable[[dict[K, Row], Callable[[Iterable[Row]], None]], list[Row]],
+        *,
+        resume: bool,
+        earlier: Path,
+        wanted: set[K],
+        quiet: bool,
+        emit: Callable[[str], None],
+        notice: Callable[[str], None],
+    ) -> list[Row]:
+        """Every row of the run, tagged with its inputs: the finished ones read back (with
+        ``resume``, :meth:`resume`), the rest from ``solve(done, on_rows)``, which calls
+        ``on_rows`` (:meth:`record`) as rows finish; on an interrupt or a failure the rows
+        finished so far are written (:meth:`save_new`) before it propagates."""
+        done = self.resume(earlier, wanted, quiet=quiet, emit=emit, notice=notice) if resume else {}
+        try:
+            rows = solve(done, self.record)
+        except BaseException:
+            self.save_new()  # no finished work is lost to an interrupt or a failure
+            raise
+        return [self.tagged(r) for r in rows]

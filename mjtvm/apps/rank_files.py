@@ -310,21 +310,23 @@ def run_rank_files(
     )
     with output_lock(outdir):
         wanted = {e.id for e in entries}
-        done = ck.resume(out_json, wanted, quiet=run.quiet, emit=emit, notice=notice) if run.resume else {}
-        try:
-            rows = rank_rows(
+        rows = ck.run(
+            lambda done, on_rows: rank_rows(
                 run.grasp,
                 entries,
                 jobs=run.jobs,
                 cluster=run.cluster,
                 progress=not run.quiet,
                 done=done,
-                on_rows=ck.record,
-            )
-        except BaseException:
-            ck.save_new()  # no finished work is lost to an interrupt or a failure
-            raise
-        rows = [ck.tagged(r) for r in rows]
+                on_rows=on_rows,
+            ),
+            resume=run.resume,
+            earlier=out_json,
+            wanted=wanted,
+            quiet=run.quiet,
+            emit=emit,
+            notice=notice,
+        )
         files: dict[Path, bytes | str] = {
             out_json: json.dumps(rows, indent=1) + "\n",
             out_csv: rows_csv(rows),

@@ -228,20 +228,22 @@ def run_sweep_files(
             every_s=CHECKPOINT_EVERY_S,
             again="run again without resuming",
         )
-        done = ck.resume(out_json, wanted, quiet=run.quiet, emit=emit, notice=notice) if run.resume else {}
-        try:
-            rows = run_sweep(
+        rows = ck.run(
+            lambda done, on_rows: run_sweep(
                 points,
                 jobs=run.jobs,
                 cluster=run.cluster,
                 progress=not run.quiet,
                 done=done,
-                on_rows=ck.record,
-            )
-        except BaseException:
-            ck.save_new()  # no finished work is lost to an interrupt or a failure
-            raise
-        rows = [ck.tagged(r) for r in rows]
+                on_rows=on_rows,
+            ),
+            resume=run.resume,
+            earlier=out_json,
+            wanted=wanted,
+            quiet=run.quiet,
+            emit=emit,
+            notice=notice,
+        )
         doubtful = sum(r.get("certified") is False for r in rows)
         if doubtful:
             notice(

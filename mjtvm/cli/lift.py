@@ -15,6 +15,7 @@ from .options import (
     grasp_option,
     lift_options,
     out_options,
+    parallel_options,
     states_option,
 )
 from .output import EXIT_OK, emit, warn
@@ -22,12 +23,10 @@ from .values import (
     CONTACTS,
     MAX_FORCE,
     MAX_GRID,
-    MAX_JOBS,
     MAX_MU,
     MAX_STATES,
     READINGS,
     choices,
-    cluster_address,
     grasps,
     integer,
     integers,
@@ -153,14 +152,7 @@ def add_sweep(sub: Subparsers) -> None:
     """``mjtvm sweep``: Problem 2 over a grid, rows to NAME.json and NAME.csv."""
     p = command(sub, "sweep", *_TEXTS["sweep"])
     _sweep_grid(p)
-    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
-    p.add_argument(
-        "--cluster",
-        type=cluster_address,
-        default=None,
-        metavar="tcp://HOST:PORT",
-        help="Dask scheduler address (overrides --jobs; connection timeout 10 s)",
-    )
+    parallel_options(p)
     out_options(p, name="sweep")
     p.add_argument(
         "--resume",

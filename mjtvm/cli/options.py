@@ -10,10 +10,12 @@ from .output import EXIT_INPUT, one_line
 from .values import (
     CONTACTS,
     MAX_FORCE,
+    MAX_JOBS,
     MAX_MU,
     MAX_STATES,
     READINGS,
     choices,
+    cluster_address,
     folder,
     fraction,
     integer,
@@ -30,6 +32,7 @@ __all__ = [
     "hand_option",
     "lift_options",
     "out_options",
+    "parallel_options",
     "removed_option",
 ]
 
@@ -105,6 +108,18 @@ def out_options(
     p.add_argument("--out", type=folder, default="results", metavar="DIR", help=out_help)
     if name is not None:
         p.add_argument("--name", type=stem, default=name, help=name_help)
+
+
+def parallel_options(p: argparse.ArgumentParser) -> None:
+    """``--jobs N`` local worker processes and ``--cluster tcp://HOST:PORT`` (a Dask scheduler)."""
+    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
+    p.add_argument(
+        "--cluster",
+        type=cluster_address,
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help="Dask scheduler address (overrides --jobs; connection timeout 10 s)",
+    )
 
 
 GRASP_HELP = (

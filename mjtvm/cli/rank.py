@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from .options import Subparsers, command, out_options
+from .options import Subparsers, command, out_options, parallel_options
 from .output import EXIT_OK, emit
-from .values import MAX_JOBS, cluster_address, input_file, integer, source
+from .values import input_file, source
 
 __all__ = ["add_rank"]
 
@@ -26,14 +26,7 @@ def add_rank(sub: Subparsers) -> None:
         "grasp", type=source, metavar="GRASP", help="a mjtvm.grasp/1 file or a shipped grasp's name"
     )
     p.add_argument("datasets", type=input_file, nargs="+", metavar="DATASET", help="dataset files")
-    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
-    p.add_argument(
-        "--cluster",
-        type=cluster_address,
-        default=None,
-        metavar="tcp://HOST:PORT",
-        help="Dask scheduler address (overrides --jobs; connection timeout 10 s)",
-    )
+    parallel_options(p)
     out_options(p, name="rank")
     p.add_argument(
         "--resume", action="store_true", help="keep the finished rows of NAME.partial.json / NAME.json"
