@@ -152,8 +152,9 @@ class StateLPs:
         self._dense: NDArray[np.float64] | None = None  # pair_matrix's
         self._abs_dense: NDArray[np.float64] | None = None
         self._cert: Certifier | None = None  # _certifier's
-        self._column: tuple[bytes, NDArray[np.float64]] | None = None  # column's last
-        self._zero: tuple[bytes, float] | None = None  # zero_alpha's last
+        # Per RVDS vertex r (its bytes): its alpha column and zero threshold, asked by every
+        # LP of that r (its session, its certificate, tvmmp's rounding).
+        self._of_r: dict[bytes, tuple[NDArray[np.float64], float]] = {}
         # _bounds' answers per (w, alpha_max): one per REFS vertex, asked again for every l.
         self._bounds_of: dict[tuple[bytes, float], tuple[NDArray[np.float64], ...]] = {}
         self._matrix_of: bytes | None = None  # the r whose column pair_matrix holds
@@ -171,24 +172,25 @@ class StateLPs:
         computed from. A twist written with 1e-16 in a component that is exactly 0 (a
         projection onto the TVMS's span) would otherwise ask for a motion the fingers
         cannot make, and the exact LP's alpha would be 0."""
-        key = r.tobytes()  # each LP asks twice (its session, its certificate)
-        if self._column is None or self._column[0] != key:
-            r = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
-            col = drop_cancellation(self.twist_rows @ r, self.abs_twist_rows @ np.abs(r))
-            col.setflags(write=False)
-            self._column = (key, col)
-        return self._column[1]
+        return self._r_values(r)[0]
 
     def zero_alpha(self, r: NDArray[np.float64]) -> float:
         """The alpha below which the twist alpha r_l is within ZERO_ALPHA (the solver's
         tolerance) of 0 in the equilibrated twist variables (the columns of ``A_twist``,
         whose factors follow the units of the state): such an alpha is reported as 0, the
         same in every unit system."""
-        key = r.tobytes()  # asked by the certificate and by tvmmp, for each LP of an l
-        if self._zero is None or self._zero[0] != key:
+        return self._r_values(r)[1]
+
+    def _r_values(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
+        """:meth:`column` and :meth:`zero_alpha` of ``r``, computed once per state."""
+        key = r.tobytes()
+        if key not in self._of_r:
             big = float((np.abs(r) / self.twist_scale).max(initial=0.0))
-            self._zero = (key, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
-        return self._zero[1]
+            rr = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
+            col = drop_cancellation(self.twist_rows @ rr, self.abs_twist_rows @ np.abs(rr))
+            col.setflags(write=False)
+            self._of_r[key] = (col, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
+        return self._of_r[key]
 
     def lp(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf

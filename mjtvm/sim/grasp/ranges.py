@@ -281,7 +281,7 @@ def _output_to_actuator(rng: OperationRange, gear: float) -> OperationRange:
     units: MuJoCo's moment includes the gear g, so u = tau / g and s = g x speed."""
     if gear == 1.0:
         return rng
-    return OperationRange(np.asarray(rng.vertices) * np.array([1.0 / gear, gear]))
+    return rng.scaled(torque=1.0 / gear, speed=gear)
 
 
 def actuator_ranges(
