@@ -201,9 +201,7 @@ class StateLPs:
         kin_col = self.column(r)
         col = np.zeros(self.asm.csc.shape[0])
         col[self.kin] = kin_col
-        lower, upper = self.asm.statics_bounds(w)
-        cu = self.col_upper.copy()
-        cu[-1] = alpha_max
+        lower, upper, cu = self._bounds(w, alpha_max)
         lp = LinearProgram(
             self.c,
             sp.hstack([self.asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csc"),
@@ -223,9 +221,7 @@ class StateLPs:
         factor = column_factor(self.row_scale[self.kin] * kin_col)
         col_s = np.append(self.col_scale, factor)
         s = Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
-        lower, upper = self.asm.statics_bounds(w)
-        cu = self.col_upper.copy()
-        cu[-1] = alpha_max
+        lower, upper, cu = self._bounds(w, alpha_max)
         nz = np.flatnonzero(kin_col)
         a_s = self._scaled_a.with_column(self.kin[nz], kin_col[nz], factor)
         with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
