@@ -37,7 +37,15 @@ from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from .synthetic import random_state
 
-__all__ = ["PAPER_S", "TARGET_S", "case2_state", "format_table", "machine_info", "run_benchmark"]
+__all__ = [
+    "PAPER_S",
+    "TARGET_S",
+    "case2_state",
+    "format_table",
+    "machine_info",
+    "run_benchmark",
+    "timed_calls",
+]
 
 TARGET_S = 5e-3  #: target wall time per state (s)
 PAPER_S = 0.20  #: the paper's Problem 2 time at the Case 2 initial state (s)
@@ -97,8 +105,9 @@ def highs_run_timer() -> Iterator[list[float]]:
         yield spent
 
 
-def _split(state: GraspState, repeats: int, warmup: int) -> dict[str, float]:
-    """Medians of one call's total, its HiGHS ``run()`` time and the rest (instrumented calls)."""
+def timed_calls(state: GraspState, repeats: int, warmup: int) -> tuple[list[float], list[float], int]:
+    """Per timed call of ``tvmmp(state, witnesses=False)`` (after ``warmup`` untimed ones): its
+    wall time and its time inside HiGHS ``run()`` (s), and the ``run()`` calls of the last one."""
     totals, runs = [], []
     with highs_run_timer() as spent:
         for i in range(warmup + repeats):
@@ -109,12 +118,18 @@ def _split(state: GraspState, repeats: int, warmup: int) -> dict[str, float]:
             if i >= warmup:
                 totals.append(total)
                 runs.append(sum(spent))
+    return totals, runs, len(spent)
+
+
+def _split(state: GraspState, repeats: int, warmup: int) -> dict[str, float]:
+    """Medians of one call's total, its HiGHS ``run()`` time and the rest (instrumented calls)."""
+    totals, runs, calls = timed_calls(state, repeats, warmup)
     other = [t - r for t, r in zip(totals, runs)]
     return {
         "total_s": statistics.median(totals),
         "highs_run_s": statistics.median(runs),
         "python_overhead_s": statistics.median(other),
-        "highs_run_calls": float(len(spent)),
+        "highs_run_calls": float(calls),
     }
 
 
