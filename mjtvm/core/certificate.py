@@ -248,6 +248,94 @@ class Certifier:
             bound,
         )
 
+    def check_many(
+        self,
+        c: NDArray[np.float64],
+        row_lower: NDArray[np.float64],
+        row_upper: NDArray[np.float64],
+        col_upper: NDArray[np.float64],
+        x: NDArray[np.float64],
+        y: NDArray[np.float64],
+        last: NDArray[np.float64],
+        *,
+        floor: NDArray[np.float64],
+    ) -> list[Certificate]:
+        """:meth:`check` of ``P`` answers at once, for LPs that differ from this family's
+        matrix only in its last column: the same measures, from matrix products instead of
+        ``P`` matrix-vector ones (Problem 2 certifies a state's pairs together).
+
+        Parameters
+        ----------
+        c
+            ``(n,)`` the costs, shared.
+        row_lower, row_upper, y
+            ``(P, m)`` each answer's row bounds and row multipliers.
+        col_upper, x
+            ``(P, n)`` each answer's column upper bounds and solution.
+        last
+            ``(P, m)`` each LP's last column (Problem 2: the alpha column of its RVDS vertex),
+            in place of the matrix's; ``self.a`` must be dense.
+        floor
+            ``(P,)`` each answer's ``floor`` (:func:`certify`).
+        """
+        a0, abs0 = self.a[:, :-1], self.abs_a[:, :-1]
+        abs_last = np.abs(last)
+        xc = np.minimum(np.maximum(x, self.col_lower), col_upper)
+        size = np.abs(xc) if self.col_ref is None else np.maximum(np.abs(xc), self.col_ref)
+        lo_ok, up_ok = np.isfinite(row_lower), np.isfinite(row_upper)
+        lo, up = np.where(lo_ok, row_lower, 0.0), np.where(up_ok, row_upper, 0.0)
+        # Row activities and terms (P, m): the shared columns, then each LP's last one.
+        terms = size[:, :-1] @ abs0.T + size[:, -1:] * abs_last
+        ax = xc[:, :-1] @ a0.T + xc[:, -1:] * last
+        below = np.where(lo_ok, lo - ax, 0.0)
+        above = np.where(up_ok, ax - up, 0.0)
+        viol = np.maximum(np.maximum(below, above), 0.0)
+        scale = terms + np.where(below > above, np.abs(lo), np.abs(up))
+        if self.starts is not None:
+            scale = np.repeat(np.maximum.reduceat(scale, self.starts, axis=1), self.counts, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(viol > 0.0, viol / scale, 0.0)
+        primal = np.max(rel, axis=1, initial=0.0)
+        # The dual checks of check(), row by row of these arrays.
+        y = np.array(y, dtype=float)
+        c = np.asarray(c, dtype=float)
+        wrong_row = ((y > 0.0) & ~lo_ok) | ((y < 0.0) & ~up_ok)
+        moved = np.sum(np.where(wrong_row, np.abs(y) * (terms + np.abs(lo)), 0.0), axis=1)
+        y[wrong_row] = 0.0
+        abs_y = np.abs(y)
+        d = np.empty_like(xc)
+        d[:, :-1] = c[:-1] - y @ a0
+        d[:, -1] = c[-1] - np.sum(y * last, axis=1)
+        mag = np.empty_like(xc)
+        mag[:, :-1] = np.abs(c[:-1]) + abs_y @ abs0
+        mag[:, -1] = abs(c[-1]) + np.sum(abs_y * abs_last, axis=1)
+        drop_cancellation(d, mag)
+        cu_ok = np.isfinite(col_upper)
+        cu = np.where(cu_ok, col_upper, 0.0)
+        wrong_col = ((d > 0.0) & ~self.lower_ok) | ((d < 0.0) & ~cu_ok)
+        dual_size = size if self.dual_ref is None else np.maximum(np.abs(xc), self.dual_ref)
+        moved += np.sum(np.where(wrong_col, np.abs(d) * dual_size, 0.0), axis=1)
+        d[wrong_col] = 0.0
+        bound = (
+            np.sum(np.maximum(y, 0.0) * lo + np.minimum(y, 0.0) * up, axis=1)
+            + np.maximum(d, 0.0) @ self.lower0
+            + np.sum(np.minimum(d, 0.0) * cu, axis=1)
+        )
+        objective = xc @ c
+        out = []
+        for i in range(len(xc)):
+            b, obj = float(bound[i]), float(objective[i])
+            size_obj = max(abs(obj), abs(b))
+            out.append(
+                Certificate(
+                    float(primal[i]),
+                    _relative(float(moved[i]), max(size_obj, float(floor[i]) / DUAL_TOL)),
+                    _relative(abs(obj - b), max(size_obj, float(floor[i]) / GAP_TOL)),
+                    b,
+                )
+            )
+        return out
+
     def farkas(
         self,
         row_lower: NDArray[np.float64],

@@ -292,6 +292,39 @@ class StateLPs:
             self.c, lower, upper, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r)
         )
 
+    def certify_many(
+        self, answers: list[tuple[NDArray[np.float64], NDArray[np.float64], float, LPSolution]]
+    ) -> list[Certificate]:
+        """:meth:`certify` of several optimal answers ``(w, r, alpha_max, sol)`` of this
+        state at once (:meth:`~mjtvm.core.certificate.Certifier.check_many`): the same
+        measures, one matrix product instead of one matrix-vector product per answer."""
+        if not answers:
+            return []
+        cert = self._certifier(answers[0][1])
+        m = self._dense.shape[0] if self._dense is not None else 0
+        last = np.zeros((len(answers), m))
+        lower, upper, cu, x, y = [], [], [], [], []
+        for i, (w, r, alpha_max, sol) in enumerate(answers):
+            lo, up, c_up = self._bounds(w, alpha_max)
+            lower.append(lo)
+            upper.append(up)
+            cu.append(c_up)
+            last[i, self.kin] = self.column(r)
+            assert sol.x is not None and sol.row_dual is not None
+            x.append(sol.x)
+            y.append(sol.row_dual)
+        floor = np.array([self.zero_alpha(r) for _, r, _, _ in answers])
+        return cert.check_many(
+            self.c,
+            np.array(lower),
+            np.array(upper),
+            np.array(cu),
+            np.array(x),
+            np.array(y),
+            last,
+            floor=floor,
+        )
+
     def _certifier(self, r: NDArray[np.float64]) -> Certifier:
         """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
@@ -346,8 +379,19 @@ class StateLPs:
         by the cold HiGHS solve.
         """
         settled = self.solve(w, r, alpha_max=alpha_max)
+        return self.conclude(w, r, alpha_max, settled, self.check(w, r, alpha_max, settled.solution))
+
+    def conclude(
+        self,
+        w: NDArray[np.float64],
+        r: NDArray[np.float64],
+        alpha_max: float,
+        settled: Settled,
+        cert: tuple[bool, Certificate | None] | None,
+    ) -> Verdict:
+        """The verdict of pair (w, r) from its settled LP and the check of its answer
+        (:meth:`certified`'s second half: the other ways where the check failed)."""
         first = settled.solution
-        cert = self._check(w, r, alpha_max, first)
         if cert is not None and cert[0]:
             return Verdict(settled, cert[1], True)
         tried = [f"{settled.solver}: {_describe(first, cert)}"]
@@ -364,7 +408,7 @@ class StateLPs:
             except SolverError as e:
                 tried.append(f"{name}: {e.status}")
                 continue
-            c2 = self._check(w, r, alpha_max, other)
+            c2 = self.check(w, r, alpha_max, other)
             if first.status == "unbounded" and other.status == "unbounded":
                 return Verdict(settled, None, True)  # confirmed by a second solve
             if c2 is not None and c2[0]:
@@ -378,7 +422,7 @@ class StateLPs:
             False,
         )
 
-    def _check(
+    def check(
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
     ) -> tuple[bool, Certificate | None] | None:
         """``(certified, certificate)`` of an optimal or infeasible ``sol``; ``None`` for an

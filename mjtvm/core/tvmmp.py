@@ -43,6 +43,7 @@ from .result import (
 )
 from .solvers import (
     SOLVERS,
+    Settled,
 )
 from .state import GraspState
 
@@ -95,14 +96,13 @@ class _Pairs:
         )
 
 
-def _solve_pair(
-    problem: StateLPs, w: NDArray[np.float64], r: NDArray[np.float64], pair: tuple[int, int]
-) -> Verdict:
-    """One LP of eq. (31-35) for REFS vertex ``w`` and RVDS vertex ``r`` (``r = 0``: only
-    whether ``w`` can be balanced, alpha held at 0), settled across the backends and
-    certified; a SolverError names the pair."""
+def _settle(
+    problem: StateLPs, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, pair: tuple[int, int]
+) -> Settled:
+    """The LP of one pair of eq. (31-35) settled across the backends (not yet certified);
+    a SolverError names the pair."""
     try:
-        return problem.certified(w, r, alpha_max=np.inf if pair[1] >= 0 else 0.0)
+        return problem.solve(w, r, alpha_max=alpha_max)
     except SolverError as e:
         raise SolverError(e.solver, e.status, pair) from e
 
@@ -110,15 +110,24 @@ def _solve_pair(
 def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pairs:
     """Every (k, l) pair's LP, the origin of the RVDS skipped (Supplement 3).
 
-    With qd = 0, alpha = 0, rho = 0 every kinematic row holds, so a pair is infeasible
-    exactly when w_k cannot be balanced; then every l of this k is (no more LPs). A state
-    whose RVDS is the origin only still checks each w_k (``l = -1``).
+    For REFS vertex ``w_k`` and RVDS vertex ``r_l`` the LP is that of alpha r_l with w_k;
+    ``r = 0`` (a state whose RVDS is the origin only, ``l = -1``) asks only whether w_k can
+    be balanced, alpha held at 0. With qd = 0, alpha = 0, rho = 0 every kinematic row holds,
+    so a pair is infeasible exactly when w_k cannot be balanced; then every l of this k is
+    (no more LPs).
 
     The pairs are solved RVDS vertex by RVDS vertex (l outer, k inner): from one k to the
     next only the balance rows' bounds change, which leaves the last basis dual feasible,
     so the dual simplex goes on from it; a new l changes the alpha column, which is in the
     basis whenever alpha > 0. With six test wrenches and six RVDS vertices on the 22-joint
-    dataset hand this halves the time inside HiGHS (k outer: a new column every LP)."""
+    dataset hand this halves the time inside HiGHS (k outer: a new column every LP).
+
+    An infeasible (or unbounded) answer is certified at once, since it decides which LPs
+    follow; the optimal ones are certified together once every LP is solved
+    (:meth:`~mjtvm.core.problem2.StateLPs.certify_many`), and an answer whose certificate
+    fails is then solved again other ways (:meth:`~mjtvm.core.problem2.StateLPs.conclude`).
+    Should that find a pair infeasible, its k is infeasible as above and its later LPs,
+    solved already, are dropped."""
     refs, rvds = state.refs, state.rvds
     if rvds is None:  # checked by tvmmp() already; kept for callers of this step
         raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
@@ -126,46 +135,83 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
     out = _Pairs.empty(n_k, n_l)
     nonzero = [l for l in range(n_l) if np.any(rvds[l] != 0.0)]
     unbalanced: set[int] = set()  # the k whose w_k no contact forces balance
+    # In solving order: (pair, r, alpha_max, settled, verdict); verdict None until certified.
+    solved: list[tuple[tuple[int, int], NDArray[np.float64], float, Settled, Verdict | None]] = []
     for l in nonzero if nonzero else [None]:
         r = rvds[l] if l is not None else np.zeros(state.twist_dim)
         for k in range(n_k):
             if k in unbalanced:
                 continue
             pair = (k, -1 if l is None else l)
-            verdict = _solve_pair(problem, refs[k], r, pair)
-            settled = verdict.settled
-            sol = settled.solution
+            alpha_max = np.inf if l is not None else 0.0
+            settled = _settle(problem, refs[k], r, alpha_max, pair)
             out.num_lps += 1
-            if settled.note is not None:
-                out.notes.append((pair, settled.note))
-            if sol.status == "infeasible":
-                out.feasible = False
-                unbalanced.add(k)
-                for ll in nonzero:
-                    out.status[k][ll] = "infeasible"
-                    out.settled_by[k][ll] = settled.solver
-                    out.certified[k][ll] = verdict.certified
-                    out.alpha[k, ll] = np.nan
-                    out.witnesses[k][ll] = None
-                continue
-            if l is None:
-                continue
-            out.status[k][l] = sol.status
-            out.settled_by[k][l] = settled.solver
-            out.certified[k][l] = verdict.certified
-            if sol.status == "optimal" and sol.x is not None:
-                # The witness within its bounds (the certificate checked the rows with it):
-                # alpha >= 0, lam >= 0 exactly, never a negative alpha.
-                x = clip(sol.x, problem.col_lower, problem.col_upper)
-                a = float(x[problem.alpha_col])
-                # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
-                # there), so that the rounding to 0 does not depend on the unit system.
-                a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
-                out.alpha[k, l] = a
-                if witnesses:
-                    out.witnesses[k][l] = _witness(problem.asm, state, x, a, rvds[l])
+            sol = settled.solution
+            verdict = None
+            if not (sol.status == "optimal" and sol.x is not None and sol.row_dual is not None):
+                check = problem.check(refs[k], r, alpha_max, sol)
+                verdict = problem.conclude(refs[k], r, alpha_max, settled, check)
+                if verdict.settled.solution.status == "infeasible":
+                    unbalanced.add(k)
+            solved.append((pair, r, alpha_max, settled, verdict))
+    pending = [(refs[p[0]], r, am, st.solution) for p, r, am, st, v in solved if v is None]
+    certs = iter(problem.certify_many(pending))
+    unbalanced.clear()
+    for pair, r, alpha_max, settled, verdict in solved:
+        k = pair[0]
+        if verdict is None:
+            cert = next(certs)
+            verdict = problem.conclude(refs[k], r, alpha_max, settled, (cert.ok, cert))
+        if k in unbalanced:
+            continue
+        _record(out, problem, state, pair, r, verdict, nonzero, witnesses)
+        if verdict.settled.solution.status == "infeasible":
+            unbalanced.add(k)
     out.notes.sort(key=lambda note: note[0])  # in (k, l) order, whatever the solving order
     return out
+
+
+def _record(
+    out: _Pairs,
+    problem: StateLPs,
+    state: GraspState,
+    pair: tuple[int, int],
+    r: NDArray[np.float64],
+    verdict: Verdict,
+    nonzero: list[int],
+    witnesses: bool,
+) -> None:
+    """Pair ``(k, l)``'s verdict (RVDS vertex ``r``) into ``out``: an infeasible one for every l of its k."""
+    k, l = pair
+    settled = verdict.settled
+    sol = settled.solution
+    if settled.note is not None:
+        out.notes.append((pair, settled.note))
+    if sol.status == "infeasible":
+        out.feasible = False
+        for ll in nonzero:
+            out.status[k][ll] = "infeasible"
+            out.settled_by[k][ll] = settled.solver
+            out.certified[k][ll] = verdict.certified
+            out.alpha[k, ll] = np.nan
+            out.witnesses[k][ll] = None
+        return
+    if l < 0:
+        return
+    out.status[k][l] = sol.status
+    out.settled_by[k][l] = settled.solver
+    out.certified[k][l] = verdict.certified
+    if sol.status == "optimal" and sol.x is not None:
+        # The witness within its bounds (the certificate checked the rows with it):
+        # alpha >= 0, lam >= 0 exactly, never a negative alpha.
+        x = clip(sol.x, problem.col_lower, problem.col_upper)
+        a = float(x[problem.alpha_col])
+        # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
+        # there), so that the rounding to 0 does not depend on the unit system.
+        a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
+        out.alpha[k, l] = a
+        if witnesses:
+            out.witnesses[k][l] = _witness(problem.asm, state, x, a, r)
 
 
 def _limiting(pairs: _Pairs) -> tuple[tuple[int, int] | None, float | None]:
