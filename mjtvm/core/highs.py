@@ -326,9 +326,10 @@ class HighsSession:
         """Change the bounds of some rows."""
         f = self.scaling.row[rows]
         lo, up = f * np.asarray(lower, dtype=float), f * np.asarray(upper, dtype=float)
-        inf = self._hs.kHighsInf
-        lo = np.where(np.isfinite(lo), lo, -inf)
-        up = np.where(np.isfinite(up), up, inf)
+        if not (np.isfinite(lo).all() and np.isfinite(up).all()):  # rare: a free row's side
+            inf = self._hs.kHighsInf
+            lo = np.where(np.isfinite(lo), lo, -inf)
+            up = np.where(np.isfinite(up), up, inf)
         status = self.highs.changeRowsBounds(len(rows), np.asarray(rows, dtype=np.int32), lo, up)
         self._check(status, "changeRowsBounds")
 

@@ -159,11 +159,7 @@ class StateLPs:
         self._bounds_of: dict[tuple[bytes, float], tuple[NDArray[np.float64], ...]] = {}
         self._matrix_of: bytes | None = None  # the r whose column pair_matrix holds
         # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
-        self._last: tuple[NDArray[np.float64], NDArray[np.float64], float] = (
-            np.full(state.twist_dim, np.nan),
-            np.full(state.twist_dim, np.nan),
-            np.nan,
-        )
+        self._last: tuple[bytes, bytes, float] = (b"", b"", np.nan)  # as bytes: cheaper to compare
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without
@@ -249,13 +245,13 @@ class StateLPs:
                 ses = self.session
                 # The column changes with l, the bounds with k (set_column re-sends alpha's
                 # bounds when it rescales).
-                if not np.array_equal(r, self._last[1]):
+                if r.tobytes() != self._last[1]:
                     ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
-                if not np.array_equal(w, self._last[0]):
+                if w.tobytes() != self._last[0]:
                     ses.set_row_bounds(self.wrench_rows, -w, -w)
                 if alpha_max != self._last[2]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
-            self._last = (w, r, alpha_max)
+            self._last = (w.tobytes(), r.tobytes(), alpha_max)
             return Settled(self.session.solve(duals=True), "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
@@ -301,29 +297,16 @@ class StateLPs:
         if not answers:
             return []
         cert = self._certifier(answers[0][1])
-        m = self._dense.shape[0] if self._dense is not None else 0
-        last = np.zeros((len(answers), m))
-        lower, upper, cu, x, y = [], [], [], [], []
+        p, (m, n) = len(answers), cert.a.shape
+        lower, upper, cu = np.empty((p, m)), np.empty((p, m)), np.empty((p, n))
+        x, y, last, floor = np.empty((p, n)), np.empty((p, m)), np.zeros((p, m)), np.empty(p)
         for i, (w, r, alpha_max, sol) in enumerate(answers):
-            lo, up, c_up = self._bounds(w, alpha_max)
-            lower.append(lo)
-            upper.append(up)
-            cu.append(c_up)
-            last[i, self.kin] = self.column(r)
+            lower[i], upper[i], cu[i] = self._bounds(w, alpha_max)
+            col, floor[i] = self._r_values(r)
+            last[i, self.kin] = col
             assert sol.x is not None and sol.row_dual is not None
-            x.append(sol.x)
-            y.append(sol.row_dual)
-        floor = np.array([self.zero_alpha(r) for _, r, _, _ in answers])
-        return cert.check_many(
-            self.c,
-            np.array(lower),
-            np.array(upper),
-            np.array(cu),
-            np.array(x),
-            np.array(y),
-            last,
-            floor=floor,
-        )
+            x[i], y[i] = sol.x, sol.row_dual
+        return cert.check_many(self.c, lower, upper, cu, x, y, last, floor=floor)
 
     def _certifier(self, r: NDArray[np.float64]) -> Certifier:
         """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
