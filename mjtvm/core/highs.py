@@ -8,6 +8,7 @@ call raises :class:`~mjtvm.errors.SolverError`.
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import threading
@@ -22,7 +23,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParamError, SolverError
 from .lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
-from .scaling import Scaling, column_factor, cost_scale, lp_scaling, scale_lp
+from .scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
 __all__ = ["HighsSession", "new_highs", "observe_runs"]
 
@@ -179,6 +180,7 @@ class HighsSession:
             )
         highspy = _highs()
         self._hs = highspy
+        self._error = highspy.HighsStatus.kError
         self.scaling = s
         self._col = np.array(s.col, dtype=float)  # per-column factors (set_column may change one)
         self._cost = np.array(cost, dtype=float)  # unscaled costs, bounds: re-scaled on change
@@ -225,6 +227,7 @@ class HighsSession:
             np.zeros(n, dtype=np.int32),  # every column continuous (HiGHS reads n entries: never empty)
         )
         self._check(status, "passModel")
+        self._sent_cost = np.array(slp.c, dtype=float)  # the scaled costs HiGHS holds
         # Largest scaled magnitude per row: the reference of set_column's round-off drop.
         self._row_max = np.zeros(a.shape[0])
         if a.nnz:
@@ -243,7 +246,7 @@ class HighsSession:
     def _check(self, status: Any, what: str) -> None:
         """kOk and kWarning pass (a warning is HiGHS informing, e.g. of a dropped tiny
         value, which scale_lp has made impossible for data); kError raises."""
-        if status == self._hs.HighsStatus.kError:
+        if status == self._error:
             raise SolverError("highs", f"{what}: {status}")
 
     @staticmethod
@@ -252,11 +255,17 @@ class HighsSession:
         answer) and refuses those above 1e15; after equilibration either means data
         spanning more than ~27 orders of magnitude, which is reported instead."""
         mag = np.abs(values[values != 0.0])
-        if mag.size and (mag.min() <= _HIGHS_SMALL or mag.max() >= _HIGHS_LARGE):
+        if mag.size:
+            HighsSession._check_range(float(mag.min()), float(mag.max()), what)
+
+    @staticmethod
+    def _check_range(smallest: float, largest: float, what: str) -> None:
+        """:meth:`_check_magnitudes` from the smallest and largest non-zero magnitudes."""
+        if smallest <= _HIGHS_SMALL or largest >= _HIGHS_LARGE:
             raise SolverError(
                 "highs",
                 f"{what}: an equilibrated coefficient is outside [1e-12, 1e15] "
-                f"({mag.min():.3g} .. {mag.max():.3g}): the data span too many orders of magnitude",
+                f"({smallest:.3g} .. {largest:.3g}): the data span too many orders of magnitude",
             )
 
     def column_scale(self, col: int) -> float:
@@ -279,25 +288,31 @@ class HighsSession:
         """
         rows = np.asarray(rows, dtype=np.int64)
         v = self.scaling.row[rows] * np.asarray(values, dtype=float)
+        mag = np.abs(v)
+        big = float(mag.max(initial=0.0))  # nan or inf where an entry is
         if rescale:
-            nz = np.abs(v[v != 0.0])
-            factor = column_factor(nz)
+            factor = factor_of_largest(big) if big != 0.0 else 1.0
             if factor != self._col[col]:
                 self._col[col] = factor
                 self._push_col_bounds(col)
                 self._push_costs(np.array([col], dtype=np.int32))
-        v = v * self._col[col]
-        if not np.isfinite(v).all():  # row factor times datum past 1e308: never drop an inf
+        f = float(self._col[col])
+        v *= f
+        mag *= f
+        big *= f
+        if not math.isfinite(big):  # row factor times datum past 1e308: never drop an inf
             raise SolverError(
                 "highs", "changeCoeff: an equilibrated coefficient overflows (data span too wide)"
             )
-        mag = np.abs(v)
-        ref = np.maximum(np.maximum(self._row_max[rows], float(mag.max(initial=0.0))), 1.0)
-        v[mag <= DROP_REL * ref] = 0.0  # round-off, as in scale_lp
-        self._check_magnitudes(v, "changeCoeff")
-        change, check = self.highs.changeCoeff, self._check
+        ref = np.maximum(self._row_max[rows], max(big, 1.0))
+        kept = mag > DROP_REL * ref
+        v[~kept] = 0.0  # round-off, as in scale_lp
+        if kept.any():  # _check_magnitudes, from what is known here: the largest is big
+            self._check_range(float(mag[kept].min()), big, "changeCoeff")
+        change, error = self.highs.changeCoeff, self._error
         for r, x in zip(rows.tolist(), v.tolist()):
-            check(change(r, col, x), "changeCoeff")
+            if change(r, col, x) == error:
+                raise SolverError("highs", "changeCoeff: kError")
 
     def start_basis(self, basic_cols: NDArray[np.int64], nonbasic_rows: NDArray[np.int64]) -> None:
         """Start the next solve from the basis of the slacks with ``basic_cols`` swapped in
@@ -341,14 +356,22 @@ class HighsSession:
         self._check(self.highs.changeColBounds(col, lo, up), "changeColBounds")
 
     def _push_costs(self, cols: NDArray[np.int32]) -> None:
-        """Send the scaled costs of ``cols`` (of every column when the cost factor changes:
-        a full cost change costs the warm start more)."""
+        """Send the scaled costs of ``cols`` (of every column when the cost factor changes),
+        those that differ from what HiGHS holds only: a cost change costs the warm start
+        (HiGHS recomputes its duals), and a column rescaled together with the cost factor
+        (the only costed column, as alpha in Problem 2 and t in ray shooting) keeps its
+        scaled cost, as every zero cost does."""
         g = cost_scale(self._cost, self._col)
         if g != self.scaling.cost:
             self.scaling = replace(self.scaling, cost=g)
             cols = np.arange(len(self._cost), dtype=np.int32)
         cols = np.asarray(cols, dtype=np.int32)
-        cost = np.ascontiguousarray(g * self._col[cols] * self._cost[cols])
+        cost = g * self._col[cols] * self._cost[cols]
+        moved = cost != self._sent_cost[cols]
+        if not moved.any():
+            return
+        cols, cost = cols[moved], np.ascontiguousarray(cost[moved])
+        self._sent_cost[cols] = cost
         self._check(self.highs.changeColsCost(len(cols), cols, cost), "changeColsCost")
 
     def set_col_bounds(self, col: int, lower: float, upper: float) -> None:

@@ -11,6 +11,7 @@ Coefficients are dropped only when they are round-off: in the equilibrated LP, a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -212,10 +213,17 @@ def column_factor(magnitudes: NDArray[np.float64]) -> float:
     bounds in :meth:`~mjtvm.core.highs.HighsSession.set_column`. Clipped, the entries
     still out of HiGHS' range are reported by the session's magnitude check."""
     nz = np.abs(magnitudes[magnitudes != 0.0])
-    if not nz.size:
-        return 1.0
-    log2 = np.round(-np.log2(nz.max()))
-    return float(np.exp2(np.clip(log2, -_MAX_LOG2, _MAX_LOG2)))
+    return factor_of_largest(float(nz.max())) if nz.size else 1.0
+
+
+def factor_of_largest(big: float) -> float:
+    """:func:`column_factor` of a column whose largest magnitude is ``big > 0`` (float
+    arithmetic: a column rewritten for every LP, as in ray shooting, spares its numpy calls)."""
+    if math.isnan(big):
+        return math.nan  # a nan entry: the session's finiteness check reports it
+    if big == math.inf:
+        return math.ldexp(1.0, -int(_MAX_LOG2))
+    return math.ldexp(1.0, int(min(max(round(-math.log2(big)), -_MAX_LOG2), _MAX_LOG2)))
 
 
 def cost_scale(c: NDArray[np.float64], col: NDArray[np.float64]) -> float:

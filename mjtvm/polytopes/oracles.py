@@ -13,14 +13,10 @@ of :func:`~mjtvm.polytopes.projection.project_lp`:
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..core.roundoff import DROP_REL
-from ..core.scaling import column_factor
 from ..core.solvers import HighsSession, LinearProgram, LPSolution
 from ..errors import SolverError
 from .lifted import LiftedPolytope
@@ -115,60 +111,12 @@ class RayShooter:
         self.session.set_option("simplex_dual_edge_weight_strategy", 1)
         self.rows = np.arange(m, m + k)
         self.num_lps = 0
-        # The t column is rewritten for every ray (the Python of the session's general
-        # set_column cost about as much as HiGHS' own warm-started run): see _set_direction.
-        scaling = self.session.scaling
         self._col = n
-        self._row_scale = scaling.row[self.rows]
-        self._t_factor = self.session.column_scale(n)  # the session's factor of t, kept
-        self._p = self._t_factor  # the power of 2 of the last ray (t's scaled bound 1 / p)
-        self._row_max = np.maximum(
-            np.max(np.abs(self._row_scale[:, None] * rows * scaling.col[n - nz : n]), axis=1, initial=0.0),
-            np.abs(self._row_scale) * self._t_factor,
-        )
-        import highspy  # loaded already by the session
-
-        self._error = highspy.HighsStatus.kError
-
-    def _set_direction(self, d: NDArray[np.float64]) -> float:
-        r"""Write ``-d`` into the t column as the session's ``set_column(..., rescale=True)``
-        would, and return the power of 2 ``p`` that scales it.
-
-        The equilibrated column is ``p`` times the row factors times ``-d``, with ``p`` the power
-        of 2 bringing its largest entry to about 1 (a long ``d`` is scaled like a short one);
-        t's scaled bounds are ``[0, 1 / p]`` and its scaled cost stays -1. The session keeps its
-        own factor ``f0`` of t: its bound is set as ``f0 / p`` (scaled ``1 / p``) and its
-        solution reads ``f0 t_s``, so ``t = p t_s = p x_t / f0``. The same round-off drop and
-        magnitude check as ``set_column``; the equilibrated LP is the one it would pass.
-        """
-        v = self._row_scale * -np.asarray(d, dtype=float)
-        mag = np.abs(v)
-        big = float(mag.max())
-        # column_factor's power of 2, from a float where no clipping applies (its numpy calls
-        # cost 20 us a ray)
-        p = 2.0 ** round(-math.log2(big)) if 1e-100 < big < 1e100 else column_factor(v)
-        v *= p
-        mag *= p
-        if not np.isfinite(v).all():
-            raise SolverError(
-                "highs", "changeCoeff: an equilibrated coefficient overflows (data span too wide)"
-            )
-        # The largest entry is now about 1: none reaches HiGHS' upper limit (1e15), and the
-        # drop leaves none at or below its lower one (1e-12 <= DROP_REL x ref).
-        ref = np.maximum(np.maximum(self._row_max, float(mag.max())), 1.0)
-        v[mag <= DROP_REL * ref] = 0.0  # round-off, as in scale_lp
-        if p != self._p:
-            self._p = p
-            self.session.set_col_bounds(self._col, 0.0, self._t_factor / p)
-        change, col, error = self.session.highs.changeCoeff, self._col, self._error
-        for r, x in zip(self.rows.tolist(), v.tolist()):
-            if change(r, col, x) == error:
-                raise SolverError("highs", "changeCoeff: kError")
-        return p
 
     def __call__(self, d: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
         """``t*`` and the unit outward normal of a hyperplane supporting :math:`S_{ov}` at ``c + t* d``."""
-        p = self._set_direction(d)
+        # Only the t column changes; rescaled (a long d like a short one), its scaled cost stays.
+        self.session.set_column(self._col, self.rows, -np.asarray(d, dtype=float), rescale=True)
         self.num_lps += 1
         sol = self.session.solve(duals=True)
         if sol.status != "optimal" or sol.x is None or sol.row_dual is None:
@@ -176,7 +124,7 @@ class RayShooter:
         y = sol.row_dual[self.rows]
         h = -y if -y @ d > 0 else y
         norm = float(np.sqrt(h @ h))
-        return float(sol.x[-1]) * p / self._t_factor, h / norm if norm > 0 else h
+        return float(sol.x[-1]), h / norm if norm > 0 else h
 
 
 class DistanceOracle:

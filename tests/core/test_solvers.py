@@ -349,3 +349,55 @@ def test_rescaled_column_out_of_range_without_nan(values, error):
             with pytest.raises(SolverError, match=error):
                 session.set_column(1, np.array([0, 1]), np.array(values), rescale=True)
     assert np.isfinite(session.column_scale(1)) and session.column_scale(1) > 0.0
+
+
+def test_factor_of_largest_is_the_power_of_2_of_column_factor():
+    """The float helper gives the numpy formula's power of 2 (clipped at 2^+-400) over 300
+    orders of magnitude on either side, at the clip and for an overflowed entry."""
+    from mjtvm.core.scaling import column_factor, factor_of_largest
+
+    rng = np.random.default_rng(0)
+    bigs = np.concatenate([10.0 ** rng.uniform(-300, 300, 2000), [5e-324, 1e-310, 1.0, 2.0, 1.5, np.inf]])
+    for big in bigs:
+        want = float(np.exp2(np.clip(np.round(-np.log2(big)), -400.0, 400.0)))
+        assert factor_of_largest(float(big)) == want
+        assert column_factor(np.array([0.0, -big, big / 3])) == want
+    assert column_factor(np.zeros(3)) == 1.0
+
+
+def test_a_rescaled_column_keeps_the_scaled_cost_highs_holds():
+    """Rescaling the only costed column moves the cost factor with it: its scaled cost, and
+    every zero cost, stay as HiGHS holds them, so no cost is sent (a cost change makes HiGHS
+    recompute its duals); the optimum is the LP's, as a fresh session finds it."""
+    from mjtvm.core.solvers import HighsSession, LinearProgram
+
+    # max t s.t. x0 + d0 t = 1, x1 + d1 t = 1, 0 <= x <= 1, 0 <= t <= 1: t* = 1 / max(d) for d >= 1.
+    a = sp.csc_matrix(np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]]))
+    lp = LinearProgram(np.array([0.0, 0.0, -1.0]), a, np.ones(2), np.ones(2), np.zeros(3), np.ones(3))
+    session = HighsSession(lp)
+    sent: list[int] = []
+    real = session.highs
+
+    class Spy:
+        def __getattr__(self, name):  # type: ignore[no-untyped-def]
+            if name == "changeColsCost":
+                return lambda n, cols, cost: sent.append(n) or real.changeColsCost(n, cols, cost)
+            return getattr(real, name)
+
+    session.highs = Spy()
+    for d in ([4.0, 2.0], [1e6, 3.0], [1.0, 8.0]):
+        session.set_column(2, np.array([0, 1]), np.array(d), rescale=True)
+        sol = session.solve()
+        assert sol.x is not None
+        assert sol.x[2] == pytest.approx(1.0 / max(d), rel=1e-12)
+        lp_d = LinearProgram(
+            lp.c,
+            sp.csc_matrix(np.array([[1.0, 0.0, d[0]], [0.0, 1.0, d[1]]])),
+            np.ones(2),
+            np.ones(2),
+            np.zeros(3),
+            np.ones(3),
+        )
+        fresh = HighsSession(lp_d).solve()
+        assert fresh.x is not None and sol.x[2] == pytest.approx(fresh.x[2], rel=1e-12)
+    assert sent == []
