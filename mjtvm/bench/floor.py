@@ -6,7 +6,9 @@ is timed, and within the same calls the time inside HiGHS ``run()``
 exactly these bases, and the ratio ``total / run`` is what mjtvm's Python around the solver
 (assembly, equilibration, the HiGHS session, the certificates, the result) costs on top of it.
 The ratio of each call is computed on that call (both in the same run, so the machine's load
-cancels to first order) and its median is reported, with the medians of both times.
+cancels to first order) and its median is reported, with the medians of both times and the
+process's CPU time over its wall time during the calls (``core_share``: 1 for a solve on one
+core; a BLAS thread that spins beside it shows as 2).
 
 The states: the paper's Case 2 initial state (4 LPs), Case 1 with the 8 RVDS vertices of
 :func:`~mjtvm.bench.cases.case1_rvds`, the ``allegro-ik`` grasp (16 joints, 4 contacts, 6 RVDS
@@ -18,6 +20,7 @@ weight (6 LPs) and with six test wrenches (36 LPs) as REFS. Target: ratio at mos
 from __future__ import annotations
 
 import statistics
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -50,7 +53,9 @@ def floor_states() -> dict[str, GraspState]:
 
 def _measure(state: GraspState, repeats: int, warmup: int) -> dict[str, Any]:
     """Medians of a call's total, its time inside HiGHS ``run()`` and their per-call ratio."""
+    wall, cpu = time.perf_counter(), time.process_time()
     totals, runs, calls = timed_calls(state, repeats, warmup)
+    share = (time.process_time() - cpu) / (time.perf_counter() - wall)
     ratios = sorted(t / r for t, r in zip(totals, runs))
     ratio = statistics.median(ratios)
     return {
@@ -62,6 +67,7 @@ def _measure(state: GraspState, repeats: int, warmup: int) -> dict[str, Any]:
         "ratio_p10": ratios[len(ratios) // 10],
         "ratio_p90": ratios[(9 * len(ratios)) // 10],
         "repeats": repeats,
+        "core_share": share,
         "met": ratio <= TARGET_RATIO,
     }
 

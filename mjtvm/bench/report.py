@@ -415,6 +415,9 @@ def _floor_rows(report: dict[str, Any]) -> list[str]:
         "P2 / HiGHS run: per call, tvmmp(state, witnesses=False) over the time inside HiGHS run() in the same "
         "call (median of the per-call ratios; ratio column)"
     )
+    busy = [f"{n} {r['core_share']:.2f}" for n, r in fl["states"].items() if r.get("core_share", 1.0) > 1.1]
+    if busy:
+        lines.append("P2 / HiGHS run on more than one core (CPU time over wall time): " + ", ".join(busy))
     return lines
 
 

@@ -7,6 +7,7 @@ import pytest
 import scipy.sparse as sp
 
 from mjtvm.core.certificate import (
+    BATCH_ENTRIES,
     DUAL_TOL,
     GAP_TOL,
     PRIMAL_TOL,
@@ -144,8 +145,10 @@ def _family(seed: int, p: int):
     return a, col_lower, c, lower, upper, cu, x, y, last, ref, groups, floor
 
 
-@pytest.mark.parametrize("seed", range(5))
-def test_check_many_gives_each_answer_the_certificate_check_gives_it(seed):
+@pytest.mark.parametrize(("seed", "entries"), [(s, BATCH_ENTRIES) for s in range(5)] + [(5, 63 * 4), (6, 1)])
+def test_check_many_gives_each_answer_the_certificate_check_gives_it(seed, entries, monkeypatch):
+    """Also in chunks (4 answers of 9 x 7 per product, or one): the chunks keep BLAS on one thread."""
+    monkeypatch.setattr("mjtvm.core.certificate.BATCH_ENTRIES", entries)
     a, col_lower, c, lower, upper, cu, x, y, last, ref, groups, floor = _family(seed, 6)
     one = Certifier(a.copy(), col_lower, col_ref=ref, row_groups=groups, dual_ref=2 * ref)
     many = one.check_many(c, lower, upper, cu, x, y, last, floor=floor)
