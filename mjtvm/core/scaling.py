@@ -228,8 +228,19 @@ def factor_of_largest(big: float) -> float:
 
 def cost_scale(c: NDArray[np.float64], col: NDArray[np.float64]) -> float:
     """The power of 2 bringing the largest scaled cost ``|col * c|`` to about 1 (1 when c = 0)."""
-    big = float(np.max(np.abs(col * c), initial=0.0))
-    return float(pow2(1.0 / big)) if big > 0.0 and np.isfinite(big) else 1.0
+    prod = np.abs(col * c)
+    big = float(prod.max()) if prod.size else 0.0
+    return _pow2_float(1.0 / big) if big > 0.0 and math.isfinite(big) else 1.0
+
+
+def _pow2_float(x: float) -> float:
+    """:func:`pow2` of one float ``x > 0`` in float arithmetic (a session rescales a column LP
+    after LP, where numpy's scalar calls cost more than the rest): ``inf`` past 2^1023, as
+    ``np.exp2``."""
+    if x == math.inf:
+        return math.inf
+    k = round(math.log2(x))
+    return math.ldexp(1.0, k) if k < 1024 else math.inf
 
 
 def lp_scaling(lp: LinearProgram) -> Scaling:

@@ -401,3 +401,18 @@ def test_a_rescaled_column_keeps_the_scaled_cost_highs_holds():
         fresh = HighsSession(lp_d).solve()
         assert fresh.x is not None and sol.x[2] == pytest.approx(fresh.x[2], rel=1e-12)
     assert sent == []
+
+
+def test_cost_scale_is_the_power_of_2_nearest_the_inverse_of_the_largest_scaled_cost():
+    """The float path of cost_scale gives numpy's pow2 over 300 orders of magnitude on either
+    side, inf where the inverse overflows, and 1 without costs."""
+    from mjtvm.core.scaling import cost_scale, pow2
+
+    rng = np.random.default_rng(1)
+    for big in np.concatenate([10.0 ** rng.uniform(-300, 300, 2000), [1.0, 0.75, 3.0, 1e-320]]):
+        c, col = np.array([0.0, -big, big / 7]), np.array([4.0, 1.0, 1.0])
+        with np.errstate(over="ignore", divide="ignore"):
+            want = float(pow2(1.0 / big))
+        assert cost_scale(c, col) == want
+    assert cost_scale(np.zeros(3), np.ones(3)) == 1.0
+    assert cost_scale(np.zeros(0), np.zeros(0)) == 1.0
