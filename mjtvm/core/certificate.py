@@ -77,11 +77,11 @@ GAP_TOL = 1e-7
 
 
 #: Most multiply-adds in one matrix product of :meth:`Certifier.check_many` (answers x rows x
-#: columns); more answers are certified in chunks. numpy's OpenBLAS runs a product of fewer
-#: than 4 x 65536 on one thread and a larger one on two, whose second thread then spins
-#: between calls: certifying the 36 answers of the 22-joint dataset state at once took two
-#: cores for 2 % less time, and two such processes side by side halved their throughput.
-BATCH_ENTRIES = 2**17
+#: columns); more answers are certified in chunks. numpy's OpenBLAS (0.3.31) ran the 22-joint
+#: dataset state's products on one thread up to 18 answers (390,600) and on two for its 36
+#: (781,200), whose second thread then spins between calls: two cores for 2 % less time, and
+#: two such processes side by side halved their throughput. A margin below that: 11 answers.
+BATCH_ENTRIES = 2**18
 
 
 @dataclass(frozen=True)
