@@ -30,6 +30,7 @@ __all__ = [
     "column_factor",
     "cost_scale",
     "equilibrate",
+    "factor_of_largest",
     "lp_scaling",
     "pow2",
     "scale_lp",
