@@ -183,10 +183,10 @@ class Certifier:
             self.counts = np.diff(np.append(self.starts, row_groups.size))
 
     def _scale(self, scale: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Each row's scale raised to the largest of its group's."""
+        """Each row's scale (along the last axis) raised to the largest of its group's."""
         if self.starts is None:
             return scale
-        return np.repeat(np.maximum.reduceat(scale, self.starts), self.counts)
+        return np.repeat(np.maximum.reduceat(scale, self.starts, axis=-1), self.counts, axis=-1)
 
     def _violation(
         self,
@@ -194,8 +194,9 @@ class Certifier:
         terms: NDArray[np.float64],
         lower: tuple[NDArray[np.bool_], NDArray[np.float64]],
         upper: tuple[NDArray[np.bool_], NDArray[np.float64]],
-    ) -> float:
-        """:func:`primal_violation` from the row activities ``ax`` and the rows' terms."""
+    ) -> NDArray[np.float64]:
+        """:func:`primal_violation` from the row activities ``ax`` and the rows' terms, along
+        the last axis (``(m,)`` or ``(P, m)`` in, ``()`` or ``(P,)`` out)."""
         (lo_ok, lo), (up_ok, up) = lower, upper
         below = np.where(lo_ok, lo - ax, 0.0)
         above = np.where(up_ok, ax - up, 0.0)
@@ -203,7 +204,7 @@ class Certifier:
         scale = self._scale(terms + np.where(below > above, np.abs(lo), np.abs(up)))
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = np.where(viol > 0.0, viol / scale, 0.0)  # viol > 0 = scale: inf
-        return float(np.max(rel, initial=0.0))
+        return np.max(rel, axis=-1, initial=0.0)
 
     def check(
         self,
@@ -218,44 +219,28 @@ class Certifier:
     ) -> Certificate:
         """:func:`certify` on this family's matrix and column lower bounds."""
         a, abs_a = self.a, self.abs_a
-        xc = clip(x, self.col_lower, col_upper)
-        size = np.abs(xc) if self.col_ref is None else np.maximum(np.abs(xc), self.col_ref)
-        lower, upper = _finite(row_lower), _finite(row_upper)
-        terms = abs_a @ size
-        primal = self._violation(a @ xc, terms, lower, upper)
-        if y is None:
-            return Certificate(primal, np.inf, np.inf, -np.inf)
-        y = np.array(y, dtype=float)
-        c = np.asarray(c, dtype=float)
-        # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
-        # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
-        # by its size times the row's (|A_i| s + |lower bound|), added up with the columns'.
-        wrong_row = ((y > 0.0) & ~lower[0]) | ((y < 0.0) & ~upper[0])
-        moved = float(np.abs(y[wrong_row]) @ (terms[wrong_row] + np.abs(lower[1][wrong_row])))
-        y[wrong_row] = 0.0
-        d = c - a.T @ y
-        # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
-        # free joint speeds and torques have d = 1e-17 where their terms are 1.
-        drop_cancellation(d, np.abs(c) + abs_a.T @ np.abs(y))
-        cu_ok, cu = _finite(col_upper)
-        wrong_col = ((d > 0.0) & ~self.lower_ok) | ((d < 0.0) & ~cu_ok)
-        dual_size = size if self.dual_ref is None else np.maximum(np.abs(xc), self.dual_ref)
-        moved += float(np.abs(d[wrong_col]) @ dual_size[wrong_col])
-        d[wrong_col] = 0.0
-        bound = float(
-            np.maximum(y, 0.0) @ lower[1]
-            + np.minimum(y, 0.0) @ upper[1]
-            + np.maximum(d, 0.0) @ self.lower0
-            + np.minimum(d, 0.0) @ cu
-        )
-        objective = float(c @ xc)
-        size_obj = max(abs(objective), abs(bound))
-        return Certificate(
-            primal,
-            _relative(moved, max(size_obj, floor / DUAL_TOL)),
-            _relative(abs(objective - bound), max(size_obj, floor / GAP_TOL)),
-            bound,
-        )
+
+        def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+            return (a @ xc[0])[None], (abs_a @ size[0])[None]
+
+        def transposed(
+            yy: NDArray[np.float64], abs_y: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], ...]:
+            return (a.T @ yy[0])[None], (abs_a.T @ abs_y[0])[None]
+
+        zero = np.zeros_like(row_lower) if y is None else y
+        one = self._measure(
+            c,
+            row_lower[None],
+            row_upper[None],
+            col_upper[None],
+            x[None],
+            zero[None],
+            [floor],
+            products,
+            transposed,
+        )[0]
+        return one if y is not None else Certificate(one.primal, np.inf, np.inf, -np.inf)
 
     def check_many(
         self,
@@ -306,38 +291,56 @@ class Certifier:
             ]
         a0, abs0 = self.a[:, :-1], self.abs_a[:, :-1]
         abs_last = np.abs(last)
-        xc = np.minimum(np.maximum(x, self.col_lower), col_upper)
+
+        def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+            # The shared columns, then each LP's last one.
+            return xc[:, :-1] @ a0.T + xc[:, -1:] * last, size[:, :-1] @ abs0.T + size[:, -1:] * abs_last
+
+        def transposed(
+            yy: NDArray[np.float64], abs_y: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], ...]:
+            ya, abs_ya = np.empty((len(yy), n)), np.empty((len(yy), n))
+            ya[:, :-1], ya[:, -1] = yy @ a0, np.sum(yy * last, axis=1)
+            abs_ya[:, :-1], abs_ya[:, -1] = abs_y @ abs0, np.sum(abs_y * abs_last, axis=1)
+            return ya, abs_ya
+
+        return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, products, transposed)
+
+    def _measure(
+        self,
+        c: NDArray[np.float64],
+        row_lower: NDArray[np.float64],
+        row_upper: NDArray[np.float64],
+        col_upper: NDArray[np.float64],
+        x: NDArray[np.float64],
+        y: NDArray[np.float64],
+        floor: Any,
+        products: Any,
+        transposed: Any,
+    ) -> list[Certificate]:
+        """The certificates of ``P`` answers (the arrays of :meth:`check_many`), the matrix
+        reached through ``products(xc, size) -> (A x, |A| size)`` and
+        ``transposed(y, |y|) -> (y A, |y| |A|)``, each ``(P, .)``."""
+        xc = np.minimum(np.maximum(x, self.col_lower), col_upper)  # clip (bounds may be inf)
         size = np.abs(xc) if self.col_ref is None else np.maximum(np.abs(xc), self.col_ref)
-        lo_ok, up_ok = np.isfinite(row_lower), np.isfinite(row_upper)
-        lo, up = np.where(lo_ok, row_lower, 0.0), np.where(up_ok, row_upper, 0.0)
-        # Row activities and terms (P, m): the shared columns, then each LP's last one.
-        terms = size[:, :-1] @ abs0.T + size[:, -1:] * abs_last
-        ax = xc[:, :-1] @ a0.T + xc[:, -1:] * last
-        below = np.where(lo_ok, lo - ax, 0.0)
-        above = np.where(up_ok, ax - up, 0.0)
-        viol = np.maximum(np.maximum(below, above), 0.0)
-        scale = terms + np.where(below > above, np.abs(lo), np.abs(up))
-        if self.starts is not None:
-            scale = np.repeat(np.maximum.reduceat(scale, self.starts, axis=1), self.counts, axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rel = np.where(viol > 0.0, viol / scale, 0.0)
-        primal = np.max(rel, axis=1, initial=0.0)
-        # The dual checks of check(), row by row of these arrays.
+        lower, upper = _finite(row_lower), _finite(row_upper)
+        (lo_ok, lo), (up_ok, up) = lower, upper
+        ax, terms = products(xc, size)
+        primal = self._violation(ax, terms, lower, upper)
         y = np.array(y, dtype=float)
         c = np.asarray(c, dtype=float)
+        # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
+        # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
+        # by its size times the row's (|A_i| s + |lower bound|), added up with the columns'.
         wrong_row = ((y > 0.0) & ~lo_ok) | ((y < 0.0) & ~up_ok)
         moved = np.sum(np.where(wrong_row, np.abs(y) * (terms + np.abs(lo)), 0.0), axis=1)
         y[wrong_row] = 0.0
-        abs_y = np.abs(y)
-        d = np.empty_like(xc)
-        d[:, :-1] = c[:-1] - y @ a0
-        d[:, -1] = c[-1] - np.sum(y * last, axis=1)
-        mag = np.empty_like(xc)
-        mag[:, :-1] = np.abs(c[:-1]) + abs_y @ abs0
-        mag[:, -1] = abs(c[-1]) + np.sum(abs_y * abs_last, axis=1)
-        drop_cancellation(d, mag)
-        cu_ok = np.isfinite(col_upper)
-        cu = np.where(cu_ok, col_upper, 0.0)
+        ya, abs_ya = transposed(y, np.abs(y))
+        d = c - ya
+        # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
+        # free joint speeds and torques have d = 1e-17 where their terms are 1.
+        drop_cancellation(d, np.abs(c) + abs_ya)
+        cu_ok, cu = _finite(col_upper)
         wrong_col = ((d > 0.0) & ~self.lower_ok) | ((d < 0.0) & ~cu_ok)
         dual_size = size if self.dual_ref is None else np.maximum(np.abs(xc), self.dual_ref)
         moved += np.sum(np.where(wrong_col, np.abs(d) * dual_size, 0.0), axis=1)
@@ -350,13 +353,13 @@ class Certifier:
         objective = xc @ c
         out = []
         for i in range(len(xc)):
-            b, obj = float(bound[i]), float(objective[i])
+            b, obj, fl = float(bound[i]), float(objective[i]), float(floor[i])
             size_obj = max(abs(obj), abs(b))
             out.append(
                 Certificate(
                     float(primal[i]),
-                    _relative(float(moved[i]), max(size_obj, float(floor[i]) / DUAL_TOL)),
-                    _relative(abs(obj - b), max(size_obj, float(floor[i]) / GAP_TOL)),
+                    _relative(float(moved[i]), max(size_obj, fl / DUAL_TOL)),
+                    _relative(abs(obj - b), max(size_obj, fl / GAP_TOL)),
                     b,
                 )
             )
@@ -396,7 +399,7 @@ def primal_violation(
     their scales."""
     one = Certifier(a, np.zeros(a.shape[1]), abs_a=abs_a, row_groups=groups)
     terms = one.abs_a @ (np.abs(x) if size is None else size)
-    return one._violation(a @ x, terms, _finite(lower), _finite(upper))
+    return float(one._violation(a @ x, terms, _finite(lower), _finite(upper)))
 
 
 def certify(
