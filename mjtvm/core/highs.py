@@ -352,7 +352,7 @@ class HighsSession:
         """Change the bounds of some rows."""
         f = self.scaling.row[rows]
         lo, up = f * np.asarray(lower, dtype=float), f * np.asarray(upper, dtype=float)
-        if not (np.isfinite(lo).all() and np.isfinite(up).all()):  # rare: a free row's side
+        if not math.isfinite(float(lo.sum() + up.sum())):  # rare: a free row's side (or a huge sum)
             inf = self._hs.kHighsInf
             lo = np.where(np.isfinite(lo), lo, -inf)
             up = np.where(np.isfinite(up), up, inf)
