@@ -326,3 +326,56 @@ def test_tied_alphas_give_the_first_pair():
     assert _limiting(pairs) == ((0, 1), 1.0)
     pairs.alpha[0, 1] = 1.0 + 1e-7  # a genuine difference: not a tie
     assert _limiting(pairs) == ((1, 0), 1.0)
+
+
+def test_an_answer_whose_deferred_certificate_fails_is_solved_again_with_a_note(monkeypatch):
+    """The optimal answers are certified together after every LP (StateLPs.certify_many): one
+    that fails there goes through the other ways (a cold HiGHS solve certifies it) with a
+    note, and its alpha is the LP's."""
+    from mjtvm.core.certificate import Certificate
+    from mjtvm.core.problem2 import StateLPs
+
+    state = random_state(3, fingers=3, joints_per_finger=3, num_refs=2, num_rvds=3)
+    want = tvmmp(state)
+    real = StateLPs.certify_many
+
+    def first_fails(self, answers):  # type: ignore[no-untyped-def]
+        certs = real(self, answers)
+        return [Certificate(1.0, c.dual, c.gap, c.bound) if i == 0 else c for i, c in enumerate(certs)]
+
+    monkeypatch.setattr(StateLPs, "certify_many", first_fails)
+    got = tvmmp(state)
+    assert want.status == got.status and all(s == "optimal" for row in got.status for s in row)
+    np.testing.assert_allclose(got.alpha, want.alpha, rtol=1e-9)
+    assert len(got.notes) == 1 and got.notes[0][0] == (0, 0)  # the first pair solved: (k=0, l=0)
+    assert (
+        "not certified (primal violation 1.0e+00" in got.notes[0][1]
+        and "certified by highs (cold)" in got.notes[0][1]
+    )
+    assert all(c is True for row in got.certified for c in row)
+
+
+def test_a_pair_found_infeasible_after_the_lps_drops_its_k(monkeypatch):
+    """Should the other ways find a deferred pair infeasible, its k is infeasible for every l
+    (as when HiGHS says so at once), and its later LPs, solved already, are not reported."""
+    from mjtvm.core.lp import LPSolution
+    from mjtvm.core.problem2 import StateLPs, Verdict
+    from mjtvm.core.solvers import Settled
+
+    state = random_state(3, fingers=3, joints_per_finger=3, num_refs=2, num_rvds=3)
+    real = StateLPs.conclude
+
+    def k1_l0_infeasible(self, w, r, alpha_max, settled, cert):  # type: ignore[no-untyped-def]
+        if np.array_equal(w, state.refs[1]) and np.array_equal(r, state.rvds[0]):
+            return Verdict(
+                Settled(LPSolution("infeasible", None, None), "highs", "made infeasible"), None, True
+            )
+        return real(self, w, r, alpha_max, settled, cert)
+
+    want = tvmmp(state)
+    monkeypatch.setattr(StateLPs, "conclude", k1_l0_infeasible)
+    got = tvmmp(state)
+    assert not got.feasible and got.tvmmp is None
+    assert got.status[1] == ("infeasible",) * 3 and got.status[0] == want.status[0] == ("optimal",) * 3
+    assert np.all(np.isnan(got.alpha[1])) and np.array_equal(got.alpha[0], want.alpha[0])
+    assert [pair for pair, _ in got.notes] == [(1, 0)]
