@@ -38,6 +38,7 @@ Farkas multipliers (:func:`farkas`): the same dual bound with zero costs, positi
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeAlias
 
@@ -60,6 +61,8 @@ __all__ = [
 ]
 
 Matrix: TypeAlias = Any  #: a dense ``NDArray[np.float64]`` or a scipy sparse matrix
+#: ``(P, .)`` arrays in, the two products of :meth:`Certifier._measure` out
+_Products: TypeAlias = Callable[[NDArray[np.float64], NDArray[np.float64]], tuple[NDArray[np.float64], ...]]
 
 #: Largest violation of a row, relative to the magnitudes of its terms (the solvers hold
 #: 1e-9 on the equilibrated rows; a row whose terms cancel keeps that scale here).
@@ -314,9 +317,9 @@ class Certifier:
         col_upper: NDArray[np.float64],
         x: NDArray[np.float64],
         y: NDArray[np.float64],
-        floor: Any,
-        products: Any,
-        transposed: Any,
+        floor: Sequence[float] | NDArray[np.float64],
+        products: _Products,
+        transposed: _Products,
     ) -> list[Certificate]:
         """The certificates of ``P`` answers (the arrays of :meth:`check_many`), the matrix
         reached through ``products(xc, size) -> (A x, |A| size)`` and
