@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from ..core.state import GraspState
 from ..errors import ParamError
 from .rig import Rig
-from .simulate import SimSettings
+from .simulate import SimSettings, held
 from .witness import Drive, witness_drive
 
 __all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test", "state_hold"]
@@ -170,13 +170,7 @@ def hold_test(
         raise ParamError("duration", f"expected a positive time (s), got {duration!r}", duration)
     n_all, n_win = max(1, st.steps(total)), max(1, min(st.steps(st.window), st.steps(total)))
     rig, m = Rig(model, drive, object_body), model
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    mujoco.mj_forward(m, d)
-    rig.bind(d, drive)
-    d.ctrl[rig.cadr] = 0.0
-    d.ctrl[rig.cadr + 1] = rig.hold_torques(drive) / rig.gear
-    mujoco.mj_forward(m, d)
+    d = held(m, qpos, rig, drive)
     starts = [_anchor(d, rig, g, body) for _label, g, body, _c, _k in rig.fingers]
     p0, r0 = d.xpos[rig.ob].copy(), d.xmat[rig.ob].reshape(3, 3).copy()
     n_settle = min(max(1, st.steps(st.settle)), n_all)

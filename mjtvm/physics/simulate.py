@@ -60,7 +60,16 @@ from ..sim.grasp.state import geom_id
 from .rig import Rig, finger_contacts, twist_errors
 from .witness import Drive
 
-__all__ = ["RolloutResult", "SimSettings", "inertial_demand", "rerun_data", "rollout", "settle", "sim_model"]
+__all__ = [
+    "RolloutResult",
+    "SimSettings",
+    "held",
+    "inertial_demand",
+    "rerun_data",
+    "rollout",
+    "settle",
+    "sim_model",
+]
 
 _F64 = NDArray[np.float64]
 
@@ -229,11 +238,9 @@ class RolloutResult:
     trace: Mapping[str, _F64] = field(default_factory=dict, repr=False)
 
 
-def settle(
-    m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive, st: SimSettings
-) -> tuple[mujoco.MjData, float]:
-    """Step 3: the configuration ``qpos`` held by the drive's feed-forward torques for the settle
-    time; returns the data and how far the object drifted (m)."""
+def held(m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive) -> mujoco.MjData:
+    """New data at ``qpos``, the drive's feed-forward torques applied (after ``mj_forward``):
+    where a rollout settles and the hold test (:mod:`~mjtvm.physics.hold`) starts."""
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
     if rig.coupled:  # the motors' ratio to the state's moment rows, at the state
@@ -242,6 +249,15 @@ def settle(
     d.ctrl[rig.cadr] = 0.0
     d.ctrl[rig.cadr + 1] = rig.hold_torques(drive) / rig.gear
     mujoco.mj_forward(m, d)
+    return d
+
+
+def settle(
+    m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive, st: SimSettings
+) -> tuple[mujoco.MjData, float]:
+    """Step 3: the configuration ``qpos`` held by the drive's feed-forward torques for the settle
+    time; returns the data and how far the object drifted (m)."""
+    d = held(m, qpos, rig, drive)
     p0 = d.xpos[rig.ob].copy()
     if st.steps(st.settle):
         mujoco.mj_step(m, d, nstep=st.steps(st.settle))
