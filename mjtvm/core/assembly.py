@@ -18,14 +18,25 @@ Problem 1 can keep it as D free variables. The rows are
   preloads has exactly the paper's system): ``n^T E_c lam_ic >= preload``, the contact's
   normal force bounded below instead of eq. (22)'s ``n_f >= 0``.
 
-Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, tau_max, tau_min,
+Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, loss][, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
 
 With a :class:`~mjtvm.core.transmission.Transmission` ``tau_i`` holds the A actuator
 forces ``u_i`` and is followed by the C constraint forces ``eq_i`` (free); the torque rows
-read ``P^T u_i - J^T E lam_i + J_eq^T eq_i - b qd = g_f``, the operation ranges bound
+read ``P^T u_i - J^T E lam_i + J_eq^T eq_i = g_f``, the operation ranges bound
 ``(u_ia, P_a qd)``, and the C rows ``J_eq qd = 0`` come last. Without one every block is
 built as above (``P = I``), entry for entry.
+
+Joint damping ``b`` is a loss, never a torque source (``docs/state-format.md``, "Damping"):
+it is not in the balance, where a finger moving along a motion its actuators do not drive
+would "make" torque (``b qd``) to hold the object. Each actuator a instead pays
+``loss_a >= b_j |qd_j| / |P_aj|`` for every joint j it moves (a variable per actuator, after
+``rho``), and its operation range bounds ``(|u_ia| + loss_a, |P_a qd|)``: the rows
+``c_tau u_ia + |c_tau| loss_a + c_qd P_a qd <= b``, which are
+``a_tau (|u| + loss) + a_qd |s| <= b`` (:attr:`OperationRange.mirrored_halfplanes`). The
+motor's torque is its holding torque plus what overcomes the damping, whatever their signs,
+so that more damping can only shrink the feasible set; a state without damping has no
+``loss`` block and is assembled exactly as before.
 """
 
 from __future__ import annotations
@@ -48,7 +59,7 @@ from .state import GraspState
 if TYPE_CHECKING:
     import scipy.sparse as sp
 
-__all__ = ["Assembly", "BoxForm", "assemble", "grasp_map_transpose"]
+__all__ = ["Assembly", "BoxForm", "assemble", "damping_loss", "grasp_map_transpose"]
 
 BoxForm = Literal["eliminated", "literal"]
 
@@ -95,8 +106,8 @@ class Assembly:
         ``(n,)`` variable bounds.
     blocks
         Name -> ``slice`` of variables: ``lam[i]``, ``tau[i]`` (and ``eq[i]`` with
-        constraints) per copy, ``qd``, ``rho`` and, in the literal form, ``tau_max``,
-        ``tau_min``, ``qd_max``, ``qd_min`` (per actuator).
+        constraints) per copy, ``qd``, ``rho``, ``loss`` (per actuator, with joint damping only) and, in the
+        literal form, ``tau_max``, ``tau_min``, ``qd_max``, ``qd_min`` (per actuator).
     wrench_rows
         One ``slice`` of D rows per copy: the force-moment balance (eq. 20).
     torque_rows
@@ -166,7 +177,7 @@ def _variables(
     state: GraspState, copies: int, box: BoxForm, n_gen: int, n_rho: int
 ) -> tuple[dict[str, slice], NDArray[np.float64], NDArray[np.float64]]:
     """The variable layout (module docstring) and the sign constraints on it: ``lam >= 0``
-    (eq. 22, 24 in generator form), ``rho >= 0`` (eq. 13, 34) and, in the literal box,
+    (eq. 22, 24 in generator form), ``rho >= 0`` (eq. 13, 34), ``loss >= 0`` and, in the literal box,
     ``tau_max, qd_max >= 0 >= tau_min, qd_min`` (appendix A)."""
     m, a = state.num_joints, len(state.operation_ranges)
     n_eq = 0 if state.transmission is None else state.transmission.num_constraints
@@ -185,6 +196,8 @@ def _variables(
             take(f"eq[{i}]", n_eq)
     take("qd", m)
     take("rho", n_rho)
+    if damping_loss(state) is not None:
+        take("loss", a)
     if box == "literal":
         for name in ("tau_max", "tau_min", "qd_max", "qd_min"):
             take(name, a)
@@ -193,6 +206,8 @@ def _variables(
     for i in range(copies):
         col_lower[blocks[f"lam[{i}]"]] = 0.0
     col_lower[blocks["rho"]] = 0.0
+    if "loss" in blocks:
+        col_lower[blocks["loss"]] = 0.0
     if box == "literal":
         col_lower[blocks["tau_max"]] = 0.0
         col_lower[blocks["qd_max"]] = 0.0
@@ -237,8 +252,6 @@ def _statics_rows(
         out.coo.add(r0, blocks[f"lam[{i}]"].start, -torque_map)
         if t is not None and t.constraint_jacobian is not None:
             out.coo.add(r0, blocks[f"eq[{i}]"].start, t.constraint_jacobian.T)
-        if t is not None and t.joint_damping is not None:
-            out.coo.add(r0, blocks["qd"].start, -np.diag(t.joint_damping))
     return wrench_rows, torque_rows
 
 
@@ -281,7 +294,8 @@ def _kinematic_rows(
 
 def _range_rows_eliminated(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
     """The operation ranges (eq. 1-3) by the exact reduction: per copy i, row h of joint j
-    is ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`)."""
+    is ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`), with
+    ``|c_tau| loss_j`` on the left under joint damping (module docstring)."""
     qd0 = blocks["qd"].start
     hps = [op.mirrored_halfplanes for op in state.operation_ranges]
     joint_of_row = np.repeat(np.arange(len(hps)), [len(hp) for hp in hps])
@@ -295,12 +309,15 @@ def _range_rows_eliminated(out: _Rows, state: GraspState, blocks: dict[str, slic
             out.coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
         else:  # the actuator's speed P_a qd
             out.coo.add(r0, qd0, hp_all[:, 1:2] * t.moment[joint_of_row])
+        if "loss" in blocks:  # a_tau (|u| + loss) + a_qd |s| <= b
+            out.coo.add_entries(row_idx, blocks["loss"].start + joint_of_row, np.abs(hp_all[:, 0]))
 
 
 def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
     """The paper's literal box (eq. 2) with four variables per joint:
     ``tau_min <= tau_i <= tau_max``, ``qd_min <= qd <= qd_max``, and the operation range's
-    half-planes (eq. 3) at the box's four corners, in their mirrored copies."""
+    half-planes (eq. 3) at the box's four corners, in their mirrored copies. Under joint
+    damping the torque's box holds ``tau_i +- loss`` (module docstring)."""
     qd0 = blocks["qd"].start
     for j, op in enumerate(state.operation_ranges):
         tmax, tmin = blocks["tau_max"].start + j, blocks["tau_min"].start + j
@@ -311,6 +328,8 @@ def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice],
             out.coo.add(r0, tau, np.array([[1.0], [-1.0]]))
             out.coo.add(r0, tmax, np.array([[-1.0], [0.0]]))
             out.coo.add(r0, tmin, np.array([[0.0], [1.0]]))
+            if "loss" in blocks:
+                out.coo.add(r0, blocks["loss"].start + j, np.array([[1.0], [1.0]]))
         r0 = out.add(-np.inf, 0.0, 2)
         if state.transmission is None:
             out.coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
@@ -324,6 +343,37 @@ def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice],
                     r0 = out.add(-np.inf, b, 1)
                     out.coo.add(r0, t_col, np.array([[st * a_t]]))
                     out.coo.add(r0, q_col, np.array([[sq * a_q]]))
+
+
+def damping_loss(state: GraspState) -> NDArray[np.float64] | None:
+    r"""``(A, M)`` the loss coefficients ``b_j / |P_aj|`` of joint damping (0 where actuator a
+    does not move joint j), or ``None`` without damping: actuator a pays
+    ``loss_a >= max_j (b_j / |P_aj|) |qd_j|`` (module docstring). Its force ``P_aj loss_a`` on
+    joint j then overcomes that joint's damping torque ``b_j |qd_j|``; exact for an actuator
+    on one joint, an upper bound for a tendon over several (each joint charged in full). A
+    joint no actuator moves has no motor to pay its damping: not modelled
+    (``docs/state-format.md``)."""
+    t = state.transmission
+    if t is None or t.joint_damping is None:
+        return None
+    arm = np.abs(t.moment)
+    with np.errstate(divide="ignore"):
+        return np.where(arm > 0.0, t.joint_damping / np.where(arm > 0.0, arm, 1.0), 0.0)
+
+
+def _loss_rows(out: _Rows, state: GraspState, blocks: dict[str, slice]) -> None:
+    """``+- (b_j / |P_aj|) qd_j - loss_a <= 0`` for every actuator a and damped joint j it
+    moves (:func:`damping_loss`)."""
+    coef = damping_loss(state)
+    if coef is None:
+        return
+    a_idx, j_idx = np.nonzero(coef)
+    values = coef[a_idx, j_idx]
+    for sign in (1.0, -1.0):
+        r0 = out.add(-np.inf, 0.0, len(values))
+        rows = r0 + np.arange(len(values))
+        out.coo.add_entries(rows, blocks["qd"].start + j_idx, sign * values)
+        out.coo.add_entries(rows, blocks["loss"].start + a_idx, -np.ones(len(values)))
 
 
 def _preload_rows(
@@ -383,6 +433,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     else:
         _range_rows_literal(out, state, blocks, copies)
     _preload_rows(out, state, gens, gen_slices, blocks, copies)
+    _loss_rows(out, state, blocks)
     t = state.transmission
     if t is not None and t.constraint_jacobian is not None:  # J_eq qd = 0
         r0 = out.add(0.0, 0.0, t.num_constraints)

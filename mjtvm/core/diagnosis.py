@@ -39,6 +39,7 @@ from scipy.optimize import linprog
 from ..errors import ParamError, SolverError
 from .assembly import BoxForm, grasp_map_transpose
 from .contacts import Contact, slide_unit, tangent_basis
+from .holding import unheld_motions
 from .problem2 import StateLPs
 from .result import Diagnosis, PairStatus
 from .state import GraspState
@@ -253,6 +254,10 @@ def _zero_alpha(
 
 
 def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnosis:
+    unheld = unheld_motions(state, k)  # a cause no contact or range can fix: said first
+    if unheld is not None:
+        moved = tuple(dict.fromkeys(j for group in unheld.joints for j in group))
+        return Diagnosis((k, -1), "unheld", (), moved, unheld.describe(state.joint_names))
     w, r = state.refs[k], np.zeros(state.twist_dim)
     joints = _binding_joints(state, lambda s: _solve(s, w, r, box, solver)[0] == "optimal")
     if joints is None:

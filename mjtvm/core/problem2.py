@@ -57,7 +57,7 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
     """``(n + 1,)`` the sizes the certificate measures a row's violation, and a reduced cost
     of the wrong sign, at where the solution is ~0 (:func:`~mjtvm.core.certificate.certify`'s
     ``col_ref``): each joint's largest speed and torque (its operation range) for the
-    speeds, torques and the literal box's variables; for the force generators' weights the
+    speeds, torques, damping losses and the literal box's variables; for the force generators' weights the
     larger of the weight and the largest torque over the largest Jacobian entry; for the
     slip speeds the largest joint speed times that entry; alpha its own value. From the
     state, never from the equilibration, which the certificate must not trust."""
@@ -78,7 +78,7 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
     force = max(weight, float(joint_torque.max(initial=0.0)) / jac if jac > 0.0 else 0.0)
     slip = float(joint_speed.max(initial=0.0)) * jac
     for name, sl in asm.blocks.items():
-        if name.startswith("tau"):
+        if name.startswith("tau") or name == "loss":
             size[sl] = torque
         elif name.startswith("qd"):
             size[sl] = speed if name != "qd" else joint_speed

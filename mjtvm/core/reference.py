@@ -81,13 +81,16 @@ def _g_transpose(position: NDArray[np.float64], p_o: NDArray[np.float64]) -> NDA
     return np.hstack([np.eye(3), -skew])  # omega x r = -[r x] omega
 
 
-def _box_constraints(state: GraspState, tau: cp.Expression, qd: cp.Expression) -> list[cp.Constraint]:
+def _box_constraints(
+    state: GraspState, tau: cp.Expression, qd: cp.Expression, loss: cp.Expression | float = 0.0
+) -> list[cp.Constraint]:
     r"""Eq. (2)-(3) literally: box variables and four corners in the mirrored copies of P
-    (per operation range: a joint, or an actuator of a transmission)."""
+    (per operation range: a joint, or an actuator of a transmission). ``loss`` (>= 0, per
+    range) widens the torque's box on both sides: the motor gives ``|tau| + loss``."""
     m = len(state.operation_ranges)
     t_max, t_min, q_max, q_min = (cp.Variable(m) for _ in range(4))
     cons = [t_max >= 0, t_min <= 0, q_max >= 0, q_min <= 0]
-    cons += [t_min <= tau, tau <= t_max, q_min <= qd, qd <= q_max]
+    cons += [t_min <= tau - loss, tau + loss <= t_max, q_min <= qd, qd <= q_max]
     n_v = max(len(r.vertices) for r in state.operation_ranges)
     # Pad each vertex list with copies of its first vertex: the hull is unchanged.
     verts = np.array(
@@ -155,10 +158,16 @@ def _build(state: GraspState, w: NDArray[np.float64], r_hat: NDArray[np.float64]
         if tr.constraint_jacobian is not None:
             joint_torque = joint_torque + tr.constraint_jacobian.T @ cp.Variable(tr.num_constraints)
             cons.append(tr.constraint_jacobian @ qd == 0)
-        if tr.joint_damping is not None:
-            joint_torque = joint_torque - cp.multiply(tr.joint_damping, qd)
         cons.append(joint_torque == torque)
-        cons += _box_constraints(state, u, tr.moment @ qd)
+        loss: cp.Expression | float = 0.0
+        if tr.joint_damping is not None:
+            # Damping is a loss (docs/state-format.md): actuator a overcomes b_j |qd_j| through
+            # each joint j it moves, its force at least b_j |qd_j| / |P_aj|; never in the balance.
+            loss = cp.Variable(len(tr.actuator_names), nonneg=True)
+            for a, j in zip(*np.nonzero(tr.moment), strict=True):
+                if tr.joint_damping[j] > 0.0:
+                    cons.append(loss[a] >= tr.joint_damping[j] * cp.abs(qd[j]) / abs(tr.moment[a, j]))
+        cons += _box_constraints(state, u, tr.moment @ qd, loss)
     return cp.Problem(cp.Maximize(alpha), cons)
 
 

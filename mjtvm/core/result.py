@@ -24,7 +24,7 @@ __all__ = [
 ]
 
 PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
-DiagnosisCause = Literal["contacts", "ranges", "balance", "unknown"]
+DiagnosisCause = Literal["contacts", "ranges", "balance", "unheld", "unknown"]
 RESULT_SCHEMA = "mjtvm.result/1"
 
 
@@ -63,6 +63,9 @@ class Diagnosis:
         ``"contacts"``: the kinematics of ``contacts`` alone lock the motion (eq. 11-13);
         ``"ranges"``: the operation ranges of ``joints`` bind (eq. 19-20 with eq. 1);
         ``"balance"``: no contact forces balance the REFS vertex, whatever the torques;
+        ``"unheld"``: the transmission leaves joint motions (``joints``) that no actuator
+        drives and no equality holds, and the REFS vertex needs torque along them
+        (:func:`~mjtvm.core.holding.unheld_motions`);
         ``"unknown"``: neither found (an alpha at the solver's tolerance).
     contacts, joints
         The names of a minimal set of contacts (``"contacts"``) or joints (``"ranges"``).
@@ -109,7 +112,9 @@ class Witness:
         ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint
         (``(A, 4)`` per actuator with a transmission, its force and speed). With the
         eliminated form it is the smallest valid box
-        ``[min(tau, 0), max(tau, 0), min(qd, 0), max(qd, 0)]``.
+        ``[min(tau - loss, 0), max(tau + loss, 0), min(qd, 0), max(qd, 0)]``, ``loss`` the
+        force that overcomes the joints' damping (0 without damping; ``tau + loss`` is what
+        the motor gives, :mod:`~mjtvm.core.assembly`).
     actuator_speeds
         ``(A,)`` actuator speeds ``P qd`` (m/s or rad/s) with a transmission, else ``None``
         (the joint speeds are the actuators').
@@ -170,6 +175,10 @@ class TvmmpResult:
         infeasible or no pair is optimal.
     feasible
         False when some REFS vertex cannot be balanced at all.
+    held
+        ``K`` booleans: whether REFS vertex :math:`w_k` is held at rest, balanced at zero
+        joint speed within the ranges' torque at zero speed (:mod:`~mjtvm.core.holding`);
+        a pair of an unheld ``k`` is infeasible. Empty for a result built without it.
     distribution
         One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
         ``None`` where no finite minimum exists; the origin is implied.
@@ -216,6 +225,7 @@ class TvmmpResult:
     certified: tuple[tuple[bool | None, ...], ...] = ()
     notes: tuple[tuple[tuple[int, int], str], ...] = ()
     diagnosis: tuple[Diagnosis, ...] = ()
+    held: tuple[bool, ...] = ()
 
     def uncertified(self) -> list[tuple[int, int]]:
         """The pairs whose answer is not certified (each has a note), in (k, l) order."""
@@ -232,6 +242,7 @@ class TvmmpResult:
             "schema": RESULT_SCHEMA,
             "tvmmp": finite_or_none(self.tvmmp),
             "feasible": self.feasible,
+            "held": list(self.held),
             "alpha": [
                 [None if s != "optimal" else finite_or_none(a) for a, s in zip(ar, sr)]
                 for ar, sr in zip(self.alpha, self.status)

@@ -65,8 +65,11 @@ def _witness(
     s = state.actuator_speeds(qd)  # qd itself without a transmission
     if asm.box == "literal":
         box = np.column_stack([x[asm.blocks[n]] for n in ("tau_min", "tau_max", "qd_min", "qd_max")])
-    else:
-        box = np.column_stack([np.minimum(tau, 0), np.maximum(tau, 0), np.minimum(s, 0), np.maximum(s, 0)])
+    else:  # the motor gives |tau| + loss under joint damping (assembly's module docstring)
+        loss = x[asm.blocks["loss"]] if "loss" in asm.blocks else 0.0
+        box = np.column_stack(
+            [np.minimum(tau - loss, 0), np.maximum(tau + loss, 0), np.minimum(s, 0), np.maximum(s, 0)]
+        )
     forces = asm.forces(x) if state.contacts else np.zeros((0, state.dim))
     act = None if state.transmission is None else s
     return Witness(alpha, alpha * r, forces, tau.copy(), qd.copy(), x[asm.blocks["rho"]].copy(), box, act)
@@ -82,6 +85,7 @@ class _Pairs:
     settled_by: list[list[str | None]]
     certified: list[list[bool | None]]
     notes: list[tuple[tuple[int, int], str]] = field(default_factory=list)
+    held: list[bool] = field(default_factory=list)
     feasible: bool = True
     num_lps: int = 0
 
@@ -112,9 +116,11 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
 
     For REFS vertex ``w_k`` and RVDS vertex ``r_l`` the LP is that of alpha r_l with w_k;
     ``r = 0`` (a state whose RVDS is the origin only, ``l = -1``) asks only whether w_k can
-    be balanced, alpha held at 0. With qd = 0, alpha = 0, rho = 0 every kinematic row holds,
-    so a pair is infeasible exactly when w_k cannot be balanced; then every l of this k is
-    (no more LPs).
+    be balanced, alpha held at 0. With qd = 0, alpha = 0, rho = 0 (and no damping loss) every
+    kinematic and range row holds, since damping is not in the balance (a loss,
+    :mod:`~mjtvm.core.assembly`), so a pair is infeasible exactly when w_k cannot be held at
+    rest (:mod:`~mjtvm.core.holding`): the first LP of each k is its hold test, reported as
+    ``held``, and every l of an unheld k is infeasible (no more LPs).
 
     The pairs are solved RVDS vertex by RVDS vertex (l outer, k inner): from one k to the
     next only the balance rows' bounds change, which leaves the last basis dual feasible,
@@ -168,6 +174,7 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
         if verdict.settled.solution.status == "infeasible":
             unbalanced.add(k)
     out.notes.sort(key=lambda note: note[0])  # in (k, l) order, whatever the solving order
+    out.held = [k not in unbalanced for k in range(n_k)]
     return out
 
 
@@ -317,5 +324,6 @@ def tvmmp(
         settled_by=tuple(tuple(b) for b in pairs.settled_by),
         certified=tuple(tuple(c) for c in pairs.certified),
         notes=tuple(pairs.notes),
+        held=tuple(pairs.held),
         diagnosis=found,
     )

@@ -297,10 +297,13 @@ def random_case(seed: int) -> tuple[str, GraspState]:
     return f"random-{space}d-{''.join(types)}", state
 
 
-def random_transmission(state: GraspState, rng: np.random.Generator) -> GraspState:
+def random_transmission(state: GraspState, rng: np.random.Generator, *, hold: bool = True) -> GraspState:
     """``state`` driven through a random transmission: M - 1 actuators (the last joint's
     torque shared: a tendon over two joints), one coupling row between the first two joints,
-    small joint damping; each actuator's range the first ranges of ``state``."""
+    small joint damping; each actuator's range the first ranges of ``state``. With ``hold`` a
+    second coupling row ties the tendon's two joints, so that no joint motion is left free;
+    without it the tendon's split is free (the Shadow hand's sum tendon), which the REFS
+    usually need held (mjtvm.core.holding)."""
     from mjtvm.core.transmission import Transmission
 
     m = state.num_joints
@@ -308,10 +311,14 @@ def random_transmission(state: GraspState, rng: np.random.Generator) -> GraspSta
     moment = np.eye(a, m)
     moment[a - 1, m - 1] = float(rng.uniform(0.3, 1.5))  # the last actuator pulls two joints
     moment[: a - 1] *= rng.uniform(0.5, 2.0, size=(a - 1, 1))
+    coupled: list[tuple[str, tuple[int, int]]] = [("coupling", (0, 1))] if m >= 3 else []
+    if hold and m >= 4:
+        coupled.append(("tendon-coupling", (m - 2, m - 1)))
     rows, names = None, ()
-    if m >= 3:
-        rows, names = np.zeros((1, m)), ("coupling",)
-        rows[0, :2] = [1.0, -float(rng.uniform(0.5, 1.5))]
+    if coupled:
+        rows, names = np.zeros((len(coupled), m)), tuple(n for n, _ in coupled)
+        for row, (_, (i, j)) in zip(rows, coupled, strict=True):
+            row[[i, j]] = [1.0, -float(rng.uniform(0.5, 1.5))]
     t = Transmission(
         tuple(f"act{i}" for i in range(a)),
         moment,
