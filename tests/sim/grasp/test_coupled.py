@@ -27,7 +27,8 @@ from mjtvm.sim.grasp.ranges import actuator_ranges
 from mjtvm.sim.grasp.transmission import equality_residual, model_transmission
 
 MODELS = Path(__file__).resolve().parents[3] / "models"
-SHADOW = MODELS / "shadow_hand" / "shadow_hand-sphere.toml"
+SHADOW = MODELS / "shadow_hand" / "shadow_hand-sphere.toml"  # the sum tendon alone: not held
+SHADOW_COUPLED = MODELS / "shadow_hand" / "shadow_hand_coupled-sphere.toml"  # J1 = J2 too
 F85 = MODELS / "robotiq_2f85" / "robotiq_2f85-sphere.toml"
 
 
@@ -145,7 +146,7 @@ def test_shipped_documents_are_unchanged_by_loading() -> None:
 # ----------------------------------------------------------------- states (mjtvm.state/2)
 @pytest.fixture(scope="module", params=["shadow", "f85"])
 def coupled(request: pytest.FixtureRequest) -> tuple[Any, Any]:
-    grasp = load_grasp(SHADOW if request.param == "shadow" else F85)
+    grasp = load_grasp(SHADOW_COUPLED if request.param == "shadow" else F85)
     return grasp, grasp.state()
 
 
@@ -218,7 +219,32 @@ def test_alphas_against_the_cvxpy_reference(coupled: tuple[Any, Any]) -> None:
     assert np.all(result.certified) and result.tvmmp is not None and result.tvmmp > 0.0
 
 
-@pytest.mark.parametrize("grasp", [SHADOW, F85])
+def test_coupled_shadow_adds_the_two_equalities() -> None:
+    """The coupled Shadow is the sum-tendon hand plus J1 = J2 on both fingers: the same 11
+    actuators and 13 joints, two constraint rows e_J1 - e_J2, closed at the grasp."""
+    grasp = load_grasp(SHADOW_COUPLED)
+    t = grasp.transmission
+    assert t is not None and len(t.actuator_names) == 11 and len(grasp.joints) == 13
+    assert t.constraint_names == ("rh_FFJ1_FFJ2", "rh_MFJ1_MFJ2")
+    ff1, ff2 = grasp.joints.index("rh_FFJ1"), grasp.joints.index("rh_FFJ2")
+    np.testing.assert_allclose(t.constraint_jacobian[0, [ff1, ff2]], [1.0, -1.0], atol=1e-12)
+    assert np.max(np.abs(t.constraint_residual)) < 1e-9
+
+
+def test_cli_solve_says_the_sum_tendon_shadow_cannot_hold() -> None:
+    """The public models' transmission (the sum tendon alone): exit 0, no TVMMP, held false,
+    and one stderr line naming the free motions J2 - J1 (docs/own-hand.md)."""
+    exe = Path(sys.executable).with_name("mjtvm")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mjtvm.cli"]
+    proc = subprocess.run([*cmd, "solve", str(SHADOW)], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["tvmmp"] is None and doc["held"] == [False] and doc["diagnosis"][0]["cause"] == "unheld"
+    (line,) = [ln for ln in proc.stderr.splitlines() if "cannot be held" in ln]
+    assert "(rh_FFJ2 +0.707, rh_FFJ1 -0.707) needs" in line and "(rh_MFJ2 +0.707, rh_MFJ1 -0.707)" in line
+
+
+@pytest.mark.parametrize("grasp", [SHADOW_COUPLED, F85])
 def test_cli_export_solve_tvms(tmp_path: Path, grasp: Path) -> None:
     """The commands a user runs, as subprocesses: export-state, solve (the grasp file and the
     exported mjtvm.state/2 file), tvms: exit 0."""
@@ -255,7 +281,7 @@ def test_ik_keeps_the_linkage_closed() -> None:
     assert np.max(np.abs(result.qpos - data.qpos)) > 1e-3  # it moved
 
 
-@pytest.mark.parametrize("grasp", [SHADOW, F85])
+@pytest.mark.parametrize("grasp", [SHADOW_COUPLED, F85])
 def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     """A short replay runs (exit 0, one row per state); so does a short verify, which drives the
     actuators through the transmission (docs/physics-check.md): one row per state and RVDS vertex.

@@ -117,7 +117,7 @@ def test_batch_grasp_reproduces_the_grasp_file_and_is_translation_invariant() ->
     # the hand's root and the object together by a translation changes no alpha (the weight and
     # the RVDS are world vectors; nothing in Problem 2 depends on where the grasp stands).
     for shift in (np.zeros(3), np.array([0.3, -0.2, 0.5])):
-        entry, batch, expected = _as_entry("shadow_hand-sphere", shift)
+        entry, batch, expected = _as_entry("shadow_hand_coupled-sphere", shift)
         got = tvmmp(batch.grasp(entry).state(), witnesses=False).tvmmp
         assert expected is not None and got == pytest.approx(expected, rel=1e-9)
 
