@@ -1,7 +1,7 @@
 """The example grasp dataset of ``mjtvm rank`` (docs/datasets.md): perturbed Shadow hand grasps.
 
-Each grasp starts from models/shadow_hand/shadow_hand-sphere.toml (the tendon-coupled Shadow
-hand, three fingertips on a sphere): the sphere's radius is scaled by a random factor in
+Each grasp starts from models/shadow_hand/shadow_hand_coupled-sphere.toml (the Shadow hand
+with J1 = J2 coupled beside its sum tendon, three fingertips on a sphere): the sphere's radius is scaled by a random factor in
 [0.9, 1.1] (its mass by the cube, as ``mjtvm rank`` scales it), its centre moved by up to 4 mm
 along each axis, the IK's start joint values perturbed by up to 0.15 rad, and the grasp file's
 own IK closes the three fingertips onto the sphere. A grasp whose IK fails is drawn again. The
@@ -39,7 +39,7 @@ from mjtvm.sim.grasp.batch import hand_joints
 from mjtvm.sim.grasp.file import load_grasp
 
 ROOT = Path(__file__).resolve().parents[1]
-GRASP = ROOT / "models" / "shadow_hand" / "shadow_hand-sphere.toml"
+GRASP = ROOT / "models" / "shadow_hand" / "shadow_hand_coupled-sphere.toml"
 OUT = ROOT / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz"
 ROOT_BODY = "rh_palm"
 
@@ -55,6 +55,8 @@ def _document(rng: np.random.Generator) -> tuple[dict, float]:
     config = dict(doc["configuration"])
     ik = dict(config["ik"])
     ik["start"] = {k: v + float(rng.uniform(-0.15, 0.15)) for k, v in ik["start"].items()}
+    for finger in ("FF", "MF"):  # the coupled hand's J1 = J2: the start keeps them equal
+        ik["start"][f"rh_{finger}J1"] = ik["start"][f"rh_{finger}J2"]
     config["ik"] = ik
     doc["object"], doc["configuration"] = obj, config
     return doc, scale
@@ -108,7 +110,7 @@ def make(n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = No
             meshes = _ellipsoid_pieces(rng)
             (folder / f"ellipsoid{k}.xml").write_text(_object_xml(meshes))
             scene = folder / f"ellipsoid{k}-scene.xml"
-            scene.write_text(_object_xml(meshes, str(GRASP.parent / "shadow_right_3f.xml")))
+            scene.write_text(_object_xml(meshes, str(GRASP.parent / "shadow_right_3f_coupled.xml")))
             scenes.append((str(scene), f"{folder.name}/ellipsoid{k}.xml"))
     rows_path: list[str] = []
     rows: dict[str, list] = {"grasp_qpos": [], "obj_pose": [], "obj_scale": [], "id": []}

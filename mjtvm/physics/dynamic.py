@@ -21,7 +21,8 @@ with a ``window`` (:func:`dynamic_pair`) both must fit the joint's operation ran
 torque of eq. (19) (:mod:`mjtvm.core.dynamic`, "Demands along a window"). The demand covers
 every driven joint, those of fingers whose witness force is zero included: their motors alone
 must accelerate them. With a transmission the demand is per joint and joins the balance
-``P^T u - J^T f + J_eq^T lambda - b qd = g_f + d`` (:mod:`mjtvm.core.transmission`); the
+``P^T u - J^T f + J_eq^T lambda = g_f + d`` (the damping a loss of the ranges,
+:mod:`mjtvm.core.assembly`); the
 motion keeps the equality rows of a forward pass at each configuration.
 
 :func:`dynamic_pair` hands this demand, as a function of alpha, to the simulator-free core

@@ -155,13 +155,9 @@ def launch(
 
 
 def _ramped(drive: Drive, sigma: float) -> Drive:
-    """The drive with its speeds, slip speeds and twist scaled by ``sigma`` (its torques and the
-    speeds its damping was solved for kept)."""
+    """The drive with its speeds, slip speeds and twist scaled by ``sigma`` (its torques kept)."""
     slips = {g: (rate * sigma, hat) for g, (rate, hat) in drive.slips.items()}
-    damped = drive.speeds if drive.damped_speeds is None and drive.actuators else drive.damped_speeds
-    return replace(
-        drive, speeds=drive.speeds * sigma, twist=drive.twist * sigma, slips=slips, damped_speeds=damped
-    )
+    return replace(drive, speeds=drive.speeds * sigma, twist=drive.twist * sigma, slips=slips)
 
 
 def launch_row(

@@ -135,30 +135,22 @@ class Rig:
         return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
 
     def hold_torques(self, drive: Drive) -> _F64:
-        """The feedforward that holds the state at rest (settle, hold test): the drive's torques;
-        with a transmission its forces ``u`` less the share of the damping ``b qd`` they carry
-        for the witness's motion, absent at rest."""
-        return drive.torques - self.damping_share(self.damped(drive)) if self.coupled else drive.torques
-
-    @staticmethod
-    def damped(drive: Drive) -> _F64:
-        """The joint speeds whose damping the drive's forces carry (:attr:`Drive.damped_speeds`)."""
-        return drive.speeds if drive.damped_speeds is None else drive.damped_speeds
+        """The feedforward that holds the state at rest (settle, hold test): the drive's torques,
+        which hold the grasp and carry no damping (the LP's damping is a loss,
+        :mod:`~mjtvm.core.assembly`)."""
+        return drive.torques
 
     def command(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:
         """With a transmission: ``(A,)`` motor speed setpoints of the tracked joint speeds ``qset``
         and ``(A,)`` feedforward forces (actuator units, before the motors' ratio).
 
-        The LP's forces ``u`` carry the damping ``b qd`` of the witness's speeds (its balance
-        has it): the damping of the tracked speeds' difference is added; each actuator's
-        friction share was taken off its range (``actuator_ranges``) and is added with the sign
-        of the witness's actuator speed, not the tracked one's (whose round-off flips at rest).
+        The LP's forces ``u`` hold the grasp; the joints' damping is a loss the motors overcome
+        (its range paid for it), so the share of the damping ``b qset`` of the tracked speeds is
+        added; each actuator's friction share was taken off its range (``actuator_ranges``) and
+        is added with the sign of the witness's actuator speed, not the tracked one's (whose
+        round-off flips at rest).
         """
-        ff = (
-            drive.torques
-            + self.damping_share(qset - self.damped(drive))
-            + self.friction * np.sign(drive.actuator_speeds)
-        )
+        ff = drive.torques + self.damping_share(qset) + self.friction * np.sign(drive.actuator_speeds)
         return self.motor_speeds(d, qset), ff
 
     def controls(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:

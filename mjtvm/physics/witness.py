@@ -112,10 +112,6 @@ class Drive:
         for the paper's independent joints.
     moment
         ``(A, M)`` the state's moment matrix ``P`` (actuator speeds ``P qd``), or ``None``.
-    damped_speeds
-        With a transmission: ``(M,)`` the joint speeds whose damping ``b qd`` the forces
-        ``torques`` carry (the LP's balance has it): the witness's at the alpha it was solved
-        for, before the speed factor. ``None``: ``speeds``.
     """
 
     joints: tuple[str, ...]
@@ -126,7 +122,6 @@ class Drive:
     slips: Mapping[str, tuple[float, _F64]] = field(default_factory=dict)
     actuators: tuple[str, ...] = ()
     moment: _F64 | None = None
-    damped_speeds: _F64 | None = None
 
     def __post_init__(self) -> None:
         na = len(self.actuators) if self.actuators else len(self.joints)
@@ -136,8 +131,6 @@ class Drive:
             )
         if self.actuators and (self.moment is None or self.moment.shape != (na, len(self.joints))):
             raise ParamError("drive.moment", f"expected shape ({na}, {len(self.joints)})")
-        if self.damped_speeds is not None and np.shape(self.damped_speeds) != (len(self.joints),):
-            raise ParamError("drive.damped_speeds", f"expected {len(self.joints)} joint speeds")
 
     @property
     def actuator_speeds(self) -> _F64:
@@ -166,12 +159,10 @@ def witness_drive(
         sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7))
         gain = s / frac if frac > 0 else 0.0
         speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
-        damped = sol["speeds"]
     elif witness == "vertex":
         if vertex is None:
             raise ParamError("vertex", "the 'vertex' drive needs the pair's Witness")
         speeds, torques, rho = vertex.speeds * s, vertex.torques, vertex.slip_speeds * s
-        damped = vertex.speeds
     else:
         raise ParamError("witness", f"expected 'central' or 'vertex', got {witness!r}", witness)
     contacts, slips, i_s = [], {}, 0
@@ -194,7 +185,6 @@ def witness_drive(
         slips,
         actuators=() if t is None else t.actuator_names,
         moment=None if t is None else t.moment,
-        damped_speeds=None if t is None else np.asarray(damped, float),
     )
 
 

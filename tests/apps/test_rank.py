@@ -17,7 +17,7 @@ from mjtvm.core.tvmmp import tvmmp
 from mjtvm.sim.grasp.file import load_grasp
 
 ROOT = Path(__file__).resolve().parents[2]
-GRASP = str(ROOT / "models" / "shadow_hand" / "shadow_hand-sphere.toml")
+GRASP = str(ROOT / "models" / "shadow_hand" / "shadow_hand_coupled-sphere.toml")
 DATASET = ROOT / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz"
 
 
@@ -71,7 +71,7 @@ def test_a_row_is_the_grasp_files_tvmmp_at_that_configuration(tmp_path: Path) ->
     s = float(z["obj_scale"][1])
     doc: dict[str, Any] = {
         "schema": "mjtvm.grasp/1",
-        "model": str(ROOT / "models" / "shadow_hand" / "shadow_right_3f.xml"),
+        "model": str(ROOT / "models" / "shadow_hand" / "shadow_right_3f_coupled.xml"),
         "mu": 0.6,
         "rvds": [list(map(float, r)) for r in base.rvds],
         "object": {

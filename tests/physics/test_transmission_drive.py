@@ -165,7 +165,6 @@ def test_damping_share_of_a_tendon_in_closed_form() -> None:
     rig = Rig(model, drive, "object")
     want = (R1 * b1 * q[0] + R2 * b2 * q[1]) / (G * (R1**2 + R2**2))
     np.testing.assert_allclose(rig.damping_share(q), [want], rtol=1e-12)
-    assert Rig.damped(drive) is drive.speeds
 
 
 def test_gear_sweep_refuses_a_transmission() -> None:
