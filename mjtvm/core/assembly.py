@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 from ..errors import ParamError
 from .contacts import force_generators, slide_unit, tangent_basis
 from .csc import Csc
-from .roundoff import drop_cancellation, drop_data_roundoff
+from .roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
 from .rows import Rows as _Rows
 from .state import GraspState
 
@@ -422,8 +422,9 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     n_rho = (1 if n_s else 0) if state.slip == "shared" else n_s
     blocks, col_lower, col_upper = _variables(state, copies, box, int(offsets[-1]), n_rho)
     gt = [grasp_map_transpose(c.position, state.object_position) for c in contacts]
-    # The round-off of the Jacobians is relative to the largest entry of them all (roundoff).
-    jac_max = max((float(np.max(np.abs(c.jacobian), initial=0.0)) for c in contacts), default=0.0)
+    # The round-off of the Jacobians is relative to their scale, the largest entry of them
+    # all unless it stands alone far above the others (roundoff.jacobian_scale).
+    jac_max = jacobian_scale([c.jacobian for c in contacts])
     jacobians = [drop_data_roundoff(c.jacobian, jac_max) for c in contacts]
     out = _Rows()
     wrench_rows, torque_rows = _statics_rows(out, state, gens, gt, jacobians, blocks, copies)

@@ -17,7 +17,13 @@ the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
   still measured at the speeds the joints can reach; rows that are the components of one
   vector (a force balance, a contact's relative velocity) share the largest of their
   scales, so that the check does not depend on the frame (the x balance of two forces
-  that are vertical is measured against the forces, not against their x components);
+  that are vertical is measured against the forces, not against their x components); a
+  term at its variable's size may be capped by a physical size of its row (``row_cap``:
+  Problem 2 caps a contact velocity's terms at the speed the hand's joints move a contact
+  at, :mod:`~mjtvm.core.problem2`), where ``|A_ij| ref_j`` overstates what the row can
+  reach: one Jacobian entry of 1e12 times its joint's top speed would make the row's
+  scale 1e12 m/s, and a contact velocity missed by 100 % would pass for round-off. The
+  term's value in this solution, ``|A_ij x_j|``, is never capped;
 * **dual**: the solver's row multipliers ``y`` (HiGHS' signs: ``y_i >= 0`` where the lower
   bound binds, ``<= 0`` the upper) and the reduced costs ``d = c - A^T y`` computed here on
   the unscaled ``A`` have the signs their bounds allow; those that do not are taken as 0,
@@ -161,6 +167,12 @@ class Certifier:
         ``col_ref``): a force that is 0 in this solution may be large at another, while the
         rows' violations are measured at ``col_ref`` (a physical force size would drown an
         unbalanced weight in a state whose Jacobians are 1e-100).
+    row_cap
+        ``(m,)`` the largest a term ``|A_ij| col_ref_j`` may add to row i's scale (``inf``:
+        no cap), a physical size of the row (module docstring); the term counts as
+        ``max(|A_ij x_j|, row_cap_i)`` where ``|A_ij| col_ref_j`` exceeds it. Read from
+        ``abs_a`` once, here: the entries it caps must not change later (Problem 2's last
+        column, alpha, has ``col_ref`` 0 and is never capped).
     """
 
     def __init__(
@@ -172,6 +184,7 @@ class Certifier:
         abs_a: Matrix | None = None,
         row_groups: NDArray[np.int64] | None = None,
         dual_ref: NDArray[np.float64] | None = None,
+        row_cap: NDArray[np.float64] | None = None,
     ) -> None:
         self.a = a
         self.dual_ref = col_ref if dual_ref is None else dual_ref
@@ -184,6 +197,36 @@ class Certifier:
             # Groups are runs of consecutive rows (Assembly.row_groups): one reduceat, not ufunc.at.
             self.starts = np.flatnonzero(np.concatenate([[True], row_groups[1:] != row_groups[:-1]]))
             self.counts = np.diff(np.append(self.starts, row_groups.size))
+        # The capped terms (row, column, |A_ij|, cap): none in a state whose rows' terms are
+        # all within their caps, which then costs nothing at each check.
+        self.capped: (
+            tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]] | None
+        )
+        self.capped = None
+        # The rows' terms are |A| s with the capped entries left out (abs_terms), so that a
+        # term of 1e20 is not added and then taken off again (the others lost in its round-off).
+        self.abs_terms = self.abs_a
+        if row_cap is not None and col_ref is not None:
+            rows = np.flatnonzero(np.isfinite(row_cap))
+            if rows.size and rows[-1] - rows[0] + 1 == rows.size:  # consecutive: a view
+                sub = self.abs_a[rows[0] : rows[-1] + 1, :-1]
+            else:
+                sub = self.abs_a[rows, :-1]  # the last column may change in place: never capped
+            sub = sub if isinstance(sub, np.ndarray) else sub.toarray()
+            r = cols = np.zeros(0, dtype=np.int64)
+            if rows.size and np.any(
+                sub.max(axis=1, initial=0.0) * col_ref[:-1].max(initial=0.0) > row_cap[rows]
+            ):
+                r, cols = np.nonzero(sub * col_ref[:-1] > row_cap[rows, None])
+            if r.size:
+                self.capped = (rows[r], cols, sub[r, cols], np.asarray(row_cap, dtype=float)[rows[r]])
+                if isinstance(self.abs_a, np.ndarray):
+                    self.abs_terms = self.abs_a.copy()
+                    self.abs_terms[rows[r], cols] = 0.0
+                else:
+                    lil = self.abs_a.tolil(copy=True)
+                    lil[rows[r], cols] = 0.0
+                    self.abs_terms = lil.tocsr()
 
     def _scale(self, scale: NDArray[np.float64]) -> NDArray[np.float64]:
         """Each row's scale (along the last axis) raised to the largest of its group's."""
@@ -221,10 +264,14 @@ class Certifier:
         floor: float = 0.0,
     ) -> Certificate:
         """:func:`certify` on this family's matrix and column lower bounds."""
-        a, abs_a = self.a, self.abs_a
+        a, abs_a, abs_terms = self.a, self.abs_a, self.abs_terms
 
         def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            return (a @ xc[0])[None], (abs_a @ size[0])[None]
+            if abs_terms is abs_a:
+                return (a @ xc[0])[None], (abs_a @ size[0])[None]
+            # A copy without the capped entries; its last column read from abs_a (in place).
+            last = abs_a[:, -1] if isinstance(abs_a, np.ndarray) else abs_a[:, -1:].toarray().ravel()
+            return (a @ xc[0])[None], (abs_terms[:, :-1] @ size[0, :-1] + last * size[0, -1])[None]
 
         def transposed(
             yy: NDArray[np.float64], abs_y: NDArray[np.float64]
@@ -292,12 +339,12 @@ class Certifier:
                     floor=floor[i : i + step],
                 )
             ]
-        a0, abs0 = self.a[:, :-1], self.abs_a[:, :-1]
+        a0, abs0, terms0 = self.a[:, :-1], self.abs_a[:, :-1], self.abs_terms[:, :-1]
         abs_last = np.abs(last)
 
         def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
             # The shared columns, then each LP's last one.
-            return xc[:, :-1] @ a0.T + xc[:, -1:] * last, size[:, :-1] @ abs0.T + size[:, -1:] * abs_last
+            return xc[:, :-1] @ a0.T + xc[:, -1:] * last, size[:, :-1] @ terms0.T + size[:, -1:] * abs_last
 
         def transposed(
             yy: NDArray[np.float64], abs_y: NDArray[np.float64]
@@ -329,6 +376,9 @@ class Certifier:
         lower, upper = _finite(row_lower), _finite(row_upper)
         (lo_ok, lo), (up_ok, up) = lower, upper
         ax, terms = products(xc, size)
+        if self.capped is not None:  # those terms at max(|A_ij x_j|, cap), not |A_ij| s_j
+            rows, cols, mag, cap = self.capped
+            np.add.at(terms.T, rows, np.maximum(mag * np.abs(xc[:, cols]), cap).T)  # terms.T: a view
         primal = self._violation(ax, terms, lower, upper)
         y = np.array(y, dtype=float)
         c = np.asarray(c, dtype=float)
@@ -419,6 +469,7 @@ def certify(
     col_ref: NDArray[np.float64] | None = None,
     abs_a: Matrix | None = None,
     row_groups: NDArray[np.int64] | None = None,
+    row_cap: NDArray[np.float64] | None = None,
 ) -> Certificate:
     """Check a solution ``x`` and row multipliers ``y`` of ``min c^T x`` s.t.
     ``row_lower <= a x <= row_upper``, ``col_lower <= x <= col_upper`` (unscaled).
@@ -444,12 +495,15 @@ def certify(
     row_groups
         ``(m,)`` ids of the vectors the rows are components of, the rows of one vector
         consecutive (:func:`primal_violation`).
+    row_cap
+        ``(m,)`` the largest a term at its variable's size may add to its row's scale
+        (:class:`Certifier`).
 
     Returns
     -------
     Certificate
     """
-    one = Certifier(a, col_lower, col_ref=col_ref, abs_a=abs_a, row_groups=row_groups)
+    one = Certifier(a, col_lower, col_ref=col_ref, abs_a=abs_a, row_groups=row_groups, row_cap=row_cap)
     return one.check(c, row_lower, row_upper, col_upper, x, y, floor=floor)
 
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..errors import SolverError
 from .assembly import Assembly, BoxForm, assemble
 from .certificate import Certificate, Certifier
-from .roundoff import drop_cancellation, drop_data_roundoff
+from .roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
 from .scaling import ScaledMatrix
 from .solvers import (
     HighsSession,
@@ -53,14 +53,25 @@ ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an ex
 P2_HIGHS_OPTIONS: dict[str, object] = {"simplex_dual_edge_weight_strategy": 1}
 
 
-def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
+def _physical_sizes(state: GraspState, asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(n + 1,)`` the sizes the certificate measures a row's violation, and a reduced cost
     of the wrong sign, at where the solution is ~0 (:func:`~mjtvm.core.certificate.certify`'s
     ``col_ref``): each joint's largest speed and torque (its operation range) for the
     speeds, torques, damping losses and the literal box's variables; for the force generators' weights the
-    larger of the weight and the largest torque over the largest Jacobian entry; for the
-    slip speeds the largest joint speed times that entry; alpha its own value. From the
-    state, never from the equilibration, which the certificate must not trust."""
+    larger of the weight and the largest torque over the Jacobians' scale; for the
+    slip speeds the largest joint speed times that scale; alpha its own value. From the
+    state, never from the equilibration, which the certificate must not trust.
+
+    And ``(m,)`` the largest a term at those sizes may add to a row's scale (the
+    :class:`~mjtvm.core.certificate.Certifier`'s ``row_cap``): on the kinematic rows (a
+    contact's relative velocity, eq. 11-13) the speed the hand's joints move a contact at,
+    ``sqrt(d)`` times the Jacobians' scale (:func:`~mjtvm.core.roundoff.jacobian_scale`)
+    times the fastest joint; ``inf`` on every other row. A row of unit vectors times the
+    Jacobians has entries at most ``sqrt(d)`` times their largest, so no term reaches the
+    cap unless one entry stands alone far above the others (1e12 among lever arms of
+    0.1 m): that joint at its top speed is not a speed the row has in any solution whose
+    contacts move with the object, and as the row's scale it would pass a contact velocity
+    missed by 100 % for round-off (the solution's own term ``|A_ij qd_j|`` counts in full)."""
     size = np.zeros(asm.num_variables + 1)
     speed = np.array([op.max_speed for op in state.operation_ranges])
     torque = np.array([op.max_torque for op in state.operation_ranges])
@@ -72,8 +83,9 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
         joint_speed = joint_speed_limits(state.transmission.moment, speed)
         joint_torque = np.abs(state.transmission.moment).T @ torque
     # A contact force is at most what the weight and the strongest joint through the largest
-    # Jacobian entry give; a slip speed at most the fastest joint through it.
-    jac = max((float(np.max(np.abs(c.jacobian), initial=0.0)) for c in state.contacts), default=0.0)
+    # Jacobian entry give; a slip speed at most the fastest joint through it (the largest
+    # entry unless it stands alone, roundoff.jacobian_scale: then the hand's lever arms).
+    jac = jacobian_scale([c.jacobian for c in state.contacts])
     weight = float(np.max(np.linalg.norm(state.refs[:, : state.dim], axis=1), initial=0.0))
     force = max(weight, float(joint_torque.max(initial=0.0)) / jac if jac > 0.0 else 0.0)
     slip = float(joint_speed.max(initial=0.0)) * jac
@@ -90,7 +102,9 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> NDArray[np.float64]:
             assert state.transmission is not None and state.transmission.constraint_jacobian is not None
             jeq = state.transmission.constraint_jacobian
             size[sl] = float(joint_torque.max(initial=0.0)) / np.max(np.abs(jeq), axis=1)
-    return size
+    cap = np.full(asm.csc.shape[0], np.inf)
+    cap[asm.kinematic_rows] = np.sqrt(state.dim) * slip
+    return size, cap
 
 
 class StateLPs:
@@ -112,7 +126,7 @@ class StateLPs:
         self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
         self.col_upper = np.append(asm.col_upper, np.inf)
         self.kin = asm.kinematic_rows
-        self.physical_sizes = _physical_sizes(state, asm)
+        self.physical_sizes, self.row_cap = _physical_sizes(state, asm)
         self.force_like = np.zeros(asm.num_variables + 1, dtype=bool)  # the lam and rho columns
         for name, sl in asm.blocks.items():
             if name.startswith("lam") or name == "rho":
@@ -320,6 +334,7 @@ class StateLPs:
                 abs_a=abs_a,
                 row_groups=self.asm.row_groups,
                 dual_ref=self.physical_sizes,
+                row_cap=self.row_cap,
             )
         return self._cert
 

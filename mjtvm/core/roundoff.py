@@ -8,7 +8,7 @@ of the perturbed data has alpha 0). So the LPs are built on the data with its ro
 set to 0, by two rules (one constant, :data:`DROP_REL`):
 
 * **data** (:func:`drop_data_roundoff`): an entry of a contact Jacobian at most
-  ``DROP_REL`` times the largest entry of the state's contact Jacobians (a joint that does
+  ``DROP_REL`` times the scale of the state's contact Jacobians, their largest entry (a joint that does
   not move the contact, written as noise of 1e-14 beside finger entries of 0.1, is 0; so is
   a 1e-18 in a row of zeros of a planar finger, and the noise in the Jacobian of a table
   that no joint moves). The entries of the Jacobians share their units (m/rad, or m/m for
@@ -20,6 +20,11 @@ set to 0, by two rules (one constant, :data:`DROP_REL`):
 * **computation** (:func:`drop_cancellation`): a computed value at most ``DROP_REL`` times
   the sum of the magnitudes of the terms it was computed from (``n . (r x n)``, the
   tangent ``n x t1``, ``A_twist r``), however small the terms are in the state's units.
+
+The largest entry of the Jacobians is their scale only when another entry comes near it
+(:func:`jacobian_scale`): a single coefficient of 1e12 among lever arms of 0.1 m (within
+the format's bounds) is data, but it is not what the other entries were computed from,
+and relative to it every lever arm of the hand (0.1 < 1e-12 x 1e12) would be "round-off".
 
 Both rules are relative, so a state in any unit system keeps every genuine coefficient,
 however small. The right-hand sides (gravity torques, REFS) are left as written: a tiny
@@ -33,11 +38,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["DROP_REL", "drop_cancellation", "drop_data_roundoff"]
+__all__ = ["DROP_REL", "LONE_ENTRY", "drop_cancellation", "drop_data_roundoff", "jacobian_scale"]
 
 #: Round-off, relative: see the module docstring; also the equilibrated LP's rule
 #: (:func:`~mjtvm.core.scaling.scale_lp`).
 DROP_REL = 1e-12
+#: How far the largest Jacobian entry may stand above the second largest and still be the
+#: Jacobians' scale (:func:`jacobian_scale`). In the shipped states the two are within 1.3;
+#: an entry alone far above the others is capped at 10 times the second largest, so that
+#: every entry above DROP_REL times the others is kept, and the round-off of a real state
+#: (1e-16 of its largest entry) is dropped as long as its two largest are within 1e4.
+LONE_ENTRY = 10.0
 
 
 def drop_cancellation(values: NDArray[np.float64], magnitudes: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -69,3 +80,31 @@ def drop_data_roundoff(data: NDArray[np.float64], reference: float | None = None
     ref = float(mag.max(initial=0.0)) if reference is None else float(reference)
     out[mag <= DROP_REL * ref] = 0.0
     return out
+
+
+def jacobian_scale(jacobians: list[NDArray[np.float64]]) -> float:
+    """The scale of a state's contact Jacobians: their largest magnitude, or ``LONE_ENTRY``
+    times the second largest where that is smaller (the reference of their round-off,
+    :func:`drop_data_roundoff`, and of the certificate's contact speeds).
+
+    A lever arm is computed from the robot's geometry, as are its round-off and every other
+    lever arm: an entry more than ``LONE_ENTRY`` times every other one (one coefficient of
+    1e12 in a hand of 0.1 m) was not, and taken as the scale it would make the hand's lever
+    arms round-off (the LP would lose them and its alphas with them). Equal to the largest
+    magnitude whenever the two largest are within ``LONE_ENTRY``, as in every real state.
+
+    Parameters
+    ----------
+    jacobians
+        Each ``(d, M)``, sharing their units (m/rad, m/m).
+
+    Returns
+    -------
+    float
+        0 when every entry is 0.
+    """
+    mags = np.concatenate([np.abs(np.ravel(j)) for j in jacobians]) if jacobians else np.zeros(0)
+    if mags.size < 2:
+        return float(mags.max(initial=0.0))
+    second, first = np.partition(mags, mags.size - 2)[-2:]
+    return float(min(first, LONE_ENTRY * second))

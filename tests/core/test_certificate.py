@@ -108,6 +108,31 @@ def test_primal_violation_is_relative_to_the_rows_terms():
     assert rel == pytest.approx(1e-6 / 2e6, rel=1e-3)
 
 
+def test_a_row_cap_keeps_a_large_coefficient_from_hiding_a_residual():
+    """1e12 x1 + x2 - x3 = 0, x3 = 1, with sizes 1 for every variable: x = (0, 1.03, 1)
+    misses the first row by 0.03, 3 % of its other terms. At x1's size the row's scale is
+    1e12 and the miss passes for round-off; with the row's terms capped at 2 (a physical
+    size of the row) x1 counts 2, the scale is 2 + 1.03 + 1 and the miss fails. The
+    solution's own term is never capped: at x1 = 1e-12 the row is 1 + 1.03 - 1 and the
+    scale counts max(1e12 x1, 2) = 2 beside the others."""
+    a = np.array([[1e12, 1.0, -1.0], [0.0, 0.0, 1.0]])
+    lo = up = np.array([0.0, 1.0])
+    cl, cu, c = np.full(3, -INF), np.full(3, INF), np.zeros(3)
+    ref, cap = np.ones(3), np.array([2.0, INF])
+    wrong = np.array([0.0, 1.03, 1.0])
+    assert certify(c, a, lo, up, cl, cu, wrong, None, col_ref=ref).primal < PRIMAL_TOL  # the defect
+    cert = certify(c, a, lo, up, cl, cu, wrong, None, col_ref=ref, row_cap=cap)
+    assert cert.primal == pytest.approx(0.03 / (2.0 + 1.03 + 1.0), rel=1e-9)
+    right = np.array([0.0, 1.0, 1.0])
+    assert certify(c, a, lo, up, cl, cu, right, None, col_ref=ref, row_cap=cap).primal == 0.0
+    big = np.array([1e-9, 1.03 - 1e3, 1.0])  # 1e12 x1 = 1e3 in this solution: counted in full
+    cert = certify(c, a, lo, up, cl, cu, big, None, col_ref=ref, row_cap=cap)
+    assert cert.primal == pytest.approx(0.03 / (1e3 + abs(1.03 - 1e3) + 1.0), rel=1e-6)
+    # sparse and dense matrices cap the same terms
+    sparse = certify(c, sp.csc_matrix(a), lo, up, cl, cu, wrong, None, col_ref=ref, row_cap=cap)
+    assert sparse.primal == pytest.approx(0.03 / 4.03, rel=1e-9)
+
+
 def test_farkas_proves_an_infeasible_lp_and_refuses_a_feasible_one():
     """x1 + x2 >= 2 with 0 <= x <= 0.5 is infeasible: y = 1 on the row gives the dual bound
     2 - 0.5 - 0.5 = 1 > 0. HiGHS' dual ray proves it too; with x <= 1 (feasible) no ray does."""

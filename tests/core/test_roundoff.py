@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from mjtvm.core.assembly import assemble, grasp_map_transpose
-from mjtvm.core.roundoff import DROP_REL, drop_cancellation, drop_data_roundoff
+from mjtvm.core.roundoff import DROP_REL, LONE_ENTRY, drop_cancellation, drop_data_roundoff, jacobian_scale
 from mjtvm.core.state_file import load_state
 from tests.support.perturb import add_jacobian_roundoff
 
@@ -55,3 +56,28 @@ def test_noise_in_the_zero_entries_of_a_state_gives_the_same_lp():
     assert any(np.any(c.jacobian != d.jacobian) for c, d in zip(clean.contacts, noisy.contacts))
     a, b = assemble(clean), assemble(noisy)
     assert (a.A != b.A).nnz == 0 and (a.A_twist != b.A_twist).nnz == 0
+
+
+def test_the_jacobians_scale_is_their_largest_entry_unless_it_stands_alone():
+    j1, j2 = np.array([[0.1, -0.05], [0.0, 0.02]]), np.array([[0.08, 1e-17]])
+    assert jacobian_scale([j1, j2]) == 0.1  # the largest, 1.25 times the second
+    assert jacobian_scale([j1, j2 * 10.0]) == 0.8  # 8 times the second: still the largest
+    lone = j2.copy()
+    lone[0, 1] = 1e12  # one entry alone far above the hand's lever arms
+    assert jacobian_scale([j1, lone]) == LONE_ENTRY * 0.1
+    assert jacobian_scale([np.array([[0.3]])]) == 0.3 and jacobian_scale([]) == 0.0
+
+
+def test_one_entry_of_1e12_keeps_the_other_entries_of_the_lp():
+    """pinch.json with one entry at 1e12: relative to it every lever arm (<= 0.1) would be
+    round-off (0.1 < 1e-12 x 1e12); the assembled kinematic rows keep every other entry."""
+    state = load_state(EXAMPLES / "pinch.json")
+    c = state.contacts[0]
+    jac = c.jacobian.copy()
+    i, j = np.argwhere(jac != 0.0)[0]
+    jac[i, j] = 1e12
+    big = state.with_(contacts=(replace(c, jacobian=jac), *state.contacts[1:]))
+    rows = assemble(state).kinematic_rows
+    a, b = assemble(state).A.toarray()[rows], assemble(big).A.toarray()[rows]
+    changed = a != b
+    assert changed.sum() == 1 and b[changed][0] == 1e12
