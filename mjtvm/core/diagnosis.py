@@ -209,15 +209,19 @@ def _dual_bound(
     col_upper: NDArray[np.float64],
     y: NDArray[np.float64],
 ) -> float:
-    """The dual bound of ``min 0`` s.t. ``lower <= a x <= upper``, ``col_lower <= x <= col_upper``
-    for the row multipliers ``y``: positive exactly when ``y`` proves the LP infeasible (the
-    bound :func:`~mjtvm.core.certificate.farkas` checks, here only to tell the sign of ``y``)."""
-    with np.errstate(invalid="ignore"):
-        rows = np.where(y > 0.0, y * lower, np.where(y < 0.0, y * upper, 0.0))
-        red = -(a.T @ y)  # the reduced costs of the zero objective
-        cols = np.where(red > 0.0, red * col_lower, np.where(red < 0.0, red * col_upper, 0.0))
-    total = float(np.sum(rows) + np.sum(cols))
-    return -np.inf if np.isnan(total) else total
+    """The finite part of the dual bound of ``min 0`` s.t. ``lower <= a x <= upper``,
+    ``col_lower <= x <= col_upper`` for the row multipliers ``y``: each row and column
+    term at its finite bound, the terms at an infinite one left out (those are the
+    multipliers of the wrong sign, within round-off of 0, that
+    :func:`~mjtvm.core.certificate.farkas` measures and bounds). Positive for the sign of
+    ``y`` that proves the LP infeasible: here only to tell that sign."""
+
+    def finite(coef: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> float:
+        at = np.where(coef > 0.0, lo, np.where(coef < 0.0, hi, 0.0))
+        ok = np.isfinite(at)
+        return float(np.sum(coef[ok] * at[ok]))
+
+    return finite(y, lower, upper) + finite(-(a.T @ y), col_lower, col_upper)
 
 
 def escape_direction(

@@ -56,6 +56,7 @@ __all__ = [
     "cached_lift",
     "checked_lift",
     "motor_model",
+    "pair_reason",
     "plot_alpha",
     "present_runs",
     "rows_csv",
@@ -228,7 +229,7 @@ def verify_state(
     )
     for l in range(len(state.rvds if state.rvds is not None else [])):
         status = res.status[0][l]
-        row: dict[str, Any] = {**base, "l": l, "status": status, **lp, "reason": _reason(res, l)}
+        row: dict[str, Any] = {**base, "l": l, "status": status, **lp, "reason": pair_reason(res, l)}
         if status == "optimal" and hold is not None:
             row.update(hold_row(hold), alpha_lp=float(res.alpha[0, l]))
         if status == "optimal" and (hold is None or hold.held):
@@ -340,7 +341,7 @@ def verify_lp(
         return state, e, fields
 
 
-def _reason(res: TvmmpResult, l: int) -> str:
+def pair_reason(res: TvmmpResult, l: int) -> str:
     """Why pair (0, l) is infeasible or its alpha 0 (the diagnosis ``mjtvm solve`` prints)."""
     for d in res.diagnosis:
         if d.pair[0] == 0 and d.pair[1] in (l, -1):

@@ -198,3 +198,17 @@ def test_each_refusal_about_the_weight_names_what_to_change(tmp_path: Path) -> N
     )
     with pytest.raises(ParamError, match=r"mg: the object has no weight to scale .*<option gravity="):
         sim_model(model, {}, mu=0.5, mg=1.0)
+
+
+def test_an_infeasible_row_says_why() -> None:
+    """allegro-jenga with mu = 0.05 (its 0.6 in the file): the fingertips' cones cannot hold the
+    block, whatever the torques; the rows carry the diagnosis solve prints, which names the
+    direction and a contact whose friction would hold it."""
+    lift = verify.checked_lift(MODELS / "objects" / "allegro-jenga.toml", 1)
+    _state, res, fields = verify.verify_lp(lift, 0, "L", mu=0.05, mg=1.1772)
+    assert not isinstance(res, Exception)
+    assert list(res.status[0]) == ["infeasible"] * 6 and "mu 0.05 (--mu)" in fields["lp_note"]
+    (d,) = res.diagnosis
+    assert d.cause == "balance" and d.relief and all(c.endswith("/geom1") for c, _ in d.relief)
+    reason = verify.pair_reason(res, 0)  # the row's reason column
+    assert reason == d.message and "a net force along (" in reason and "balanced with '" in reason
