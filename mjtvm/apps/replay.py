@@ -22,7 +22,7 @@ import math
 import statistics
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -59,16 +59,51 @@ SWEEP_MG_MU = 0.3
 
 def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[float, float]:
     """``mu`` and ``mg`` (N), the grasp's own where ``None``: its friction coefficient and the
-    magnitude of its weight (REFS)."""
+    magnitude of its weight (REFS).
+
+    The lift's checks (``replay``, ``verify``) load the object with its weight alone, along
+    the model's gravity through its centre of mass: each refusal names the option (``--mu``,
+    ``--mg``) or the grasp-file key (``mu``, ``[refs]``) to change, or the model's gravity.
+
+    Raises
+    ------
+    ParamError
+        No single friction coefficient and no ``mu``; REFS other than the weight alone and no
+        ``mg``; an ``mg`` the grasp's REFS cannot take (no weight in them, no gravity in the
+        model).
+    """
     if mu is None:
         mu = getattr(grasp, "default_mu", None)
         if mu is None:
-            raise ParamError("mu", f"the grasp {grasp.name!r} has no single friction coefficient: give one")
+            raise ParamError(
+                "mu",
+                f"the grasp {grasp.name!r} has no single friction coefficient: give one with --mu, "
+                "or one top-level mu in the grasp file",
+            )
+    document = getattr(grasp, "document", None)
+    refs = document.get("refs") if isinstance(document, Mapping) else None
+    model = getattr(grasp, "model", None)
+    no_gravity = model is not None and not np.any(np.asarray(model.opt.gravity))
+    if no_gravity and (mg is not None or getattr(grasp, "weight_mg", None) is not None):
+        raise ParamError(
+            "mg",
+            f"the model of the grasp {grasp.name!r} has no gravity (MuJoCo's option gravity is 0 0 0): "
+            "the object has no weight to load or scale; give the model a gravity "
+            '(<option gravity="0 0 -9.81"/> in its MJCF file)',
+        )
+    if mg is not None and isinstance(refs, Mapping) and not refs.get("weight", True):
+        raise ParamError(
+            "mg",
+            f"the grasp {grasp.name!r}'s REFS have no weight ([refs] weight = false): --mg cannot "
+            "replace it; set [refs] weight = true in the grasp file",
+        )
     if mg is None:
         mg = getattr(grasp, "weight_mg", None)
         if mg is None:
             raise ParamError(
-                "mg", f"the grasp {grasp.name!r}'s REFS are not its weight alone: give the weight"
+                "mg",
+                f"the grasp {grasp.name!r}'s REFS are not its weight alone: give the weight with --mg "
+                "(N), or make the grasp file's [refs] the weight alone (weight = true, no wrenches)",
             )
     return float(mu), float(mg)
 

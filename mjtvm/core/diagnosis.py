@@ -21,6 +21,16 @@ need it (every alpha > 0: nothing is computed).
   means no contact forces balance :math:`w_k` at all (the friction cones and normals);
   otherwise the filter names the joints whose torque limits bind, each with the torque it
   needs (the witness of the LP with those joints enlarged) and the most its range gives.
+  Either way the diagnosis says which way the REFS vertex is unbalanced: the certified Farkas
+  multipliers ``y`` of the LP (:func:`~mjtvm.core.certificate.farkas`) bound every
+  admissible contact wrench ``f`` by ``y_w^T f < -y_w^T w_k`` on the balance rows
+  ``G E lam = -w_k`` (eq. 20), so the net wrench ``w_k + f`` has a negative component
+  along ``y_w`` whatever the forces: it pushes the object along the twist ``-y_w``
+  (:func:`escape_direction`; e.g. along the weight for a finger whose cone cannot hold it
+  up). For the balance cause each contact is then changed alone (:func:`relieving_contacts`):
+  its friction coefficient raised (an F-point: the least that balances, by bisection), or
+  the contact made a sticking F-point (an L, S or D point); those that balance the vertex
+  are named, with the change.
 
 The pair LPs are Problem 2's own (:class:`~mjtvm.core.problem2.StateLPs`, certified), on the
 state with the contacts or ranges changed, so that what is diagnosed is what was solved.
@@ -45,10 +55,12 @@ from .result import Diagnosis, PairStatus
 from .state import GraspState
 from .transmission import joint_speed_limits
 
-__all__ = ["RELAX", "diagnose", "kinematic_alpha"]
+__all__ = ["RELAX", "diagnose", "escape_direction", "kinematic_alpha", "relieving_contacts"]
 
 RELAX = 100.0  # an enlarged operation range: the range scaled by this in torque and speed
 _KIN_ZERO = 1e-9  # kinematic alpha at most this (rows and speeds normalised to 1) is 0
+_MU_STEPS = 12  # bisection steps on log(mu) between a contact's mu and RELAX times it: 0.15 % on tan(60 deg)
+_PURE = 1e-6  # a direction's force (moment x length) part below this fraction of the other is left out
 
 
 # ------------------------------------------------------------------ kinematics alone
@@ -189,6 +201,157 @@ def _binding_joints(state: GraspState, works: Callable[[GraspState], bool]) -> l
     return sorted(relaxed)
 
 
+# ------------------------------------------------------------------ which way, and what relieves it
+def _dual_bound(
+    a: NDArray[np.float64],
+    lower: NDArray[np.float64],
+    upper: NDArray[np.float64],
+    col_lower: NDArray[np.float64],
+    col_upper: NDArray[np.float64],
+    y: NDArray[np.float64],
+) -> float:
+    """The finite part of the dual bound of ``min 0`` s.t. ``lower <= a x <= upper``,
+    ``col_lower <= x <= col_upper`` for the row multipliers ``y``: each row and column
+    term at its finite bound, the terms at an infinite one left out (those are the
+    multipliers of the wrong sign, within round-off of 0, that
+    :func:`~mjtvm.core.certificate.farkas` measures and bounds). Positive for the sign of
+    ``y`` that proves the LP infeasible: here only to tell that sign."""
+
+    def finite(coef: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> float:
+        at = np.where(coef > 0.0, lo, np.where(coef < 0.0, hi, 0.0))
+        ok = np.isfinite(at)
+        return float(np.sum(coef[ok] * at[ok]))
+
+    return finite(y, lower, upper) + finite(-(a.T @ y), col_lower, col_upper)
+
+
+def escape_direction(
+    state: GraspState, w: NDArray[np.float64], *, box: BoxForm = "eliminated", solver: str = "highs"
+) -> NDArray[np.float64] | None:
+    r"""``(D,)`` the unit twist along which the REFS vertex ``w`` stays unbalanced, or ``None``.
+
+    The LP of ``w`` at rest (Problem 2's pair with ``r = 0``, :class:`~mjtvm.core.problem2.StateLPs`)
+    solved and certified infeasible by its Farkas multipliers ``y``
+    (:func:`~mjtvm.core.certificate.farkas`, HiGHS' dual ray); ``-y`` on its balance rows
+    ``G E lam = -w`` (eq. 20), normalised: the net wrench on the object has a negative
+    component along ``y_w`` for every admissible contact force (module docstring), so it
+    pushes the object along ``-y_w`` (``[v; omega]`` about the object's origin, world frame).
+    ``None`` when the LP is feasible or not certified infeasible, or when the certificate
+    lies in the torque rows alone (a joint that cannot hold its own link).
+    """
+    problem = StateLPs(state, box, solver)
+    r = np.zeros(state.twist_dim)
+    verdict = problem.certified(w, r, alpha_max=0.0)
+    if problem.session is not None:
+        problem.session.release()
+        problem.session = None
+    sol = verdict.settled.solution
+    if sol.status != "infeasible" or not verdict.certified or sol.row_dual is None:
+        return None
+    y = np.asarray(sol.row_dual, dtype=float)
+    if not problem.proves_infeasible(w, r, 0.0, sol):
+        return None
+    a = problem.pair_matrix(r)[0]
+    lower, upper = problem.asm.statics_bounds(w)
+    col_upper = problem.col_upper.copy()
+    col_upper[-1] = 0.0  # alpha held at 0: the holding at rest
+    sign = max((1.0, -1.0), key=lambda s: _dual_bound(a, lower, upper, problem.col_lower, col_upper, s * y))
+    y_w = sign * y[problem.asm.wrench_rows[0]]
+    norm = float(np.linalg.norm(y_w))
+    if norm == 0.0 or _dual_bound(a, lower, upper, problem.col_lower, col_upper, sign * y) <= 0.0:
+        return None
+    out: NDArray[np.float64] = -y_w / norm
+    return out
+
+
+def _feasible(state: GraspState, w: NDArray[np.float64], box: BoxForm, solver: str) -> bool:
+    return _solve(state, w, np.zeros(state.twist_dim), box, solver)[0] == "optimal"
+
+
+def relieving_contacts(
+    state: GraspState, w: NDArray[np.float64], *, box: BoxForm = "eliminated", solver: str = "highs"
+) -> tuple[tuple[str, str], ...]:
+    r"""The changes of one contact alone that balance ``w`` at rest: ``(contact, change)`` pairs.
+
+    An F-point: its friction coefficient raised (eq. 24's cone), up to :data:`RELAX` times
+    its own; where that balances ``w``, the least coefficient that does, by bisection on
+    its logarithm (``"mu >= X"``, X rounded up). An L, S or D point: made a sticking F-point
+    (``"type F, mu X"``) with the largest coefficient of the state's F and S points (1
+    without any). ``state`` is solved as given: pass it with its ranges enlarged to ask
+    about the contacts alone.
+    """
+    mus = [float(c.mu) for c in state.contacts if c.type in ("F", "S") and c.mu is not None]
+    mu0 = max(mus, default=1.0)
+
+    def with_contact(i: int, c: Contact) -> GraspState:
+        return state.with_(contacts=tuple(c if j == i else x for j, x in enumerate(state.contacts)))
+
+    out: list[tuple[str, str]] = []
+    for i, c in enumerate(state.contacts):
+        if c.type == "F" and c.mu is not None:
+            lo = float(c.mu)
+            hi = RELAX * max(lo, 1.0)
+            if not _feasible(with_contact(i, replace(c, mu=hi)), w, box, solver):
+                continue
+            for _ in range(_MU_STEPS):
+                mid = float(np.sqrt(lo * hi)) if lo > 0.0 else hi / 2.0
+                if _feasible(with_contact(i, replace(c, mu=mid)), w, box, solver):
+                    hi = mid
+                else:
+                    lo = mid
+            out.append((c.name, f"mu >= {_round_up(hi)}"))
+        elif c.type != "F":
+            stuck = replace(c, type="F", mu=mu0, slide_direction=None)
+            if _feasible(with_contact(i, stuck), w, box, solver):
+                out.append((c.name, f"type F, mu {mu0:g}"))
+    return tuple(out)
+
+
+def _round_up(x: float) -> str:
+    """``x`` to 3 significant digits, rounded up (a bisection's feasible end stays feasible)."""
+    if x <= 0.0:
+        return "0"
+    e = int(np.floor(np.log10(x))) - 2
+    return f"{np.ceil(x / 10.0**e - 1e-9) * 10.0**e:.3g}"
+
+
+def _vector(v: NDArray[np.float64]) -> str:
+    return "(" + ", ".join(f"{x:.3g}" if abs(x) >= 5e-4 else "0" for x in v / np.linalg.norm(v)) + ")"
+
+
+def _direction_words(state: GraspState, w: NDArray[np.float64], t: NDArray[np.float64]) -> str:
+    """The escape twist ``t`` in words: the force along its ``v``, the moment about its ``omega``."""
+    d = state.dim
+    v, om = t[:d], t[d:]
+    length = max(
+        (float(np.linalg.norm(c.position - state.object_position)) for c in state.contacts), default=1.0
+    )
+    length = length if length > 0.0 else 1.0
+    fv, fm = float(np.linalg.norm(v)), float(np.linalg.norm(om)) * length
+    parts = []
+    if fv > _PURE * fm:
+        words = f"a net force along {_vector(v)}"
+        wf = w[:d]
+        if np.linalg.norm(wf) > 0.0 and float(v @ wf) / (fv * float(np.linalg.norm(wf))) > 0.999:
+            words += " (the REFS vertex's own direction)"
+        parts.append(words)
+    if fm > _PURE * fv:
+        if d == 2:
+            parts.append(f"a net moment {'counter-clockwise' if om[0] > 0 else 'clockwise'}")
+        else:
+            parts.append(f"a net moment about {_vector(om)}")
+    return " and ".join(parts) + " that no admissible contact force opposes"
+
+
+def _relief_words(relief: Sequence[tuple[str, str]]) -> str:
+    if not relief:
+        return (
+            "no single contact's friction or type balances it: no contact's normal opposes that "
+            "direction (move a finger, or add a contact, whose normal pushes against it)"
+        )
+    return "balanced with " + " or ".join(f"{name!r} {change}" for name, change in relief)
+
+
 # ------------------------------------------------------------------ the words
 def _names(items: Sequence[str]) -> str:
     return ", ".join(repr(x) for x in items)
@@ -261,13 +424,19 @@ def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnos
     w, r = state.refs[k], np.zeros(state.twist_dim)
     joints = _binding_joints(state, lambda s: _solve(s, w, r, box, solver)[0] == "optimal")
     if joints is None:
+        relaxed = _with_relaxed(state, set(range(len(state.operation_ranges))))
+        t = escape_direction(relaxed, w, box=box, solver=solver)
+        relief = relieving_contacts(relaxed, w, box=box, solver=solver)
+        which = "" if t is None else f": {_direction_words(state, w, t)}"
         return Diagnosis(
             (k, -1),
             "balance",
             tuple(c.name for c in state.contacts),
             (),
             f"REFS vertex {k} cannot be balanced by any forces of the contacts (their normals and friction "
-            "cones, eq. 20-24), whatever the joint torques",
+            f"cones, eq. 20-24), whatever the joint torques{which}; {_relief_words(relief)}",
+            () if t is None else tuple(float(x) for x in t),
+            relief,
         )
     _, _, tau = _solve(_with_relaxed(state, set(joints)), w, r, box, solver)
     unit = "N m" if state.transmission is None else "N or N m"  # a tendon's force is in N
@@ -277,12 +446,15 @@ def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnos
         else repr(state.actuator_names[j])
         for j in joints
     )
+    t = escape_direction(state, w, box=box, solver=solver)
+    which = "" if t is None else f"; within those limits: {_direction_words(state, w, t)}"
     return Diagnosis(
         (k, -1),
         "ranges",
         (),
         tuple(state.actuator_names[j] for j in joints),
-        f"REFS vertex {k} cannot be balanced: the torque limits of {needs} bind (eq. 19-20)",
+        f"REFS vertex {k} cannot be balanced: the torque limits of {needs} bind (eq. 19-20){which}",
+        () if t is None else tuple(float(x) for x in t),
     )
 
 

@@ -71,6 +71,16 @@ class Diagnosis:
         The names of a minimal set of contacts (``"contacts"``) or joints (``"ranges"``).
     message
         One line in words.
+    direction
+        For a REFS vertex that cannot be balanced (pair ``(k, -1)``), where its Farkas
+        certificate gives one: ``(D,)`` the unit twist ``[v; omega]`` (about the object's
+        origin, world frame) along which the net wrench on the object pushes it whatever
+        the admissible contact forces: minus the certified multipliers of the balance rows
+        (eq. 20), scaled to norm 1; ``()`` otherwise.
+    relief
+        For cause ``"balance"``: ``(contact, change)`` pairs, each a change of one contact
+        alone that makes the REFS vertex balanced (``"mu >= 1.74"``, a larger friction
+        coefficient; ``"type F, mu 0.3"``, the contact sticking); ``()`` when none does.
     """
 
     pair: tuple[int, int]
@@ -78,15 +88,22 @@ class Diagnosis:
     contacts: tuple[str, ...]
     joints: tuple[str, ...]
     message: str
+    direction: tuple[float, ...] = ()
+    relief: tuple[tuple[str, str], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out: dict[str, Any] = {
             "pair": list(self.pair),
             "cause": self.cause,
             "contacts": list(self.contacts),
             "joints": list(self.joints),
             "message": self.message,
         }
+        if self.direction:
+            out["direction"] = [float(x) for x in self.direction]
+        if self.cause == "balance":
+            out["relief"] = [{"contact": c, "change": ch} for c, ch in self.relief]
+        return out
 
 
 @dataclass(frozen=True, eq=False)

@@ -168,7 +168,14 @@ def sim_model(
     if mg is not None:
         if not (math.isfinite(mg) and mg > 0):
             raise ParamError("mg", f"expected a positive weight (N), got {mg!r}", mg)
-        scale = mg / (float(m.body_mass[ob]) * -float(m.opt.gravity[2]))
+        g = float(np.linalg.norm(m.opt.gravity))  # the weight along the model's gravity, as the REFS
+        if g == 0.0 or float(m.body_mass[ob]) == 0.0:
+            raise ParamError(
+                "mg",
+                "the object has no weight to scale (the model's gravity or the object's mass is 0): "
+                'give the model a gravity (<option gravity="0 0 -9.81"/>) and the object a mass',
+            )
+        scale = mg / (float(m.body_mass[ob]) * g)
         m.body_mass[ob] *= scale
         m.body_inertia[ob] *= scale
     kinds = {geom_id(m, label, "contact_types geom"): kind for label, kind in contact_types.items()}

@@ -33,7 +33,7 @@ from tqdm import tqdm
 from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
 from ..core.state import GraspState
-from ..core.tvmmp import tvmmp
+from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import MjtvmError, ModelError, StateError
 from ..sim.lift.states import lift_state
 from ..sim.lift.trajectory import Lift, scripted_lift
@@ -56,6 +56,7 @@ __all__ = [
     "cached_lift",
     "checked_lift",
     "motor_model",
+    "pair_reason",
     "plot_alpha",
     "present_runs",
     "rows_csv",
@@ -63,6 +64,7 @@ __all__ = [
     "state_indices",
     "summarize",
     "verify_lift",
+    "verify_lp",
     "verify_state",
 ]
 
@@ -205,12 +207,7 @@ def verify_state(
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
     witnesses then press on the object.
     """
-    variant, _, reading = run.partition("-")
-    state = lift_state(lift, index, variant=variant, reading=reading or "physical", mu=mu, mg=mg)  # type: ignore[arg-type]
-    if preload > 0:
-        state = state.with_(
-            contacts=tuple(replace(c, preload=preload) if c.type == "L" else c for c in state.contacts)
-        )
+    state, res, lp = verify_lp(lift, index, run, mu=mu, mg=mg, preload=preload)
     ob = lift.scenario.object_body
     model = sim_model(
         motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
@@ -224,17 +221,15 @@ def verify_state(
         "mu": mu,
         "mg": mg,
     }
-    try:
-        res = tvmmp(state)
-    except MjtvmError as e:
-        return [{**base, "l": -1, "status": f"solver: {e}"}]
+    if isinstance(res, MjtvmError):
+        return [{**base, "l": -1, "status": f"solver: {res}", **lp}]
     rows = []
     hold = state_hold(
         model, lift.qpos[index], state, res, settings=settings, object_body=ob, duration=hold_time
     )
     for l in range(len(state.rvds if state.rvds is not None else [])):
         status = res.status[0][l]
-        row: dict[str, Any] = {**base, "l": l, "status": status}
+        row: dict[str, Any] = {**base, "l": l, "status": status, **lp, "reason": pair_reason(res, l)}
         if status == "optimal" and hold is not None:
             row.update(hold_row(hold), alpha_lp=float(res.alpha[0, l]))
         if status == "optimal" and (hold is None or hold.held):
@@ -282,6 +277,76 @@ def verify_state(
                 )
         rows.append(row)
     return rows
+
+
+def verify_lp(
+    lift: Lift, index: int, run: str, *, mu: float, mg: float, preload: float = 0.0
+) -> tuple[GraspState, TvmmpResult | MjtvmError, dict[str, str]]:
+    r"""The state :func:`verify_state` checks at lift state ``index`` for ``run``, its Problem 2
+    (``alpha_lp``, without a rollout) and the row's ``lp_state`` and ``lp_note``.
+
+    State 0 is the grasp at its own configuration (the lift starts there): with the grasp's
+    friction and weight (``mu``, ``mg`` its own), the file's contact types and no
+    ``preload``, the state is the one ``mjtvm solve GRASP`` solves and its alphas are solve's
+    (``lp_state`` ``grasp``, ``lp_note`` empty). Otherwise ``lp_note`` says what differs from
+    solve's state and why: a state further along the lift (``lp_state`` ``lift``), another
+    ``mu`` or ``mg`` (``--mu``, ``--mg``), the L contacts' preload (``--preload``), the
+    contacts the run retypes. The LP is solved on the initial configuration, never on the
+    settled one of the hold test or a rollout (those move the object by at most
+    ``hold_reach``).
+
+    Returns
+    -------
+    state, result, fields
+        The grasp state, its :func:`~mjtvm.core.tvmmp.tvmmp` result (with the diagnosis of
+        its infeasible pairs and zero alphas), or the error the LP ended in, and
+        ``{"lp_state": ..., "lp_note": ...}``.
+    """
+    variant, _, reading = run.partition("-")
+    sc = lift.scenario
+    own_mg = getattr(sc, "weight_mg", None)  # the grasp's own weight: its REFS as they are (solve's)
+    state = lift_state(
+        lift,
+        index,
+        variant=variant,  # type: ignore[arg-type]
+        reading=reading or "physical",  # type: ignore[arg-type]
+        mu=mu,
+        mg=None if own_mg is not None and mg == own_mg else mg,
+    )
+    if preload > 0:
+        state = state.with_(
+            contacts=tuple(replace(c, preload=preload) if c.type == "L" else c for c in state.contacts)
+        )
+    notes = []
+    if index > 0 or float(lift.s[index]) != 0.0:
+        notes.append(
+            f"the lift's state {index} (s = {float(lift.s[index]):.6g} m), not the grasp's configuration"
+        )
+    if mu != getattr(sc, "default_mu", None):
+        notes.append(f"mu {mu:g} (--mu), not the grasp's")
+    if mg != own_mg:
+        notes.append(f"mg {mg:g} N (--mg), not the grasp's weight")
+    if preload > 0:
+        notes.append(f"preload {preload:g} N on the L contacts (--preload)")
+    own = getattr(sc, "contact_types", {})
+    retyped = sorted(
+        {c.name.split("#")[0] for c in state.contacts if own.get(c.name.split("#")[0], c.type) != c.type}
+    )
+    if retyped:
+        notes.append(f"run {run} types {', '.join(retyped)} {variant}, the grasp file otherwise")
+    fields = {"lp_state": "grasp" if index == 0 else "lift", "lp_note": "; ".join(notes)}
+    try:
+        return state, tvmmp(state, diagnose=True), fields
+    except MjtvmError as e:
+        return state, e, fields
+
+
+def pair_reason(res: TvmmpResult, l: int) -> str:
+    """Why pair (0, l) is infeasible or its alpha 0 (the diagnosis ``mjtvm solve`` prints)."""
+    for d in res.diagnosis:
+        if d.pair[0] == 0 and d.pair[1] in (l, -1):
+            return d.message
+    return ""
 
 
 def _dynamic_row(

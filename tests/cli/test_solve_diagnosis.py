@@ -38,3 +38,38 @@ def test_solve_prints_which_torque_limit_makes_a_pair_infeasible(
     assert err.startswith(
         "mjtvm: warning: REFS vertex 0 cannot be balanced: the torque limits of 'q' (needs 3.05 N m"
     )
+
+
+def test_solve_says_which_way_a_vertex_is_unbalanced_and_what_relieves_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The tilted support of tests/core/test_diagnosis.py (normal 60 deg from vertical, mu 0.3):
+    stderr names the vertex, the direction and the contact with the friction that holds it
+    (tan 60 deg = 1.732, rounded up); the JSON has the same in direction and relief."""
+    from mjtvm import Contact
+
+    palm = Contact("palm", "F", [A, 0.0], [3.0**0.5 / 2.0, 0.5], [[0.0], [0.0]], mu=0.3)
+    path = tmp_path / "tilted.json"
+    path.write_text(json.dumps(state_to_dict(state([palm], g_f=0.0))))
+    assert main(["solve", str(path), "--no-witnesses"]) == 0
+    out, err = capsys.readouterr()
+    (d,) = json.loads(out)["diagnosis"]
+    assert d["relief"] == [{"contact": "palm", "change": "mu >= 1.74"}] and len(d["direction"]) == 3
+    (line,) = err.splitlines()
+    assert line.startswith("mjtvm: warning: REFS vertex 0 cannot be balanced by any forces of the contacts")
+    assert "a net force along (" in line and line.endswith("balanced with 'palm' mu >= 1.74")
+
+
+def test_a_torque_limit_names_the_direction_too() -> None:
+    r"""One F-point under the object (normal (0, 1)) and a weight of 30 N: its force (0, 30)
+    needs tau = A 30 = 1.5 N m > T_max: cause ranges; the escape is straight down, the
+    weight's direction."""
+    from mjtvm import tvmmp
+
+    (d,) = tvmmp(state([link_point("tip", A)], refs=[[0.0, -30.0, 0.0]], g_f=0.0), diagnose=True).diagnosis
+    assert (d.cause, d.joints) == ("ranges", ("q",))
+    assert d.message.endswith(
+        "bind (eq. 19-20); within those limits: a net force along (0, -1) (the REFS vertex's own "
+        "direction) that no admissible contact force opposes"
+    )
+    assert d.direction[1] == pytest.approx(-1.0, abs=1e-6)

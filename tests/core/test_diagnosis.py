@@ -141,3 +141,69 @@ def test_the_diagnosis_is_in_the_result_document_and_its_schema() -> None:
     jsonschema.Draft202012Validator(load_schema("result")).validate(doc)
     assert doc["diagnosis"][0]["contacts"] == ["tip", "mid"] and doc["diagnosis"][0]["cause"] == "contacts"
     assert "diagnosis" not in tvmmp(state([link_point("tip", A), link_point("mid", 0.03)])).to_dict()
+
+
+# ------------------------------------------------------------------ which way, and what relieves it
+SIN60, COS60 = np.sqrt(3.0) / 2.0, 0.5
+
+
+def _generators_power(d, contact: Contact, state_: GraspState) -> np.ndarray:
+    """The power of each of the contact's force generators' wrenches along the escape twist."""
+    from mjtvm.core.assembly import grasp_map_transpose
+    from mjtvm.core.contacts import force_generators
+
+    gt = grasp_map_transpose(contact.position, state_.object_position)
+    return np.array(d.direction) @ (gt.T @ force_generators(contact))
+
+
+def test_a_tilted_support_names_the_weight_and_the_friction_that_would_hold_it() -> None:
+    r"""A point of the base (J = 0) right under the object's origin, its normal tilted 60 deg
+    from vertical, mu = 0.3: its cone (half-angle atan 0.3 = 16.7 deg) does not hold the
+    vertical force (0, mg) that the weight asks (whose moment about p_O is 0 there), whatever
+    the torques: cause balance. A coefficient mu >= tan 60 deg = 1.7321 holds it (the cone's
+    edge n + mu t is then vertical): the relief is 'palm', mu >= 1.74 (the bisection's feasible
+    end, rounded up). The escape twist: the weight does positive power along it, and the
+    contact's generators none against it (the Farkas bound on their columns, J = 0)."""
+    palm = Contact("palm", "F", [A, 0.0], [SIN60, COS60], [[0.0], [0.0]], mu=0.3)
+    st = state([palm], g_f=0.0)
+    res = tvmmp(st, diagnose=True)
+    assert not res.feasible
+    (d,) = res.diagnosis
+    assert (d.pair, d.cause, d.relief) == ((0, -1), "balance", (("palm", "mu >= 1.74"),))
+    assert len(d.direction) == 3 and np.linalg.norm(d.direction) == pytest.approx(1.0)
+    assert np.dot(d.direction, WEIGHT[0]) > 0.0  # the weight pushes the object that way
+    assert np.all(_generators_power(d, palm, st) >= -1e-9)
+    assert "a net force along" in d.message and "balanced with 'palm' mu >= 1.74" in d.message
+    ok = st.with_(contacts=(Contact("palm", "F", [A, 0.0], [SIN60, COS60], [[0.0], [0.0]], mu=1.74),))
+    assert tvmmp(ok).feasible  # the relief, checked: and just below tan 60 it is not
+    low = st.with_(contacts=(Contact("palm", "F", [A, 0.0], [SIN60, COS60], [[0.0], [0.0]], mu=1.73),))
+    assert not tvmmp(low).feasible
+
+
+def test_a_finger_pushing_sideways_under_gravity_cannot_hold_and_says_so() -> None:
+    r"""One F-point at A whose normal (1, 0) points sideways: its force's x component n_f
+    must vanish (the REFS has none), so with any friction its tangential force mu n_f is 0 too:
+    the weight (0, -1) is unbalanced whatever the torques and the coefficient. The escape
+    twist has the weight's side (positive power of the weight along it, a downward force
+    part); no single change of friction or type relieves it, and the message says to move
+    or add a contact."""
+    tip = Contact("tip", "F", [A, 0.0], [1.0, 0.0], [[0.0], [A]], mu=0.3)
+    res = tvmmp(state([tip]), diagnose=True)
+    (d,) = res.diagnosis
+    assert (d.pair, d.cause, d.relief) == ((0, -1), "balance", ())
+    assert np.dot(d.direction, WEIGHT[0]) > 0.0 and d.direction[1] < 0.0
+    assert "no contact's normal opposes that direction" in d.message
+    doc = json.loads(json.dumps(res.to_dict()))
+    jsonschema.Draft202012Validator(load_schema("result")).validate(doc)
+    assert doc["diagnosis"][0]["relief"] == [] and len(doc["diagnosis"][0]["direction"]) == 3
+
+
+def test_a_frictionless_finger_is_relieved_by_sticking() -> None:
+    r"""An L-point (frictionless) under the object, normal tilted 10 deg: its force along the
+    normal alone cannot be vertical, so the weight is unbalanced; as an F-point with the
+    state's largest coefficient (none: 1) the cone (45 deg) holds the vertical force: relief
+    'tip', type F, mu 1."""
+    n = [np.sin(np.radians(10.0)), np.cos(np.radians(10.0))]
+    tip = Contact("tip", "L", [A, 0.0], n, [[0.0], [A]])
+    (d,) = tvmmp(state([tip]), diagnose=True).diagnosis
+    assert (d.cause, d.relief) == ("balance", (("tip", "type F, mu 1"),))

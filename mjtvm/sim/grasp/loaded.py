@@ -140,7 +140,7 @@ class Grasp:
         must include the weight. ``mu``: one coefficient for every contact, or geom label ->
         coefficient updating the file's.
         """
-        refs = self.refs if mg is None else self.weightweight_refs(mg)
+        refs = self.refs if mg is None else self.weight_refs(mg)
         friction = self.mu
         if mu is not None:
             friction = MappingProxyType(
@@ -152,11 +152,13 @@ class Grasp:
 
     @property
     def default_mu(self) -> float | None:
-        """The file's ``mu``, else the one coefficient its contacts share (``None`` if they differ)."""
-        if self.document["mu"] is not None:
-            return float(self.document["mu"])
+        """The one coefficient the contacts share (``None`` if they differ: a contact's own ``mu``
+        overriding the file's), else the file's ``mu``. The physics check simulates one
+        coefficient: with it, its LP is solve's."""
         values = set(self.mu.values())
-        return values.pop() if len(values) == 1 else None
+        if len(values) == 1:
+            return values.pop()
+        return float(self.document["mu"]) if not values and self.document["mu"] is not None else None
 
     @property
     def weight_mg(self) -> float | None:
@@ -166,7 +168,7 @@ class Grasp:
             return None
         return float(np.linalg.norm(self.refs[0, :3]))
 
-    def weightweight_refs(self, mg: float) -> NDArray[np.float64]:
+    def weight_refs(self, mg: float) -> NDArray[np.float64]:
         """``(K, 6)`` the REFS with the weight's magnitude set to ``mg`` (N), as :meth:`with_options`
         makes them (without building a new grasp: the lift's states call this for every point)."""
         if not self.document["refs"]["weight"]:

@@ -22,7 +22,7 @@ from ..grasp.transmission import coupled_joints
 from .motion import Motion, rotate
 from .surface import OBJECT_TYPES, distance_model, is_sphere, witness
 
-__all__ = ["TOUCH_TOL", "GraspLike", "Marcher"]
+__all__ = ["TOUCH_TOL", "GraspLike", "Marcher", "start_tolerance"]
 
 TOUCH_TOL = 1e-6  # m: a geom within this distance of the object touches it
 _MAX_ROUNDS = 30  # retargeting rounds of one correction (each converges quadratically)
@@ -138,7 +138,7 @@ class Marcher:
             if int(model.geom_bodyid[g]) in inside:
                 raise ModelError(f"contact_types[{label!r}]", f"an {kind} geom of the object itself")
             near = min(((witness(self.dmodel, data, o, g), o) for o in objects), key=lambda w: w[0].distance)
-            if kind in ("F", "L", "S") and near[0].distance <= _start_tolerance(grasp):
+            if kind in ("F", "L", "S") and near[0].distance <= start_tolerance(grasp):
                 fingers.append(self._finger(data, label, kind, g, *near))
         if not fingers:
             raise ModelError("contact_types", "no F, L or S geom touches the object at the start")
@@ -398,7 +398,7 @@ class Marcher:
         return None
 
 
-def _start_tolerance(grasp: GraspLike) -> float:
+def start_tolerance(grasp: GraspLike) -> float:
     """How far a finger geom may be from the object at the start and count as touching (m): the
     grasp file's ``contact_tolerance``, else :data:`TOUCH_TOL`."""
     value = getattr(grasp, "contact_tolerance", None)

@@ -9,9 +9,13 @@ Slide directions :math:`\hat p_{C_s}` of the S-points, from the lift's motion (:
 * ``"literal"``: the paper's printed :math:`A_s [(J_c^+ G_c^T)^T\ I]^T \dot r =
   T^T T (J \dot q - G^T \dot r)`, the reverse: friction helps it.
 
-A state's contacts are the geoms touching the object (MuJoCo distance <=
-:data:`~mjtvm.sim.lift.march.TOUCH_TOL`):
-a D-point (e.g. the palm under the object) exists only while it touches.
+A state's contacts are the lift's finger and support geoms within the grasp's contact
+tolerance of the object (:func:`~mjtvm.sim.lift.march.start_tolerance`: the grasp file's
+``contact_tolerance``, at least :data:`~mjtvm.sim.lift.march.TOUCH_TOL`), the contacts
+``mjtvm solve`` finds on the grasp itself: a D-point (e.g. the palm under the object)
+exists only while it is that near. With the grasp's slip mode and contact preloads, state 0
+of a lift at the grasp's own configuration is the grasp's state (``Grasp.state``) with its
+contacts retyped as the variant asks.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from numpy.typing import NDArray
 from ...core.state import GraspState
 from ...errors import ModelError, StateError
 from ..grasp.state import detected_contacts, grasp_state
-from .march import TOUCH_TOL
+from .march import start_tolerance
 from .trajectory import Lift
 
 __all__ = ["READINGS", "VARIANTS", "Reading", "Variant", "lift_state", "slide_directions"]
@@ -106,13 +110,15 @@ def lift_state(
             raise StateError(name, f"expected a finite number >= 0, got {value!r}")
     roles = dict(zip(lift.geoms, lift.roles, strict=True))
     slides = slide_directions(lift, i, reading=reading) if variant == "S" else {}
+    # the grasp's own contact tolerance, as Grasp.state (solve) detects contacts: a finger the
+    # file accepts at a gap below it is a contact here too
+    tol = start_tolerance(sc)
     if base is None:
         data = mujoco.MjData(sc.model)
         data.qpos[:] = lift.qpos[i]
         # geoms within MuJoCo's margin but not touching need a type too; they are dropped below
         near = {
-            c.geom: "D"
-            for c in detected_contacts(sc.model, data, object_body=sc.object_body, tolerance=TOUCH_TOL)
+            c.geom: "D" for c in detected_contacts(sc.model, data, object_body=sc.object_body, tolerance=tol)
         }
         types = near | {g: "D" for g in (*lift.base, *sc.ignored_geoms)} | {g: "L" for g in roles}
         base = grasp_state(
@@ -126,18 +132,22 @@ def lift_state(
             joints=sc.joints,
             operation_ranges=getattr(sc, "operation_ranges", None),
             friction_edges=getattr(sc, "friction_edges", 16),
-            contact_tolerance=TOUCH_TOL,
+            contact_tolerance=tol,
+            slip=getattr(sc, "slip", "per_contact"),
             # a grasp file's joint_losses = "ignore" leaves a transmission's damping out too
             joint_damping=getattr(sc, "document", {}).get("joint_losses", "fold") == "fold",
         )
     friction = sc.mu if mu is None else float(mu)
     contacts = []
+    preloads = getattr(sc, "preloads", {})  # the grasp file's contact preloads (N), as Grasp.state
     for c in base.contacts:
         geom = c.name.split("#")[0]
-        if geom not in lift.touching[i] or geom in sc.ignored_geoms:
+        if geom in sc.ignored_geoms:
             continue
         if geom not in roles and geom not in lift.base:
-            raise ModelError(f"geom {geom!r}", f"touches the object at state {i}: no contact of the lift")
+            if geom in lift.touching[i]:
+                raise ModelError(f"geom {geom!r}", f"touches the object at state {i}: no contact of the lift")
+            continue  # within the tolerance but not touching: no contact of the lift
         kind = "D" if geom not in roles else "F" if roles[geom] == "F" else variant
         coefficient = friction.get(geom) if isinstance(friction, Mapping) else friction
         if kind in ("F", "S") and coefficient is None:
@@ -148,6 +158,7 @@ def lift_state(
                 type=kind,
                 mu=None if kind == "D" else float(coefficient),  # type: ignore[arg-type]
                 slide_direction=slides[geom] if kind == "S" else None,
+                preload=float(preloads.get(geom, 0.0)) if kind != "D" else 0.0,
             )
         )
     if mg is None:
