@@ -78,19 +78,34 @@ def _verify(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_verify_says_in_one_line_that_the_grasp_does_not_hold(tmp_path: Any) -> None:
-    """The shipped Shadow grasp: its tendon-coupled middle finger is not held by any actuator
-    (docs/physics-check.md), and at state 0 the object leaves its contacts within a rollout's time."""
+    """The coupled Shadow grasp: the LP holds it, but at state 0 the first finger, on its
+    friction cone in the witness, slides and the object leaves its contacts within a rollout's
+    time (docs/physics-check.md)."""
     proc = _verify(
-        "--grasp", "shadow_hand-sphere", "--states", "2", "--contacts", "L", "--out", str(tmp_path)
+        "--grasp", "shadow_hand_coupled-sphere", "--states", "2", "--contacts", "L", "--out", str(tmp_path)
     )
     assert proc.returncode == 0, proc.stderr
     lines = [x for x in proc.stderr.splitlines() if "does not hold" in x]
-    assert len(lines) == 1, proc.stderr
-    assert lines[0].startswith("mjtvm verify: shadow_hand-sphere state 0 (L) does not hold at rest: in 37 ms")
-    assert " lets go: slides " in lines[0] and "not_held 1" in proc.stdout
+    assert len(lines) >= 1, proc.stderr
+    assert lines[0].startswith(
+        "mjtvm verify: shadow_hand_coupled-sphere state 0 (L) does not hold at rest: in 37 ms"
+    )
+    assert " lets go: slides " in lines[0] and "not_held" in proc.stdout
     rows = verify_rows(tmp_path / "verify.csv")
     assert {r["held"] for r in rows if r["state"] == "0"} == {"False"}
     assert all(r["alpha_sim"] == "" for r in rows if r["state"] == "0")
+
+
+def test_verify_refuses_the_sum_tendon_shadow_for_the_lps_reason(tmp_path: Any) -> None:
+    """The public models' sum tendon alone: the LP cannot hold the grasp (mjtvm.core.holding),
+    so every row is infeasible with that reason and no rollout runs."""
+    proc = _verify(
+        "--grasp", "shadow_hand-sphere", "--states", "1", "--contacts", "L", "--out", str(tmp_path)
+    )
+    assert proc.returncode == 0, proc.stderr
+    rows = verify_rows(tmp_path / "verify.csv")
+    assert rows and all(r["status"] == "infeasible" for r in rows)
+    assert all(r["reason"].startswith("REFS vertex 0 cannot be held at rest: the transmission") for r in rows)
 
 
 def test_verify_on_a_holding_grasp_prints_no_hold_line(tmp_path: Any) -> None:
