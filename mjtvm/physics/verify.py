@@ -32,6 +32,7 @@ from tqdm import tqdm
 
 from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
+from ..core.friction import cone_margin
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import MjtvmError, ModelError, StateError
@@ -193,6 +194,7 @@ def verify_state(
     preload: float = 0.0,
     hold_time: float | None = None,
     launch_distance: float | None = None,
+    friction_margin: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
 
@@ -203,10 +205,14 @@ def verify_state(
 
     ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
-    witnesses then press on the object.
+    witnesses then press on the object. ``friction_margin``: the margin delta of the LPs whose
+    witness is driven (default the grasp file's, 0), on the rollouts' cone
+    (:func:`~mjtvm.core.friction.cone_margin`: pyramidal adds 1/sqrt(2)).
     """
     variant, _, reading = run.partition("-")
     state = lift_state(lift, index, variant=variant, reading=reading or "physical", mu=mu, mg=mg)  # type: ignore[arg-type]
+    delta = lift_margin(lift) if friction_margin is None else friction_margin
+    state = state.with_(friction_margin=cone_margin((settings or SimSettings()).cone, delta))
     if preload > 0:
         state = state.with_(
             contacts=tuple(replace(c, preload=preload) if c.type == "L" else c for c in state.contacts)
@@ -223,6 +229,7 @@ def verify_state(
         "x": float(getattr(lift, lift_x(lift))[index]),
         "mu": mu,
         "mg": mg,
+        "friction_margin": state.friction_margin,
     }
     try:
         res = tvmmp(state)
@@ -368,6 +375,7 @@ def verify_lift(
     preload: float = 0.0,
     hold_time: float | None = None,
     launch_distance: float | None = None,
+    friction_margin: float | None = None,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -387,7 +395,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of :data:`RUNS`.
-    dynamics, preload, hold_time, launch_distance
+    dynamics, preload, hold_time, launch_distance, friction_margin
         As in :func:`verify_state`.
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -416,6 +424,7 @@ def verify_lift(
         "preload": preload,
         "hold_time": hold_time,
         "launch_distance": launch_distance,
+        "friction_margin": friction_margin,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)
@@ -452,6 +461,12 @@ def verify_lift(
             files[outdir / f"{name}.png"] = plot_alpha(rows, f"{grasp}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
         write_files(files, option="out")
     return rows
+
+
+def lift_margin(lift: Lift) -> float:
+    """The grasp file's ``friction_margin`` delta (before its ``cone``; 0 without one)."""
+    document = getattr(lift.scenario, "document", None) or {}
+    return float(document.get("friction_margin", 0.0))
 
 
 def state_indices(num_states: int, stride: int) -> list[int]:
