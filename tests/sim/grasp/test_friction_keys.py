@@ -121,3 +121,27 @@ def test_cli_friction_margin(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["solve", "--friction-margin", "1"]) == 2
     err = capsys.readouterr().err
     assert "--friction-margin: expected a number in [0, 1), got '1'" in err and err.count("\n") == 1
+
+
+def test_the_driven_witness_keeps_the_margin() -> None:
+    """verify drives central_witness of the state it solves: at margin 0.1 every F force of
+    Case 2's witness (at its alpha_kl) has ft <= 0.9 mu fn, and the vertex witness of the
+    margin-0 LP reaches mu on some F contact (the bug: forces on the cone)."""
+    from mjtvm.physics.witness import central_witness
+
+    def worst(state: Any, forces: Any) -> float:
+        out = 0.0
+        for c, f in zip(state.contacts, forces, strict=True):
+            fn = float(f @ c.normal)
+            if c.type == "F" and fn > 1e-9:
+                out = max(out, float(np.linalg.norm(f - fn * c.normal)) / (fn * c.mu))
+        return out
+
+    state = load_grasp(_doc(friction_margin=0.1)).state()
+    res = tvmmp(state)
+    k, l = res.limiting  # type: ignore[misc]
+    sol = central_witness(state, k, l, float(res.alpha[k, l]) * (1 - 1e-7))
+    assert worst(state, sol["forces"]) <= 0.9 * (1 + 1e-6)
+    nominal = state.with_(friction_margin=0.0)
+    vertex = tvmmp(nominal).witnesses[0]
+    assert max(worst(nominal, w.forces) for w in vertex if w is not None) > 0.98
