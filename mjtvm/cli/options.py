@@ -29,6 +29,7 @@ __all__ = [
     "Parser",
     "Subparsers",
     "command",
+    "friction_margin_option",
     "hand_option",
     "lift_options",
     "out_options",
@@ -133,6 +134,19 @@ def grasp_option(
 ) -> None:
     """``--grasp NAME|FILE``."""
     p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
+
+
+def friction_margin_option(p: argparse.ArgumentParser) -> None:
+    """``--friction-margin D``: the LPs use (1 - D) mu for every F contact (docs/state-format.md)."""
+    p.add_argument(
+        "--friction-margin",
+        type=fraction,
+        default=None,
+        metavar="D",
+        help="friction margin in [0, 1): the LPs use (1 - D) mu for every F contact's cone; replaces the "
+        "state's friction_margin or the grasp file's (combined with its cone: pyramidal x 1/sqrt(2)) "
+        "(default: the state's or grasp's, 0)",
+    )
 
 
 def hand_option(

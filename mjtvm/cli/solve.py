@@ -15,7 +15,7 @@ from ..core.state_file import load_state
 from ..core.tvmmp import tvmmp
 from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
-from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
+from .options import GRASP_HELP, Subparsers, command, friction_margin_option, grasp_option, hand_option
 from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
 from .show import warn_contacts
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
@@ -70,6 +70,7 @@ def add_solve(sub: Subparsers) -> None:
         help=_SOURCE_HELP + " (default: the shipped example pinch.json)",
     )
     hand_option(p)
+    friction_margin_option(p)
     p.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend")
     p.add_argument(
         "--box",
@@ -116,12 +117,18 @@ def _read_stdin() -> bytes:
 
 
 def load_source(
-    source: str | None, *, hand: str = "default", default: str | None = None, warnings: bool = True
+    source: str | None,
+    *,
+    hand: str = "default",
+    default: str | None = None,
+    warnings: bool = True,
+    friction_margin: float | None = None,
 ) -> GraspState:
     """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo; its
-    contact warnings on stderr unless ``warnings`` is false)."""
+    contact warnings on stderr unless ``warnings`` is false). ``friction_margin``: the margin
+    instead of the state's ``friction_margin`` or the grasp file's (on its ``cone``)."""
     if source == "-":
-        return load_state(_read_stdin())
+        return _with_margin(load_state(_read_stdin()), friction_margin)
     if source is None:
         if default is None:
             raise OptionError(
@@ -131,18 +138,25 @@ def load_source(
     if is_grasp_source(source):
         from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
-        grasp = load_scenario(source, variant=hand)
+        grasp = load_scenario(source, variant=hand, friction_margin=friction_margin)
         state = grasp.state()
         if warnings:
             warn_contacts(grasp)
         return state
     if hand != "default":
         raise OptionError("--hand", "applies to the paper's shipped grasps, not to a state file")
-    return load_state(source)
+    return _with_margin(load_state(source), friction_margin)
+
+
+def _with_margin(state: GraspState, friction_margin: float | None) -> GraspState:
+    """A state file's state with the ``--friction-margin`` (a state has no cone: as given)."""
+    return state if friction_margin is None else state.with_(friction_margin=friction_margin)
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    state = load_source(args.state, hand=args.hand, default=example_path())
+    state = load_source(
+        args.state, hand=args.hand, default=example_path(), friction_margin=args.friction_margin
+    )
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
     warn_uncertified(result)
@@ -165,6 +179,7 @@ def add_export_state(sub: Subparsers) -> None:
     p.add_argument(
         "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient; default: the grasp's"
     )
+    friction_margin_option(p)
     _indent_option(p)
     p.add_argument("--quiet", action="store_true", help="no contact report on stderr")
     p.set_defaults(func=_cmd_export_state)
@@ -177,7 +192,9 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     source = args.grasp_file or args.grasp
     if source is None:
         raise OptionError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
-    grasp = load_scenario(source, variant=args.hand, mg=args.mg, mu=args.mu)
+    grasp = load_scenario(
+        source, variant=args.hand, mg=args.mg, mu=args.mu, friction_margin=args.friction_margin
+    )
     state = grasp.state()
     if not args.quiet:
         warn_contacts(grasp)

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, grasp_option, out_options, states_option
+from .options import Parser, friction_margin_option, grasp_option, out_options, states_option
 from .output import EXIT_OK
 from .values import (
     CONTACTS,
@@ -86,6 +86,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=None,
         help="object weight (N) (default: the grasp's)",
     )
+    friction_margin_option(p)
     p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
     p.add_argument(
         "--start-method",
@@ -249,6 +250,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             preload=args.preload,
             hold_time=args.hold,
             launch_distance=args.launch,
+            friction_margin=args.friction_margin,
             jobs=args.jobs,
             start_method=args.start_method,
             out=None,

@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 from ..errors import ParamError
 from .contacts import force_generators, slide_unit, tangent_basis
 from .csc import Csc
+from .friction import margin_contacts
 from .roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
 from .rows import Rows as _Rows
 from .state import GraspState
@@ -415,7 +416,8 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     if box not in ("eliminated", "literal"):
         raise ParamError("box", f"expected 'eliminated' or 'literal', got {box!r}", box)
     contacts = state.contacts
-    gens = tuple(force_generators(c, state.friction_edges) for c in contacts)
+    # F pyramids at (1 - friction_margin) mu (mjtvm.core.friction); the contacts as they are at 0.
+    gens = tuple(force_generators(c, state.friction_edges) for c in margin_contacts(state))
     offsets = np.cumsum([0] + [g.shape[1] for g in gens])
     gen_slices = tuple(slice(int(a), int(b)) for a, b in pairwise(offsets))
     n_s = sum(c.type == "S" for c in contacts)

@@ -59,6 +59,21 @@ def _direction_norm(v: NDArray[np.float64]) -> float:
     return 0.0 if big == 0.0 else big * float(np.linalg.norm(v / big))
 
 
+def _mu_range(value: ArrayLike, ctype: str, mu: float | None) -> tuple[float, float]:
+    """A contact's ``mu_range`` checked: two numbers ``0 <= lo <= mu <= hi`` on an F or S contact."""
+    if ctype not in ("F", "S"):
+        raise StateError("mu_range", f"only F and S contacts have friction; this contact is of type {ctype}")
+    v = float_array(value, "mu_range", ndim=1, what="two numbers [mu_lo, mu_hi]")
+    if v.shape != (2,):
+        raise StateError("mu_range", f"expected two numbers [mu_lo, mu_hi], got {v.shape[0]}", value)
+    lo, hi = float(v[0]), float(v[1])
+    if not 0.0 <= lo <= float(mu) <= hi:  # type: ignore[arg-type]  # mu: validated for F and S
+        raise StateError(
+            "mu_range", f"expected 0 <= mu_lo <= mu ({mu!r}) <= mu_hi, got [{lo!r}, {hi!r}]", value
+        )
+    return (lo, hi)
+
+
 @dataclass(frozen=True, eq=False)
 class Contact:
     r"""One contact point :math:`C_{ij}` between a finger (or the base) and the object.
@@ -88,6 +103,10 @@ class Contact:
         instead of eq. (22)'s :math:`n_f \ge 0` (F, L and S; a D-point carries no force).
         A finger held on the object by its velocity loop alone (a zero-force L-point) leaves
         it at the first lag; a preload makes the witness press it on.
+    mu_range
+        Optional ``(mu_lo, mu_hi)`` with ``mu_lo <= mu <= mu_hi`` (F and S only): the interval
+        the true coefficient is known to lie in. The LPs use ``mu``; the result adds the worst
+        case over the interval (:mod:`mjtvm.core.friction`, ``docs/state-format.md``).
     """
 
     name: str
@@ -99,6 +118,7 @@ class Contact:
     tangent: NDArray[np.float64] | None = None
     slide_direction: NDArray[np.float64] | None = None
     preload: float = 0.0
+    mu_range: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -179,6 +199,8 @@ class Contact:
         if preload > 0.0 and self.type == "D":
             raise StateError("preload", "a D contact carries no force: its preload must be 0", self.preload)
         object.__setattr__(self, "preload", preload)
+        if self.mu_range is not None:
+            object.__setattr__(self, "mu_range", _mu_range(self.mu_range, self.type, self.mu))
 
     @property
     def dim(self) -> int:

@@ -5,7 +5,8 @@ shares nothing with :mod:`mjtvm.core.assembly` (only the schema's orientation ru
 :func:`~mjtvm.core.contacts.tangent_basis` and :func:`~mjtvm.core.contacts.slide_unit` are reused):
 
 * contact forces are free d-vectors per F-point with the friction pyramid in H-form
-  :math:`V f \le 0` (eq. 24; with :math:`\mu = 0` the normal ray), :math:`f = n_f n` at L-points (eq. 22),
+  :math:`V f \le 0` (eq. 24; with :math:`\mu = 0` the normal ray) of the coefficient
+  :math:`(1 - \delta)\mu` at the state's ``friction_margin`` :math:`\delta`, :math:`f = n_f n` at L-points (eq. 22),
   :math:`f = n_f (n - \mu \hat s)` at S-points (eq. 16-17), none at D-points;
 * kinematics eq. (7)-(13) with :math:`G^T \dot r = v + \omega \times (p_C - p_O)`;
 * torques eq. (19), balance eq. (20); with a transmission (:mod:`mjtvm.core.transmission`)
@@ -40,7 +41,7 @@ _HIGHS_TOL = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance
 _CORNERS = ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0))  # (s1, s2) of eq. (2)
 
 
-def pyramid_halfspaces(contact: Contact, friction_edges: int) -> NDArray[np.float64]:
+def pyramid_halfspaces(contact: Contact, friction_edges: int, mu: float | None = None) -> NDArray[np.float64]:
     r"""``V`` of eq. (24): the inscribed friction pyramid is :math:`\{f : V f \le 0\}`.
 
     Edges :math:`e_k = n + \mu (\cos\theta_k t_1 + \sin\theta_k t_2)`,
@@ -54,13 +55,16 @@ def pyramid_halfspaces(contact: Contact, friction_edges: int) -> NDArray[np.floa
         An F contact with ``mu > 0``.
     friction_edges
         :math:`n_{fric}` (space only).
+    mu
+        The coefficient of the pyramid (default the contact's ``mu``).
 
     Returns
     -------
     ndarray
         ``(n_fric, 3)`` in space, ``(2, 2)`` in the plane.
     """
-    n, mu = contact.normal, float(contact.mu)  # type: ignore[arg-type]
+    n = contact.normal
+    mu = float(contact.mu if mu is None else mu)  # type: ignore[arg-type]
     basis = tangent_basis(n, contact.tangent)
     if contact.dim == 2:
         edges = [n + mu * basis[0], n - mu * basis[0]]
@@ -127,8 +131,10 @@ def _build(state: GraspState, w: NDArray[np.float64], r_hat: NDArray[np.float64]
         if c.type == "F":
             cons.append(rel == 0)  # eq. (7)
             f = cp.Variable(d)
-            if float(c.mu) > 0.0:  # type: ignore[arg-type]
-                cons.append(pyramid_halfspaces(c, state.friction_edges) @ f <= 0)  # eq. (24)
+            # docs/state-format.md: the friction margin delta shrinks the cone to (1 - delta) mu
+            mu_f = (1.0 - state.friction_margin) * float(c.mu)  # type: ignore[arg-type]
+            if mu_f > 0.0:
+                cons.append(pyramid_halfspaces(c, state.friction_edges, mu_f) @ f <= 0)  # eq. (24)
             else:  # the pyramid degenerates to the normal ray
                 cons += [tangent_basis(n, c.tangent) @ f == 0, n @ f >= 0]
         else:

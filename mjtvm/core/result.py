@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .assembly import BoxForm
+from .friction import FrictionReport
 
 __all__ = [
     "RESULT_SCHEMA",
@@ -226,6 +227,10 @@ class TvmmpResult:
         Per alpha 0 and per REFS vertex that cannot be balanced, why
         (:func:`~mjtvm.core.diagnosis.diagnose`); empty unless asked for (``tvmmp(...,
         diagnose=True)``) and some alpha is 0 or some pair infeasible.
+    friction
+        :class:`~mjtvm.core.friction.FrictionReport` when the state has a friction margin or
+        friction intervals (the TVMMP at margin 0, the worst case over the intervals), else
+        ``None``. ``alpha`` and ``tvmmp`` are at the margin, at the nominal coefficients.
     """
 
     alpha: NDArray[np.float64]
@@ -243,6 +248,7 @@ class TvmmpResult:
     notes: tuple[tuple[tuple[int, int], str], ...] = ()
     diagnosis: tuple[Diagnosis, ...] = ()
     held: tuple[bool, ...] = ()
+    friction: FrictionReport | None = None
 
     def uncertified(self) -> list[tuple[int, int]]:
         """The pairs whose answer is not certified (each has a note), in (k, l) order."""
@@ -281,6 +287,8 @@ class TvmmpResult:
         }
         if self.diagnosis:
             out["diagnosis"] = [d.to_dict() for d in self.diagnosis]
+        if self.friction is not None:
+            out["friction"] = self.friction.to_dict()
         if witnesses:
             out["witnesses"] = [[None if w is None else w.to_dict() for w in row] for row in self.witnesses]
         return out

@@ -29,6 +29,7 @@ from .bounds import (
     describe,
     float_array,
     integer,
+    number,
 )
 from .contacts import Contact
 from .operation_range import OperationRange
@@ -91,6 +92,10 @@ class GraspState:
         How actuators and equality constraints act on the joints
         (:class:`~mjtvm.core.transmission.Transmission`), or ``None``: each joint is driven
         by its own actuator, as in the paper.
+    friction_margin
+        :math:`\delta \in [0, 1)` (default 0): the LPs use :math:`(1 - \delta) \mu` for every
+        F contact's friction pyramid (eq. 24), so that the witness forces keep a distance from
+        the cone (:mod:`mjtvm.core.friction`; S contacts keep ``mu``, ``docs/state-format.md``).
     """
 
     space: int
@@ -104,6 +109,7 @@ class GraspState:
     friction_edges: int = 16
     slip: SlipMode = "per_contact"
     transmission: Transmission | None = None
+    friction_margin: float = 0.0
 
     def __post_init__(self) -> None:
         space = self.space
@@ -182,6 +188,12 @@ class GraspState:
             raise StateError(
                 "slip", f"expected 'per_contact' or 'shared', got {describe(self.slip)}", self.slip
             )
+        margin = number(self.friction_margin, "friction_margin")
+        if not 0.0 <= margin < 1.0:
+            raise StateError(
+                "friction_margin", f"expected a number in [0, 1), got {margin!r}", self.friction_margin
+            )
+        object.__setattr__(self, "friction_margin", margin)
 
     @property
     def dim(self) -> int:

@@ -37,6 +37,7 @@ _TOP_KEYS = {
     "friction_edges",
     "slip",
     "transmission",
+    "friction_margin",
 }
 _REQUIRED_TOP = ("schema", "space", "object_position", "joints", "gravity_torque", "contacts", "refs")
 _JOINT_KEYS = {"name", "operation_range"}
@@ -50,6 +51,7 @@ _CONTACT_KEYS = {
     "tangent",
     "slide_direction",
     "preload",
+    "mu_range",
 }
 _REQUIRED_CONTACT = ("name", "type", "position", "normal", "jacobian")
 
@@ -123,6 +125,8 @@ def parse_state(data: Mapping[str, Any]) -> GraspState:
         kwargs["friction_edges"] = data["friction_edges"]
     if "slip" in data:
         kwargs["slip"] = data["slip"]
+    if "friction_margin" in data:
+        kwargs["friction_margin"] = data["friction_margin"]
     if "rvds" in data:
         # JSON null would mean "absent" to GraspState: refuse it, the format says "omit the key".
         if data["rvds"] is None:
@@ -246,6 +250,8 @@ def state_to_dict(state: GraspState) -> dict[str, Any]:
             entry["slide_direction"] = c.slide_direction.tolist()
         if c.preload > 0.0:
             entry["preload"] = c.preload
+        if c.mu_range is not None:
+            entry["mu_range"] = list(c.mu_range)
         contacts.append(entry)
     t = state.transmission
     out: dict[str, Any] = {
@@ -267,6 +273,8 @@ def state_to_dict(state: GraspState) -> dict[str, Any]:
     out["friction_edges"] = state.friction_edges
     if state.slip != "per_contact":
         out["slip"] = state.slip
+    if state.friction_margin > 0.0:
+        out["friction_margin"] = state.friction_margin
     if t is not None:
         out["transmission"] = transmission_to_dict(t, state.operation_ranges)
     return out

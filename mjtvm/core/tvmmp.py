@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from ..errors import ParamError, SolverError, StateError
 from .assembly import Assembly, BoxForm
 from .certificate import clip
+from .friction import FrictionReport, interval_corners, nominal_state
 from .problem2 import StateLPs, Verdict
 from .result import Diagnosis
 from .result import (  # re-exported: the result types lived here
@@ -310,6 +311,9 @@ def tvmmp(
         from .diagnosis import diagnose as diagnose_pairs  # it solves Problem 2's LPs itself
 
         found = diagnose_pairs(state, pairs.alpha, pairs.status, box=box, solver=solver)
+    report = None
+    if state.friction_margin > 0.0 or any(c.mu_range is not None for c in state.contacts):
+        report = _friction_report(state, solver, box)
     return TvmmpResult(
         alpha=pairs.alpha,
         status=tuple(tuple(s) for s in pairs.status),
@@ -326,4 +330,39 @@ def tvmmp(
         notes=tuple(pairs.notes),
         held=tuple(pairs.held),
         diagnosis=found,
+        friction=report,
+    )
+
+
+def _friction_report(state: GraspState, solver: str, box: BoxForm) -> FrictionReport:
+    """The TVMMP at margin 0 (when the margin is not) and the worst TVMMP over the friction
+    intervals, the least over the corners of :func:`~mjtvm.core.friction.interval_corners`
+    (exact by its quasi-concavity argument; each corner's LPs certified as any state's)."""
+    certified = True
+    nominal = None
+    if state.friction_margin > 0.0:
+        res = tvmmp(nominal_state(state), solver=solver, box=box, witnesses=False)
+        nominal, certified = res.tvmmp, not res.uncertified()
+    corners = interval_corners(state)
+    worst: float | None = None
+    worst_mu: tuple[tuple[str, float], ...] = ()
+    feasible = True
+    for corner in corners:
+        res = tvmmp(corner, solver=solver, box=box, witnesses=False)
+        certified = certified and not res.uncertified()
+        if not res.feasible:
+            feasible, worst = False, None
+            worst_mu = tuple((c.name, float(c.mu)) for c in corner.contacts if c.mu is not None)
+            break
+        if res.tvmmp is not None and (worst is None or res.tvmmp < worst):
+            worst = res.tvmmp
+            worst_mu = tuple((c.name, float(c.mu)) for c in corner.contacts if c.mu is not None)
+    return FrictionReport(
+        margin=state.friction_margin,
+        nominal_tvmmp=nominal,
+        worst_tvmmp=worst,
+        worst_feasible=feasible,
+        worst_mu=worst_mu,
+        corners=len(corners),
+        certified=certified,
     )

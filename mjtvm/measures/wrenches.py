@@ -19,6 +19,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from ..core.assembly import grasp_map_transpose
 from ..core.contacts import force_generators
+from ..core.friction import margin_contacts
 from ..core.state import GraspState
 from ..errors import ParamError, SolverError
 
@@ -82,7 +83,7 @@ def primitive_wrenches(state: GraspState, torque_scale: float) -> list[NDArray[n
     """
     scale = _wrench_scale(state, torque_scale)
     out = []
-    for c in state.contacts:
+    for c in margin_contacts(state):  # F pyramids at the state's friction margin
         gt = grasp_map_transpose(c.position, state.object_position)
         out.append(scale[:, None] * (gt.T @ force_generators(c, state.friction_edges)))
     return out

@@ -32,6 +32,7 @@ from tqdm import tqdm
 
 from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
+from ..core.friction import cone_margin
 from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import MjtvmError, ModelError, StateError
@@ -195,6 +196,7 @@ def verify_state(
     preload: float = 0.0,
     hold_time: float | None = None,
     launch_distance: float | None = None,
+    friction_margin: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
 
@@ -205,9 +207,13 @@ def verify_state(
 
     ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
-    witnesses then press on the object.
+    witnesses then press on the object. ``friction_margin``: the margin delta of the LPs whose
+    witness is driven (default the grasp file's, 0), on the rollouts' cone
+    (:func:`~mjtvm.core.friction.cone_margin`: pyramidal adds 1/sqrt(2)).
     """
-    state, res, lp = verify_lp(lift, index, run, mu=mu, mg=mg, preload=preload)
+    delta = lift_margin(lift) if friction_margin is None else friction_margin
+    margin = cone_margin((settings or SimSettings()).cone, delta)
+    state, res, lp = verify_lp(lift, index, run, mu=mu, mg=mg, preload=preload, friction_margin=margin)
     ob = lift.scenario.object_body
     model = sim_model(
         motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
@@ -220,6 +226,7 @@ def verify_state(
         "x": float(getattr(lift, lift_x(lift))[index]),
         "mu": mu,
         "mg": mg,
+        "friction_margin": state.friction_margin,
     }
     if isinstance(res, MjtvmError):
         return [{**base, "l": -1, "status": f"solver: {res}", **lp}]
@@ -280,7 +287,14 @@ def verify_state(
 
 
 def verify_lp(
-    lift: Lift, index: int, run: str, *, mu: float, mg: float, preload: float = 0.0
+    lift: Lift,
+    index: int,
+    run: str,
+    *,
+    mu: float,
+    mg: float,
+    preload: float = 0.0,
+    friction_margin: float | None = None,
 ) -> tuple[GraspState, TvmmpResult | MjtvmError, dict[str, str]]:
     r"""The state :func:`verify_state` checks at lift state ``index`` for ``run``, its Problem 2
     (``alpha_lp``, without a rollout) and the row's ``lp_state`` and ``lp_note``.
@@ -291,7 +305,8 @@ def verify_lp(
     (``lp_state`` ``grasp``, ``lp_note`` empty). Otherwise ``lp_note`` says what differs from
     solve's state and why: a state further along the lift (``lp_state`` ``lift``), another
     ``mu`` or ``mg`` (``--mu``, ``--mg``), the L contacts' preload (``--preload``), the
-    contacts the run retypes. The LP is solved on the initial configuration, never on the
+    contacts the run retypes, a ``friction_margin`` (the state's, on the rollouts' cone) other
+    than the grasp's. The LP is solved on the initial configuration, never on the
     settled one of the hold test or a rollout (those move the object by at most
     ``hold_reach``).
 
@@ -317,6 +332,9 @@ def verify_lp(
         state = state.with_(
             contacts=tuple(replace(c, preload=preload) if c.type == "L" else c for c in state.contacts)
         )
+    own_margin = state.friction_margin
+    if friction_margin is not None:
+        state = state.with_(friction_margin=friction_margin)
     notes = []
     if index > 0 or float(lift.s[index]) != 0.0:
         notes.append(
@@ -328,6 +346,11 @@ def verify_lp(
         notes.append(f"mg {mg:g} N (--mg), not the grasp's weight")
     if preload > 0:
         notes.append(f"preload {preload:g} N on the L contacts (--preload)")
+    if state.friction_margin != own_margin:
+        notes.append(
+            f"friction margin {state.friction_margin:g} (--friction-margin on the rollouts' cone), "
+            f"not the grasp's {own_margin:g}"
+        )
     own = getattr(sc, "contact_types", {})
     retyped = sorted(
         {c.name.split("#")[0] for c in state.contacts if own.get(c.name.split("#")[0], c.type) != c.type}
@@ -433,6 +456,7 @@ def verify_lift(
     preload: float = 0.0,
     hold_time: float | None = None,
     launch_distance: float | None = None,
+    friction_margin: float | None = None,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -452,7 +476,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of :data:`RUNS`.
-    dynamics, preload, hold_time, launch_distance
+    dynamics, preload, hold_time, launch_distance, friction_margin
         As in :func:`verify_state`.
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -481,6 +505,7 @@ def verify_lift(
         "preload": preload,
         "hold_time": hold_time,
         "launch_distance": launch_distance,
+        "friction_margin": friction_margin,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)
@@ -517,6 +542,12 @@ def verify_lift(
             files[outdir / f"{name}.png"] = plot_alpha(rows, f"{grasp}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
         write_files(files, option="out")
     return rows
+
+
+def lift_margin(lift: Lift) -> float:
+    """The grasp file's ``friction_margin`` delta (before its ``cone``; 0 without one)."""
+    document = getattr(lift.scenario, "document", None) or {}
+    return float(document.get("friction_margin", 0.0))
 
 
 def state_indices(num_states: int, stride: int) -> list[int]:

@@ -45,6 +45,9 @@ _TOP = {
     "lift",
     "supports",
     "joint_losses",
+    "friction_margin",
+    "mu_range",
+    "cone",
 }
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}

@@ -33,7 +33,7 @@ from .checks import (
     _kind,
 )
 from .rules import check_contact_rules
-from .sections import _configuration, _contacts, _lift, _quaternion, _ranges, _refs, _shape
+from .sections import _configuration, _contacts, _lift, _quaternion, _ranges, _refs, _shape, mu_range
 from .validate import schema_problem
 
 __all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
@@ -147,6 +147,17 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
     doc["configuration"] = _configuration(c, doc["configuration"])
     doc["joints"] = c.names(doc["joints"], "joints") if "joints" in doc else None
     doc["mu"] = c.number(doc["mu"], "mu", low=0.0) if "mu" in doc else None
+    doc["friction_margin"] = c.number(doc.get("friction_margin", 0.0), "friction_margin", low=0.0)
+    if doc["friction_margin"] >= 1.0:
+        raise c.fail("friction_margin", f"expected a number in [0, 1), got {doc['friction_margin']!r}")
+    doc["mu_range"] = mu_range(c, doc["mu_range"], "mu_range") if "mu_range" in doc else None
+    if doc["mu_range"] is not None and (
+        doc["mu"] is None or not doc["mu_range"][0] <= doc["mu"] <= doc["mu_range"][1]
+    ):
+        raise c.beyond("mu_range", f"expected [mu_lo, mu_hi] around the top-level mu ({doc['mu']!r})")
+    doc["cone"] = doc.get("cone", "elliptic")
+    if doc["cone"] not in ("elliptic", "pyramidal", "model"):
+        raise c.fail("cone", f"expected 'elliptic', 'pyramidal' or 'model', got {doc['cone']!r}")
     doc["friction_edges"] = c.integer(
         doc.get("friction_edges", 16), "friction_edges", MIN_FRICTION_EDGES, MAX_FRICTION_EDGES
     )

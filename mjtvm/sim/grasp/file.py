@@ -34,6 +34,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from ...core.friction import cone_margin
 from ...core.state import GraspState
 from ...errors import ModelError
 from .base import hold_mocap_poses, set_base_pose, set_joint_values
@@ -178,6 +179,13 @@ def _select(
     return f"{kind} {target!r}", ids
 
 
+def _cone(model: mujoco.MjModel, cone: str) -> str:
+    """The grasp file's ``cone``, ``"model"`` read from the model's ``opt.cone``."""
+    if cone != "model":
+        return cone
+    return "pyramidal" if int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL) else "elliptic"
+
+
 def _default_joints(model: mujoco.MjModel, geoms: Sequence[int]) -> tuple[str, ...]:
     """The hinge and slide joints on the chains from the world to the contact geoms' bodies."""
     chain: set[int] = set()
@@ -291,6 +299,7 @@ def grasp_from_model(
     data = _configure(model, doc, ob, file)
     types: dict[str, str] = {}
     selections, mu, slides, geoms, preloads = [], {}, {}, [], {}
+    ranges_mu: dict[str, tuple[float, float]] = {}  # geom label -> its friction interval
     for i, entry in enumerate(doc["contacts"]):
         what, ids = _select(model, entry, ob, file, f"contacts[{i}]")
         labels = tuple(geom_label(model, g) for g in ids)
@@ -310,6 +319,13 @@ def grasp_from_model(
                     f"the {entry['type']} contact {what} needs a "
                     "friction coefficient: set mu at the top or in the contact",
                 )
+            interval = entry.get("mu_range", doc["mu_range"] if "mu" not in entry else None)
+            if interval is not None and entry["type"] in ("F", "S"):
+                if not interval[0] <= mu[label] <= interval[1]:
+                    raise GraspError(
+                        file, f"contacts[{i}].mu_range", f"expected [mu_lo, mu_hi] around mu ({mu[label]!r})"
+                    )
+                ranges_mu[label] = interval
             if entry.get("preload"):
                 preloads[label] = float(entry["preload"])
             if "slide" in entry:
@@ -335,6 +351,10 @@ def grasp_from_model(
         )
         types.update(expansion.types)
         mu.update(expansion.mu)
+        if doc["mu_range"] is not None:  # the rules that take the top-level mu take its interval
+            for rule, match in zip(doc["contact_rules"], expansion.matches, strict=True):
+                if rule["mu"] is None and match.type in ("F", "S"):
+                    ranges_mu.update(dict.fromkeys(match.labels, doc["mu_range"]))
         ignored += expansion.ignored
         geoms += [geom_id(model, label) for label in expansion.types]
         rules = expansion.matches
@@ -369,6 +389,9 @@ def grasp_from_model(
         contact_types=MappingProxyType(types),
         selections=tuple(selections),
         mu=MappingProxyType(mu),
+        mu_ranges=MappingProxyType(ranges_mu),
+        friction_margin=cone_margin(_cone(model, doc["cone"]), doc["friction_margin"]),
+        cone=_cone(model, doc["cone"]),
         slide_directions=MappingProxyType(slides),
         refs=weight_refs(model, data, doc, doc["object"]["body"], file),
         rvds=rvds,

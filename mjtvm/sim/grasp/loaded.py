@@ -25,6 +25,8 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...core.contacts import Contact
+from ...core.friction import cone_margin
 from ...core.operation_range import OperationRange
 from ...core.state import GraspState
 from .checks import GraspError
@@ -99,6 +101,15 @@ class Grasp:
         (:mod:`mjtvm.sim.grasp.transmission`), or ``None`` for the paper's independent joints
         (each joint its own actuator, no equality). With a transmission, ``operation_ranges``
         and ``motors`` are keyed by actuator name, in the actuator's units.
+    mu_ranges
+        Geom label -> friction interval ``(mu_lo, mu_hi)`` of its F or S contact (the file's
+        ``mu_range``, top-level or per contact): the states' contact ``mu_range``.
+    friction_margin
+        The states' ``friction_margin``: the file's ``friction_margin`` delta on its ``cone``,
+        :math:`1 - (1 - \delta) c` (:func:`~mjtvm.core.friction.cone_margin`; 0 by default).
+    cone
+        The MuJoCo cone of that margin: ``"elliptic"`` or ``"pyramidal"`` (the file's ``cone``,
+        ``"model"`` read from the model's ``opt.cone``).
     rule_matches
         Per ``contact_rules`` entry: the touching geoms it typed (:mod:`mjtvm.sim.grasp.rules`);
         those geoms are in ``contact_types`` (or ``ignored_geoms``), not in ``selections``.
@@ -129,17 +140,27 @@ class Grasp:
     preloads: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
     transmission: ModelTransmission | None = None
     rule_matches: tuple[RuleMatch, ...] = ()
+    mu_ranges: Mapping[str, tuple[float, float]] = field(default_factory=lambda: MappingProxyType({}))
+    friction_margin: float = 0.0
+    cone: str = "elliptic"
 
     def with_options(
-        self, *, mg: float | None = None, mu: float | Mapping[str, float] | None = None
+        self,
+        *,
+        mg: float | None = None,
+        mu: float | Mapping[str, float] | None = None,
+        friction_margin: float | None = None,
     ) -> Grasp:
         r"""The grasp with another object weight and/or friction.
 
         ``mg`` (N): the REFS become the object's weight of magnitude ``mg`` (along gravity,
         through the object's centre of mass) plus each of the file's wrenches; the file's REFS
         must include the weight. ``mu``: one coefficient for every contact, or geom label ->
-        coefficient updating the file's.
+        coefficient updating the file's (the file's ``mu_range`` intervals must hold it).
+        ``friction_margin``: the margin :math:`\delta` instead of the file's, on the grasp's
+        ``cone`` (:func:`~mjtvm.core.friction.cone_margin`).
         """
+        margin = self.friction_margin if friction_margin is None else cone_margin(self.cone, friction_margin)
         refs = self.refs if mg is None else self.weight_refs(mg)
         friction = self.mu
         if mu is not None:
@@ -148,7 +169,7 @@ class Grasp:
                 if not isinstance(mu, Mapping)
                 else {**self.mu, **mu}
             )
-        return replace(self, refs=refs, mu=friction)
+        return replace(self, refs=refs, mu=friction, friction_margin=margin)
 
     @property
     def default_mu(self) -> float | None:
@@ -311,7 +332,8 @@ class Grasp:
             for c in state.contacts
             if c.name.split("#")[0] not in ignored
         )
-        return state.with_(contacts=kept)
+        kept = with_mu_ranges(kept, self.mu_ranges)
+        return state.with_(contacts=kept, friction_margin=self.friction_margin)
 
     def _touching(self) -> dict[str, float]:
         return touching_geoms(self.model, self.data, self.object_body, self.contact_tolerance)
@@ -328,6 +350,19 @@ class Grasp:
                 if d < 0.1 and (best is None or d < best):
                     best = d
         return best
+
+
+def with_mu_ranges(
+    contacts: Sequence[Contact], ranges: Mapping[str, tuple[float, float]]
+) -> tuple[Contact, ...]:
+    """``contacts`` with the friction interval of their geom (name up to ``#``) where ``ranges``
+    has one and the contact has friction (F or S)."""
+    return tuple(
+        replace(c, mu_range=ranges[c.name.split("#")[0]])
+        if c.type in ("F", "S") and c.name.split("#")[0] in ranges
+        else c
+        for c in contacts
+    )
 
 
 def weight_refs(

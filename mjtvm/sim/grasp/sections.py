@@ -138,19 +138,31 @@ def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
     }
 
 
+def mu_range(c: _Checker, value: Any, field: str) -> tuple[float, float]:
+    """A friction interval ``[mu_lo, mu_hi]``, ``0 <= mu_lo <= mu_hi`` (``docs/grasp-format.md``)."""
+    lo, hi = c.vector(value, field, 2)
+    if not 0.0 <= lo <= hi:
+        raise c.beyond(field, f"expected [mu_lo, mu_hi] with 0 <= mu_lo <= mu_hi, got {value!r}")
+    return (lo, hi)
+
+
 def _contacts(c: _Checker, value: Any) -> list[dict[str, Any]]:
     if not isinstance(value, list) or not value or len(value) > MAX_ITEMS:
         raise c.fail("contacts", f"expected a list of 1 to {MAX_ITEMS} contact tables, got {_kind(value)}")
     out = []
     for i, item in enumerate(value):
         field = f"contacts[{i}]"
-        s = c.selector(item, field, {"type", "mu", "slide", "preload"})
+        s = c.selector(item, field, {"type", "mu", "slide", "preload", "mu_range"})
         if "type" not in s:
             raise c.fail(f"{field}.type", "required (F, L, S or D)")
         if s["type"] not in CONTACT_TYPES:
             raise c.fail(f"{field}.type", f"expected one of {', '.join(CONTACT_TYPES)}, got {s['type']!r}")
         if "mu" in s:
             s["mu"] = c.number(s["mu"], f"{field}.mu", low=0.0)
+        if "mu_range" in s:
+            s["mu_range"] = mu_range(c, s["mu_range"], f"{field}.mu_range")
+            if s["type"] not in ("F", "S"):
+                raise c.beyond(f"{field}.mu_range", "only F and S contacts have friction")
         if "preload" in s:
             s["preload"] = c.number(s["preload"], f"{field}.preload", low=0.0)
             if s["preload"] > 0.0 and s["type"] == "D":

@@ -22,6 +22,7 @@ BEYOND_SCHEMA = (
     "a quaternion has norm 1 within 1e-6 (also a free joint's 7 numbers in configuration.qpos)",
     "a direction (contacts[].slide, lift.direction, lift.twist) is not zero",
     "a [low, high] pair (configuration.ik.bounds, lift.bounds) has low < high",
+    "a friction interval (mu_range) has mu_lo <= mu <= mu_hi for its mu, on an F or S contact",
     "the REFS is more than the origin (weight, or a non-zero wrench)",
     "keys and strings hold no NUL character and no lone surrogate; nesting is at most 16 deep",
 )

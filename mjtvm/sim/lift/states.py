@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from ...core.state import GraspState
 from ...errors import ModelError, StateError
+from ..grasp.loaded import with_mu_ranges
 from ..grasp.state import detected_contacts, grasp_state
 from .march import start_tolerance
 from .trajectory import Lift
@@ -88,7 +89,8 @@ def lift_state(
     geoms as D-points. REFS: the grasp's weight at magnitude ``mg`` (N; N m about the object's
     origin; ``[[0, 0, -mg, 0, 0, 0]]`` for the paper's sphere) plus the grasp's extra wrenches,
     or the grasp's own ``refs`` when ``mg`` is ``None``; RVDS: the grasp's (eq. 37 for Case 2);
-    friction ``mu`` for every F and S contact, or the grasp's ``mu`` when ``None``. ``base``,
+    friction ``mu`` for every F and S contact, or the grasp's ``mu`` (and its ``mu_range``
+    intervals) when ``None``; the grasp's ``friction_margin`` (0 for a scenario without one). ``base``,
     a state of the same index, skips MuJoCo: its contacts are retyped (cheap, for sweeps).
 
     Raises
@@ -167,4 +169,7 @@ def lift_state(
         refs = np.array(sc.weight_refs(float(mg)), dtype=float)
     else:
         refs = np.array([[0.0, 0.0, -float(mg), 0.0, 0.0, 0.0]])
-    return base.with_(contacts=tuple(contacts), refs=refs)
+    margin = float(getattr(sc, "friction_margin", 0.0))
+    if mu is None and getattr(sc, "mu_ranges", None):
+        return base.with_(contacts=with_mu_ranges(contacts, sc.mu_ranges), refs=refs, friction_margin=margin)
+    return base.with_(contacts=tuple(contacts), refs=refs, friction_margin=margin)

@@ -138,6 +138,7 @@ def load_scenario(
     variant: str = "default",
     mg: float | None = None,
     mu: float | Mapping[str, float] | None = None,
+    friction_margin: float | None = None,
 ) -> Grasp:
     r"""A paper case as a :class:`~mjtvm.sim.grasp.loaded.Grasp`: its shipped grasp file.
 
@@ -149,8 +150,8 @@ def load_scenario(
         file or shipped grasp name (then ``variant`` must stay ``"default"``).
     variant
         Hand of a shipped scenario: ``"default"`` or ``"humanlike"``.
-    mg, mu
-        Object weight (N) and friction coefficient instead of the file's
+    mg, mu, friction_margin
+        Object weight (N), friction coefficient and friction margin instead of the file's
         (:meth:`~mjtvm.sim.grasp.loaded.Grasp.with_options`).
 
     Raises
@@ -164,7 +165,7 @@ def load_scenario(
         source = grasp_file_name(source, variant)[: -len(".toml")]
     elif variant != "default":
         raise ModelError("variant", f"applies to the shipped scenarios ({', '.join(SCENARIOS)}) only")
-    return load_grasp(source).with_options(mg=mg, mu=mu)
+    return load_grasp(source).with_options(mg=mg, mu=mu, friction_margin=friction_margin)
 
 
 def export_state(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:

@@ -258,7 +258,7 @@ def _case(name: str) -> dict[str, Any]:
             ("contacts", 0, "colour"),
             "red",
             "contacts[0].colour",
-            "unknown key (allowed: body, geom, geom_id, mu, preload, slide, type)",
+            "unknown key (allowed: body, geom, geom_id, mu, mu_range, preload, slide, type)",
         ),
         (("mu",), -1, "mu", "expected a number >= 0, got the number -1"),
         (("friction_edges",), "16", "friction_edges", "expected an integer, got the string '16'"),
