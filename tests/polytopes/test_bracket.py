@@ -43,13 +43,18 @@ def local(result, points: np.ndarray) -> np.ndarray:
     return (points * result.scale) @ basis.T
 
 
-def qhull_volume(result) -> float:
-    """The scaled volume of one Qhull hull of the exact vertices, inside their linear hull.
+def exact_hull(result) -> ConvexHull:
+    """One Qhull hull of the exact vertices, scaled, inside their linear hull.
 
     Qhull's ``Q12`` allows the wide merges of duplicated ridges: scipy 1.17.1's Qhull stops on
     the spatial state's 208 vertices (QH6271, "wide merge ... due to dupridge") without it, and
     with it agrees with the TVMS's own volume to 2e-13."""
-    return float(ConvexHull(local(result, result.vertices), qhull_options="Q12").volume)
+    return ConvexHull(local(result, result.vertices), qhull_options="Q12")
+
+
+def qhull_volume(result) -> float:
+    """The scaled volume of :func:`exact_hull`."""
+    return float(exact_hull(result).volume)
 
 
 @pytest.fixture(scope="module", params=sorted(STATES))
@@ -102,7 +107,7 @@ def test_bracket_contains_the_exact_volume(exact):
             assert a.volume_bracket.tolist() == [0.0, 0.0]
         assert a.volume is None and a.affine_volume is None and a.hausdorff_gap > 0.0
         # The inner polytope's vertices are points of S_ov: inside the exact hull.
-        hull = ConvexHull(local(r, r.vertices))
+        hull = exact_hull(r)
         slack = local(r, a.vertices) @ hull.equations[:, :-1].T + hull.equations[:, -1]
         assert np.max(slack) <= 1e-7 * np.max(np.abs(r.vertices * r.scale))
 
