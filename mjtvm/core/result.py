@@ -24,7 +24,7 @@ __all__ = [
 ]
 
 PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
-DiagnosisCause = Literal["contacts", "ranges", "balance", "unknown"]
+DiagnosisCause = Literal["contacts", "ranges", "balance", "limits", "unknown"]
 RESULT_SCHEMA = "mjtvm.result/1"
 
 
@@ -63,6 +63,7 @@ class Diagnosis:
         ``"contacts"``: the kinematics of ``contacts`` alone lock the motion (eq. 11-13);
         ``"ranges"``: the operation ranges of ``joints`` bind (eq. 19-20 with eq. 1);
         ``"balance"``: no contact forces balance the REFS vertex, whatever the torques;
+        ``"limits"``: the position limits of ``joints`` bind (:mod:`~mjtvm.core.limits`);
         ``"unknown"``: neither found (an alpha at the solver's tolerance).
     contacts, joints
         The names of a minimal set of contacts (``"contacts"``) or joints (``"ranges"``).

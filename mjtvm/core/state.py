@@ -31,6 +31,7 @@ from .bounds import (
     integer,
 )
 from .contacts import Contact
+from .limits import JointLimits
 from .operation_range import OperationRange
 from .transmission import Transmission
 
@@ -91,6 +92,10 @@ class GraspState:
         How actuators and equality constraints act on the joints
         (:class:`~mjtvm.core.transmission.Transmission`), or ``None``: each joint is driven
         by its own actuator, as in the paper.
+    joint_limits
+        The joints' positions and position ranges (:class:`~mjtvm.core.limits.JointLimits`:
+        a joint on its limit cannot move further into it), or ``None``: no position limits,
+        the paper's LPs.
     """
 
     space: int
@@ -104,6 +109,7 @@ class GraspState:
     friction_edges: int = 16
     slip: SlipMode = "per_contact"
     transmission: Transmission | None = None
+    joint_limits: JointLimits | None = None
 
     def __post_init__(self) -> None:
         space = self.space
@@ -182,6 +188,11 @@ class GraspState:
             raise StateError(
                 "slip", f"expected 'per_contact' or 'shared', got {describe(self.slip)}", self.slip
             )
+        lim = self.joint_limits
+        if lim is not None and not isinstance(lim, JointLimits):
+            raise StateError("joint_limits", f"expected JointLimits or None, got {describe(lim)}")
+        if lim is not None and lim.num_joints != m:
+            raise StateError("joints", f"expected {m} joint positions and ranges, got {lim.num_joints}")
 
     @property
     def dim(self) -> int:

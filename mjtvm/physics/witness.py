@@ -46,10 +46,10 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
-    asm = assemble(state)
+    asm = assemble(state, horizon=True)  # Problem 2's rows, the joint limits' horizon too
     w, r = state.refs[k], state.rvds[l]
     n = asm.num_variables
-    a = sp.hstack([asm.A, sp.csc_matrix((asm.A_twist @ r).reshape(-1, 1))], format="csr")
+    a = sp.hstack([asm.A, sp.csc_matrix(asm.alpha_column(state, r).reshape(-1, 1))], format="csr")
     lo, hi = asm.statics_bounds(w)
     cl, cu = np.append(asm.col_lower, alpha), np.append(asm.col_upper, alpha)
     eq = np.isfinite(lo) & (lo == hi)

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from ...core.state import GraspState
 from ...errors import ModelError, StateError
-from ..grasp.state import detected_contacts, grasp_state
+from ..grasp.state import detected_contacts, grasp_state, limit_options
 from .march import TOUCH_TOL
 from .trajectory import Lift
 
@@ -129,6 +129,8 @@ def lift_state(
             contact_tolerance=TOUCH_TOL,
             # a grasp file's joint_losses = "ignore" leaves a transmission's damping out too
             joint_damping=getattr(sc, "document", {}).get("joint_losses", "fold") == "fold",
+            # the grasp file's joint_limits (mjtvm.core.limits): false, or its tolerance and horizon
+            joint_limits=limit_options(getattr(sc, "document", {}).get("joint_limits")),
         )
     friction = sc.mu if mu is None else float(mu)
     contacts = []
