@@ -46,12 +46,15 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
-    asm = assemble(state, horizon=True)  # Problem 2's rows, the joint limits' horizon too
+    asm = assemble(state)
     w, r = state.refs[k], state.rvds[l]
     n = asm.num_variables
-    a = sp.hstack([asm.A, sp.csc_matrix(asm.alpha_column(state, r).reshape(-1, 1))], format="csr")
+    a = sp.hstack([asm.A, sp.csc_matrix((asm.A_twist @ r).reshape(-1, 1))], format="csr")
     lo, hi = asm.statics_bounds(w)
     cl, cu = np.append(asm.col_lower, alpha), np.append(asm.col_upper, alpha)
+    # The joints on a position limit are held (assemble's on-limit rows); Problem 2's travel
+    # horizon (mjtvm.core.limits) is not imposed here: with it, as rows or as bounds on qd,
+    # Clarabel called Shadow's rollout QP at 1 % of alpha_kl infeasible (not isolated).
     eq = np.isfinite(lo) & (lo == hi)
     up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
     ceq = cl == cu
