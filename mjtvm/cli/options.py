@@ -32,9 +32,11 @@ __all__ = [
     "friction_margin_option",
     "hand_option",
     "lift_options",
+    "limit_horizon_option",
     "out_options",
     "parallel_options",
     "removed_option",
+    "with_limit_horizon",
 ]
 
 
@@ -52,6 +54,8 @@ class Parser(argparse.ArgumentParser):
 
 
 if TYPE_CHECKING:
+    from ..core.state import GraspState
+
     Subparsers = argparse._SubParsersAction[Parser]
 else:
     Subparsers = argparse._SubParsersAction
@@ -211,3 +215,25 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
         "resists the lift, what the physics check supports), literal (the paper's printed vector: "
         "reproduces its Fig. 8), a comma list, or both",
     )
+
+
+def limit_horizon_option(p: argparse.ArgumentParser) -> None:
+    """``--limit-horizon M``: Problem 2's travel horizon of the joint limits (m of object travel;
+    ``docs/joint-limits.md``), replacing the state's."""
+    p.add_argument(
+        "--limit-horizon",
+        type=number(0.0, 1e3),
+        default=None,
+        metavar="M",
+        help="metres of object travel within which no joint may reach its position limit "
+        "(Problem 2; 0: only joints on a limit are held; default: the state's, 0.001 from a grasp)",
+    )
+
+
+def with_limit_horizon(state: GraspState, horizon: float | None) -> GraspState:
+    """``state`` with the joint limits' horizon ``horizon`` (``None``, or a state without
+    limits: unchanged)."""
+    lim = state.joint_limits
+    if horizon is None or lim is None:
+        return state
+    return state.with_(joint_limits=lim.with_options(horizon=horizon))

@@ -15,7 +15,16 @@ from ..core.state_file import load_state
 from ..core.tvmmp import tvmmp
 from ..errors import OptionError, StateError
 from ..polytopes.budget import DEFAULT_CONFIDENCE
-from .options import GRASP_HELP, Subparsers, command, friction_margin_option, grasp_option, hand_option
+from .options import (
+    GRASP_HELP,
+    Subparsers,
+    command,
+    friction_margin_option,
+    grasp_option,
+    hand_option,
+    limit_horizon_option,
+    with_limit_horizon,
+)
 from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
 from .show import warn_contacts
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
@@ -79,6 +88,7 @@ def add_solve(sub: Subparsers) -> None:
         help="operation-range form: exact reduction or the paper's literal eq. 2 box",
     )
     p.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
+    limit_horizon_option(p)
     _indent_option(p)
     p.set_defaults(func=_cmd_solve)
 
@@ -154,8 +164,9 @@ def _with_margin(state: GraspState, friction_margin: float | None) -> GraspState
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    state = load_source(
-        args.state, hand=args.hand, default=example_path(), friction_margin=args.friction_margin
+    state = with_limit_horizon(
+        load_source(args.state, hand=args.hand, default=example_path(), friction_margin=args.friction_margin),
+        args.limit_horizon,
     )
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
@@ -180,6 +191,7 @@ def add_export_state(sub: Subparsers) -> None:
         "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient; default: the grasp's"
     )
     friction_margin_option(p)
+    limit_horizon_option(p)
     _indent_option(p)
     p.add_argument("--quiet", action="store_true", help="no contact report on stderr")
     p.set_defaults(func=_cmd_export_state)
@@ -195,7 +207,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     grasp = load_scenario(
         source, variant=args.hand, mg=args.mg, mu=args.mu, friction_margin=args.friction_margin
     )
-    state = grasp.state()
+    state = with_limit_horizon(grasp.state(), args.limit_horizon)
     if not args.quiet:
         warn_contacts(grasp)
         report = ", ".join(

@@ -16,7 +16,12 @@ Problem 1 can keep it as D free variables. The rows are
   the paper's literal box with four variables per joint;
 * preloads, per copy and per contact with ``preload > 0`` (last, so that a state without
   preloads has exactly the paper's system): ``n^T E_c lam_ic >= preload``, the contact's
-  normal force bounded below instead of eq. (22)'s ``n_f >= 0``.
+  normal force bounded below instead of eq. (22)'s ``n_f >= 0``;
+* joint position limits (:mod:`~mjtvm.core.limits`; after every other row, so that a state
+  without ``joint_limits`` has exactly the paper's system): ``qd_j <= 0`` for a joint on its
+  upper limit, ``qd_j >= 0`` on its lower; with ``horizon=True`` (Problem 2) also
+  ``sign qd_j - rate s alpha <= 0`` per limited side, whose ``alpha`` coefficient the caller
+  puts in with ``alpha`` (:meth:`Assembly.alpha_column`).
 
 Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, loss][, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
@@ -41,7 +46,7 @@ so that more damping can only shrink the feasible set; a state without damping h
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
 from typing import TYPE_CHECKING, Literal
@@ -53,6 +58,7 @@ from ..errors import ParamError
 from .contacts import force_generators, slide_unit, tangent_basis
 from .csc import Csc
 from .friction import margin_contacts
+from .limits import travel_speed
 from .roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
 from .rows import Rows as _Rows
 from .state import GraspState
@@ -125,6 +131,14 @@ class Assembly:
         its moment balance, a contact's relative velocity); every other row its own id.
         A certificate measures a row's violation against its vector's size, as a rotation
         of the frame mixes the components (:mod:`~mjtvm.core.certificate`).
+    limit_rows
+        The rows ``qd_j <= 0`` / ``qd_j >= 0`` of the joints on a position limit
+        (:mod:`~mjtvm.core.limits`).
+    horizon_rows, horizon_rates
+        The travel-horizon rows ``sign qd_j - rate_j s(r) alpha <= 0`` (assembled with
+        ``horizon=True``) and their ``rate_j = slack_j / H`` (rad or m per m of travel):
+        the ``alpha`` coefficient of the row is ``-rate_j`` times the travel speed of ``r``
+        (:meth:`alpha_column`).
     """
 
     csc: Csc
@@ -142,6 +156,9 @@ class Assembly:
     row_groups: NDArray[np.int64]
     copies: int
     box: BoxForm
+    limit_rows: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    horizon_rows: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    horizon_rates: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
     @property
     def num_variables(self) -> int:
@@ -167,6 +184,14 @@ class Assembly:
             lower[rows] = -w
             upper[rows] = -w
         return lower, upper
+
+    def alpha_column(self, state: GraspState, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        r"""``(m,)`` the coefficients of ``alpha`` when ``rdot = alpha r`` (eq. 31):
+        ``A_twist r``, and ``-rate_j s(r)`` on the horizon rows (:func:`~mjtvm.core.limits.travel_speed`)."""
+        col = np.asarray(self.A_twist @ r, dtype=float).reshape(-1)
+        if len(self.horizon_rows):
+            col[self.horizon_rows] = -self.horizon_rates * travel_speed(state, r)
+        return col
 
     def forces(self, x: NDArray[np.float64], copy: int = 0) -> NDArray[np.float64]:
         """``(L, d)`` contact forces on the object, from a solution vector ``x``."""
@@ -396,7 +421,38 @@ def _preload_rows(
             out.coo.add(r0, blocks[f"lam[{i}]"].start + gen_slices[ci].start, row)
 
 
-def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated") -> Assembly:
+def _limit_rows(
+    out: _Rows, state: GraspState, blocks: dict[str, slice], horizon: bool
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """The position-limit rows (:mod:`~mjtvm.core.limits`): ``qd_j <= 0`` per joint on its
+    upper limit, then ``qd_j >= 0`` per joint on its lower; with ``horizon`` the horizon
+    rows ``sign qd_j <= rate_j s alpha`` (bounds ``(-inf, 0]``, their ``alpha`` coefficient
+    the caller's). Returns the limit rows, the horizon rows and their rates."""
+    empty = np.zeros(0, dtype=np.int64)
+    lim = state.joint_limits
+    if lim is None:
+        return empty, empty, np.zeros(0)
+    qd0 = blocks["qd"].start
+    start = out.count
+    for joints, lo, hi in (
+        (np.flatnonzero(lim.at_upper), -np.inf, 0.0),
+        (np.flatnonzero(lim.at_lower), 0.0, np.inf),
+    ):
+        if len(joints):
+            r0 = out.add(lo, hi, len(joints))
+            out.coo.add_entries(r0 + np.arange(len(joints)), qd0 + joints, np.ones(len(joints)))
+    limit_rows = np.arange(start, out.count)
+    joints, sign, rate = lim.horizon_sides() if horizon else (empty, np.zeros(0), np.zeros(0))
+    if not len(joints):
+        return limit_rows, empty, np.zeros(0)
+    r0 = out.add(-np.inf, 0.0, len(joints))
+    out.coo.add_entries(r0 + np.arange(len(joints)), qd0 + joints, sign)
+    return limit_rows, r0 + np.arange(len(joints)), rate
+
+
+def assemble(
+    state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated", horizon: bool = False
+) -> Assembly:
     r"""Build the sparse constraint system of ``state`` (see the module docstring).
 
     Parameters
@@ -408,6 +464,10 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         Problem 2 (eq. 31), K for Problem 1 (eq. 26).
     box
         ``"eliminated"`` (exact reduction, default) or ``"literal"`` (eq. 2's box).
+    horizon
+        Also the travel-horizon rows of the joint limits (Problem 2, whose ``alpha`` they
+        need: :meth:`Assembly.alpha_column`); Problem 1 takes the on-limit rows only
+        (:mod:`~mjtvm.core.limits`).
 
     Returns
     -------
@@ -441,6 +501,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
     if t is not None and t.constraint_jacobian is not None:  # J_eq qd = 0
         r0 = out.add(0.0, 0.0, t.num_constraints)
         out.coo.add(r0, blocks["qd"].start, t.constraint_jacobian)
+    limit_rows, horizon_rows, horizon_rates = _limit_rows(out, state, blocks, horizon)
     return Assembly(
         csc=out.coo.build((out.count, len(col_lower))),
         twist_csc=out.twist.build((out.count, state.twist_dim)),
@@ -457,4 +518,7 @@ def assemble(state: GraspState, *, copies: int = 1, box: BoxForm = "eliminated")
         row_groups=np.concatenate(out.groups),
         copies=copies,
         box=box,
+        limit_rows=limit_rows,
+        horizon_rows=horizon_rows,
+        horizon_rates=horizon_rates,
     )

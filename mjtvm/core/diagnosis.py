@@ -353,6 +353,30 @@ def _relief_words(relief: Sequence[tuple[str, str]]) -> str:
 
 
 # ------------------------------------------------------------------ the words
+def _binding_limits(state: GraspState, works: Callable[[GraspState], bool]) -> list[int]:
+    """A minimal set of limited joints whose position limits, removed, give ``works``
+    (the state without any limits does): removed in joint order until it works, then each
+    put back where it still works."""
+    lim = state.joint_limits
+    assert lim is not None
+
+    def without(removed: set[int]) -> GraspState:
+        lo, hi = lim.lower.copy(), lim.upper.copy()
+        idx = sorted(removed)
+        lo[idx], hi[idx] = -np.inf, np.inf
+        return state.with_(joint_limits=replace(lim, lower=lo, upper=hi))
+
+    removed: set[int] = set()
+    for joint in np.flatnonzero(lim.limited).tolist():
+        removed.add(joint)
+        if works(without(removed)):
+            break
+    for joint in sorted(removed):
+        if works(without(removed - {joint})):
+            removed.discard(joint)
+    return sorted(removed)
+
+
 def _names(items: Sequence[str]) -> str:
     return ", ".join(repr(x) for x in items)
 
@@ -392,6 +416,19 @@ def _zero_alpha(
             (),
             f"the contacts {kinds} lock the motion along RVDS vertex {l}: their kinematic rows "
             f"(J qd = G^T rdot, eq. 11-13) admit no joint speed for it{_lock_hint(locks[l])}",
+        )
+    lim = state.joint_limits
+    if lim is not None and _solve(state.with_(joint_limits=None), w, r, box, solver)[1] > 0.0:
+        held = _binding_limits(state, lambda s: _solve(s, w, r, box, solver)[1] > 0.0)
+        names = tuple(state.joint_names[j] for j in held)
+        return Diagnosis(
+            (k, l),
+            "limits",
+            (),
+            names,
+            f"the position limits of joint{'' if len(names) == 1 else 's'} {_names(names)} bind: "
+            f"on a limit, or reaching it within {lim.horizon:g} m of object travel along RVDS vertex {l} "
+            "(docs/joint-limits.md)",
         )
     joints = _binding_joints(state, lambda s: _solve(s, w, r, box, solver)[1] > 0.0)
     if not joints:

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from ..errors import SolverError
 from .assembly import Assembly, BoxForm, assemble
 from .certificate import Certificate, Certifier
+from .limits import travel_speed
 from .roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
 from .scaling import ScaledMatrix
 from .solvers import (
@@ -118,14 +119,17 @@ class StateLPs:
 
     def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
         self.state, self.solver = state, solver
-        self.asm = asm = assemble(state, copies=1, box=box)
+        self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
         n = asm.num_variables
         self.alpha_col = n
         self.c = np.zeros(n + 1)
         self.c[n] = -1.0  # maximise alpha
         self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
         self.col_upper = np.append(asm.col_upper, np.inf)
-        self.kin = asm.kinematic_rows
+        # The rows alpha enters: the kinematics (A_twist r_l) and the joint limits' horizon
+        # rows (-rate s(r_l), mjtvm.core.limits), last.
+        self.kin = np.concatenate([asm.kinematic_rows, asm.horizon_rows])
+        self._num_kinematic = len(asm.kinematic_rows)
         self.physical_sizes, self.row_cap = _physical_sizes(state, asm)
         self.force_like = np.zeros(asm.num_variables + 1, dtype=bool)  # the lam and rho columns
         for name, sl in asm.blocks.items():
@@ -176,7 +180,8 @@ class StateLPs:
         self._last: tuple[bytes, bytes, float] = (b"", b"", np.nan)  # as bytes: cheaper to compare
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows, without
+        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows (then the joint
+        limits' horizon rows, ``-rate s(r)``: :meth:`~mjtvm.core.assembly.Assembly.alpha_column`), without
         round-off (:mod:`~mjtvm.core.roundoff`): components of ``r`` at most DROP_REL times
         its largest, and entries at most DROP_REL times the sum of the magnitudes they were
         computed from. A twist written with 1e-16 in a component that is exactly 0 (a
@@ -198,6 +203,8 @@ class StateLPs:
             big = float((np.abs(r) / self.twist_scale).max(initial=0.0))
             rr = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
             col = drop_cancellation(self.twist_rows @ rr, self.abs_twist_rows @ np.abs(rr))
+            if len(self.asm.horizon_rows):  # the horizon rows: -rate_j s(r) (mjtvm.core.limits)
+                col[self._num_kinematic :] = -self.asm.horizon_rates * travel_speed(self.state, rr)
             col.setflags(write=False)
             self._of_r[key] = (col, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
         return self._of_r[key]

@@ -13,7 +13,12 @@ shares nothing with :mod:`mjtvm.core.assembly` (only the schema's orientation ru
   the joint torques are :math:`P^T u + J_{eq}^T \lambda - b \dot q`, the constraints
   :math:`J_{eq} \dot q = 0` hold and the box bounds each actuator's :math:`(u, P \dot q)`;
 * the box of eq. (2) with its four variables per joint and each corner written as a
-  convex combination of the vertices of :math:`P` mirrored into its quadrant.
+  convex combination of the vertices of :math:`P` mirrored into its quadrant;
+* joint position limits (``docs/joint-limits.md``): :math:`\dot q_j \le 0` within the
+  tolerance of the upper limit, :math:`\dot q_j \ge 0` of the lower, and over a travel
+  horizon :math:`H \dot q_j \le (hi_j - q_j)\, s\, \alpha`,
+  :math:`-H \dot q_j \le (q_j - lo_j)\, s\, \alpha` with :math:`s` the largest speed of
+  :math:`p_O` and of the contact points under :math:`\hat r_l`.
 
 The problem is rebuilt for every (k, l): this is the slow baseline of the benchmarks.
 """
@@ -174,7 +179,40 @@ def _build(state: GraspState, w: NDArray[np.float64], r_hat: NDArray[np.float64]
                 if tr.joint_damping[j] > 0.0:
                     cons.append(loss[a] >= tr.joint_damping[j] * cp.abs(qd[j]) / abs(tr.moment[a, j]))
         cons += _box_constraints(state, u, tr.moment @ qd, loss)
+    cons += _limit_constraints(state, qd, alpha, r_hat)
     return cp.Problem(cp.Maximize(alpha), cons)
+
+
+def _limit_constraints(
+    state: GraspState, qd: cp.Variable, alpha: cp.Variable, r_hat: NDArray[np.float64]
+) -> list[cp.Constraint]:
+    r"""The joint position limits, written from ``docs/joint-limits.md``: a joint on a limit
+    (within the tolerance) does not move toward it; any other limited joint does not reach
+    its limit while the object travels the horizon :math:`H` at :math:`\alpha \hat r_l`."""
+    lim = state.joint_limits
+    if lim is None:
+        return []
+    d = state.dim
+    points = [state.object_position] + [c.position for c in state.contacts]
+    speed = max(
+        float(np.linalg.norm(_g_transpose(p, state.object_position) @ r_hat)) for p in points
+    )  # the object's travel per unit alpha (at p_O the map is [I, 0])
+    assert d in (2, 3)
+    cons: list[cp.Constraint] = []
+    h = lim.horizon
+    for j in range(state.num_joints):
+        if not np.isfinite(lim.lower[j]):
+            continue
+        up, dn = lim.upper[j] - lim.position[j], lim.position[j] - lim.lower[j]
+        if up <= lim.tolerance:
+            cons.append(qd[j] <= 0)
+        elif h > 0:
+            cons.append(h * qd[j] <= up * speed * alpha)
+        if dn <= lim.tolerance:
+            cons.append(qd[j] >= 0)
+        elif h > 0:
+            cons.append(-h * qd[j] <= dn * speed * alpha)
+    return cons
 
 
 def reference_alpha(

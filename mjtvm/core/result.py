@@ -25,7 +25,7 @@ __all__ = [
 ]
 
 PairStatus = Literal["optimal", "infeasible", "unbounded", "skipped"]
-DiagnosisCause = Literal["contacts", "ranges", "balance", "unheld", "unknown"]
+DiagnosisCause = Literal["contacts", "ranges", "balance", "unheld", "limits", "unknown"]
 RESULT_SCHEMA = "mjtvm.result/1"
 
 
@@ -67,6 +67,7 @@ class Diagnosis:
         ``"unheld"``: the transmission leaves joint motions (``joints``) that no actuator
         drives and no equality holds, and the REFS vertex needs torque along them
         (:func:`~mjtvm.core.holding.unheld_motions`);
+        ``"limits"``: the position limits of ``joints`` bind (:mod:`~mjtvm.core.limits`);
         ``"unknown"``: neither found (an alpha at the solver's tolerance).
     contacts, joints
         The names of a minimal set of contacts (``"contacts"``) or joints (``"ranges"``).

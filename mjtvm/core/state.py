@@ -32,6 +32,7 @@ from .bounds import (
     number,
 )
 from .contacts import Contact
+from .limits import JointLimits
 from .operation_range import OperationRange
 from .transmission import Transmission
 
@@ -96,6 +97,10 @@ class GraspState:
         :math:`\delta \in [0, 1)` (default 0): the LPs use :math:`(1 - \delta) \mu` for every
         F contact's friction pyramid (eq. 24), so that the witness forces keep a distance from
         the cone (:mod:`mjtvm.core.friction`; S contacts keep ``mu``, ``docs/state-format.md``).
+    joint_limits
+        The joints' positions and position ranges (:class:`~mjtvm.core.limits.JointLimits`:
+        a joint on its limit cannot move further into it), or ``None``: no position limits,
+        the paper's LPs.
     """
 
     space: int
@@ -110,6 +115,7 @@ class GraspState:
     slip: SlipMode = "per_contact"
     transmission: Transmission | None = None
     friction_margin: float = 0.0
+    joint_limits: JointLimits | None = None
 
     def __post_init__(self) -> None:
         space = self.space
@@ -194,6 +200,11 @@ class GraspState:
                 "friction_margin", f"expected a number in [0, 1), got {margin!r}", self.friction_margin
             )
         object.__setattr__(self, "friction_margin", margin)
+        lim = self.joint_limits
+        if lim is not None and not isinstance(lim, JointLimits):
+            raise StateError("joint_limits", f"expected JointLimits or None, got {describe(lim)}")
+        if lim is not None and lim.num_joints != m:
+            raise StateError("joints", f"expected {m} joint positions and ranges, got {lim.num_joints}")
 
     @property
     def dim(self) -> int:

@@ -14,10 +14,13 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..errors import StateError
-from .bounds import MAX_CONTACTS, MAX_FILE_BYTES, MAX_JOINTS, check_json_tree, describe
+from .bounds import MAX_CONTACTS, MAX_FILE_BYTES, MAX_JOINTS, check_json_tree, describe, float_array, number
 from .contacts import Contact
 from .files import atomic_write
+from .limits import JointLimits
 from .operation_range import OperationRange
 from .schema import schema_problem
 from .state import SCHEMA, SCHEMA_V2, GraspState, _name
@@ -38,9 +41,12 @@ _TOP_KEYS = {
     "slip",
     "transmission",
     "friction_margin",
+    "joint_limits",
 }
 _REQUIRED_TOP = ("schema", "space", "object_position", "joints", "gravity_torque", "contacts", "refs")
 _JOINT_KEYS = {"name", "operation_range"}
+_LIMIT_KEYS = {"position", "range"}  # optional on every joint, together (mjtvm.core.limits)
+_LIMIT_OPTION_KEYS = {"tolerance", "horizon"}
 _CONTACT_KEYS = {
     "name",
     "type",
@@ -97,7 +103,7 @@ def parse_state(data: Mapping[str, Any]) -> GraspState:
     names, ranges = [], []
     for i, j in enumerate(joints):
         keys = _JOINT_KEYS if driven else {"name"}
-        _check_keys(j, keys, tuple(sorted(keys)), f"joints[{i}]")
+        _check_keys(j, keys | _LIMIT_KEYS, tuple(sorted(keys)), f"joints[{i}]")
         names.append(_name(j["name"], f"joints[{i}].name"))
         if driven:
             try:
@@ -127,6 +133,9 @@ def parse_state(data: Mapping[str, Any]) -> GraspState:
         kwargs["slip"] = data["slip"]
     if "friction_margin" in data:
         kwargs["friction_margin"] = data["friction_margin"]
+    limits = _joint_limits(data, joints)
+    if limits is not None:
+        kwargs["joint_limits"] = limits
     if "rvds" in data:
         # JSON null would mean "absent" to GraspState: refuse it, the format says "omit the key".
         if data["rvds"] is None:
@@ -144,6 +153,40 @@ def parse_state(data: Mapping[str, Any]) -> GraspState:
         refs=data["refs"],
         **kwargs,
     )
+
+
+def _joint_limits(data: Mapping[str, Any], joints: Sequence[Any]) -> JointLimits | None:
+    """The joints' ``position`` and ``range`` (both or neither on each joint) and the
+    top-level ``joint_limits`` options, as :class:`~mjtvm.core.limits.JointLimits`; ``None``
+    when no joint has a range."""
+    pos, lo, hi = [], [], []
+    for i, j in enumerate(joints):
+        has = [k in j for k in ("position", "range")]
+        if has[0] != has[1]:
+            missing = "range" if has[0] else "position"
+            raise StateError(
+                f"joints[{i}].{missing}", "required with the joint's " + ("position" if has[0] else "range")
+            )
+        if not has[0]:
+            pos.append(0.0)
+            lo.append(-float("inf"))
+            hi.append(float("inf"))
+            continue
+        pos.append(number(j["position"], f"joints[{i}].position"))
+        rng = float_array(j["range"], f"joints[{i}].range", ndim=1, max_len=2, what="[lower, upper]")
+        if rng.shape != (2,):
+            raise StateError(f"joints[{i}].range", f"expected [lower, upper], got {rng.shape[0]} numbers")
+        lo.append(float(rng[0]))
+        hi.append(float(rng[1]))
+    options = data.get("joint_limits")
+    if options is not None:
+        _check_keys(options, _LIMIT_OPTION_KEYS, (), "joint_limits")
+    if all(x == -float("inf") for x in lo):
+        if options is not None:
+            raise StateError("joint_limits", "needs at least one joint with a position and a range")
+        return None
+    opts = {k: options[k] for k in _LIMIT_OPTION_KEYS if options is not None and k in options}
+    return JointLimits(np.array(pos), np.array(lo), np.array(hi), **opts)
 
 
 def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
@@ -258,12 +301,7 @@ def state_to_dict(state: GraspState) -> dict[str, Any]:
         "schema": SCHEMA if t is None else SCHEMA_V2,
         "space": state.space,
         "object_position": state.object_position.tolist(),
-        "joints": [
-            {"name": n, "operation_range": r.to_list()}
-            for n, r in zip(state.joint_names, state.operation_ranges)
-        ]
-        if t is None
-        else [{"name": n} for n in state.joint_names],
+        "joints": _joints_to_list(state),
         "gravity_torque": state.gravity_torque.tolist(),
         "contacts": contacts,
         "refs": state.refs.tolist(),
@@ -277,6 +315,25 @@ def state_to_dict(state: GraspState) -> dict[str, Any]:
         out["friction_margin"] = state.friction_margin
     if t is not None:
         out["transmission"] = transmission_to_dict(t, state.operation_ranges)
+    lim = state.joint_limits
+    if lim is not None:
+        out["joint_limits"] = {"tolerance": lim.tolerance, "horizon": lim.horizon}
+    return out
+
+
+def _joints_to_list(state: GraspState) -> list[dict[str, Any]]:
+    """The ``joints`` list: names, operation ranges (without a transmission), and each
+    limited joint's ``position`` and ``range``."""
+    t, lim = state.transmission, state.joint_limits
+    out: list[dict[str, Any]] = []
+    for j, name in enumerate(state.joint_names):
+        entry: dict[str, Any] = {"name": name}
+        if t is None:
+            entry["operation_range"] = state.operation_ranges[j].to_list()
+        if lim is not None and lim.limited[j]:
+            entry["position"] = float(lim.position[j])
+            entry["range"] = [float(lim.lower[j]), float(lim.upper[j])]
+        out.append(entry)
     return out
 
 

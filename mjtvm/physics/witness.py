@@ -52,6 +52,9 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     a = sp.hstack([asm.A, sp.csc_matrix((asm.A_twist @ r).reshape(-1, 1))], format="csr")
     lo, hi = asm.statics_bounds(w)
     cl, cu = np.append(asm.col_lower, alpha), np.append(asm.col_upper, alpha)
+    # The joints on a position limit are held (assemble's on-limit rows); Problem 2's travel
+    # horizon (mjtvm.core.limits) is not imposed here: with it, as rows or as bounds on qd,
+    # Clarabel called Shadow's rollout QP at 1 % of alpha_kl infeasible (not isolated).
     eq = np.isfinite(lo) & (lo == hi)
     up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
     ceq = cl == cu

@@ -17,7 +17,8 @@ so the statics drop out: :math:`S_{ov} = \{\dot r \in V : A_q \dot q = A_r \dot 
    contact, whose force must then be 0 (a point force balances no wrench but 0); the box's
    half-widths are the speeds at :math:`g_j`,
    :meth:`~mjtvm.core.operation_range.OperationRange.max_speed_at`, as on the LP path;
-3. no transmission (its damping puts the speeds in the torque rows) and only F and L contacts
+3. no transmission (its damping puts the speeds in the torque rows), no joint on its
+   position limit (its speed is one-sided, :mod:`~mjtvm.core.limits`), and only F and L contacts
    (equalities :math:`A_q \dot q = A_r \dot r`, eq. 7 and 9; an S contact's slip and a D
    contact's inequality are not images of the box);
 4. the twist space ``V`` is a linear subspace: all of :math:`R^D` without the RVDS cone, or
@@ -116,6 +117,10 @@ def speed_box(state: GraspState) -> tuple[NDArray[np.float64] | None, str]:
         return None, "a transmission couples the joints"
     if np.any(state.refs != 0.0):
         return None, "a REFS wrench needs contact forces"
+    lim = state.joint_limits
+    if lim is not None and np.any(lim.at_upper | lim.at_lower):  # its box is one-sided
+        j = int(np.flatnonzero(lim.at_upper | lim.at_lower)[0])
+        return None, f"joint {state.joint_names[j]!r} is on its position limit"
     for c in state.contacts:
         if c.preload > 0.0:
             return None, f"contact {c.name!r} has a preload"

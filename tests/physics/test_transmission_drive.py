@@ -96,6 +96,10 @@ def test_f85_motor_model_and_central_witness() -> None:
     assert list(motors) == ["fingers_actuator"]
     assert motors["fingers_actuator"] == box_motor(5.0, 1.25)
     state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
+    # Its coupler joints reach their limit after 0.99999 mm of lift (docs/joint-limits.md): at
+    # the default 1 mm horizon alpha_00 is 0; the linkage's witness is checked without it.
+    assert state.joint_limits is not None
+    state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
     t = state.transmission
     assert t is not None and t.constraint_jacobian is not None
     res = tvmmp(state)
@@ -185,6 +189,10 @@ def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
     lift = cached_lift(F85, 2)
     grasp = lift.scenario
     state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
+    # Its coupler joints reach their limit after 0.99999 mm of lift (docs/joint-limits.md): at
+    # the default 1 mm horizon alpha_00 is 0; the linkage's witness is checked without it.
+    assert state.joint_limits is not None
+    state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
     model = sim_model(motor_model(grasp), _types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body)
     res = tvmmp(state)
     alpha = float(res.alpha[0, 0])

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.core.contacts import tangent_basis
+from mjtvm.core.limits import JointLimits
 from mjtvm.core.operation_range import OperationRange
 from mjtvm.core.roundoff import DROP_REL
 from mjtvm.core.state import GraspState
@@ -108,6 +109,10 @@ def rescale(state: GraspState, *, length: float = 1.0, force: float = 1.0, time:
         gravity_torque=state.gravity_torque * force * length,
         refs=state.refs * wscale,
         rvds=None if state.rvds is None else state.rvds * rscale,
+        # the joint limits' horizon is a length (m of object travel); the angles are not
+        joint_limits=None
+        if state.joint_limits is None
+        else state.joint_limits.with_options(horizon=state.joint_limits.horizon * length),
     )
 
 
@@ -135,8 +140,17 @@ def rescale_joints(state: GraspState, factor: float) -> GraspState:
     """
     contacts = tuple(replace(c, jacobian=c.jacobian * factor) for c in state.contacts)
     ranges = tuple(scale_range(op, factor, 1.0 / factor) for op in state.operation_ranges)
+    lim = state.joint_limits
+    if lim is not None:  # angles q' = q / s: positions, ranges and the tolerance
+        lim = JointLimits(
+            lim.position / factor, lim.lower / factor, lim.upper / factor, lim.tolerance / factor, lim.horizon
+        )
     return replace(
-        state, contacts=contacts, operation_ranges=ranges, gravity_torque=state.gravity_torque * factor
+        state,
+        contacts=contacts,
+        operation_ranges=ranges,
+        gravity_torque=state.gravity_torque * factor,
+        joint_limits=lim,
     )
 
 

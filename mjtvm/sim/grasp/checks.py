@@ -48,6 +48,7 @@ _TOP = {
     "friction_margin",
     "mu_range",
     "cone",
+    "joint_limits",
 }
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}

@@ -34,6 +34,7 @@ from .checks import (
 )
 from .rules import check_contact_rules
 from .sections import _configuration, _contacts, _lift, _quaternion, _ranges, _refs, _shape, mu_range
+from .state import JointLimitOptions
 from .validate import schema_problem
 
 __all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
@@ -185,7 +186,27 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
     if doc["joint_losses"] not in ("fold", "ignore"):
         raise c.fail("joint_losses", f"expected 'fold' or 'ignore', got {doc['joint_losses']!r}")
     doc["lift"] = _lift(c, doc["lift"]) if "lift" in doc else None
+    doc["joint_limits"] = _joint_limits(c, doc.get("joint_limits", {}))
     return doc
+
+
+def _joint_limits(c: Any, value: Any) -> dict[str, float] | bool:
+    """``joint_limits``: ``false`` (the paper's LPs, no position limits) or a table of
+    ``tolerance`` and ``horizon`` (``docs/joint-limits.md``), completed with the defaults
+    (:func:`~mjtvm.sim.grasp.state.limit_options` reads it)."""
+    if value is False:
+        return False
+    if not isinstance(value, Mapping):
+        raise c.fail(
+            "joint_limits", f"expected false or a table of tolerance and horizon, got {_kind(value)}"
+        )
+    for key in sorted(set(value) - {"tolerance", "horizon"}):
+        raise c.fail(f"joint_limits.{key}", "unknown key (allowed: horizon, tolerance)")
+    default = JointLimitOptions()
+    return {
+        k: c.number(value[k], f"joint_limits.{k}", low=0.0) if k in value else float(getattr(default, k))
+        for k in ("tolerance", "horizon")
+    }
 
 
 def _toml_value(value: Any) -> str:

@@ -39,6 +39,7 @@ from .rules import RuleMatch, touching_geoms
 from .state import (
     geom_id,
     grasp_state,
+    limit_options,
     object_weight,
     subtree,
 )
@@ -309,6 +310,7 @@ class Grasp:
             "friction_edges": self.friction_edges,
             "slip": self.slip,
             "joint_damping": self.document["joint_losses"] == "fold",
+            "joint_limits": limit_options(self.document["joint_limits"]),
             **options,
         }
         state = grasp_state(

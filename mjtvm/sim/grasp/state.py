@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, cast
 
 import mujoco
@@ -21,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...core.contacts import CONTACT_TYPES, Contact
+from ...core.limits import DEFAULT_HORIZON, DEFAULT_TOLERANCE, JointLimits
 from ...core.operation_range import OperationRange, as_operation_range
 from ...core.state import GraspState, SlipMode
 from ...core.transmission import Transmission
@@ -44,11 +46,14 @@ from .transmission import check_closed, is_independent, model_transmission
 # state's callers have always found them.
 __all__ = [
     "DetectedContact",
+    "JointLimitOptions",
     "detected_contacts",
     "forward_touching",
     "geom_id",
     "geom_label",
     "grasp_state",
+    "joint_limits_of",
+    "limit_options",
     "model_id",
     "object_weight",
     "precise_collision",
@@ -57,6 +62,26 @@ __all__ = [
 ]
 
 _OBJ = mujoco.mjtObj
+
+
+@dataclass(frozen=True)
+class JointLimitOptions:
+    """How :func:`grasp_state` states the joints' position limits (:mod:`mjtvm.core.limits`):
+    a joint within ``tolerance`` (rad or m) of a limit is on it, and ``horizon`` (m of
+    object travel; 0: on-limit rows only) is Problem 2's travel horizon."""
+
+    tolerance: float = DEFAULT_TOLERANCE
+    horizon: float = DEFAULT_HORIZON
+
+
+def limit_options(value: Mapping[str, float] | bool | None) -> JointLimitOptions | None:
+    """The :class:`JointLimitOptions` of a grasp file's normalised ``joint_limits``
+    (``false``: ``None``, no limits; a missing key: the defaults)."""
+    if value is None or value is True:
+        return JointLimitOptions()
+    if value is False:
+        return None
+    return JointLimitOptions(**value)
 
 
 def object_weight(
@@ -141,6 +166,7 @@ def grasp_state(
     slip: SlipMode = "per_contact",
     contact_tolerance: float | None = None,
     joint_damping: bool = True,
+    joint_limits: JointLimitOptions | None = JointLimitOptions(),
 ) -> GraspState:
     r"""The grasp state (space = 3) at the configuration ``data.qpos``.
 
@@ -191,6 +217,11 @@ def grasp_state(
         actuator's) this function puts no damping anywhere: the operation ranges given are
         used as they are, and a grasp file folds the model's damping and friction loss into
         them beforehand (:func:`~mjtvm.sim.grasp.ranges.joint_ranges`, ``joint_losses``).
+    joint_limits
+        The tolerance and horizon of the joints' position limits
+        (:class:`JointLimitOptions`): each joint with ``jnt_limited`` carries its
+        ``jnt_range`` and its ``qpos`` (:func:`joint_limits_of`); ``None``: no limits (the
+        paper's LPs).
 
     Returns
     -------
@@ -228,6 +259,7 @@ def grasp_state(
     contacts = _contacts(model, work, detected, dofs, contact_types, mu, slide_directions)
     transmission, ranges = _drive(model, work, joint_ids, names, overrides, joint_damping)
     gravity_torque = (work.qfrc_bias - work.qfrc_passive)[dofs]
+    limits = None if joint_limits is None else joint_limits_of(model, work, joint_ids, joint_limits)
     if refs is None:
         refs = object_weight(model, work, object_body=object_body)[None, :]
     return GraspState(
@@ -242,7 +274,23 @@ def grasp_state(
         friction_edges=friction_edges,
         slip=slip,
         transmission=transmission,
+        joint_limits=limits,
     )
+
+
+def joint_limits_of(
+    model: mujoco.MjModel, data: mujoco.MjData, joint_ids: Sequence[int], options: JointLimitOptions
+) -> JointLimits | None:
+    """The limits of the state's joints: ``jnt_range`` of each joint with ``jnt_limited``
+    (a coupled hand's joints each their own) and its position ``qpos``; ``None`` when no
+    joint is limited."""
+    limited = [bool(model.jnt_limited[j]) for j in joint_ids]
+    if not any(limited):
+        return None
+    position = np.array([float(data.qpos[model.jnt_qposadr[j]]) for j in joint_ids])
+    lower = np.array([float(model.jnt_range[j, 0]) if f else -np.inf for j, f in zip(joint_ids, limited)])
+    upper = np.array([float(model.jnt_range[j, 1]) if f else np.inf for j, f in zip(joint_ids, limited)])
+    return JointLimits(position, lower, upper, options.tolerance, options.horizon)
 
 
 def _drive(

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from ...core.state import GraspState
 from ...errors import ModelError, StateError
 from ..grasp.loaded import with_mu_ranges
-from ..grasp.state import detected_contacts, grasp_state
+from ..grasp.state import detected_contacts, grasp_state, limit_options
 from .march import start_tolerance
 from .trajectory import Lift
 
@@ -138,6 +138,8 @@ def lift_state(
             slip=getattr(sc, "slip", "per_contact"),
             # a grasp file's joint_losses = "ignore" leaves a transmission's damping out too
             joint_damping=getattr(sc, "document", {}).get("joint_losses", "fold") == "fold",
+            # the grasp file's joint_limits (mjtvm.core.limits): false, or its tolerance and horizon
+            joint_limits=limit_options(getattr(sc, "document", {}).get("joint_limits")),
         )
     friction = sc.mu if mu is None else float(mu)
     contacts = []
