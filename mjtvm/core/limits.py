@@ -118,7 +118,7 @@ class JointLimits:
             j = int(np.flatnonzero(limited & (lo > hi))[0])
             raise StateError(
                 f"joints[{j}].range",
-                f"expected [lower, upper] with lower <= upper, got [{lo[j]!r}, {hi[j]!r}]",
+                f"expected [lower, upper] with lower <= upper, got [{float(lo[j]):g}, {float(hi[j]):g}]",
             )
         for a in (pos, lo, hi):
             a.setflags(write=False)

@@ -182,7 +182,10 @@ def scratch_alpha(state: GraspState, k: int, l: int) -> tuple[str, float | None]
 
 @functools.cache
 def grasp(name: str) -> GraspState:
-    return load_grasp(name).state()
+    """The shipped grasp's state without its joint position limits: the scratch LP transcribes
+    the paper's rows only (F, L, D contacts, no transmission, no limits); the limits have their
+    own differential test (tests/core/test_limits.py)."""
+    return load_grasp(name).state().with_(joint_limits=None)
 
 
 def entries(state: GraspState) -> list[tuple[int, tuple[int, int]]]:

@@ -168,7 +168,7 @@ def test_the_documented_example_is_valid(validator):
 BEYOND_SCHEMA = re.compile(
     r"(one per joint|one column per joint|rows of equal length|unit vector|"
     r"the origin \[0, 0\] must be a vertex|not down-closed|not convex|repeated vertex|winding|"
-    r"tangent plane|orthogonal|non-zero|unique|finite)"
+    r"tangent plane|orthogonal|non-zero|unique|finite|lower <= upper)"
 )
 VALUES: list[Any] = [
     "x",

@@ -58,3 +58,37 @@ def test_allegro_thumb_on_its_limit_at_states_25_to_29(lift) -> None:  # type: i
         tvmmp(s24.with_(joint_limits=None), witnesses=False).alpha,
         rtol=1e-9,
     )
+
+
+@pytest.mark.parametrize(
+    "grasp",
+    ["shadow_hand/shadow_hand_coupled-sphere.toml", "allegro/allegro-ik.toml", "gripper3/gripper3-box.toml"],
+)
+def test_no_witness_reaches_a_model_limit_within_the_horizon(grasp: str) -> None:
+    """Each witness's joints moved for the time the object takes to travel the horizon,
+    q + qd H / (alpha s(r_l)), stay inside the MuJoCo model's own jnt_range (read here from the
+    model, not from the state's limits): first order, independent of the LP's limit rows."""
+    from pathlib import Path
+
+    from mjtvm import load_grasp
+    from mjtvm.core.limits import travel_speed
+
+    g = load_grasp(Path(__file__).resolve().parents[3] / "models" / grasp)
+    state = g.state()
+    assert state.joint_limits is not None and state.rvds is not None
+    horizon = state.joint_limits.horizon
+    result = tvmmp(state)
+    moved = 0
+    for l, w in enumerate(result.witnesses[0]):
+        assert w is not None
+        if w.alpha <= 0.0:
+            continue
+        t = horizon / (w.alpha * travel_speed(state, state.rvds[l]))
+        for name, qd in zip(state.joint_names, w.speeds, strict=True):
+            j = g.model.joint(name)
+            if g.model.jnt_limited[j.id]:
+                lo, hi = g.model.jnt_range[j.id]
+                q_end = g.data.qpos[j.qposadr[0]] + qd * t
+                assert lo - 1e-9 <= q_end <= hi + 1e-9, (name, l, q_end, lo, hi)
+                moved += 1
+    assert moved > 0
