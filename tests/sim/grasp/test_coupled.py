@@ -32,6 +32,19 @@ SHADOW_COUPLED = MODELS / "shadow_hand" / "shadow_hand_coupled-sphere.toml"  # J
 F85 = MODELS / "robotiq_2f85" / "robotiq_2f85-sphere.toml"
 
 
+def _f85_without_horizon(folder: Path) -> Path:
+    """The 2F-85 grasp with a travel horizon of 0 (only joints on a limit held): its couplers
+    reach their stop after 0.99999 mm of lift, inside the default 1 mm horizon, which makes its
+    alpha along the lift 0 (docs/own-hand.md); the speed checks below are of the lift itself."""
+    text = F85.read_text(encoding="utf-8").replace(
+        'model = "robotiq_2f85.xml"',
+        f"model = {json.dumps(str(F85.parent / 'robotiq_2f85.xml'))}\njoint_limits = {{ horizon = 0.0 }}",
+    )
+    out = folder / "f85-no-horizon.toml"
+    out.write_text(text, encoding="utf-8")
+    return out
+
+
 def _doc(path: Path) -> dict[str, Any]:
     doc = tomllib.loads(path.read_text(encoding="utf-8"))
     doc["model"] = str(path.parent / doc["model"])
@@ -216,7 +229,11 @@ def test_alphas_against_the_cvxpy_reference(coupled: tuple[Any, Any]) -> None:
     ref, status = reference_tvmmp(state)
     assert all(s == "optimal" for row in status for s in row)
     np.testing.assert_allclose(result.alpha, ref, rtol=1e-6, atol=1e-9)
-    assert np.all(result.certified) and result.tvmmp is not None and result.tvmmp > 0.0
+    assert np.all(result.certified) and result.tvmmp is not None
+    if state.num_joints == 8:  # the 2F-85: along the lift its couplers reach their stop (horizon)
+        assert result.alpha[0, 0] == 0.0 and result.alpha[0, 1] > 0.0
+    else:
+        assert result.tvmmp > 0.0
 
 
 def test_coupled_shadow_adds_the_two_equalities() -> None:
@@ -258,6 +275,12 @@ def test_cli_export_solve_tvms(tmp_path: Path, grasp: Path) -> None:
             state_file.write_text(proc.stdout, encoding="utf-8")
     proc = subprocess.run([*cmd, "solve", str(state_file)], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr
+    if grasp == F85:  # 0 within the default 1 mm horizon, its limit the cause; > 0 within 0.9 mm
+        doc = json.loads(proc.stdout)
+        assert doc["tvmmp"] == 0.0 and doc["diagnosis"][0]["cause"] == "limits"
+        words = ["solve", str(state_file), "--limit-horizon", "0.0009"]
+        proc = subprocess.run([*cmd, *words], capture_output=True, text=True, check=False)
+        assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["tvmmp"] > 0
 
 
@@ -292,6 +315,9 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     alpha), its state 1 does."""
     exe = Path(sys.executable).with_name("mjtvm")
     cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mjtvm.cli"]
+    f85 = grasp == F85
+    if f85:
+        grasp = _f85_without_horizon(tmp_path)
     out = tmp_path / "replay"
     words = ["replay", "--grasp", str(grasp), "--states", "3", "--no-sweeps", "--no-plots", "--quiet"]
     proc = subprocess.run([*cmd, *words, "--out", str(out)], capture_output=True, text=True, timeout=600)
@@ -322,10 +348,10 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     nrvds = len(tomllib.loads(grasp.read_text(encoding="utf-8"))["rvds"])
     assert len(found) == 2 * nrvds
     assert all(r["status"] == "optimal" and float(r["alpha_lp"]) > 0 for r in found)
-    if grasp == F85:
+    if f85:
         assert all(1.0 <= float(r["ratio"]) <= 1.3 and r["pass_check"] == "True" for r in found)
     held = [r for r in found if r["held"] == "True"]
-    if grasp == F85:
+    if f85:
         assert held == found
     else:
         assert [r["held"] for r in found] == ["False"] * nrvds + ["True"] * nrvds
@@ -334,7 +360,7 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
             r["alpha_dyn"] == "" and r["verdict"].startswith("does not hold at rest") for r in found[:nrvds]
         )
     # --dynamics: the dynamic alpha of each pair held, its limit named per actuator (docs/dynamics.md)
-    prefix = "fingers_actuator" if grasp == F85 else "rh_A_"
+    prefix = "fingers_actuator" if f85 else "rh_A_"
     assert all(float(r["alpha_dyn"]) > 0 and r["dyn_joint"].startswith(prefix) for r in held), held
 
 
