@@ -21,7 +21,7 @@ Problem 1 can keep it as D free variables. The rows are
   without ``joint_limits`` has exactly the paper's system): ``qd_j <= 0`` for a joint on its
   upper limit, ``qd_j >= 0`` on its lower; with ``horizon=True`` (Problem 2) also
   ``sign qd_j - rate s alpha <= 0`` per limited side, whose ``alpha`` coefficient the caller
-  puts in with ``alpha`` (:meth:`Assembly.alpha_column`).
+  puts in with ``alpha`` (:meth:`Assembly.horizon_column`).
 
 Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, loss][, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
@@ -138,7 +138,7 @@ class Assembly:
         The travel-horizon rows ``sign qd_j - rate_j s(r) alpha <= 0`` (assembled with
         ``horizon=True``) and their ``rate_j = slack_j / H`` (rad or m per m of travel):
         the ``alpha`` coefficient of the row is ``-rate_j`` times the travel speed of ``r``
-        (:meth:`alpha_column`).
+        (:meth:`horizon_column`).
     """
 
     csc: Csc
@@ -185,13 +185,11 @@ class Assembly:
             upper[rows] = -w
         return lower, upper
 
-    def alpha_column(self, state: GraspState, r: NDArray[np.float64]) -> NDArray[np.float64]:
-        r"""``(m,)`` the coefficients of ``alpha`` when ``rdot = alpha r`` (eq. 31):
-        ``A_twist r``, and ``-rate_j s(r)`` on the horizon rows (:func:`~mjtvm.core.limits.travel_speed`)."""
-        col = np.asarray(self.A_twist @ r, dtype=float).reshape(-1)
-        if len(self.horizon_rows):
-            col[self.horizon_rows] = -self.horizon_rates * travel_speed(state, r)
-        return col
+    def horizon_column(self, state: GraspState, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        r"""``(len(horizon_rows),)`` the coefficients of ``alpha`` on the horizon rows when
+        ``rdot = alpha r`` (eq. 31): ``-rate_j s(r)`` (:func:`~mjtvm.core.limits.travel_speed`);
+        on every other row alpha's coefficient is ``A_twist r``."""
+        return -self.horizon_rates * travel_speed(state, r)
 
     def forces(self, x: NDArray[np.float64], copy: int = 0) -> NDArray[np.float64]:
         """``(L, d)`` contact forces on the object, from a solution vector ``x``."""
@@ -466,7 +464,7 @@ def assemble(
         ``"eliminated"`` (exact reduction, default) or ``"literal"`` (eq. 2's box).
     horizon
         Also the travel-horizon rows of the joint limits (Problem 2, whose ``alpha`` they
-        need: :meth:`Assembly.alpha_column`); Problem 1 takes the on-limit rows only
+        need: :meth:`Assembly.horizon_column`); Problem 1 takes the on-limit rows only
         (:mod:`~mjtvm.core.limits`).
 
     Returns

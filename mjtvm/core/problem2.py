@@ -19,7 +19,6 @@ from numpy.typing import NDArray
 from ..errors import SolverError
 from .assembly import Assembly, BoxForm, assemble
 from .certificate import Certificate, Certifier
-from .limits import travel_speed
 from .roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
 from .scaling import ScaledMatrix
 from .solvers import (
@@ -181,7 +180,7 @@ class StateLPs:
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows (then the joint
-        limits' horizon rows, ``-rate s(r)``: :meth:`~mjtvm.core.assembly.Assembly.alpha_column`), without
+        limits' horizon rows, ``-rate s(r)``: :meth:`~mjtvm.core.assembly.Assembly.horizon_column`), without
         round-off (:mod:`~mjtvm.core.roundoff`): components of ``r`` at most DROP_REL times
         its largest, and entries at most DROP_REL times the sum of the magnitudes they were
         computed from. A twist written with 1e-16 in a component that is exactly 0 (a
@@ -204,7 +203,7 @@ class StateLPs:
             rr = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
             col = drop_cancellation(self.twist_rows @ rr, self.abs_twist_rows @ np.abs(rr))
             if len(self.asm.horizon_rows):  # the horizon rows: -rate_j s(r) (mjtvm.core.limits)
-                col[self._num_kinematic :] = -self.asm.horizon_rates * travel_speed(self.state, rr)
+                col[self._num_kinematic :] = self.asm.horizon_column(self.state, rr)
             col.setflags(write=False)
             self._of_r[key] = (col, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
         return self._of_r[key]
