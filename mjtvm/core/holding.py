@@ -81,7 +81,8 @@ def free_motions(state: GraspState) -> NDArray[np.float64]:
     (each joint its own actuator, eq. 19).
 
     The basis is taken per group of joints that the transmission's rows connect (a finger's
-    tendon and its equalities), so that each motion names one finger's joints.
+    tendon and its equalities), so that each motion names one finger's joints; each motion's
+    first largest entry is positive.
     """
     m = state.num_joints
     t = state.transmission
@@ -100,7 +101,10 @@ def free_motions(state: GraspState) -> NDArray[np.float64]:
         for v in basis:
             full = np.zeros(m)
             full[group] = v
-            big = np.argmax(np.abs(full))
+            # The sign: the first entry within round-off of the largest is positive, so that
+            # equal entries (J1 + J2 of a sum tendon) do not let LAPACK's round-off pick it.
+            mag = np.abs(full)
+            big = int(np.flatnonzero(mag >= (1.0 - 1e-9) * mag.max())[0])
             out.append(full * np.sign(full[big]))
     return np.array(out).reshape(-1, m)
 
