@@ -1,13 +1,13 @@
 r"""mjtvm: joint torque-velocity pair based manipulability (Watanabe) on top of MuJoCo.
 
 The core (this namespace) needs neither MuJoCo nor rerun: grasp states, operation
-ranges, contacts, Problem 2 (TVMMP, :func:`tvmmp`) and Problem 1 (TVMS, :func:`tvms`). The
-MuJoCo coupling (:mod:`mjtvm.sim`: ``grasp``, ``lift``, ``paper_hand``; :mod:`mjtvm.physics`)
-and the rerun recording (:mod:`mjtvm.viewer`) live in their own packages. The grasp-file names
-here (:func:`load_grasp`, :func:`export_state`, :class:`Grasp`, :class:`GraspError`,
-:func:`shipped_grasps`) are imported on first use, so that ``import mjtvm`` does not load MuJoCo;
-so are the classic grasp measures (:func:`classic_measures`, :class:`GraspMeasures`,
-:mod:`mjtvm.measures`), which a solve does not need.
+ranges, contacts, Problem 2 (TVMMP, [`tvmmp()`][mjtvm.core.tvmmp.tvmmp]) and Problem 1 (TVMS, [`tvms()`][mjtvm.polytopes.tvms.tvms]). The
+MuJoCo coupling (`mjtvm.sim`: ``grasp``, ``lift``, ``paper_hand``; `mjtvm.physics`)
+and the rerun recording (`mjtvm.viewer`) live in their own packages. The grasp-file names
+here ([`load_grasp()`][mjtvm.sim.grasp.file.load_grasp], [`export_state()`][mjtvm.sim.grasp.file.export_state], [`Grasp`][mjtvm.sim.grasp.loaded.Grasp], `GraspError`,
+[`shipped_grasps()`][mjtvm.sim.grasp.file.shipped_grasps]) are imported on first use, so that ``import mjtvm`` does not load MuJoCo;
+so are the classic grasp measures ([`classic_measures()`][mjtvm.measures.classic.classic_measures], [`GraspMeasures`][mjtvm.measures.classic.GraspMeasures],
+`mjtvm.measures`), which a solve does not need.
 """
 
 from typing import TYPE_CHECKING

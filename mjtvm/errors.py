@@ -1,6 +1,6 @@
 r"""The one exception family of mjtvm.
 
-Every error the package raises on purpose derives from :class:`MjtvmError`, and
+Every error the package raises on purpose derives from [`MjtvmError`][mjtvm.errors.MjtvmError], and
 carries the offending data as attributes so that callers (and tests) need not
 parse messages.
 """
@@ -53,8 +53,8 @@ class StateError(MjtvmError, ValueError):
 
 class ParamError(MjtvmError, ValueError):
     r"""A bad argument to a Python function of the package: not bad data (a state, a grasp
-    file, a model: :class:`StateError`, :class:`ModelError`) and not a command-line option
-    (:class:`OptionError`).
+    file, a model: [`StateError`][mjtvm.errors.StateError], [`ModelError`][mjtvm.errors.ModelError]) and not a command-line option
+    ([`OptionError`][mjtvm.errors.OptionError]).
 
     Parameters
     ----------

@@ -1,8 +1,8 @@
-r"""The applications of Problem 2 along a lift: :mod:`mjtvm.apps.replay` (the replay and the
-Fig. 8/9 sweeps; its records and files in :mod:`mjtvm.apps.replay_records`),
-:mod:`mjtvm.apps.sweep` (parameter sweeps on a grid, a process pool or a Dask cluster; the
-files of ``mjtvm sweep`` in :mod:`mjtvm.apps.sweep_files`), :mod:`mjtvm.apps.rank` (a grasp dataset ranked by TVMMP; the
-files of ``mjtvm rank`` in :mod:`mjtvm.apps.rank_files`) and :mod:`mjtvm.apps.figures`.
+r"""The applications of Problem 2 along a lift: [`mjtvm.apps.replay`][mjtvm.apps.replay] (the replay and the
+Fig. 8/9 sweeps; its records and files in [`mjtvm.apps.replay_records`][mjtvm.apps.replay_records]),
+[`mjtvm.apps.sweep`][mjtvm.apps.sweep] (parameter sweeps on a grid, a process pool or a Dask cluster; the
+files of ``mjtvm sweep`` in [`mjtvm.apps.sweep_files`][mjtvm.apps.sweep_files]), [`mjtvm.apps.rank`][mjtvm.apps.rank] (a grasp dataset ranked by TVMMP; the
+files of ``mjtvm rank`` in [`mjtvm.apps.rank_files`][mjtvm.apps.rank_files]) and [`mjtvm.apps.figures`][mjtvm.apps.figures].
 
 The names below are imported on first use: the replay loads matplotlib, which a sweep's
 workers do not need.

@@ -115,7 +115,7 @@ class RowCheckpoint(Generic[K]):
         write_files({self.path: json.dumps(doc, indent=1) + "\n"})
 
     def record(self, rows: Iterable[Row]) -> None:
-        """Keep newly finished rows; write them when :attr:`every_s` has passed."""
+        """Keep newly finished rows; write them when `every_s` has passed."""
         self.finished.update((self.key(r), self.tagged(r)) for r in rows)
         if time.monotonic() - self._last >= self.every_s:
             self.save()
@@ -138,9 +138,9 @@ class RowCheckpoint(Generic[K]):
         notice: Callable[[str], None],
     ) -> list[Row]:
         """Every row of the run, tagged with its inputs: the finished ones read back (with
-        ``resume``, :meth:`resume`), the rest from ``solve(done, on_rows)``, which calls
-        ``on_rows`` (:meth:`record`) as rows finish; on an interrupt or a failure the rows
-        finished so far are written (:meth:`save_new`) before it propagates."""
+        ``resume``, `resume()`), the rest from ``solve(done, on_rows)``, which calls
+        ``on_rows`` (`record()`) as rows finish; on an interrupt or a failure the rows
+        finished so far are written (`save_new()`) before it propagates."""
         done = self.resume(earlier, wanted, quiet=quiet, emit=emit, notice=notice) if resume else {}
         try:
             rows = solve(done, self.record)

@@ -43,7 +43,7 @@ def lift_axes(width: float, height: float) -> tuple[Any, Any]:
 
 
 def lift_png(fig: Any, ax: Any, *, ylabel: str, title: str, legend_fontsize: float, x: str = "z") -> bytes:
-    """Label ``ax`` (x: :data:`X_LABELS` of ``x``, y: ``ylabel`` from 0) and render ``fig``."""
+    """Label ``ax`` (x: [`X_LABELS`][mjtvm.apps.figures.X_LABELS] of ``x``, y: ``ylabel`` from 0) and render ``fig``."""
     ax.set_xlabel(X_LABELS[x])
     ax.set_ylabel(ylabel, fontsize=8)
     ax.set_title(title, fontsize=9)

@@ -1,15 +1,15 @@
 r"""Rank a grasp dataset by TVMMP: one row per grasp, in this process, a local pool or on Dask.
 
-:func:`rank_row` evaluates one :class:`~mjtvm.sim.grasp.dataset.DatasetGrasp` on the grasp
-file's model (:class:`~mjtvm.sim.grasp.batch.BatchModels`): the contacts MuJoCo finds, the
-deepest penetration, the grasp state, Problem 2 (:func:`~mjtvm.core.tvmmp.tvmmp` with
+[`rank_row()`][mjtvm.apps.rank.rank_row] evaluates one [`DatasetGrasp`][mjtvm.sim.grasp.dataset.DatasetGrasp] on the grasp
+file's model ([`BatchModels`][mjtvm.sim.grasp.batch.BatchModels]): the contacts MuJoCo finds, the
+deepest penetration, the grasp state, Problem 2 ([`tvmmp()`][mjtvm.core.tvmmp.tvmmp] with
 ``diagnose=True``, which says why an alpha is 0 or a pair infeasible). A grasp that cannot be
 evaluated (no contact where the file expects one, a finger too deep, a solver failure, a bad
-base) is a row with ``failure`` and ``reason``: it never stops the batch. :func:`rank_rows`
+base) is a row with ``failure`` and ``reason``: it never stops the batch. [`rank_rows()`][mjtvm.apps.rank.rank_rows]
 runs the rows serially, on ``jobs`` local processes (forked on Linux after the model is
-compiled, as :mod:`mjtvm.apps.sweep` does) or on a Dask cluster; rows come back in the
+compiled, as [`mjtvm.apps.sweep`][mjtvm.apps.sweep] does) or on a Dask cluster; rows come back in the
 dataset's order whichever way ran them. The files of ``mjtvm rank`` are
-:mod:`mjtvm.apps.rank_files`.
+[`mjtvm.apps.rank_files`][mjtvm.apps.rank_files].
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ _BATCHES: dict[str, BatchModels] = {}
 
 
 def batch_models(grasp: str) -> BatchModels:
-    """The :class:`~mjtvm.sim.grasp.batch.BatchModels` of a grasp file, cached in this process.
+    """The [`BatchModels`][mjtvm.sim.grasp.batch.BatchModels] of a grasp file, cached in this process.
 
     Raises
     ------
@@ -68,7 +68,7 @@ def _classify(error: Exception) -> str:
 #: Grasps per task of a process pool, at most: what an interruption can lose per worker.
 TASK_GRASPS = 20
 
-#: The classic measures a row carries (:class:`~mjtvm.measures.GraspMeasures`'s fields): all
+#: The classic measures a row carries ([`GraspMeasures`][mjtvm.measures.GraspMeasures]'s fields): all
 #: but the kinematic velocity polytope, whose support LPs cost 1-3.5 s a grasp on a 16-joint
 #: hand (``mjtvm.classic_measures(state)`` computes it).
 CLASSIC_COLUMNS = (
@@ -84,7 +84,7 @@ CLASSIC_COLUMNS = (
 
 def _classic_columns(state: GraspState) -> dict[str, Any]:
     """The classic measures of the state the TVMMP was computed on
-    (:func:`~mjtvm.measures.classic_measures`, without the velocity polytope)."""
+    ([`classic_measures()`][mjtvm.measures.classic_measures], without the velocity polytope)."""
     from ..measures import classic_measures
 
     doc = classic_measures(state, polytope=False).to_dict()
@@ -107,9 +107,9 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         state, or found before it failed), ``penetration`` (m, the deepest contact's depth
         inside the object, 0 when none penetrates), ``feasible``, ``tvmmp``, ``alpha``
         (K x R, ``None`` where not optimal), ``status`` (K x R), ``limiting`` ([k, l]),
-        ``certified``, ``failure`` (one of :data:`FAILURES`, or ``None``) and ``reason``
+        ``certified``, ``failure`` (one of [`FAILURES`][mjtvm.apps.rank.FAILURES], or ``None``) and ``reason``
         (the error of a failed grasp, the diagnosis of a zero or infeasible TVMMP, else
-        ``None``), then the :data:`CLASSIC_COLUMNS` (``None`` for a failed grasp);
+        ``None``), then the [`CLASSIC_COLUMNS`][mjtvm.apps.rank.CLASSIC_COLUMNS] (``None`` for a failed grasp);
         ``docs/outputs.md`` documents each.
     """
     row: dict[str, Any] = {
@@ -182,7 +182,7 @@ def rank_rows(
     done: Mapping[str, dict[str, Any]] | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
 ) -> list[dict[str, Any]]:
-    r"""The row of every grasp (:func:`rank_row`), in the order of ``entries``.
+    r"""The row of every grasp ([`rank_row()`][mjtvm.apps.rank.rank_row]), in the order of ``entries``.
 
     Parameters
     ----------

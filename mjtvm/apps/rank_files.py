@@ -1,11 +1,11 @@
 r"""The files of ``mjtvm rank``: the rows as JSON, CSV (and Parquet), the plots, the summary,
 the checkpoint and ``--resume``.
 
-:func:`run_rank_files` reads the datasets (:func:`~mjtvm.sim.grasp.dataset.read_dataset`),
-ranks them (:func:`~mjtvm.apps.rank.rank_rows`) into ``NAME.json``, ``NAME.csv``,
+[`run_rank_files()`][mjtvm.apps.rank_files.run_rank_files] reads the datasets ([`read_dataset()`][mjtvm.sim.grasp.dataset.read_dataset]),
+ranks them ([`rank_rows()`][mjtvm.apps.rank.rank_rows]) into ``NAME.json``, ``NAME.csv``,
 ``NAME.parquet`` (when ``pyarrow`` imports), ``NAME-objects.png`` (TVMMP per object) and
 ``NAME-tvmmp.png`` (the TVMMP histogram), ``NAME-epsilon.png`` (TVMMP against the epsilon), keeping every finished row in
-``NAME.partial.json`` while it runs, as ``mjtvm sweep`` does (:mod:`mjtvm.apps.sweep_files`).
+``NAME.partial.json`` while it runs, as ``mjtvm sweep`` does ([`mjtvm.apps.sweep_files`][mjtvm.apps.sweep_files]).
 """
 
 from __future__ import annotations
@@ -170,7 +170,7 @@ def _columns(flat: Sequence[dict[str, Any]]) -> list[str]:
 
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
-    """The rows as CSV (:func:`rows_table`; empty cells where a value is ``None``)."""
+    """The rows as CSV ([`rows_table()`][mjtvm.apps.rank_files.rows_table]; empty cells where a value is ``None``)."""
     flat = rows_table(rows)
     buf = io.StringIO(newline="")
     writer = csv.DictWriter(buf, fieldnames=_columns(flat), restval="")
@@ -180,7 +180,7 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
 
 
 def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
-    """The rows as Parquet (:func:`rows_table`), or ``None`` when ``pyarrow`` is not installed."""
+    """The rows as Parquet ([`rows_table()`][mjtvm.apps.rank_files.rows_table]), or ``None`` when ``pyarrow`` is not installed."""
     try:
         import pyarrow as pa
         import pyarrow.parquet as pq
@@ -273,12 +273,12 @@ def run_rank_files(
     run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
 ) -> list[Path]:
     r"""``mjtvm rank``: read the datasets, lock ``run.out``, resume, rank, write the files; the
-    summary (:func:`rank_summary`) goes to ``notice``.
+    summary ([`rank_summary()`][mjtvm.apps.rank_files.rank_summary]) goes to ``notice``.
 
     While it runs, ``NAME.partial.json`` (schema ``mjtvm.rank-checkpoint/1``) holds every
-    finished row, rewritten atomically at most every :data:`CHECKPOINT_EVERY_S` s and on an
+    finished row, rewritten atomically at most every [`CHECKPOINT_EVERY_S`][mjtvm.apps.rank_files.CHECKPOINT_EVERY_S] s and on an
     interrupt or failure, removed once the outputs are written. Every row carries ``inputs``
-    (:func:`inputs_digest`); with ``run.resume`` the rows of the checkpoint and of an earlier
+    ([`inputs_digest()`][mjtvm.apps.rank_files.inputs_digest]); with ``run.resume`` the rows of the checkpoint and of an earlier
     ``NAME.json`` whose id is in the datasets and whose ``inputs`` are unchanged are kept. The
     result equals an uninterrupted run (tested).
 

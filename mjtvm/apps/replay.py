@@ -1,18 +1,18 @@
 r"""Replay of the scripted lift: TVMMP along it (paper section 5, Fig. 8) and the Fig. 9 sweeps.
 
-For every state of a :class:`~mjtvm.sim.lift.trajectory.Lift`, Problem 2 (eq. 31-35,
-:func:`~mjtvm.core.tvmmp.tvmmp`) is solved with fingers 2 and 4 as L-points and as S-points (slide
-directions of the chosen reading, :mod:`mjtvm.sim.lift.trajectory`), at the given mu and mg; the sweeps
-take L-points at mu in :data:`SWEEP_MUS` (mg = :data:`SWEEP_MU_MG`) and mg in
-:data:`SWEEP_MGS` (mu = :data:`SWEEP_MG_MU`). Results go to ``lift.csv`` (one row per
+For every state of a [`Lift`][mjtvm.sim.lift.trajectory.Lift], Problem 2 (eq. 31-35,
+[`tvmmp()`][mjtvm.core.tvmmp.tvmmp]) is solved with fingers 2 and 4 as L-points and as S-points (slide
+directions of the chosen reading, [`mjtvm.sim.lift.trajectory`][mjtvm.sim.lift.trajectory]), at the given mu and mg; the sweeps
+take L-points at mu in [`SWEEP_MUS`][mjtvm.apps.replay.SWEEP_MUS] (mg = [`SWEEP_MU_MG`][mjtvm.apps.replay.SWEEP_MU_MG]) and mg in
+[`SWEEP_MGS`][mjtvm.apps.replay.SWEEP_MGS] (mu = [`SWEEP_MG_MU`][mjtvm.apps.replay.SWEEP_MG_MU]). Results go to ``lift.csv`` (one row per
 (variant, reading, state) of the main run), ``lift-sweeps.csv``, ``lift.json`` (the same
 with metadata, the lift's bookkeeping and the sweeps) and, unless disabled, ``fig8.png``,
 ``fig9a.png`` and ``fig9b.png`` (TVMMP vs the object height z, m).
 
-Where HiGHS cannot settle an LP (status ``Unknown`` after its cold restarts), :func:`~mjtvm.core.tvmmp.tvmmp`
+Where HiGHS cannot settle an LP (status ``Unknown`` after its cold restarts), [`tvmmp()`][mjtvm.core.tvmmp.tvmmp]
 itself solves that pair with Clarabel and says so in ``settled_by``; the ``solver`` column names
 the backends that produced a row's alphas (``highs``, ``clarabel`` or ``highs+clarabel``).
-The records and their CSV and JSON are :mod:`mjtvm.apps.replay_records`.
+The records and their CSV and JSON are [`mjtvm.apps.replay_records`][mjtvm.apps.replay_records].
 """
 
 from __future__ import annotations
@@ -133,10 +133,10 @@ def replay_lift(
     progress: bool = False,
     bases: Sequence[GraspState] | None = None,
 ) -> tuple[Record, ...]:
-    r"""TVMMP and every :math:`\alpha_{kl}` along the lift (Fig. 8).
+    r"""TVMMP and every $\alpha_{kl}$ along the lift (Fig. 8).
 
     One record per (variant, reading, state): L-points once (reading ``None``), S-points once
-    per reading. ``bases`` are :func:`~mjtvm.sim.lift.states.lift_state` of each state, reused.
+    per reading. ``bases`` are [`lift_state()`][mjtvm.sim.lift.states.lift_state] of each state, reused.
     """
     _check(variants, readings, mu, mg)
     runs = [(v, r) for v in variants for r in ((None,) if v == "L" else readings)]
@@ -247,7 +247,7 @@ def _figures(
 
 @dataclass(frozen=True, eq=False)
 class ReplayOutput:
-    """What :func:`run_replay` computed and wrote (``files``: name -> path)."""
+    """What [`run_replay()`][mjtvm.apps.replay.run_replay] computed and wrote (``files``: name -> path)."""
 
     lift: Lift
     records: tuple[Record, ...]
@@ -274,13 +274,13 @@ def run_replay(
 ) -> ReplayOutput:
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
 
-    ``stop_margin``: :func:`~mjtvm.sim.lift.trajectory.scripted_lift`'s (the grasp's by default).
-    ``mu`` and ``mg`` default to the grasp's (:func:`grasp_defaults`): 0.3 and 1 N for the paper's
+    ``stop_margin``: [`scripted_lift()`][mjtvm.sim.lift.trajectory.scripted_lift]'s (the grasp's by default).
+    ``mu`` and ``mg`` default to the grasp's ([`grasp_defaults()`][mjtvm.apps.replay.grasp_defaults]): 0.3 and 1 N for the paper's
     Case 2. ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
-    plots: the CLI starts the rerun recording there (:func:`~mjtvm.viewer.recording.start_recording`).
+    plots: the CLI starts the rerun recording there ([`start_recording()`][mjtvm.viewer.recording.start_recording]).
 
-    The files are written as one set, atomically (:func:`mjtvm.core.files.write_files`), after
+    The files are written as one set, atomically ([`mjtvm.core.files.write_files()`][mjtvm.core.files.write_files]), after
     everything is computed; the output folder is checked before any work.
 
     Raises

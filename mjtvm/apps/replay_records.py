@@ -1,7 +1,7 @@
 r"""The records of the lift replay and their files: Problem 2 at one state of the lift
-(:class:`Record`, :func:`solve_state`), the records as CSV and the lift as JSON.
+([`Record`][mjtvm.apps.replay_records.Record], [`solve_state()`][mjtvm.apps.replay_records.solve_state]), the records as CSV and the lift as JSON.
 
-:mod:`mjtvm.apps.replay` runs the replay and writes these files.
+[`mjtvm.apps.replay`][mjtvm.apps.replay] runs the replay and writes these files.
 """
 
 from __future__ import annotations
@@ -37,16 +37,16 @@ class Record:
         Friction coefficient and object weight (N).
     index, z, s
         State index, object origin height (m) and travel along the lift (m; the lift's path
-        parameter, :attr:`~mjtvm.sim.lift.trajectory.Lift.s`).
+        parameter, [`s`][mjtvm.sim.lift.trajectory.Lift.s]).
     result
-        The :class:`~mjtvm.core.tvmmp.TvmmpResult` (alpha_kl, status, TVMMP, limiting pair, timings).
+        The [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult] (alpha_kl, status, TVMMP, limiting pair, timings).
     solver
         The backend that produced ``result``.
     saturated
         Joints whose (torque, speed) in the limiting pair's witness lies on the edge of their
         operation range (one optimal vertex; other optima may differ).
     state
-        The :class:`~mjtvm.core.state.GraspState` that was solved (kept for the recording).
+        The [`GraspState`][mjtvm.core.state.GraspState] that was solved (kept for the recording).
     """
 
     variant: str
@@ -126,7 +126,7 @@ def _saturated(state: GraspState, result: TvmmpResult) -> tuple[str, ...]:
 def solve_state(state: GraspState) -> tuple[TvmmpResult, str]:
     """Problem 2 with the default backend; returns the result and the backends that settled it.
 
-    A :class:`~mjtvm.errors.SolverError` (neither solver settles a pair) propagates: solver
+    A [`SolverError`][mjtvm.errors.SolverError] (neither solver settles a pair) propagates: solver
     trouble is reported, not hidden.
     """
     result = tvmmp(state)

@@ -1,11 +1,11 @@
 r"""Parameter sweeps of Problem 2 over lifts: a grid, a local process pool or a Dask cluster.
 
-A sweep is a list of :class:`SweepPoint` (scenario, hand, contact variant, slide reading,
+A sweep is a list of [`SweepPoint`][mjtvm.apps.sweep.SweepPoint] (scenario, hand, contact variant, slide reading,
 mu, mg, lift state). Points that share a lift configuration are solved together by one
 task, which builds the scripted lift once per worker process (the lift depends only on the
 scenario, the hand and the number of states: mu and mg change the statics, not the motion),
 reads each state's MuJoCo grasp once per worker, and solves each requested state with
-:func:`~mjtvm.core.tvmmp.tvmmp`. The same tasks run
+[`tvmmp()`][mjtvm.core.tvmmp.tvmmp]. The same tasks run
 
 * serially (``jobs=1``),
 * on a local process pool (``jobs > 1``; on Linux forked after this process has built the
@@ -17,10 +17,10 @@ reads each state's MuJoCo grasp once per worker, and solves each requested state
   attaches to any existing scheduler (including batch-queue clusters via dask-jobqueue).
 
 Every way returns the same rows in the order of the points (tested). A local pool's workers
-never outlive the sweep: an interrupt ends them at once (:func:`_stop`), and on Linux the
-kernel kills them when their parent dies (:func:`_die_with_parent`). A scheduler address is
-checked by its handshake within :data:`CONNECT_TIMEOUT_S` (:func:`_check_scheduler`).
-The files of ``mjtvm sweep`` (checkpoint, resume, lock) are :mod:`mjtvm.apps.sweep_files`.
+never outlive the sweep: an interrupt ends them at once (`_stop()`), and on Linux the
+kernel kills them when their parent dies (`_die_with_parent()`). A scheduler address is
+checked by its handshake within [`CONNECT_TIMEOUT_S`][mjtvm.apps.sweep.CONNECT_TIMEOUT_S] (`_check_scheduler()`).
+The files of ``mjtvm sweep`` (checkpoint, resume, lock) are [`mjtvm.apps.sweep_files`][mjtvm.apps.sweep_files].
 """
 
 from __future__ import annotations
@@ -209,7 +209,7 @@ def _die_with_parent() -> None:
 def _init_worker(parent: int = 0) -> None:
     """Set up a pool worker: Ctrl-C is the parent's (a terminal sends SIGINT to the whole
     process group; each worker would print its own KeyboardInterrupt traceback), and the
-    worker dies with its parent (:func:`_die_with_parent`). ``parent``: the pid of the process
+    worker dies with its parent (`_die_with_parent()`). ``parent``: the pid of the process
     that forked the worker (0 for a forkserver's worker, whose parent is the forkserver)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _die_with_parent()
@@ -222,7 +222,7 @@ def _stop(pool: ProcessPoolExecutor) -> None:
 
     ``shutdown(wait=True)``, what the ``with`` statement does, would first run every queued
     task; ``shutdown`` also forgets the workers, so they are taken before it. Workers get
-    SIGTERM, and SIGKILL after :data:`STOP_WAIT_S`.
+    SIGTERM, and SIGKILL after [`STOP_WAIT_S`][mjtvm.apps.sweep.STOP_WAIT_S].
     """
     procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
@@ -251,7 +251,7 @@ def run_sweep(
     Parameters
     ----------
     points
-        The sweep (e.g. from :func:`grid`).
+        The sweep (e.g. from [`grid()`][mjtvm.apps.sweep.grid]).
     jobs
         Local worker processes (1 = in this process).
     cluster
@@ -331,7 +331,7 @@ def _fork_tasks(tasks: list[tuple[_Key, list[int]]], jobs: int) -> list[list[tup
 
 
 def _solve_many(groups: list[tuple[_Key, list[int]]]) -> list[dict[str, Any]]:
-    """:func:`_solve_group` of each group (one forked task)."""
+    """`_solve_group()` of each group (one forked task)."""
     return [row for key, states in groups for row in _solve_group(key, states)]
 
 
@@ -350,7 +350,7 @@ def _run_pool(
     forkserver's workers imported mjtvm and built it again each). Forking is safe here: at
     that point the process's only other threads are OpenBLAS' idle pools, which OpenBLAS
     re-creates in the child (pthread_atfork); HiGHS runs single-threaded and its idle
-    instances are not reused across the fork (:mod:`mjtvm.core.highs`); MuJoCo holds no
+    instances are not reused across the fork ([`mjtvm.core.highs`][mjtvm.core.highs]); MuJoCo holds no
     threads. Elsewhere (no safe fork) the forkserver's workers build the lift themselves.
     """
     fork = _forks()
@@ -375,7 +375,7 @@ def run_calls(
     """Each ``fn(*args)`` of ``calls`` on ``jobs`` local processes (forked, or started from a
     forkserver), its rows passed to ``finished`` in the order of ``calls`` or, without
     ``in_order``, as they finish. On an interrupt or a failure the pending calls are cancelled
-    and the workers ended (:func:`_stop`)."""
+    and the workers ended (`_stop()`)."""
     context = multiprocessing.get_context("fork" if fork else "forkserver")
     pool = ProcessPoolExecutor(
         max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
@@ -394,7 +394,7 @@ def run_calls(
 
 
 CONNECT_TIMEOUT_S = 10.0
-"""How long :func:`run_sweep` waits for a Dask scheduler given by address."""
+"""How long [`run_sweep()`][mjtvm.apps.sweep.run_sweep] waits for a Dask scheduler given by address."""
 
 
 def _check_scheduler(address: str, timeout: float) -> None:
@@ -436,7 +436,7 @@ def _check_scheduler(address: str, timeout: float) -> None:
 @contextmanager
 def dask_client(cluster: Any) -> Iterator[Any]:
     """A Dask client of ``cluster``: a ``distributed.Client`` as it is, or a scheduler address
-    checked (:func:`_check_scheduler`), connected, and closed on exit.
+    checked (`_check_scheduler()`), connected, and closed on exit.
 
     Raises
     ------

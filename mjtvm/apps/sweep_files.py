@@ -1,7 +1,7 @@
 r"""The files of ``mjtvm sweep``: the inputs digest, the rows as CSV, the checkpoint, resume and the lock.
 
-:func:`run_sweep_files` runs a :class:`SweepFiles` (the grid of :func:`~mjtvm.apps.sweep.grid`
-and the solving of :func:`~mjtvm.apps.sweep.run_sweep`) into ``NAME.json`` and ``NAME.csv``,
+[`run_sweep_files()`][mjtvm.apps.sweep_files.run_sweep_files] runs a [`SweepFiles`][mjtvm.apps.sweep_files.SweepFiles] (the grid of [`grid()`][mjtvm.apps.sweep.grid]
+and the solving of [`run_sweep()`][mjtvm.apps.sweep.run_sweep]) into ``NAME.json`` and ``NAME.csv``,
 keeping every finished row in ``NAME.partial.json`` while it runs.
 """
 
@@ -100,7 +100,7 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
 
 
 _BUILT_FROM: dict[tuple[str, str, int], str] = {}
-"""(grasp, hand, states) -> the inputs digest its cached lift (:func:`_lift`) was built from;
+"""(grasp, hand, states) -> the inputs digest its cached lift (`_lift()`) was built from;
 a lift of unknown or other inputs is built again."""
 
 
@@ -110,8 +110,8 @@ def _stderr(text: str) -> None:
 
 @dataclass(frozen=True)
 class SweepFiles:
-    """What ``mjtvm sweep`` runs: the grid (the arguments of :func:`grid`), where its files go
-    and how it is solved (the arguments of :func:`run_sweep`).
+    """What ``mjtvm sweep`` runs: the grid (the arguments of [`grid()`][mjtvm.apps.sweep.grid]), where its files go
+    and how it is solved (the arguments of [`run_sweep()`][mjtvm.apps.sweep.run_sweep]).
 
     Parameters
     ----------
@@ -130,7 +130,7 @@ class SweepFiles:
     jobs, cluster
         Local worker processes, or a Dask scheduler address (which overrides ``jobs``).
     resume
-        Keep the finished rows of an earlier run (:func:`run_sweep_files`).
+        Keep the finished rows of an earlier run ([`run_sweep_files()`][mjtvm.apps.sweep_files.run_sweep_files]).
     quiet
         No progress bar and no resume summary.
     """
@@ -164,9 +164,9 @@ def run_sweep_files(
     r"""``mjtvm sweep``: check ``run.out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
 
     While the sweep runs, ``NAME.partial.json`` (schema ``mjtvm.sweep-checkpoint/1``) holds
-    every finished row; it is rewritten atomically at most every :data:`CHECKPOINT_EVERY_S`
+    every finished row; it is rewritten atomically at most every [`CHECKPOINT_EVERY_S`][mjtvm.apps.sweep_files.CHECKPOINT_EVERY_S]
     seconds and on an interrupt or failure, and removed once ``NAME.json`` and ``NAME.csv``
-    are written. Every row carries ``inputs``, the :func:`inputs_digest` of its grasp. With
+    are written. Every row carries ``inputs``, the [`inputs_digest()`][mjtvm.apps.sweep_files.inputs_digest] of its grasp. With
     ``run.resume`` the rows of the checkpoint and of an earlier ``NAME.json`` whose point
     belongs to this grid and whose ``inputs`` equal the grasp's digest now are kept, and only
     the other points are solved; rows whose inputs changed (an edited grasp or model file,

@@ -1,5 +1,5 @@
-r"""The paper's cases in the benchmark suite: Case 1's RVDS (:func:`case1_beta`,
-:func:`case1_rvds`), Problem 1 and Problem 2 per state, and the rows of Cases 1 and 2.
+r"""The paper's cases in the benchmark suite: Case 1's RVDS ([`case1_beta()`][mjtvm.bench.cases.case1_beta],
+[`case1_rvds()`][mjtvm.bench.cases.case1_rvds]), Problem 1 and Problem 2 per state, and the rows of Cases 1 and 2.
 """
 
 from __future__ import annotations
@@ -114,7 +114,7 @@ def bench_problem1(
 def bench_problem2(
     state: Any, *, repeats: int = 200, baseline_repeats: int = 10, warmup: int = 10
 ) -> dict[str, Any]:
-    """Problem 2 per state (:func:`mjtvm.bench.timing.bench_state`: ours, literal box, split, cvxpy baseline)."""
+    """Problem 2 per state ([`mjtvm.bench.timing.bench_state()`][mjtvm.bench.timing.bench_state]: ours, literal box, split, cvxpy baseline)."""
     from .timing import bench_state
 
     out = bench_state(state, repeats=repeats, baseline_repeats=baseline_repeats, warmup=warmup)

@@ -1,32 +1,32 @@
 r"""Speed at dataset scale: batches of Problem 2 on a 22-joint hand, and ``mjtvm solve`` as a process.
 
 A dataset of grasps (``mjtvm rank``) solves Problem 2 once per grasp, so what counts is the
-throughput of :func:`~mjtvm.core.tvmmp.tvmmp` over many states and the fixed cost of a
+throughput of [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] over many states and the fixed cost of a
 command. Measured here:
 
-* **batch Problem 2** (:func:`bench_batch`): :data:`BATCH_STATES` seeded synthetic states
-  (:func:`dataset_state`, :func:`~mjtvm.bench.synthetic.random_state`) of a Shadow-sized hand:
+* **batch Problem 2** ([`bench_batch()`][mjtvm.bench.dataset.bench_batch]): [`BATCH_STATES`][mjtvm.bench.dataset.BATCH_STATES] seeded synthetic states
+  ([`dataset_state()`][mjtvm.bench.dataset.dataset_state], [`random_state()`][mjtvm.bench.synthetic.random_state]) of a Shadow-sized hand:
   five fingers of 4, 4, 4, 5 and 5 joints (22, as the Shadow hand's fingers and thumb), one
   fingertip F-contact per finger, friction 0.5, the RVDS of the six translations
-  :math:`\pm e_x, \pm e_y, \pm e_z` (:data:`SIX_RVDS`). REFS: one vertex (a wrench that random
+  $\pm e_x, \pm e_y, \pm e_z$ ([`SIX_RVDS`][mjtvm.bench.dataset.SIX_RVDS]). REFS: one vertex (a wrench that random
   admissible contact forces balance, standing for the object's weight: 6 LPs per grasp) or six
   such test wrenches (36 LPs). ``tvmmp(state, witnesses=False)`` over the whole batch in a loop,
   states built beforehand; grasps/s = states / the median batch time;
-* the same batches **on 2 processes** (:func:`_pool_batch`): a forked (Linux; else forkserver)
+* the same batches **on 2 processes** (`_pool_batch()`): a forked (Linux; else forkserver)
   pool of 2 workers, each solving half of the batch (the states are pickled to the workers),
   the pool's start-up included; the speed-up is the serial median over this median, and
   every alpha must equal the serial run's to the bit. Each solving process's CPU time is
   recorded too: its share of a core (CPU time over the run's wall time) tells a pool that
   does not scale from a machine that other jobs load;
-* **``mjtvm solve STATE.json`` as a process** (:func:`bench_cli`): the wall time of
+* **``mjtvm solve STATE.json`` as a process** ([`bench_cli()`][mjtvm.bench.dataset.bench_cli]): the wall time of
   ``python -m mjtvm.cli solve STATE.json`` (one 6-LP state of the batch written with
-  :func:`~mjtvm.core.state_file.dump_state`), and of ``python -c "import mjtvm"`` alone, medians
+  [`dump_state()`][mjtvm.core.state_file.dump_state]), and of ``python -c "import mjtvm"`` alone, medians
   over runs after one untimed run (the file cache warm); beside them the floor a process that
   solves pays before any of mjtvm's code runs (``python -c "pass"``, and ``import numpy,
   highspy, jsonschema``, the modules ``solve`` needs). The paper's 0.2 s per state (MATLAB, one
   Problem 2 state) stands beside them.
 
-The targets (:data:`TARGETS`) are the dataset-scale goals; a miss is reported, never hidden.
+The targets ([`TARGETS`][mjtvm.bench.dataset.TARGETS]) are the dataset-scale goals; a miss is reported, never hidden.
 """
 
 from __future__ import annotations
@@ -131,7 +131,7 @@ def _pool_batch(states: Sequence[GraspState], jobs: int) -> tuple[float, list[fl
 def bench_batch(
     *, num_states: int = BATCH_STATES, num_refs: int = 1, repeats: int = 3, jobs: Sequence[int] = (1,)
 ) -> dict[str, Any]:
-    """One batch of :func:`dataset_state` states: its timing per process count, grasps/s, speed-up.
+    """One batch of [`dataset_state()`][mjtvm.bench.dataset.dataset_state] states: its timing per process count, grasps/s, speed-up.
 
     Returns ``{"states", "joints", "contacts", "refs", "rvds", "lps_per_grasp", "feasible",
     "build_s", "instrumented_s", "highs_run_s", "per_jobs": {"1": stats + "grasps_per_s", ...},
@@ -208,7 +208,7 @@ def _process_times(argv: Sequence[str], repeats: int) -> list[float]:
 
 
 def bench_cli(*, repeats: int = 7) -> dict[str, Any]:
-    """``mjtvm solve STATE.json`` (a 6-LP :func:`dataset_state`) and ``import mjtvm`` as processes."""
+    """``mjtvm solve STATE.json`` (a 6-LP [`dataset_state()`][mjtvm.bench.dataset.dataset_state]) and ``import mjtvm`` as processes."""
     from ..core.state_file import dump_state
 
     with tempfile.TemporaryDirectory(prefix="mjtvm-bench-") as tmp:

@@ -2,7 +2,7 @@ r"""Problem 2 against its solver's floor: how much of a state's time is HiGHS's 
 
 Per state, ``tvmmp(state, witnesses=False)`` (HiGHS, eliminated box, every answer certified)
 is timed, and within the same calls the time inside HiGHS ``run()``
-(:func:`~mjtvm.core.highs.observe_runs`): the floor is HiGHS solving exactly these LPs from
+([`observe_runs()`][mjtvm.core.highs.observe_runs]): the floor is HiGHS solving exactly these LPs from
 exactly these bases, and the ratio ``total / run`` is what mjtvm's Python around the solver
 (assembly, equilibration, the HiGHS session, the certificates, the result) costs on top of it.
 The ratio of each call is computed on that call (both in the same run, so the machine's load
@@ -11,10 +11,10 @@ process's CPU time over its wall time during the calls (``core_share``: 1 for a 
 core; a BLAS thread that spins beside it shows as 2).
 
 The states: the paper's Case 2 initial state (4 LPs), Case 1 with the 8 RVDS vertices of
-:func:`~mjtvm.bench.cases.case1_rvds`, the ``allegro-ik`` grasp (16 joints, 4 contacts, 6 RVDS
-vertices) and the 22-joint dataset hand (:func:`~mjtvm.bench.dataset.dataset_state`) with the
+[`case1_rvds()`][mjtvm.bench.cases.case1_rvds], the ``allegro-ik`` grasp (16 joints, 4 contacts, 6 RVDS
+vertices) and the 22-joint dataset hand ([`dataset_state()`][mjtvm.bench.dataset.dataset_state]) with the
 weight (6 LPs) and with six test wrenches (36 LPs) as REFS. Target: ratio at most
-:data:`TARGET_RATIO`.
+[`TARGET_RATIO`][mjtvm.bench.floor.TARGET_RATIO].
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ FLOOR_STATES = ("case2", "case1", "allegro-ik", "dataset-6", "dataset-36")
 
 
 def floor_states() -> dict[str, GraspState]:
-    """The states of :data:`FLOOR_STATES` (module docstring)."""
+    """The states of [`FLOOR_STATES`][mjtvm.bench.floor.FLOOR_STATES] (module docstring)."""
     from ..sim.grasp.file import load_grasp
     from ..sim.paper_hand.scenario import load_scenario
     from .cases import case1_rvds
@@ -75,7 +75,7 @@ def _measure(state: GraspState, repeats: int, warmup: int) -> dict[str, Any]:
 def bench_floor(
     *, repeats: int = 100, warmup: int = 10, say: Callable[[str], None] = lambda _: None
 ) -> dict[str, Any]:
-    """``{"target_ratio", "states": {name: _measure}}`` for every state of :func:`floor_states`;
+    """``{"target_ratio", "states": {name: _measure}}`` for every state of [`floor_states()`][mjtvm.bench.floor.floor_states];
     the 36-LP state is repeated a sixth as often (its call is six times longer)."""
     out: dict[str, Any] = {"target_ratio": TARGET_RATIO, "states": {}}
     for name, state in floor_states().items():

@@ -4,12 +4,12 @@ test hands through the pipeline a user runs.
 Per grasp (``allegro-ik``: the hand-only Allegro, the grasp found by IK; ``allegro-sphere``: the
 same hand at a keyframe; ``gripper3-box``: a three-finger gripper and a box on a table):
 
-* **load**: :func:`~mjtvm.sim.grasp.file.load_grasp` (read and check the file, build the model
+* **load**: [`load_grasp()`][mjtvm.sim.grasp.file.load_grasp] (read and check the file, build the model
   with its additions through ``MjSpec``, set the configuration, the IK for ``allegro-ik``);
-* **state**: :meth:`~mjtvm.sim.grasp.loaded.Grasp.state` (contact detection within the tolerance,
+* **state**: [`state()`][mjtvm.sim.grasp.loaded.Grasp.state] (contact detection within the tolerance,
   Jacobians, gravity torques);
-* **Problem 2**: :func:`~mjtvm.core.tvmmp.tvmmp` of that state (its RVDS);
-* **lift**: :func:`~mjtvm.sim.lift.trajectory.scripted_lift` of the file's ``[lift]``, 30 states.
+* **Problem 2**: [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] of that state (its RVDS);
+* **lift**: [`scripted_lift()`][mjtvm.sim.lift.trajectory.scripted_lift] of the file's ``[lift]``, 30 states.
 
 Medians over repeats after one warm-up.
 """

@@ -1,18 +1,18 @@
 r"""mjtvm against the library a user would pick instead, on its home ground: pycapacity 2.1.9.
 
 With no wrench to balance (REFS = {0}) and one fingertip contact, the TVMS restricted to
-the translations (RVDS :math:`\pm e_x, \pm e_y, \pm e_z`) is the classic velocity polytope
-:math:`\{J \dot q : |\dot q| \le \dot q_{max}\}` of the fingertip's Jacobian
-(:mod:`~mjtvm.polytopes.speed_box`). Measured in one run, per finger of 3, 4, 7 and 12
-joints (:func:`fingertip_state`: a random spatial chain, the paper's motor at every joint):
+the translations (RVDS $\pm e_x, \pm e_y, \pm e_z$) is the classic velocity polytope
+$\{J \dot q : |\dot q| \le \dot q_{max}\}$ of the fingertip's Jacobian
+([`speed_box`][mjtvm.polytopes.speed_box]). Measured in one run, per finger of 3, 4, 7 and 12
+joints ([`fingertip_state()`][mjtvm.bench.peers.fingertip_state]: a random spatial chain, the paper's motor at every joint):
 
-* ``tvms``: :func:`~mjtvm.polytopes.tvms.tvms` on the state (``method="auto"``: the
+* ``tvms``: [`tvms()`][mjtvm.polytopes.tvms.tvms] on the state (``method="auto"``: the
   zonotope; its volume and alphas included), against pycapacity's ``velocity_polytope``
   (hyperplane shifting, a Chebyshev centre by GLPK, Qhull's halfspace intersection): the
   pair interleaved ``repeats`` times, medians, ``ratio`` = pycapacity / mjtvm (above 1:
   mjtvm faster);
-* ``function``: :func:`~mjtvm.polytopes.capacity.velocity_polytope` on the same Jacobian, the
-  same way, and :func:`~mjtvm.polytopes.capacity.force_polytope` against pycapacity's
+* ``function``: [`velocity_polytope()`][mjtvm.polytopes.capacity.velocity_polytope] on the same Jacobian, the
+  same way, and [`force_polytope()`][mjtvm.polytopes.capacity.force_polytope] against pycapacity's
   ``force_polytope`` (vertex enumeration ``vepoli2``) on the torque box;
 * ``lp``: the LP projection on the same state (``method="lp"``, as before this path
   existed), a few repeats;
@@ -53,7 +53,7 @@ TRANSLATIONS = np.vstack([np.eye(6)[:3], -np.eye(6)[:3]])  #: the RVDS of the tr
 def fingertip_jacobian(joints: int, seed: int = 0) -> NDArray[np.float64]:
     """``(3, joints)`` the fingertip's linear Jacobian of a seeded random spatial chain of
     revolute joints: unit axes ``z_i`` at points ``p_i`` 30-60 mm apart, columns
-    :math:`z_i \\times (p_{tip} - p_i)` (m/rad)."""
+    $z_i \\times (p_{tip} - p_i)$ (m/rad)."""
     rng = np.random.default_rng(seed)
     axes = rng.normal(size=(joints, 3))
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
@@ -64,8 +64,8 @@ def fingertip_jacobian(joints: int, seed: int = 0) -> NDArray[np.float64]:
 
 
 def fingertip_state(joints: int, seed: int = 0) -> GraspState:
-    """One F-contact at the tip of :func:`fingertip_jacobian`'s chain, REFS = {0}, no gravity
-    torque, the paper's motor (:func:`~mjtvm.core.operation_range.default_operation_range`) at
+    """One F-contact at the tip of [`fingertip_jacobian()`][mjtvm.bench.peers.fingertip_jacobian]'s chain, REFS = {0}, no gravity
+    torque, the paper's motor ([`default_operation_range()`][mjtvm.core.operation_range.default_operation_range]) at
     every joint, the translations as RVDS: its TVMS is the fingertip's velocity polytope."""
     jac = fingertip_jacobian(joints, seed)
     tip = np.array([0.0, 0.0, -0.02])

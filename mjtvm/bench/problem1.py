@@ -2,30 +2,30 @@ r"""Timing of Problem 1 (the TVMS) on the paper's states, against the cdd baseli
 
 The paper (MATLAB, Core Solo U1300 1.06 GHz) reports 0.19 s for Case 1 (Problem 1, no
 RVDS) and 129 s for Case 2's initial state (Problem 1 without RVDS). mjtvm's targets are
-:data:`TARGETS_S`. For each state, in one run:
+[`TARGETS_S`][mjtvm.bench.problem1.TARGETS_S]. For each state, in one run:
 
 * ``tvms(state, rvds_cone=False)`` (support LPs on HiGHS): the median wall time over
   ``repeats`` calls after ``warmup`` calls, the time inside HiGHS ``run()``
-  (:func:`~mjtvm.bench.timing.highs_run_timer`), the LP count, the dimension, the number of
+  ([`highs_run_timer()`][mjtvm.bench.timing.highs_run_timer]), the LP count, the dimension, the number of
   vertices and the scaled affine volume;
 * ``tvms(state, method="cdd", rvds_cone=False)``: the paper's vertex enumeration in a child
   process, its wall time or "did not finish in ``time_limit`` s", and how far its
   vertices lie from the LP method's (Hausdorff distance relative to the extent);
 * memory: the process's peak resident set (``resource.getrusage``) before and after the
   state's LP runs, the peak of Python allocations during one more LP run under
-  :mod:`tracemalloc` (HiGHS' and Qhull's own buffers are not traced), and the cdd child's
+  [`tracemalloc`][tracemalloc] (HiGHS' and Qhull's own buffers are not traced), and the cdd child's
   peak resident set.
 
 Run it as ``python -m mjtvm.bench.problem1`` (prints a table, then the JSON report).
 
-**Problem 1 at scale** (:func:`bench_p1_scale`, ``python -m mjtvm.bench.problem1 --scale``):
+**Problem 1 at scale** ([`bench_p1_scale()`][mjtvm.bench.problem1.bench_p1_scale], ``python -m mjtvm.bench.problem1 --scale``):
 one row per case, each in a fresh child process whose own peak resident set is reported
-beside its wall time (:data:`SCALE_CASES`): Case 2's initial state, exact; the Allegro test
+beside its wall time ([`SCALE_CASES`][mjtvm.bench.problem1.SCALE_CASES]): Case 2's initial state, exact; the Allegro test
 hand's 16-joint four-fingertip grasp (``allegro-sphere``) with its TVMS restricted to the
 coordinate subspace of the 3 translations and the first ``D - 3`` rotations (3-D: translations;
 4-D: + omega_x; 5-D: + omega_y; 6-D: all), i.e. the section of S_ov by that subspace, which is
 what the RVDS cone of ``+-e_i`` (i in the subspace) gives (6-D: no RVDS); the 16-finger
-synthetic hand (:func:`~mjtvm.bench.scaling.scaling_hand`, its RVDS cone). The Allegro 5-D and
+synthetic hand ([`scaling_hand()`][mjtvm.bench.scaling.scaling_hand], its RVDS cone). The Allegro 5-D and
 6-D rows ask for a 1 % volume bracket within 60 s (``tolerance=0.01, time_limit=60``).
 """
 
@@ -149,7 +149,7 @@ def run_tvms_benchmark(
     time_limit: float = 120.0,
     trace_memory: bool = True,
 ) -> dict[str, Any]:
-    """Benchmark the shipped scenarios (:func:`~mjtvm.sim.paper_hand.scenario.load_scenario`); JSON-ready report."""
+    """Benchmark the shipped scenarios ([`load_scenario()`][mjtvm.sim.paper_hand.scenario.load_scenario]); JSON-ready report."""
     from ..sim.paper_hand.scenario import load_scenario
 
     reps = {"case1": 50, "case2": 1} | (repeats or {})
@@ -174,7 +174,7 @@ def run_tvms_benchmark(
 
 
 def format_tvms_table(report: dict[str, Any]) -> str:
-    """A plain-text table of a :func:`run_tvms_benchmark` report."""
+    """A plain-text table of a [`run_tvms_benchmark()`][mjtvm.bench.problem1.run_tvms_benchmark] report."""
     head = (
         f"{'case':<6} {'dim':>3} {'verts':>6} {'LPs':>6} {'LP s':>9} {'run() s':>8} {'target':>7} "
         f"{'paper s':>8} {'cdd s':>22} {'Hausdorff':>9} {'RSS MiB':>8} {'traced':>7}"
@@ -215,7 +215,7 @@ SCALE_CASES: dict[str, tuple[str, dict[str, Any], tuple[float, float] | None]] =
 
 
 def scale_state(spec: str) -> GraspState:
-    """The state of a :data:`SCALE_CASES` entry (``case2``, ``allegro:D``, ``scaling:F``)."""
+    """The state of a [`SCALE_CASES`][mjtvm.bench.problem1.SCALE_CASES] entry (``case2``, ``allegro:D``, ``scaling:F``)."""
     if spec.startswith("allegro:"):
         from ..sim.grasp.file import load_grasp
 
@@ -260,7 +260,7 @@ def _scale_child(spec: str, kwargs: dict[str, Any], send: Any) -> None:
 def bench_p1_scale(
     names: Sequence[str] | None = None, *, repeats: int = 1, say: Any = print
 ) -> dict[str, Any]:
-    """Rows of :data:`SCALE_CASES` (module docstring): the median over ``repeats`` fresh child
+    """Rows of [`SCALE_CASES`][mjtvm.bench.problem1.SCALE_CASES] (module docstring): the median over ``repeats`` fresh child
     processes of the wall time of ``tvms``, and the largest child peak resident set."""
     import multiprocessing
 
@@ -309,7 +309,7 @@ def _within(row: dict[str, Any], kwargs: dict[str, Any]) -> bool:
 
 
 def format_scale_table(report: dict[str, Any]) -> str:
-    """A plain-text table of :func:`bench_p1_scale`."""
+    """A plain-text table of [`bench_p1_scale()`][mjtvm.bench.problem1.bench_p1_scale]."""
     head = (
         f"{'case':<18} {'status':<22} {'dim':>3} {'verts':>6} {'LPs':>6} {'s':>8} {'MiB':>7} {'bracket':>26} "
         f"{'gap':>7} {'estimate (99.9 %)':>26}"

@@ -1,5 +1,5 @@
-r"""The report of :mod:`mjtvm.bench.suite`: targets, notes on misses, the table (the command
-line that runs the suite and writes them: :mod:`mjtvm.cli.bench`).
+r"""The report of [`mjtvm.bench.suite`][mjtvm.bench.suite]: targets, notes on misses, the table (the command
+line that runs the suite and writes them: [`mjtvm.cli.bench`][mjtvm.cli.bench]).
 
 Where a target is missed the notes say where the time goes and what would close it, from the
 measured figures of the run (nothing here is a fixed claim).
@@ -70,7 +70,7 @@ def auto_notes(report: dict[str, Any]) -> list[str]:
 
 
 def _peer_notes(report: dict[str, Any]) -> list[str]:
-    """The rows slower than pycapacity (:mod:`mjtvm.bench.peers`), with this run's split."""
+    """The rows slower than pycapacity ([`mjtvm.bench.peers`][mjtvm.bench.peers]), with this run's split."""
     pe = report.get("peers")
     if not pe or pe.get("met") is not False:
         return []
@@ -101,7 +101,7 @@ def _peer_notes(report: dict[str, Any]) -> list[str]:
 
 
 def _dataset_notes(report: dict[str, Any]) -> list[str]:
-    """The dataset-scale misses (:mod:`mjtvm.bench.dataset`), with this run's figures."""
+    """The dataset-scale misses ([`mjtvm.bench.dataset`][mjtvm.bench.dataset]), with this run's figures."""
     ds = report.get("dataset")
     if not ds:
         return []
@@ -394,7 +394,7 @@ def _peer_rows(report: dict[str, Any]) -> list[str]:
 
 
 def _floor_rows(report: dict[str, Any]) -> list[str]:
-    """Problem 2 over its time inside HiGHS (:mod:`mjtvm.bench.floor`): one row per state."""
+    """Problem 2 over its time inside HiGHS ([`mjtvm.bench.floor`][mjtvm.bench.floor]): one row per state."""
     fl = report.get("floor")
     if not fl:
         return []
@@ -438,7 +438,7 @@ def _footer(report: dict[str, Any], notes: Sequence[str]) -> list[str]:
 
 
 def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str:
-    """A plain-text table of a :func:`~mjtvm.bench.suite.run_suite` report (medians): the paper's
+    """A plain-text table of a [`run_suite()`][mjtvm.bench.suite.run_suite] report (medians): the paper's
     cases, the lift, the sweeps, the scaling hands, the test hands, the dataset scale, then the
     notes and the machine."""
     lines = [_HEAD, "-" * len(_HEAD)]

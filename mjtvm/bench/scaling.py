@@ -1,5 +1,5 @@
-r"""Scaling in the benchmark suite: synthetic hands of 2 to 16 fingers (:func:`scaling_hand`) and
-the time and memory of Problems 1 and 2 on them (:func:`bench_scaling`).
+r"""Scaling in the benchmark suite: synthetic hands of 2 to 16 fingers ([`scaling_hand()`][mjtvm.bench.scaling.scaling_hand]) and
+the time and memory of Problems 1 and 2 on them ([`bench_scaling()`][mjtvm.bench.scaling.bench_scaling]).
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ SCALING_RADIUS = 0.12  # m: finger bases on this circle around the object's axis
 def scaling_hand(fingers: int, *, mu: float = 0.5, mg: float = 1.0) -> Any:
     r"""A grasp state of a synthetic hand with ``fingers`` fingers of 4 joints (IK-free).
 
-    The MJCF comes from :func:`~mjtvm.sim.paper_hand.hand.hand_mjcf` (default finger: [yaw, pitch] at the
+    The MJCF comes from [`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf] (default finger: [yaw, pitch] at the
     base, [pitch, yaw] after link 1): bases evenly on a circle of radius
-    :data:`SCALING_RADIUS` around the z axis, headings pointing inwards. Every finger takes
+    [`SCALING_RADIUS`][mjtvm.bench.scaling.SCALING_RADIUS] around the z axis, headings pointing inwards. Every finger takes
     the same pose (link 1 vertical, link 2 pointing up and inwards at 54 deg), so all tips lie
     on one circle at one height; the sphere's centre is put on the axis where its surface
     touches every tip (0.1 mm deep). One F-contact per finger (the tip), friction ``mu``, REFS

@@ -1,41 +1,41 @@
 r"""The project's benchmark run: the paper's cases, the lift, the sweeps, scaling.
 
-One run of :func:`run_suite` (``python scripts/bench.py`` or ``mjtvm bench``) measures, with
-medians over repeats and :func:`time.perf_counter`, the garbage collector enabled:
+One run of [`run_suite()`][mjtvm.bench.suite.run_suite] (``python scripts/bench.py`` or ``mjtvm bench``) measures, with
+medians over repeats and [`time.perf_counter()`][time.perf_counter], the garbage collector enabled:
 
 * **Case 1, Problem 1**: ``tvms(load_scenario("case1").state())`` (no RVDS; paper 0.19 s);
 * **Case 1, Problem 2** with the 8-vertex RVDS of the digest (section 6): +-e_y, +-e_4
   (omega_x), +-e_6 (omega_z; the paper's e_5 is a typo) and +-beta, where beta is computed
   from the model as the one in-plane (x, z, omega_y) object motion that finger 3's two
-  contacts leave (:func:`case1_beta`, unscaled unit vector; paper 0.26 s);
+  contacts leave ([`case1_beta()`][mjtvm.bench.cases.case1_beta], unscaled unit vector; paper 0.26 s);
 * **Case 2's initial state**: Problem 1 without RVDS (paper 129 s; median of 3 runs after a warm-up)
   and Problem 2 with its 4 RVDS vertices (paper 0.20 s);
-* the **full lift** with both contact variants (:func:`~mjtvm.apps.replay.time_replay`: no plots,
+* the **full lift** with both contact variants ([`time_replay()`][mjtvm.apps.replay.time_replay]: no plots,
   no sweeps; imports excluded; target <= 1 s);
 * the **Fig. 9 sweeps** (9 (mu, mg) combinations x 30 states, L-points) through
-  :func:`~mjtvm.apps.sweep.run_sweep` on 1 process and on 2 (``jobs=2``), every run from
+  [`run_sweep()`][mjtvm.apps.sweep.run_sweep] on 1 process and on 2 (``jobs=2``), every run from
   cold caches (the lift, the states' grasps); the 2-process time includes the pool's
   start-up (on Linux the workers are forked after the lift is built);
 * the **baselines** in the same run: cvxpy rebuilt per pair
-  (:func:`~mjtvm.core.reference.reference_tvmmp`) for the Problem 2 cases and the cdd vertex
+  ([`reference_tvmmp()`][mjtvm.core.reference.reference_tvmmp]) for the Problem 2 cases and the cdd vertex
   enumeration (capped at ``time_limit`` s) for Problem 1;
-* **scaling**: synthetic hands of 2, 4, 8 and 16 fingers of 4 joints (:func:`scaling_hand`:
-  MJCF from :func:`~mjtvm.sim.paper_hand.hand.hand_mjcf`, one fingertip F-contact per finger, IK-free),
+* **scaling**: synthetic hands of 2, 4, 8 and 16 fingers of 4 joints ([`scaling_hand()`][mjtvm.bench.scaling.scaling_hand]:
+  MJCF from [`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf], one fingertip F-contact per finger, IK-free),
   time per TVMMP state (4 RVDS vertices) and per Problem 1 (restricted to the RVDS cone),
   with the tracemalloc peak and the process's ``ru_maxrss``;
-* **hands mjtvm does not generate** (:mod:`mjtvm.bench.hands`): each test hand's grasp file
+* **hands mjtvm does not generate** ([`mjtvm.bench.hands`][mjtvm.bench.hands]): each test hand's grasp file
   loaded, its state, Problem 2 and its lift;
-* **dataset scale** (:mod:`mjtvm.bench.dataset`): batches of 200 synthetic 22-joint,
+* **dataset scale** ([`mjtvm.bench.dataset`][mjtvm.bench.dataset]): batches of 200 synthetic 22-joint,
   five-contact states with a six-direction RVDS, Problem 2 with one REFS vertex (6 LPs) and
   with six (36 LPs) as grasps/s on one process, the 36-LP batch on 2 processes, and
   ``mjtvm solve STATE.json`` and ``import mjtvm`` as processes (``--quick``: one repeat);
-* **peers** (:mod:`mjtvm.bench.peers`): velocity and force polytopes of one fingertip of 3, 4,
+* **peers** ([`mjtvm.bench.peers`][mjtvm.bench.peers]): velocity and force polytopes of one fingertip of 3, 4,
   7 and 12 joints and pycapacity's four-link example against pycapacity (when installed),
   pairs interleaved, as ratios (target: at least as fast);
-* **Problem 2 against its solver's floor** (:mod:`mjtvm.bench.floor`): per state, the wall
+* **Problem 2 against its solver's floor** ([`mjtvm.bench.floor`][mjtvm.bench.floor]): per state, the wall
   time of Problem 2 over its time inside HiGHS ``run()`` in the same calls, on Case 2, Case 1,
   the ``allegro-ik`` grasp and the 22-joint dataset hand (6 and 36 LPs);
-* **Problem 1 at scale** (:func:`~mjtvm.bench.problem1.bench_p1_scale`, not with ``--quick``):
+* **Problem 1 at scale** ([`bench_p1_scale()`][mjtvm.bench.problem1.bench_p1_scale], not with ``--quick``):
   Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
   the 16-finger hand, each in a fresh process with its peak resident memory.
 
@@ -70,15 +70,15 @@ PAPER_S = {"case1_p1": 0.19, "case1_p2": 0.26, "case2_p1": 129.0, "case2_p2": 0.
 TARGETS_S = {"case1_p1": 0.05, "case2_p1": 1.0, "p2_state": 5e-3, "case2_p2_state": 1.5e-3, "lift": 1.0}
 """mjtvm's targets (s): ``p2_state`` for a Problem 2 state in general, ``case2_p2_state`` for
 Case 2's initial state; the sweep target is a speed-up:
-:data:`TARGET_SWEEP_SPEEDUP`."""
+[`TARGET_SWEEP_SPEEDUP`][mjtvm.bench.suite.TARGET_SWEEP_SPEEDUP]."""
 P2_TARGET_KEYS = {"case1_p2": "p2_state", "case2_p2": "case2_p2_state"}
-"""The target (a key of :data:`TARGETS_S`) of each Problem 2 row of the report."""
+"""The target (a key of [`TARGETS_S`][mjtvm.bench.suite.TARGETS_S]) of each Problem 2 row of the report."""
 TARGET_SWEEP_SPEEDUP = 1.6
 
 
 # ------------------------------------------------------------------ measurements
 def bench_lift(*, repeats: int = 3, num_states: int = 30) -> dict[str, Any]:
-    """:func:`~mjtvm.apps.replay.time_replay` (L and S, no plots, no sweeps) after one untimed run."""
+    """[`time_replay()`][mjtvm.apps.replay.time_replay] (L and S, no plots, no sweeps) after one untimed run."""
     from ..apps.replay import time_replay
 
     time_replay(repeats=1, num_states=num_states)  # warm-up: lazy imports, caches
@@ -88,7 +88,7 @@ def bench_lift(*, repeats: int = 3, num_states: int = 30) -> dict[str, Any]:
 
 
 def sweep_points(num_states: int = 30) -> tuple[Any, ...]:
-    """The Fig. 9 sweeps as :class:`~mjtvm.apps.sweep.SweepPoint` (9a: mu at mg = 2 N; 9b: mg at mu = 0.3)."""
+    """The Fig. 9 sweeps as [`SweepPoint`][mjtvm.apps.sweep.SweepPoint] (9a: mu at mg = 2 N; 9b: mg at mu = 0.3)."""
     from ..apps.replay import SWEEP_MG_MU, SWEEP_MGS, SWEEP_MU_MG, SWEEP_MUS
     from ..apps.sweep import grid
 
@@ -98,7 +98,7 @@ def sweep_points(num_states: int = 30) -> tuple[Any, ...]:
 
 
 def _pool_startup(jobs: int) -> float:
-    """Wall time to start a pool of ``jobs`` workers as :func:`~mjtvm.apps.sweep.run_sweep` does
+    """Wall time to start a pool of ``jobs`` workers as [`run_sweep()`][mjtvm.apps.sweep.run_sweep] does
     (forked on Linux, else from a forkserver) whose workers import mjtvm.apps.sweep."""
     import multiprocessing
     import warnings
@@ -125,7 +125,7 @@ def _noop_arg(_: int) -> int:
 
 
 def bench_sweeps(*, jobs: Sequence[int] = (1, 2), repeats: int = 3, num_states: int = 30) -> dict[str, Any]:
-    r"""Wall time of :func:`~mjtvm.apps.sweep.run_sweep` over :func:`sweep_points` per process count.
+    r"""Wall time of [`run_sweep()`][mjtvm.apps.sweep.run_sweep] over [`sweep_points()`][mjtvm.bench.suite.sweep_points] per process count.
 
     Every run starts without the in-process caches of the lift and of the states' MuJoCo
     grasps, as a ``mjtvm sweep`` command does: each run builds the lift once (in this process;

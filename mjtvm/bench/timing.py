@@ -1,19 +1,19 @@
 r"""Timing of Problem 2 (TVMMP) on Case-2-sized states, against a cvxpy baseline.
 
 The paper reports 0.20 s per state for Problem 2 at the Case 2 initial state (MATLAB,
-Core Solo U1300 1.06 GHz); mjtvm's target is at most :data:`TARGET_S` per state. A
+Core Solo U1300 1.06 GHz); mjtvm's target is at most [`TARGET_S`][mjtvm.bench.timing.TARGET_S] per state. A
 Case-2-sized state has 16 joints (four fingers of four), five contacts (F, L, F, L, D),
 one REFS vertex and four RVDS vertices (eq. 37), so four LPs. Measured per state:
 
 * ``tvmmp(state, witnesses=False)`` (HiGHS, eliminated box) and the same with
   ``box="literal"``: median wall time over many repeats after a warm-up;
 * where the time goes: the HiGHS ``run()`` calls are timed through
-  :func:`~mjtvm.core.highs.observe_runs` for the duration of one measurement, the rest of a call is
-  Python overhead, of which :func:`~mjtvm.core.assembly.assemble` alone is timed too;
-* the baseline :func:`~mjtvm.core.reference.reference_tvmmp`, which rebuilds a cvxpy problem
+  [`observe_runs()`][mjtvm.core.highs.observe_runs] for the duration of one measurement, the rest of a call is
+  Python overhead, of which `assemble()` alone is timed too;
+* the baseline [`reference_tvmmp()`][mjtvm.core.reference.reference_tvmmp], which rebuilds a cvxpy problem
   for every pair, in the same run.
 
-All times come from :func:`time.perf_counter`; the garbage collector stays enabled.
+All times come from [`time.perf_counter()`][time.perf_counter]; the garbage collector stays enabled.
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def _timed(fn: Callable[[], object], repeats: int, warmup: int) -> list[float]:
 
 @contextmanager
 def highs_run_timer() -> Iterator[list[float]]:
-    """Record the wall time of every HiGHS ``run`` (:func:`~mjtvm.core.highs.observe_runs`)."""
+    """Record the wall time of every HiGHS ``run`` ([`observe_runs()`][mjtvm.core.highs.observe_runs])."""
     spent: list[float] = []
     with observe_runs(spent.append):
         yield spent
@@ -188,7 +188,7 @@ def run_benchmark(
     warmup: int = 20,
     baseline_solver: str = "CLARABEL",
 ) -> dict[str, Any]:
-    """Benchmark :func:`case2_state` for each seed; returns the JSON-ready report."""
+    """Benchmark [`case2_state()`][mjtvm.bench.timing.case2_state] for each seed; returns the JSON-ready report."""
     per_seed = {}
     for seed in seeds:
         state = case2_state(seed)
@@ -229,7 +229,7 @@ def run_benchmark(
 
 
 def format_table(report: dict[str, Any]) -> str:
-    """A plain-text table of a :func:`run_benchmark` report (times in ms)."""
+    """A plain-text table of a [`run_benchmark()`][mjtvm.bench.timing.run_benchmark] report (times in ms)."""
     head = (
         f"{'seed':>4} {'ours':>8} {'literal':>8} {'run()':>8} {'python':>8} {'assemble':>9} "
         f"{'cvxpy':>8} {'ratio':>7} {'|dalpha|':>9}"

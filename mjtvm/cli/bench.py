@@ -1,5 +1,5 @@
-"""``mjtvm bench`` (and ``scripts/bench.py``): the suite of :mod:`mjtvm.bench.suite`, its report
-(:mod:`mjtvm.bench.report`) printed and written to NAME.json and NAME.md."""
+"""``mjtvm bench`` (and ``scripts/bench.py``): the suite of [`mjtvm.bench.suite`][mjtvm.bench.suite], its report
+([`mjtvm.bench.report`][mjtvm.bench.report]) printed and written to NAME.json and NAME.md."""
 
 from __future__ import annotations
 
@@ -82,13 +82,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _steps(quick: bool) -> int:
-    """How many ``say`` steps :func:`~mjtvm.bench.suite.run_suite` announces (the progress bar's total)."""
+    """How many ``say`` steps [`run_suite()`][mjtvm.bench.suite.run_suite] announces (the progress bar's total)."""
     cases = 3 if quick else 4
     return cases + 5  # the lift, the sweeps, the scaling, the peers, the dataset scale
 
 
 def _read_notes(path: Path | None) -> list[str]:
-    """The lines of the ``--notes`` file (none without one), read up to :data:`MAX_NOTES_BYTES`."""
+    """The lines of the ``--notes`` file (none without one), read up to [`MAX_NOTES_BYTES`][mjtvm.cli.bench.MAX_NOTES_BYTES]."""
     if path is None:
         return []
     try:

@@ -211,7 +211,7 @@ def grid_size(args: argparse.Namespace) -> int:
 
 
 _SWEEP_OPTIONS = {"mus": "--mu", "mgs": "--mg", "cluster": "--cluster", "states": "--state-indices"}
-"""The options of the :class:`~mjtvm.apps.sweep_files.SweepFiles` fields whose values only the run
+"""The options of the [`SweepFiles`][mjtvm.apps.sweep_files.SweepFiles] fields whose values only the run
 can judge (the grasps' own mu and mg, a scheduler's answer)."""
 
 

@@ -42,7 +42,7 @@ __all__ = [
 
 class Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``error: --states: expected ... (try 'mjtvm sweep --help')``,
-    and help that shows the defaults (:class:`Formatter`)."""
+    and help that shows the defaults ([`Formatter`][mjtvm.cli.options.Formatter])."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", Formatter)
@@ -94,7 +94,7 @@ def removed_option(parser: argparse.ArgumentParser, old: str, hint: str) -> None
 
 
 def command(sub: Subparsers, name: str, help: str, description: str) -> argparse.ArgumentParser:
-    """A subcommand's parser (a :class:`Parser`, like its parent)."""
+    """A subcommand's parser (a [`Parser`][mjtvm.cli.options.Parser], like its parent)."""
     return sub.add_parser(name, help=help, description=description)  # a Parser, with the Formatter
 
 

@@ -68,7 +68,7 @@ def warn(text: str) -> None:
 
 
 def warn_uncertified(result: Any) -> None:
-    """One stderr line per pair of a :class:`~mjtvm.core.result.TvmmpResult` whose answer
+    """One stderr line per pair of a [`TvmmpResult`][mjtvm.core.result.TvmmpResult] whose answer
     is not certified, with its note (the JSON holds the same in ``certified`` and ``notes``)."""
     for k, l in result.uncertified():
         warn(f"alpha[{k}][{l}] is not certified: {result.note((k, l))}")
@@ -96,7 +96,7 @@ def lp_progress(enabled: bool, desc: str) -> Iterator[None]:
 @contextlib.contextmanager
 def bracket_progress(enabled: bool) -> Iterator[Callable[[dict[str, Any]], None] | None]:
     """A line on stderr with Problem 1's volume bracket as it narrows (the ``progress`` callback
-    of :func:`~mjtvm.polytopes.tvms.tvms`), or ``None`` when disabled."""
+    of [`tvms()`][mjtvm.polytopes.tvms.tvms]), or ``None`` when disabled."""
     if not enabled:
         yield None
         return

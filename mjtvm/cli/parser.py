@@ -1,4 +1,4 @@
-"""The ``mjtvm`` parser (one builder per command group) and :func:`main`: errors to exit codes."""
+"""The ``mjtvm`` parser (one builder per command group) and [`main()`][mjtvm.cli.parser.main]: errors to exit codes."""
 
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ class _VersionAction(argparse.Action):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``mjtvm`` (``verify``'s options: :func:`mjtvm.cli.verify.add_arguments`)."""
+    """The argument parser of ``mjtvm`` (``verify``'s options: [`mjtvm.cli.verify.add_arguments()`][mjtvm.cli.verify.add_arguments])."""
     parser = Parser(
         prog="mjtvm",
         description="Joint torque-velocity pair based manipulability (Watanabe) of robot hands. "
@@ -80,7 +80,7 @@ def _parse(words: list[str]) -> argparse.Namespace:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``mjtvm`` console script; returns the exit code (:mod:`mjtvm.cli`)."""
+    """Entry point of the ``mjtvm`` console script; returns the exit code ([`mjtvm.cli`][mjtvm.cli])."""
     words = list(sys.argv[1:] if argv is None else argv)
     try:
         try:

@@ -80,7 +80,7 @@ def add_show(sub: Subparsers) -> None:
 
 
 def warn_contacts(grasp: Grasp) -> None:
-    """A stderr warning per line of :func:`~mjtvm.sim.grasp.report.contact_warnings`."""
+    """A stderr warning per line of [`contact_warnings()`][mjtvm.sim.grasp.report.contact_warnings]."""
     from ..sim.grasp.report import contact_warnings
 
     for line in contact_warnings(grasp):

@@ -148,7 +148,7 @@ _UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
 
 def memory_size(text: str) -> int:
     """An argparse type: bytes as ``512M``, ``2G``, ``1.5GiB``, ``2000000000`` or a share of the
-    available memory, ``25%``; at most :data:`MAX_MEMORY`."""
+    available memory, ``25%``; at most [`MAX_MEMORY`][mjtvm.cli.values.MAX_MEMORY]."""
     t = text.strip().upper().removesuffix("IB").removesuffix("B")
     try:
         if t.endswith("%"):
@@ -181,7 +181,7 @@ def _items(text: str, what: str) -> list[str]:
 
 
 def numbers(low: float, high: float, *, strict: bool = False) -> Callable[[str], tuple[float, ...]]:
-    """An argparse type: at most :data:`MAX_LIST` comma-separated finite numbers in ``[low, high]``
+    """An argparse type: at most [`MAX_LIST`][mjtvm.cli.values.MAX_LIST] comma-separated finite numbers in ``[low, high]``
     (``(low, high]`` when ``strict``)."""
     one = number(low, high, strict=strict)
 
@@ -199,7 +199,7 @@ def numbers(low: float, high: float, *, strict: bool = False) -> Callable[[str],
 
 
 def integers(low: int, high: int) -> Callable[[str], tuple[int, ...]]:
-    """An argparse type: at most :data:`MAX_LIST` comma-separated integers in ``[low, high]``."""
+    """An argparse type: at most [`MAX_LIST`][mjtvm.cli.values.MAX_LIST] comma-separated integers in ``[low, high]``."""
     one = integer(low, high)
 
     def parse(text: str) -> tuple[int, ...]:
@@ -231,7 +231,7 @@ def choices(allowed: Sequence[str], *, every: str | None = None) -> Callable[[st
 
 
 def names(text: str) -> tuple[str, ...]:
-    """An argparse type: at most :data:`MAX_LIST` non-empty comma-separated names."""
+    """An argparse type: at most [`MAX_LIST`][mjtvm.cli.values.MAX_LIST] non-empty comma-separated names."""
     values = tuple(v.strip() for v in _items(text, "names"))
     if not all(values):
         raise argparse.ArgumentTypeError(f"expected comma-separated names, got {shown(text)}")
@@ -243,7 +243,7 @@ _STEM = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 
 def stem(text: str) -> str:
     """An argparse type: a file stem (letters, digits, ``_ . -``; no folder, no leading dot), at
-    most :data:`MAX_STEM` characters."""
+    most [`MAX_STEM`][mjtvm.cli.values.MAX_STEM] characters."""
     if not _STEM.fullmatch(text) or len(text) > MAX_STEM:
         raise argparse.ArgumentTypeError(
             f"expected a file stem of 1 to {MAX_STEM} letters, digits, '_', '.', '-' (no '/'), got {shown(text)}"
@@ -253,8 +253,8 @@ def stem(text: str) -> str:
 
 # ------------------------------------------------------------------ paths
 def _path(text: str, what: str) -> Path:
-    """``text`` as a path the system can take: not empty, at most :data:`PATH_MAX` bytes, no
-    component over :data:`NAME_MAX` bytes (else ``stat`` fails with ENAMETOOLONG deep inside)."""
+    """``text`` as a path the system can take: not empty, at most [`PATH_MAX`][mjtvm.cli.values.PATH_MAX] bytes, no
+    component over [`NAME_MAX`][mjtvm.cli.values.NAME_MAX] bytes (else ``stat`` fails with ENAMETOOLONG deep inside)."""
     if not text:
         raise argparse.ArgumentTypeError(f"expected {what}, got ''")
     try:
@@ -323,7 +323,7 @@ def source(text: str) -> str:
 
 
 def grasps(text: str) -> tuple[str, ...]:
-    """An argparse type: comma-separated grasps (each as :func:`source`)."""
+    """An argparse type: comma-separated grasps (each as [`source()`][mjtvm.cli.values.source])."""
     values = names(text)
     for value in values:
         source(value)

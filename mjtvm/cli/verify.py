@@ -1,7 +1,7 @@
-"""``mjtvm verify``: the physics check of :mod:`mjtvm.physics.verify` on the command line.
+"""``mjtvm verify``: the physics check of [`mjtvm.physics.verify`][mjtvm.physics.verify] on the command line.
 
 Its parser is built only when the command runs (the options' defaults come from
-:class:`~mjtvm.physics.simulate.SimSettings`, which imports MuJoCo).
+[`SimSettings`][mjtvm.physics.simulate.SimSettings], which imports MuJoCo).
 """
 
 from __future__ import annotations
@@ -152,7 +152,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _simulation_options(p: argparse.ArgumentParser) -> None:
-    """The rollouts' :class:`~mjtvm.physics.simulate.SimSettings` (ablations)."""
+    """The rollouts' [`SimSettings`][mjtvm.physics.simulate.SimSettings] (ablations)."""
     from ..physics.simulate import SimSettings  # MuJoCo
 
     p.add_argument(
@@ -180,7 +180,7 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_gears(args: argparse.Namespace) -> int:
-    """``mjtvm verify --gears``: :func:`~mjtvm.physics.gears.gear_sweep` to gears.csv and gears.png."""
+    """``mjtvm verify --gears``: [`gear_sweep()`][mjtvm.physics.gears.gear_sweep] to gears.csv and gears.png."""
     from ..apps.replay import grasp_defaults
     from ..core.files import check_output_dir, output_lock, write_files
     from ..physics import verify
@@ -210,10 +210,10 @@ def _cmd_gears(args: argparse.Namespace) -> int:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
-    """Run ``mjtvm verify`` with parsed :func:`add_arguments` options; print the summary.
+    """Run ``mjtvm verify`` with parsed [`add_arguments()`][mjtvm.cli.verify.add_arguments] options; print the summary.
 
     The output folder is checked and locked before any work; the CSV, PNG and the slide
-    check's CSV are written together, atomically, at the end (:mod:`mjtvm.core.files`).
+    check's CSV are written together, atomically, at the end ([`mjtvm.core.files`][mjtvm.core.files]).
     """
     from ..core.files import check_output_dir, output_lock, write_files
     from ..physics import verify

@@ -1,32 +1,32 @@
 r"""Sparse assembly of the TVM constraint system, shared by Problems 1 and 2.
 
-One :class:`Assembly` holds, for one grasp state, every linear constraint of eq. (26)
+One [`Assembly`][mjtvm.core.assembly.Assembly] holds, for one grasp state, every linear constraint of eq. (26)
 (eq. 34 with S-points) except the object twist, whose coefficients are kept apart in
 ``A_twist`` so that Problem 2 can collapse the twist into ``alpha * r_l`` (eq. 31) and
 Problem 1 can keep it as D free variables. The rows are
 
 * statics, per REFS copy i (eq. 19-20, 25):
   ``G E lam_i = -w_i`` (D rows) and ``tau_i - J^T E lam_i = g_f`` (M rows), where
-  the columns of ``E`` are the force generators of :func:`~mjtvm.core.contacts.force_generators`
+  the columns of ``E`` are the force generators of `force_generators()`
   and ``lam_i >= 0`` (eq. 24; D-points carry no force);
 * kinematics (eq. 11-13): ``H (J qd - G^T rdot) [+ rho T s] = 0`` for F (d rows), L and
   S normal (1 row), S tangential (d - 1 rows); ``<= 0`` for D (eq. 12);
 * operation ranges (eq. 2-3): either the exact reduction
-  ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`), or
+  ``c_tau tau_ij + c_qd qd_j <= b`` (`OperationRange.mirrored_halfplanes`), or
   the paper's literal box with four variables per joint;
 * preloads, per copy and per contact with ``preload > 0`` (last, so that a state without
   preloads has exactly the paper's system): ``n^T E_c lam_ic >= preload``, the contact's
   normal force bounded below instead of eq. (22)'s ``n_f >= 0``;
-* joint position limits (:mod:`~mjtvm.core.limits`; after every other row, so that a state
+* joint position limits (`limits`; after every other row, so that a state
   without ``joint_limits`` has exactly the paper's system): ``qd_j <= 0`` for a joint on its
   upper limit, ``qd_j >= 0`` on its lower; with ``horizon=True`` (Problem 2) also
   ``sign qd_j - rate s alpha <= 0`` per limited side, whose ``alpha`` coefficient the caller
-  puts in with ``alpha`` (:meth:`Assembly.horizon_column`).
+  puts in with ``alpha`` (`Assembly.horizon_column()`).
 
 Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, loss][, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
 
-With a :class:`~mjtvm.core.transmission.Transmission` ``tau_i`` holds the A actuator
+With a [`Transmission`][mjtvm.core.transmission.Transmission] ``tau_i`` holds the A actuator
 forces ``u_i`` and is followed by the C constraint forces ``eq_i`` (free); the torque rows
 read ``P^T u_i - J^T E lam_i + J_eq^T eq_i = g_f``, the operation ranges bound
 ``(u_ia, P_a qd)``, and the C rows ``J_eq qd = 0`` come last. Without one every block is
@@ -38,7 +38,7 @@ would "make" torque (``b qd``) to hold the object. Each actuator a instead pays
 ``loss_a >= b_j |qd_j| / |P_aj|`` for every joint j it moves (a variable per actuator, after
 ``rho``), and its operation range bounds ``(|u_ia| + loss_a, |P_a qd|)``: the rows
 ``c_tau u_ia + |c_tau| loss_a + c_qd P_a qd <= b``, which are
-``a_tau (|u| + loss) + a_qd |s| <= b`` (:attr:`OperationRange.mirrored_halfplanes`). The
+``a_tau (|u| + loss) + a_qd |s| <= b`` (`OperationRange.mirrored_halfplanes`). The
 motor's torque is its holding torque plus what overcomes the damping, whatever their signs,
 so that more damping can only shrink the feasible set; a state without damping has no
 ``loss`` block and is assembled exactly as before.
@@ -74,12 +74,12 @@ BoxForm = Literal["eliminated", "literal"]
 def grasp_map_transpose(
     position: NDArray[np.float64], object_position: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    r"""``(d, D)`` :math:`G_{ij}^T`: velocity of the object point at ``position`` (eq. 6).
+    r"""``(d, D)`` $G_{ij}^T$: velocity of the object point at ``position`` (eq. 6).
 
-    In space :math:`G^T = [I, -[r\times]]` with :math:`r = p_C - p_O`, so
-    :math:`G^T \dot r = v + \omega \times r`; in the plane
-    :math:`G^T \dot r = [v_x - \omega r_y, v_y + \omega r_x]`. The round-off of ``r``
-    (:mod:`~mjtvm.core.roundoff`: of the difference, then of the vector) is 0.
+    In space $G^T = [I, -[r\times]]$ with $r = p_C - p_O$, so
+    $G^T \dot r = v + \omega \times r$; in the plane
+    $G^T \dot r = [v_x - \omega r_y, v_y + \omega r_x]$. The round-off of ``r``
+    ([`roundoff`][mjtvm.core.roundoff]: of the difference, then of the vector) is 0.
     """
     p_c, p_o = np.asarray(position, dtype=float), np.asarray(object_position, dtype=float)
     r = drop_data_roundoff(drop_cancellation(p_c - p_o, np.abs(p_c) + np.abs(p_o)))
@@ -91,7 +91,7 @@ def grasp_map_transpose(
 
 def _product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """``a @ b`` with the round-off of exact cancellations set to 0
-    (:func:`~mjtvm.core.roundoff.drop_cancellation`), e.g. ``n . (r x n)``."""
+    ([`drop_cancellation()`][mjtvm.core.roundoff.drop_cancellation]), e.g. ``n . (r x n)``."""
     return drop_cancellation(a @ b, np.abs(a) @ np.abs(b))
 
 
@@ -103,12 +103,12 @@ class Assembly:
     ----------
     csc
         ``(m, n)`` the matrix ``A`` over the variables listed in the module docstring
-        (:class:`~mjtvm.core.csc.Csc`; :attr:`A` is the same as a scipy matrix).
+        ([`Csc`][mjtvm.core.csc.Csc]; `A` is the same as a scipy matrix).
     twist_csc
-        ``(m, D)`` the coefficients of the object twist ``rdot`` (:attr:`A_twist` as scipy's).
+        ``(m, D)`` the coefficients of the object twist ``rdot`` (`A_twist` as scipy's).
     row_lower, row_upper
         ``(m,)`` row bounds; the statics rows of copy i hold ``-w`` once
-        :meth:`statics_bounds` is applied.
+        `statics_bounds()` is applied.
     col_lower, col_upper
         ``(n,)`` variable bounds.
     blocks
@@ -130,15 +130,15 @@ class Assembly:
         ``(m,)`` one id per vector whose components the rows are (a copy's force balance,
         its moment balance, a contact's relative velocity); every other row its own id.
         A certificate measures a row's violation against its vector's size, as a rotation
-        of the frame mixes the components (:mod:`~mjtvm.core.certificate`).
+        of the frame mixes the components ([`certificate`][mjtvm.core.certificate]).
     limit_rows
         The rows ``qd_j <= 0`` / ``qd_j >= 0`` of the joints on a position limit
-        (:mod:`~mjtvm.core.limits`).
+        (`limits`).
     horizon_rows, horizon_rates
         The travel-horizon rows ``sign qd_j - rate_j s(r) alpha <= 0`` (assembled with
         ``horizon=True``) and their ``rate_j = slack_j / H`` (rad or m per m of travel):
         the ``alpha`` coefficient of the row is ``-rate_j`` times the travel speed of ``r``
-        (:meth:`horizon_column`).
+        (`horizon_column()`).
     """
 
     csc: Csc
@@ -167,12 +167,12 @@ class Assembly:
 
     @cached_property
     def A(self) -> sp.csc_matrix:
-        """``(m, n)`` the constraint matrix as a scipy sparse matrix (:attr:`csc`'s arrays)."""
+        """``(m, n)`` the constraint matrix as a scipy sparse matrix (`csc`'s arrays)."""
         return self.csc.to_scipy()
 
     @cached_property
     def A_twist(self) -> sp.csc_matrix:
-        """``(m, D)`` the twist's coefficients as a scipy sparse matrix (:attr:`twist_csc`'s arrays)."""
+        """``(m, D)`` the twist's coefficients as a scipy sparse matrix (`twist_csc`'s arrays)."""
         return self.twist_csc.to_scipy()
 
     def statics_bounds(
@@ -187,7 +187,7 @@ class Assembly:
 
     def horizon_column(self, state: GraspState, r: NDArray[np.float64]) -> NDArray[np.float64]:
         r"""``(len(horizon_rows),)`` the coefficients of ``alpha`` on the horizon rows when
-        ``rdot = alpha r`` (eq. 31): ``-rate_j s(r)`` (:func:`~mjtvm.core.limits.travel_speed`);
+        ``rdot = alpha r`` (eq. 31): ``-rate_j s(r)`` ([`travel_speed()`][mjtvm.core.limits.travel_speed]);
         on every other row alpha's coefficient is ``A_twist r``."""
         return -self.horizon_rates * travel_speed(state, r)
 
@@ -250,7 +250,7 @@ def _statics_rows(
     copies: int,
 ) -> tuple[list[slice], list[slice]]:
     """Per copy i, the statics with ``f = E lam_i`` (eq. 19-20): ``G E lam_i = -w_i`` (D
-    rows, bounds set later by :meth:`Assembly.statics_bounds`) and
+    rows, bounds set later by [`Assembly.statics_bounds()`][mjtvm.core.assembly.Assembly.statics_bounds]) and
     ``tau_i - J^T E lam_i = g_f`` (M rows). Returns the slices of the balance rows and of
     the torque rows."""
     contacts, big_d, m = state.contacts, state.twist_dim, state.num_joints
@@ -318,7 +318,7 @@ def _kinematic_rows(
 
 def _range_rows_eliminated(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
     """The operation ranges (eq. 1-3) by the exact reduction: per copy i, row h of joint j
-    is ``c_tau tau_ij + c_qd qd_j <= b`` (:attr:`OperationRange.mirrored_halfplanes`), with
+    is ``c_tau tau_ij + c_qd qd_j <= b`` (`OperationRange.mirrored_halfplanes`), with
     ``|c_tau| loss_j`` on the left under joint damping (module docstring)."""
     qd0 = blocks["qd"].start
     hps = [op.mirrored_halfplanes for op in state.operation_ranges]
@@ -387,7 +387,7 @@ def damping_loss(state: GraspState) -> NDArray[np.float64] | None:
 
 def _loss_rows(out: _Rows, state: GraspState, blocks: dict[str, slice]) -> None:
     """``+- (b_j / |P_aj|) qd_j - loss_a <= 0`` for every actuator a and damped joint j it
-    moves (:func:`damping_loss`)."""
+    moves ([`damping_loss()`][mjtvm.core.assembly.damping_loss])."""
     coef = damping_loss(state)
     if coef is None:
         return
@@ -422,7 +422,7 @@ def _preload_rows(
 def _limit_rows(
     out: _Rows, state: GraspState, blocks: dict[str, slice], horizon: bool
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
-    """The position-limit rows (:mod:`~mjtvm.core.limits`): ``qd_j <= 0`` per joint on its
+    """The position-limit rows (`limits`): ``qd_j <= 0`` per joint on its
     upper limit, then ``qd_j >= 0`` per joint on its lower; with ``horizon`` the horizon
     rows ``sign qd_j <= rate_j s alpha`` (bounds ``(-inf, 0]``, their ``alpha`` coefficient
     the caller's). Returns the limit rows, the horizon rows and their rates."""
@@ -464,8 +464,8 @@ def assemble(
         ``"eliminated"`` (exact reduction, default) or ``"literal"`` (eq. 2's box).
     horizon
         Also the travel-horizon rows of the joint limits (Problem 2, whose ``alpha`` they
-        need: :meth:`Assembly.horizon_column`); Problem 1 takes the on-limit rows only
-        (:mod:`~mjtvm.core.limits`).
+        need: `Assembly.horizon_column()`); Problem 1 takes the on-limit rows only
+        (`limits`).
 
     Returns
     -------

@@ -1,10 +1,10 @@
 r"""Bounds of the ``mjtvm.state/1`` format and the number checks shared by its validators.
 
-Every number of a state is finite and at most :data:`MAX_ABS` in absolute value, and
+Every number of a state is finite and at most [`MAX_ABS`][mjtvm.core.bounds.MAX_ABS] in absolute value, and
 every list has a bounded length (the constants below; ``docs/state-format.md`` gives
-the reasons). :func:`float_array` turns a nested list (or an array) into a float array
+the reasons). [`float_array()`][mjtvm.core.bounds.float_array] turns a nested list (or an array) into a float array
 only after checking every leaf, so that a string, a boolean, an object or an integer
-too large for a float is reported as one :class:`~mjtvm.errors.StateError` naming the
+too large for a float is reported as one [`StateError`][mjtvm.errors.StateError] naming the
 field, never as a ``TypeError``/``OverflowError`` deep inside numpy, and never silently
 converted (numpy would turn ``"1.5"`` and ``true`` into numbers).
 """
@@ -118,7 +118,7 @@ def float_array(
 ) -> NDArray[np.float64]:
     r"""A read-only float array of ``ndim`` dimensions from nested lists (or an array).
 
-    Every leaf is checked by :func:`number`, and every level must be a list (rows of
+    Every leaf is checked by [`number()`][mjtvm.core.bounds.number], and every level must be a list (rows of
     equal length). Shapes beyond the nesting (lengths, columns) are the caller's.
 
     Parameters
@@ -173,10 +173,10 @@ def float_array(
 
 
 def check_json_tree(data: Any, field: str = "") -> None:
-    """Check that a decoded document is plain JSON no deeper than :data:`MAX_DEPTH`.
+    """Check that a decoded document is plain JSON no deeper than [`MAX_DEPTH`][mjtvm.core.bounds.MAX_DEPTH].
 
     Iterative (an explicit stack), so that a document nested thousands deep or a mapping
-    that contains itself is refused with a :class:`StateError` rather than a
+    that contains itself is refused with a [`StateError`][mjtvm.errors.StateError] rather than a
     ``RecursionError``. Allowed values: mappings with string keys, lists and tuples,
     strings, numbers, booleans, ``None`` and numeric numpy arrays or scalars (a mapping
     built in Python); which of them fits where is checked by the field validators.

@@ -1,16 +1,16 @@
 r"""Certificates: an LP's answer checked against the original, unscaled LP before it is reported.
 
 The solvers see an equilibrated LP whose round-off has been dropped
-(:mod:`~mjtvm.core.scaling`); their tolerances hold there. A wrong scaling, a dropped
+(`scaling`); their tolerances hold there. A wrong scaling, a dropped
 coefficient that was not round-off, or a solver's own slip can make an answer that is
 "optimal" for the solver and wrong for the grasp. So every optimal answer of Problem 2 is
-checked on the LP as assembled from the state (:func:`~mjtvm.core.assembly.assemble`: the
+checked on the LP as assembled from the state (`assemble()`: the
 paper's statics, friction, kinematics and operation ranges, unscaled, nothing dropped but
-the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
+the state's own round-off, [`roundoff`][mjtvm.core.roundoff]), for ``min c^T x`` s.t.
 ``l <= A x <= u``, ``lc <= x <= uc``:
 
 * **primal**: the solution clipped to its bounds (so ``alpha >= 0`` and ``lam >= 0`` hold
-  exactly) satisfies every row to :data:`PRIMAL_TOL` relative to the magnitudes of the
+  exactly) satisfies every row to `PRIMAL_TOL` relative to the magnitudes of the
   row's terms, ``|A_i| s + |bound|`` with ``s_j = max(|x_j|, ref_j)`` and ``ref_j`` a
   physical size of the variable given by the caller (Problem 2: each joint's largest speed
   and torque), so that a kinematic row of joint speeds that are ~0 in this solution is
@@ -20,7 +20,7 @@ the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
   that are vertical is measured against the forces, not against their x components); a
   term at its variable's size may be capped by a physical size of its row (``row_cap``:
   Problem 2 caps a contact velocity's terms at the speed the hand's joints move a contact
-  at, :mod:`~mjtvm.core.problem2`), where ``|A_ij| ref_j`` overstates what the row can
+  at, [`problem2`][mjtvm.core.problem2]), where ``|A_ij| ref_j`` overstates what the row can
   reach: one Jacobian entry of 1e12 times its joint's top speed would make the row's
   scale 1e12 m/s, and a contact velocity missed by 100 % would pass for round-off. The
   term's value in this solution, ``|A_ij x_j|``, is never capped;
@@ -28,10 +28,10 @@ the state's own round-off, :mod:`~mjtvm.core.roundoff`), for ``min c^T x`` s.t.
   bound binds, ``<= 0`` the upper) and the reduced costs ``d = c - A^T y`` computed here on
   the unscaled ``A`` have the signs their bounds allow; those that do not are taken as 0,
   and what that moves the dual bound by (their sizes times the typical sizes of their
-  rows and variables) must stay within :data:`DUAL_TOL` of the objective, or within
+  rows and variables) must stay within `DUAL_TOL` of the objective, or within
   ``floor`` absolute;
 * **gap**: the dual objective ``D`` (weak duality: ``D <= c^T x*`` for any such ``y``)
-  meets the primal one within :data:`GAP_TOL` relative, or within ``floor`` absolute (for
+  meets the primal one within `GAP_TOL` relative, or within ``floor`` absolute (for
   alpha: the value below which alpha is reported as 0, so that an alpha of 0 is certified
   by a bound below that value).
 
@@ -39,7 +39,7 @@ For Problem 2 (``c = -e_alpha``) the dual bound bounds the true alpha from above
 reported alpha is feasible and within ``GAP_TOL + DUAL_TOL`` (2e-7) of the maximum. The
 bound holds to ``DUAL_TOL``, not rigorously: that would need finite bounds on every
 variable, and the forces and slip speeds have none. An infeasible verdict is certified by
-Farkas multipliers (:func:`farkas`): the same dual bound with zero costs, positive.
+Farkas multipliers ([`farkas()`][mjtvm.core.certificate.farkas]): the same dual bound with zero costs, positive.
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ __all__ = [
 ]
 
 Matrix: TypeAlias = Any  #: a dense ``NDArray[np.float64]`` or a scipy sparse matrix
-#: ``(P, .)`` arrays in, the two products of :meth:`Certifier._measure` out
+#: ``(P, .)`` arrays in, the two products of `Certifier._measure()` out
 _Products: TypeAlias = Callable[[NDArray[np.float64], NDArray[np.float64]], tuple[NDArray[np.float64], ...]]
 
 #: Largest violation of a row, relative to the magnitudes of its terms (the solvers hold
@@ -85,7 +85,7 @@ DUAL_TOL = 1e-7
 GAP_TOL = 1e-7
 
 
-#: Most multiply-adds in one matrix product of :meth:`Certifier.check_many` (answers x rows x
+#: Most multiply-adds in one matrix product of [`Certifier.check_many()`][mjtvm.core.certificate.Certifier.check_many] (answers x rows x
 #: columns); more answers are certified in chunks. numpy's OpenBLAS (0.3.31) ran the 22-joint
 #: dataset state's products on one thread up to 18 answers (390,600) and on two for its 36
 #: (781,200), whose second thread then spins between calls: two cores for 2 % less time, and
@@ -149,7 +149,7 @@ def _relative(value: float, ref: float) -> float:
 
 
 class Certifier:
-    """The checks of :func:`certify` and :func:`farkas` for a family of LPs that share their
+    """The checks of [`certify()`][mjtvm.core.certificate.certify] and [`farkas()`][mjtvm.core.certificate.farkas] for a family of LPs that share their
     matrix object, column lower bounds, variables' sizes and row groups: Problem 2 checks
     every LP of a state with one (its matrix's last column, the alpha column, overwritten
     in place between LPs), so what depends on those alone is computed once.
@@ -161,7 +161,7 @@ class Certifier:
     col_lower
         ``(n,)`` the column lower bounds.
     col_ref, abs_a, row_groups
-        As in :func:`certify`; ``abs_a`` must follow ``a`` if ``a`` changes.
+        As in [`certify()`][mjtvm.core.certificate.certify]; ``abs_a`` must follow ``a`` if ``a`` changes.
     dual_ref
         ``(n,)`` the sizes a reduced cost of the wrong sign is weighed with (default
         ``col_ref``): a force that is 0 in this solution may be large at another, while the
@@ -241,7 +241,7 @@ class Certifier:
         lower: tuple[NDArray[np.bool_], NDArray[np.float64]],
         upper: tuple[NDArray[np.bool_], NDArray[np.float64]],
     ) -> NDArray[np.float64]:
-        """:func:`primal_violation` from the row activities ``ax`` and the rows' terms, along
+        """[`primal_violation()`][mjtvm.core.certificate.primal_violation] from the row activities ``ax`` and the rows' terms, along
         the last axis (``(m,)`` or ``(P, m)`` in, ``()`` or ``(P,)`` out)."""
         (lo_ok, lo), (up_ok, up) = lower, upper
         below = np.where(lo_ok, lo - ax, 0.0)
@@ -263,7 +263,7 @@ class Certifier:
         *,
         floor: float = 0.0,
     ) -> Certificate:
-        """:func:`certify` on this family's matrix and column lower bounds."""
+        """[`certify()`][mjtvm.core.certificate.certify] on this family's matrix and column lower bounds."""
         a, abs_a, abs_terms = self.a, self.abs_a, self.abs_terms
 
         def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
@@ -304,7 +304,7 @@ class Certifier:
         *,
         floor: NDArray[np.float64],
     ) -> list[Certificate]:
-        """:meth:`check` of ``P`` answers at once, for LPs that differ from this family's
+        """`check()` of ``P`` answers at once, for LPs that differ from this family's
         matrix only in its last column: the same measures, from matrix products instead of
         ``P`` matrix-vector ones (Problem 2 certifies a state's pairs together).
 
@@ -320,7 +320,7 @@ class Certifier:
             ``(P, m)`` each LP's last column (Problem 2: the alpha column of its RVDS vertex),
             in place of the matrix's; ``self.a`` must be dense.
         floor
-            ``(P,)`` each answer's ``floor`` (:func:`certify`).
+            ``(P,)`` each answer's ``floor`` ([`certify()`][mjtvm.core.certificate.certify]).
         """
         m, n = self.a.shape
         step = max(1, BATCH_ENTRIES // max(m * n, 1))
@@ -368,7 +368,7 @@ class Certifier:
         products: _Products,
         transposed: _Products,
     ) -> list[Certificate]:
-        """The certificates of ``P`` answers (the arrays of :meth:`check_many`), the matrix
+        """The certificates of ``P`` answers (the arrays of `check_many()`), the matrix
         reached through ``products(xc, size) -> (A x, |A| size)`` and
         ``transposed(y, |y|) -> (y A, |y| |A|)``, each ``(P, .)``."""
         xc = np.minimum(np.maximum(x, self.col_lower), col_upper)  # clip (bounds may be inf)
@@ -425,7 +425,7 @@ class Certifier:
         col_upper: NDArray[np.float64],
         y: NDArray[np.float64] | None,
     ) -> bool:
-        """:func:`farkas` on this family's matrix and column lower bounds."""
+        """[`farkas()`][mjtvm.core.certificate.farkas] on this family's matrix and column lower bounds."""
         if y is None or not np.all(np.isfinite(y)):
             return False
         zero = np.zeros(self.a.shape[1])
@@ -494,10 +494,10 @@ def certify(
         ``|a|``, when the caller keeps it.
     row_groups
         ``(m,)`` ids of the vectors the rows are components of, the rows of one vector
-        consecutive (:func:`primal_violation`).
+        consecutive ([`primal_violation()`][mjtvm.core.certificate.primal_violation]).
     row_cap
         ``(m,)`` the largest a term at its variable's size may add to its row's scale
-        (:class:`Certifier`).
+        ([`Certifier`][mjtvm.core.certificate.Certifier]).
 
     Returns
     -------
@@ -520,7 +520,7 @@ def farkas(
 ) -> bool:
     """Whether row multipliers ``y`` prove ``row_lower <= a x <= row_upper``,
     ``col_lower <= x <= col_upper`` infeasible (Farkas): with zero costs, the dual bound
-    of :func:`certify` is positive, and what the multipliers of the wrong sign move it by
+    of [`certify()`][mjtvm.core.certificate.certify] is positive, and what the multipliers of the wrong sign move it by
     is within ``DUAL_TOL`` of it. Either sign of ``y`` is tried (solvers differ)."""
     one = Certifier(a, col_lower, col_ref=np.ones(a.shape[1]) if col_ref is None else col_ref, abs_a=abs_a)
     return one.farkas(row_lower, row_upper, col_upper, y)

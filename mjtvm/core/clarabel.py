@@ -80,7 +80,7 @@ def _solve_clarabel(lp: LinearProgram) -> LPSolution:
 
 
 def solve_clarabel(lp: LinearProgram, *, scaling: Scaling | None = None) -> LPSolution:
-    """Clarabel on the equilibrated ``lp`` (:func:`lp_scaling` unless ``scaling``), unscaled."""
+    """Clarabel on the equilibrated ``lp`` ([`lp_scaling()`][mjtvm.core.scaling.lp_scaling] unless ``scaling``), unscaled."""
     import scipy.sparse as sp
 
     s = lp_scaling(lp) if scaling is None else scaling

@@ -76,7 +76,7 @@ def _mu_range(value: ArrayLike, ctype: str, mu: float | None) -> tuple[float, fl
 
 @dataclass(frozen=True, eq=False)
 class Contact:
-    r"""One contact point :math:`C_{ij}` between a finger (or the base) and the object.
+    r"""One contact point $C_{ij}$ between a finger (or the base) and the object.
 
     Parameters
     ----------
@@ -99,14 +99,14 @@ class Contact:
         S only, ``(d,)``: direction of the object's contact-point velocity relative to
         the finger's; its normal component is ignored.
     preload
-        Minimum normal force (N, default 0): the LP requires :math:`n^T f \ge` ``preload``
-        instead of eq. (22)'s :math:`n_f \ge 0` (F, L and S; a D-point carries no force).
+        Minimum normal force (N, default 0): the LP requires $n^T f \ge$ ``preload``
+        instead of eq. (22)'s $n_f \ge 0$ (F, L and S; a D-point carries no force).
         A finger held on the object by its velocity loop alone (a zero-force L-point) leaves
         it at the first lag; a preload makes the witness press it on.
     mu_range
         Optional ``(mu_lo, mu_hi)`` with ``mu_lo <= mu <= mu_hi`` (F and S only): the interval
         the true coefficient is known to lie in. The LPs use ``mu``; the result adds the worst
-        case over the interval (:mod:`mjtvm.core.friction`, ``docs/state-format.md``).
+        case over the interval (`mjtvm.core.friction`, ``docs/state-format.md``).
     """
 
     name: str
@@ -216,7 +216,7 @@ class Contact:
 def tangent_basis(
     normal: NDArray[np.float64], tangent: NDArray[np.float64] | None = None
 ) -> NDArray[np.float64]:
-    r"""Orthonormal tangent basis :math:`T` (``(d-1, d)``, the paper's :math:`T_{ij}`).
+    r"""Orthonormal tangent basis $T$ (``(d-1, d)``, the paper's $T_{ij}$).
 
     Rows ``t1`` (and ``t2 = n x t1`` in space); see the module docstring for the rule.
     """
@@ -243,7 +243,7 @@ def tangent_basis(
 
 def slide_unit(contact: Contact) -> NDArray[np.float64]:
     """Unit tangential slide direction of an S contact (normal component removed, its
-    round-off 0 as in :func:`tangent_basis`)."""
+    round-off 0 as in [`tangent_basis()`][mjtvm.core.contacts.tangent_basis])."""
     if contact.slide_direction is None:
         raise StateError("slide_direction", f"contact {contact.name!r} has none")
     s = contact.slide_direction / _direction_norm(contact.slide_direction)  # validated non-zero

@@ -1,10 +1,10 @@
 r"""A compressed-sparse-column matrix as HiGHS takes it: three arrays and a shape.
 
 Problem 2 builds, equilibrates and passes one constraint matrix per state and reads nothing
-else of it, so its path does not import :mod:`scipy.sparse`: that import alone is about
+else of it, so its path does not import `scipy.sparse`: that import alone is about
 0.12 s of a ``mjtvm solve`` process (scipy's array-API layer clones numpy's namespace,
 which imports ``numpy.testing`` and ``numpy.f2py``), more than the solve itself. Everything
-else (the polytopes, the fallbacks, Clarabel) gets a scipy matrix from :meth:`Csc.to_scipy`.
+else (the polytopes, the fallbacks, Clarabel) gets a scipy matrix from [`Csc.to_scipy()`][mjtvm.core.csc.Csc.to_scipy].
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ class Csc:
 def from_triplets(
     rows: NDArray[np.int64], cols: NDArray[np.int64], vals: NDArray[np.float64], shape: tuple[int, int]
 ) -> Csc:
-    """The canonical :class:`Csc` of ``(row, col, value)`` triplets; repeated positions are
+    """The canonical [`Csc`][mjtvm.core.csc.Csc] of ``(row, col, value)`` triplets; repeated positions are
     summed (as scipy's COO conversion does)."""
     order = np.lexsort((rows, cols))
     rows, cols, vals = rows[order], cols[order], np.asarray(vals, dtype=float)[order]
@@ -95,7 +95,7 @@ def from_triplets(
 
 
 def as_csc(a: Any) -> Csc:
-    """``a`` (a :class:`Csc`, a scipy sparse matrix or a dense array) as a canonical :class:`Csc`."""
+    """``a`` (a [`Csc`][mjtvm.core.csc.Csc], a scipy sparse matrix or a dense array) as a canonical [`Csc`][mjtvm.core.csc.Csc]."""
     if isinstance(a, Csc):
         return a
     import scipy.sparse as sp
@@ -113,5 +113,5 @@ def as_csc(a: Any) -> Csc:
 
 
 def scipy_matrix(a: Any) -> Any:
-    """``a`` as scipy takes it: a :class:`Csc` converted (:meth:`Csc.to_scipy`), anything else as it is."""
+    """``a`` as scipy takes it: a [`Csc`][mjtvm.core.csc.Csc] converted ([`Csc.to_scipy()`][mjtvm.core.csc.Csc.to_scipy]), anything else as it is."""
     return a.to_scipy() if isinstance(a, Csc) else a

@@ -1,4 +1,4 @@
-r"""Why an alpha of Problem 2 is 0 or a pair infeasible, in words (:func:`diagnose`).
+r"""Why an alpha of Problem 2 is 0 or a pair infeasible, in words ([`diagnose()`][mjtvm.core.diagnosis.diagnose]).
 
 An enveloping grasp with every touching link a sticking F-point is typically locked: two
 F-points on one finger, or one on the palm, admit no object motion, and TVMMP is exactly 0.
@@ -6,33 +6,33 @@ A pair can also be infeasible: some joint cannot produce the torque that balance
 vertex. Each question is answered with small LPs on the state alone, only for the pairs that
 need it (every alpha > 0: nothing is computed).
 
-* :math:`\alpha_{kl} = 0`. First the kinematics alone (eq. 11-13): the contact rows
-  :math:`H(J\dot q - G^T \alpha \hat r_l)\ (=, \le)\ 0` (with the S-points' slip) and every
+* $\alpha_{kl} = 0$. First the kinematics alone (eq. 11-13): the contact rows
+  $H(J\dot q - G^T \alpha \hat r_l)\ (=, \le)\ 0$ (with the S-points' slip) and every
   joint at most its no-load speed (the operation range's largest speed, eq. 1), maximising
-  alpha (:func:`kinematic_alpha`). If that is 0, the contacts lock the motion, whatever the
+  alpha ([`kinematic_alpha()`][mjtvm.core.diagnosis.kinematic_alpha]). If that is 0, the contacts lock the motion, whatever the
   forces: a deletion filter (drop one contact at a time, leave it out while the others still
   lock) gives a minimal set of contacts whose rows alone admit no joint speed along
-  :math:`\hat r_l`. Otherwise the operation ranges bind: at the torques that balance
-  :math:`w_k` (eq. 19-20) they leave the joints no speed for the motion; the same filter on
+  $\hat r_l$. Otherwise the operation ranges bind: at the torques that balance
+  $w_k$ (eq. 19-20) they leave the joints no speed for the motion; the same filter on
   the joints (every range enlarged 100 times in torque and speed, then each restored while
   alpha stays > 0) gives a minimal set of joints.
-* an infeasible pair (:math:`w_k` cannot be balanced within the ranges, eq. 19-20, 22-24;
-  then every :math:`l` of this :math:`k` is): with every range enlarged, still infeasible
-  means no contact forces balance :math:`w_k` at all (the friction cones and normals);
+* an infeasible pair ($w_k$ cannot be balanced within the ranges, eq. 19-20, 22-24;
+  then every $l$ of this $k$ is): with every range enlarged, still infeasible
+  means no contact forces balance $w_k$ at all (the friction cones and normals);
   otherwise the filter names the joints whose torque limits bind, each with the torque it
   needs (the witness of the LP with those joints enlarged) and the most its range gives.
   Either way the diagnosis says which way the REFS vertex is unbalanced: the certified Farkas
-  multipliers ``y`` of the LP (:func:`~mjtvm.core.certificate.farkas`) bound every
+  multipliers ``y`` of the LP ([`farkas()`][mjtvm.core.certificate.farkas]) bound every
   admissible contact wrench ``f`` by ``y_w^T f < -y_w^T w_k`` on the balance rows
   ``G E lam = -w_k`` (eq. 20), so the net wrench ``w_k + f`` has a negative component
   along ``y_w`` whatever the forces: it pushes the object along the twist ``-y_w``
-  (:func:`escape_direction`; e.g. along the weight for a finger whose cone cannot hold it
-  up). For the balance cause each contact is then changed alone (:func:`relieving_contacts`):
+  ([`escape_direction()`][mjtvm.core.diagnosis.escape_direction]; e.g. along the weight for a finger whose cone cannot hold it
+  up). For the balance cause each contact is then changed alone ([`relieving_contacts()`][mjtvm.core.diagnosis.relieving_contacts]):
   its friction coefficient raised (an F-point: the least that balances, by bisection), or
   the contact made a sticking F-point (an L, S or D point); those that balance the vertex
   are named, with the change.
 
-The pair LPs are Problem 2's own (:class:`~mjtvm.core.problem2.StateLPs`, certified), on the
+The pair LPs are Problem 2's own ([`StateLPs`][mjtvm.core.problem2.StateLPs], certified), on the
 state with the contacts or ranges changed, so that what is diagnosed is what was solved.
 A minimal set is one of possibly several (the filter's order is the state's).
 """
@@ -68,7 +68,7 @@ def _kinematic_rows(
     state: GraspState, contacts: Sequence[Contact], r: NDArray[np.float64]
 ) -> tuple[list[NDArray[np.float64]], list[NDArray[np.float64]], int]:
     """Equality and inequality rows over ``[u (M), rho (S), alpha]`` (``qd = speed * u``, as
-    eq. 11-13 write them in :mod:`~mjtvm.core.assembly`) and the number of rho variables."""
+    eq. 11-13 write them in [`assembly`][mjtvm.core.assembly]) and the number of rho variables."""
     speed = np.array([op.max_speed for op in state.operation_ranges])
     tr = state.transmission
     if tr is not None:
@@ -214,7 +214,7 @@ def _dual_bound(
     ``col_lower <= x <= col_upper`` for the row multipliers ``y``: each row and column
     term at its finite bound, the terms at an infinite one left out (those are the
     multipliers of the wrong sign, within round-off of 0, that
-    :func:`~mjtvm.core.certificate.farkas` measures and bounds). Positive for the sign of
+    [`farkas()`][mjtvm.core.certificate.farkas] measures and bounds). Positive for the sign of
     ``y`` that proves the LP infeasible: here only to tell that sign."""
 
     def finite(coef: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> float:
@@ -230,9 +230,9 @@ def escape_direction(
 ) -> NDArray[np.float64] | None:
     r"""``(D,)`` the unit twist along which the REFS vertex ``w`` stays unbalanced, or ``None``.
 
-    The LP of ``w`` at rest (Problem 2's pair with ``r = 0``, :class:`~mjtvm.core.problem2.StateLPs`)
+    The LP of ``w`` at rest (Problem 2's pair with ``r = 0``, [`StateLPs`][mjtvm.core.problem2.StateLPs])
     solved and certified infeasible by its Farkas multipliers ``y``
-    (:func:`~mjtvm.core.certificate.farkas`, HiGHS' dual ray); ``-y`` on its balance rows
+    ([`farkas()`][mjtvm.core.certificate.farkas], HiGHS' dual ray); ``-y`` on its balance rows
     ``G E lam = -w`` (eq. 20), normalised: the net wrench on the object has a negative
     component along ``y_w`` for every admissible contact force (module docstring), so it
     pushes the object along ``-y_w`` (``[v; omega]`` about the object's origin, world frame).
@@ -273,7 +273,7 @@ def relieving_contacts(
 ) -> tuple[tuple[str, str], ...]:
     r"""The changes of one contact alone that balance ``w`` at rest: ``(contact, change)`` pairs.
 
-    An F-point: its friction coefficient raised (eq. 24's cone), up to :data:`RELAX` times
+    An F-point: its friction coefficient raised (eq. 24's cone), up to `RELAX` times
     its own; where that balances ``w``, the least coefficient that does, by bisection on
     its logarithm (``"mu >= X"``, X rounded up). An L, S or D point: made a sticking F-point
     (``"type F, mu X"``) with the largest coefficient of the state's F and S points (1
@@ -503,7 +503,7 @@ def diagnose(
     box: BoxForm = "eliminated",
     solver: str = "highs",
 ) -> tuple[Diagnosis, ...]:
-    r"""One :class:`~mjtvm.core.result.Diagnosis` per pair with alpha 0 and per REFS vertex
+    r"""One `Diagnosis` per pair with alpha 0 and per REFS vertex
     that cannot be balanced (pair ``(k, -1)``); empty when every alpha is > 0.
 
     Parameters
@@ -511,7 +511,7 @@ def diagnose(
     state
         The grasp state Problem 2 was solved for (with ``rvds``).
     alpha, status
-        ``(K, R)`` alphas and statuses of :func:`~mjtvm.core.tvmmp.tvmmp`.
+        ``(K, R)`` alphas and statuses of [`tvmmp()`][mjtvm.core.tvmmp.tvmmp].
     box, solver
         As Problem 2 was solved.
     """

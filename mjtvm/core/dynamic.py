@@ -1,57 +1,59 @@
 r"""A dynamics-aware alpha: eq. (31) with extra joint torque demands that grow with alpha.
 
 The paper's Problem 2 is quasi-static: the torque of joint j balances gravity and the contact
-forces (eq. 19), :math:`\tau = g_f + J^T f`, and the operation range (eq. 1-3) bounds the pair
-:math:`(\tau_j, \dot q_j)`. Moving the object at a constant twist :math:`\alpha \hat r_l` while
-the configuration changes needs joint accelerations as well: :math:`\dot q \propto \alpha`,
-:math:`\ddot q \propto \alpha^2`, and the motors must supply
-:math:`M(q)\ddot q + c(q, \dot q)` on top. This module takes that extra torque as a
+forces (eq. 19), $\tau = g_f + J^T f$, and the operation range (eq. 1-3) bounds the pair
+$(\tau_j, \dot q_j)$. Moving the object at a constant twist $\alpha \hat r_l$ while
+the configuration changes needs joint accelerations as well: $\dot q \propto \alpha$,
+$\ddot q \propto \alpha^2$, and the motors must supply
+$M(q)\ddot q + c(q, \dot q)$ on top. This module takes that extra torque as a
 *demand*, a function of the candidate alpha returning ``(M,)`` joint torques (N m), and finds
 
-.. math:: \alpha^{dyn}_{kl} = \max \{\alpha \ge 0 :\ \alpha \le A(d(\alpha))\},
+$$
+\alpha^{dyn}_{kl} = \max \{\alpha \ge 0 :\ \alpha \le A(d(\alpha))\},
+$$
 
-where :math:`A(d)` is the LP of eq. (31) for pair (k, l) with the statics rows
-:math:`\tau - J^T E \lambda = g_f + d` (the demand added to the gravity torque). The core
-does not know where the demand comes from (no MuJoCo here); :mod:`mjtvm.physics.dynamic`
+where $A(d)$ is the LP of eq. (31) for pair (k, l) with the statics rows
+$\tau - J^T E \lambda = g_f + d$ (the demand added to the gravity torque). The core
+does not know where the demand comes from (no MuJoCo here); [`mjtvm.physics.dynamic`][mjtvm.physics.dynamic]
 computes it from the hand's model.
 
 Why one LP per candidate decides it exactly
 -------------------------------------------
 For a fixed demand d, the alphas of the feasible set of eq. (31) form an interval
-:math:`[0, A(d)]`: with :math:`\dot q = 0`, :math:`\rho = 0`, :math:`\alpha = 0` every kinematic
+$[0, A(d)]$: with $\dot q = 0$, $\rho = 0$, $\alpha = 0$ every kinematic
 row holds, and the operation ranges are mirrored and down-closed (each row pair
-:math:`c_\tau \tau \pm c_{qd} \dot q \le b` averages to :math:`c_\tau \tau \le b`), so any
+$c_\tau \tau \pm c_{qd} \dot q \le b$ averages to $c_\tau \tau \le b$), so any
 feasible torque is feasible at rest. Hence alpha is dynamically feasible iff
-:math:`A(d(\alpha)) \ge \alpha` (one LP; ``A = None`` when the demand cannot be balanced even
+$A(d(\alpha)) \ge \alpha$ (one LP; ``A = None`` when the demand cannot be balanced even
 at rest).
 
 Convergence (bisection)
 -----------------------
-Let :math:`d(\alpha) = \alpha^2 h` with a fixed h (the joint motion per unit alpha fixed, as
-for a non-redundant hand), and :math:`P = \{(\alpha, t)\}` the alphas and demand scales
-:math:`t h` for which eq. (31) is feasible: a projection of a polyhedron, so convex. If
-:math:`a_2 \le \alpha_{kl} = A(0)` is feasible, i.e. :math:`(a_2, a_2^2) \in P`, then every
-:math:`a \in [0, a_2]` is: :math:`(a, 0) \in P` (quasi-static, :math:`a \le \alpha_{kl}`) and
-:math:`(a, a a_2) \in P` (the chord from :math:`(0, 0)` to :math:`(a_2, a_2^2)`), hence
-:math:`(a, a^2) \in P` as :math:`0 \le a^2 \le a a_2`. The feasible alphas below
-:math:`\alpha_{kl}` are an interval :math:`[0, \alpha^{dyn}]`, and bisection on the test
+Let $d(\alpha) = \alpha^2 h$ with a fixed h (the joint motion per unit alpha fixed, as
+for a non-redundant hand), and $P = \{(\alpha, t)\}$ the alphas and demand scales
+$t h$ for which eq. (31) is feasible: a projection of a polyhedron, so convex. If
+$a_2 \le \alpha_{kl} = A(0)$ is feasible, i.e. $(a_2, a_2^2) \in P$, then every
+$a \in [0, a_2]$ is: $(a, 0) \in P$ (quasi-static, $a \le \alpha_{kl}$) and
+$(a, a a_2) \in P$ (the chord from $(0, 0)$ to $(a_2, a_2^2)$), hence
+$(a, a^2) \in P$ as $0 \le a^2 \le a a_2$. The feasible alphas below
+$\alpha_{kl}$ are an interval $[0, \alpha^{dyn}]$, and bisection on the test
 converges to its end, halving the bracket with every LP. When the demand *helps* (negative
-work, :math:`A(d(\alpha_{kl})) > \alpha_{kl}`) the bracket is extended by doubling above
-:math:`\alpha_{kl}`; there the interval property is assumed, not proved. At the end,
-:math:`|A(d(\alpha^{dyn})) - \alpha^{dyn}|` is within the tolerance when A and d are
-continuous (the fixed point of :math:`\alpha \mapsto A(d(\alpha))`); :attr:`DynamicAlpha.residual`
+work, $A(d(\alpha_{kl})) > \alpha_{kl}$) the bracket is extended by doubling above
+$\alpha_{kl}$; there the interval property is assumed, not proved. At the end,
+$|A(d(\alpha^{dyn})) - \alpha^{dyn}|$ is within the tolerance when A and d are
+continuous (the fixed point of $\alpha \mapsto A(d(\alpha))$); [`DynamicAlpha.residual`][mjtvm.core.dynamic.DynamicAlpha.residual]
 reports it.
 
 Demands along a window
 ----------------------
 A state's demand is that of one instant; the motion that checks it lasts a window, along which
-:math:`M(q)\ddot q + c` changes with the configuration (near a stretched finger it grows like
-:math:`1/\cos^3 q`). A demand may therefore return several vectors ``(n, M)``, e.g. the extremes
-of each joint's demand over the window (:func:`mjtvm.physics.dynamic.window_demand`): alpha is
-feasible iff eq. (31) is feasible with *each* of them, :math:`\min_i A(d_i(\alpha)) \ge \alpha`
+$M(q)\ddot q + c$ changes with the configuration (near a stretched finger it grows like
+$1/\cos^3 q$). A demand may therefore return several vectors ``(n, M)``, e.g. the extremes
+of each joint's demand over the window ([`mjtvm.physics.dynamic.window_demand()`][mjtvm.physics.dynamic.window_demand]): alpha is
+feasible iff eq. (31) is feasible with *each* of them, $\min_i A(d_i(\alpha)) \ge \alpha$
 (one LP per vector, each with its own forces, as the forces of the motion change along it). The
 feasible alphas are then the intersection of the intervals of the vectors, again an interval,
-and the bisection above applies unchanged. (A window's demand is not :math:`\alpha^2 h`: at a
+and the bisection above applies unchanged. (A window's demand is not $\alpha^2 h$: at a
 higher speed the window covers more of the path; there the interval property is assumed.)
 """
 
@@ -80,8 +82,8 @@ contact forces), the joint speed, and the extra (inertial) demand."""
 
 
 def quadratic(h: ArrayLike) -> Demand:
-    r"""The demand :math:`d(\alpha) = \alpha^2 h` of a fixed joint motion per unit alpha
-    (:math:`\ddot q = \alpha^2 \dot u\,`, Coriolis quadratic in :math:`\dot q = \alpha u`)."""
+    r"""The demand $d(\alpha) = \alpha^2 h$ of a fixed joint motion per unit alpha
+    ($\ddot q = \alpha^2 \dot u\,$, Coriolis quadratic in $\dot q = \alpha u$)."""
     hv = np.asarray(h, dtype=float).copy()
     return lambda a: a * a * hv
 
@@ -89,8 +91,8 @@ def quadratic(h: ArrayLike) -> Demand:
 def pair_alpha(
     state: GraspState, k: int, l: int, offset: ArrayLike | None = None, *, solver: str = "highs"
 ) -> tuple[float | None, Witness | None]:
-    r""":math:`A(d)`: alpha of pair (k, l) (eq. 31) with ``offset`` (N m per joint) added to
-    :math:`g_f` in the statics rows (eq. 19); ``(None, None)`` when the LP is infeasible."""
+    r"""$A(d)$: alpha of pair (k, l) (eq. 31) with ``offset`` (N m per joint) added to
+    $g_f$ in the statics rows (eq. 19); ``(None, None)`` when the LP is infeasible."""
     if state.rvds is None:
         raise StateError("rvds", "Problem 2 needs RVDS vertices (a non-empty list of twists)")
     g = state.gravity_torque if offset is None else state.gravity_torque + np.asarray(offset, dtype=float)
@@ -108,24 +110,24 @@ class DynamicAlpha:
     Attributes
     ----------
     alpha
-        :math:`\alpha^{dyn}_{kl}` (0 when even a slow motion is infeasible; ``nan`` when the
+        $\alpha^{dyn}_{kl}$ (0 when even a slow motion is infeasible; ``nan`` when the
         pair has no quasi-static solution).
     alpha_static
-        :math:`\alpha_{kl}` (no demand), or ``nan``.
+        $\alpha_{kl}$ (no demand), or ``nan``.
     demand
-        ``(M,)`` the demand at :math:`\alpha^{dyn}` (N m); of a demand with several vectors, the
+        ``(M,)`` the demand at $\alpha^{dyn}$ (N m); of a demand with several vectors, the
         one whose LP gives the least alpha (the binding one).
     witness
-        The LP's solution with that demand (its alpha is :math:`A(d(\alpha^{dyn}))`), or None.
+        The LP's solution with that demand (its alpha is $A(d(\alpha^{dyn}))$), or None.
     joint
         Index of the limiting joint: the least slack of its operation range at the witness
-        (a simplex vertex: :mod:`mjtvm.physics.dynamic` names it at a central solution instead).
+        (a simplex vertex: [`mjtvm.physics.dynamic`][mjtvm.physics.dynamic] names it at a central solution instead).
     term
-        Which use of that joint's range is largest (:data:`TERMS`): the torque of eq. (19)
-        :math:`|\tau_j - d_j| / \tau_{max}`, the speed :math:`|\dot q_j| / \dot q_{max}` or the
-        demand :math:`|d_j| / \tau_{max}`.
+        Which use of that joint's range is largest ([`TERMS`][mjtvm.core.dynamic.TERMS]): the torque of eq. (19)
+        $|\tau_j - d_j| / \tau_{max}$, the speed $|\dot q_j| / \dot q_{max}$ or the
+        demand $|d_j| / \tau_{max}$.
     residual
-        :math:`A(d(\alpha^{dyn})) - \alpha^{dyn}` (>= 0; small at a fixed point).
+        $A(d(\alpha^{dyn})) - \alpha^{dyn}$ (>= 0; small at a fixed point).
     lps
         Number of LPs solved (one per demand vector and candidate); ``bracket`` the final bisection bracket.
     """
@@ -145,7 +147,7 @@ def limiting_term(
     state: GraspState, torques: ArrayLike, speeds: ArrayLike, demand: ArrayLike
 ) -> tuple[int, str]:
     """The limiting joint of a solution (joint ``torques`` and ``speeds``, the ``demand`` included
-    in the torques) and its dominant term (:attr:`DynamicAlpha.term`). With a transmission,
+    in the torques) and its dominant term ([`DynamicAlpha.term`][mjtvm.core.dynamic.DynamicAlpha.term]). With a transmission,
     the limiting actuator (its force and speed), the demand carried by the actuator forces
     that balance it in the least-squares sense."""
     d = np.asarray(demand, dtype=float)
@@ -172,7 +174,7 @@ def dynamic_alpha(
     max_lps: int = 80,
     solver: str = "highs",
 ) -> DynamicAlpha:
-    r""":math:`\alpha^{dyn}_{kl}` by bisection over LPs (module docstring).
+    r"""$\alpha^{dyn}_{kl}$ by bisection over LPs (module docstring).
 
     Parameters
     ----------
@@ -182,7 +184,7 @@ def dynamic_alpha(
         alpha -> ``(M,)`` extra joint torque (N m), or ``(n, M)`` torques each to be met
         (module docstring); ``d(0)`` should be 0.
     rtol
-        Bracket width relative to :math:`\alpha_{kl}` at which the bisection stops.
+        Bracket width relative to $\alpha_{kl}$ at which the bisection stops.
     max_lps
         Upper bound on LPs (the bisection stops earlier at ``rtol``).
 

@@ -1,34 +1,34 @@
 r"""The friction margin and the friction interval (``docs/state-format.md``, "Friction margin").
 
-**Margin.** A state's ``friction_margin`` :math:`\delta \in [0, 1)` makes every LP use
-:math:`(1 - \delta)\mu` for each F contact's pyramid (eq. 24): the witness forces then keep
-:math:`|f_t| \le (1 - \delta)\mu f_n`, a relative distance :math:`\delta` from the cone
+**Margin.** A state's ``friction_margin`` $\delta \in [0, 1)$ makes every LP use
+$(1 - \delta)\mu$ for each F contact's pyramid (eq. 24): the witness forces then keep
+$|f_t| \le (1 - \delta)\mu f_n$, a relative distance $\delta$ from the cone
 that the contact really has (a simplex witness of Problem 2 puts F forces on the pyramid's
 edges, a rollout of it is the first to slip there). The margin is applied to the contacts'
-``mu`` before any assembly (:func:`margin_contacts`, called by
-:func:`~mjtvm.core.assembly.assemble`); the cvxpy transcription
-:mod:`mjtvm.core.reference` applies it on its own.
+``mu`` before any assembly ([`margin_contacts()`][mjtvm.core.friction.margin_contacts], called by
+`assemble()`); the cvxpy transcription
+[`mjtvm.core.reference`][mjtvm.core.reference] applies it on its own.
 
-S contacts keep ``mu``: kinetic friction is :math:`\mu n_f` exactly (eq. 16-17), there is
+S contacts keep ``mu``: kinetic friction is $\mu n_f$ exactly (eq. 16-17), there is
 no cone to keep away from, and a smaller coefficient may raise alpha as well as lower it;
 the uncertainty of an S coefficient is the interval's.
 
-**Interval.** A contact's ``mu_range`` :math:`[\mu_{lo}, \mu_{hi}]` holds its true
+**Interval.** A contact's ``mu_range`` $[\mu_{lo}, \mu_{hi}]$ holds its true
 coefficient. The worst TVMMP over the box of intervals (each contact's coefficient on its
-own) is attained at a corner with every F coefficient at :math:`\mu_{lo}` and every S
-coefficient at :math:`\mu_{lo}` or :math:`\mu_{hi}`: :func:`interval_corners`, all
-:math:`2^S` of them, then the least TVMMP. Proof (``docs/state-format.md``):
+own) is attained at a corner with every F coefficient at $\mu_{lo}$ and every S
+coefficient at $\mu_{lo}$ or $\mu_{hi}$: [`interval_corners()`][mjtvm.core.friction.interval_corners], all
+$2^S$ of them, then the least TVMMP. Proof (``docs/state-format.md``):
 
-* F: the pyramid of :math:`\mu` is the cone over a polygon scaled by :math:`\mu`, so a
-  larger :math:`\mu` only adds feasible points: alpha is non-decreasing in it.
-* S: with the other coefficients fixed, let :math:`x_1, x_2` be feasible at
-  :math:`\mu_1 < \mu_2` with alpha :math:`\ge a`. The S force is
-  :math:`n_f n - t s` with :math:`t = \mu n_f`, and every other row is linear in
-  :math:`(x, n_f, t)`; so :math:`\theta x_1 + (1-\theta) x_2` is feasible, with alpha
-  :math:`\ge a`, at :math:`\mu(\theta) = (\theta \mu_1 n_1 + (1-\theta)\mu_2 n_2) /
-  (\theta n_1 + (1-\theta) n_2)`, which runs continuously from :math:`\mu_2` to
-  :math:`\mu_1` (if :math:`n_1 = 0`, :math:`x_1` is feasible at every :math:`\mu`).
-  The set :math:`\{\mu : \alpha(\mu) \ge a\}` is an interval: alpha is quasi-concave in
+* F: the pyramid of $\mu$ is the cone over a polygon scaled by $\mu$, so a
+  larger $\mu$ only adds feasible points: alpha is non-decreasing in it.
+* S: with the other coefficients fixed, let $x_1, x_2$ be feasible at
+  $\mu_1 < \mu_2$ with alpha $\ge a$. The S force is
+  $n_f n - t s$ with $t = \mu n_f$, and every other row is linear in
+  $(x, n_f, t)$; so $\theta x_1 + (1-\theta) x_2$ is feasible, with alpha
+  $\ge a$, at $\mu(\theta) = (\theta \mu_1 n_1 + (1-\theta)\mu_2 n_2) /
+  (\theta n_1 + (1-\theta) n_2)$, which runs continuously from $\mu_2$ to
+  $\mu_1$ (if $n_1 = 0$, $x_1$ is feasible at every $\mu$).
+  The set $\{\mu : \alpha(\mu) \ge a\}$ is an interval: alpha is quasi-concave in
   each S coefficient, so is the TVMMP (a minimum of quasi-concave functions), and its
   minimum over an interval is at an end; over a box, by induction, at a corner.
 
@@ -37,11 +37,11 @@ coefficient shared by every contact (the diagonal of the box) it is a lower boun
 with at most one S contact per interval.
 
 **Cones.** MuJoCo's elliptic cone is the Coulomb cone of the geom's friction: the LP's
-pyramid is inscribed in it at :math:`\mu`. Its pyramidal cone (condim 3) has the four edges
-:math:`n \pm \mu t_1, n \pm \mu t_2`: the cross-section is a square with vertices at
-:math:`\pm\mu` on the tangent axes, whose inscribed circle has radius :math:`\mu/\sqrt 2`
-(``docs/dynamics.md``): a pyramid inscribed at :math:`\mu/\sqrt 2` lies in it whatever the
-orientation of MuJoCo's tangent frame (:func:`cone_margin`).
+pyramid is inscribed in it at $\mu$. Its pyramidal cone (condim 3) has the four edges
+$n \pm \mu t_1, n \pm \mu t_2$: the cross-section is a square with vertices at
+$\pm\mu$ on the tangent axes, whose inscribed circle has radius $\mu/\sqrt 2$
+(``docs/dynamics.md``): a pyramid inscribed at $\mu/\sqrt 2$ lies in it whatever the
+orientation of MuJoCo's tangent frame (`cone_margin()`).
 """
 
 from __future__ import annotations
@@ -73,9 +73,9 @@ MAX_INTERVAL_S = 8
 
 
 def cone_margin(cone: str, margin: float = 0.0) -> float:
-    r"""The state's ``friction_margin`` for a user margin :math:`\delta` on MuJoCo's ``cone``:
-    :math:`1 - (1 - \delta) c` with :math:`c` = :data:`CONE_SCALE` (elliptic: :math:`\delta`;
-    pyramidal: :math:`1 - (1 - \delta)/\sqrt 2`, 0.2929 at :math:`\delta = 0`)."""
+    r"""The state's ``friction_margin`` for a user margin $\delta$ on MuJoCo's ``cone``:
+    $1 - (1 - \delta) c$ with $c$ = [`CONE_SCALE`][mjtvm.core.friction.CONE_SCALE] (elliptic: $\delta$;
+    pyramidal: $1 - (1 - \delta)/\sqrt 2$, 0.2929 at $\delta = 0$)."""
     if cone not in CONE_SCALE:
         raise ParamError("cone", f"expected 'elliptic' or 'pyramidal', got {cone!r}", cone)
     if not 0.0 <= margin < 1.0:
@@ -85,7 +85,7 @@ def cone_margin(cone: str, margin: float = 0.0) -> float:
 
 
 def margin_contacts(state: GraspState) -> tuple[Contact, ...]:
-    r"""The state's contacts with every F coefficient at :math:`(1 - \delta)\mu` (the state's
+    r"""The state's contacts with every F coefficient at $(1 - \delta)\mu$ (the state's
     ``friction_margin``); the contacts themselves when the margin is 0."""
     delta = state.friction_margin
     if delta == 0.0:
@@ -105,14 +105,14 @@ def nominal_state(state: GraspState) -> GraspState:
 
 def interval_corners(state: GraspState) -> list[GraspState]:
     r"""The states at the corners of the friction intervals that hold the worst TVMMP (module
-    docstring): every F contact with an interval at its :math:`\mu_{lo}`, every S contact with
-    one at :math:`\mu_{lo}` or :math:`\mu_{hi}` (:math:`2^S` states; margin kept, intervals
+    docstring): every F contact with an interval at its $\mu_{lo}$, every S contact with
+    one at $\mu_{lo}$ or $\mu_{hi}$ ($2^S$ states; margin kept, intervals
     dropped). Empty when no contact has an interval.
 
     Raises
     ------
     ParamError
-        More than :data:`MAX_INTERVAL_S` S contacts with an interval.
+        More than [`MAX_INTERVAL_S`][mjtvm.core.friction.MAX_INTERVAL_S] S contacts with an interval.
     """
     ranged = [i for i, c in enumerate(state.contacts) if c.mu_range is not None]
     if not ranged:
@@ -148,7 +148,7 @@ class FrictionReport:
     Attributes
     ----------
     margin
-        The state's ``friction_margin`` :math:`\delta` (F contacts at :math:`(1-\delta)\mu`).
+        The state's ``friction_margin`` $\delta$ (F contacts at $(1-\delta)\mu$).
     nominal_tvmmp
         The TVMMP at margin 0 (the nominal coefficients), ``None`` when infeasible; ``None``
         too when not computed (margin 0: it is the result's own).

@@ -1,9 +1,9 @@
-r"""HiGHS through ``highspy``: :class:`HighsSession` holds one equilibrated LP and re-solves
+r"""HiGHS through ``highspy``: [`HighsSession`][mjtvm.core.highs.HighsSession] holds one equilibrated LP and re-solves
 it after changing one column and some row bounds from the previous basis (the LPs of one
 state differ only there).
 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from any
-call raises :class:`~mjtvm.errors.SolverError`.
+call raises [`SolverError`][mjtvm.errors.SolverError].
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ _RUN_OBSERVERS: list[Callable[[float], None]] = []
 
 @contextmanager
 def observe_runs(callback: Callable[[float], None]) -> Iterator[None]:
-    """Call ``callback(seconds)`` after every HiGHS ``run`` of every :class:`HighsSession`
+    """Call ``callback(seconds)`` after every HiGHS ``run`` of every [`HighsSession`][mjtvm.core.highs.HighsSession]
     while the context is open: the one hook for a progress count (``mjtvm tvms``) and for the
     benchmark's time inside HiGHS, instead of each patching ``highspy.Highs.run``."""
     _RUN_OBSERVERS.append(callback)
@@ -46,8 +46,8 @@ _HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
 _HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
 _HIGHS_DEFAULTS: dict[str, object] = {"simplex_strategy": 1, "solver": "choose"}
 #: HiGHS' own defaults of the options a session may choose for itself at construction
-#: (:meth:`HighsSession.from_scaled`'s ``options``, e.g. Problem 2's): every session sets all
-#: of them, so that a ``Highs`` reused from another session (:meth:`HighsSession.release`)
+#: ([`HighsSession.from_scaled()`][mjtvm.core.highs.HighsSession.from_scaled]'s ``options``, e.g. Problem 2's): every session sets all
+#: of them, so that a ``Highs`` reused from another session ([`HighsSession.release()`][mjtvm.core.highs.HighsSession.release])
 #: solves as a fresh one would.
 _TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 
@@ -56,7 +56,7 @@ _TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 #: threads to inherit across a fork), unless this process's HiGHS task scheduler was already
 #: started with another count by someone else (cvxpy's or a user's own ``highspy.Highs`` with
 #: HiGHS' default, ``threads = 0``): HiGHS then refuses every ``run`` with ``threads = 1``
-#: (kError), and ``threads = 0`` takes the scheduler as it is (see :meth:`HighsSession._run`).
+#: (kError), and ``threads = 0`` takes the scheduler as it is (see `HighsSession._run()`).
 _THREADS = [1]
 
 
@@ -106,7 +106,7 @@ _IDLE_MAX = 4
 
 
 def _acquire_highs():  # type: ignore[no-untyped-def]
-    """An idle ``Highs`` given back by :meth:`HighsSession.release`, else :func:`new_highs`.
+    """An idle ``Highs`` given back by [`HighsSession.release()`][mjtvm.core.highs.HighsSession.release], else [`new_highs()`][mjtvm.core.highs.new_highs].
 
     Constructing a ``Highs`` costs ~50 us, 2 % of a Problem 2 state; a reused one gets a new
     model (``passModel`` discards the old model, basis and solution) and the session's options,
@@ -125,8 +125,8 @@ class HighsSession:
     r"""A HiGHS instance holding one equilibrated LP, re-solved after small modifications.
 
     Every method takes and returns the LP's own (unscaled) values; the session scales
-    them with its :class:`Scaling`. Every HiGHS call's status is checked: ``kWarning`` is
-    accepted, ``kError`` raises :class:`~mjtvm.errors.SolverError` naming the call.
+    them with its [`Scaling`][mjtvm.core.scaling.Scaling]. Every HiGHS call's status is checked: ``kWarning`` is
+    accepted, ``kError`` raises [`SolverError`][mjtvm.errors.SolverError] naming the call.
 
     Parameters
     ----------
@@ -134,7 +134,7 @@ class HighsSession:
         The initial LP.
     scaling
         Precomputed factors (e.g. once per state for Problem 2); default
-        :func:`lp_scaling` of ``lp``.
+        [`lp_scaling()`][mjtvm.core.scaling.lp_scaling] of ``lp``.
     """
 
     def __init__(self, lp: LinearProgram, *, scaling: Scaling | None = None) -> None:
@@ -155,8 +155,8 @@ class HighsSession:
         """The session of an LP whose ``scale_lp(lp, scaling)`` the caller has already (the
         same arrays: Problem 2 builds it from a per-state cache, without the sparse copies),
         given with the LP's own costs and column bounds. Its HiGHS instance may be one a
-        finished session gave back (:meth:`release`). ``options`` (names of
-        ``_TUNABLE_DEFAULTS`` only) are this session's, kept through :meth:`solve`'s retries."""
+        finished session gave back (`release()`). ``options`` (names of
+        ``_TUNABLE_DEFAULTS`` only) are this session's, kept through `solve()`'s retries."""
         self = cls.__new__(cls)
         self._load(scaled, scaling, cost, col_lower, col_upper, _acquire_highs(), options or {})
         return self
@@ -242,7 +242,7 @@ class HighsSession:
 
     def release(self) -> None:
         """Give the HiGHS instance back for the next session of this process (the session is
-        unusable afterwards). Only for a session without :meth:`set_option` (the options given
+        unusable afterwards). Only for a session without `set_option()` (the options given
         at construction are set again by every session) whose last call returned normally."""
         h, self.highs = self.highs, None
         if h is not None and len(_IDLE) < _IDLE_MAX and _IDLE_PID[0] == os.getpid():
@@ -265,7 +265,7 @@ class HighsSession:
 
     @staticmethod
     def _check_range(smallest: float, largest: float, what: str) -> None:
-        """:meth:`_check_magnitudes` from the smallest and largest non-zero magnitudes."""
+        """`_check_magnitudes()` from the smallest and largest non-zero magnitudes."""
         if smallest <= _HIGHS_SMALL or largest >= _HIGHS_LARGE:
             raise SolverError(
                 "highs",
@@ -278,7 +278,7 @@ class HighsSession:
         return float(self._col[col])
 
     def set_option(self, name: str, value: object) -> None:
-        """Set a HiGHS option for this session's solves (kept after :meth:`solve`'s retries)."""
+        """Set a HiGHS option for this session's solves (kept after `solve()`'s retries)."""
         self._check(self.highs.setOptionValue(name, value), f"option {name}={value!r} rejected")
         self._options[name] = value
 

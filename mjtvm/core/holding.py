@@ -1,19 +1,19 @@
 r"""Holding at rest, and the joint motions a transmission leaves unheld.
 
-A grasp is held when its REFS vertex :math:`w_k` is balanced at zero joint speed: contact
+A grasp is held when its REFS vertex $w_k$ is balanced at zero joint speed: contact
 forces in their cones balance it on the object (eq. 20-24) and the actuators, with their
 torque at zero speed (eq. 1), balance the finger side (eq. 19, with the transmission of
-:mod:`~mjtvm.core.transmission`: ``P^T u - J^T f + J_eq^T lambda = g_f``). Joint damping is
-not in that balance (it is a loss, :mod:`~mjtvm.core.assembly`), so the point
+[`transmission`][mjtvm.core.transmission]: ``P^T u - J^T f + J_eq^T lambda = g_f``). Joint damping is
+not in that balance (it is a loss, [`assembly`][mjtvm.core.assembly]), so the point
 ``qd = 0, alpha = 0`` satisfies every kinematic and operation-range row whenever these
 statics hold, and every pair ``(k, l)`` of Problem 2 is feasible exactly when ``w_k`` is held:
-Problem 2's first LP of each ``k`` is its hold test (:attr:`TvmmpResult.held`).
+Problem 2's first LP of each ``k`` is its hold test (`TvmmpResult.held`).
 
 An underactuated hand can fail it for a reason no contact can fix: a joint motion ``v``
 that no actuator drives and no equality constraint holds (``P v = 0``, ``J_eq v = 0``: the
 Shadow hand's J1 - J2 under its sum tendon) takes no torque from the hand,
 ``v^T (P^T u + J_eq^T lambda) = 0``, so the contacts and gravity alone must balance along it,
-``v^T (J^T f + g_f) = 0``. :func:`free_motions` gives those motions and :func:`unheld_motions`
+``v^T (J^T f + g_f) = 0``. [`free_motions()`][mjtvm.core.holding.free_motions] gives those motions and [`unheld_motions()`][mjtvm.core.holding.unheld_motions]
 says whether a REFS vertex fails because of them: with a free torque added along each, the
 hold LP becomes feasible, and the least such torque is what the hand lacks.
 """
@@ -46,14 +46,14 @@ class UnheldMotion:
     Attributes
     ----------
     k
-        The REFS vertex :math:`w_k`.
+        The REFS vertex $w_k$.
     joints
         Per free motion, the names of the joints it moves.
     motions
-        ``(F, M)`` unit joint motions :math:`v` with ``P v = 0`` and ``J_eq v = 0``.
+        ``(F, M)`` unit joint motions $v$ with ``P v = 0`` and ``J_eq v = 0``.
     torque
-        ``(F,)`` the least torque (N m per unit of motion, :math:`|t_i|` summed to a minimum)
-        that would have to act along each motion for :math:`w_k` to be held.
+        ``(F,)`` the least torque (N m per unit of motion, $|t_i|$ summed to a minimum)
+        that would have to act along each motion for $w_k$ to be held.
     """
 
     k: int
@@ -132,8 +132,8 @@ def unheld_motions(state: GraspState, k: int) -> UnheldMotion | None:
     r"""Whether REFS vertex ``k`` fails to be held because of the transmission's free motions.
 
     Solves the hold LP of ``w_k`` (Problem 2's rows at ``qd = 0``, ``alpha = 0``) with a free
-    torque ``t_i`` added along each free motion ``v_i`` of :func:`free_motions` in the torque
-    balance, minimising :math:`\sum_i |t_i|`.
+    torque ``t_i`` added along each free motion ``v_i`` of [`free_motions()`][mjtvm.core.holding.free_motions] in the torque
+    balance, minimising $\sum_i |t_i|$.
 
     Returns
     -------

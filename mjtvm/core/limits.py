@@ -1,17 +1,17 @@
 r"""Joint position limits in Problems 1 and 2 (``docs/joint-limits.md``).
 
 The paper's LPs bound each joint's torque and speed (eq. 1-3) but not its position: a joint
-sitting on its limit is free, in the LP, to move further into it. :class:`JointLimits` carries
+sitting on its limit is free, in the LP, to move further into it. `JointLimits` carries
 each joint's position ``q_j`` and range ``[lo_j, hi_j]`` (MuJoCo's ``jnt_range`` and the
-state's ``qpos``), and :func:`~mjtvm.core.assembly.assemble` turns them into rows on the
+state's ``qpos``), and `assemble()` turns them into rows on the
 joint speeds ``qd`` (the module docstring's choice, documented in ``docs/joint-limits.md``):
 
-* **instantaneous** (Problems 1 and 2): a joint within :attr:`JointLimits.tolerance` of its
+* **instantaneous** (Problems 1 and 2): a joint within [`JointLimits.tolerance`][mjtvm.core.limits.JointLimits.tolerance] of its
   upper limit (``hi_j - q_j <= tol``) gets ``qd_j <= 0``; of its lower limit, ``qd_j >= 0``.
   The paper's instantaneous measure, made physically true: the joint can still leave its
   limit, never push past it;
 * **travel horizon** (Problem 2 only): while the object moves along ``alpha r_l`` by
-  :attr:`JointLimits.horizon` metres of travel (:func:`travel_speed`: the fastest of the
+  [`JointLimits.horizon`][mjtvm.core.limits.JointLimits.horizon] metres of travel ([`travel_speed()`][mjtvm.core.limits.travel_speed]: the fastest of the
   object's point ``p_O`` and its contact points), no joint may cross its limit:
   ``H qd_j <= (hi_j - q_j) s_l alpha`` and ``-H qd_j <= (q_j - lo_j) s_l alpha`` with
   ``s_l`` the travel speed of ``r_l``, linear in ``(qd, alpha)``. Problem 1's twist is free
@@ -65,16 +65,16 @@ class JointLimits:
     Parameters
     ----------
     position
-        ``(M,)`` :math:`q_j` (rad or m), the configuration of the state; may lie a little
+        ``(M,)`` $q_j$ (rad or m), the configuration of the state; may lie a little
         beyond a limit (MuJoCo's limits are soft): such a joint is on its limit.
     lower, upper
-        ``(M,)`` :math:`[lo_j, hi_j]` (rad or m); ``-inf``, ``+inf`` for a joint without
+        ``(M,)`` $[lo_j, hi_j]$ (rad or m); ``-inf``, ``+inf`` for a joint without
         limits (both or neither), ``lo_j <= hi_j``.
     tolerance
         A joint with ``hi_j - q_j <= tolerance`` is on its upper limit (``q_j - lo_j`` the
-        lower), in the joints' units (:data:`DEFAULT_TOLERANCE`).
+        lower), in the joints' units ([`DEFAULT_TOLERANCE`][mjtvm.core.limits.DEFAULT_TOLERANCE]).
     horizon
-        ``H`` (m of object travel, :data:`DEFAULT_HORIZON`; 0: the instantaneous rows only).
+        ``H`` (m of object travel, [`DEFAULT_HORIZON`][mjtvm.core.limits.DEFAULT_HORIZON]; 0: the instantaneous rows only).
     """
 
     position: NDArray[np.float64]

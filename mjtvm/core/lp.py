@@ -1,4 +1,4 @@
-"""The LP form shared by the backends: :class:`LinearProgram` and :class:`LPSolution`."""
+"""The LP form shared by the backends: [`LinearProgram`][mjtvm.core.lp.LinearProgram] and [`LPSolution`][mjtvm.core.lp.LPSolution]."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ FEASIBILITY_TOL = 1e-9
 class LinearProgram:
     """``min c^T x`` s.t. ``row_lower <= A x <= row_upper`` and ``col_lower <= x <= col_upper``.
 
-    ``A`` is a scipy sparse matrix, or a :class:`~mjtvm.core.csc.Csc` where only HiGHS reads
+    ``A`` is a scipy sparse matrix, or a [`Csc`][mjtvm.core.csc.Csc] where only HiGHS reads
     it (Problem 2's session)."""
 
     c: NDArray[np.float64]

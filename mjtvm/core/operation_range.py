@@ -1,12 +1,12 @@
 r"""Operation ranges: the joint torque-velocity pair set (TVS) of one joint, eq. (1)-(3).
 
-An operation range is a convex polygon :math:`P` in the quadrant of absolute joint
-torque and absolute joint speed, :math:`(|\tau|, |\dot q|)` in (N m, rad/s), with a
+An operation range is a convex polygon $P$ in the quadrant of absolute joint
+torque and absolute joint speed, $(|\tau|, |\dot q|)$ in (N m, rad/s), with a
 vertex at the origin and one on each axis (paper, eq. 1). mjtvm additionally
-requires :math:`P` to be *down-closed* (if :math:`(a, b) \in P` then every
-:math:`(a', b')` with :math:`0 \le a' \le a`, :math:`0 \le b' \le b` is too), which
+requires $P$ to be *down-closed* (if $(a, b) \in P$ then every
+$(a', b')$ with $0 \le a' \le a$, $0 \le b' \le b$ is too), which
 holds for every motor operation range: only then is the box of eq. (2) exactly the
-operation range (see :func:`mirrored_halfplanes`).
+operation range (see [`mirrored_halfplanes()`][mjtvm.core.polygon.mirrored_halfplanes]).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ _RPM = 2.0 * np.pi / 60.0  # rad/s per rpm
 
 @dataclass(frozen=True, eq=False)
 class OperationRange:
-    r"""A validated operation range :math:`P` of one joint (paper, eq. 1).
+    r"""A validated operation range $P$ of one joint (paper, eq. 1).
 
     Parameters
     ----------
@@ -70,53 +70,53 @@ class OperationRange:
 
     @property
     def halfplanes(self) -> NDArray[np.float64]:
-        r"""``(h, 3)`` rows ``[a_tau, a_qd, b]``: :math:`P = \{x \ge 0 : a^T x \le b\}`.
+        r"""``(h, 3)`` rows ``[a_tau, a_qd, b]``: $P = \{x \ge 0 : a^T x \le b\}$.
 
-        Only the edges off the axes are listed (the axis edges are :math:`x \ge 0`);
-        every ``a`` is non-negative and every ``b`` positive because :math:`P` is
+        Only the edges off the axes are listed (the axis edges are $x \ge 0$);
+        every ``a`` is non-negative and every ``b`` positive because $P$ is
         down-closed.
         """
         return self._halfplanes
 
     @cached_property
     def mirrored_halfplanes(self) -> NDArray[np.float64]:
-        r"""``(h', 3)`` rows ``[c_tau, c_qd, b]`` with :math:`(\tau, \dot q)` feasible iff
-        :math:`c_\tau \tau + c_{qd} \dot q \le b` for every row.
+        r"""``(h', 3)`` rows ``[c_tau, c_qd, b]`` with $(\tau, \dot q)$ feasible iff
+        $c_\tau \tau + c_{qd} \dot q \le b$ for every row.
 
         This is the exact elimination of the four box variables of eq. (2).
 
-        **Claim.** For a convex, down-closed :math:`P`, a signed pair
-        :math:`(\tau, \dot q)` admits a box
-        :math:`\tau_{min} \le \tau \le \tau_{max}`, :math:`\dot q_{min} \le \dot q \le
-        \dot q_{max}` whose four corners lie in the copies of :math:`P` mirrored into
-        their quadrants (eq. 2) if and only if :math:`(|\tau|, |\dot q|) \in P`, i.e. iff
-        :math:`s_1 a_\tau \tau + s_2 a_{qd} \dot q \le b` for every edge
-        :math:`a^T x \le b` of :math:`P` off the axes and every
-        :math:`s_1, s_2 \in \{-1, 1\}`.
+        **Claim.** For a convex, down-closed $P$, a signed pair
+        $(\tau, \dot q)$ admits a box
+        $\tau_{min} \le \tau \le \tau_{max}$, $\dot q_{min} \le \dot q \le
+        \dot q_{max}$ whose four corners lie in the copies of $P$ mirrored into
+        their quadrants (eq. 2) if and only if $(|\tau|, |\dot q|) \in P$, i.e. iff
+        $s_1 a_\tau \tau + s_2 a_{qd} \dot q \le b$ for every edge
+        $a^T x \le b$ of $P$ off the axes and every
+        $s_1, s_2 \in \{-1, 1\}$.
 
-        **Proof.** (if) Take :math:`\tau_{max} = \max(\tau, 0)`,
-        :math:`\tau_{min} = \min(\tau, 0)` and likewise for :math:`\dot q`. Each corner's
-        absolute value is componentwise at most :math:`(|\tau|, |\dot q|) \in P`, so it
-        lies in :math:`P` by down-closure. (only if) The corner of the box in the
-        quadrant of :math:`(\tau, \dot q)` dominates :math:`(|\tau|, |\dot q|)`
-        componentwise and lies in :math:`P` (mirrored back); down-closure puts
-        :math:`(|\tau|, |\dot q|)` in :math:`P`. Finally, :math:`x \in \mathbb{R}^2_{\ge 0}`
-        lies in :math:`P` iff :math:`a^T x \le b` on its off-axis edges, and as every
-        :math:`a \ge 0`, :math:`a^T |x| \le b` is equivalent to the four sign
+        **Proof.** (if) Take $\tau_{max} = \max(\tau, 0)$,
+        $\tau_{min} = \min(\tau, 0)$ and likewise for $\dot q$. Each corner's
+        absolute value is componentwise at most $(|\tau|, |\dot q|) \in P$, so it
+        lies in $P$ by down-closure. (only if) The corner of the box in the
+        quadrant of $(\tau, \dot q)$ dominates $(|\tau|, |\dot q|)$
+        componentwise and lies in $P$ (mirrored back); down-closure puts
+        $(|\tau|, |\dot q|)$ in $P$. Finally, $x \in \mathbb{R}^2_{\ge 0}$
+        lies in $P$ iff $a^T x \le b$ on its off-axis edges, and as every
+        $a \ge 0$, $a^T |x| \le b$ is equivalent to the four sign
         combinations, all linear. With several REFS vertices sharing one box
-        (eq. 26) the same argument gives :math:`(|\tau_i|, |\dot q|) \in P` for every
+        (eq. 26) the same argument gives $(|\tau_i|, |\dot q|) \in P$ for every
         vertex i. QED.
         """
         return mirrored_halfplanes(self._halfplanes)
 
     def contains(self, torque: float, speed: float, *, tol: float = 1e-9) -> bool:
-        r"""Whether :math:`(|\tau|, |\dot q|)` lies in :math:`P` (with slack ``tol``)."""
+        r"""Whether $(|\tau|, |\dot q|)$ lies in $P$ (with slack ``tol``)."""
         x = np.array([abs(torque), abs(speed)])
         return bool(np.all(self._halfplanes[:, :2] @ x <= self._halfplanes[:, 2] + tol))
 
     def max_speed_at(self, torque: float) -> float:
-        r"""Largest :math:`|\dot q|` available at torque :math:`|\tau|` (rad/s); ``-inf``
-        when :math:`|\tau|` exceeds the maximum torque."""
+        r"""Largest $|\dot q|$ available at torque $|\tau|$ (rad/s); ``-inf``
+        when $|\tau|$ exceeds the maximum torque."""
         t = abs(torque)
         if t > self.max_torque * (1 + 1e-12):
             return float("-inf")
@@ -134,11 +134,11 @@ class OperationRange:
         r"""The range of the torque left at the joint after viscous damping and dry friction.
 
         The joint's torque balance (eq. 19) gains the passive torque of the joint:
-        :math:`\tau_{motor} = \tau + d\,\dot q + f\,\mathrm{sgn}(\dot q)` with damping
+        $\tau_{motor} = \tau + d\,\dot q + f\,\mathrm{sgn}(\dot q)$ with damping
         ``d`` (N m s/rad) and friction loss ``f`` (N m), MuJoCo's ``dof_damping`` and
-        ``dof_frictionloss``. Requiring :math:`|\tau| + d|\dot q| + f \le T(|\dot q|)`
-        (``T`` this range's torque at a speed) maps every vertex :math:`(t, w)` to
-        :math:`(t - d w - f, w)` and clips at :math:`t = 0`: a convex, down-closed polygon
+        ``dof_frictionloss``. Requiring $|\tau| + d|\dot q| + f \le T(|\dot q|)$
+        (``T`` this range's torque at a speed) maps every vertex $(t, w)$ to
+        $(t - d w - f, w)$ and clips at $t = 0$: a convex, down-closed polygon
         again. It is exact while the motor drives (torque and speed of one sign) and
         conservative while it brakes, where the losses would help: the operation range is one
         polygon for all four sign quadrants (eq. 2).
@@ -279,5 +279,5 @@ def default_operation_range(*, gear_efficiency: float | None = None) -> Operatio
 
 
 def as_operation_range(value: OperationRange | ArrayLike) -> OperationRange:
-    """Coerce vertices (or an existing range) to an :class:`OperationRange`."""
+    """Coerce vertices (or an existing range) to an `OperationRange`."""
     return value if isinstance(value, OperationRange) else OperationRange(np.asarray(value))

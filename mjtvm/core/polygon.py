@@ -1,10 +1,10 @@
 r"""The polygon geometry of an operation range (eq. 1-3), as pure functions on vertices.
 
-:func:`validated_vertices` checks a polygon in the quadrant of absolute torque and speed
-(shape, quadrant, origin, convexity, down-closure); :func:`halfplanes` lists its edges off
-the axes; :func:`mirrored_halfplanes` the sign combinations of those edges that eliminate
+[`validated_vertices()`][mjtvm.core.polygon.validated_vertices] checks a polygon in the quadrant of absolute torque and speed
+(shape, quadrant, origin, convexity, down-closure); [`halfplanes()`][mjtvm.core.polygon.halfplanes] lists its edges off
+the axes; [`mirrored_halfplanes()`][mjtvm.core.polygon.mirrored_halfplanes] the sign combinations of those edges that eliminate
 the box of eq. (2) exactly (the claim and proof are on
-:attr:`~mjtvm.core.operation_range.OperationRange.mirrored_halfplanes`).
+[`mirrored_halfplanes`][mjtvm.core.operation_range.OperationRange.mirrored_halfplanes]).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def _cross(o: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64
 
 def validated_vertices(raw: object) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The vertices ``v`` as floats, checked, with ``u = v / scale`` and ``scale = (max
-    torque, max speed)``; :class:`~mjtvm.errors.StateError` (field ``""``) naming the problem.
+    torque, max speed)``; [`StateError`][mjtvm.errors.StateError] (field ``""``) naming the problem.
 
     Torque and speed have unrelated units (1.5 N m beside 1.5e9 rad/s is a valid range), so
     every geometric check runs on ``u``, where both axes span [0, 1] and one absolute

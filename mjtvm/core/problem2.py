@@ -1,11 +1,11 @@
 r"""The LPs of Problem 2 for one grasp state (eq. 31-35), solved and certified.
 
-:class:`StateLPs` assembles a state's constraints once (:func:`~mjtvm.core.assembly.assemble`)
+[`StateLPs`][mjtvm.core.problem2.StateLPs] assembles a state's constraints once (`assemble()`)
 and equilibrates them once; the LP of a pair (k, l) differs from the others only in the
 column of ``alpha`` (``A_twist r_l``) and the right-hand side of the balance rows
 (``-w_k``), so one HiGHS session is modified and re-solved from its last basis. Every
-answer is certified on the unscaled LP (:mod:`~mjtvm.core.certificate`) and solved again
-other ways when it is not (:meth:`StateLPs.certified`). :func:`~mjtvm.core.tvmmp.tvmmp`
+answer is certified on the unscaled LP ([`certificate`][mjtvm.core.certificate]) and solved again
+other ways when it is not ([`StateLPs.certified()`][mjtvm.core.problem2.StateLPs.certified]). [`tvmmp()`][mjtvm.core.tvmmp.tvmmp]
 runs the pairs and reports them.
 """
 
@@ -55,7 +55,7 @@ P2_HIGHS_OPTIONS: dict[str, object] = {"simplex_dual_edge_weight_strategy": 1}
 
 def _physical_sizes(state: GraspState, asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(n + 1,)`` the sizes the certificate measures a row's violation, and a reduced cost
-    of the wrong sign, at where the solution is ~0 (:func:`~mjtvm.core.certificate.certify`'s
+    of the wrong sign, at where the solution is ~0 ([`certify()`][mjtvm.core.certificate.certify]'s
     ``col_ref``): each joint's largest speed and torque (its operation range) for the
     speeds, torques, damping losses and the literal box's variables; for the force generators' weights the
     larger of the weight and the largest torque over the Jacobians' scale; for the
@@ -63,9 +63,9 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> tuple[NDArray[np.float6
     state, never from the equilibration, which the certificate must not trust.
 
     And ``(m,)`` the largest a term at those sizes may add to a row's scale (the
-    :class:`~mjtvm.core.certificate.Certifier`'s ``row_cap``): on the kinematic rows (a
+    [`Certifier`][mjtvm.core.certificate.Certifier]'s ``row_cap``): on the kinematic rows (a
     contact's relative velocity, eq. 11-13) the speed the hand's joints move a contact at,
-    ``sqrt(d)`` times the Jacobians' scale (:func:`~mjtvm.core.roundoff.jacobian_scale`)
+    ``sqrt(d)`` times the Jacobians' scale ([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale])
     times the fastest joint; ``inf`` on every other row. A row of unit vectors times the
     Jacobians has entries at most ``sqrt(d)`` times their largest, so no term reaches the
     cap unless one entry stands alone far above the others (1e12 among lever arms of
@@ -110,10 +110,10 @@ def _physical_sizes(state: GraspState, asm: Assembly) -> tuple[NDArray[np.float6
 class StateLPs:
     """The LPs of one state: variables of the assembly, then ``alpha`` (last column).
 
-    The equilibration (:func:`~mjtvm.core.solvers.equilibrate`) is computed once per state, on
+    The equilibration (`equilibrate()`) is computed once per state, on
     ``A`` with the largest REFS magnitudes as right-hand side (rows of twist coefficients
     only are scaled to the twist's); only the factor of the alpha column is chosen per RVDS
-    vertex (its largest entry ``A_twist r_l`` brought to 1, :func:`~mjtvm.core.scaling.column_factor`).
+    vertex (its largest entry ``A_twist r_l`` brought to 1, `column_factor()`).
     """
 
     def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
@@ -180,8 +180,8 @@ class StateLPs:
 
     def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows (then the joint
-        limits' horizon rows, ``-rate s(r)``: :meth:`~mjtvm.core.assembly.Assembly.horizon_column`), without
-        round-off (:mod:`~mjtvm.core.roundoff`): components of ``r`` at most DROP_REL times
+        limits' horizon rows, ``-rate s(r)``: `horizon_column()`), without
+        round-off ([`roundoff`][mjtvm.core.roundoff]): components of ``r`` at most DROP_REL times
         its largest, and entries at most DROP_REL times the sum of the magnitudes they were
         computed from. A twist written with 1e-16 in a component that is exactly 0 (a
         projection onto the TVMS's span) would otherwise ask for a motion the fingers
@@ -196,7 +196,7 @@ class StateLPs:
         return self._r_values(r)[1]
 
     def _r_values(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
-        """:meth:`column` and :meth:`zero_alpha` of ``r``, computed once per state."""
+        """`column()` and `zero_alpha()` of ``r``, computed once per state."""
         key = r.tobytes()
         if key not in self._of_r:
             big = float((np.abs(r) / self.twist_scale).max(initial=0.0))
@@ -232,7 +232,7 @@ class StateLPs:
 
     def _session(self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float) -> HighsSession:
         """A HiGHS session holding the LP of (w, r), built from the per-state scaled matrix
-        (the arrays :meth:`lp` then ``scale_lp`` would give, without their sparse copies)."""
+        (the arrays `lp()` then ``scale_lp`` would give, without their sparse copies)."""
         kin_col = self.column(r)
         factor = column_factor(self.row_scale[self.kin] * kin_col)
         col_s = np.append(self.col_scale, factor)
@@ -301,7 +301,7 @@ class StateLPs:
     def certify(
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
     ) -> Certificate:
-        """The certificate (:mod:`~mjtvm.core.certificate`) of an optimal ``sol`` of pair (w, r)."""
+        """The certificate ([`certificate`][mjtvm.core.certificate]) of an optimal ``sol`` of pair (w, r)."""
         lower, upper, cu = self._bounds(w, alpha_max)
         assert sol.x is not None
         return self._certifier(r).check(
@@ -311,8 +311,8 @@ class StateLPs:
     def certify_many(
         self, answers: list[tuple[NDArray[np.float64], NDArray[np.float64], float, LPSolution]]
     ) -> list[Certificate]:
-        """:meth:`certify` of several optimal answers ``(w, r, alpha_max, sol)`` of this
-        state at once (:meth:`~mjtvm.core.certificate.Certifier.check_many`): the same
+        """`certify()` of several optimal answers ``(w, r, alpha_max, sol)`` of this
+        state at once ([`check_many()`][mjtvm.core.certificate.Certifier.check_many]): the same
         measures, one matrix product instead of one matrix-vector product per answer."""
         if not answers:
             return []
@@ -329,7 +329,7 @@ class StateLPs:
         return cert.check_many(self.c, lower, upper, cu, x, y, last, floor=floor)
 
     def _certifier(self, r: NDArray[np.float64]) -> Certifier:
-        """The state's :class:`~mjtvm.core.certificate.Certifier`, its alpha column that of ``r``."""
+        """The state's [`Certifier`][mjtvm.core.certificate.Certifier], its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
         if self._cert is None:
             primal = np.where(self.force_like, 0.0, self.physical_sizes)  # forces, slips: their own values
@@ -364,17 +364,17 @@ class StateLPs:
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
     ) -> bool:
         """Whether ``sol``'s Farkas multipliers (HiGHS' dual ray, Clarabel's certificate) prove
-        pair (w, r) infeasible on the unscaled LP (:func:`~mjtvm.core.certificate.farkas`)."""
+        pair (w, r) infeasible on the unscaled LP ([`farkas()`][mjtvm.core.certificate.farkas])."""
         lower, upper, cu = self._bounds(w, alpha_max)
         return self._certifier(r).farkas(lower, upper, cu, sol.row_dual)
 
     def certified(
         self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
     ) -> Verdict:
-        """The LP of (w, r) settled (:meth:`solve`) and its answer certified on the unscaled LP.
+        """The LP of (w, r) settled (`solve()`) and its answer certified on the unscaled LP.
 
-        An optimal answer is certified by :meth:`certify`, an infeasible one by its Farkas
-        multipliers (:meth:`proves_infeasible`). An answer that is not is solved again
+        An optimal answer is certified by `certify()`, an infeasible one by its Farkas
+        multipliers (`proves_infeasible()`). An answer that is not is solved again
         other ways, in turn: HiGHS from a cold start on the pair's own equilibration (which
         includes the alpha column), Clarabel, and HiGHS on the LP as assembled (its own
         scaling, no equilibration of ours); the first certified answer is reported, with a
@@ -394,7 +394,7 @@ class StateLPs:
         cert: tuple[bool, Certificate | None] | None,
     ) -> Verdict:
         """The verdict of pair (w, r) from its settled LP and the check of its answer
-        (:meth:`certified`'s second half: the other ways where the check failed)."""
+        (`certified()`'s second half: the other ways where the check failed)."""
         first = settled.solution
         if cert is not None and cert[0]:
             return Verdict(settled, cert[1], True)

@@ -1,24 +1,24 @@
 r"""An independent cvxpy transcription of Problem 2 (eq. 31-35), for cross-checks only.
 
 Everything here is written from the paper's equations, in their literal forms, and
-shares nothing with :mod:`mjtvm.core.assembly` (only the schema's orientation rule
-:func:`~mjtvm.core.contacts.tangent_basis` and :func:`~mjtvm.core.contacts.slide_unit` are reused):
+shares nothing with [`mjtvm.core.assembly`][mjtvm.core.assembly] (only the schema's orientation rule
+[`tangent_basis()`][mjtvm.core.contacts.tangent_basis] and [`slide_unit()`][mjtvm.core.contacts.slide_unit] are reused):
 
 * contact forces are free d-vectors per F-point with the friction pyramid in H-form
-  :math:`V f \le 0` (eq. 24; with :math:`\mu = 0` the normal ray) of the coefficient
-  :math:`(1 - \delta)\mu` at the state's ``friction_margin`` :math:`\delta`, :math:`f = n_f n` at L-points (eq. 22),
-  :math:`f = n_f (n - \mu \hat s)` at S-points (eq. 16-17), none at D-points;
-* kinematics eq. (7)-(13) with :math:`G^T \dot r = v + \omega \times (p_C - p_O)`;
-* torques eq. (19), balance eq. (20); with a transmission (:mod:`mjtvm.core.transmission`)
-  the joint torques are :math:`P^T u + J_{eq}^T \lambda - b \dot q`, the constraints
-  :math:`J_{eq} \dot q = 0` hold and the box bounds each actuator's :math:`(u, P \dot q)`;
+  $V f \le 0$ (eq. 24; with $\mu = 0$ the normal ray) of the coefficient
+  $(1 - \delta)\mu$ at the state's ``friction_margin`` $\delta$, $f = n_f n$ at L-points (eq. 22),
+  $f = n_f (n - \mu \hat s)$ at S-points (eq. 16-17), none at D-points;
+* kinematics eq. (7)-(13) with $G^T \dot r = v + \omega \times (p_C - p_O)$;
+* torques eq. (19), balance eq. (20); with a transmission ([`mjtvm.core.transmission`][mjtvm.core.transmission])
+  the joint torques are $P^T u + J_{eq}^T \lambda - b \dot q$, the constraints
+  $J_{eq} \dot q = 0$ hold and the box bounds each actuator's $(u, P \dot q)$;
 * the box of eq. (2) with its four variables per joint and each corner written as a
-  convex combination of the vertices of :math:`P` mirrored into its quadrant;
-* joint position limits (``docs/joint-limits.md``): :math:`\dot q_j \le 0` within the
-  tolerance of the upper limit, :math:`\dot q_j \ge 0` of the lower, and over a travel
-  horizon :math:`H \dot q_j \le (hi_j - q_j)\, s\, \alpha`,
-  :math:`-H \dot q_j \le (q_j - lo_j)\, s\, \alpha` with :math:`s` the largest speed of
-  :math:`p_O` and of the contact points under :math:`\hat r_l`.
+  convex combination of the vertices of $P$ mirrored into its quadrant;
+* joint position limits (``docs/joint-limits.md``): $\dot q_j \le 0$ within the
+  tolerance of the upper limit, $\dot q_j \ge 0$ of the lower, and over a travel
+  horizon $H \dot q_j \le (hi_j - q_j)\, s\, \alpha$,
+  $-H \dot q_j \le (q_j - lo_j)\, s\, \alpha$ with $s$ the largest speed of
+  $p_O$ and of the contact points under $\hat r_l$.
 
 The problem is rebuilt for every (k, l): this is the slow baseline of the benchmarks.
 """
@@ -47,19 +47,19 @@ _CORNERS = ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0))  # (s1, s2) of e
 
 
 def pyramid_halfspaces(contact: Contact, friction_edges: int, mu: float | None = None) -> NDArray[np.float64]:
-    r"""``V`` of eq. (24): the inscribed friction pyramid is :math:`\{f : V f \le 0\}`.
+    r"""``V`` of eq. (24): the inscribed friction pyramid is $\{f : V f \le 0\}$.
 
-    Edges :math:`e_k = n + \mu (\cos\theta_k t_1 + \sin\theta_k t_2)`,
-    :math:`\theta_k = 2\pi k / n_{fric}` (in the plane :math:`n \pm \mu t`); each row is the
-    normal of the facet through two consecutive edges (:math:`e_k \times e_{k+1}`; in the plane
-    the perpendicular of each edge), signed so that :math:`n` (interior) gives a negative value.
+    Edges $e_k = n + \mu (\cos\theta_k t_1 + \sin\theta_k t_2)$,
+    $\theta_k = 2\pi k / n_{fric}$ (in the plane $n \pm \mu t$); each row is the
+    normal of the facet through two consecutive edges ($e_k \times e_{k+1}$; in the plane
+    the perpendicular of each edge), signed so that $n$ (interior) gives a negative value.
 
     Parameters
     ----------
     contact
         An F contact with ``mu > 0``.
     friction_edges
-        :math:`n_{fric}` (space only).
+        $n_{fric}$ (space only).
     mu
         The coefficient of the pyramid (default the contact's ``mu``).
 
@@ -82,7 +82,7 @@ def pyramid_halfspaces(contact: Contact, friction_edges: int, mu: float | None =
 
 
 def _g_transpose(position: NDArray[np.float64], p_o: NDArray[np.float64]) -> NDArray[np.float64]:
-    r"""``(d, D)`` :math:`G_{ij}^T`: :math:`G^T \dot r = v + \omega \times (p_C - p_O)` (eq. 6)."""
+    r"""``(d, D)`` $G_{ij}^T$: $G^T \dot r = v + \omega \times (p_C - p_O)$ (eq. 6)."""
     r = position - p_o
     if r.shape[0] == 2:  # [vx - w r_y, vy + w r_x]
         return np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
@@ -188,7 +188,7 @@ def _limit_constraints(
 ) -> list[cp.Constraint]:
     r"""The joint position limits, written from ``docs/joint-limits.md``: a joint on a limit
     (within the tolerance) does not move toward it; any other limited joint does not reach
-    its limit while the object travels the horizon :math:`H` at :math:`\alpha \hat r_l`."""
+    its limit while the object travels the horizon $H$ at $\alpha \hat r_l$."""
     lim = state.joint_limits
     if lim is None:
         return []
@@ -225,7 +225,7 @@ def reference_alpha(
     state
         A grasp state with ``rvds``.
     k, l
-        Indices of :math:`w_k` in ``state.refs`` and :math:`\hat r_l` in ``state.rvds``.
+        Indices of $w_k$ in ``state.refs`` and $\hat r_l$ in ``state.rvds``.
     solver
         A cvxpy solver name (``"CLARABEL"``, ``"HIGHS"``, ...).
 
@@ -265,7 +265,7 @@ def reference_alpha(
 def reference_tvmmp(
     state: GraspState, *, solver: str = "CLARABEL"
 ) -> tuple[NDArray[np.float64], tuple[tuple[str, ...], ...]]:
-    r"""Every :math:`\alpha_{kl}` of Problem 2, one freshly built cvxpy LP per pair.
+    r"""Every $\alpha_{kl}$ of Problem 2, one freshly built cvxpy LP per pair.
 
     Parameters
     ----------

@@ -53,7 +53,7 @@ def finite_or_none(x: float | None) -> float | None:
 
 @dataclass(frozen=True)
 class Diagnosis:
-    r"""Why a pair's alpha is 0 or a REFS vertex cannot be balanced (:mod:`~mjtvm.core.diagnosis`).
+    r"""Why a pair's alpha is 0 or a REFS vertex cannot be balanced ([`diagnosis`][mjtvm.core.diagnosis]).
 
     Attributes
     ----------
@@ -66,8 +66,8 @@ class Diagnosis:
         ``"balance"``: no contact forces balance the REFS vertex, whatever the torques;
         ``"unheld"``: the transmission leaves joint motions (``joints``) that no actuator
         drives and no equality holds, and the REFS vertex needs torque along them
-        (:func:`~mjtvm.core.holding.unheld_motions`);
-        ``"limits"``: the position limits of ``joints`` bind (:mod:`~mjtvm.core.limits`);
+        ([`unheld_motions()`][mjtvm.core.holding.unheld_motions]);
+        ``"limits"``: the position limits of ``joints`` bind (`limits`);
         ``"unknown"``: neither found (an alpha at the solver's tolerance).
     contacts, joints
         The names of a minimal set of contacts (``"contacts"``) or joints (``"ranges"``).
@@ -110,30 +110,30 @@ class Diagnosis:
 
 @dataclass(frozen=True, eq=False)
 class Witness:
-    r"""A solution attaining :math:`\alpha_{kl}` (Supplement 1 scales it down to any speed).
+    r"""A solution attaining $\alpha_{kl}$ (Supplement 1 scales it down to any speed).
 
     Attributes
     ----------
     alpha
-        :math:`\alpha_{kl}`.
+        $\alpha_{kl}$.
     twist
-        ``(D,)`` object twist :math:`\alpha \hat r_l` = [v of p_O (m/s); omega (rad/s)].
+        ``(D,)`` object twist $\alpha \hat r_l$ = [v of p_O (m/s); omega (rad/s)].
     forces
         ``(L, d)`` contact forces on the object (N), world frame.
     torques
-        ``(M,)`` joint torques :math:`\tau` (N m), eq. (19); with a transmission the
+        ``(M,)`` joint torques $\tau$ (N m), eq. (19); with a transmission the
         ``(A,)`` actuator forces ``u`` (N or N m), one per operation range.
     speeds
-        ``(M,)`` joint speeds :math:`\dot q` (rad/s).
+        ``(M,)`` joint speeds $\dot q$ (rad/s).
     slip_speeds
-        Slip speeds :math:`\rho` of the S-points (m/s), one per S-point or one shared.
+        Slip speeds $\rho$ of the S-points (m/s), one per S-point or one shared.
     box
         ``(M, 4)`` the box of eq. (2): ``[tau_min, tau_max, qd_min, qd_max]`` per joint
         (``(A, 4)`` per actuator with a transmission, its force and speed). With the
         eliminated form it is the smallest valid box
         ``[min(tau - loss, 0), max(tau + loss, 0), min(qd, 0), max(qd, 0)]``, ``loss`` the
         force that overcomes the joints' damping (0 without damping; ``tau + loss`` is what
-        the motor gives, :mod:`~mjtvm.core.assembly`).
+        the motor gives, [`assembly`][mjtvm.core.assembly]).
     actuator_speeds
         ``(A,)`` actuator speeds ``P qd`` (m/s or rad/s) with a transmission, else ``None``
         (the joint speeds are the actuators').
@@ -150,7 +150,7 @@ class Witness:
 
     @property
     def range_speeds(self) -> NDArray[np.float64]:
-        """The speeds paired with :attr:`torques` in the operation ranges."""
+        """The speeds paired with `torques` in the operation ranges."""
         return self.speeds if self.actuator_speeds is None else self.actuator_speeds
 
     def to_dict(self) -> dict[str, Any]:
@@ -186,28 +186,28 @@ class TvmmpResult:
     Attributes
     ----------
     alpha
-        ``(K, R)`` :math:`\alpha_{kl}`; NaN where the pair is not ``optimal``.
+        ``(K, R)`` $\alpha_{kl}$; NaN where the pair is not ``optimal``.
     status
         ``K`` tuples of ``R`` statuses: ``optimal``, ``infeasible``, ``unbounded`` or ``skipped``.
     tvmmp
-        :math:`\min \alpha_{kl}` over the optimal pairs; ``None`` when a pair is
+        $\min \alpha_{kl}$ over the optimal pairs; ``None`` when a pair is
         infeasible or no pair is optimal.
     feasible
         False when some REFS vertex cannot be balanced at all.
     held
-        ``K`` booleans: whether REFS vertex :math:`w_k` is held at rest, balanced at zero
-        joint speed within the ranges' torque at zero speed (:mod:`~mjtvm.core.holding`);
+        ``K`` booleans: whether REFS vertex $w_k$ is held at rest, balanced at zero
+        joint speed within the ranges' torque at zero speed ([`holding`][mjtvm.core.holding]);
         a pair of an unheld ``k`` is infeasible. Empty for a result built without it.
     distribution
-        One entry per RVDS vertex: :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4), or
+        One entry per RVDS vertex: $\min_k \alpha_{kl} \hat r_l$ (Supplement 4), or
         ``None`` where no finite minimum exists; the origin is implied.
     limiting
         The (k, l) attaining the TVMMP, or ``None``; of alphas within a relative 1e-8 of
         the TVMMP (a tie up to the solver's round-off), the first in (k, l) order.
     witnesses
-        ``K`` tuples of ``R`` :class:`Witness` (``None`` where not optimal or not requested).
+        ``K`` tuples of ``R`` [`Witness`][mjtvm.core.result.Witness] (``None`` where not optimal or not requested).
     timings
-        :class:`Timings`.
+        [`Timings`][mjtvm.core.result.Timings].
     solver, box
         The backend asked for and the operation-range form used.
     settled_by
@@ -217,7 +217,7 @@ class TvmmpResult:
         verdict was overruled by HiGHS and a feasibility re-solve.
     certified
         ``K`` tuples of ``R``: whether each pair's answer is certified on the unscaled LP
-        (:mod:`~mjtvm.core.certificate`: an optimal alpha by its primal, dual and gap
+        ([`certificate`][mjtvm.core.certificate]: an optimal alpha by its primal, dual and gap
         checks; an infeasible or unbounded verdict by a second, cold solve); ``None`` where
         skipped. A pair that is not certified has a note saying what failed.
     notes
@@ -226,10 +226,10 @@ class TvmmpResult:
         a state without non-zero RVDS vertex).
     diagnosis
         Per alpha 0 and per REFS vertex that cannot be balanced, why
-        (:func:`~mjtvm.core.diagnosis.diagnose`); empty unless asked for (``tvmmp(...,
+        ([`diagnose()`][mjtvm.core.diagnosis.diagnose]); empty unless asked for (``tvmmp(...,
         diagnose=True)``) and some alpha is 0 or some pair infeasible.
     friction
-        :class:`~mjtvm.core.friction.FrictionReport` when the state has a friction margin or
+        [`FrictionReport`][mjtvm.core.friction.FrictionReport] when the state has a friction margin or
         friction intervals (the TVMMP at margin 0, the worst case over the intervals), else
         ``None``. ``alpha`` and ``tvmmp`` are at the margin, at the nominal coefficients.
     """

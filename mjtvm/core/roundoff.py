@@ -5,9 +5,9 @@ rotation of the frame) carries entries like ``1e-18`` where the exact value is 0
 not harmless: in an F-point's kinematic row of a planar finger, ``0 = v_y`` becomes
 ``1e-18 qd_0 = v_y``, which pins ``qd_0`` to 0 and the grasp's TVMMP with it (the exact LP
 of the perturbed data has alpha 0). So the LPs are built on the data with its round-off
-set to 0, by two rules (one constant, :data:`DROP_REL`):
+set to 0, by two rules (one constant, `DROP_REL`):
 
-* **data** (:func:`drop_data_roundoff`): an entry of a contact Jacobian at most
+* **data** ([`drop_data_roundoff()`][mjtvm.core.roundoff.drop_data_roundoff]): an entry of a contact Jacobian at most
   ``DROP_REL`` times the scale of the state's contact Jacobians, their largest entry (a joint that does
   not move the contact, written as noise of 1e-14 beside finger entries of 0.1, is 0; so is
   a 1e-18 in a row of zeros of a planar finger, and the noise in the Jacobian of a table
@@ -17,12 +17,12 @@ set to 0, by two rules (one constant, :data:`DROP_REL`):
   support's Jacobian of noise only. A component of a vector (a contact's normal, when the
   contact is built; its position relative to the object; an RVDS vertex) at most
   ``DROP_REL`` times its largest component is 0 too;
-* **computation** (:func:`drop_cancellation`): a computed value at most ``DROP_REL`` times
+* **computation** ([`drop_cancellation()`][mjtvm.core.roundoff.drop_cancellation]): a computed value at most ``DROP_REL`` times
   the sum of the magnitudes of the terms it was computed from (``n . (r x n)``, the
   tangent ``n x t1``, ``A_twist r``), however small the terms are in the state's units.
 
 The largest entry of the Jacobians is their scale only when another entry comes near it
-(:func:`jacobian_scale`): a single coefficient of 1e12 among lever arms of 0.1 m (within
+([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]): a single coefficient of 1e12 among lever arms of 0.1 m (within
 the format's bounds) is data, but it is not what the other entries were computed from,
 and relative to it every lever arm of the hand (0.1 < 1e-12 x 1e12) would be "round-off".
 
@@ -41,10 +41,10 @@ from numpy.typing import NDArray
 __all__ = ["DROP_REL", "LONE_ENTRY", "drop_cancellation", "drop_data_roundoff", "jacobian_scale"]
 
 #: Round-off, relative: see the module docstring; also the equilibrated LP's rule
-#: (:func:`~mjtvm.core.scaling.scale_lp`).
+#: ([`scale_lp()`][mjtvm.core.scaling.scale_lp]).
 DROP_REL = 1e-12
 #: How far the largest Jacobian entry may stand above the second largest and still be the
-#: Jacobians' scale (:func:`jacobian_scale`). In the shipped states the two are within 1.3;
+#: Jacobians' scale ([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]). In the shipped states the two are within 1.3;
 #: an entry alone far above the others is capped at 10 times the second largest, so that
 #: every entry above DROP_REL times the others is kept, and the round-off of a real state
 #: (1e-16 of its largest entry) is dropped as long as its two largest are within 1e4.
@@ -85,7 +85,7 @@ def drop_data_roundoff(data: NDArray[np.float64], reference: float | None = None
 def jacobian_scale(jacobians: list[NDArray[np.float64]]) -> float:
     """The scale of a state's contact Jacobians: their largest magnitude, or ``LONE_ENTRY``
     times the second largest where that is smaller (the reference of their round-off,
-    :func:`drop_data_roundoff`, and of the certificate's contact speeds).
+    [`drop_data_roundoff()`][mjtvm.core.roundoff.drop_data_roundoff], and of the certificate's contact speeds).
 
     A lever arm is computed from the robot's geometry, as are its round-off and every other
     lever arm: an entry more than ``LONE_ENTRY`` times every other one (one coefficient of

@@ -1,12 +1,12 @@
 r"""Equilibration of an LP by powers of 2 (a documented decision: docs/result-format.md, Solver handling).
 
-Both backends see the LP after :func:`equilibrate` -- rows and columns multiplied by powers
+Both backends see the LP after [`equilibrate()`][mjtvm.core.scaling.equilibrate] -- rows and columns multiplied by powers
 of 2 (so the scaling itself is exact) chosen by mean-of-logs then Ruiz passes over
 ``|[A | b]|``, the right-hand sides taking part (their factor pinned at 1) so that a change
 of force or length unit, which multiplies the solution, is undone too. Solutions,
-objectives and duals are unscaled (:func:`unscale`) before they are returned.
+objectives and duals are unscaled ([`unscale()`][mjtvm.core.scaling.unscale]) before they are returned.
 Coefficients are dropped only when they are round-off: in the equilibrated LP, at most
-:data:`~mjtvm.core.lp.DROP_REL` times the largest entry of their row, of their column, or 1.
+[`DROP_REL`][mjtvm.core.lp.DROP_REL] times the largest entry of their row, of their column, or 1.
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def equilibrate(
     Returns
     -------
     Scaling
-        With ``cost = 1`` (see :func:`cost_scale`).
+        With ``cost = 1`` (see [`cost_scale()`][mjtvm.core.scaling.cost_scale]).
     """
     n = a.shape[1]
     e = _log_entries(a, rhs)
@@ -119,7 +119,7 @@ class _LogEntries(NamedTuple):
 
 
 def _log_entries(a: Csc | sp.spmatrix, rhs: NDArray[np.float64] | None) -> _LogEntries:
-    """The statistics of :func:`equilibrate`: the entries of ``|[A | rhs]|`` in log2."""
+    """The statistics of [`equilibrate()`][mjtvm.core.scaling.equilibrate]: the entries of ``|[A | rhs]|`` in log2."""
     m, n = a.shape
     if isinstance(a, Csc):
         csc_in: Any = a
@@ -204,21 +204,21 @@ def column_factor(magnitudes: NDArray[np.float64]) -> float:
     The largest entry, as in Ruiz's passes, and not a mean over the column: a round-off
     entry (1.7e-18 in the z component of a tangent ``n x t1`` that is exactly 0) would pull
     a mean-based factor up by 1e9, blow the column's genuine entries up to 1e12 beside the
-    O(1) rest of their rows, and :func:`scale_lp`'s round-off rule would then drop those
+    O(1) rest of their rows, and [`scale_lp()`][mjtvm.core.scaling.scale_lp]'s round-off rule would then drop those
     rows' genuine entries instead (an S-point's tangential row lost its joint speeds).
     Scaled to a largest entry of 1, round-off stays round-off and is dropped.
 
-    Clipped at 2^+-400 as in :func:`equilibrate`: a column of subnormals only (a fuzzed
+    Clipped at 2^+-400 as in [`equilibrate()`][mjtvm.core.scaling.equilibrate]: a column of subnormals only (a fuzzed
     state, after its row factors) asked for more than 2^1024, and a column holding an
     overflowed entry (inf) for 2^-inf = 0; either made ``inf * 0 = nan`` coefficients and
-    bounds in :meth:`~mjtvm.core.highs.HighsSession.set_column`. Clipped, the entries
+    bounds in [`set_column()`][mjtvm.core.highs.HighsSession.set_column]. Clipped, the entries
     still out of HiGHS' range are reported by the session's magnitude check."""
     nz = np.abs(magnitudes[magnitudes != 0.0])
     return factor_of_largest(float(nz.max())) if nz.size else 1.0
 
 
 def factor_of_largest(big: float) -> float:
-    """:func:`column_factor` of a column whose largest magnitude is ``big > 0`` (float
+    """`column_factor()` of a column whose largest magnitude is ``big > 0`` (float
     arithmetic: a column rewritten for every LP, as in ray shooting, spares its numpy calls)."""
     if math.isnan(big):
         return math.nan  # a nan entry: the session's finiteness check reports it
@@ -235,7 +235,7 @@ def cost_scale(c: NDArray[np.float64], col: NDArray[np.float64]) -> float:
 
 
 def _pow2_float(x: float) -> float:
-    """:func:`pow2` of one float ``x > 0`` in float arithmetic (a session rescales a column LP
+    """[`pow2()`][mjtvm.core.scaling.pow2] of one float ``x > 0`` in float arithmetic (a session rescales a column LP
     after LP, where numpy's scalar calls cost more than the rest): ``inf`` past 2^1023, as
     ``np.exp2``."""
     if x == math.inf:
@@ -245,7 +245,7 @@ def _pow2_float(x: float) -> float:
 
 
 def lp_scaling(lp: LinearProgram) -> Scaling:
-    """:func:`equilibrate` on ``lp`` (its finite row bounds as the right-hand side), with the cost factor."""
+    """[`equilibrate()`][mjtvm.core.scaling.equilibrate] on ``lp`` (its finite row bounds as the right-hand side), with the cost factor."""
     rhs = np.fmax(
         np.where(np.isfinite(lp.row_lower), np.abs(lp.row_lower), 0.0),
         np.where(np.isfinite(lp.row_upper), np.abs(lp.row_upper), 0.0),
@@ -290,7 +290,7 @@ def scale_lp(lp: LinearProgram, s: Scaling) -> LinearProgram:
 
 
 def unscale(sol: LPSolution, s: Scaling) -> LPSolution:
-    r"""The solution of the original LP from that of :func:`scale_lp`'s: ``x = col x_s``,
+    r"""The solution of the original LP from that of [`scale_lp()`][mjtvm.core.scaling.scale_lp]'s: ``x = col x_s``,
     objective ``/ g`` and row duals ``row y_s / g`` (from ``g col c = col A^T row y_s``)."""
     if sol.status != "optimal" or sol.x is None:
         return sol
@@ -301,7 +301,7 @@ def unscale(sol: LPSolution, s: Scaling) -> LPSolution:
 
 class ScaledMatrix:
     """``diag(row) A diag(col)`` of one state, computed once, and the scaled ``[A | a]`` of each
-    alpha column ``a`` with :func:`~mjtvm.core.scaling.scale_lp`'s round-off rule (an entry at
+    alpha column ``a`` with [`scale_lp()`][mjtvm.core.scaling.scale_lp]'s round-off rule (an entry at
     most DROP_REL times the largest of its row, of its column, or 1 is dropped; the rows'
     largest entries include the alpha column's)."""
 

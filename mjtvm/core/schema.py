@@ -1,12 +1,12 @@
 r"""The shipped JSON Schemas (``mjtvm/data/schema/*.schema.json``) as the loaders' gate.
 
 A format's schema is its one definition of structure, types, bounds and option pairs: the
-state loader (:func:`mjtvm.core.state_file.load_state`) and the grasp loader
-(:func:`mjtvm.sim.grasp.document.read_grasp_document`) refuse every document the schema
+state loader ([`mjtvm.core.state_file.load_state()`][mjtvm.core.state_file.load_state]) and the grasp loader
+(`mjtvm.sim.grasp.document.read_grasp_document()`) refuse every document the schema
 refuses, so a tool that checks files with the schema refuses nothing mjtvm would accept. The
 loaders' own field checks run as well, because they normalise the document and word most
 refusals better; the rules JSON Schema cannot state are theirs alone (listed in each format's
-page). :func:`schema_problem` words the validator's most relevant error in the loaders' form,
+page). [`schema_problem()`][mjtvm.core.schema.schema_problem] words the validator's most relevant error in the loaders' form,
 ``field: expected ..., got ...``.
 """
 
@@ -71,7 +71,7 @@ def schema_problem(
     Parameters
     ----------
     name
-        The format, as for :func:`load_schema`.
+        The format, as for [`load_schema()`][mjtvm.core.schema.load_schema].
     doc
         The decoded document; numpy arrays and scalars in it are read as JSON lists and numbers.
     describe, key

@@ -1,32 +1,32 @@
 r"""Linear-program backends called through their direct APIs, on equilibrated LPs.
 
-A :class:`LinearProgram` is ``min c^T x`` s.t. ``row_lower <= A x <= row_upper``,
+A [`LinearProgram`][mjtvm.core.lp.LinearProgram] is ``min c^T x`` s.t. ``row_lower <= A x <= row_upper``,
 ``col_lower <= x <= col_upper`` with a sparse CSC ``A``. Two backends:
 
 * ``"highs"`` (default): HiGHS dual simplex through ``highspy``. Simplex returns a
   vertex, so alphas are exact to the solver's feasibility tolerance, infeasible and
-  unbounded LPs are certified, and a :class:`HighsSession` re-solves after changing
+  unbounded LPs are certified, and a [`HighsSession`][mjtvm.core.highs.HighsSession] re-solves after changing
   one column and some row bounds from the previous basis (the LPs of one state differ
   only there).
 * ``"clarabel"``: the Clarabel interior-point solver, used as an independent
   cross-check and as the fallback when HiGHS cannot settle an LP.
 
 Scaling (a documented decision): both backends see the LP after
-:func:`equilibrate` -- rows and columns multiplied by powers of 2 (so the scaling itself
+[`equilibrate()`][mjtvm.core.scaling.equilibrate] -- rows and columns multiplied by powers of 2 (so the scaling itself
 is exact) chosen by mean-of-logs then Ruiz passes over ``|[A | b]|``, the right-hand
 sides taking part (their factor pinned at 1) so that a change of force or length unit,
 which multiplies the solution, is undone too. Problem 2 computes it once per state. The solvers' absolute tolerances (1e-9) then mean the same thing in
 every unit system; solutions, objectives and duals are unscaled before they are
 returned. Coefficients are dropped only when they are round-off: in the equilibrated LP,
-at most :data:`DROP_REL` times the largest entry of their row, of their column, or 1.
+at most [`DROP_REL`][mjtvm.core.solvers.DROP_REL] times the largest entry of their row, of their column, or 1.
 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from
-any call raises :class:`~mjtvm.errors.SolverError`. LP statuses are ``"optimal"``,
+any call raises [`SolverError`][mjtvm.errors.SolverError]. LP statuses are ``"optimal"``,
 ``"infeasible"`` or ``"unbounded"``; anything else raises
-:class:`~mjtvm.errors.SolverError`. :func:`solve_settled` / :func:`fallback` /
-:func:`clarabel_checked` settle an LP across both backends (HiGHS' cold retries, then
+[`SolverError`][mjtvm.errors.SolverError]. [`solve_settled()`][mjtvm.core.solvers.solve_settled] / [`fallback()`][mjtvm.core.solvers.fallback] /
+[`clarabel_checked()`][mjtvm.core.solvers.clarabel_checked] settle an LP across both backends (HiGHS' cold retries, then
 Clarabel; Clarabel's verdicts checked by HiGHS and a feasibility re-solve) and return a
-:class:`Settled` with a note whenever a backend failed or they disagreed.
+[`Settled`][mjtvm.core.solvers.Settled] with a note whenever a backend failed or they disagreed.
 """
 
 from __future__ import annotations
@@ -149,7 +149,7 @@ def clarabel_checked(lp: LinearProgram, *, scaling: Scaling | None = None) -> Se
 
 
 def solve_settled(lp: LinearProgram, *, solver: str = "highs", scaling: Scaling | None = None) -> Settled:
-    """One LP settled as :func:`clarabel_checked` (``"clarabel"``) or by HiGHS with its cold
+    """One LP settled as [`clarabel_checked()`][mjtvm.core.solvers.clarabel_checked] (``"clarabel"``) or by HiGHS with its cold
     retries and then Clarabel as the fallback (``"highs"``); SolverError, chained to
     HiGHS' own, only when neither settles it."""
     if solver == "clarabel":

@@ -1,10 +1,10 @@
 r"""Grasp states and the ``mjtvm.state/1`` JSON contract (``docs/state-format.md``).
 
-A :class:`GraspState` is everything the TVM core needs at one instant: joints with
+A [`GraspState`][mjtvm.core.state.GraspState] is everything the TVM core needs at one instant: joints with
 their operation ranges and gravity torques, contacts with Jacobians, the REFS and the
 RVDS. Every vector is in the world frame, SI units. The JSON form is exact: unknown or
-repeated keys, wrong shapes, NaN, numbers beyond the bounds of :mod:`mjtvm.core.bounds`,
-non-unit normals, bad operation ranges each raise one :class:`~mjtvm.errors.StateError`
+repeated keys, wrong shapes, NaN, numbers beyond the bounds of `mjtvm.core.bounds`,
+non-unit normals, bad operation ranges each raise one [`StateError`][mjtvm.errors.StateError]
 naming the field. The format is described in ``docs/state-format.md`` and, as a JSON
 Schema, in ``mjtvm/data/schema/state.schema.json``.
 """
@@ -72,33 +72,33 @@ class GraspState:
     space
         3 (spatial: d = 3, D = 6) or 2 (planar: d = 2, D = 3).
     object_position
-        ``(d,)`` :math:`p_O`, the point about which moments are taken (m).
+        ``(d,)`` $p_O$, the point about which moments are taken (m).
     joint_names
         The M joints, in the order of every joint-indexed vector.
     operation_ranges
-        One :class:`OperationRange` per joint (eq. 1), or per actuator of ``transmission``.
+        One `OperationRange` per joint (eq. 1), or per actuator of ``transmission``.
     gravity_torque
-        ``(M,)`` :math:`g_f` (N m): the joint torques that hold the fingers against gravity (eq. 19).
+        ``(M,)`` $g_f$ (N m): the joint torques that hold the fingers against gravity (eq. 19).
     contacts
         The L contacts.
     refs
-        ``(K, D)`` REFS vertices :math:`w_k` = [force; moment about p_O] to balance (eq. 5).
+        ``(K, D)`` REFS vertices $w_k$ = [force; moment about p_O] to balance (eq. 5).
     rvds
-        ``(R, D)`` RVDS vertices :math:`\hat r_l` = [v of p_O; omega] (eq. 30), or ``None``.
+        ``(R, D)`` RVDS vertices $\hat r_l$ = [v of p_O; omega] (eq. 30), or ``None``.
     friction_edges
         Edges of each friction pyramid in space (ignored in the plane).
     slip
         ``"per_contact"`` (one slip speed per S contact) or ``"shared"`` (eq. 34 literally).
     transmission
         How actuators and equality constraints act on the joints
-        (:class:`~mjtvm.core.transmission.Transmission`), or ``None``: each joint is driven
+        ([`Transmission`][mjtvm.core.transmission.Transmission]), or ``None``: each joint is driven
         by its own actuator, as in the paper.
     friction_margin
-        :math:`\delta \in [0, 1)` (default 0): the LPs use :math:`(1 - \delta) \mu` for every
+        $\delta \in [0, 1)$ (default 0): the LPs use $(1 - \delta) \mu$ for every
         F contact's friction pyramid (eq. 24), so that the witness forces keep a distance from
-        the cone (:mod:`mjtvm.core.friction`; S contacts keep ``mu``, ``docs/state-format.md``).
+        the cone (`mjtvm.core.friction`; S contacts keep ``mu``, ``docs/state-format.md``).
     joint_limits
-        The joints' positions and position ranges (:class:`~mjtvm.core.limits.JointLimits`:
+        The joints' positions and position ranges (`JointLimits`:
         a joint on its limit cannot move further into it), or ``None``: no position limits,
         the paper's LPs.
     """
@@ -223,7 +223,7 @@ class GraspState:
 
     @property
     def actuator_names(self) -> tuple[str, ...]:
-        """The names of :attr:`operation_ranges`: the actuators, or the joints without a
+        """The names of `operation_ranges`: the actuators, or the joints without a
         transmission."""
         return self.joint_names if self.transmission is None else self.transmission.actuator_names
 

@@ -1,8 +1,8 @@
-r"""The ``mjtvm.state/1`` and ``mjtvm.state/2`` JSON files of a :class:`~mjtvm.core.state.GraspState`
+r"""The ``mjtvm.state/1`` and ``mjtvm.state/2`` JSON files of a [`GraspState`][mjtvm.core.state.GraspState]
 (``docs/state-format.md``; JSON Schema ``mjtvm/data/schema/state.schema.json``).
 
 Version 2 adds a ``transmission`` (actuators with their moment rows and operation ranges,
-equality constraints, joint damping: :mod:`mjtvm.core.transmission`); a state without one
+equality constraints, joint damping: [`mjtvm.core.transmission`][mjtvm.core.transmission]); a state without one
 is written as version 1, and both versions are read.
 """
 
@@ -82,9 +82,9 @@ def _contact_from_dict(obj: Mapping[str, Any]) -> Contact:
 
 
 def parse_state(data: Mapping[str, Any]) -> GraspState:
-    """Validate a decoded ``mjtvm.state/1`` document and build a :class:`GraspState`.
+    """Validate a decoded ``mjtvm.state/1`` document and build a [`GraspState`][mjtvm.core.state.GraspState].
 
-    ``data`` is expected to be plain JSON data (see :func:`load_state`, which also checks
+    ``data`` is expected to be plain JSON data (see [`load_state()`][mjtvm.core.state_file.load_state], which also checks
     the nesting depth and the value types of a mapping before calling this).
     """
     _check_keys(data, _TOP_KEYS, _REQUIRED_TOP, "")
@@ -157,7 +157,7 @@ def parse_state(data: Mapping[str, Any]) -> GraspState:
 
 def _joint_limits(data: Mapping[str, Any], joints: Sequence[Any]) -> JointLimits | None:
     """The joints' ``position`` and ``range`` (both or neither on each joint) and the
-    top-level ``joint_limits`` options, as :class:`~mjtvm.core.limits.JointLimits`; ``None``
+    top-level ``joint_limits`` options, as `JointLimits`; ``None``
     when no joint has a range."""
     pos, lo, hi = [], [], []
     for i, j in enumerate(joints):
@@ -264,7 +264,7 @@ def load_state(source: str | bytes | os.PathLike[str] | Mapping[str, Any]) -> Gr
 
 
 def _gated(data: Mapping[str, Any]) -> GraspState:
-    """The state, refused where ``state.schema.json`` refuses it (:mod:`mjtvm.core.schema`):
+    """The state, refused where ``state.schema.json`` refuses it ([`mjtvm.core.schema`][mjtvm.core.schema]):
     the field checks word the refusal when they see it; the schema has the last word."""
     problem = schema_problem("state", data)
     state = parse_state(data)

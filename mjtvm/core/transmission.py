@@ -3,7 +3,7 @@ r"""Actuators, transmissions and equality constraints of a hand (``docs/state-fo
 The paper drives every joint by its own motor: the operation range of eq. (1) bounds the
 pair (torque, speed) of a joint. A real hand drives its joints through a transmission: one
 tendon actuator moves two distal joints, a linkage closes a kinematic loop. A
-:class:`Transmission` states it linearly at the state, as MuJoCo does:
+[`Transmission`][mjtvm.core.transmission.Transmission] states it linearly at the state, as MuJoCo does:
 
 * actuator speeds ``s = P qd`` and joint torques ``P^T u`` from the actuator forces ``u``,
   with ``P`` the ``(A, M)`` moment matrix (MuJoCo's ``actuator_moment``); the operation
@@ -58,7 +58,7 @@ class Transmission:
     Parameters
     ----------
     actuator_names
-        The A actuators, in the order of :attr:`GraspState.operation_ranges`.
+        The A actuators, in the order of `GraspState.operation_ranges`.
     moment
         ``(A, M)`` the moment matrix ``P``: actuator speeds ``s = P qd`` (m/s or rad/s),
         joint torques ``P^T u`` (N m) from actuator forces ``u`` (N or N m). Every row is
@@ -124,7 +124,7 @@ class Transmission:
 
     @property
     def num_joints(self) -> int:
-        """M, the columns of :attr:`moment`."""
+        """M, the columns of `moment`."""
         return int(self.moment.shape[1])
 
     @property

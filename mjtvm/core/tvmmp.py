@@ -1,12 +1,14 @@
 r"""Problem 2: the TVMMP and the distribution of achievable velocities (eq. 31-35).
 
-For each REFS vertex :math:`w_k` and each non-zero RVDS vertex :math:`\hat r_l`,
+For each REFS vertex $w_k$ and each non-zero RVDS vertex $\hat r_l$,
 
-.. math:: \alpha_{kl} = \max \alpha \ \text{s.t.}\ \dot r = \alpha \hat r_l \in S_1\ (S_2
-          \text{ with S-points}),
+$$
+\alpha_{kl} = \max \alpha \ \text{s.t.}\ \dot r = \alpha \hat r_l \in S_1\ (S_2
+\text{ with S-points}),
+$$
 
-and TVMMP :math:`= \min_{kl} \alpha_{kl}` (eq. 32, 35). The LPs of one state, solved and
-certified, are :class:`~mjtvm.core.problem2.StateLPs`'s; here they are run pair by pair and
+and TVMMP $= \min_{kl} \alpha_{kl}$ (eq. 32, 35). The LPs of one state, solved and
+certified, are [`StateLPs`][mjtvm.core.problem2.StateLPs]'s; here they are run pair by pair and
 reported (the limiting pair, the distribution of Supplement 4, the witnesses).
 """
 
@@ -78,7 +80,7 @@ def _witness(
 
 @dataclass
 class _Pairs:
-    """The verdicts of the (k, l) pairs as they are solved (:class:`TvmmpResult`'s fields)."""
+    """The verdicts of the (k, l) pairs as they are solved ([`TvmmpResult`][mjtvm.core.result.TvmmpResult]'s fields)."""
 
     alpha: NDArray[np.float64]
     status: list[list[PairStatus]]
@@ -119,8 +121,8 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
     ``r = 0`` (a state whose RVDS is the origin only, ``l = -1``) asks only whether w_k can
     be balanced, alpha held at 0. With qd = 0, alpha = 0, rho = 0 (and no damping loss) every
     kinematic and range row holds, since damping is not in the balance (a loss,
-    :mod:`~mjtvm.core.assembly`), so a pair is infeasible exactly when w_k cannot be held at
-    rest (:mod:`~mjtvm.core.holding`): the first LP of each k is its hold test, reported as
+    [`assembly`][mjtvm.core.assembly]), so a pair is infeasible exactly when w_k cannot be held at
+    rest ([`holding`][mjtvm.core.holding]): the first LP of each k is its hold test, reported as
     ``held``, and every l of an unheld k is infeasible (no more LPs).
 
     The pairs are solved RVDS vertex by RVDS vertex (l outer, k inner): from one k to the
@@ -131,8 +133,8 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
 
     An infeasible (or unbounded) answer is certified at once, since it decides which LPs
     follow; the optimal ones are certified together once every LP is solved
-    (:meth:`~mjtvm.core.problem2.StateLPs.certify_many`), and an answer whose certificate
-    fails is then solved again other ways (:meth:`~mjtvm.core.problem2.StateLPs.conclude`).
+    ([`certify_many()`][mjtvm.core.problem2.StateLPs.certify_many]), and an answer whose certificate
+    fails is then solved again other ways ([`conclude()`][mjtvm.core.problem2.StateLPs.conclude]).
     Should that find a pair infeasible, its k is infeasible as above and its later LPs,
     solved already, are dropped."""
     refs, rvds = state.refs, state.rvds
@@ -223,7 +225,7 @@ def _record(
 
 
 def _limiting(pairs: _Pairs) -> tuple[tuple[int, int] | None, float | None]:
-    r"""The pair attaining :math:`\min \alpha_{kl}` over the optimal pairs (eq. 32, 35) and
+    r"""The pair attaining $\min \alpha_{kl}$ over the optimal pairs (eq. 32, 35) and
     that minimum; ``None`` when a pair is infeasible or none is optimal.
 
     The pair is the first in (k, l) order whose alpha is within ``LIMITING_TIE_REL`` of the
@@ -242,7 +244,7 @@ def _limiting(pairs: _Pairs) -> tuple[tuple[int, int] | None, float | None]:
 def _distribution(
     pairs: _Pairs, rvds: NDArray[np.float64], twist_dim: int
 ) -> list[NDArray[np.float64] | None]:
-    r"""Per RVDS vertex, :math:`\min_k \alpha_{kl} \hat r_l` (Supplement 4): the origin
+    r"""Per RVDS vertex, $\min_k \alpha_{kl} \hat r_l$ (Supplement 4): the origin
     where skipped, ``None`` where a pair is infeasible or none is optimal."""
     alpha, status = pairs.alpha, pairs.status
     n_k, n_l = alpha.shape
@@ -271,7 +273,7 @@ def tvmmp(
     Parameters
     ----------
     state
-        A grasp state with ``rvds`` (the RVDS vertices :math:`\hat r_l`).
+        A grasp state with ``rvds`` (the RVDS vertices $\hat r_l$).
     solver
         ``"highs"`` (default) or ``"clarabel"``.
     box
@@ -279,7 +281,7 @@ def tvmmp(
     witnesses
         Whether to keep the forces, torques, speeds and box of each optimal pair.
     diagnose
-        Whether to say why an alpha is 0 or a pair infeasible (:mod:`~mjtvm.core.diagnosis`,
+        Whether to say why an alpha is 0 or a pair infeasible ([`diagnosis`][mjtvm.core.diagnosis],
         a few LPs per such pair; nothing when every alpha is > 0): the result's ``diagnosis``.
 
     Returns
@@ -336,7 +338,7 @@ def tvmmp(
 
 def _friction_report(state: GraspState, solver: str, box: BoxForm) -> FrictionReport:
     """The TVMMP at margin 0 (when the margin is not) and the worst TVMMP over the friction
-    intervals, the least over the corners of :func:`~mjtvm.core.friction.interval_corners`
+    intervals, the least over the corners of [`interval_corners()`][mjtvm.core.friction.interval_corners]
     (exact by its quasi-concavity argument; each corner's LPs certified as any state's)."""
     certified = True
     nominal = None

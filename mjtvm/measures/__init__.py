@@ -1,10 +1,10 @@
 r"""Classic grasp measures beside TVMMP, without MuJoCo (``docs/measures.md``).
 
-:func:`classic_measures` gives a :class:`GraspMeasures`: force closure, the Ferrari-Canny
+[`classic_measures()`][mjtvm.measures.classic.classic_measures] gives a [`GraspMeasures`][mjtvm.measures.classic.GraspMeasures]: force closure, the Ferrari-Canny
 epsilons, the grasp matrix's smallest singular value, Yoshikawa's hand-object
 manipulability and the kinematic velocity polytope's volume of one
-:class:`~mjtvm.core.state.GraspState`. The wrench measures live in
-:mod:`~mjtvm.measures.wrenches`, the kinematic ones in :mod:`~mjtvm.measures.kinematics`.
+[`GraspState`][mjtvm.core.state.GraspState]. The wrench measures live in
+[`wrenches`][mjtvm.measures.wrenches], the kinematic ones in [`kinematics`][mjtvm.measures.kinematics].
 """
 
 from .classic import GraspMeasures, classic_measures

@@ -1,6 +1,6 @@
 r"""The classic grasp measures of one grasp state beside its TVMMP (``docs/measures.md``).
 
-:func:`classic_measures` computes, on the same :class:`~mjtvm.core.state.GraspState` that
+[`classic_measures()`][mjtvm.measures.classic.classic_measures] computes, on the same [`GraspState`][mjtvm.core.state.GraspState] that
 Problem 2 solves, force closure, the Ferrari-Canny epsilons (L1 and L-infinity), the
 smallest singular value of the grasp matrix, Yoshikawa's hand-object manipulability and
 the kinematic velocity polytope's volume, each with the torque scale that makes moments
@@ -66,7 +66,7 @@ class GraspMeasures:
     grasp_rank
         The rank of the grasp matrix.
     manipulability
-        Yoshikawa's :math:`\sqrt{\det(K_Q K_Q^T)}` ((m/s)^D per (rad/s)^D); 0 when the
+        Yoshikawa's $\sqrt{\det(K_Q K_Q^T)}$ ((m/s)^D per (rad/s)^D); 0 when the
         kinematics do not determine the twist or do not reach every twist.
     twist_determined
         Whether the contact kinematics determine the object twist from the joint speeds.

@@ -1,7 +1,7 @@
 r"""Kinematic measures of a grasp state: the hand-object manipulability (Yoshikawa's measure)
 and the kinematic velocity polytope (``docs/measures.md``).
 
-Twists are scaled like the wrenches of :mod:`~mjtvm.measures.wrenches`:
+Twists are scaled like the wrenches of [`wrenches`][mjtvm.measures.wrenches]:
 ``[v; rho omega]`` (m/s), with ``v`` the velocity of the object position and ``rho`` the torque
 scale, so that a scaled wrench times a scaled twist is the power (W) and volumes and
 ellipsoids of twists have one unit.
@@ -61,7 +61,7 @@ def contact_kinematics(
 
 
 def _null_space(m: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Orthonormal basis (columns) of the null space of ``m`` (rank by :data:`RANK_REL_TOL`)."""
+    """Orthonormal basis (columns) of the null space of ``m`` (rank by [`RANK_REL_TOL`][mjtvm.measures.kinematics.RANK_REL_TOL])."""
     if m.shape[0] == 0:
         return np.eye(m.shape[1])
     _, s, vt = np.linalg.svd(m)
@@ -73,13 +73,13 @@ def manipulability(state: GraspState, torque_scale: float) -> tuple[float, bool]
     r"""Yoshikawa's measure of the hand-object system and whether the kinematics determine
     the twist.
 
-    The consistent motions are the null space of ``[A, -B]`` (:func:`contact_kinematics`).
+    The consistent motions are the null space of ``[A, -B]`` ([`contact_kinematics()`][mjtvm.measures.kinematics.contact_kinematics]).
     When ``B t = 0`` has only ``t = 0`` the twist is a linear function of the consistent
     joint speeds: ``t = K qd`` on the subspace ``Q`` they span (Li, Hsu & Sastry 1989: the
     hand Jacobian ``G^{+T} J`` restricted to ``Q``; Bicchi & Prattichizzo 2000). With ``K_Q``
     its matrix in an orthonormal basis of ``Q``, the unit ball of joint speeds in ``Q`` maps
     onto the ellipsoid ``{K_Q z : |z| <= 1}`` and the measure is its volume up to the unit
-    ball's, :math:`w = \sqrt{\det(K_Q K_Q^T)}` (Yoshikawa 1985); 0 when ``dim Q < D`` or
+    ball's, $w = \sqrt{\det(K_Q K_Q^T)}$ (Yoshikawa 1985); 0 when ``dim Q < D`` or
     ``K_Q`` is rank deficient (some twist needs no or unbounded joint speed).
 
     Returns
@@ -107,7 +107,7 @@ def speed_only_state(state: GraspState) -> GraspState:
     """``state`` with its statics made void: no REFS wrench, no gravity torque, no preload, no
     damping, and each operation range replaced by the box of its largest torque and speed, so
     that Problem 1's polytope is the set of twists of joint speeds within those speeds
-    (:func:`velocity_polytope`). The contact forces may then all be 0, which leaves every
+    ([`velocity_polytope()`][mjtvm.measures.kinematics.velocity_polytope]). The contact forces may then all be 0, which leaves every
     torque at 0, where the (down-closed) ranges allow their largest speed."""
     boxes = tuple(OperationRange.box(r.max_torque, r.max_speed) for r in state.operation_ranges)
     t = state.transmission
@@ -127,8 +127,8 @@ def velocity_polytope(state: GraspState, torque_scale: float) -> tuple[float, in
     """The kinematic velocity polytope: the twists reached with joint (actuator) speeds within
     each operation range's largest speed, ``|P qd| <= s_max`` and ``J_eq qd = 0`` with a
     transmission, under the contact kinematics of eq. (9)-(13) (D-points' ``<=`` included),
-    forces ignored: Problem 1's TVMS of :func:`speed_only_state` (exact projection by
-    support LPs, :func:`~mjtvm.polytopes.projection.project_lp`).
+    forces ignored: Problem 1's TVMS of [`speed_only_state()`][mjtvm.measures.kinematics.speed_only_state] (exact projection by
+    support LPs, `project_lp()`).
 
     Returns
     -------

@@ -2,7 +2,7 @@ r"""Wrench-space measures of a grasp state: force closure, the Ferrari-Canny eps
 the grasp matrix (``docs/measures.md``).
 
 Every contact that transmits a force (F, L, S; a D-point carries none) contributes the
-wrenches of its force generators :func:`~mjtvm.core.contacts.force_generators` -- the
+wrenches of its force generators `force_generators()` -- the
 friction pyramid's edges of ``state.friction_edges`` for F, the normal for L, ``n - mu s``
 for S -- each with unit normal component, so that a combination ``sum lam_k e_k`` with
 ``lam >= 0`` has normal force ``sum lam_k``. The wrench of a force ``f`` at ``p_C`` is
@@ -54,7 +54,7 @@ def default_torque_scale(state: GraspState) -> float:
 
 
 def checked_torque_scale(state: GraspState, torque_scale: float | None) -> float:
-    """``torque_scale`` validated (a finite number > 0, m), or :func:`default_torque_scale`."""
+    """``torque_scale`` validated (a finite number > 0, m), or [`default_torque_scale()`][mjtvm.measures.wrenches.default_torque_scale]."""
     if torque_scale is None:
         return default_torque_scale(state)
     if isinstance(torque_scale, bool) or not isinstance(torque_scale, (int, float, np.floating, np.integer)):
@@ -90,9 +90,9 @@ def primitive_wrenches(state: GraspState, torque_scale: float) -> list[NDArray[n
 
 
 def grasp_matrix(state: GraspState, torque_scale: float) -> NDArray[np.float64]:
-    r"""``(D, n)`` the grasp matrix :math:`G` (Li & Sastry 1988) of the components each contact
-    transmits: all d force components of an F contact (the columns of :math:`G_{ij}` =
-    :math:`(G_{ij}^T)^T`), the normal :math:`G_{ij} n` of an L or S contact, nothing of a
+    r"""``(D, n)`` the grasp matrix $G$ (Li & Sastry 1988) of the components each contact
+    transmits: all d force components of an F contact (the columns of $G_{ij}$ =
+    $(G_{ij}^T)^T$), the normal $G_{ij} n$ of an L or S contact, nothing of a
     D-point; moment rows divided by ``torque_scale``. ``n = 0`` gives a ``(D, 0)`` matrix."""
     scale = _wrench_scale(state, torque_scale)
     cols = [np.zeros((state.twist_dim, 0))]
@@ -105,7 +105,7 @@ def grasp_matrix(state: GraspState, torque_scale: float) -> NDArray[np.float64]:
 
 
 def scaled_rank(m: NDArray[np.float64]) -> int:
-    """Rank of ``m`` with singular values below :data:`RANK_REL_TOL` x the largest as 0."""
+    """Rank of ``m`` with singular values below `RANK_REL_TOL` x the largest as 0."""
     if m.size == 0:
         return 0
     s = np.linalg.svd(m, compute_uv=False)
@@ -171,7 +171,7 @@ def epsilon_l1(wrenches: NDArray[np.float64]) -> float:
 
 
 class _Hull:
-    """A growing point set's hull, rebuilt from all the points (:func:`_hull`) when asked.
+    """A growing point set's hull, rebuilt from all the points (`_hull()`) when asked.
 
     Not Qhull's incremental mode: on nearly degenerate input (facets wider than its
     precision allows, ``qh_ERRwide``) ``add_points`` ends the process with exit code 7
@@ -192,7 +192,7 @@ class _Hull:
 def _supports(
     groups: list[NDArray[np.float64]], u: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """:func:`_support` of ``(n, D)`` directions at once: ``(n,)`` values, ``(n, D)`` points."""
+    """`_support()` of ``(n, D)`` directions at once: ``(n,)`` values, ``(n, D)`` points."""
     values, points = np.zeros(u.shape[0]), np.zeros_like(u)
     for w in groups:
         s = u @ w
@@ -209,19 +209,19 @@ def epsilon_linf(groups: list[NDArray[np.float64]]) -> tuple[float, float]:
     inside the Minkowski sum of the contacts' sets conv(0, W_i) (each contact's normal force
     at most 1), with the bracket's width.
 
-    The sum has up to :math:`\prod (g_i + 1)` vertices, so it is not built: the expanding
+    The sum has up to $\prod (g_i + 1)$ vertices, so it is not built: the expanding
     polytope algorithm refines an inner polytope ``Q`` (the hull of support points, so
     ``Q`` lies inside the sum) from its facet nearest the origin. The support function
-    :math:`h(u) = \sum_i \max(0, \max_k u^T w_{ik})` is the optimum of the support LP over
+    $h(u) = \sum_i \max(0, \max_k u^T w_{ik})$ is the optimum of the support LP over
     ``lam >= 0``, ``sum_k lam_ik <= 1``, in closed form. The nearest facet's distance of ``Q``
     is a lower bound, the smallest ``h(u)`` queried an upper bound (every facet of the sum
     has its normal's support value as its distance); refinement stops when they agree within
-    :data:`LINF_REL_TOL` x the largest wrench.
+    `LINF_REL_TOL` x the largest wrench.
 
     Parameters
     ----------
     groups
-        Per contact, ``(D, g_i)`` primitive wrenches (:func:`primitive_wrenches`).
+        Per contact, ``(D, g_i)`` primitive wrenches ([`primitive_wrenches()`][mjtvm.measures.wrenches.primitive_wrenches]).
 
     Returns
     -------

@@ -1,12 +1,12 @@
 r"""The physics check: MuJoCo rollouts of TVMMP witnesses with the hand's ``<dcmotor>`` actuators.
 
-:func:`verify_lift` compares alpha_sim (rollouts, :func:`alpha_sim`) with alpha_kl (the LP)
-along the lift, after the hold test at rest (:mod:`~mjtvm.physics.hold`), with a verdict in
-words per pair (:mod:`~mjtvm.physics.verdict`) and optionally a launch from rest
-(:mod:`~mjtvm.physics.launch`); :func:`slide_check` settles the slide direction of S-points;
-:func:`dynamic_pair` adds the torque the witness motion needs beyond eq. (19);
-:func:`gear_sweep` varies the gear ratio; :func:`attach_dcmotors` gives any hand DC motors,
-:func:`attach_actuator_dcmotors` the actuators of a hand with a transmission (:func:`box_motor`
+[`verify_lift()`][mjtvm.physics.verify.verify_lift] compares alpha_sim (rollouts, [`alpha_sim()`][mjtvm.physics.bisection.alpha_sim]) with alpha_kl (the LP)
+along the lift, after the hold test at rest ([`hold`][mjtvm.physics.hold]), with a verdict in
+words per pair ([`verdict`][mjtvm.physics.verdict]) and optionally a launch from rest
+([`launch`][mjtvm.physics.launch]); [`slide_check()`][mjtvm.physics.slide_check.slide_check] settles the slide direction of S-points;
+[`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair] adds the torque the witness motion needs beyond eq. (19);
+[`gear_sweep()`][mjtvm.physics.gears.gear_sweep] varies the gear ratio; [`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors] gives any hand DC motors,
+[`attach_actuator_dcmotors()`][mjtvm.physics.motors.attach_actuator_dcmotors] the actuators of a hand with a transmission ([`box_motor()`][mjtvm.physics.motors.box_motor]
 for a box range).
 
 The names below are imported on first use: the report's plots load matplotlib, which a

@@ -1,5 +1,5 @@
-r"""alpha_sim of one pair (k, l): the largest fraction s of :math:`\alpha_{kl}` whose witness a MuJoCo
-rollout achieves, found by bisection on pass/fail rollouts (:func:`~mjtvm.physics.simulate.rollout`).
+r"""alpha_sim of one pair (k, l): the largest fraction s of $\alpha_{kl}$ whose witness a MuJoCo
+rollout achieves, found by bisection on pass/fail rollouts ([`rollout()`][mjtvm.physics.simulate.rollout]).
 """
 
 from __future__ import annotations
@@ -70,10 +70,10 @@ def alpha_sim(
     tol: float = 0.01,
     object_body: str = "object",
 ) -> tuple[float, float, Bisection]:
-    r"""alpha_sim of pair (k, l): :math:`s^* \alpha_{kl}`, s* by :func:`bisect` on rollouts.
+    r"""alpha_sim of pair (k, l): $s^* \alpha_{kl}$, s* by [`bisect()`][mjtvm.physics.bisection.bisect] on rollouts.
 
-    ``model`` from :func:`sim_model`; ``result``: the state's
-    :class:`~mjtvm.core.tvmmp.TvmmpResult` (solved here when omitted). Returns
+    ``model`` from `sim_model()`; ``result``: the state's
+    [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult] (solved here when omitted). Returns
     ``(alpha_sim, alpha_kl, bisection)``.
 
     Raises

@@ -1,33 +1,35 @@
 r"""The joint torque that the motion of a witness needs beyond eq. (19), from MuJoCo.
 
 The quasi-static TVMMP (eq. 31) balances gravity and the contact forces only. Moving the
-object at the constant twist :math:`\alpha \hat r_l` while the configuration changes takes
+object at the constant twist $\alpha \hat r_l$ while the configuration changes takes
 joint accelerations, and the motors must supply
 
-.. math:: d = M(q)\,\ddot q + c(q, \dot q)
+$$
+d = M(q)\,\ddot q + c(q, \dot q)
+$$
 
 on the finger joints (mass matrix with the motors' rotor inertia, i.e. MuJoCo's armature;
-Coriolis and centrifugal terms; gravity excluded: it is :math:`g_f` already). The joint
-motion is the one a rollout drives (:mod:`mjtvm.physics.simulate`): the witness's joint
-speeds, corrected at every configuration by :meth:`~mjtvm.physics.rig.Rig.setpoints` so that
+Coriolis and centrifugal terms; gravity excluded: it is $g_f$ already). The joint
+motion is the one a rollout drives ([`mjtvm.physics.simulate`][mjtvm.physics.simulate]): the witness's joint
+speeds, corrected at every configuration by [`setpoints()`][mjtvm.physics.rig.Rig.setpoints] so that
 each finger's contact point follows the object (F: all of its velocity, L: the normal part,
 S: eq. 13 with the witness's slip). Its acceleration at the state's configuration is a
-central difference of those setpoints along the motion (:func:`joint_demand`).
+central difference of those setpoints along the motion ([`joint_demand()`][mjtvm.physics.dynamic.joint_demand]).
 
 A rollout checks a span of motion (``startup + window``, 7 ms by default), not an instant,
-and near a stretched finger the demand grows within it. :func:`window_demand` integrates the
+and near a stretched finger the demand grows within it. [`window_demand()`][mjtvm.physics.dynamic.window_demand] integrates the
 same motion kinematically over such a span and keeps each joint's largest and least demand;
-with a ``window`` (:func:`dynamic_pair`) both must fit the joint's operation range with the
-torque of eq. (19) (:mod:`mjtvm.core.dynamic`, "Demands along a window"). The demand covers
+with a ``window`` ([`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair]) both must fit the joint's operation range with the
+torque of eq. (19) ([`mjtvm.core.dynamic`][mjtvm.core.dynamic], "Demands along a window"). The demand covers
 every driven joint, those of fingers whose witness force is zero included: their motors alone
 must accelerate them. With a transmission the demand is per joint and joins the balance
 ``P^T u - J^T f + J_eq^T lambda = g_f + d`` (the damping a loss of the ranges,
-:mod:`mjtvm.core.assembly`); the
+[`mjtvm.core.assembly`][mjtvm.core.assembly]); the
 motion keeps the equality rows of a forward pass at each configuration.
 
-:func:`dynamic_pair` hands this demand, as a function of alpha, to the simulator-free core
-(:func:`~mjtvm.core.dynamic.dynamic_alpha`), which bisects over LPs for
-:math:`\alpha^{dyn}_{kl}`. The joint speeds grow as alpha and the demand as alpha^2; the
+[`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair] hands this demand, as a function of alpha, to the simulator-free core
+([`dynamic_alpha()`][mjtvm.core.dynamic.dynamic_alpha]), which bisects over LPs for
+$\alpha^{dyn}_{kl}$. The joint speeds grow as alpha and the demand as alpha^2; the
 witness (and with it the joint motion of redundant fingers) is recomputed at each candidate
 alpha, as the rollout at that speed would drive it.
 """
@@ -62,13 +64,13 @@ class JointDemand:
     Attributes
     ----------
     inertia
-        :math:`M(q)\ddot q` on the driven joints (rotor inertia included).
+        $M(q)\ddot q$ on the driven joints (rotor inertia included).
     bias
-        :math:`c(q, \dot q)`: Coriolis and centrifugal torques (gravity excluded).
+        $c(q, \dot q)$: Coriolis and centrifugal torques (gravity excluded).
     acceleration
-        :math:`\ddot q` of the driven joints (rad/s^2).
+        $\ddot q$ of the driven joints (rad/s^2).
     speeds
-        :math:`\dot q` of the driven joints at the configuration (the tracked setpoints).
+        $\dot q$ of the driven joints at the configuration (the tracked setpoints).
     """
 
     inertia: _F64
@@ -78,7 +80,7 @@ class JointDemand:
 
     @property
     def total(self) -> _F64:
-        """:math:`M\\ddot q + c` (N m)."""
+        """$M\\ddot q + c$ (N m)."""
         return self.inertia + self.bias
 
 
@@ -108,16 +110,16 @@ def joint_demand(
     step: float | None = None,
     rig: Rig | None = None,
 ) -> JointDemand:
-    r""":math:`M(q)\ddot q` and :math:`c(q, \dot q)` of the drive's motion at ``qpos`` (module docstring).
+    r"""$M(q)\ddot q$ and $c(q, \dot q)$ of the drive's motion at ``qpos`` (module docstring).
 
     Parameters
     ----------
     model
         A model whose driven joints have ``<dcmotor>`` actuators
-        (:func:`~mjtvm.physics.simulate.sim_model`); the armature (rotor inertia) is part of
+        ([`sim_model()`][mjtvm.physics.simulate.sim_model]); the armature (rotor inertia) is part of
         its mass matrix.
     drive
-        The motion: object twist, joint speeds and contact types (:class:`~mjtvm.physics.witness.Drive`).
+        The motion: object twist, joint speeds and contact types ([`Drive`][mjtvm.physics.witness.Drive]).
     step
         Time step (s) of the central difference of the tracked speeds; default the model's
         time step.
@@ -131,7 +133,7 @@ def joint_demand(
 def _demand_at(
     m: mujoco.MjModel, d: mujoco.MjData, probe: mujoco.MjData, rig: Rig, drive: Drive, qpos: _F64, h: float
 ) -> tuple[JointDemand, _F64]:
-    """The demand at ``qpos`` (:func:`joint_demand`) and the full ``qvel`` of the motion there."""
+    """The demand at ``qpos`` ([`joint_demand()`][mjtvm.physics.dynamic.joint_demand]) and the full ``qvel`` of the motion there."""
     speeds = _set_motion(m, d, rig, drive, qpos)
     qvel = d.qvel.copy()
     ahead = []
@@ -160,14 +162,14 @@ def window_demand(
     object_body: str = "object",
     rig: Rig | None = None,
 ) -> _F64:
-    r"""``(2, M)``: each joint's largest and least demand :math:`M\ddot q + c` along the motion.
+    r"""``(2, M)``: each joint's largest and least demand $M\ddot q + c$ along the motion.
 
     The drive's motion (object at its twist, joints at the tracked setpoints) is integrated
     kinematically from ``qpos`` for ``duration`` (s) in steps of the model's time step
-    (``mj_integratePos``), and :func:`joint_demand` taken at every configuration passed,
+    (``mj_integratePos``), and [`joint_demand()`][mjtvm.physics.dynamic.joint_demand] taken at every configuration passed,
     ``qpos`` and the last included. Row 0 is the per-joint maximum, row 1 the minimum (N m):
-    the operation range bounds :math:`|\tau_j|`, so both ends of each joint's demand must fit
-    (:mod:`mjtvm.core.dynamic`, "Demands along a window"). ``duration = 0``: the demand at
+    the operation range bounds $|\tau_j|$, so both ends of each joint's demand must fit
+    ([`mjtvm.core.dynamic`][mjtvm.core.dynamic], "Demands along a window"). ``duration = 0``: the demand at
     ``qpos`` twice.
     """
     if not (math.isfinite(duration) and duration >= 0):
@@ -199,13 +201,13 @@ def demand_of(
     object_body: str = "object",
     window: float = 0.0,
 ) -> Any:
-    r"""The demand :math:`a \mapsto M\ddot q + c` of pair (k, l) for :func:`~mjtvm.core.dynamic.dynamic_alpha`.
+    r"""The demand $a \mapsto M\ddot q + c$ of pair (k, l) for [`dynamic_alpha()`][mjtvm.core.dynamic.dynamic_alpha].
 
     At a candidate alpha ``a`` the motion is the rollout's drive at speed factor
-    ``a / alpha_kl`` (:func:`~mjtvm.physics.witness.witness_drive`: the central witness at
+    ``a / alpha_kl`` ([`witness_drive()`][mjtvm.physics.witness.witness_drive]: the central witness at
     ``min(a, alpha_kl)``, its speeds scaled above), so the demand is the torque the check at
     that speed needs. Zero at ``a = 0``. ``window`` (s) > 0: the ``(2, M)`` extremes of that
-    demand along the motion's first ``window`` seconds (:func:`window_demand`), else the demand
+    demand along the motion's first ``window`` seconds ([`window_demand()`][mjtvm.physics.dynamic.window_demand]), else the demand
     at ``qpos``.
     """
     rig: list[Rig] = []
@@ -236,12 +238,12 @@ def dynamic_pair(
     rtol: float = 1e-3,
     window: float = 0.0,
 ) -> DynamicAlpha:
-    r""":math:`\alpha^{dyn}_{kl}` of one pair of a MuJoCo grasp state (module docstring).
+    r"""$\alpha^{dyn}_{kl}$ of one pair of a MuJoCo grasp state (module docstring).
 
-    ``model`` from :func:`~mjtvm.physics.simulate.sim_model` (the grasp's model with its
+    ``model`` from [`sim_model()`][mjtvm.physics.simulate.sim_model] (the grasp's model with its
     motors), ``qpos`` the state's configuration, ``result`` the state's quasi-static
-    :class:`~mjtvm.core.tvmmp.TvmmpResult` (solved here when omitted). ``window`` (s): the
-    demand is taken along the motion's first ``window`` seconds (:func:`demand_of`); a
+    [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult] (solved here when omitted). ``window`` (s): the
+    demand is taken along the motion's first ``window`` seconds ([`demand_of()`][mjtvm.physics.dynamic.demand_of]); a
     rollout's is its ``startup + window``, the span over which it is checked.
 
     Raises

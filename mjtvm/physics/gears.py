@@ -1,12 +1,12 @@
 r"""Gear-ratio sweep: the quasi-static TVMMP and the dynamic one against the gear ratio.
 
 The same motor behind an ideal gear of ratio N gives the joint N times its torque, 1/N of
-its speed and N^2 times its rotor inertia. :func:`gear_sweep` rescales the lift states'
-operation ranges from the model's gear :math:`N_0` (torque x :math:`N/N_0`, speed x
-:math:`N_0/N`: :meth:`~mjtvm.core.operation_range.OperationRange.scaled`, exact for the
+its speed and N^2 times its rotor inertia. [`gear_sweep()`][mjtvm.physics.gears.gear_sweep] rescales the lift states'
+operation ranges from the model's gear $N_0$ (torque x $N/N_0$, speed x
+$N_0/N$: [`scaled()`][mjtvm.core.operation_range.OperationRange.scaled], exact for the
 datasheet's range of an ideal gear) and sets every ``<dcmotor>``'s gear to N (MuJoCo reflects
 the rotor inertia as armature x gear^2), then solves the TVMMP (eq. 32) and the dynamic TVMMP
-(the minimum over l of :func:`~mjtvm.physics.dynamic.dynamic_pair`) at the chosen states.
+(the minimum over l of [`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair]) at the chosen states.
 
 The quasi-static measure sees only torque against speed: once the grasp's torques fit,
 a lower ratio is faster and its TVMMP keeps rising as N falls until the torque runs out. The

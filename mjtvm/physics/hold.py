@@ -3,7 +3,7 @@ r"""The hold test: does the grasp hold the object at rest, before any speed is t
 The state is simulated at rest: gravity on, the object free, every motor's speed setpoint 0
 and its feedforward the torques (actuator forces) of the witness at alpha = 0, i.e. the forces
 that balance the weight (and a contact's ``preload``): a rollout's settle phase
-(:func:`~mjtvm.physics.simulate.rollout`). The grasp holds when, over the hold,
+([`rollout()`][mjtvm.physics.simulate.rollout]). The grasp holds when, over the hold,
 
 the object's points at the contacts stay within ``lost_gap`` (0.5 mm), counting both what they
 moved during the hold and what the object's speed at its end would add over one more rollout's
@@ -76,26 +76,26 @@ class ContactHold:
 
 @dataclass(frozen=True)
 class HoldResult:
-    """Outcome of :func:`hold_test`.
+    """Outcome of [`hold_test()`][mjtvm.physics.hold.hold_test].
 
     Attributes
     ----------
     held
-        Whether :attr:`reach` stays within :attr:`bound`.
+        Whether `reach` stays within `bound`.
     drift
         Largest displacement (m) of the object's points at the contacts over the hold.
     speed
-        Largest object twist :math:`|[v; R\\omega]|` (m/s) in the hold's last ``window``
+        Largest object twist $|[v; R\\omega]|$ (m/s) in the hold's last ``window``
         (extrapolated over a rollout's length in the criterion: module docstring).
     translation, rotation
         The object origin's displacement (m) and its rotation (deg) over the hold.
     contacts
-        Per finger contact, how it moved and its force (:class:`ContactHold`).
+        Per finger contact, how it moved and its force ([`ContactHold`][mjtvm.physics.hold.ContactHold]).
     reach
-        :attr:`drift` plus :attr:`speed` times a rollout's length (m): where the contacts are
+        `drift` plus `speed` times a rollout's length (m): where the contacts are
         headed within one more rollout.
     duration, bound
-        The hold's length (s) and the bound on :attr:`reach` (m).
+        The hold's length (s) and the bound on `reach` (m).
     rotor_inertia
         The largest rotor inertia of the state's motors reflected through their gear (kg m^2
         at a joint, or in the units of the actuator's transmission): MuJoCo's actuator
@@ -150,7 +150,7 @@ def hold_test(
     Parameters
     ----------
     model
-        From :func:`~mjtvm.physics.simulate.sim_model`.
+        From [`sim_model()`][mjtvm.physics.simulate.sim_model].
     drive
         The witness drive at speed factor 0 (its torques hold the object; its speeds are 0).
     settings
@@ -234,7 +234,7 @@ def state_hold(
 ) -> HoldResult | None:
     """The hold test of a grasp state with the central witness at alpha = 0 (the same for every
     RVDS vertex: no twist to produce); ``None`` when no pair of ``result`` (the state's
-    :class:`~mjtvm.core.tvmmp.TvmmpResult`) has a witness."""
+    [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult]) has a witness."""
     optimal = [l for l, status in enumerate(result.status[0]) if status == "optimal"]
     if not optimal:
         return None

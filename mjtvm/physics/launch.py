@@ -1,29 +1,29 @@
 r"""The launch from rest: does the hand get the object up to speed within a stated distance?
 
-Every other rollout starts impulsively, at the drive's speeds (:func:`~mjtvm.physics.simulate.rollout`,
+Every other rollout starts impulsively, at the drive's speeds ([`rollout()`][mjtvm.physics.simulate.rollout],
 step 4): it tests whether a speed can be *kept*, not whether it can be *reached*. A launch
 starts where a rollout's settle ends, at rest, and commands the pair's witness with its speed
-ramped up at a constant rate: the speed factor :math:`\sigma(t) = \min(1, t / t_r)` times the
-joint speeds of :math:`\alpha_{kl}\hat r_l` (tracked at the current configuration, as in a
+ramped up at a constant rate: the speed factor $\sigma(t) = \min(1, t / t_r)$ times the
+joint speeds of $\alpha_{kl}\hat r_l$ (tracked at the current configuration, as in a
 rollout's run), the witness's torques fed forward, so that an object following the command
-covers ``distance`` D when it reaches the LP's speed: :math:`t_r = 2D / \alpha_{kl}`. The
+covers ``distance`` D when it reaches the LP's speed: $t_r = 2D / \alpha_{kl}$. The
 motors then accelerate the fingers and the object with what their speed-torque lines and
 saturation give, against the rotor and link inertia the quasi-static LP leaves out.
 
-The launch ends when the object has travelled D along :math:`\hat r_l` (its twist
-:math:`[v; R\omega]` projected on the target's direction and integrated: metres, R the object's
+The launch ends when the object has travelled D along $\hat r_l$ (its twist
+$[v; R\omega]$ projected on the target's direction and integrated: metres, R the object's
 bounding radius), when a contact is lost (a finger more than ``lost_gap`` from the object) or an
 F-point slips beyond ``lost_gap`` + ``slip_tol`` x the travel (0.5 mm + 5 %: the hold test's
 bound, since the fingers' speed loops lag their commands by different amounts while they
 accelerate, and a rollout's 0.01 mm floor, meant for a window at speed, would stop every launch
-in its first milliseconds), or at :math:`2 t_r`. It
-reports the largest speed along :math:`\hat r_l` reached (:class:`LaunchResult`): at most
-about :math:`\alpha_{kl}` (the command's), less when the hand cannot accelerate the object
+in its first milliseconds), or at $2 t_r$. It
+reports the largest speed along $\hat r_l$ reached ([`LaunchResult`][mjtvm.physics.launch.LaunchResult]): at most
+about $\alpha_{kl}$ (the command's), less when the hand cannot accelerate the object
 that fast, or loses it on the way.
 
-D is stated, not physical: :data:`LAUNCH_DISTANCE` (10 mm) by default, ``mjtvm verify
+D is stated, not physical: [`LAUNCH_DISTANCE`][mjtvm.physics.launch.LAUNCH_DISTANCE] (10 mm) by default, ``mjtvm verify
 --launch M`` (``docs/physics-check.md``, "From rest"); the ramp's acceleration
-:math:`\alpha_{kl}^2 / 2D` grows as D shrinks.
+$\alpha_{kl}^2 / 2D$ grows as D shrinks.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ LAUNCH_DISTANCE = 0.01
 
 @dataclass(frozen=True)
 class LaunchResult:
-    """Outcome of :func:`launch` (SI units; speeds and distances of the twist [v; R omega]
+    """Outcome of [`launch()`][mjtvm.physics.launch.launch] (SI units; speeds and distances of the twist [v; R omega]
     projected on the target direction).
 
     Attributes
@@ -95,11 +95,11 @@ def launch(
     Parameters
     ----------
     model
-        From :func:`~mjtvm.physics.simulate.sim_model`.
+        From [`sim_model()`][mjtvm.physics.simulate.sim_model].
     drive
-        The pair's witness drive at the speed to reach (s = 1: :math:`\alpha_{kl}\hat r_l`).
+        The pair's witness drive at the speed to reach (s = 1: $\alpha_{kl}\hat r_l$).
     distance
-        The stated distance D (m) along the target direction; default :data:`LAUNCH_DISTANCE`.
+        The stated distance D (m) along the target direction; default [`LAUNCH_DISTANCE`][mjtvm.physics.launch.LAUNCH_DISTANCE].
 
     Raises
     ------

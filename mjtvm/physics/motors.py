@@ -1,25 +1,25 @@
 r"""DC motors for any hand: MuJoCo ``<dcmotor>`` actuators attached with ``mujoco.MjSpec``.
 
-The physics check (:mod:`mjtvm.physics.simulate`) drives each state joint with a
+The physics check ([`mjtvm.physics.simulate`][mjtvm.physics.simulate]) drives each state joint with a
 ``<dcmotor>`` (``input="vel ff"``: a velocity setpoint in actuator-length units and a
 motor-side torque feedforward; drive voltage clamped at Vmax; torque saturated at the
 continuous torque; rotor inertia as the actuator's ``armature``). The generated hand has
-them (:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf`); a public hand usually has position servos.
-:func:`attach_dcmotors` replaces the actuators of the given joints by ``<dcmotor>`` elements
+them ([`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf]); a public hand usually has position servos.
+[`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors] replaces the actuators of the given joints by ``<dcmotor>`` elements
 through MuJoCo's model-editing API, with exactly the attributes
-:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes, so the compiled arrays are the template's.
+[`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf] writes, so the compiled arrays are the template's.
 
 Where a joint's motor comes from (the ``[ranges]`` of a grasp file, ``docs/grasp-format.md``,
-resolved by :func:`mjtvm.sim.grasp.ranges.joint_ranges` into ``Grasp.motors``): a ``<dcmotor>`` of
-the model (:func:`motor_of_actuator` reads it back) or a datasheet
-(:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet`); a polygon or an actuator with a speed limit
+resolved by [`mjtvm.sim.grasp.ranges.joint_ranges()`][mjtvm.sim.grasp.ranges.joint_ranges] into ``Grasp.motors``): a ``<dcmotor>`` of
+the model ([`motor_of_actuator()`][mjtvm.physics.motors.motor_of_actuator] reads it back) or a datasheet
+([`from_datasheet()`][mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet]); a polygon or an actuator with a speed limit
 is an operation range without a motor, and a datasheet with a gear efficiency other than 1
-cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): :func:`require_motors` refuses those,
+cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): [`require_motors()`][mjtvm.physics.motors.require_motors] refuses those,
 naming the joint and how to give motor data.
 
 A hand with a transmission (coupled joints, a linkage) is driven by actuator instead:
-:func:`attach_actuator_dcmotors` replaces each actuator of the state by a ``<dcmotor>`` of the
-same name on the same joint or tendon, and :func:`box_motor` stands for an ``actuator = true``
+[`attach_actuator_dcmotors()`][mjtvm.physics.motors.attach_actuator_dcmotors] replaces each actuator of the state by a ``<dcmotor>`` of the
+same name on the same joint or tendon, and [`box_motor()`][mjtvm.physics.motors.box_motor] stands for an ``actuator = true``
 box (the motor whose speed-torque line passes through the box's corner).
 
 Units: SI, motor side unless said otherwise (torques N m, speeds rad/s, inertia kg m^2).
@@ -112,10 +112,10 @@ def dcmotor_of_actuator(model: mujoco.MjModel, name: str) -> int:
 
 
 def motor_of_actuator(model: mujoco.MjModel, actuator: int) -> DCMotor:
-    r"""The :class:`~mjtvm.sim.grasp.dcmotor.DCMotor` of a compiled ``<dcmotor>`` (inverse of :func:`attach_dcmotors`).
+    r"""The `DCMotor` of a compiled ``<dcmotor>`` (inverse of [`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors]).
 
     ``actuator_gainprm`` holds R (Ohm), K (V s/rad), ..., kd, Vmax
-    (:func:`~mjtvm.sim.grasp.actuator.operation_range_from_actuator`): voltage = Vmax, stall
+    ([`operation_range_from_actuator()`][mjtvm.sim.grasp.actuator.operation_range_from_actuator]): voltage = Vmax, stall
     torque K V / R, no-load speed V / K, continuous torque the upper ``forcerange``.
     """
     label = f"actuator {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator) or f'#{actuator}'!r}"
@@ -164,7 +164,7 @@ def attach_dcmotors(
     ``gear``, ``nominal = "voltage stall_torque no_load_speed"``, ``saturation =
     "max_continuous_torque 0 0"``, ``armature = rotor_inertia``, ``input = "vel ff"`` and
     ``controller = "0 0 velocity_gain 0 0 voltage"``: what
-    :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes. The new actuators come after the kept ones,
+    [`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf] writes. The new actuators come after the kept ones,
     in the joints' model order; no control range, no damping (the joint's own damping,
     armature and ``actuatorfrcrange`` stay, and the latter caps the torque).
 
@@ -251,7 +251,7 @@ def attach_actuator_dcmotors(
     ``motor.gear x`` the actuator's own gear, so that its moment is ``motor.gear`` times the
     actuator's row of ``P``: MuJoCo applies ``P^T u`` for a motor torque ``u / motor.gear`` and
     its ``actuator_velocity`` is ``motor.gear x P qd``. Other attributes as
-    :func:`attach_dcmotors` (sensors of a replaced actuator removed, keyframe controls of the
+    [`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors] (sensors of a replaced actuator removed, keyframe controls of the
     kept actuators kept, the new ones at 0, after the kept ones in ``motors``' order).
 
     Raises
@@ -303,7 +303,7 @@ def _compile(
 
 
 BOX_SPEED_MARGIN = 0.1
-"""The box motor's no-load speed is ``1 + BOX_SPEED_MARGIN`` times the box's speed (:func:`box_motor`)."""
+"""The box motor's no-load speed is ``1 + BOX_SPEED_MARGIN`` times the box's speed ([`box_motor()`][mjtvm.physics.motors.box_motor])."""
 
 
 def box_motor(max_force: float, max_speed: float, *, gear: float = 1.0) -> DCMotor:
@@ -343,7 +343,7 @@ def _add_dcmotor(
     trntype: mujoco.mjtTrn = mujoco.mjtTrn.mjTRN_JOINT,
     gear: float | None = None,
 ) -> None:
-    """One ``<dcmotor>`` as :meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.mjcf` writes it, on the
+    """One ``<dcmotor>`` as [`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf] writes it, on the
     transmission ``trntype`` to ``joint`` (a joint, tendon, ... name) with ``gear`` (default
     ``motor.gear``)."""
     act = spec.add_actuator(name=name, target=joint, trntype=trntype)
@@ -369,8 +369,8 @@ def require_motors(
 ) -> dict[str, DCMotor]:
     r"""The motors to attach so that every joint of ``joints`` has its ``<dcmotor>``.
 
-    ``motors`` follows :attr:`mjtvm.sim.grasp.loaded.Grasp.motors` (:func:`mjtvm.sim.grasp.ranges.joint_ranges`):
-    a :class:`~mjtvm.sim.grasp.dcmotor.DCMotor` (from a datasheet), ``None`` (the model's own
+    ``motors`` follows [`mjtvm.sim.grasp.loaded.Grasp.motors`][mjtvm.sim.grasp.loaded.Grasp.motors] ([`mjtvm.sim.grasp.ranges.joint_ranges()`][mjtvm.sim.grasp.ranges.joint_ranges]):
+    a `DCMotor` (from a datasheet), ``None`` (the model's own
     ``<dcmotor>`` drives the joint) or a string saying why the joint's range has no motor
     (a polygon, an actuator with a speed limit, a gear efficiency other than 1). Joints that
     already have one ``<dcmotor>`` with ``input="vel ff"`` need nothing.
@@ -398,7 +398,7 @@ def actuator_motors(grasp: Any) -> dict[str, DCMotor]:
 
     A datasheet's motor as is; an ``actuator = true`` box (``|u| <= U``, ``|s| <= S``, ``U`` the
     range's force plus the joints' friction share the range had taken off) the
-    :func:`~mjtvm.physics.motors.box_motor` of ``(U, S)``; an actuator that is already a
+    [`box_motor()`][mjtvm.physics.motors.box_motor] of ``(U, S)``; an actuator that is already a
     ``<dcmotor>`` with ``input="vel ff"`` nothing (it drives as is).
 
     Raises
@@ -438,7 +438,7 @@ def actuator_motors(grasp: Any) -> dict[str, DCMotor]:
 
 
 def actuator_model(grasp: Any) -> mujoco.MjModel:
-    """The grasp's model with :func:`actuator_motors` attached on the actuators' own transmissions."""
+    """The grasp's model with [`actuator_motors()`][mjtvm.physics.motors.actuator_motors] attached on the actuators' own transmissions."""
     motors = actuator_motors(grasp)
     if not motors:
         return grasp.model
@@ -453,7 +453,7 @@ def grasp_source(grasp: Any) -> mujoco.MjSpec | Path:
 
 def same_model(grasp: Any, model: mujoco.MjModel) -> mujoco.MjModel:
     """``model`` when it has the grasp model's coordinates, bodies and geoms (only actuators
-    were added); else a :class:`ModelError`."""
+    were added); else a [`ModelError`][mjtvm.errors.ModelError]."""
     if (model.nq, model.nv, model.nbody, model.ngeom) != (
         grasp.model.nq,
         grasp.model.nv,

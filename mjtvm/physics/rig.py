@@ -1,5 +1,5 @@
-"""Per-step pieces of a rollout (:func:`~mjtvm.physics.simulate.rollout`): the model's and
-drive's indices with the tracked joint speeds (:class:`Rig`), the object's twist errors, and
+"""Per-step pieces of a rollout ([`rollout()`][mjtvm.physics.simulate.rollout]): the model's and
+drive's indices with the tracked joint speeds ([`Rig`][mjtvm.physics.rig.Rig]), the object's twist errors, and
 each finger's gap, slip and contact force.
 """
 
@@ -27,9 +27,9 @@ class Rig:
     r"""Indices of one model and drive, reused by every step.
 
     Any hand: each driven joint's actuator is the single ``<dcmotor>`` (``input="vel ff"``)
-    whose transmission is that joint (:func:`~mjtvm.physics.motors.dcmotor_of_joint`), not
+    whose transmission is that joint ([`dcmotor_of_joint()`][mjtvm.physics.motors.dcmotor_of_joint]), not
     an actuator of the joint's name; finger geoms are found by label
-    (:func:`~mjtvm.sim.grasp.state.geom_id`: a name or ``"<body>/geom<n>"``); each finger's
+    ([`geom_id()`][mjtvm.sim.grasp.state.geom_id]: a name or ``"<body>/geom<n>"``); each finger's
     contact point is its nearest point to the object (``mj_geomDistance``), so fingertips and
     objects of any primitive or mesh shape work.
 
@@ -45,11 +45,11 @@ class Rig:
     fingers
         Per drive contact: (label, geom id, body id, columns of the drive's joints moving it, type).
     coupled
-        The drive has a transmission (:attr:`Drive.actuators`): ``acts`` are the actuators'
+        The drive has a transmission ([`Drive.actuators`][mjtvm.physics.witness.Drive.actuators]): ``acts`` are the actuators'
         ``<dcmotor>`` s (found by name), ``gear`` their ratio ``c`` to the state's moment rows
-        (set by :meth:`bind`: motor moment = ``c x P``, so motor torque ``u / c`` and motor speed
+        (set by `bind()`: motor moment = ``c x P``, so motor torque ``u / c`` and motor speed
         ``c x P qd``), ``friction`` each actuator's share of its joints' friction loss,
-        ``max_j frictionloss_j / |P_aj|`` (what :func:`~mjtvm.sim.grasp.ranges.actuator_ranges`
+        ``max_j frictionloss_j / |P_aj|`` (what [`actuator_ranges()`][mjtvm.sim.grasp.ranges.actuator_ranges]
         takes off its range).
     """
 
@@ -137,7 +137,7 @@ class Rig:
     def hold_torques(self, drive: Drive) -> _F64:
         """The feedforward that holds the state at rest (settle, hold test): the drive's torques,
         which hold the grasp and carry no damping (the LP's damping is a loss,
-        :mod:`~mjtvm.core.assembly`)."""
+        [`assembly`][mjtvm.core.assembly])."""
         return drive.torques
 
     def command(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:
@@ -157,7 +157,7 @@ class Rig:
         """``(A,)`` speed setpoints (actuator-length units) and feedforward torques (joint side,
         before the motors' gear) of the tracked joint speeds ``qset`` (a rollout's step 5).
 
-        With a transmission :meth:`command`; without, ``qset`` x gear and the drive's torques
+        With a transmission `command()`; without, ``qset`` x gear and the drive's torques
         plus the joints' own damping and friction loss at ``qset`` (passive torques of the
         model, which the grasp's operation ranges leave out of the torque budget,
         ``OperationRange.with_losses``).
@@ -189,7 +189,7 @@ class Rig:
         """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5).
 
         With a transmission the correction is one least-squares solve over every finger's rows
-        in the null space of the equality rows (:meth:`equality_rows`), so the speeds keep
+        in the null space of the equality rows (`equality_rows()`), so the speeds keep
         ``J_eq qd = 0``; without, finger by finger (the fingers' joints are disjoint).
         """
         if self.coupled:
@@ -298,7 +298,7 @@ def finger_contacts(
     fsum: dict[str, _F64],
     f6: _F64,
 ) -> list[float]:
-    """Each finger's gap to the object (m, returned; :meth:`Rig.nearest`), and midway between
+    """Each finger's gap to the object (m, returned; [`Rig.nearest()`][mjtvm.physics.rig.Rig.nearest]), and midway between
     the nearest points the object's velocity relative to the finger's, tangential to the
     normal: integrated into ``slip`` for F-contacts, summed with the contact force into
     ``ssum`` and ``fsum`` for the others (keys: the fingers' geom labels)."""

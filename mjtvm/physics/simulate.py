@@ -1,4 +1,4 @@
-r"""MuJoCo rollouts of TVMMP witnesses: is :math:`s\,\alpha_{kl}\hat r_l` physically achievable?
+r"""MuJoCo rollouts of TVMMP witnesses: is $s\,\alpha_{kl}\hat r_l$ physically achievable?
 
 A rollout drives the hand with MuJoCo's own ``<dcmotor>`` actuators (``input="vel ff"``:
 velocity setpoint in actuator-length units, i.e. joint speed x gear, plus a torque
@@ -6,19 +6,19 @@ feedforward; drive voltage clamped at Vmax; motor torque clamped at the continuo
 so the speed-torque line, the torque saturation and the rotor inertia are MuJoCo's motor
 physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
 
-1. *Model* (:func:`sim_model`): a copy of the lift's model with elliptic friction cones,
+1. *Model* ([`sim_model()`][mjtvm.physics.simulate.sim_model]): a copy of the lift's model with elliptic friction cones,
    contact ``solref = (2 ms, 1)``, ``impratio = 10``, a 0.25 ms step; finger geoms take
    priority in contact mixing: F- and S-geoms get friction ``mu`` (condim 3), L-geoms and the
    base D-geom are frictionless (condim 1), other finger geoms keep ``mu``.
-2. *Drive* (:func:`witness_drive`): the witness of pair (k, l) at speed factor ``s``: joint
-   speeds :math:`s\,\dot q^*`, feedforward torques :math:`\tau^*` (eq. 19) plus the joints'
+2. *Drive* (`witness_drive()`): the witness of pair (k, l) at speed factor ``s``: joint
+   speeds $s\,\dot q^*$, feedforward torques $\tau^*$ (eq. 19) plus the joints'
    own damping and friction loss at the commanded speeds (zero on the paper's hand), object twist
-   :math:`s\alpha_{kl}\hat r_l`. The ``"central"`` witness (default) re-solves the
-   constraints of eq. (31) at :math:`\alpha = \min(s, 1)\alpha_{kl}` minimising
-   :math:`\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2` (least joint motion,
+   $s\alpha_{kl}\hat r_l$. The ``"central"`` witness (default) re-solves the
+   constraints of eq. (31) at $\alpha = \min(s, 1)\alpha_{kl}$ minimising
+   $\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2$ (least joint motion,
    forces inside the pyramids); above 1 its speeds are scaled. ``"vertex"`` scales the
-   simplex witness of :func:`~mjtvm.core.tvmmp.tvmmp` (Supplement 1).
-3. *Settle* (``settle`` s): setpoints 0, feedforward :math:`\tau^*`, from the lift state's
+   simplex witness of [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] (Supplement 1).
+3. *Settle* (``settle`` s): setpoints 0, feedforward $\tau^*$, from the lift state's
    ``qpos`` at rest: the fingers hold the object with the witness forces.
 4. *Start* (impulsive): joint and object velocities are set to the drive's (they satisfy
    eq. 7-13), since accelerating the reflected rotor inertia (gear^2 x rotor) to TVMMP
@@ -29,17 +29,17 @@ physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
    for L, eq. 7 minus the witness slip for S), so that the kinematic drift of constant joint
    speeds in a moving configuration is not mistaken for a motor limit.
 
-Failure (:class:`RolloutResult`), at any step of the window: the twist :math:`[v; R\omega]`
-(R the object's bounding radius, :class:`~mjtvm.physics.rig.Rig`) off :math:`s\alpha\hat r_l`
+Failure ([`RolloutResult`][mjtvm.physics.simulate.RolloutResult]), at any step of the window: the twist $[v; R\omega]$
+(R the object's bounding radius, [`Rig`][mjtvm.physics.rig.Rig]) off $s\alpha\hat r_l$
 by more than ``speed_tol`` in magnitude or ``angle_tol`` degrees in direction; an F-point's accumulated
 tangential slip above ``slip_tol`` x the object's travel (+ ``slip_floor``); a finger geom
 more than ``lost_gap`` from the object; a motor torque at its saturation.
 
 Any hand: the model needs one ``<dcmotor>`` per state joint (found by its transmission;
-:mod:`mjtvm.physics.motors` attaches them to a hand with servos), or, for a state with a
+[`mjtvm.physics.motors`][mjtvm.physics.motors] attaches them to a hand with servos), or, for a state with a
 transmission, one per actuator on the actuator's own joint or tendon (found by name; the
 drive's actuator forces fed forward, its actuator speeds the setpoints, ``docs/physics-check.md``), finger geoms are keyed by
-label (:func:`~mjtvm.sim.grasp.state.geom_label`), and contact points come from
+label (`geom_label()`), and contact points come from
 ``mj_geomDistance``, so fingertips and objects need not be spheres.
 """
 
@@ -139,9 +139,9 @@ def sim_model(
     ----------
     model
         A model whose state joints each have one ``<dcmotor>`` with ``input="vel ff"``
-        (:func:`~mjtvm.physics.motors.attach_dcmotors` gives any hand those).
+        ([`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors] gives any hand those).
     contact_types
-        Geom label (:func:`~mjtvm.sim.grasp.state.geom_label`: its name, or ``"<body>/geom<n>"``
+        Geom label (`geom_label()`: its name, or ``"<body>/geom<n>"``
         when unnamed) -> ``"F"``, ``"L"``, ``"S"`` or ``"D"`` (a state's contacts). Geoms
         not listed: ``"D"`` on the world body, else ``"F"``.
     mu
@@ -205,7 +205,7 @@ class RolloutResult:
     passed, reason
         Whether every criterion held; the first violation (``""`` when passed).
     speed_error, angle_error
-        Largest :math:`|\,|\dot r|/|\dot r^*| - 1|` and direction error (deg) of [v; R omega].
+        Largest $|\,|\dot r|/|\dot r^*| - 1|$ and direction error (deg) of [v; R omega].
     slip_ratio
         Largest F-point slip over the window divided by its tolerance (1 = at tolerance).
     gap
@@ -227,7 +227,7 @@ class RolloutResult:
         rest"``, ``"slip"``, ``"contact lost"``, ``"torque limit"``; ``""`` when passed) and
         where (the geom, or the saturated joints or actuators; ``""`` for the twist).
     trace
-        Per-step arrays when requested (:func:`rerun_data`), else empty.
+        Per-step arrays when requested ([`rerun_data()`][mjtvm.physics.simulate.rerun_data]), else empty.
     """
 
     passed: bool
@@ -247,7 +247,7 @@ class RolloutResult:
 
 def held(m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive) -> mujoco.MjData:
     """New data at ``qpos``, the drive's feed-forward torques applied (after ``mj_forward``):
-    where a rollout settles and the hold test (:mod:`~mjtvm.physics.hold`) starts."""
+    where a rollout settles and the hold test ([`hold`][mjtvm.physics.hold]) starts."""
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
     if rig.coupled:  # the motors' ratio to the state's moment rows, at the state
@@ -291,7 +291,7 @@ def rollout(
 ) -> RolloutResult:
     r"""Settle, start and run one drive from ``qpos`` (module docstring, steps 3-5).
 
-    ``model`` comes from :func:`sim_model`. ``record`` keeps per-step arrays (``trace``).
+    ``model`` comes from [`sim_model()`][mjtvm.physics.simulate.sim_model]. ``record`` keeps per-step arrays (``trace``).
     """
     st = settings or SimSettings()
     rig, m = Rig(model, drive, object_body), model
@@ -381,7 +381,7 @@ def _violation(
     tnorm: float,
     gap_geom: str,
 ) -> tuple[str, str, str]:
-    """The first violated criterion as (text, kind, where) (:attr:`RolloutResult.failure`)."""
+    """The first violated criterion as (text, kind, where) ([`RolloutResult.failure`][mjtvm.physics.simulate.RolloutResult.failure])."""
     if tnorm > 0 and worst["speed"] > st.speed_tol:
         return f"twist magnitude off by {100 * worst['speed']:.1f} %", "twist magnitude", ""
     if tnorm == 0 and worst["speed"] > st.slip_floor / max(st.window, 1e-12):
@@ -432,7 +432,7 @@ def inertial_demand(
     r"""``(M,)`` largest joint torque (N m) that inertia and Coriolis forces add along the ideal motion.
 
     The drive's motion (tracked setpoints, object at the drive's twist) is integrated
-    kinematically for ``duration``; the torque is :math:`M(q)\ddot q + c(q, \dot q)` on the
+    kinematically for ``duration``; the torque is $M(q)\ddot q + c(q, \dot q)$ on the
     driven joints (rotor inertia included, object excluded): what the quasi-static TVMMP
     (eq. 19) leaves out.
     """

@@ -1,6 +1,6 @@
 r"""The slide-direction check of the S variant along the lift.
 
-:func:`slide_check` settles the slide-direction ambiguity of the S variant: fingers 2 and 4,
+[`slide_check()`][mjtvm.physics.slide_check.slide_check] settles the slide-direction ambiguity of the S variant: fingers 2 and 4,
 frictional (mu), are driven with the paper's minimum-norm lift motion (their slip is then the
 one that motion produces), or made to out-run the object (the slip of the literal reading),
 or left frictionless (control); it reports the direction of MuJoCo's friction force
@@ -42,11 +42,11 @@ def slide_check(
     paper's minimum-norm motion, so they slip as that motion makes them), ``literal``
     (frictional, driven to slip against that direction at the same slip speed: they out-run
     the object) and ``frictionless`` (L-points, control). Feedforward: the central solution
-    (:func:`~mjtvm.physics.witness.central_witness`) of the mode's LP (S-points of that reading;
+    ([`central_witness()`][mjtvm.physics.witness.central_witness]) of the mode's LP (S-points of that reading;
     L-points for the control) for the twist ``speed e_z``, or of the L-point LP where the
     reading's LP has none (``ff`` column). Per S geom: ``cos`` of MuJoCo's mean tangential
     friction force on the object and of the measured slip with the physical slide direction
-    :math:`\hat p` (eq. 13), the friction force's z component (N) and the twist errors.
+    $\hat p$ (eq. 13), the friction force's z component (N) and the twist errors.
     """
     ez = np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])
     rows = []

@@ -1,8 +1,8 @@
 """A pair's verdict in words: why alpha_sim is what it is (the ``verdict`` column of ``verify.csv``).
 
-The bisection (:func:`~mjtvm.physics.bisection.bisect`) ends between a passing speed factor
+The bisection ([`bisect()`][mjtvm.physics.bisection.bisect]) ends between a passing speed factor
 s* and a failing one just above it; the failing rollout's first violation
-(:attr:`~mjtvm.physics.simulate.RolloutResult.failure`) is what limits alpha_sim:
+([`failure`][mjtvm.physics.simulate.RolloutResult.failure]) is what limits alpha_sim:
 
 * ``slip at contact C`` (an F-point's slip beyond its tolerance), ``contact lost at C`` (a
   finger more than 0.5 mm from the object), ``torque limit at joint J`` (``at actuator A`` for
@@ -14,7 +14,7 @@ s* and a failing one just above it; the failing rollout's first violation
 * ``passes at s* + 0.01 (...)`` when the rollout just above s* passes: pass and fail are not
   monotone in s there, and the bisection's failing midpoint lies between the two;
 * a state that does not hold at rest gets the hold test's line instead
-  (:meth:`~mjtvm.physics.hold.HoldResult.message`).
+  ([`message()`][mjtvm.physics.hold.HoldResult.message]).
 """
 
 from __future__ import annotations

@@ -1,17 +1,17 @@
 r"""Physics check of the TVMMP along the lift: alpha_sim (MuJoCo rollouts) against alpha_kl (LP).
 
-:func:`verify_lift` runs, for every sampled state of the scripted lift
-(:func:`~mjtvm.sim.lift.trajectory.scripted_lift`), every hand variant / reading and every RVDS vertex
-l, the bisection of :func:`~mjtvm.physics.bisection.alpha_sim` (REFS: the weight, k = 0), one rollout
+[`verify_lift()`][mjtvm.physics.verify.verify_lift] runs, for every sampled state of the scripted lift
+([`scripted_lift()`][mjtvm.sim.lift.trajectory.scripted_lift]), every hand variant / reading and every RVDS vertex
+l, the bisection of [`alpha_sim()`][mjtvm.physics.bisection.alpha_sim] (REFS: the weight, k = 0), one rollout
 at s = 0.9 and the inertial torque the quasi-static LP leaves out
-(:func:`~mjtvm.physics.simulate.inertial_demand` at s = 1). With ``dynamics`` it adds the
-dynamic alpha (:func:`~mjtvm.physics.dynamic.dynamic_pair`: eq. 31 with the witness motion's
-:math:`M\ddot q + c` in the torque budget), its limiting joint and term, alpha_sim / alpha_dyn
+([`inertial_demand()`][mjtvm.physics.simulate.inertial_demand] at s = 1). With ``dynamics`` it adds the
+dynamic alpha ([`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair]: eq. 31 with the witness motion's
+$M\ddot q + c$ in the torque budget), its limiting joint and term, alpha_sim / alpha_dyn
 and one rollout at s = 0.9 alpha_dyn. Rows go to ``verify.csv``, the curves
 (TVMMP, the dynamic TVMMP and the simulated minimum along z) to ``verify.png``. States run in parallel with
 ``jobs`` processes (``ProcessPoolExecutor``, ``forkserver`` or ``spawn`` start).
 
-:func:`~mjtvm.physics.slide_check.slide_check` settles the slide direction of the S variant.
+[`slide_check()`][mjtvm.physics.slide_check.slide_check] settles the slide direction of the S variant.
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def cached_lift(grasp: str | Path, num_states: int) -> Lift:
 
 
 def checked_lift(grasp: str | Path, num_states: int) -> Lift:
-    """The lift the check runs: :func:`cached_lift`, or the grasp's own state alone when its
+    """The lift the check runs: [`cached_lift()`][mjtvm.physics.verify.cached_lift], or the grasp's own state alone when its
     file has no ``[lift]`` (there is no motion to sample)."""
     one = getattr(_scenario(grasp), "lift", ...) is None
     return cached_lift(grasp, 1 if one else num_states)
@@ -122,19 +122,19 @@ def motor_model(grasp: Any) -> mujoco.MjModel:
     r"""The grasp's model with a ``<dcmotor>`` on every state joint, built once per grasp.
 
     With a transmission: a ``<dcmotor>`` per actuator instead, on the actuator's own
-    transmission (:func:`~mjtvm.physics.motors.actuator_motors`,
-    :func:`~mjtvm.physics.motors.attach_actuator_dcmotors`).
+    transmission ([`actuator_motors()`][mjtvm.physics.motors.actuator_motors],
+    [`attach_actuator_dcmotors()`][mjtvm.physics.motors.attach_actuator_dcmotors]).
 
     The model as is when each state joint already has one (``input="vel ff"``); otherwise
     the grasp's ``MjSpec`` (its MJCF file with the object and supports it adds) with the motors
     of ``grasp.motors`` attached
-    (:func:`~mjtvm.physics.motors.attach_dcmotors`; :func:`~mjtvm.physics.motors.require_motors`
+    ([`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors]; [`require_motors()`][mjtvm.physics.motors.require_motors]
     refuses joints without motor data, naming them).
 
     Parameters
     ----------
     grasp
-        A :class:`~mjtvm.sim.grasp.loaded.Grasp` (``model``, ``model_path``, ``joints``, ``motors``).
+        A [`Grasp`][mjtvm.sim.grasp.loaded.Grasp] (``model``, ``model_path``, ``joints``, ``motors``).
 
     Raises
     ------
@@ -198,18 +198,18 @@ def verify_state(
     launch_distance: float | None = None,
     friction_margin: float | None = None,
 ) -> list[dict[str, Any]]:
-    r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of :data:`RUNS`).
+    r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of [`RUNS`][mjtvm.physics.verify.RUNS]).
 
-    First the hold test (:func:`~mjtvm.physics.hold.hold_test`, ``hold_time`` s, default a
+    First the hold test ([`hold_test()`][mjtvm.physics.hold.hold_test], ``hold_time`` s, default a
     rollout's length): a state that does not hold at rest gets its verdict and no rollout.
     ``launch_distance`` (m): also the launch from rest of every pair
-    (:func:`~mjtvm.physics.launch.launch`).
+    ([`launch()`][mjtvm.physics.launch.launch]).
 
     ``dynamics``: also the dynamic alpha and its check (module docstring). ``preload`` (N): the
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
     witnesses then press on the object. ``friction_margin``: the margin delta of the LPs whose
     witness is driven (default the grasp file's, 0), on the rollouts' cone
-    (:func:`~mjtvm.core.friction.cone_margin`: pyramidal adds 1/sqrt(2)).
+    (`cone_margin()`: pyramidal adds 1/sqrt(2)).
     """
     delta = lift_margin(lift) if friction_margin is None else friction_margin
     margin = cone_margin((settings or SimSettings()).cone, delta)
@@ -296,7 +296,7 @@ def verify_lp(
     preload: float = 0.0,
     friction_margin: float | None = None,
 ) -> tuple[GraspState, TvmmpResult | MjtvmError, dict[str, str]]:
-    r"""The state :func:`verify_state` checks at lift state ``index`` for ``run``, its Problem 2
+    r"""The state [`verify_state()`][mjtvm.physics.verify.verify_state] checks at lift state ``index`` for ``run``, its Problem 2
     (``alpha_lp``, without a rollout) and the row's ``lp_state`` and ``lp_note``.
 
     State 0 is the grasp at its own configuration (the lift starts there): with the grasp's
@@ -313,7 +313,7 @@ def verify_lp(
     Returns
     -------
     state, result, fields
-        The grasp state, its :func:`~mjtvm.core.tvmmp.tvmmp` result (with the diagnosis of
+        The grasp state, its [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] result (with the diagnosis of
         its infeasible pairs and zero alphas), or the error the LP ended in, and
         ``{"lp_state": ..., "lp_note": ...}``.
     """
@@ -471,13 +471,13 @@ def verify_lift(
     grasp
         A shipped grasp's name (``case2``, ...) or a grasp file's path (``mjtvm.grasp/1``).
         Its model is simulated as is when every state joint has a ``<dcmotor>``, else with
-        the grasp's motors attached (:func:`motor_model`).
+        the grasp's motors attached ([`motor_model()`][mjtvm.physics.verify.motor_model]).
     stride
         Check every ``stride``-th state (the last state is always included).
     runs
-        Subset of :data:`RUNS`.
+        Subset of [`RUNS`][mjtvm.physics.verify.RUNS].
     dynamics, preload, hold_time, launch_distance, friction_margin
-        As in :func:`verify_state`.
+        As in [`verify_state()`][mjtvm.physics.verify.verify_state].
     jobs, start_method
         Worker processes (1: in this process) and their start method.
     out, name
@@ -557,5 +557,5 @@ def state_indices(num_states: int, stride: int) -> list[int]:
 
 # --------------------------------------------------------------- slide check
 def runs_of(contacts: Sequence[str], readings: Sequence[str]) -> list[str]:
-    """The :data:`RUNS` of contact types (``L``, ``S``) and readings: L once, S once per reading."""
+    """The [`RUNS`][mjtvm.physics.verify.RUNS] of contact types (``L``, ``S``) and readings: L once, S once per reading."""
     return [r for r in RUNS if r.split("-")[0] in contacts and (r == "L" or r.split("-")[1] in readings)]

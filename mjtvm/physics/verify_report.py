@@ -1,5 +1,5 @@
 r"""The physics check's report: its rows as CSV, the alpha curves along the lift as a PNG, and
-per run the distribution of alpha_sim / alpha_kl (:func:`~mjtvm.physics.verify.verify_lift`'s rows).
+per run the distribution of alpha_sim / alpha_kl ([`verify_lift()`][mjtvm.physics.verify.verify_lift]'s rows).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 r"""Witnesses to drive in a rollout: the motion and forces attaining alpha_kl (Supplement 1).
 
-The simplex witness of :func:`~mjtvm.core.tvmmp.tvmmp` sits at a vertex of the feasible set
+The simplex witness of [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] sits at a vertex of the feasible set
 (redundant joints at their speed limits, friction on the pyramid's edges); a rollout drives a
-more central one: the same constraints (eq. 31, assembled by :func:`~mjtvm.core.assembly.assemble`)
+more central one: the same constraints (eq. 31, assembled by `assemble()`)
 at a given alpha, with the least joint motion and the forces inside the pyramids.
 """
 
@@ -31,18 +31,18 @@ _F64 = NDArray[np.float64]
 def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str, _F64]:
     r"""The least-motion, force-centred solution of eq. (31) at a fixed ``alpha`` (Clarabel QP).
 
-    Minimises :math:`\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2` over the
-    constraints of :func:`~mjtvm.core.assembly.assemble` with :math:`\dot r = \alpha \hat r_l`;
+    Minimises $\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2$ over the
+    constraints of `assemble()` with $\dot r = \alpha \hat r_l$;
     returns ``speeds``, ``torques``, ``forces`` and ``slip_speeds`` (and ``actuator_speeds``
     ``P qd`` with a transmission). With a transmission the ranges bound actuators and
-    :math:`\omega_{0j}` is joint j's fastest speed through them
-    (:func:`~mjtvm.core.transmission.joint_speed_limits`): the weight stays per joint speed;
+    $\omega_{0j}$ is joint j's fastest speed through them
+    ([`joint_speed_limits()`][mjtvm.core.transmission.joint_speed_limits]): the weight stays per joint speed;
     ``torques`` are then the actuator forces ``u``.
 
     Raises
     ------
     SolverError
-        The QP is not solved (e.g. ``alpha`` above :math:`\alpha_{kl}`).
+        The QP is not solved (e.g. ``alpha`` above $\alpha_{kl}$).
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
@@ -105,7 +105,7 @@ class Drive:
         ``(6,)`` the object twist to produce, [v of the object origin; omega] (m/s, rad/s).
     contacts
         ``(geom label, type)`` of each finger contact (F, L, S); D-contacts are left out. The
-        label is :func:`~mjtvm.sim.grasp.state.geom_label` (a name, or ``"<body>/geom<n>"``).
+        label is `geom_label()` (a name, or ``"<body>/geom<n>"``).
     slips
         S geom label -> (slip speed rho (m/s), unit slide direction (3,)) of eq. (13).
     actuators
@@ -153,7 +153,7 @@ def witness_drive(
 ) -> Drive:
     r"""The drive of pair (k, l) at speed factor ``s`` (module docstring, step 2).
 
-    ``vertex``: the :class:`~mjtvm.core.tvmmp.Witness` of the pair, required for ``"vertex"``.
+    ``vertex``: the [`Witness`][mjtvm.core.tvmmp.Witness] of the pair, required for ``"vertex"``.
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")

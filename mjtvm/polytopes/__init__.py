@@ -1,12 +1,12 @@
-r"""The velocity polytopes of Problem 1 without MuJoCo: the TVMS (:mod:`mjtvm.polytopes.tvms`),
-its projection and enumeration, the polar vertex enumeration (:mod:`mjtvm.polytopes.polar`),
-the velocity and force polytopes of a Jacobian (:mod:`mjtvm.polytopes.capacity`, zonotopes:
-:mod:`mjtvm.polytopes.zonotope`),
-the point-set geometry (:mod:`mjtvm.polytopes.hull`), volumes, estimates and brackets.
+r"""The velocity polytopes of Problem 1 without MuJoCo: the TVMS ([`mjtvm.polytopes.tvms`][mjtvm.polytopes.tvms]),
+its projection and enumeration, the polar vertex enumeration ([`mjtvm.polytopes.polar`][mjtvm.polytopes.polar]),
+the velocity and force polytopes of a Jacobian ([`mjtvm.polytopes.capacity`][mjtvm.polytopes.capacity], zonotopes:
+[`mjtvm.polytopes.zonotope`][mjtvm.polytopes.zonotope]),
+the point-set geometry ([`mjtvm.polytopes.hull`][mjtvm.polytopes.hull]), volumes, estimates and brackets.
 
 The names below are imported on first use, so that importing one module does not load the others.
-The functions named like their modules, :func:`~mjtvm.polytopes.tvms.tvms`,
-:func:`~mjtvm.polytopes.refine.refine` and :func:`~mjtvm.polytopes.zonotope.zonotope`, are not among them (``mjtvm.polytopes.tvms`` is the module).
+The functions named like their modules, [`tvms()`][mjtvm.polytopes.tvms.tvms],
+[`refine()`][mjtvm.polytopes.refine.refine] and [`zonotope()`][mjtvm.polytopes.zonotope.zonotope], are not among them (``mjtvm.polytopes.tvms`` is the module).
 """
 
 from __future__ import annotations

@@ -1,25 +1,27 @@
 r"""The certified bracket of an anytime projection (Problem 1): inner and outer polytopes.
 
-While :func:`~mjtvm.polytopes.projection.project_lp` refines its outer polytope
-:math:`O \supseteq S_{ov}` (the cutting planes), every LP also proves points of
-:math:`S_{ov}`: the support LPs' solutions, the points where the rays leave it and the
-certified vertices. Their hull is the inner polytope :math:`I \subseteq S_{ov}`, so
+While `project_lp()` refines its outer polytope
+$O \supseteq S_{ov}$ (the cutting planes), every LP also proves points of
+$S_{ov}$: the support LPs' solutions, the points where the rays leave it and the
+certified vertices. Their hull is the inner polytope $I \subseteq S_{ov}$, so
 
-.. math:: \mathrm{vol}(I) \le \mathrm{vol}(S_{ov}) \le \mathrm{vol}(O), \qquad
-          d_H(I, S_{ov}),\ d_H(S_{ov}, O) \le d_H(I, O),
+$$
+\mathrm{vol}(I) \le \mathrm{vol}(S_{ov}) \le \mathrm{vol}(O), \qquad
+d_H(I, S_{ov}),\ d_H(S_{ov}, O) \le d_H(I, O),
+$$
 
 and both sides move monotonically: ``I`` only gains points, ``O`` only gains rows.
 
 Volumes without a triangulation of the whole polytope (an exact decomposition; see
 ``docs/problem1.md`` for the choice):
 
-* :func:`outer_volume`: O's face lattice from the simplices of its polar hull, and the
-  pyramids over its faces, nested (:mod:`~mjtvm.polytopes.lattice`; no points x facets
+* [`outer_volume()`][mjtvm.polytopes.bracket.outer_volume]: O's face lattice from the simplices of its polar hull, and the
+  pyramids over its faces, nested ([`lattice`][mjtvm.polytopes.lattice]; no points x facets
   incidence matrix, no triangulation by Qhull);
-* :func:`inner_hull`: Qhull on the proven points (their facets also give the ray lengths
-  :func:`ray_lengths` and the Hausdorff bound :func:`hausdorff_bound`).
+* [`inner_hull()`][mjtvm.polytopes.bracket.inner_hull]: Qhull on the proven points (their facets also give the ray lengths
+  [`ray_lengths()`][mjtvm.polytopes.bracket.ray_lengths] and the Hausdorff bound [`hausdorff_bound()`][mjtvm.polytopes.bracket.hausdorff_bound]).
 
-Every function takes a :class:`~mjtvm.polytopes.budget.Budget` and reserves its arrays
+Every function takes a [`Budget`][mjtvm.polytopes.budget.Budget] and reserves its arrays
 before making them.
 """
 
@@ -57,7 +59,7 @@ class Bracket:
 
 @dataclass(frozen=True)
 class InnerHull:
-    r"""The hull of proven points: volume, facets :math:`n^T u \le o` (unit ``n``) and vertices."""
+    r"""The hull of proven points: volume, facets $n^T u \le o$ (unit ``n``) and vertices."""
 
     volume: float
     normals: NDArray[np.float64]
@@ -66,17 +68,17 @@ class InnerHull:
 
 
 def outer_volume(polar: PolarHull, budget: Budget) -> tuple[float, FaceLattice]:
-    r"""An upper bound of the volume of :math:`O = \{u : a_j^T u \le b_j\}` (``polar``'s rows)
-    and the face lattice it comes from (:meth:`PolarHull.lattice`, its ``vertices`` and uniform
-    points: :class:`~mjtvm.polytopes.lattice.FaceLattice`).
+    r"""An upper bound of the volume of $O = \{u : a_j^T u \le b_j\}$ (``polar``'s rows)
+    and the face lattice it comes from ([`PolarHull.lattice()`][mjtvm.polytopes.polar.PolarHull.lattice], its ``vertices`` and uniform
+    points: [`FaceLattice`][mjtvm.polytopes.lattice.FaceLattice]).
 
-    The lattice measures the joggled :math:`O' = \{u : y'^T_j (u - c) \le 1\}` exactly (the
+    The lattice measures the joggled $O' = \{u : y'^T_j (u - c) \le 1\}$ exactly (the
     pyramids over its faces, nested; no Qhull triangulation of the facets). With
-    :math:`\delta_j = y'_j - y_j` and :math:`R \ge \max_{u \in O} |u - c|`, every
-    :math:`u \in O` has :math:`y'^T_j (u - c) \le 1 + \epsilon`, :math:`\epsilon = R
-    \max_j |\delta_j|`: O lies in :math:`c + (1 + \epsilon)(O' - c)`, so
-    :math:`\mathrm{vol}(O) \le (1 + \epsilon)^k \mathrm{vol}(O')` (``R`` from O''s vertices with 1 %
-    to spare, as O' is within :math:`\epsilon` of O). Up to round-off: the corners of flat
+    $\delta_j = y'_j - y_j$ and $R \ge \max_{u \in O} |u - c|$, every
+    $u \in O$ has $y'^T_j (u - c) \le 1 + \epsilon$, $\epsilon = R
+    \max_j |\delta_j|$: O lies in $c + (1 + \epsilon)(O' - c)$, so
+    $\mathrm{vol}(O) \le (1 + \epsilon)^k \mathrm{vol}(O')$ (``R`` from O''s vertices with 1 %
+    to spare, as O' is within $\epsilon$ of O). Up to round-off: the corners of flat
     simplices are ill-conditioned (4e-8 relative on the 4- to 6-D cross-polytopes, whose
     vertices lie on 2^(k-1) facets).
     """
@@ -88,7 +90,7 @@ def outer_volume(polar: PolarHull, budget: Budget) -> tuple[float, FaceLattice]:
 
 
 def inner_hull(points: NDArray[np.float64], budget: Budget) -> InnerHull:
-    """The hull of ``(n, k)`` proven points, k >= 2 (joggled by :data:`JOGGLE` of their extent:
+    """The hull of ``(n, k)`` proven points, k >= 2 (joggled by [`JOGGLE`][mjtvm.polytopes.bracket.JOGGLE] of their extent:
     a relative volume error of that order)."""
     k = points.shape[1]
     budget.reserve(len(points) * QHULL_BYTES_PER_POINT * k / 6, "the inner hull (Qhull)")
@@ -105,7 +107,7 @@ def inner_hull(points: NDArray[np.float64], budget: Budget) -> InnerHull:
 def ray_lengths(
     normals: NDArray[np.float64], offsets: NDArray[np.float64], directions: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    r"""``max t`` with :math:`t d \in \{u : n^T u \le o\}` for each row ``d`` (the origin inside;
+    r"""``max t`` with $t d \in \{u : n^T u \le o\}$ for each row ``d`` (the origin inside;
     ``inf`` where no row stops the ray)."""
     out = np.full(len(directions), np.inf)
     for i, d in enumerate(directions):
@@ -119,8 +121,8 @@ def ray_lengths(
 def hausdorff_bound(
     outer_vertices: NDArray[np.float64], inner: InnerHull, center: NDArray[np.float64], budget: Budget
 ) -> float:
-    r"""An upper bound of :math:`d_H(I, O)`: as I is inside O, :math:`d_H` is the largest
-    distance from a vertex ``v`` of O to I, and :math:`d(v, I) \le |v - p|` for the nearest
+    r"""An upper bound of $d_H(I, O)$: as I is inside O, $d_H$ is the largest
+    distance from a vertex ``v`` of O to I, and $d(v, I) \le |v - p|$ for the nearest
     vertex ``p`` of I (a k-d tree: no vertices x facets array). ``center`` is unused (kept for
     the ray bound's signature)."""
     if len(outer_vertices) == 0 or len(inner.vertices) == 0:

@@ -1,15 +1,15 @@
 r"""Limits of an anytime projection (Problem 1): memory, time and the volume tolerance.
 
-:class:`Limits` is what :func:`~mjtvm.polytopes.tvms.tvms` passes down to
-:func:`~mjtvm.polytopes.projection.project_lp`: a relative volume tolerance (0: exact within
-floating point), a wall-clock limit and a memory budget. :class:`Budget` enforces them:
-:meth:`Budget.reserve` is called with the size of an array (or a Qhull hull) *before* it is
-made, and :meth:`Budget.check` between steps; both raise :class:`LimitReached`, which the
+`Limits` is what [`tvms()`][mjtvm.polytopes.tvms.tvms] passes down to
+`project_lp()`: a relative volume tolerance (0: exact within
+floating point), a wall-clock limit and a memory budget. [`Budget`][mjtvm.polytopes.budget.Budget] enforces them:
+[`Budget.reserve()`][mjtvm.polytopes.budget.Budget.reserve] is called with the size of an array (or a Qhull hull) *before* it is
+made, and [`Budget.check()`][mjtvm.polytopes.budget.Budget.check] between steps; both raise [`LimitReached`][mjtvm.polytopes.budget.LimitReached], which the
 projection turns into ``status: "approximate"`` with the bracket it has.
 
 The memory budget counts the resident set of the process above what it held when the solve
 started (Linux ``/proc/self/statm``; elsewhere only the announced sizes), so HiGHS' and Qhull's
-own buffers count too. The default is :data:`DEFAULT_MEMORY_FRACTION` of the memory the
+own buffers count too. The default is [`DEFAULT_MEMORY_FRACTION`][mjtvm.polytopes.budget.DEFAULT_MEMORY_FRACTION] of the memory the
 machine has available (``MemAvailable`` in ``/proc/meminfo``, else psutil when installed,
 else the physical memory).
 """
@@ -61,7 +61,7 @@ def available_memory() -> int:
 
 
 def default_memory_budget() -> int:
-    """:data:`DEFAULT_MEMORY_FRACTION` of :func:`available_memory`, in bytes."""
+    """[`DEFAULT_MEMORY_FRACTION`][mjtvm.polytopes.budget.DEFAULT_MEMORY_FRACTION] of [`available_memory()`][mjtvm.polytopes.budget.available_memory], in bytes."""
     return int(DEFAULT_MEMORY_FRACTION * available_memory())
 
 
@@ -75,7 +75,7 @@ def rss_bytes() -> int:
 
 
 class LimitReached(Exception):
-    """A limit of :class:`Limits` stops the projection: ``reason`` is ``"time"`` or ``"memory"``."""
+    """A limit of `Limits` stops the projection: ``reason`` is ``"time"`` or ``"memory"``."""
 
     def __init__(self, reason: str, detail: str) -> None:
         super().__init__(f"{reason} limit: {detail}")
@@ -94,7 +94,7 @@ class Limits:
     time_limit
         Seconds of wall-clock time for the whole solve (``None``: none).
     memory
-        Bytes of memory the solve may add to the process (``None``: :func:`default_memory_budget`).
+        Bytes of memory the solve may add to the process (``None``: `default_memory_budget()`).
     progress
         Called with a dict (``round``, ``lps``, ``inner``, ``outer``, ``gap``, ``hausdorff``,
         ``seconds``) whenever the bracket is measured, and (``phase: "estimate"``,
@@ -102,7 +102,7 @@ class Limits:
         of the randomized estimate; ``None``: nothing.
     confidence
         With a ``tolerance``: when the certified bracket stays wider, a randomized estimate
-        (:mod:`~mjtvm.polytopes.estimate`) whose interval holds the volume with this
+        ([`estimate`][mjtvm.polytopes.estimate]) whose interval holds the volume with this
         probability; 0: none.
     """
 
@@ -124,7 +124,7 @@ class Limits:
 
 
 class Budget:
-    """The running account of :class:`Limits` for one solve (started at construction)."""
+    """The running account of `Limits` for one solve (started at construction)."""
 
     def __init__(self, limits: Limits | None = None) -> None:
         self.limits = limits or Limits()
@@ -132,7 +132,7 @@ class Budget:
         self.base_rss = rss_bytes()
         self.memory = self.limits.memory if self.limits.memory is not None else default_memory_budget()
         self.peak = 0  #: the largest use (bytes above the start) seen by reserve / check
-        #: seconds after the start at which :meth:`check` stops (default: the time limit)
+        #: seconds after the start at which `check()` stops (default: the time limit)
         self.deadline: float | None = self.limits.time_limit
 
     @property
@@ -145,7 +145,7 @@ class Budget:
         return max(rss_bytes() - self.base_rss, 0)
 
     def reserve(self, nbytes: float, what: str) -> None:
-        """Raise :class:`LimitReached` if ``nbytes`` more would exceed the memory budget."""
+        """Raise [`LimitReached`][mjtvm.polytopes.budget.LimitReached] if ``nbytes`` more would exceed the memory budget."""
         used = self.used()
         self.peak = max(self.peak, used)
         if used + nbytes > self.memory:
@@ -156,7 +156,7 @@ class Budget:
             )
 
     def check(self) -> None:
-        """Raise :class:`LimitReached` past the time limit or the memory budget."""
+        """Raise [`LimitReached`][mjtvm.polytopes.budget.LimitReached] past the time limit or the memory budget."""
         t = self.deadline
         if t is not None and self.elapsed > t:
             raise LimitReached("time", f"{self.elapsed:.1f} s > {t:g} s")

@@ -1,15 +1,15 @@
 r"""The classic capacity polytopes of one serial chain: velocity and force polytopes.
 
-* :func:`velocity_polytope`: :math:`\{J \dot q : \dot q_{min} \le \dot q \le \dot q_{max}\}`,
-  a zonotope (:mod:`~mjtvm.polytopes.zonotope`: vertices and facets from the Jacobian's
+* [`velocity_polytope()`][mjtvm.polytopes.capacity.velocity_polytope]: $\{J \dot q : \dot q_{min} \le \dot q \le \dot q_{max}\}$,
+  a zonotope ([`zonotope`][mjtvm.polytopes.zonotope]: vertices and facets from the Jacobian's
   columns, no LP, no Qhull);
-* :func:`force_polytope`: :math:`\{f : \tau_{min} \le J^T f \le \tau_{max}\}`, the forces the
+* [`force_polytope()`][mjtvm.polytopes.capacity.force_polytope]: $\{f : \tau_{min} \le J^T f \le \tau_{max}\}$, the forces the
   joint torques can resist (pycapacity's definition, ``force_polytope``), an intersection of
   ``n`` slabs whose vertices come from one Qhull hull of its polar points.
 
-These are what Problem 1 becomes when no force binds (:mod:`~mjtvm.polytopes.speed_box`):
+These are what Problem 1 becomes when no force binds ([`speed_box`][mjtvm.polytopes.speed_box]):
 with one fingertip contact and no wrench to balance, the TVMS restricted to translations
-is the velocity polytope of the fingertip's Jacobian. Both return a :class:`CapacityPolytope`.
+is the velocity polytope of the fingertip's Jacobian. Both return a [`CapacityPolytope`][mjtvm.polytopes.capacity.CapacityPolytope].
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ DUPLICATE_TOL = 1e-9  #: force-polytope vertices closer than this x the extent a
 
 @dataclass(frozen=True, eq=False)
 class CapacityPolytope:
-    r"""A polytope in :math:`R^m` with its vertices, facets and volume.
+    r"""A polytope in $R^m$ with its vertices, facets and volume.
 
     Attributes
     ----------
@@ -42,13 +42,13 @@ class CapacityPolytope:
         ``(v, m)`` the vertices (units of the polytope: m/s and rad/s for velocities, N and
         N m for forces).
     normals, offsets
-        ``(f, m)`` unit rows and ``(f,)``: the facets :math:`n^T x \le o` (inside the affine
+        ``(f, m)`` unit rows and ``(f,)``: the facets $n^T x \le o$ (inside the affine
         hull when ``dimension < m``).
     dimension
         Dimension of the affine hull.
     known_volume
         The volume inside the affine hull when the construction gives it (a zonotope's sum),
-        ``None`` to measure it on first use of :attr:`affine_volume` (one Qhull hull).
+        ``None`` to measure it on first use of `affine_volume` (one Qhull hull).
     """
 
     vertices: NDArray[np.float64]
@@ -104,10 +104,10 @@ def _limits(
 
 
 def velocity_polytope(jacobian: ArrayLike, qd_min: ArrayLike, qd_max: ArrayLike) -> CapacityPolytope:
-    r"""The velocity polytope :math:`\{J \dot q : \dot q_{min} \le \dot q \le \dot q_{max}\}`.
+    r"""The velocity polytope $\{J \dot q : \dot q_{min} \le \dot q \le \dot q_{max}\}$.
 
-    A zonotope with centre :math:`J (\dot q_{min} + \dot q_{max}) / 2` and generators
-    :math:`J_i (\dot q_{max,i} - \dot q_{min,i}) / 2` (:func:`~mjtvm.polytopes.zonotope.zonotope`):
+    A zonotope with centre $J (\dot q_{min} + \dot q_{max}) / 2$ and generators
+    $J_i (\dot q_{max,i} - \dot q_{min,i}) / 2$ ([`zonotope()`][mjtvm.polytopes.zonotope.zonotope]):
     the same polytope as pycapacity's ``velocity_polytope`` (hyperplane shifting, then
     Qhull) without an LP or a hull.
 
@@ -127,7 +127,7 @@ def velocity_polytope(jacobian: ArrayLike, qd_min: ArrayLike, qd_max: ArrayLike)
     ------
     ParamError
         A mis-shaped or non-finite argument, ``qd_min > qd_max``, or too many joints for the
-        dimension (:data:`~mjtvm.polytopes.zonotope.MAX_CANDIDATES`).
+        dimension (`MAX_CANDIDATES`).
     """
     j = _jacobian(jacobian)
     low, high = _limits("qd_min", "qd_max", qd_min, qd_max, j.shape[1], strict=False)
@@ -166,14 +166,14 @@ def _interior_point(
 
 
 def force_polytope(jacobian: ArrayLike, tau_min: ArrayLike, tau_max: ArrayLike) -> CapacityPolytope:
-    r"""The force polytope :math:`\{f : \tau_{min} \le J^T f \le \tau_{max}\}` (pycapacity's
+    r"""The force polytope $\{f : \tau_{min} \le J^T f \le \tau_{max}\}$ (pycapacity's
     ``force_polytope``): the forces at the end point that the joint torques can resist.
 
     An intersection of ``n`` slabs. With a point ``p`` strictly inside (the origin when
-    :math:`\tau_{min} < 0 < \tau_{max}`, else the Chebyshev centre), its vertices are the
-    facets of the hull of the polar points :math:`a_i / (b_i - a_i^T p)` (one Qhull hull of
+    $\tau_{min} < 0 < \tau_{max}$, else the Chebyshev centre), its vertices are the
+    facets of the hull of the polar points $a_i / (b_i - a_i^T p)$ (one Qhull hull of
     ``2 n`` points), each then solved exactly from its ``m`` active rows. Its volume is
-    measured when first asked for (:attr:`CapacityPolytope.affine_volume`: one more hull).
+    measured when first asked for ([`CapacityPolytope.affine_volume`][mjtvm.polytopes.capacity.CapacityPolytope.affine_volume]: one more hull).
 
     Parameters
     ----------

@@ -1,9 +1,9 @@
 r"""The paper's projection, the baseline of Problem 1: vertex enumeration with cddlib (eq. 27).
 
 The lifted polytope's H-representation is turned into its vertices with cddlib, in the
-paper's variables (:func:`force_form`) and with the equalities solved first; the vertices
+paper's variables ([`force_form()`][mjtvm.polytopes.enumeration.force_form]) and with the equalities solved first; the vertices
 are mapped to twists and reduced to the vertices of their hull
-(:func:`~mjtvm.polytopes.hull.reduce_points`). cddlib runs in a child process that is killed after
+([`reduce_points()`][mjtvm.polytopes.hull.reduce_points]). cddlib runs in a child process that is killed after
 ``time_limit`` seconds, so that a hand the enumeration cannot handle reports
 ``"timeout"`` instead of hanging.
 """
@@ -33,11 +33,11 @@ def force_form(poly: LiftedPolytope) -> LiftedPolytope:
     r"""The lifted polytope with each friction pyramid's edge weights replaced by its force.
 
     For a contact with more generators than dimensions (an F-point in space) every row
-    sees the contact only through :math:`f = E \lambda`, so the assembly's columns of
-    :math:`\lambda` are ``M E``; they become the d columns ``M = A_lam E^+`` of ``f``,
-    and :math:`\lambda \ge 0` becomes the pyramid's facets :math:`V f \le 0` (eq. 24):
+    sees the contact only through $f = E \lambda$, so the assembly's columns of
+    $\lambda$ are ``M E``; they become the d columns ``M = A_lam E^+`` of ``f``,
+    and $\lambda \ge 0$ becomes the pyramid's facets $V f \le 0$ (eq. 24):
     the paper's variables, fewer and better suited to vertex enumeration. The map
-    :math:`\lambda \mapsto f` is onto the pyramid, so the projection is unchanged.
+    $\lambda \mapsto f$ is onto the pyramid, so the projection is unchanged.
     (``assembly.blocks`` then no longer index the columns.)
     """
     asm = poly.assembly
@@ -156,7 +156,7 @@ def _cdd_worker(conn: Any, rows: NDArray[np.float64]) -> None:
 
 
 def _run_cdd(rows: NDArray[np.float64], time_limit: float) -> NDArray[np.float64] | None:
-    """:func:`_cdd_worker` in a child process; ``None`` after ``time_limit`` seconds."""
+    """`_cdd_worker()` in a child process; ``None`` after ``time_limit`` seconds."""
     methods = multiprocessing.get_all_start_methods()
     ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
     recv, send = ctx.Pipe(duplex=False)
@@ -191,10 +191,10 @@ def project_cdd(
 ) -> Projection:
     r"""Projection by vertex enumeration of the lifted polytope (the paper's way, eq. 27).
 
-    cddlib (float) enumerates the vertices and rays of :func:`force_form` with its
+    cddlib (float) enumerates the vertices and rays of [`force_form()`][mjtvm.polytopes.enumeration.force_form] with its
     equalities solved; the vertices are mapped to twists and reduced to the vertices of
-    their hull (:func:`~mjtvm.polytopes.hull.reduce_points`); a ray with a non-zero twist makes
-    :math:`S_{ov}` unbounded. Status ``"timeout"`` after ``time_limit`` seconds.
+    their hull ([`reduce_points()`][mjtvm.polytopes.hull.reduce_points]); a ray with a non-zero twist makes
+    $S_{ov}$ unbounded. Status ``"timeout"`` after ``time_limit`` seconds.
     """
     t0 = time.perf_counter()
     big_d = poly.twist_dim

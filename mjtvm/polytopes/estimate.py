@@ -1,24 +1,24 @@
 r"""A randomized volume of the TVMS with a confidence interval, inside the certified bracket.
 
-When the certified bracket [vol(I), vol(O)] of :mod:`~mjtvm.polytopes.refine` stays wider than
+When the certified bracket [vol(I), vol(O)] of [`refine`][mjtvm.polytopes.refine] stays wider than
 the tolerance (a 6-D TVMS with hundreds of thousands of vertices: every round of cutting planes
 multiplies O's vertices, and I's hull grows as fast), the volume is estimated by Monte Carlo:
 
 * points uniform in O, drawn exactly from its face lattice
-  (:meth:`~mjtvm.polytopes.lattice.FaceLattice.sample`; no Markov chain, no burn-in);
-* each classified in or out of :math:`S_{ov}` exactly: out if it breaks a supporting
+  ([`sample()`][mjtvm.polytopes.lattice.FaceLattice.sample]; no Markov chain, no burn-in);
+* each classified in or out of $S_{ov}$ exactly: out if it breaks a supporting
   hyperplane already found, else by the ray-shooting LP from the centre
-  (:class:`~mjtvm.polytopes.oracles.RayShooter`: in when the ray reaches it, to ``10 tol``;
+  ([`RayShooter`][mjtvm.polytopes.oracles.RayShooter]: in when the ray reaches it, to ``10 tol``;
   otherwise the LP's supporting hyperplane joins the list);
-* :math:`\mathrm{vol}(S_{ov}) = \mathrm{vol}(O)\, p`, ``p`` the fraction of O in
-  :math:`S_{ov}`, with the exact (Clopper-Pearson) binomial interval of ``p``.
+* $\mathrm{vol}(S_{ov}) = \mathrm{vol}(O)\, p$, ``p`` the fraction of O in
+  $S_{ov}$, with the exact (Clopper-Pearson) binomial interval of ``p``.
 
 The sample grows in doubling batches (1024, 2048, ...) until the interval's relative width
 ``(upper - lower) / upper`` is at most the tolerance. Where O is much larger than
-:math:`S_{ov}` (fewer than half of a batch's points inside), the hyperplanes found cut O down
+$S_{ov}$ (fewer than half of a batch's points inside), the hyperplanes found cut O down
 first and the sampling starts again in the smaller O. Looking after every batch would spend
 the confidence more than once: look ``j`` (from 0) uses the level
-:math:`1 - \alpha / ((j + 1)(j + 2))` (``alpha = 1 - confidence``), whose misses sum to at most
+$1 - \alpha / ((j + 1)(j + 2))$ (``alpha = 1 - confidence``), whose misses sum to at most
 ``alpha`` over all looks (a union bound), so the interval reported holds with probability at
 least ``confidence`` whenever the sampling stops. The interval is intersected with the certified
 bracket. Unlike the bracket it is a statistical statement, and it is reported apart from it.
@@ -102,7 +102,7 @@ def clopper_pearson(inside: int, samples: int, alpha: float) -> tuple[float, flo
 
 
 class _Classifier:
-    """Points in or out of :math:`S_{ov}`: the hyperplanes found, then the ray-shooting LP."""
+    """Points in or out of $S_{ov}$: the hyperplanes found, then the ray-shooting LP."""
 
     def __init__(
         self,
@@ -153,7 +153,7 @@ def estimate_volume(
     tighten: Callable[[NDArray[np.float64], NDArray[np.float64]], tuple[float, FaceLattice] | None]
     | None = None,
 ) -> VolumeEstimate:
-    r"""Estimate :math:`\mathrm{vol}(S_{ov})` by uniform points in O (module docstring).
+    r"""Estimate $\mathrm{vol}(S_{ov})$ by uniform points in O (module docstring).
 
     Parameters
     ----------
@@ -161,9 +161,9 @@ def estimate_volume(
         O's face lattice (its ``volume`` and sampler), scaled coordinates of dimension ``k``.
     shoot
         ``shoot(d) -> (t, a)``: the ray-shooting LP from ``center`` along ``d`` (``t`` in
-        [0, 1], ``a`` the unit normal of a hyperplane supporting :math:`S_{ov}` at ``center + t d``).
+        [0, 1], ``a`` the unit normal of a hyperplane supporting $S_{ov}$ at ``center + t d``).
     center, tol
-        ``(k,)`` the point the rays start from (inside :math:`S_{ov}`), and the tolerance of
+        ``(k,)`` the point the rays start from (inside $S_{ov}$), and the tolerance of
         the projection (absolute, scaled units).
     bracket
         The certified ``(inner, outer)`` volumes: the interval is clipped to them.
@@ -175,7 +175,7 @@ def estimate_volume(
         In (0, 1): the probability that the interval holds the volume.
     order
         ``order(points) -> permutation``: the order of each batch's LPs (neighbours together
-        warm-start each other, see :func:`~mjtvm.polytopes.refine._chain`).
+        warm-start each other, see `_chain()`).
     seed
         Of the random points (the estimate is reproducible).
     progress
@@ -184,9 +184,9 @@ def estimate_volume(
     tighten
         ``tighten(normals, offsets) -> (outer volume, lattice)``: O with the hyperplanes
         ``normals @ u <= offsets`` added (``None`` when that would cost too much: the sampling
-        then goes on in the O it has). Called when fewer than :data:`MIN_INSIDE` of the
+        then goes on in the O it has). Called when fewer than [`MIN_INSIDE`][mjtvm.polytopes.estimate.MIN_INSIDE] of the
         points of a batch are inside (then the sampling starts again in the smaller O, and the
-        certified bracket's outer volume comes down with it: :attr:`VolumeEstimate.outer`).
+        certified bracket's outer volume comes down with it: [`VolumeEstimate.outer`][mjtvm.polytopes.estimate.VolumeEstimate.outer]).
     """
     start = time.perf_counter()
     rng = np.random.default_rng(seed)

@@ -1,13 +1,13 @@
 r"""Convex hulls of point sets that may span a subspace: the geometry under Problem 1.
 
-* :func:`polish_vertices`: the facets and exact vertices of a bounded polytope given by
-  inequalities and points (the vertex enumeration is :mod:`~mjtvm.polytopes.polar`);
-* :func:`triangulate`: simplicial facets of a full-dimensional point set (Qhull, joggled);
-* :func:`vertex_mask`, :func:`distinct`, :func:`span`: vertices of a triangulated hull,
+* [`polish_vertices()`][mjtvm.polytopes.hull.polish_vertices]: the facets and exact vertices of a bounded polytope given by
+  inequalities and points (the vertex enumeration is [`polar`][mjtvm.polytopes.polar]);
+* [`triangulate()`][mjtvm.polytopes.hull.triangulate]: simplicial facets of a full-dimensional point set (Qhull, joggled);
+* [`vertex_mask()`][mjtvm.polytopes.hull.vertex_mask], [`distinct()`][mjtvm.polytopes.hull.distinct], [`span()`][mjtvm.polytopes.hull.span]: vertices of a triangulated hull,
   clusters of round-off, linear hulls;
-* :func:`reduce_points`: linear hull and vertices of the hull of points and the origin
-  (the last step of the cdd baseline); :func:`cone_facets`: a cone's facets (cddlib);
-* the measures (volumes, Hausdorff distance) are in :mod:`~mjtvm.polytopes.volume`.
+* [`reduce_points()`][mjtvm.polytopes.hull.reduce_points]: linear hull and vertices of the hull of points and the origin
+  (the last step of the cdd baseline); [`cone_facets()`][mjtvm.polytopes.hull.cone_facets]: a cone's facets (cddlib);
+* the measures (volumes, Hausdorff distance) are in [`volume`][mjtvm.polytopes.volume].
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ WELL_APART = 0.05  #: facets through a point whose normals' smallest singular va
 
 
 def _joggled(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``points`` moved by a seeded uniform perturbation of :data:`JOGGLE` x their extent."""
+    """``points`` moved by a seeded uniform perturbation of [`JOGGLE`][mjtvm.polytopes.hull.JOGGLE] x their extent."""
     rng = np.random.default_rng(0)
     return points + rng.uniform(-1.0, 1.0, points.shape) * JOGGLE * np.max(np.abs(points))
 
@@ -100,7 +100,7 @@ def polish_vertices(
     points: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.float64], tol: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     r"""Vertices and facets of a full-dimensional polytope given as ``conv(points)`` and
-    as :math:`\{u : a_j^T u \le b_j\}` (the same set up to ``tol``).
+    as $\{u : a_j^T u \le b_j\}$ (the same set up to ``tol``).
 
     The inequalities (some not facet-defining, some near copies of one another) are
     refitted: a row whose points (those within ``10 tol`` of it) span a hyperplane becomes
@@ -125,7 +125,7 @@ def polish_vertices(
 def _refit_facets(
     points: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.float64], tol: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The facets of :func:`polish_vertices`: the least-squares plane through the points of each
+    """The facets of [`polish_vertices()`][mjtvm.polytopes.hull.polish_vertices]: the least-squares plane through the points of each
     row whose points span a hyperplane (one per distinct point set), outward as the row."""
     k = points.shape[1]
     incident = incidence(points, normals, offsets, 10 * tol)
@@ -220,7 +220,7 @@ def _uncertified(
     facet_n: NDArray[np.float64],
     tol: float,
 ) -> NDArray[np.int64]:
-    """The candidates among ``check`` that :func:`_not_in_hull_of_neighbours` must look at one by one.
+    """The candidates among ``check`` that `_not_in_hull_of_neighbours()` must look at one by one.
 
     Its cheap certificate, for all candidates at once and against all their neighbours (a
     superset of the kept ones the loop compares with, so passing here means passing there),

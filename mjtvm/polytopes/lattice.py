@@ -1,33 +1,35 @@
 r"""Volume of a polytope from its face lattice, and uniform points in it (Problem 1's outer polytope).
 
-The outer polytope :math:`O = \{u : a_j^T u \le b_j\}` of the cutting planes comes with its
-vertex enumeration (:class:`~mjtvm.polytopes.polar.PolarHull`): Qhull's simplicial hull of the
+The outer polytope $O = \{u : a_j^T u \le b_j\}$ of the cutting planes comes with its
+vertex enumeration ([`PolarHull`][mjtvm.polytopes.polar.PolarHull]): Qhull's simplicial hull of the
 joggled polar points, each simplex a vertex of O with the ``k`` rows through it. That is the
 combinatorics of a *simple* polytope (every vertex on ``k`` facets; where O is degenerate the
 joggle splits a vertex into copies at the same place), and it gives O's whole face lattice: a
 face is a set ``F`` of rows, common to the simplices of its vertices, of dimension ``k - |F|``.
 
-**Volume** (an exact decomposition, no triangulation by Qhull): with a point :math:`p_F` in the
+**Volume** (an exact decomposition, no triangulation by Qhull): with a point $p_F$ in the
 relative interior of each face (the mean of its vertices; the interior point ``c`` for O
-itself), the pyramids from :math:`p_F` over the facets of F give, face by face from the
+itself), the pyramids from $p_F$ over the facets of F give, face by face from the
 vertices up,
 
-.. math:: V(F) = \frac{1}{k - |F|} \sum_{i} h(F, i)\, V(F \cup \{i\}), \qquad
-          h(F, i) = \frac{b_i - a_i^T p_F}{\| P_F a_i \|},\qquad V(\text{vertex}) = 1,
+$$
+V(F) = \frac{1}{k - |F|} \sum_{i} h(F, i)\, V(F \cup \{i\}), \qquad
+h(F, i) = \frac{b_i - a_i^T p_F}{\| P_F a_i \|},\qquad V(\text{vertex}) = 1,
+$$
 
-where the sum runs over the facets :math:`F \cup \{i\}` of F and :math:`P_F` projects onto
-the directions of F (orthogonal to its rows): :math:`h` is the distance from :math:`p_F` to
-facet :math:`F \cup \{i\}` inside F's affine hull. ``vol(O) = V(∅)``. The faces come from
-the simplices' subsets (at most :math:`2^k` each) and each edge of the lattice once (from the
+where the sum runs over the facets $F \cup \{i\}$ of F and $P_F$ projects onto
+the directions of F (orthogonal to its rows): $h$ is the distance from $p_F$ to
+facet $F \cup \{i\}$ inside F's affine hull. ``vol(O) = V(∅)``. The faces come from
+the simplices' subsets (at most $2^k$ each) and each edge of the lattice once (from the
 simplex where its facet is met first); it costs an orthonormal basis per face, against
 Qhull's triangulation of each facet before (a 6-D O with 230 rows and 8016 simplices: 0.3 s
 instead of 7.0 s; with 1894 rows and 183,322 simplices 9 s and 1.2 GB).
 
-The pyramids nest: the simplices :math:`(c, p_{F_1}, \dots, p_{F_k})` over the flags
-:math:`\emptyset \subset F_1 \subset \dots \subset F_k` (a vertex) tile O, and their volumes
-are the products of the heights over ``k!``. :meth:`FaceLattice.sample` draws a flag with
+The pyramids nest: the simplices $(c, p_{F_1}, \dots, p_{F_k})$ over the flags
+$\emptyset \subset F_1 \subset \dots \subset F_k$ (a vertex) tile O, and their volumes
+are the products of the heights over ``k!``. [`FaceLattice.sample()`][mjtvm.polytopes.lattice.FaceLattice.sample] draws a flag with
 probability proportional to its volume (face by face: child ``F ∪ {i}`` of F with probability
-:math:`h(F, i) V(F \cup \{i\}) / ((k - |F|) V(F))`) and a uniform point in its simplex
+$h(F, i) V(F \cup \{i\}) / ((k - |F|) V(F))$) and a uniform point in its simplex
 (Dirichlet(1, ..., 1) weights): uniform points in O.
 """
 
@@ -87,7 +89,7 @@ class _Level:
 
 
 class FaceLattice:
-    r"""Volume of :math:`O = \{u : a_j^T u \le b_j\}` and uniform points in it (module docstring).
+    r"""Volume of $O = \{u : a_j^T u \le b_j\}$ and uniform points in it (module docstring).
 
     Parameters
     ----------
@@ -98,7 +100,7 @@ class FaceLattice:
     corners, rows
         ``(n, k)`` O's vertices, one per simplex of the polar hull (copies of a degenerate
         vertex and flat simplices included), and ``(n, k)`` the indices of the rows through
-        each (:meth:`~mjtvm.polytopes.polar.PolarHull.lattice` solves them on the joggled rows).
+        each ([`lattice()`][mjtvm.polytopes.polar.PolarHull.lattice] solves them on the joggled rows).
     budget
         Checked between the levels; its memory reserved for the subsets of each level.
     """

@@ -1,13 +1,13 @@
-r"""LP oracles on the TVMS :math:`S_{ov}`, the projection of a lifted polytope (eq. 26, 34).
+r"""LP oracles on the TVMS $S_{ov}$, the projection of a lifted polytope (eq. 26, 34).
 
 Each holds one HiGHS session over the lifted polytope's rows (built once, re-solved warm
 after changing a few costs, bounds or coefficients) and answers in the working coordinates
-of :func:`~mjtvm.polytopes.projection.project_lp`:
+of `project_lp()`:
 
-* :class:`SupportOracle`: :math:`\max h^T s` over :math:`S_{ov}` (a point, a ray, or empty);
-* :class:`RayShooter`: where the segment from an interior point towards a point leaves
-  :math:`S_{ov}`, with a supporting hyperplane there from the duals;
-* :class:`DistanceOracle`: the max-norm distance from a point to :math:`S_{ov}` and a
+* [`SupportOracle`][mjtvm.polytopes.oracles.SupportOracle]: $\max h^T s$ over $S_{ov}$ (a point, a ray, or empty);
+* [`RayShooter`][mjtvm.polytopes.oracles.RayShooter]: where the segment from an interior point towards a point leaves
+  $S_{ov}$, with a supporting hyperplane there from the duals;
+* [`DistanceOracle`][mjtvm.polytopes.oracles.DistanceOracle]: the max-norm distance from a point to $S_{ov}$ and a
   separating hyperplane from the duals.
 """
 
@@ -25,11 +25,11 @@ __all__ = ["DistanceOracle", "RayShooter", "SupportOracle"]
 
 
 class SupportOracle:
-    r"""Support function of :math:`S_{ov}` by LPs on one HiGHS session.
+    r"""Support function of $S_{ov}$ by LPs on one HiGHS session.
 
     Only the costs of ``z`` change between LPs, and the primal simplex re-solves from the
     previous optimal basis (which stays primal feasible). An unbounded LP is followed by
-    one on the recession cone (:meth:`~mjtvm.polytopes.lifted.LiftedPolytope.recession`) for a ray.
+    one on the recession cone ([`recession()`][mjtvm.polytopes.lifted.LiftedPolytope.recession]) for a ray.
     """
 
     def __init__(self, poly: LiftedPolytope, metric: NDArray[np.float64]) -> None:
@@ -75,15 +75,15 @@ class SupportOracle:
 
 
 class RayShooter:
-    r"""Ray shooting in :math:`S_{ov}` by LPs on a HiGHS session.
+    r"""Ray shooting in $S_{ov}$ by LPs on a HiGHS session.
 
-    ``max t`` over the lifted polytope with the ``k`` extra rows :math:`R z - t d = c`
-    (:math:`R z` = the working coordinates of the twist, ``c`` inside :math:`S_{ov}`,
-    :math:`0 \le t \le 1`): :math:`c + t^* d` is where the segment from ``c`` to ``c + d``
-    leaves :math:`S_{ov}`. Only the ``k`` coefficients of the ``t`` column change between
-    LPs. The duals ``y`` of those rows give the hyperplane supporting :math:`S_{ov}` there:
-    the Lagrangian of the equalities shows :math:`\max_{s \in S_{ov}} -y^T s = -y^T (c + t^* d)`
-    when :math:`t^* < 1` (HiGHS' sign convention is settled by :math:`-y^T d > 0`).
+    ``max t`` over the lifted polytope with the ``k`` extra rows $R z - t d = c$
+    ($R z$ = the working coordinates of the twist, ``c`` inside $S_{ov}$,
+    $0 \le t \le 1$): $c + t^* d$ is where the segment from ``c`` to ``c + d``
+    leaves $S_{ov}$. Only the ``k`` coefficients of the ``t`` column change between
+    LPs. The duals ``y`` of those rows give the hyperplane supporting $S_{ov}$ there:
+    the Lagrangian of the equalities shows $\max_{s \in S_{ov}} -y^T s = -y^T (c + t^* d)$
+    when $t^* < 1$ (HiGHS' sign convention is settled by $-y^T d > 0$).
     """
 
     def __init__(self, poly: LiftedPolytope, rows: NDArray[np.float64], center: NDArray[np.float64]) -> None:
@@ -114,7 +114,7 @@ class RayShooter:
         self._col = n
 
     def __call__(self, d: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
-        """``t*`` and the unit outward normal of a hyperplane supporting :math:`S_{ov}` at ``c + t* d``."""
+        """``t*`` and the unit outward normal of a hyperplane supporting $S_{ov}$ at ``c + t* d``."""
         # Only the t column changes; rescaled (a long d like a short one), its scaled cost stays.
         self.session.set_column(self._col, self.rows, -np.asarray(d, dtype=float), rescale=True)
         self.num_lps += 1
@@ -128,14 +128,14 @@ class RayShooter:
 
 
 class DistanceOracle:
-    r"""Distance from a point to :math:`S_{ov}` in the max norm, and a separating hyperplane.
+    r"""Distance from a point to $S_{ov}$ in the max norm, and a separating hyperplane.
 
     ``min delta`` over the lifted polytope with the ``2k`` rows
-    :math:`v - \delta \le R z \le v + \delta` (only their bounds change). With multipliers
-    :math:`\lambda^\pm \ge 0` of the upper and lower rows, the dual reads
-    :math:`\delta^* = \max_{\|g\|_1 \le 1} g^T v - h_{S}(g)` at :math:`g = \lambda^- - \lambda^+`:
-    the hyperplane :math:`g^T u \le h_S(g)` separates ``v`` by at least :math:`\delta^*`
-    (Euclidean distance, as :math:`\|g\|_2 \le 1`).
+    $v - \delta \le R z \le v + \delta$ (only their bounds change). With multipliers
+    $\lambda^\pm \ge 0$ of the upper and lower rows, the dual reads
+    $\delta^* = \max_{\|g\|_1 \le 1} g^T v - h_{S}(g)$ at $g = \lambda^- - \lambda^+$:
+    the hyperplane $g^T u \le h_S(g)$ separates ``v`` by at least $\delta^*$
+    (Euclidean distance, as $\|g\|_2 \le 1$).
     """
 
     def __init__(self, poly: LiftedPolytope, rows: NDArray[np.float64]) -> None:

@@ -1,9 +1,9 @@
 r"""Vertex enumeration of a bounded polytope given by inequalities, by its polar hull.
 
-:class:`PolarHull` keeps Qhull's hull of the polar points as cutting planes are added
-(Problem 1); :func:`polar_vertices` enumerates at once. The facets and exact vertices
-(:func:`~mjtvm.polytopes.hull.polish_vertices`) and the point-set geometry are in
-:mod:`~mjtvm.polytopes.hull`.
+[`PolarHull`][mjtvm.polytopes.polar.PolarHull] keeps Qhull's hull of the polar points as cutting planes are added
+(Problem 1); [`polar_vertices()`][mjtvm.polytopes.polar.polar_vertices] enumerates at once. The facets and exact vertices
+([`polish_vertices()`][mjtvm.polytopes.hull.polish_vertices]) and the point-set geometry are in
+[`hull`][mjtvm.polytopes.hull].
 """
 
 from __future__ import annotations
@@ -23,17 +23,17 @@ FLAT = 1e-11  #: Hadamard ratio below which a simplex of the polar hull is flat
 
 
 class PolarHull:
-    r"""Vertices of the bounded polytope :math:`O = \{u : a_j^T u \le b_j\}` around an
+    r"""Vertices of the bounded polytope $O = \{u : a_j^T u \le b_j\}$ around an
     interior point, as rows are added (the cutting planes of Problem 1).
 
     Vertex enumeration by duality: with ``c`` = ``center`` inside O, the polar points
-    :math:`y_j = a_j / (b_j - a_j^T c)` have a hull whose facets :math:`\{y : w^T y = 1\}`
-    are O's vertices :math:`c + w`. Qhull on joggled points (each moved by :data:`JOGGLE`
+    $y_j = a_j / (b_j - a_j^T c)$ have a hull whose facets $\{y : w^T y = 1\}$
+    are O's vertices $c + w$. Qhull on joggled points (each moved by [`JOGGLE`][mjtvm.polytopes.polar.JOGGLE]
     x its size, seeded, so that the many coplanar polar points of a degenerate O never stop
     it) gives the simplices, and keeps its hull between calls: added rows are added points
     (a hull from scratch where Qhull's incremental mode fails, then on points joggled anew).
     Each simplex's ``k`` inequalities are then solved exactly on the unperturbed rows (flat
-    simplices, see :data:`FLAT`,
+    simplices, see [`FLAT`][mjtvm.polytopes.polar.FLAT],
     skipped); a solution that breaks some inequality (an ill-conditioned corner) is pulled
     back along the ray from ``c`` onto O's boundary. Every vertex of O is found: its polar
     facet is covered by the triangulation's simplices, at least one of them
@@ -44,7 +44,7 @@ class PolarHull:
     normals, offsets
         ``(m, k)`` and ``(m,)``: the inequalities, ``m >= k + 1``, O bounded.
     center
-        ``(k,)`` a point with :math:`a_j^T c < b_j` for all ``j``.
+        ``(k,)`` a point with $a_j^T c < b_j$ for all ``j``.
     tol
         Round-off of the inequalities (absolute, in the units of ``u``).
     """
@@ -69,7 +69,7 @@ class PolarHull:
         self.add(normals, offsets)
 
     def add(self, normals: NDArray[np.float64], offsets: NDArray[np.float64]) -> None:
-        r"""Add the rows :math:`a^T u \le b` (``(m, k)``, ``(m,)``; ``c`` strictly inside)."""
+        r"""Add the rows $a^T u \le b$ (``(m, k)``, ``(m,)``; ``c`` strictly inside)."""
         normals, offsets = np.atleast_2d(normals), np.atleast_1d(offsets)
         polar = normals / (offsets - normals @ self.center)[:, None]
         size = np.max(np.abs(polar), axis=1, keepdims=True)
@@ -87,8 +87,8 @@ class PolarHull:
         # Qhull's incremental mode can still stop on a precision error (scipy issue #4974:
         # facets with the same vertex set after a "dupridge"): the hull is then made again
         # from scratch on the same points, and where that fails too, on all points joggled
-        # anew, 10 and 100 times as much (:meth:`_rejoggle`), never by Qhull's own "QJ",
-        # whose joggled points the face lattice (:meth:`lattice`) would not know.
+        # anew, 10 and 100 times as much (`_rejoggle()`), never by Qhull's own "QJ",
+        # whose joggled points the face lattice (`lattice()`) would not know.
         try:
             if self._hull is None:
                 self._hull = ConvexHull(self._joggled, incremental=True)
@@ -114,18 +114,18 @@ class PolarHull:
         return simp
 
     def _rejoggle(self, factor: float) -> None:
-        """All polar points joggled anew by ``factor`` x :data:`JOGGLE` x their size (seeded)."""
+        """All polar points joggled anew by ``factor`` x [`JOGGLE`][mjtvm.polytopes.polar.JOGGLE] x their size (seeded)."""
         size = np.max(np.abs(self._polar), axis=1, keepdims=True)
         noise = self._rng.uniform(-1.0, 1.0, self._polar.shape)
         self._joggled = self._polar + noise * factor * JOGGLE * size
 
     def vertices(self, budget: Budget | None = None) -> NDArray[np.float64]:
         """``(n, k)`` the vertices of O, clusters closer than ``10 tol`` merged (near-parallel
-        rows can leave spurious points on O's boundary: :func:`polish_vertices` sorts them out)."""
+        rows can leave spurious points on O's boundary: `polish_vertices()` sorts them out)."""
         return self._solve(self._simplices(budget), budget)
 
     def new_vertices(self, budget: Budget | None = None) -> NDArray[np.float64]:
-        """The vertices of O as :meth:`vertices`, less those of simplices of Qhull's hull that
+        """The vertices of O as `vertices()`, less those of simplices of Qhull's hull that
         an earlier call solved already (the vertices that survived the rows added since)."""
         simp = self._simplices(budget)
         k, base = simp.shape[1], 2 ** (62 // simp.shape[1])
@@ -155,14 +155,14 @@ class PolarHull:
         return float(np.max(np.linalg.norm(self._joggled - self._polar, axis=1), initial=0.0))
 
     def lattice(self, budget: Budget | None = None) -> FaceLattice:
-        r"""The face lattice of the joggled polytope :math:`O'` that Qhull's simplices describe
-        exactly (:class:`~mjtvm.polytopes.lattice.FaceLattice`: O's volume, uniform points).
+        r"""The face lattice of the joggled polytope $O'$ that Qhull's simplices describe
+        exactly ([`FaceLattice`][mjtvm.polytopes.lattice.FaceLattice]: O's volume, uniform points).
 
-        :math:`O' = \{u : y'^T_j (u - c) \le 1\}` with the joggled polar points :math:`y'_j`
-        is simple, and its vertices :math:`c + w`, :math:`Y'_S w = 1`, belong to every
+        $O' = \{u : y'^T_j (u - c) \le 1\}$ with the joggled polar points $y'_j$
+        is simple, and its vertices $c + w$, $Y'_S w = 1$, belong to every
         simplex, flat ones too: on O's own rows a flat simplex has no vertex, and dropping it
         loses the flags through it (the 4-D cross-polytope came out 0.50 instead of 2/3). The
-        volumes of O and O' differ by the joggle's order (:data:`JOGGLE`, relative)."""
+        volumes of O and O' differ by the joggle's order ([`JOGGLE`][mjtvm.polytopes.polar.JOGGLE], relative)."""
         simp = self._simplices(budget)
         k = len(self.center)
         if budget is not None:  # the lattice's subsets, faces and edges: about 8 (k + 2) 2^k bytes a simplex
@@ -225,5 +225,5 @@ class PolarHull:
 def polar_vertices(
     normals: NDArray[np.float64], offsets: NDArray[np.float64], center: NDArray[np.float64], tol: float
 ) -> NDArray[np.float64]:
-    r"""The vertices of :math:`\{u : a_j^T u \le b_j\}` at once (:class:`PolarHull`)."""
+    r"""The vertices of $\{u : a_j^T u \le b_j\}$ at once ([`PolarHull`][mjtvm.polytopes.polar.PolarHull])."""
     return PolarHull(normals, offsets, center, tol).vertices()

@@ -1,44 +1,46 @@
-r"""Problem 1: the projection of the lifted polytope of eq. (26) (eq. 34; :mod:`~mjtvm.polytopes.lifted`).
+r"""Problem 1: the projection of the lifted polytope of eq. (26) (eq. 34; [`lifted`][mjtvm.polytopes.lifted]).
 
-The TVMS is :math:`S_{ov}`, the projection onto the twist space of the lifted polytope
+The TVMS is $S_{ov}$, the projection onto the twist space of the lifted polytope
 
-.. math:: \{ (x, \dot r) : \text{row\_lower} \le A x + A_{twist} \dot r \le
-          \text{row\_upper},\ \text{col\_lower} \le x \le \text{col\_upper} \}
+$$
+\{ (x, \dot r) : \text{row\_lower} \le A x + A_{twist} \dot r \le
+\text{row\_upper},\ \text{col\_lower} \le x \le \text{col\_upper} \}
+$$
 
-built by :func:`~mjtvm.core.assembly.assemble` with one statics copy per REFS vertex
-(``statics_bounds`` puts :math:`-w_k` on copy k's balance rows), one common
-:math:`\dot q` and one common box (eliminated exactly, :attr:`OperationRange.
-mirrored_halfplanes`). With the RVDS cone, :math:`\dot r = \sum_l c_l \hat r_l`,
-:math:`c_l \ge 0`, and the variables ``c`` replace :math:`\dot r` (columns
+built by `assemble()` with one statics copy per REFS vertex
+(``statics_bounds`` puts $-w_k$ on copy k's balance rows), one common
+$\dot q$ and one common box (eliminated exactly, `OperationRange.
+mirrored_halfplanes`). With the RVDS cone, $\dot r = \sum_l c_l \hat r_l$,
+$c_l \ge 0$, and the variables ``c`` replace $\dot r$ (columns
 ``A_twist @ R^T``). The lifted variables are ``y = [x; z]`` and the twist is
-``generators @ z`` (``z`` is :math:`\dot r` itself without the cone).
+``generators @ z`` (``z`` is $\dot r$ itself without the cone).
 
-**The origin.** :math:`S_{ov}` contains :math:`\dot r = 0` whenever it is non-empty:
-with :math:`\dot q = 0`, :math:`\rho = 0` every kinematic row holds, and the
-operation-range rows :math:`a_\tau |\tau| + a_{qd} |\dot q| \le b` are weakest at
-:math:`\dot q = 0`, so the forces and torques of any feasible point still fit. Hence
-the affine hull of :math:`S_{ov}` is a linear subspace, and its recession cone is the
+**The origin.** $S_{ov}$ contains $\dot r = 0$ whenever it is non-empty:
+with $\dot q = 0$, $\rho = 0$ every kinematic row holds, and the
+operation-range rows $a_\tau |\tau| + a_{qd} |\dot q| \le b$ are weakest at
+$\dot q = 0$, so the forces and torques of any feasible point still fit. Hence
+the affine hull of $S_{ov}$ is a linear subspace, and its recession cone is the
 projection of the lifted one (obtained from the same rows with zero bounds).
 
 Two exact projections:
 
-* :func:`project_lp` (fast, output-sensitive): LPs in twist space
-  (:mod:`~mjtvm.polytopes.oracles`). First the linear hull: support LPs along :math:`\pm e_i`,
+* `project_lp()` (fast, output-sensitive): LPs in twist space
+  ([`oracles`][mjtvm.polytopes.oracles]). First the linear hull: support LPs along $\pm e_i$,
   then along directions orthogonal to the points found until each is either extended or
-  proved orthogonal to :math:`S_{ov}` (max = min = 0). Inside it, an outer approximation
+  proved orthogonal to $S_{ov}$ (max = min = 0). Inside it, an outer approximation
   refined by cutting planes (the dual of Bretl and Lall's inner one, in any dimension
   <= 6): a polytope O given by valid inequalities (support LPs' values, and the RVDS
-  cone's facets when :math:`\dot r` is restricted to it), so O contains :math:`S_{ov}`; its
+  cone's facets when $\dot r$ is restricted to it), so O contains $S_{ov}$; its
   vertices come from a convex hull of the polar points (Qhull,
-  :class:`~mjtvm.polytopes.polar.PolarHull`); a ray-shooting LP either certifies a vertex as a
-  point of :math:`S_{ov}` or yields a supporting hyperplane that cuts it off. When every
-  vertex of O is certified, O is :math:`S_{ov}`. The LPs number about vertices +
+  [`PolarHull`][mjtvm.polytopes.polar.PolarHull]); a ray-shooting LP either certifies a vertex as a
+  point of $S_{ov}$ or yields a supporting hyperplane that cuts it off. When every
+  vertex of O is certified, O is $S_{ov}$. The LPs number about vertices +
   facets, and Qhull works on the facets (a few hundred on the Case 2 hand, whose 6-D
   TVMS has 2044 vertices: triangulating those takes 250 000 simplices, so an inner
   approximation built on the vertices takes 47 s).
-* :func:`~mjtvm.polytopes.enumeration.project_cdd` (the paper's way, the baseline): vertex
+* `project_cdd()` (the paper's way, the baseline): vertex
   enumeration of the lifted polytope with cddlib, projection of its vertices, convex hull
-  (:func:`~mjtvm.polytopes.hull.reduce_points`).
+  ([`reduce_points()`][mjtvm.polytopes.hull.reduce_points]).
 
 Both work in scaled coordinates ``s = metric * rdot`` (the vertex set does not depend on
 the metric, the tolerances do) and return the vertices in twist coordinates.
@@ -66,11 +68,11 @@ REL_TOL = 1e-9  #: tolerance relative to the extent of S_ov (LP tolerances are 1
 def _linear_hull(
     support: SupportOracle, big_d: int, rel_tol: float
 ) -> tuple[list[NDArray[np.float64]], NDArray[np.float64], float, NDArray[np.float64] | None]:
-    r"""Points of :math:`S_{ov}` spanning its linear hull, that hull's basis, the tolerance and a ray.
+    r"""Points of $S_{ov}$ spanning its linear hull, that hull's basis, the tolerance and a ray.
 
-    LPs along :math:`\pm e_i` give the extent; then, while some direction ``u`` orthogonal
-    to the span found so far is left, max and min of :math:`u^T s` either give a point
-    off the span or prove ``u`` orthogonal to :math:`S_{ov}` (both 0).
+    LPs along $\pm e_i$ give the extent; then, while some direction ``u`` orthogonal
+    to the span found so far is left, max and min of $u^T s$ either give a point
+    off the span or prove ``u`` orthogonal to $S_{ov}$ (both 0).
     """
     points: list[NDArray[np.float64]] = []
     ray: NDArray[np.float64] | None = None
@@ -122,15 +124,15 @@ def project_lp(
     Parameters
     ----------
     poly
-        From :func:`lifted_polytope`.
+        From `lifted_polytope()`.
     metric
         ``(D,)`` positive scaling of the working coordinates (default ones).
     rel_tol
-        Facet and linear-hull tolerance, relative to the extent of :math:`S_{ov}`.
+        Facet and linear-hull tolerance, relative to the extent of $S_{ov}$.
     limits
-        When to stop before the polytope is exact (:class:`~mjtvm.polytopes.budget.Limits`;
-        default: exact, within :func:`~mjtvm.polytopes.budget.default_memory_budget`). Then
-        the status is ``"approximate"`` and :attr:`Projection.approximation` holds the bracket.
+        When to stop before the polytope is exact (`Limits`;
+        default: exact, within `default_memory_budget()`). Then
+        the status is ``"approximate"`` and [`Projection.approximation`][mjtvm.polytopes.lifted.Projection.approximation] holds the bracket.
     """
     budget = Budget(limits)
     t0 = time.perf_counter()

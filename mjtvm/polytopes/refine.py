@@ -1,9 +1,9 @@
-r"""Cutting planes of :func:`~mjtvm.polytopes.projection.project_lp`, anytime (Problem 1).
+r"""Cutting planes of `project_lp()`, anytime (Problem 1).
 
-:func:`refine` keeps an outer polytope O (valid inequalities) and an inner one I (the hull of
-points the LPs proved to lie in :math:`S_{ov}`, :mod:`~mjtvm.polytopes.bracket`) and refines O
-until every vertex is certified (then O = :math:`S_{ov}`), or until a limit of
-:class:`~mjtvm.polytopes.budget.Limits` stops it: the relative volume gap of the bracket
+[`refine()`][mjtvm.polytopes.refine.refine] keeps an outer polytope O (valid inequalities) and an inner one I (the hull of
+points the LPs proved to lie in $S_{ov}$, [`bracket`][mjtvm.polytopes.bracket]) and refines O
+until every vertex is certified (then O = $S_{ov}$), or until a limit of
+`Limits` stops it: the relative volume gap of the bracket
 [vol(I), vol(O)] at most ``tolerance``, the time limit or the memory budget. It then
 returns ``status: "approximate"`` with the bracket instead of failing.
 """
@@ -43,7 +43,7 @@ REFINE_SHARE = 0.5
 
 
 class Cutter:
-    """The LPs of :func:`_refine` (ray shooting, support, distance; one HiGHS session each),
+    """The LPs of `_refine()` (ray shooting, support, distance; one HiGHS session each),
     which certify vertices of O or cut them off."""
 
     def __init__(
@@ -67,7 +67,7 @@ class Cutter:
         return self.support.num_lps + self.shoot.num_lps + (self.nearest.num_lps if self.nearest else 0)
 
     def cut(self, a: NDArray[np.float64]) -> float:
-        """The support value :math:`h(a)` of :math:`S_{ov}` along ``a`` (local coordinates)."""
+        """The support value $h(a)$ of $S_{ov}$ along ``a`` (local coordinates)."""
         status, s = self.support(self.basis.T @ a)
         if status != "optimal":  # bounded after _linear_hull: a solver fault
             raise SolverError("highs", f"support LP inside a bounded TVMS: {status}")
@@ -76,9 +76,9 @@ class Cutter:
         return float(a @ (self.basis @ s))
 
     def settle(self, verts: NDArray[np.float64]) -> None:
-        """Certify the vertices among ``verts`` (appended to :attr:`certified`) or cut them off
-        (rows ``(normals, offsets)`` in :attr:`new_n`, :attr:`new_b`, the first :attr:`cuts`).
-        A :class:`LimitReached` from the budget (checked every 32 vertices) leaves both as far as
+        """Certify the vertices among ``verts`` (appended to `certified`) or cut them off
+        (rows ``(normals, offsets)`` in `new_n`, `new_b`, the first `cuts`).
+        A [`LimitReached`][mjtvm.polytopes.budget.LimitReached] from the budget (checked every 32 vertices) leaves both as far as
         they got."""
         k, tol, center = self.basis.shape[0], self.tol, self.center
         certified: list[NDArray[np.float64]] = []
@@ -132,13 +132,13 @@ def _chain(points: NDArray[np.float64], center: NDArray[np.float64]) -> NDArray[
 
 @dataclass
 class Meter:
-    """The bracket's measurements (:meth:`measure`) with the last of each part and its cost.
+    """The bracket's measurements (`measure()`) with the last of each part and its cost.
 
     A part whose predicted cost does not fit in the time left is not measured again: the last
     inner hull stays valid (I only gains points, an older I is inside the newer), and so does
     the last outer lattice (O only gains rows). The predictions: Qhull's hull of the proven
-    points grows as their number to the power :data:`INNER_GROWTH`, the face lattice linearly
-    with the simplices of the polar hull (:meth:`PolarHull.predicted_size`).
+    points grows as their number to the power [`INNER_GROWTH`][mjtvm.polytopes.refine.INNER_GROWTH], the face lattice linearly
+    with the simplices of the polar hull ([`PolarHull.predicted_size()`][mjtvm.polytopes.polar.PolarHull.predicted_size]).
     """
 
     inner: InnerHull | None = None
@@ -201,33 +201,33 @@ def refine(
 ) -> Projection:
     r"""Outer approximation refined by cutting planes inside the linear hull (module docstring).
 
-    ``local``: points of :math:`S_{ov}` spanning its linear hull, in its coordinates ``u``.
-    ``O`` = :math:`\{u : a_j^T u \le b_j\}` starts as ``bounds`` (the support LPs along
-    :math:`\pm e_i` of the twist and the RVDS cone's facets, in these coordinates) or, where
-    they leave O unbounded, as the box of support LPs along :math:`\pm e_i` of ``u``; every
-    row is a support LP's value or a facet of a cone that holds :math:`S_{ov}`, so
-    :math:`O \supseteq S_{ov}`. Each round enumerates O's vertices (:class:`PolarHull`, which
+    ``local``: points of $S_{ov}$ spanning its linear hull, in its coordinates ``u``.
+    ``O`` = $\{u : a_j^T u \le b_j\}$ starts as ``bounds`` (the support LPs along
+    $\pm e_i$ of the twist and the RVDS cone's facets, in these coordinates) or, where
+    they leave O unbounded, as the box of support LPs along $\pm e_i$ of ``u``; every
+    row is a support LP's value or a facet of a cone that holds $S_{ov}$, so
+    $O \supseteq S_{ov}$. Each round enumerates O's vertices ([`PolarHull`][mjtvm.polytopes.polar.PolarHull], which
     keeps Qhull's hull of the polar points between rounds) and shoots a ray from the centre
-    ``c`` of the points to each vertex not yet certified (:class:`RayShooter`): a ray that
-    reaches it (to ``10 tol``) certifies the vertex as a point of :math:`S_{ov}`, hence one of
+    ``c`` of the points to each vertex not yet certified ([`RayShooter`][mjtvm.polytopes.oracles.RayShooter]): a ray that
+    reaches it (to ``10 tol``) certifies the vertex as a point of $S_{ov}$, hence one of
     its vertices; otherwise the duals give the normal ``a`` of a hyperplane supporting
-    :math:`S_{ov}` where the ray leaves it, and the support LP along ``a`` adds the row
-    :math:`a^T u \le h(a)`, which cuts the vertex off. A vertex within ``tol`` of that row is
-    settled by its distance to :math:`S_{ov}` (:class:`DistanceOracle`): within ``tol``,
+    $S_{ov}$ where the ray leaves it, and the support LP along ``a`` adds the row
+    $a^T u \le h(a)$, which cuts the vertex off. A vertex within ``tol`` of that row is
+    settled by its distance to $S_{ov}$ ([`DistanceOracle`][mjtvm.polytopes.oracles.DistanceOracle]): within ``tol``,
     certified; otherwise cut off by the dual's separating hyperplane. When a round certifies
-    every vertex, O = :math:`S_{ov}` (to ``10 tol``); :func:`polish_vertices` then refits the
+    every vertex, O = $S_{ov}$ (to ``10 tol``); [`polish_vertices()`][mjtvm.polytopes.hull.polish_vertices] then refits the
     facets and sorts out the vertices. The rays of a round go in an order that keeps
-    neighbours together (:func:`_chain`), and a vertex that is a support LP's solution needs none.
+    neighbours together (`_chain()`), and a vertex that is a support LP's solution needs none.
 
     With a ``tolerance`` or a ``progress`` callback in ``budget.limits`` the bracket is
-    measured between rounds (:class:`Meter`), at most as often as it keeps its cost below the
+    measured between rounds ([`Meter`][mjtvm.polytopes.refine.Meter]), at most as often as it keeps its cost below the
     time spent refining; a limit reached stops the loop, the cuts found so far are kept and
     the result is ``"approximate"``, with the bracket measured then (only the memory budget
-    applies to a first measurement; if even it does not fit, a :class:`SolverError`). A round
-    predicted (:data:`GROWTH`) to end past the time limit is not started. With a tolerance and
-    a ``confidence``, the cutting planes stop at :data:`REFINE_SHARE` of the time limit and,
+    applies to a first measurement; if even it does not fit, a [`SolverError`][mjtvm.errors.SolverError]). A round
+    predicted ([`GROWTH`][mjtvm.polytopes.refine.GROWTH]) to end past the time limit is not started. With a tolerance and
+    a ``confidence``, the cutting planes stop at [`REFINE_SHARE`][mjtvm.polytopes.refine.REFINE_SHARE] of the time limit and,
     if the bracket is still wider than the tolerance, a randomized estimate
-    (:func:`~mjtvm.polytopes.estimate.estimate_volume`) uses the rest.
+    (`estimate_volume()`) uses the rest.
     """
     budget = budget or Budget()
     limits: Limits = budget.limits
@@ -327,7 +327,7 @@ def _approximate(
     until: float | None,
 ) -> Projection:
     """The ``"approximate"`` result: the bracket (measured again where that fits in the time
-    left, see :class:`Meter`), then the randomized estimate where it is asked for."""
+    left, see [`Meter`][mjtvm.polytopes.refine.Meter]), then the randomized estimate where it is asked for."""
     limits = budget.limits
     before = meter.bracket
     if stop.reason != "tolerance":
@@ -389,7 +389,7 @@ def _tighten(
 ) -> tuple[float, FaceLattice] | None:
     """O with the rows ``normals @ u <= offsets`` added (supporting hyperplanes of S_ov found by
     the estimate's LPs): its volume bound and lattice; ``None`` (the rows kept, the lattice
-    not made) where its predicted cost (:class:`Meter`) exceeds the time left."""
+    not made) where its predicted cost ([`Meter`][mjtvm.polytopes.refine.Meter]) exceeds the time left."""
     polar.add(normals, offsets)
     t = budget.limits.time_limit
     if t is not None and meter.outer_simplices:

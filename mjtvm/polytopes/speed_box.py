@@ -1,40 +1,40 @@
 r"""Problem 1 when no force binds: the TVMS is the image of the joint-speed box, a zonotope.
 
-:math:`S_{ov}` (eq. 26) couples the twist to the forces only through the joint speeds' box:
-joint j may turn at :math:`|\dot q_j| \le` the speed its operation range allows at its
+$S_{ov}$ (eq. 26) couples the twist to the forces only through the joint speeds' box:
+joint j may turn at $|\dot q_j| \le$ the speed its operation range allows at its
 torque. When one set of forces balances every REFS vertex with every torque in the range
-that still allows the joint's full speed :math:`\dot q_{max,j}` (the vertex of :math:`P_j`
-on the speed axis), every joint speed in the box :math:`B = \prod_j [-\dot q_{max,j},
-\dot q_{max,j}]` is feasible with those forces, and none outside it is (down-closure, eq. 1),
-so the statics drop out: :math:`S_{ov} = \{\dot r \in V : A_q \dot q = A_r \dot r,\ \dot q \in B\}`.
+that still allows the joint's full speed $\dot q_{max,j}$ (the vertex of $P_j$
+on the speed axis), every joint speed in the box $B = \prod_j [-\dot q_{max,j},
+\dot q_{max,j}]$ is feasible with those forces, and none outside it is (down-closure, eq. 1),
+so the statics drop out: $S_{ov} = \{\dot r \in V : A_q \dot q = A_r \dot r,\ \dot q \in B\}$.
 
-**The condition** (:func:`speed_box_projection`; all of it, else the LP projection runs):
+**The condition** ([`speed_box_projection()`][mjtvm.polytopes.speed_box.speed_box_projection]; all of it, else the LP projection runs):
 
 1. *no contact force is needed*: every REFS vertex is 0 and no contact has a preload, so
-   the zero forces balance them, leaving each torque at the gravity torque :math:`g_j`;
+   the zero forces balance them, leaving each torque at the gravity torque $g_j$;
 2. *no other force helps*: either the gravity torques leave every joint its full speed,
-   :math:`(|g_j|, \dot q_{max,j}) \in P_j` (to 1e-12 relative), or the state has one
+   $(|g_j|, \dot q_{max,j}) \in P_j$ (to 1e-12 relative), or the state has one
    contact, whose force must then be 0 (a point force balances no wrench but 0); the box's
-   half-widths are the speeds at :math:`g_j`,
-   :meth:`~mjtvm.core.operation_range.OperationRange.max_speed_at`, as on the LP path;
+   half-widths are the speeds at $g_j$,
+   `max_speed_at()`, as on the LP path;
 3. no transmission (its damping puts the speeds in the torque rows), no joint on its
-   position limit (its speed is one-sided, :mod:`~mjtvm.core.limits`), and only F and L contacts
-   (equalities :math:`A_q \dot q = A_r \dot r`, eq. 7 and 9; an S contact's slip and a D
+   position limit (its speed is one-sided, `limits`), and only F and L contacts
+   (equalities $A_q \dot q = A_r \dot r$, eq. 7 and 9; an S contact's slip and a D
    contact's inequality are not images of the box);
-4. the twist space ``V`` is a linear subspace: all of :math:`R^D` without the RVDS cone, or
+4. the twist space ``V`` is a linear subspace: all of $R^D$ without the RVDS cone, or
    the cone of an RVDS whose every vertex's negative is a vertex too (translations:
-   :math:`\pm e_x, \pm e_y, \pm e_z`);
-5. the kinematics fix the twist and leave the joints free: :math:`A_r` is injective on ``V``
-   and :math:`\mathrm{range}(A_q) \subseteq A_r V` (rank decisions at
-   :data:`~mjtvm.polytopes.zonotope.RANK_TOL` relative).
+   $\pm e_x, \pm e_y, \pm e_z$);
+5. the kinematics fix the twist and leave the joints free: $A_r$ is injective on ``V``
+   and $\mathrm{range}(A_q) \subseteq A_r V$ (rank decisions at
+   `RANK_TOL` relative).
 
-Then :math:`S_{ov} = \{T \dot q : \dot q \in B\}` with :math:`T = E (A_r E)^+ A_q` (``E`` an
-orthonormal basis of ``V``), a zonotope (:func:`~mjtvm.polytopes.zonotope.zonotope`). One
+Then $S_{ov} = \{T \dot q : \dot q \in B\}$ with $T = E (A_r E)^+ A_q$ (``E`` an
+orthonormal basis of ``V``), a zonotope ([`zonotope()`][mjtvm.polytopes.zonotope.zonotope]). One
 fingertip F-contact with the translations as RVDS is the classic velocity polytope
-:math:`\{J \dot q : \dot q \in B\}` of the fingertip's Jacobian (pycapacity's
+$\{J \dot q : \dot q \in B\}$ of the fingertip's Jacobian (pycapacity's
 ``velocity_polytope``). Conditions 1-2 are sufficient, not necessary, for forces not to
 bind (internal forces that keep the torques small would also do; an LP would decide it).
-Where forces cannot bind, :math:`S_{ov}` has the same vertices on both paths; the LP path
+Where forces cannot bind, $S_{ov}$ has the same vertices on both paths; the LP path
 finds them to its 1e-9 tolerance, this one to round-off.
 """
 
@@ -66,7 +66,7 @@ FULL_SPEED_TOL = 1e-12  #: a joint keeps its full speed at its gravity torque to
 
 
 def _speeds_at(ranges: tuple[OperationRange, ...], torques: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(M,)`` :meth:`~mjtvm.core.operation_range.OperationRange.max_speed_at` of each joint's
+    """``(M,)`` `max_speed_at()` of each joint's
     torque, the same arithmetic, once per distinct range (a hand's joints often share one)."""
     out = np.empty(len(ranges))
     t = np.abs(torques)
@@ -85,8 +85,8 @@ def _speeds_at(ranges: tuple[OperationRange, ...], torques: NDArray[np.float64])
 
 
 def ray_lengths_in(proj: Projection, rays: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``max alpha`` with ``alpha r`` in :math:`S_{ov}` for each row ``r`` of ``(R, D)`` ``rays``
-    (Problem 2's alphas with one REFS vertex), from the facets of a :class:`BoxImage`'s
+    """``max alpha`` with ``alpha r`` in $S_{ov}$ for each row ``r`` of ``(R, D)`` ``rays``
+    (Problem 2's alphas with one REFS vertex), from the facets of a [`BoxImage`][mjtvm.polytopes.speed_box.BoxImage]'s
     projection: ``nan`` for a zero row, 0 for a ray leaving the linear hull at once, ``inf``
     where no facet stops it (the rule of the LP path's ``tvms._ray_lengths``, all rays at once)."""
     w, basis = proj.metric, proj.basis
@@ -164,8 +164,8 @@ def _twist_space(state: GraspState, rvds_cone: bool) -> NDArray[np.float64] | No
 
 
 def speed_box_map(state: GraspState, rvds_cone: bool) -> tuple[NDArray[np.float64] | None, str]:
-    r"""``(D, M)`` the map :math:`T = E (A_r E)^+ A_q` with :math:`S_{ov} = T B` (conditions 3-5
-    of the module docstring; 1-2 are :func:`speed_box`), else ``None`` and why not."""
+    r"""``(D, M)`` the map $T = E (A_r E)^+ A_q$ with $S_{ov} = T B$ (conditions 3-5
+    of the module docstring; 1-2 are [`speed_box()`][mjtvm.polytopes.speed_box.speed_box]), else ``None`` and why not."""
     e = _twist_space(state, rvds_cone)
     if e is None:
         return None, "the RVDS cone is not a linear subspace"
@@ -188,17 +188,17 @@ def speed_box_map(state: GraspState, rvds_cone: bool) -> tuple[NDArray[np.float6
 
 @dataclass(frozen=True, eq=False)
 class BoxImage:
-    """:math:`S_{ov}` as the image of the joint-speed box.
+    """$S_{ov}$ as the image of the joint-speed box.
 
     Attributes
     ----------
     projection
-        The :class:`~mjtvm.polytopes.lifted.Projection` the LP path would return (status
+        The `Projection` the LP path would return (status
         ``"bounded"``, vertices in twist coordinates, ``basis`` and ``facets`` as there;
         ``method = "zonotope"``, no LP).
     affine_volume
         Its volume inside the affine hull in the scaled coordinates ``weights * rdot``
-        (Shephard's sum, :mod:`~mjtvm.polytopes.zonotope`).
+        (Shephard's sum, [`zonotope`][mjtvm.polytopes.zonotope]).
     """
 
     projection: Projection
@@ -208,9 +208,9 @@ class BoxImage:
 def speed_box_projection(
     state: GraspState, weights: NDArray[np.float64], rvds_cone: bool
 ) -> tuple[BoxImage | None, str]:
-    """:math:`S_{ov}` of ``state`` as a :class:`BoxImage` in the scaled coordinates
+    """$S_{ov}$ of ``state`` as a [`BoxImage`][mjtvm.polytopes.speed_box.BoxImage] in the scaled coordinates
     ``weights * rdot`` when the module docstring's condition holds and the enumeration fits
-    :data:`~mjtvm.polytopes.zonotope.MAX_CANDIDATES`; else ``None`` and why not."""
+    `MAX_CANDIDATES`; else ``None`` and why not."""
     t0 = time.perf_counter()
     box, why = speed_box(state)
     if box is None:

@@ -1,18 +1,18 @@
-r"""Problem 1: the TVMS :math:`S_{ov}` and the TVMM (eq. 26-29, 34), the ``mjtvm.tvms/1`` document.
+r"""Problem 1: the TVMS $S_{ov}$ and the TVMM (eq. 26-29, 34), the ``mjtvm.tvms/1`` document.
 
-When no force binds (:mod:`~mjtvm.polytopes.speed_box`: no wrench to balance, gravity
+When no force binds ([`speed_box`][mjtvm.polytopes.speed_box]: no wrench to balance, gravity
 torques that leave every joint its full speed, F and L contacts, a twist subspace),
-:math:`S_{ov}` is the image of the joint-speed box, a zonotope, computed directly without an
-LP (``method="auto"``, the default). Otherwise :func:`tvms` builds the lifted polytope
-(:func:`~mjtvm.polytopes.lifted.lifted_polytope`),
-projects it onto the twist space (:func:`~mjtvm.polytopes.projection.project_lp`, or the paper's
-vertex enumeration :func:`~mjtvm.polytopes.enumeration.project_cdd` as the baseline) and measures
-it: the D-dimensional volume (eq. 28-29, by Qhull), 0 unless :math:`S_{ov}` is full-dimensional,
+$S_{ov}$ is the image of the joint-speed box, a zonotope, computed directly without an
+LP (``method="auto"``, the default). Otherwise [`tvms()`][mjtvm.polytopes.tvms.tvms] builds the lifted polytope
+(`lifted_polytope()`),
+projects it onto the twist space (`project_lp()`, or the paper's
+vertex enumeration `project_cdd()` as the baseline) and measures
+it: the D-dimensional volume (eq. 28-29, by Qhull), 0 unless $S_{ov}$ is full-dimensional,
 and the volume inside its affine hull after scaling the twist by ``scale`` (the paper's
 Case 1 figure: diag(10, 10, 10, 1, 1, 1), 1 / 0.1 m on the linear part).
 
 The baseline, like the paper, enumerates the lifted polytope's vertices with cddlib
-(:mod:`mjtvm.polytopes.enumeration`).
+(`mjtvm.polytopes.enumeration`).
 """
 
 from __future__ import annotations
@@ -80,9 +80,9 @@ class TvmsResult:
     bounded
         False when unbounded; ``None`` on timeout.
     dimension
-        Dimension of the affine hull of :math:`S_{ov}` (-1 when empty, ``None`` unknown).
+        Dimension of the affine hull of $S_{ov}$ (-1 when empty, ``None`` unknown).
     vertices
-        ``(n, D)`` the vertices of :math:`S_{ov}`: [v of p_O (m/s); omega (rad/s)]; ``(0, D)``
+        ``(n, D)`` the vertices of $S_{ov}$: [v of p_O (m/s); omega (rad/s)]; ``(0, D)``
         unless bounded.
     volume
         D-dimensional volume (TVMM, eq. 29; m^3 rad^3 / s^6 in space), 0 when
@@ -90,16 +90,16 @@ class TvmsResult:
     scale
         ``(D,)`` the factors applied to the twist before measuring ``affine_volume``.
     affine_volume
-        Volume inside the affine hull of the scaled :math:`S_{ov}` (``dimension``-dimensional;
+        Volume inside the affine hull of the scaled $S_{ov}$ (``dimension``-dimensional;
         0 for a point or the empty set); ``None`` unless bounded or empty.
     unbounded_direction
-        ``(D,)`` a unit twist along which :math:`S_{ov}` is unbounded, or ``None``.
+        ``(D,)`` a unit twist along which $S_{ov}$ is unbounded, or ``None``.
     method, rvds_cone
-        How :math:`S_{ov}` was computed (``"lp"``, ``"cdd"``, or ``"zonotope"``: the image of
-        the joint-speed box, :mod:`~mjtvm.polytopes.speed_box`) and whether the RVDS cone
+        How $S_{ov}$ was computed (``"lp"``, ``"cdd"``, or ``"zonotope"``: the image of
+        the joint-speed box, [`speed_box`][mjtvm.polytopes.speed_box]) and whether the RVDS cone
         restricted it.
     timings
-        :class:`TvmsTimings`.
+        [`TvmsTimings`][mjtvm.polytopes.tvms.TvmsTimings].
     lifted_vertices
         Number of vertices of the lifted polytope (``"cdd"`` only).
     volume_bracket, affine_volume_bracket
@@ -111,14 +111,14 @@ class TvmsResult:
         approximate.
     alpha_bracket
         ``(R, 2)`` [inner, outer] ray lengths along each RVDS vertex ``r_l``: bounds of
-        ``max alpha`` with ``alpha r_l`` in :math:`S_{ov}` (Problem 2's :math:`\alpha_l` when
+        ``max alpha`` with ``alpha r_l`` in $S_{ov}$ (Problem 2's $\alpha_l$ when
         the state has one REFS vertex); a row of ``nan`` for a zero vertex, ``inf`` where the
         ray does not leave. ``None`` without RVDS or unless bounded or approximate.
     stopped_by
         ``None`` when exact; else ``(reason, detail)``: ``"tolerance"``, ``"time"`` or
         ``"memory"`` and one line on it.
     volume_estimate
-        The randomized volume (:class:`~mjtvm.polytopes.estimate.VolumeEstimate`, in the
+        The randomized volume (`VolumeEstimate`, in the
         units of ``affine_volume``; statistical, not certified) when the bracket stopped wider
         than the tolerance and a ``confidence`` was asked for; else ``None``.
     """
@@ -199,7 +199,7 @@ class TvmsResult:
 
 
 def default_scale(state: GraspState) -> NDArray[np.float64]:
-    """``(D,)`` 1 / :data:`CHARACTERISTIC_LENGTH` on the linear part, 1 on the angular part."""
+    """``(D,)`` 1 / `CHARACTERISTIC_LENGTH` on the linear part, 1 on the angular part."""
     return np.concatenate(
         [np.full(state.dim, 1.0 / CHARACTERISTIC_LENGTH), np.ones(state.twist_dim - state.dim)]
     )
@@ -233,8 +233,8 @@ def _volumes(
 
     Both come from one measurement in the scaled coordinates: the D-volume is the scaled
     one divided by the product of ``scale`` when the TVMS is full-dimensional, else 0.
-    With the projection's ``facets`` it is a sum of pyramids (:func:`facet_volume`),
-    otherwise one Qhull hull of the vertices (:func:`hull_volume`).
+    With the projection's ``facets`` it is a sum of pyramids ([`facet_volume()`][mjtvm.polytopes.volume.facet_volume]),
+    otherwise one Qhull hull of the vertices ([`hull_volume()`][mjtvm.polytopes.volume.hull_volume]).
     """
     if dimension <= 0:
         return 0.0, 0.0
@@ -296,7 +296,7 @@ def _brackets(
 def _box_image_result(
     state: GraspState, image: BoxImage, weights: NDArray[np.float64], rvds_cone: bool
 ) -> TvmsResult:
-    """The result of :func:`tvms` from the image of the joint-speed box: exact, its volume by
+    """The result of [`tvms()`][mjtvm.polytopes.tvms.tvms] from the image of the joint-speed box: exact, its volume by
     Shephard's sum, the alphas from its facets as on the LP path."""
     t0 = time.perf_counter()
     proj = image.projection
@@ -345,19 +345,19 @@ def tvms(
     ----------
     state
         The grasp state; all its REFS vertices are balanced at once, with one common
-        :math:`\dot q` and box.
+        $\dot q$ and box.
     method
-        ``"lp"`` (support LPs, :func:`~mjtvm.polytopes.projection.project_lp`), ``"cdd"``
+        ``"lp"`` (support LPs, `project_lp()`), ``"cdd"``
         (vertex enumeration of the lifted polytope,
-        :func:`~mjtvm.polytopes.enumeration.project_cdd`), ``"zonotope"`` (the image of the
-        joint-speed box when no force binds, :func:`~mjtvm.polytopes.speed_box.speed_box_projection`:
+        `project_cdd()`), ``"zonotope"`` (the image of the
+        joint-speed box when no force binds, [`speed_box_projection()`][mjtvm.polytopes.speed_box.speed_box_projection]:
         no LP) or ``"auto"`` (default): ``"zonotope"`` when its condition holds, else ``"lp"``.
     scale
-        ``(D,)`` positive factors for ``affine_volume`` (default :func:`default_scale`:
+        ``(D,)`` positive factors for ``affine_volume`` (default [`default_scale()`][mjtvm.polytopes.tvms.default_scale]:
         diag(10, 10, 10, 1, 1, 1) in space). They also scale the working coordinates of
         the projection, whose tolerances are relative.
     rvds_cone
-        Restrict :math:`S_{ov}` to the cone generated by ``state.rvds`` when the state has
+        Restrict $S_{ov}$ to the cone generated by ``state.rvds`` when the state has
         an RVDS (the schema's reading of Problem 1); no restriction without RVDS.
     box
         ``"eliminated"`` (default) or ``"literal"`` (eq. 2's box variables).
@@ -370,19 +370,19 @@ def tvms(
         bracket is at most this (default 0: exact within floating point).
     memory
         ``method="lp"``: bytes the projection may add to the process's resident set (default
-        :func:`~mjtvm.polytopes.budget.default_memory_budget`, a quarter of the available
+        `default_memory_budget()`, a quarter of the available
         memory); reaching it gives status ``"approximate"``.
     progress
         ``method="lp"``: called with the bracket (a dict, see
-        :class:`~mjtvm.polytopes.budget.Limits`) whenever it is measured (which it then is
+        `Limits`) whenever it is measured (which it then is
         between rounds, at most half of the time), and with the estimate's interval.
     confidence
         ``method="lp"`` with a ``tolerance``: if the certified bracket is still wider than
         the tolerance when the cutting planes stop (at half of ``time_limit``, or by the
         memory budget), the volume is estimated by uniform points in the outer polytope and
-        LPs (:func:`~mjtvm.polytopes.estimate.estimate_volume`) until its interval, which
+        LPs (`estimate_volume()`) until its interval, which
         holds the volume with this probability, is that narrow or the time is up
-        (:attr:`TvmsResult.volume_estimate`). 0: no estimate (the cutting planes then have
+        (`TvmsResult.volume_estimate`). 0: no estimate (the cutting planes then have
         all the time).
 
     Raises

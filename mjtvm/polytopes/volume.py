@@ -1,9 +1,9 @@
 r"""Measures of the polytopes of Problem 1: volumes and the Hausdorff distance.
 
-* :func:`hull_volume`: one Qhull hull of the vertices;
-* :func:`facet_volume`: pyramids over the facets that :func:`~mjtvm.polytopes.hull.polish_vertices`
+* [`hull_volume()`][mjtvm.polytopes.volume.hull_volume]: one Qhull hull of the vertices;
+* [`facet_volume()`][mjtvm.polytopes.volume.facet_volume]: pyramids over the facets that [`polish_vertices()`][mjtvm.polytopes.hull.polish_vertices]
   returns (no triangulation of the whole polytope);
-* :func:`hausdorff`: the distance of two vertex sets (tests, benchmarks).
+* [`hausdorff()`][mjtvm.polytopes.volume.hausdorff]: the distance of two vertex sets (tests, benchmarks).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ __all__ = ["facet_volume", "hausdorff", "hull_volume"]
 def hull_volume(points: NDArray[np.float64]) -> float:
     """Volume of the hull of ``(n, k)`` full-dimensional points, k >= 2.
 
-    Where Qhull gives up on degenerate points, they are joggled by :data:`JOGGLE` x their
+    Where Qhull gives up on degenerate points, they are joggled by `JOGGLE` x their
     extent (a relative volume error of that order), and only then by Qhull's "QJ", whose
     retries can joggle by up to 1e-6 relative and more.
     """
@@ -83,17 +83,17 @@ def facet_volume(
     points: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.float64], tol: float
 ) -> float:
     r"""Volume of the full-dimensional polytope with vertices ``(n, k)`` and facets
-    :math:`a_j^T u \le b_j` (:func:`~mjtvm.polytopes.hull.polish_vertices`), k >= 2, as pyramids over its facets.
+    $a_j^T u \le b_j$ ([`polish_vertices()`][mjtvm.polytopes.hull.polish_vertices]), k >= 2, as pyramids over its facets.
 
-    With ``c`` the mean of the vertices, :math:`V = \sum_j h_j A_j / k`, where :math:`h_j`
-    is the distance from ``c`` to facet j's plane and :math:`A_j` the (k-1)-volume of the
+    With ``c`` the mean of the vertices, $V = \sum_j h_j A_j / k$, where $h_j$
+    is the distance from ``c`` to facet j's plane and $A_j$ the (k-1)-volume of the
     facet, the hull of its vertices (those within ``10 tol``) in that plane. Facets at a
     tiny angle that share a (k-1)-dimensional region to ``10 tol`` are measured as one
-    (:func:`_coplanar_groups`; otherwise that region counts twice: 1e-5 of Case 2's TVMS),
+    (`_coplanar_groups()`; otherwise that region counts twice: 1e-5 of Case 2's TVMS),
     with the least-squares plane of their points: the error is the sliver between them,
-    :math:`\le 10\,tol \times` its area.
+    $\le 10\,tol \times$ its area.
 
-    Each facet's area comes from Qhull on its points joggled by :data:`JOGGLE` (so that it
+    Each facet's area comes from Qhull on its points joggled by `JOGGLE` (so that it
     never gives up on degenerate faces), with the simplices measured on the unperturbed
     points: a simplex's sign is the joggled one's, so the signed sum is the area of the
     facet's boundary cycle, exact up to the joggle's effect on which simplices there are

@@ -1,25 +1,25 @@
 r"""Zonotopes: the image of a box under a linear map, by its generators' combinations.
 
-A box :math:`\{x : x_{min} \le x \le x_{max}\}` through a matrix ``A`` is the zonotope
-:math:`Z = c + \sum_i [-1, 1]\, g_i` with centre :math:`c = A (x_{min} + x_{max}) / 2` and
-generators :math:`g_i = A_i (x_{max,i} - x_{min,i}) / 2`. Its faces come from the generators
+A box $\{x : x_{min} \le x \le x_{max}\}$ through a matrix ``A`` is the zonotope
+$Z = c + \sum_i [-1, 1]\, g_i$ with centre $c = A (x_{min} + x_{max}) / 2$ and
+generators $g_i = A_i (x_{max,i} - x_{min,i}) / 2$. Its faces come from the generators
 alone (McMullen 1971; Ziegler, *Lectures on Polytopes*, 1995, section 7.3): in the
 k-dimensional linear span of the generators,
 
 * every facet lies in a hyperplane spanned by k - 1 generators: with ``n`` its normal and
-  ``H`` the generators in it, the facet is :math:`c \pm \sum_{i \notin H}
-  \mathrm{sign}(n^T g_i)\, g_i + \sum_{i \in H} [-1, 1]\, g_i`, a (k-1)-zonotope at offset
-  :math:`n^T c \pm \sum_{i} |n^T g_i|` (the facets of "hyperplane shifting": Gouttefarde and
+  ``H`` the generators in it, the facet is $c \pm \sum_{i \notin H}
+  \mathrm{sign}(n^T g_i)\, g_i + \sum_{i \in H} [-1, 1]\, g_i$, a (k-1)-zonotope at offset
+  $n^T c \pm \sum_{i} |n^T g_i|$ (the facets of "hyperplane shifting": Gouttefarde and
   Krut 2010, which pycapacity implements);
-* every vertex is :math:`c + \sum_i \sigma_i g_i` for the sign vector
-  :math:`\sigma_i = \mathrm{sign}(u^T g_i)` of a generic direction ``u``, and lies on a facet:
+* every vertex is $c + \sum_i \sigma_i g_i$ for the sign vector
+  $\sigma_i = \mathrm{sign}(u^T g_i)$ of a generic direction ``u``, and lies on a facet:
   the vertices are those of the facets, i.e. for a facet with ``|H| = k - 1`` its
-  :math:`2^{k-1}` sign choices on ``H`` (otherwise the facet's own vertices, by recursion);
-* the volume is :math:`2^k \sum_{|S| = k} |\det g_S|` (Shephard 1974), computed here as the
-  pyramids over the facets, :math:`\frac{1}{k} \sum_F h_F A_F`, whose areas
-  :math:`A_F = 2^{k-1} |\det g_S|` the facets' normals already hold (cofactor normals).
+  $2^{k-1}$ sign choices on ``H`` (otherwise the facet's own vertices, by recursion);
+* the volume is $2^k \sum_{|S| = k} |\det g_S|$ (Shephard 1974), computed here as the
+  pyramids over the facets, $\frac{1}{k} \sum_F h_F A_F$, whose areas
+  $A_F = 2^{k-1} |\det g_S|$ the facets' normals already hold (cofactor normals).
 
-No LP, no Qhull: numpy on :math:`\binom{n}{k-1}` generator subsets, exact up to round-off.
+No LP, no Qhull: numpy on $\binom{n}{k-1}$ generator subsets, exact up to round-off.
 Vertices are found as distinct sign vectors (integers), so none is found twice. Zero
 generators are dropped and parallel ones merged first (their segments add up).
 """
@@ -45,7 +45,7 @@ MAX_CANDIDATES = 2**24  #: (k-1)-subsets x 2^(k-1) sign choices x generators the
 
 @dataclass(frozen=True, eq=False)
 class Zonotope:
-    r"""A zonotope :math:`c + \sum_i [-1, 1]\, g_i` in :math:`R^m`, with its faces and volume.
+    r"""A zonotope $c + \sum_i [-1, 1]\, g_i$ in $R^m$, with its faces and volume.
 
     Attributes
     ----------
@@ -62,7 +62,7 @@ class Zonotope:
     signs
         ``(v, n)`` int8: vertex ``j`` is ``center + generators @ signs[j]``.
     normals, offsets
-        ``(f, m)`` unit rows and ``(f,)``: the facets :math:`n^T x \le o` inside the affine
+        ``(f, m)`` unit rows and ``(f,)``: the facets $n^T x \le o$ inside the affine
         hull (the normals lie in the span; none when ``k < 2``, the segment's ends bound it).
     affine_volume
         ``k``-dimensional volume inside the affine hull (the length for ``k = 1``, 0 for a point).
@@ -85,7 +85,7 @@ class Zonotope:
 
 
 def _merged(gens: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(m, n')``: zero columns dropped (below :data:`RANK_TOL` x the largest), parallel ones added
+    """``(m, n')``: zero columns dropped (below `RANK_TOL` x the largest), parallel ones added
     (aligned to the first of their direction)."""
     norms = np.sqrt(np.einsum("ij,ij->j", gens, gens))
     big = float(norms.max(initial=0.0))
@@ -145,8 +145,8 @@ def _faces(
     g: NDArray[np.float64],
 ) -> tuple[NDArray[np.int8], NDArray[np.float64], NDArray[np.float64], float]:
     r"""Sign vectors of the vertices, the facets' unit normals and half-widths
-    :math:`\sum_i |n^T g_i|` (one row per pair of opposite facets), and the volume of
-    :math:`\sum_i [-1, 1] g_i` for ``(k, n)`` generators of rank k, none zero, none parallel."""
+    $\sum_i |n^T g_i|$ (one row per pair of opposite facets), and the volume of
+    $\sum_i [-1, 1] g_i$ for ``(k, n)`` generators of rank k, none zero, none parallel."""
     k, n = g.shape
     if k == 1:
         s = np.sign(g[0]).astype(np.int8)
@@ -223,7 +223,7 @@ def _distinct_rows(half: NDArray[np.int8]) -> NDArray[np.int8]:
 
 
 def _check_size(n: int, k: int) -> None:
-    """Refuse an enumeration that would hold more than :data:`MAX_CANDIDATES` entries."""
+    """Refuse an enumeration that would hold more than `MAX_CANDIDATES` entries."""
     size = math.comb(n, k - 1) * 2 ** (k - 1) * n if k >= 2 else n
     if size > MAX_CANDIDATES:
         raise ParamError(
@@ -234,7 +234,7 @@ def _check_size(n: int, k: int) -> None:
 
 
 def zonotope(center: ArrayLike, generators: ArrayLike) -> Zonotope:
-    r"""The zonotope :math:`c + \sum_i [-1, 1]\, g_i`: vertices, facets and volume (module docstring).
+    r"""The zonotope $c + \sum_i [-1, 1]\, g_i$: vertices, facets and volume (module docstring).
 
     Parameters
     ----------
@@ -250,7 +250,7 @@ def zonotope(center: ArrayLike, generators: ArrayLike) -> Zonotope:
     Raises
     ------
     ParamError
-        Non-finite or mis-shaped arrays, or an enumeration larger than :data:`MAX_CANDIDATES`.
+        Non-finite or mis-shaped arrays, or an enumeration larger than `MAX_CANDIDATES`.
     """
     c = np.asarray(center, dtype=float)
     g = np.asarray(generators, dtype=float)

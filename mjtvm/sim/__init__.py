@@ -1,10 +1,10 @@
-r"""The MuJoCo coupling, in three rooms: :mod:`mjtvm.sim.grasp` (a grasp file and everything it
-loads, down to the grasp state), :mod:`mjtvm.sim.lift` (the scripted lift) and
-:mod:`mjtvm.sim.paper_hand` (the paper's hand and its Cases 1 and 2); :mod:`mjtvm.sim.scene`
+r"""The MuJoCo coupling, in three rooms: [`mjtvm.sim.grasp`][mjtvm.sim.grasp] (a grasp file and everything it
+loads, down to the grasp state), [`mjtvm.sim.lift`][mjtvm.sim.lift] (the scripted lift) and
+[`mjtvm.sim.paper_hand`][mjtvm.sim.paper_hand] (the paper's hand and its Cases 1 and 2); [`mjtvm.sim.scene`][mjtvm.sim.scene]
 hands the geometry to the viewer.
 
 The names below are imported on first use, so that importing one room (e.g. the viewer's
-:mod:`mjtvm.sim.scene`) does not load the others.
+[`mjtvm.sim.scene`][mjtvm.sim.scene]) does not load the others.
 """
 
 from __future__ import annotations

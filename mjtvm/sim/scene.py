@@ -1,11 +1,11 @@
 r"""The hand's and the object's geometry as plain arrays, for drawing without MuJoCo.
 
-:func:`scene_geometry` reads a model's drawable geoms once: the capsules (links), the spheres
+[`scene_geometry()`][mjtvm.sim.scene.scene_geometry] reads a model's drawable geoms once: the capsules (links), the spheres
 on the hand (tips) and on the object, the planes (the palm), with their sizes, colours,
 names and (planes) fixed positions, and the colliding mesh geoms (an object's convex pieces)
-with their vertices and triangles. :func:`scene_poses` runs MuJoCo's forward kinematics at
+with their vertices and triangles. [`scene_poses()`][mjtvm.sim.scene.scene_poses] runs MuJoCo's forward kinematics at
 each configuration and returns the geoms' world poses. The viewer
-(:mod:`~mjtvm.viewer.viz`) draws from these alone, so MuJoCo stays in the coupling layer.
+([`viz`][mjtvm.viewer.viz]) draws from these alone, so MuJoCo stays in the coupling layer.
 """
 
 from __future__ import annotations
@@ -103,7 +103,7 @@ class SceneGeometry:
 
 @dataclass(frozen=True, eq=False)
 class ScenePoses:
-    """World poses of the geoms of a :class:`SceneGeometry` at ``S`` configurations.
+    """World poses of the geoms of a [`SceneGeometry`][mjtvm.sim.scene.SceneGeometry] at ``S`` configurations.
 
     Attributes
     ----------

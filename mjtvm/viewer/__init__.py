@@ -1,5 +1,5 @@
-r"""The rerun viewer: :mod:`mjtvm.viewer.viz` records the lift replay and the physics check
-(what each state draws: :mod:`mjtvm.viewer.drawing`); :mod:`mjtvm.viewer.recording` runs the
+r"""The rerun viewer: [`mjtvm.viewer.viz`][mjtvm.viewer.viz] records the lift replay and the physics check
+(what each state draws: [`mjtvm.viewer.drawing`][mjtvm.viewer.drawing]); [`mjtvm.viewer.recording`][mjtvm.viewer.recording] runs the
 replay's recording beside the replay.
 
 The names below are imported on first use: importing this package does not load rerun.

@@ -1,4 +1,4 @@
-r"""What the replay's rerun recording draws at each state (:mod:`~mjtvm.viewer.viz`, whose
+r"""What the replay's rerun recording draws at each state ([`viz`][mjtvm.viewer.viz], whose
 docstring lists the entities): the hand's and the object's geoms, the contacts, forces and
 slide directions of a run, its velocity polytopes as convex-hull meshes, its scalars and the
 joint panels.
@@ -66,7 +66,7 @@ def hull_mesh(points: NDArray[np.float64], *, tol: float = 1e-9) -> tuple[NDArra
 def translational_tvms(state: GraspState) -> NDArray[np.float64] | None:
     r"""The TVMS of Problem 1 projected onto the translational velocity.
 
-    The projection of :func:`~mjtvm.polytopes.tvms.tvms` (the same call, without the volume, which
+    The projection of [`tvms()`][mjtvm.polytopes.tvms.tvms] (the same call, without the volume, which
     the recording does not show). Returns its vertices' ``(V, 3)`` linear parts (m/s), or
     ``None`` unless it is bounded.
     """
@@ -94,7 +94,7 @@ def _mirrored(rng: OperationRange) -> NDArray[np.float64]:
 
 
 class _Scene:
-    """The hand's and the object's geoms (:mod:`~mjtvm.sim.scene`) and their poses along the lift."""
+    """The hand's and the object's geoms ([`scene`][mjtvm.sim.scene]) and their poses along the lift."""
 
     def __init__(self, lift: Lift) -> None:
         sc = lift.scenario

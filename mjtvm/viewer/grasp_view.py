@@ -3,14 +3,14 @@ r"""Rerun recording of one grasp as loaded, before any solve (``mjtvm show GRASP
 Entities (world frame, m; static, no timeline):
 
 * ``/grasp/hand/<kind>`` and ``/grasp/object/<kind>``: the colliding geoms
-  (:func:`~mjtvm.sim.grasp.shapes.geom_shapes`), boxes, spheres and ellipsoids, capsules,
+  ([`geom_shapes()`][mjtvm.sim.grasp.shapes.geom_shapes]), boxes, spheres and ellipsoids, capsules,
   cylinders, planes (a thin box) and meshes, labelled with their geom labels; the object as
   a wireframe;
-* ``/grasp/contacts``: the report's pairs (:func:`~mjtvm.sim.grasp.report.contact_rows`) at
-  their contact points, coloured by type (:data:`~mjtvm.viewer.drawing.TYPE_COLORS`; grey
+* ``/grasp/contacts``: the report's pairs ([`contact_rows()`][mjtvm.sim.grasp.report.contact_rows]) at
+  their contact points, coloured by type ([`TYPE_COLORS`][mjtvm.viewer.drawing.TYPE_COLORS]; grey
   when not selected), labelled ``geom type distance``;
-* ``/grasp/normals``: unit normals into the object, :data:`NORMAL_LENGTH` m long;
-* ``/grasp/cones``: the friction cone (half-angle ``atan(mu)``, :data:`CONE_HEIGHT` m high,
+* ``/grasp/normals``: unit normals into the object, [`NORMAL_LENGTH`][mjtvm.viewer.grasp_view.NORMAL_LENGTH] m long;
+* ``/grasp/cones``: the friction cone (half-angle ``atan(mu)``, [`CONE_HEIGHT`][mjtvm.viewer.grasp_view.CONE_HEIGHT] m high,
   apex at the contact point, opening into the object along the normal) of every selected F
   and S contact.
 """

@@ -1,9 +1,9 @@
 r"""The rerun recording of a replay, made beside the rest of the main job.
 
-:func:`start_recording` starts :func:`~mjtvm.viewer.viz.record_replay` as soon as the replay's
+[`start_recording()`][mjtvm.viewer.recording.start_recording] starts [`record_replay()`][mjtvm.viewer.viz.record_replay] as soon as the replay's
 records exist, in a forked child process, so that the recording (rerun's import, the
 TVMSs, the logging) runs on the second core while the parent computes the sweeps and the
-plots; :meth:`RecordingJob.result` waits for it. On the default 30-state lift this brings
+plots; [`RecordingJob.result()`][mjtvm.viewer.recording.RecordingJob.result] waits for it. On the default 30-state lift this brings
 what the recording adds to ``mjtvm replay`` from 27-31 % down to a few per cent
 (docs/rerun.md).
 
@@ -11,7 +11,7 @@ A forked child inherits the parent's threads' locks but not the threads. The par
 none that matter (OpenBLAS re-creates its pool after a fork, tqdm's monitor only sleeps)
 as long as rerun itself has not been loaded: its runtime's threads would be missing in the
 child. So the fork is used only where it exists and rerun is not imported yet; otherwise
-the recording runs in this process when :meth:`RecordingJob.result` is called, after the
+the recording runs in this process when [`RecordingJob.result()`][mjtvm.viewer.recording.RecordingJob.result] is called, after the
 rest of the job, as it would without this module. rerun is imported only by the child (or
 then), never here.
 """
@@ -71,7 +71,7 @@ def _child(
 
 
 class RecordingJob:
-    """A recording under way (:func:`start_recording`)."""
+    """A recording under way ([`start_recording()`][mjtvm.viewer.recording.start_recording])."""
 
     def __init__(
         self,
@@ -98,7 +98,7 @@ class RecordingJob:
             send.close()
 
     def result(self) -> dict[str, Any]:
-        """Wait for the recording; its :func:`~mjtvm.viewer.viz.record_replay` summary.
+        """Wait for the recording; its [`record_replay()`][mjtvm.viewer.viz.record_replay] summary.
 
         Raises
         ------
@@ -141,19 +141,19 @@ def start_recording(
     fork: bool | None = None,
 ) -> RecordingJob:
     r"""Start recording ``output`` (the lift and the replay's records are all it reads) to
-    the ``.rrd`` file ``path`` and/or a spawned viewer (:func:`~mjtvm.viewer.viz.record_replay`).
+    the ``.rrd`` file ``path`` and/or a spawned viewer ([`record_replay()`][mjtvm.viewer.viz.record_replay]).
 
     Parameters
     ----------
     output
-        :func:`~mjtvm.apps.replay.run_replay`'s result, or the partial one its ``on_replay``
+        [`run_replay()`][mjtvm.apps.replay.run_replay]'s result, or the partial one its ``on_replay``
         hook receives.
     path, spawn, tvms_every
-        As :func:`~mjtvm.viewer.viz.record_replay` (``tvms_every=None``: its default).
+        As [`record_replay()`][mjtvm.viewer.viz.record_replay] (``tvms_every=None``: its default).
     fork
         Record in a forked child (the default where the platform forks and rerun is not
         imported yet, see the module docstring) or in this process at
-        :meth:`RecordingJob.result`.
+        [`RecordingJob.result()`][mjtvm.viewer.recording.RecordingJob.result].
     """
     can_fork = "fork" in multiprocessing.get_all_start_methods() and "rerun" not in sys.modules
     return RecordingJob(output, path, spawn, tvms_every, fork=can_fork if fork is None else fork and can_fork)

@@ -1,7 +1,7 @@
-r"""Rerun recording of the lift replay (``mjtvm replay --rrd FILE``); with :mod:`~mjtvm.viewer.drawing`
+r"""Rerun recording of the lift replay (``mjtvm replay --rrd FILE``); with [`drawing`][mjtvm.viewer.drawing]
 (what is drawn), the only modules importing rerun.
 
-:func:`record_replay` logs a :class:`~mjtvm.apps.replay.ReplayOutput` on two timelines, ``state``
+[`record_replay()`][mjtvm.viewer.viz.record_replay] logs a [`ReplayOutput`][mjtvm.apps.replay.ReplayOutput] on two timelines, ``state``
 (the state index) and ``lift_z`` (the object centre's height in micrometres: rerun timelines
 are integer sequences, durations or timestamps). Entities (world frame, m; ``docs/rerun.md``):
 
@@ -9,15 +9,15 @@ are integer sequences, durations or timestamps). Entities (world frame, m; ``doc
   (spheres), ``/scene/meshes/<k>`` (each colliding mesh geom, e.g. an object's convex pieces:
   its triangles, static, under a transform to the geom's pose): the MuJoCo geoms at each
   state's pose;
-* ``/scene/<run>/contacts`` coloured by type (:data:`~mjtvm.viewer.drawing.TYPE_COLORS`), labelled ``geom type``;
+* ``/scene/<run>/contacts`` coloured by type ([`TYPE_COLORS`][mjtvm.viewer.drawing.TYPE_COLORS]), labelled ``geom type``;
   ``/scene/<run>/forces``: the contact forces of the limiting pair's witness
-  (:data:`~mjtvm.viewer.drawing.FORCE_SCALE` m per N); ``/scene/<run>/slides``: S-point slide directions;
+  ([`FORCE_SCALE`][mjtvm.viewer.drawing.FORCE_SCALE] m per N); ``/scene/<run>/slides``: S-point slide directions;
 * ``/scene/<run>/distribution`` and ``/scene/<run>/tvms``: convex-hull meshes of object
   centre velocities (m/s) under a transform to the object's origin scaled by
-  :data:`~mjtvm.viewer.drawing.VELOCITY_SCALE` m per m/s: the distribution polytope of Supplement 4 (the origin and
-  :math:`\min_k \alpha_{kl} \hat r_l`, translational part) and the TVMS of Problem 1
-  (:func:`~mjtvm.polytopes.tvms.tvms`, its vertices projected onto the translational coordinates), the
-  latter at every :data:`TVMS_EVERY`-th state and the last by default;
+  [`VELOCITY_SCALE`][mjtvm.viewer.drawing.VELOCITY_SCALE] m per m/s: the distribution polytope of Supplement 4 (the origin and
+  $\min_k \alpha_{kl} \hat r_l$, translational part) and the TVMS of Problem 1
+  ([`tvms()`][mjtvm.polytopes.tvms.tvms], its vertices projected onto the translational coordinates), the
+  latter at every [`TVMS_EVERY`][mjtvm.viewer.viz.TVMS_EVERY]-th state and the last by default;
 * ``/tvmmp/<run>``, ``/alpha/<run>/k<k>_l<l>``, ``/limiting/<run>`` (``[k, l]``): scalars,
   an empty batch where there is no value;
 * ``/joints/<joint>``: ``range`` (static: the operation range mirrored into four quadrants),
@@ -124,7 +124,7 @@ def record_replay(
     Parameters
     ----------
     output
-        :func:`~mjtvm.apps.replay.run_replay`'s result.
+        [`run_replay()`][mjtvm.apps.replay.run_replay]'s result.
     path
         The recording file (``None``: none).
     spawn
@@ -202,9 +202,9 @@ def record_replay(
 def record_verify(
     rows: Sequence[Mapping[str, Any]], path: str | Path, *, recording_id: str | None = None
 ) -> dict[str, Any]:
-    r"""Record the physics check of ``mjtvm verify`` (:func:`~mjtvm.physics.verify.verify_lift` rows).
+    r"""Record the physics check of ``mjtvm verify`` ([`verify_lift()`][mjtvm.physics.verify.verify_lift] rows).
 
-    On the ``state`` and ``lift_z`` timelines of :func:`record_replay`, per run (``L``,
+    On the ``state`` and ``lift_z`` timelines of [`record_replay()`][mjtvm.viewer.viz.record_replay], per run (``L``,
     ``S_literal``, ...): ``verify/<run>/tvmmp`` (min over l of the LP's alpha_kl),
     ``verify/<run>/alpha_sim`` (min over l of the simulated alpha_sim), one
     ``verify/<run>/ratio/l<l>`` per RVDS vertex (alpha_sim / alpha_kl), and the rollouts'

@@ -168,7 +168,8 @@ def test_time_replay_reports_runs(tmp_path: Path) -> None:
 
 def test_default_replay_draws_the_readme_fig8(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A plain `mjtvm replay` draws the README's Fig. 8: L, S literal (the paper's curve) and S physical,
-    the same records as docs/fig8_default.csv (the rows behind docs/fig8_default.png), labelled."""
+    the same records as tests/apps/data/fig8_default.csv (the rows behind docs/fig8_default.png,
+    drawn by `mjtvm replay --no-sweeps`), labelled."""
     import mjtvm.apps.replay as replay
 
     labels: list[str] = []
@@ -187,7 +188,7 @@ def test_default_replay_draws_the_readme_fig8(tmp_path: Path, monkeypatch: pytes
         "S-points, literal reading (the paper's Fig. 8)",
     ]
     got = _rows(tmp_path / "lift.csv")
-    shown = _rows(Path(__file__).resolve().parents[2] / "docs" / "fig8_default.csv")
+    shown = _rows(Path(__file__).resolve().parent / "data" / "fig8_default.csv")
     assert [(r["variant"], r["reading"], r["state"]) for r in got] == [
         (r["variant"], r["reading"], r["state"]) for r in shown
     ]

@@ -1,8 +1,8 @@
 r"""The grasp file and everything it loads: the ``mjtvm.grasp/1`` document and its checks, the
 MJCF model with the object, the configuration (keyframe, joint values or IK), the contacts
 MuJoCo detects, each joint's operation range (a motor or servo datasheet, ``<dcmotor>``, polygon) and the
-:class:`~mjtvm.core.state.GraspState` read from ``mjData``; datasets of configurations on one grasp
-file (:mod:`~mjtvm.sim.grasp.dataset`, :mod:`~mjtvm.sim.grasp.batch`).
+[`GraspState`][mjtvm.core.state.GraspState] read from ``mjData``; datasets of configurations on one grasp
+file ([`dataset`][mjtvm.sim.grasp.dataset], [`batch`][mjtvm.sim.grasp.batch]).
 """
 
 from .actuator import operation_range_from_actuator

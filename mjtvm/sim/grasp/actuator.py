@@ -1,5 +1,5 @@
 r"""A joint's continuous operation range read from its compiled ``<dcmotor>`` actuator
-(the actuators :func:`~mjtvm.sim.paper_hand.hand.hand_mjcf` writes, or any MJCF's)."""
+(the actuators [`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf] writes, or any MJCF's)."""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ r"""Joint values and a posed hand base from a grasp file's ``configuration`` (``
 quaternion); ``configuration.base`` poses one body that has a pose of its own: a mocap body
 (``data.mocap_pos``/``mocap_quat``) or a body on a free joint (its ``qpos``). Both are set
 after the keyframe (if any) and before IK, whose variables are hinge and slide joints only
-(:func:`~mjtvm.sim.grasp.ik.solve_ik`): a posed base stays where the file puts it.
+(`solve_ik()`): a posed base stays where the file puts it.
 
 World frame, SI units.
 """

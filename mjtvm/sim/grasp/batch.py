@@ -1,16 +1,16 @@
 r"""The grasps of a dataset on one grasp file (``mjtvm rank``; ``docs/datasets.md``).
 
-:class:`BatchModels` compiles the grasp file's model once per (object file, scale) and
-:meth:`BatchModels.grasp` builds one :class:`~mjtvm.sim.grasp.loaded.Grasp` per
-:class:`~mjtvm.sim.grasp.dataset.DatasetGrasp` by
-:func:`~mjtvm.sim.grasp.file.grasp_from_model`: the file's document (contacts, rules, ranges,
+[`BatchModels`][mjtvm.sim.grasp.batch.BatchModels] compiles the grasp file's model once per (object file, scale) and
+[`BatchModels.grasp()`][mjtvm.sim.grasp.batch.BatchModels.grasp] builds one [`Grasp`][mjtvm.sim.grasp.loaded.Grasp] per
+[`DatasetGrasp`][mjtvm.sim.grasp.dataset.DatasetGrasp] by
+[`grasp_from_model()`][mjtvm.sim.grasp.file.grasp_from_model]: the file's document (contacts, rules, ranges,
 REFS, RVDS) with the dataset's configuration in place of the file's.
 
 *The root pose.* ``grasp_qpos`` starts with the pose of the hand's root body in the world: the
 file's ``configuration.base.body`` when it names one, else the one body under the world that is
 neither the object nor a support. A root on a free joint takes the pose in its ``qpos``; a
 root fixed to the world is made a mocap body (``MjSpec``, before compiling) so that it can be
-posed (:func:`~mjtvm.sim.grasp.base.set_base_pose`): the hand keeps its kinematics, only
+posed ([`set_base_pose()`][mjtvm.sim.grasp.base.set_base_pose]): the hand keeps its kinematics, only
 where it stands changes, and gravity stays the world's.
 
 *The object's scale* multiplies the object's geom sizes and positions, its meshes' scale and
@@ -137,7 +137,7 @@ class BatchModels:
     ----------
     doc, path
         The normalised grasp document and its file
-        (:func:`~mjtvm.sim.grasp.document.read_grasp_document`).
+        (`read_grasp_document()`).
     """
 
     def __init__(self, doc: Mapping[str, Any], path: Path | None) -> None:
@@ -202,7 +202,7 @@ class BatchModels:
         Raises
         ------
         GraspError
-            As :func:`~mjtvm.sim.grasp.file.grasp_from_model`, or a ``qpos`` whose joints
+            As [`grasp_from_model()`][mjtvm.sim.grasp.file.grasp_from_model], or a ``qpos`` whose joints
             cannot be named (an unnamed or ball joint).
         """
         root = entry.root is not None

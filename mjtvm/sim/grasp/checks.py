@@ -1,6 +1,6 @@
-r"""The value checks of a ``mjtvm.grasp/1`` document: the format's constants, :class:`GraspError`
+r"""The value checks of a ``mjtvm.grasp/1`` document: the format's constants, `GraspError`
 and the checker of values (types, bounds, unknown keys, text); the checks of each section of
-the format are in :mod:`mjtvm.sim.grasp.sections`, and :mod:`mjtvm.sim.grasp.document` runs them.
+the format are in [`mjtvm.sim.grasp.sections`][mjtvm.sim.grasp.sections], and `mjtvm.sim.grasp.document` runs them.
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ class GraspError(ModelError):
         The offending field, e.g. ``"contacts[2].geom"``.
     beyond_schema
         True when the broken rule is one JSON Schema cannot state
-        (:data:`mjtvm.sim.grasp.validate.BEYOND_SCHEMA`): the schema accepts the document.
+        (`mjtvm.sim.grasp.validate.BEYOND_SCHEMA`): the schema accepts the document.
     """
 
     def __init__(self, file: str, field: str, problem: str, *, beyond_schema: bool = False) -> None:
@@ -75,7 +75,7 @@ class GraspError(ModelError):
 
 
 class _Checker:
-    """Field checks that raise :class:`GraspError` naming the field."""
+    """Field checks that raise `GraspError` naming the field."""
 
     def __init__(self, file: str) -> None:
         self.file = file
@@ -84,7 +84,7 @@ class _Checker:
         return GraspError(self.file, field, problem)
 
     def beyond(self, field: str, problem: str) -> GraspError:
-        """A rule of :data:`~mjtvm.sim.grasp.validate.BEYOND_SCHEMA` broken."""
+        """A rule of `BEYOND_SCHEMA` broken."""
         return GraspError(self.file, field, problem, beyond_schema=True)
 
     def table(

@@ -58,7 +58,7 @@ def solve_configuration(
     (``mj_geomDistance``) goes to ``point`` when given (a point on the object's surface), else
     to the object's nearest surface point; the nearest points move as the finger turns, so
     the targets are recomputed and the IK rerun until every geom touches the surface (distance
-    within ``tolerance``) within :data:`POINT_TOLERANCE` (1 mm) of its ``point``: where a flat
+    within ``tolerance``) within [`POINT_TOLERANCE`][mjtvm.sim.grasp.configure.POINT_TOLERANCE] (1 mm) of its ``point``: where a flat
     face meets a curved surface the nearest point is not unique (it jumps along the line of
     contact as the finger turns), the witness points of curved shapes are iterative (about
     1e-6 m), and a finger may be unable to move along the surface at all (e.g. out of its plane).
@@ -101,7 +101,7 @@ def _settle_targets(
     ik: Mapping[str, Any],
     file: str,
 ) -> mujoco.MjData:
-    """The rounds of :func:`_solve_configuration`: retarget, solve, until settled."""
+    """The rounds of `_solve_configuration()`: retarget, solve, until settled."""
     tol = float(ik["tolerance"])
     work = copy.copy(data)
     worst, last = "", np.inf

@@ -2,7 +2,7 @@ r"""Grasp datasets: many configurations of one grasp file's hand (``docs/dataset
 
 A dataset file holds, per grasp, either ``grasp_qpos`` (the hand's root pose
 ``[x, y, z, qw, qx, qy, qz]``, m and a unit quaternion, then the hand's joints in model order:
-:func:`hand_joints`) or ``qpos`` (the model's whole ``qpos``, ``nq`` numbers), and optionally
+`hand_joints()`) or ``qpos`` (the model's whole ``qpos``, ``nq`` numbers), and optionally
 ``obj_pose`` (the object's pose, 7 numbers as the root's), ``obj_scale`` (> 0, default 1) and
 ``obj_path`` (an MJCF file of the object, relative to the dataset file). Layouts:
 
@@ -236,7 +236,7 @@ def read_dataset(path: str | Path, *, nq: int, num_joints: int) -> list[DatasetG
     nq
         The model's ``nq`` (the width of ``qpos``).
     num_joints
-        ``J``: the hand's joints (:func:`hand_joints`): ``grasp_qpos`` has ``7 + J`` numbers.
+        ``J``: the hand's joints (`hand_joints()`): ``grasp_qpos`` has ``7 + J`` numbers.
 
     Raises
     ------

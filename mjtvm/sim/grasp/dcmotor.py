@@ -1,8 +1,8 @@
 r"""A DC motor behind an ideal gear, as MuJoCo's ``<dcmotor>`` actuator takes it.
 
-A grasp file's ``motors`` table names datasheets (:meth:`DCMotor.from_datasheet`); the paper's
-hand (:func:`~mjtvm.sim.paper_hand.hand.hand_mjcf`) and the physics check write the actuators
-(:meth:`DCMotor.mjcf`).
+A grasp file's ``motors`` table names datasheets ([`DCMotor.from_datasheet()`][mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet]); the paper's
+hand ([`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf]) and the physics check write the actuators
+([`DCMotor.mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf]).
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ class DCMotor:
     def from_datasheet(
         cls, data: Mapping[str, Any] | None = None, *, line: Literal["nominal", "stall"] = "nominal"
     ) -> DCMotor:
-        r"""The motor of a datasheet (default: :func:`~mjtvm.core.operation_range.load_motor_data`).
+        r"""The motor of a datasheet (default: [`load_motor_data()`][mjtvm.core.operation_range.load_motor_data]).
 
         Parameters
         ----------
@@ -80,7 +80,7 @@ class DCMotor:
             (default): the line through the no-load point and the nominal point (max
             continuous torque at nominal speed), i.e. the stall torque
             ``T_N n_0 / (n_0 - n_N)`` (204.4 mN m for the RE25): the actuator's continuous
-            range then equals :func:`~mjtvm.core.operation_range.default_operation_range`.
+            range then equals [`default_operation_range()`][mjtvm.core.operation_range.default_operation_range].
             ``"stall"``: the catalogue stall torque (243 mN m); that line passes 2.3 % above
             the catalogue nominal point (8525 rpm instead of 8330 rpm at 26.3 mN m).
         """

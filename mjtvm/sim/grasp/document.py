@@ -1,12 +1,12 @@
 r"""Reading and checking a ``mjtvm.grasp/1`` document (``docs/grasp-format.md``).
 
-:func:`read_grasp_document` reads a TOML or JSON grasp file (or takes a mapping) and checks
+`read_grasp_document()` reads a TOML or JSON grasp file (or takes a mapping) and checks
 its structure field by field: unknown keys, wrong types, missing or conflicting choices
 (one of ``keyframe``/``qpos``/``ik``; one selector per contact; one source per operation
-range) and numbers outside the format's bounds are each one :class:`GraspError` naming the
+range) and numbers outside the format's bounds are each one `GraspError` naming the
 field, e.g. ``contacts[2].type: expected one of F, L, S, D, got 'X'``. Names are checked
-against the model later (:mod:`mjtvm.sim.grasp.file`). Every document is also validated
-with the JSON Schema ``mjtvm/data/schema/grasp.schema.json`` (:mod:`mjtvm.sim.grasp.validate`):
+against the model later ([`mjtvm.sim.grasp.file`][mjtvm.sim.grasp.file]). Every document is also validated
+with the JSON Schema ``mjtvm/data/schema/grasp.schema.json`` ([`mjtvm.sim.grasp.validate`][mjtvm.sim.grasp.validate]):
 what it refuses is refused, so the two cannot disagree.
 """
 
@@ -100,7 +100,7 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
 
 def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[str, Any]:
     """The document with defaults filled in, selectors and numbers normalised; a
-    :class:`GraspError` for the first field breaking the format."""
+    `GraspError` for the first field breaking the format."""
     doc = dict(c.table(raw, "", _TOP, _REQUIRED))
     if doc["schema"] != SCHEMA:
         raise c.fail("schema", f"expected {SCHEMA!r}, got {doc['schema']!r}")
@@ -193,7 +193,7 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
 def _joint_limits(c: Any, value: Any) -> dict[str, float] | bool:
     """``joint_limits``: ``false`` (the paper's LPs, no position limits) or a table of
     ``tolerance`` and ``horizon`` (``docs/joint-limits.md``), completed with the defaults
-    (:func:`~mjtvm.sim.grasp.state.limit_options` reads it)."""
+    ([`limit_options()`][mjtvm.sim.grasp.state.limit_options] reads it)."""
     if value is False:
         return False
     if not isinstance(value, Mapping):

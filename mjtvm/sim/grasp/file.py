@@ -1,22 +1,22 @@
 r"""A grasp of any MJCF hand, from a ``mjtvm.grasp/1`` file (``docs/grasp-format.md``).
 
-:func:`load_grasp` reads a grasp file (:mod:`mjtvm.sim.grasp.document`), loads the model it names,
+[`load_grasp()`][mjtvm.sim.grasp.file.load_grasp] reads a grasp file (`mjtvm.sim.grasp.document`), loads the model it names,
 sets the configuration (a keyframe, joint values, or IK targets brought onto the object's
 surface), resolves the contact selections (geom name or label, body, geom id) against the
 model, types by the file's ``contact_rules`` the touching geoms no entry selects
-(:mod:`mjtvm.sim.grasp.rules`) and finds each joint's operation range
-(:mod:`mjtvm.sim.grasp.ranges`), or, when the model's actuators or equality constraints
-couple the joints, the transmission (:mod:`mjtvm.sim.grasp.transmission`) and each
-actuator's range. :meth:`~mjtvm.sim.grasp.loaded.Grasp.state`
-then gives the :class:`~mjtvm.core.state.GraspState` of
-:func:`~mjtvm.sim.grasp.state.grasp_state`.
+([`mjtvm.sim.grasp.rules`][mjtvm.sim.grasp.rules]) and finds each joint's operation range
+(`mjtvm.sim.grasp.ranges`), or, when the model's actuators or equality constraints
+couple the joints, the transmission ([`mjtvm.sim.grasp.transmission`][mjtvm.sim.grasp.transmission]) and each
+actuator's range. [`state()`][mjtvm.sim.grasp.loaded.Grasp.state]
+then gives the [`GraspState`][mjtvm.core.state.GraspState] of
+`grasp_state()`.
 
 *Contacts that touch.* Geoms placed exactly touching are often reported by MuJoCo only once
 they penetrate; a grasp file's ``contact_tolerance`` (default 0.1 mm) counts a geom within
 that distance of the object as touching: MuJoCo's collision runs with that margin on the
-object's geoms for detection only (:func:`~mjtvm.sim.grasp.state.grasp_state`). Every selection
+object's geoms for detection only (`grasp_state()`). Every selection
 must touch (else an error gives the nearest distance, from ``mj_geomDistance``) and every
-touching geom must be selected or ignored; :meth:`~mjtvm.sim.grasp.loaded.Grasp.contact_report` lists found vs
+touching geom must be selected or ignored; [`contact_report()`][mjtvm.sim.grasp.loaded.Grasp.contact_report] lists found vs
 expected.
 
 World frame, SI units.
@@ -94,7 +94,7 @@ def models_root() -> Path:
 
 
 def shipped_grasps() -> dict[str, Path]:
-    """Name -> path of every grasp file shipped in ``models/<hand>/`` (:func:`models_root`)."""
+    """Name -> path of every grasp file shipped in ``models/<hand>/`` ([`models_root()`][mjtvm.sim.grasp.file.models_root])."""
     return {p.stem: p for p in sorted(models_root().glob("*/*.toml"))}
 
 
@@ -270,19 +270,19 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
 def grasp_from_model(
     doc: Mapping[str, Any], path: Path | None, model: mujoco.MjModel, model_path: Path
 ) -> Grasp:
-    r"""The grasp of a normalised document (:func:`~mjtvm.sim.grasp.document.read_grasp_document`)
-    on a compiled model: what :func:`load_grasp` does after compiling the model.
+    r"""The grasp of a normalised document (`read_grasp_document()`)
+    on a compiled model: what [`load_grasp()`][mjtvm.sim.grasp.file.load_grasp] does after compiling the model.
 
     A batch (``mjtvm rank``) compiles each (object, scale) once and builds every grasp of a
     dataset on it, each from the file's document with its own ``configuration`` and ``object``
-    pose. ``model`` is the document's model (:func:`~mjtvm.sim.grasp.model.build_spec`
+    pose. ``model`` is the document's model ([`build_spec()`][mjtvm.sim.grasp.model.build_spec]
     compiled, possibly edited); a mocap base's pose is written into it
-    (:func:`~mjtvm.sim.grasp.base.hold_mocap_poses`).
+    ([`hold_mocap_poses()`][mjtvm.sim.grasp.base.hold_mocap_poses]).
 
     Raises
     ------
     GraspError
-        As :func:`load_grasp`, for everything but the model file.
+        As [`load_grasp()`][mjtvm.sim.grasp.file.load_grasp], for everything but the model file.
     """
     file = str(path) if path is not None else "grasp"
     ob = mujoco.mj_name2id(model, _OBJ.mjOBJ_BODY, doc["object"]["body"])
@@ -413,13 +413,13 @@ def grasp_from_model(
 def export_state(source: str | Path | Mapping[str, Any]) -> GraspState:
     r"""The grasp state of a grasp file, a shipped grasp by name, or a document.
 
-    What ``mjtvm export-state`` prints: :meth:`~mjtvm.sim.grasp.loaded.Grasp.state` of
-    :func:`load_grasp`; :func:`~mjtvm.core.state_file.state_to_dict` gives its ``mjtvm.state/1`` document.
+    What ``mjtvm export-state`` prints: [`state()`][mjtvm.sim.grasp.loaded.Grasp.state] of
+    [`load_grasp()`][mjtvm.sim.grasp.file.load_grasp]; [`state_to_dict()`][mjtvm.core.state_file.state_to_dict] gives its ``mjtvm.state/1`` document.
 
     Raises
     ------
     GraspError
-        As :func:`load_grasp`; or a selection that does not touch, a touching geom nobody
+        As [`load_grasp()`][mjtvm.sim.grasp.file.load_grasp]; or a selection that does not touch, a touching geom nobody
         selected, or an S contact without a slide direction.
     """
     return load_grasp(source).state()

@@ -1,10 +1,10 @@
 r"""Inverse kinematics: finger points at target positions on a sphere (damped least squares).
 
-An :class:`IkTarget` asks that a point fixed to a finger body reach a world position and,
+An [`IkTarget`][mjtvm.sim.grasp.ik.IkTarget] asks that a point fixed to a finger body reach a world position and,
 optionally, that a link axis through it be tangent to a sphere there, so that the link's
 surface touches the sphere at that point instead of cutting into it.
-:func:`geom_contact_target` builds the target that makes a fingertip sphere or a link
-capsule touch the object at a given contact point. :func:`solve_ik` moves the chosen joints
+[`geom_contact_target()`][mjtvm.sim.grasp.ik.geom_contact_target] builds the target that makes a fingertip sphere or a link
+capsule touch the object at a given contact point. `solve_ik()` moves the chosen joints
 (Levenberg-Marquardt: damped least squares on ``mj_jac``) within their joint ranges.
 
 Frames and units: world frame unless "body frame" is said; m and rad.
@@ -66,9 +66,9 @@ class IkTarget:
         ``x = x_b + R_b point``.
     tangent_axis
         ``(3,)`` optional unit direction in the body frame (a link axis through ``point``).
-        With ``centre``, adds the residual :math:`a \cdot (c - x)` (m), :math:`a = R_b`
+        With ``centre``, adds the residual $a \cdot (c - x)$ (m), $a = R_b$
         ``tangent_axis``: zero when ``x`` is the point of the axis nearest the sphere
-        centre :math:`c`, i.e. the axis is tangent to the sphere's concentric sphere
+        centre $c$, i.e. the axis is tangent to the sphere's concentric sphere
         through ``x`` and a capsule around it touches the object at one point.
     centre
         ``(3,)`` the sphere centre (m); required with ``tangent_axis``.
@@ -101,7 +101,7 @@ class IkTarget:
 
 @dataclass(frozen=True, eq=False)
 class IkResult:
-    r"""Outcome of :func:`solve_ik`.
+    r"""Outcome of `solve_ik()`.
 
     Attributes
     ----------
@@ -143,7 +143,7 @@ def geom_contact_target(
     * Capsule geom (a link): the point of its axis at distance ``along`` from the axis
       end nearest the body origin (the link's joint end) goes to ``contact - offset n``;
       with ``tangent`` the axis is kept perpendicular to ``n`` there (see
-      :class:`IkTarget`), so the capsule touches the sphere at ``contact`` only.
+      [`IkTarget`][mjtvm.sim.grasp.ik.IkTarget]), so the capsule touches the sphere at ``contact`` only.
 
     Parameters
     ----------
@@ -200,7 +200,7 @@ def geom_contact_target(
 
 
 def body_label(model: mujoco.MjModel, body: int) -> str:
-    """A body's name, or ``"body#<id>"`` when unnamed (as :func:`~mjtvm.sim.grasp.state.geom_label`)."""
+    """A body's name, or ``"body#<id>"`` when unnamed (as `geom_label()`)."""
     return str(mujoco.mj_id2name(model, _OBJ.mjOBJ_BODY, int(body)) or f"body#{int(body)}")
 
 
@@ -220,10 +220,10 @@ def ik_residual(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     r"""Residual rows and their Jacobian at ``data.qpos`` (runs ``mj_kinematics`` and ``mj_comPos``).
 
-    Position rows :math:`e = x - x^*` with Jacobian ``mj_jac``'s :math:`J_p`; tangency row
-    :math:`e = a \cdot (c - x)` with :math:`\partial e / \partial q_k =
-    (\omega_k \times a) \cdot (c - x) - a \cdot J_{p,k}`, :math:`\omega_k` the rotational
-    Jacobian column (``mj_jac``'s :math:`J_r`).
+    Position rows $e = x - x^*$ with Jacobian ``mj_jac``'s $J_p$; tangency row
+    $e = a \cdot (c - x)$ with $\partial e / \partial q_k =
+    (\omega_k \times a) \cdot (c - x) - a \cdot J_{p,k}$, $\omega_k$ the rotational
+    Jacobian column (``mj_jac``'s $J_r$).
 
     Parameters
     ----------
@@ -271,7 +271,7 @@ def _chain_joints(model: mujoco.MjModel, bodies: list[int]) -> list[int]:
 
 
 def _ik_joints(model: mujoco.MjModel, targets: Sequence[IkTarget], joints: Sequence[str] | None) -> list[int]:
-    """The hinge and slide joints :func:`solve_ik` moves (checked; default: the targets' chains)."""
+    """The hinge and slide joints `solve_ik()` moves (checked; default: the targets' chains)."""
     scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
     if joints is None:
         ids = [j for j in _chain_joints(model, _bodies(model, targets)) if int(model.jnt_type[j]) in scalar]
@@ -311,7 +311,7 @@ def _damped_step(
     box: tuple[NDArray[np.float64], NDArray[np.float64]],
     mu: float,
 ) -> NDArray[np.float64]:
-    r"""One Levenberg-Marquardt step :math:`(J^T J + \mu I)\,\delta q = -J^T e`, joints at a
+    r"""One Levenberg-Marquardt step $(J^T J + \mu I)\,\delta q = -J^T e$, joints at a
     bound of ``box = (lo, hi)`` it would push beyond frozen (projected gradient), capped at
     0.5 rad per joint."""
     lo, hi = box
@@ -339,13 +339,13 @@ def solve_ik(
     strict: bool = True,
     scratch: mujoco.MjData | None = None,
 ) -> IkResult:
-    r"""Place every target: minimise :math:`\tfrac12 |e(q)|^2` over the chosen joints.
+    r"""Place every target: minimise $\tfrac12 |e(q)|^2$ over the chosen joints.
 
     Long only through its signature and parameter documentation (one keyword per option);
     the body is a short sequence of the named steps below it in this module.
 
-    Levenberg-Marquardt: :math:`(J^T J + \mu I)\,\delta q = -J^T e` on the free joints,
-    :math:`\mu` divided by 3 after a step that lowers :math:`|e|` and multiplied by 10
+    Levenberg-Marquardt: $(J^T J + \mu I)\,\delta q = -J^T e$ on the free joints,
+    $\mu$ divided by 3 after a step that lowers $|e|$ and multiplied by 10
     otherwise; steps are capped at 0.5 rad per joint and clipped to the joint ranges; a
     joint at a bound that the step would push beyond it is frozen for that step (projected
     gradient). Over-determined but consistent targets (e.g. a link lying on the palm *and*

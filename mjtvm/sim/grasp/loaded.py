@@ -1,13 +1,13 @@
-r"""A loaded grasp (:class:`Grasp`): a hand, an object and a grasp configuration in MuJoCo,
-with each contact's type and friction and each joint's operation range; :meth:`Grasp.state`
-gives its :class:`~mjtvm.core.state.GraspState` (:func:`~mjtvm.sim.grasp.state.grasp_state`).
+r"""A loaded grasp ([`Grasp`][mjtvm.sim.grasp.loaded.Grasp]): a hand, an object and a grasp configuration in MuJoCo,
+with each contact's type and friction and each joint's operation range; [`Grasp.state()`][mjtvm.sim.grasp.loaded.Grasp.state]
+gives its [`GraspState`][mjtvm.core.state.GraspState] (`grasp_state()`).
 
-:func:`~mjtvm.sim.grasp.file.load_grasp` builds it from a grasp file. *Contacts that touch.*
+[`load_grasp()`][mjtvm.sim.grasp.file.load_grasp] builds it from a grasp file. *Contacts that touch.*
 Geoms placed exactly touching are often reported by MuJoCo only once they penetrate; a grasp
 file's ``contact_tolerance`` (default 0.1 mm) counts a geom within that distance of the object
 as touching: MuJoCo's collision runs with that margin on the object's geoms for detection only.
 Every selection must touch (else an error gives the nearest distance, from ``mj_geomDistance``)
-and every touching geom must be selected or ignored; :meth:`Grasp.contact_report` lists found
+and every touching geom must be selected or ignored; [`Grasp.contact_report()`][mjtvm.sim.grasp.loaded.Grasp.contact_report] lists found
 vs expected.
 
 World frame, SI units.
@@ -53,7 +53,7 @@ _SCALAR = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 @dataclass(frozen=True, eq=False)
 class Grasp:
-    r"""A hand, an object and a grasp configuration, ready for :meth:`state`.
+    r"""A hand, an object and a grasp configuration, ready for `state()`.
 
     Attributes
     ----------
@@ -69,7 +69,7 @@ class Grasp:
     joints
         The state's joints, in model order unless the file lists them.
     contact_types
-        Geom label (:func:`~mjtvm.sim.grasp.state.geom_label`) -> ``"F"``, ``"L"``, ``"S"`` or
+        Geom label (`geom_label()`) -> ``"F"``, ``"L"``, ``"S"`` or
         ``"D"``, every geom of every selection and every touching geom a rule typed.
     selections
         Per ``contacts`` entry of the file: its description and the labels it selects.
@@ -82,7 +82,7 @@ class Grasp:
     operation_ranges
         Joint name -> operation range at the joint.
     motors
-        Joint name -> :class:`~mjtvm.sim.grasp.dcmotor.DCMotor` from a datasheet, ``None`` when the
+        Joint name -> `DCMotor` from a datasheet, ``None`` when the
         model's ``<dcmotor>`` drives the joint, or why there is no motor model (a string).
     contact_tolerance
         m: a geom within this distance of the object touches it.
@@ -99,7 +99,7 @@ class Grasp:
         ``preload``; ``mjtvm.state/1``'s contact ``preload``).
     transmission
         How the model's actuators and equality constraints drive the joints
-        (:mod:`mjtvm.sim.grasp.transmission`), or ``None`` for the paper's independent joints
+        ([`mjtvm.sim.grasp.transmission`][mjtvm.sim.grasp.transmission]), or ``None`` for the paper's independent joints
         (each joint its own actuator, no equality). With a transmission, ``operation_ranges``
         and ``motors`` are keyed by actuator name, in the actuator's units.
     mu_ranges
@@ -107,12 +107,12 @@ class Grasp:
         ``mu_range``, top-level or per contact): the states' contact ``mu_range``.
     friction_margin
         The states' ``friction_margin``: the file's ``friction_margin`` delta on its ``cone``,
-        :math:`1 - (1 - \delta) c` (:func:`~mjtvm.core.friction.cone_margin`; 0 by default).
+        $1 - (1 - \delta) c$ (`cone_margin()`; 0 by default).
     cone
         The MuJoCo cone of that margin: ``"elliptic"`` or ``"pyramidal"`` (the file's ``cone``,
         ``"model"`` read from the model's ``opt.cone``).
     rule_matches
-        Per ``contact_rules`` entry: the touching geoms it typed (:mod:`mjtvm.sim.grasp.rules`);
+        Per ``contact_rules`` entry: the touching geoms it typed ([`mjtvm.sim.grasp.rules`][mjtvm.sim.grasp.rules]);
         those geoms are in ``contact_types`` (or ``ignored_geoms``), not in ``selections``.
     """
 
@@ -158,8 +158,8 @@ class Grasp:
         through the object's centre of mass) plus each of the file's wrenches; the file's REFS
         must include the weight. ``mu``: one coefficient for every contact, or geom label ->
         coefficient updating the file's (the file's ``mu_range`` intervals must hold it).
-        ``friction_margin``: the margin :math:`\delta` instead of the file's, on the grasp's
-        ``cone`` (:func:`~mjtvm.core.friction.cone_margin`).
+        ``friction_margin``: the margin $\delta$ instead of the file's, on the grasp's
+        ``cone`` (`cone_margin()`).
         """
         margin = self.friction_margin if friction_margin is None else cone_margin(self.cone, friction_margin)
         refs = self.refs if mg is None else self.weight_refs(mg)
@@ -191,7 +191,7 @@ class Grasp:
         return float(np.linalg.norm(self.refs[0, :3]))
 
     def weight_refs(self, mg: float) -> NDArray[np.float64]:
-        """``(K, 6)`` the REFS with the weight's magnitude set to ``mg`` (N), as :meth:`with_options`
+        """``(K, 6)`` the REFS with the weight's magnitude set to ``mg`` (N), as `with_options()`
         makes them (without building a new grasp: the lift's states call this for every point)."""
         if not self.document["refs"]["weight"]:
             raise GraspError(self.file, "refs", "has no weight (weight = false): mg cannot replace it")
@@ -200,7 +200,7 @@ class Grasp:
 
     def spec(self) -> mujoco.MjSpec:
         """A fresh ``MjSpec`` of the model file with the grasp's additions (object, supports), e.g.
-        to attach motors (:mod:`mjtvm.physics`) before compiling; ``spec().compile()`` equals ``model``."""
+        to attach motors (`mjtvm.physics`) before compiling; ``spec().compile()`` equals ``model``."""
         return build_spec(self.document, self.model_path, self.file)
 
     @property
@@ -244,7 +244,7 @@ class Grasp:
     def check_contacts(self) -> None:
         """Every selection touches the object, every touching geom is selected or ignored, and
         no selected contact is deeper inside the object than the file's ``max_penetration``
-        (:func:`~mjtvm.sim.grasp.report.check_penetration`).
+        (`check_penetration()`).
 
         Raises
         ------
@@ -287,12 +287,12 @@ class Grasp:
         preloads: Mapping[str, float] | None = None,
         **options: Any,
     ) -> GraspState:
-        r"""The grasp state (:func:`~mjtvm.sim.grasp.state.grasp_state`) with the ignored contacts dropped.
+        r"""The grasp state (`grasp_state()`) with the ignored contacts dropped.
 
         ``contact_types`` and ``slide_directions`` update the grasp's (geom labels); ``refs``,
         ``rvds`` and ``mu`` replace them; ``preloads`` (geom label -> N) updates the file's
         contact preloads; further keywords go to
-        :func:`~mjtvm.sim.grasp.state.grasp_state`.
+        `grasp_state()`.
 
         Raises
         ------

@@ -6,9 +6,9 @@ collision (GJK/EPA, ``opt.ccd_tolerance`` 1e-6) for the others, e.g. a cylinder,
 or a box against a box-, cylinder- or ellipsoid-tipped finger. Where two such surfaces
 touch within a micrometre, the normal is the direction between two nearly equal witness
 points and is off by up to a few 1e-3 (measured: 4e-3 for an ellipsoid fingertip on a
-cylinder's side). :func:`object_normal` gives the exact normal of a sphere, capsule, box,
+cylinder's side). [`object_normal()`][mjtvm.sim.grasp.normals.object_normal] gives the exact normal of a sphere, capsule, box,
 cylinder or ellipsoid object at the contact point; the grasp state uses it for every pair
-MuJoCo may collide iteratively (:func:`needs_exact_normal`). World frame.
+MuJoCo may collide iteratively ([`needs_exact_normal()`][mjtvm.sim.grasp.normals.needs_exact_normal]). World frame.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ _OBJECT_TYPES = (_S, _C, _E, _Y, _B)
 
 
 def needs_exact_normal(model: mujoco.MjModel, object_geom: int, other_geom: int) -> bool:
-    """Whether the pair is collided iteratively (GJK/EPA) while :func:`object_normal` knows the
+    """Whether the pair is collided iteratively (GJK/EPA) while [`object_normal()`][mjtvm.sim.grasp.normals.object_normal] knows the
     object's shape: an ellipsoid, or a cylinder with a capsule, cylinder or box. Closed-form
     pairs keep MuJoCo's normals, bit for bit."""
     a, b = int(model.geom_type[object_geom]), int(model.geom_type[other_geom])
@@ -57,7 +57,7 @@ def object_normal(
     nearest to the point (relative to its half-size); a cylinder's the radial direction or
     the cap's axis, whichever surface is nearer; a sphere's and a capsule's the direction from
     the centre or the nearest axis point; an ellipsoid's the gradient
-    :math:`(x/a_x^2, y/a_y^2, z/a_z^2)` at the point scaled onto the surface.
+    $(x/a_x^2, y/a_y^2, z/a_z^2)$ at the point scaled onto the surface.
     """
     rot = np.array(data.geom_xmat[geom], dtype=float).reshape(3, 3)
     local = rot.T @ (np.asarray(point, dtype=float) - np.array(data.geom_xpos[geom], dtype=float))

@@ -2,7 +2,7 @@ r"""The geom pairs that can touch the object, and their exact distances (``mj_ge
 
 MuJoCo's collision pipeline reports a pair only if its broad phase and mid-phase let it
 through; the mid-phase bounding volumes are built at compile time without the collision
-margin that :func:`~mjtvm.sim.grasp.touch.forward_touching` adds, so a pair within the
+margin that [`forward_touching()`][mjtvm.sim.grasp.touch.forward_touching] adds, so a pair within the
 tolerance can be culled there. ``mj_geomDistance`` runs the pair's narrow phase alone: the
 distances below are what the contact detection is checked against and completed with.
 
@@ -119,7 +119,7 @@ def pair_distance(
 def near_pairs(
     model: mujoco.MjModel, data: mujoco.MjData, object_bodies: set[int], within: float
 ) -> list[GeomPair]:
-    """Every :func:`candidate_pairs` pair at a distance of at most ``within`` (m), in that order."""
+    """Every [`candidate_pairs()`][mjtvm.sim.grasp.pairs.candidate_pairs] pair at a distance of at most ``within`` (m), in that order."""
     found = []
     for g, o in candidate_pairs(model, object_bodies):
         pair = pair_distance(model, data, g, o, within + max(within, 1e-3))

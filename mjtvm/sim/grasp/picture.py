@@ -1,9 +1,9 @@
 r"""A picture of a loaded grasp by MuJoCo's renderer (``mjtvm show --png``): the model at the
-grasp's configuration with its contact points, seen from :data:`VIEWS` around the object.
+grasp's configuration with its contact points, seen from [`VIEWS`][mjtvm.sim.grasp.picture.VIEWS] around the object.
 
 Rendering needs an OpenGL context: headless, MuJoCo's EGL (or OSMesa) back end, chosen by the
 environment variable ``MUJOCO_GL`` before MuJoCo is imported (``mjtvm show --png`` sets
-``egl`` when it is unset). A context that cannot be made is a :class:`RenderError`.
+``egl`` when it is unset). A context that cannot be made is a [`RenderError`][mjtvm.sim.grasp.picture.RenderError].
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def render_grasp(
     width: int = 480,
     height: int = 480,
 ) -> NDArray[np.uint8]:
-    """``(height, len(VIEWS) * width, 3)`` RGB: the grasp from each of :data:`VIEWS`, with the
+    """``(height, len(VIEWS) * width, 3)`` RGB: the grasp from each of [`VIEWS`][mjtvm.sim.grasp.picture.VIEWS], with the
     contacts within ``tolerance`` (m) drawn as MuJoCo's contact points.
 
     Raises

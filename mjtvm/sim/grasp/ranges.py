@@ -4,15 +4,15 @@ A joint's entry is its exact name, else the first glob pattern (``fnmatch``, in 
 that matches it, else ``"*"``. Four sources (``docs/grasp-format.md``):
 
 * ``dcmotor``: the model's ``<dcmotor>`` driving the joint
-  (:func:`~mjtvm.sim.grasp.actuator.operation_range_from_actuator`), exact;
+  ([`operation_range_from_actuator()`][mjtvm.sim.grasp.actuator.operation_range_from_actuator]), exact;
 * ``datasheet``: a motor datasheet entry, in maxon's form (no-load speed, nominal point, max
   permissible speed, gear ratio and efficiency) through
-  :meth:`~mjtvm.core.operation_range.OperationRange.from_datasheet`, exact for the motor's
+  [`from_datasheet()`][mjtvm.core.operation_range.OperationRange.from_datasheet], exact for the motor's
   continuous operation, or in the servo form (stall torque, no-load speed, optional gear,
-  continuous torque, rotor inertia) through :class:`~mjtvm.sim.grasp.servo.ServoDatasheet`;
+  continuous torque, rotor inertia) through [`ServoDatasheet`][mjtvm.sim.grasp.servo.ServoDatasheet];
   the same entry gives the physics check its ``<dcmotor>``
-  (:meth:`~mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet`,
-  :meth:`~mjtvm.sim.grasp.servo.ServoDatasheet.motor`) when the gear is ideal;
+  ([`from_datasheet()`][mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet],
+  [`motor()`][mjtvm.sim.grasp.servo.ServoDatasheet.motor]) when the gear is ideal;
 * ``actuator`` + ``speed_limit``: the box ``|tau| <= gear x forcerange``,
   ``|qdot| <= speed_limit`` of a (e.g. position) actuator. **An approximation**: a real
   motor's speed falls with torque (the datasheet's speed-torque line), so the box promises
@@ -196,16 +196,16 @@ def joint_ranges(
 
     With ``losses`` (the grasp file's ``joint_losses = "fold"``, the default) each range is the
     torque left after the joint's own damping and friction loss in the model
-    (:meth:`~mjtvm.core.operation_range.OperationRange.with_losses`): public hand models often
+    ([`with_losses()`][mjtvm.core.operation_range.OperationRange.with_losses]): public hand models often
     carry joint damping (the Allegro's 1 N m s/rad eats 1.5 N m at 1.5 rad/s, more than its
     0.7 N m motors give), which the motor must overcome before it moves the object.
 
     Returns
     -------
     ranges
-        Joint name -> :class:`~mjtvm.core.operation_range.OperationRange` at the joint.
+        Joint name -> `OperationRange` at the joint.
     motors
-        Joint name -> a :class:`~mjtvm.sim.grasp.dcmotor.DCMotor` (datasheet source), ``None`` when the
+        Joint name -> a `DCMotor` (datasheet source), ``None`` when the
         model's own ``<dcmotor>`` drives it, or a string saying why there is no motor model
         (the physics check refuses such joints with it).
 
@@ -299,7 +299,7 @@ def actuator_ranges(
 
     The ranges are in the actuator's units: force ``u`` (MuJoCo's ``actuator_force``) and speed
     ``s = moment @ qd`` (``actuator_velocity``), the moment including the actuator's gear. An
-    entry is found by the actuator's name as a joint's is (:func:`range_entry`). Sources:
+    entry is found by the actuator's name as a joint's is ([`range_entry()`][mjtvm.sim.grasp.ranges.range_entry]). Sources:
 
     * ``actuator = true`` (or the actuator's own name) + ``speed_limit``: the box
       ``|u| <= forcerange``, ``|s| <= speed_limit`` (s in the actuator's units: for the Shadow

@@ -1,10 +1,10 @@
 r"""What a loaded grasp's contacts look like before anything is solved: every geom near the
-object (:func:`contact_rows`, the table of ``mjtvm show``), penetration beyond the file's
-``max_penetration`` refused (:func:`check_penetration`) and smaller penetration or an IK target
-that is not the geom that touches reported (:func:`contact_warnings`).
+object ([`contact_rows()`][mjtvm.sim.grasp.report.contact_rows], the table of ``mjtvm show``), penetration beyond the file's
+``max_penetration`` refused (`check_penetration()`) and smaller penetration or an IK target
+that is not the geom that touches reported ([`contact_warnings()`][mjtvm.sim.grasp.report.contact_warnings]).
 
-Distances are exact (``mj_geomDistance``, :mod:`mjtvm.sim.grasp.pairs`); the contacts the
-state keeps are :func:`~mjtvm.sim.grasp.touch.detected_contacts`' (one per finger body, the
+Distances are exact (``mj_geomDistance``, [`mjtvm.sim.grasp.pairs`][mjtvm.sim.grasp.pairs]); the contacts the
+state keeps are [`detected_contacts()`][mjtvm.sim.grasp.touch.detected_contacts]' (one per finger body, the
 deepest). World frame, SI units.
 """
 
@@ -35,11 +35,11 @@ __all__ = [
     "kept_contacts",
 ]
 
-#: How far :func:`contact_rows` looks by default, in contact tolerances (at least 1 mm): far
+#: How far [`contact_rows()`][mjtvm.sim.grasp.report.contact_rows] looks by default, in contact tolerances (at least 1 mm): far
 #: enough to show the geom a user meant to touch and the distance still to close.
 NEAR_TOLERANCES = 10.0
 
-#: m: the shallowest penetration :func:`contact_warnings` reports. Below a micrometre it is the
+#: m: the shallowest penetration [`contact_warnings()`][mjtvm.sim.grasp.report.contact_warnings] reports. Below a micrometre it is the
 #: placement's round-off (the IK stops at about 1e-9 m, the collision at 1e-12 m; the shipped
 #: IK grasps penetrate by up to 1.3e-8 m), not a finger inside the object.
 REPORTED_PENETRATION = 1e-6
@@ -52,7 +52,7 @@ class ContactRow:
     Parameters
     ----------
     geom, body
-        The geom outside the object (label, :func:`~mjtvm.sim.grasp.touch.geom_label`) and its body's name.
+        The geom outside the object (label, `geom_label()`) and its body's name.
     object_geom
         The object's geom (label).
     distance
@@ -130,7 +130,7 @@ def check_penetration(grasp: Grasp) -> None:
 
 
 def contact_warnings(grasp: Grasp) -> list[str]:
-    """One line per selected contact that penetrates (deeper than :data:`REPORTED_PENETRATION`,
+    """One line per selected contact that penetrates (deeper than [`REPORTED_PENETRATION`][mjtvm.sim.grasp.report.REPORTED_PENETRATION],
     within ``max_penetration``) and per IK target geom that does not touch the object (naming
     the geom of its body that does)."""
     out = []
@@ -147,7 +147,7 @@ def contact_warnings(grasp: Grasp) -> list[str]:
 
 def _self_overlaps(grasp: Grasp) -> list[str]:
     """One line per pair of hand geoms (neither the object's nor the world's) that overlap
-    deeper than :data:`REPORTED_PENETRATION` at the configuration: a contact no LP sees, whose
+    deeper than [`REPORTED_PENETRATION`][mjtvm.sim.grasp.report.REPORTED_PENETRATION] at the configuration: a contact no LP sees, whose
     force the physics check would feel."""
     model = grasp.model
     inside = subtree(model, model.body(grasp.object_body).id)
@@ -211,7 +211,7 @@ def _ik_warnings(grasp: Grasp) -> list[str]:
 
 def contact_rows(grasp: Grasp, within: float | None = None) -> list[ContactRow]:
     r"""Every geom pair (hand geom, object geom) that may collide within ``within`` (m; default
-    :data:`NEAR_TOLERANCES` contact tolerances, at least 1 mm), ordered by hand geom id.
+    [`NEAR_TOLERANCES`][mjtvm.sim.grasp.report.NEAR_TOLERANCES] contact tolerances, at least 1 mm), ordered by hand geom id.
 
     A pair is ``selected`` when it is a contact of the grasp state: within
     ``contact_tolerance``, the deepest of its body, typed by the file and not ignored.

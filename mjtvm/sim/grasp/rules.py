@@ -3,7 +3,7 @@ r"""Contact rules: the ``contact_rules`` of a ``mjtvm.grasp/1`` file (``docs/gra
 An enveloping grasp touches the object with many links; listing each in ``contacts`` is
 tedious and the natural first file (every link a sticking F-point) locks the object. A rule
 types every touching geom whose label (``geom``) or body name (``body``) matches a glob
-pattern (:func:`fnmatch.fnmatchcase`): ``F``, ``L``, ``D``, or ``ignore`` (dropped, as an
+pattern (`fnmatch.fnmatchcase()`): ``F``, ``L``, ``D``, or ``ignore`` (dropped, as an
 ``ignore`` entry). So three lines type a 16-link hand::
 
     contact_rules = [
@@ -15,7 +15,7 @@ pattern (:func:`fnmatch.fnmatchcase`): ``F``, ``L``, ``D``, or ``ignore`` (dropp
 Decisions (documented in ``docs/grasp-format.md``):
 
 * the rules apply to the geoms touching the object at the configuration (as
-  :meth:`~mjtvm.sim.grasp.loaded.Grasp.check_contacts` finds them) that no ``contacts`` or
+  [`check_contacts()`][mjtvm.sim.grasp.loaded.Grasp.check_contacts] finds them) that no ``contacts`` or
   ``ignore`` entry selects: explicit entries override the rules; among the rules, in file
   order, the first that matches wins;
 * a pattern that matches no geom (or body) of the model outside the object is an error (a
@@ -56,7 +56,7 @@ _RULE_KEYS = {"geom", "body", "type", "mu"}
 
 def check_contact_rules(c: _Checker, value: Any) -> list[dict[str, Any]]:
     """The ``contact_rules`` list normalised to ``{"select": "geom"|"body", "pattern", "type",
-    "mu"}`` (``mu`` None when not given); a :class:`GraspError` naming the first bad field."""
+    "mu"}`` (``mu`` None when not given); a `GraspError` naming the first bad field."""
     if not isinstance(value, list) or not value or len(value) > MAX_ITEMS:
         raise c.fail("contact_rules", f"expected a list of 1 to {MAX_ITEMS} rule tables, got {_kind(value)}")
     out = []
@@ -98,7 +98,7 @@ class RuleMatch:
     type
         ``"F"``, ``"L"``, ``"D"`` or ``"ignore"``.
     labels
-        The touching geoms it typed (labels, :func:`~mjtvm.sim.grasp.touch.geom_label`),
+        The touching geoms it typed (labels, `geom_label()`),
         possibly none.
     """
 
@@ -169,9 +169,9 @@ def expand_rules(
     model
         The compiled model.
     rules
-        The normalised ``contact_rules`` (:func:`check_contact_rules`).
+        The normalised ``contact_rules`` ([`check_contact_rules()`][mjtvm.sim.grasp.rules.check_contact_rules]).
     touching
-        Labels of the geoms touching the object (:func:`touching_geoms`).
+        Labels of the geoms touching the object ([`touching_geoms()`][mjtvm.sim.grasp.rules.touching_geoms]).
     taken
         Labels selected by ``contacts`` or ``ignore``: the rules leave them.
     object_body

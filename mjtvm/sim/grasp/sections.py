@@ -1,6 +1,6 @@
 r"""The section checks of a ``mjtvm.grasp/1`` document (configuration, contacts, refs, ranges,
-lift), built on the value checks of :mod:`mjtvm.sim.grasp.checks`;
-:mod:`mjtvm.sim.grasp.document` runs them.
+lift), built on the value checks of `mjtvm.sim.grasp.checks`;
+`mjtvm.sim.grasp.document` runs them.
 """
 
 from __future__ import annotations

@@ -7,13 +7,13 @@ nominal point. A DC motor's speed falls linearly with its torque between those e
 operation range (eq. 1-3, the paper's Fig. 1 form) at the joint is the region under that line,
 left of the continuous (rated, thermal) torque when the sheet gives one:
 
-.. math::
+$$
+(0, 0),\ (T_c, 0),\ (T_c, \omega_0 (1 - T_c / T_s)),\ (0, \omega_0)
+$$
 
-    (0, 0),\ (T_c, 0),\ (T_c, \omega_0 (1 - T_c / T_s)),\ (0, \omega_0)
-
-(``|tau|`` N m, ``|qdot|`` rad/s), with :math:`T_s` and :math:`T_c` times the gear ratio and
-efficiency and :math:`\omega_0` over the gear ratio; the triangle :math:`(0, 0), (T_s, 0),
-(0, \omega_0)` without a continuous torque (the servo may then hold its stall torque).
+(``|tau|`` N m, ``|qdot|`` rad/s), with $T_s$ and $T_c$ times the gear ratio and
+efficiency and $\omega_0$ over the gear ratio; the triangle $(0, 0), (T_s, 0),
+(0, \omega_0)$ without a continuous torque (the servo may then hold its stall torque).
 
 Keys (a JSON file or an inline table, as ``[ranges]`` ``datasheet = ...`` takes it;
 ``docs/grasp-format.md``): ``voltage_V``, ``stall_torque_Nm``, ``no_load_speed_rpm``

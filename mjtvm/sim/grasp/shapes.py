@@ -1,6 +1,6 @@
 r"""Every colliding geom of a grasp as plain arrays (type, size, world pose, colour; a mesh's
 vertices and faces), for drawing a grasp without MuJoCo (``mjtvm show``,
-:mod:`mjtvm.viewer.grasp_view`). World frame, m; quaternions ``(w, x, y, z)``.
+[`mjtvm.viewer.grasp_view`][mjtvm.viewer.grasp_view]). World frame, m; quaternions ``(w, x, y, z)``.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ class GeomShape:
     Attributes
     ----------
     label
-        :func:`~mjtvm.sim.grasp.touch.geom_label`.
+        `geom_label()`.
     kind
         ``"plane"``, ``"sphere"``, ``"capsule"``, ``"ellipsoid"``, ``"cylinder"``, ``"box"`` or ``"mesh"``.
     size

@@ -1,10 +1,10 @@
 r"""Grasp states from a MuJoCo model: the coupling between a simulation and the TVM core.
 
-:func:`grasp_state` reads, at the configuration held in an ``mjData``, everything a
-:class:`~mjtvm.core.state.GraspState` needs: the contacts MuJoCo detects between the object and
+`grasp_state()` reads, at the configuration held in an ``mjData``, everything a
+[`GraspState`][mjtvm.core.state.GraspState] needs: the contacts MuJoCo detects between the object and
 the rest of the model, their Jacobians, the joints' gravity torques and operation ranges,
 and the object's weight as the default REFS. Which contact is of which type (F, L, S, D) is
-grasp data keyed by geom label, never derived here; which geoms touch is :mod:`mjtvm.sim.grasp.touch`.
+grasp data keyed by geom label, never derived here; which geoms touch is [`mjtvm.sim.grasp.touch`][mjtvm.sim.grasp.touch].
 
 Frames and units: world frame, SI. Contact normals point into the object; Jacobians map the
 state's joint velocities (rad/s) to the velocity (m/s) of the finger-side contact point.
@@ -66,7 +66,7 @@ _OBJ = mujoco.mjtObj
 
 @dataclass(frozen=True)
 class JointLimitOptions:
-    """How :func:`grasp_state` states the joints' position limits (:mod:`mjtvm.core.limits`):
+    """How `grasp_state()` states the joints' position limits (`mjtvm.core.limits`):
     a joint within ``tolerance`` (rad or m) of a limit is on it, and ``horizon`` (m of
     object travel; 0: on-limit rows only) is Problem 2's travel horizon."""
 
@@ -75,7 +75,7 @@ class JointLimitOptions:
 
 
 def limit_options(value: Mapping[str, float] | bool | None) -> JointLimitOptions | None:
-    """The :class:`JointLimitOptions` of a grasp file's normalised ``joint_limits``
+    """The [`JointLimitOptions`][mjtvm.sim.grasp.state.JointLimitOptions] of a grasp file's normalised ``joint_limits``
     (``false``: ``None``, no limits; a missing key: the defaults)."""
     if value is None or value is True:
         return JointLimitOptions()
@@ -205,22 +205,22 @@ def grasp_state(
         with a transmission (below), actuator name -> operation range in the actuator's units,
         one for every driving actuator.
     one_contact_per_body
-        See :func:`detected_contacts`.
+        See [`detected_contacts()`][mjtvm.sim.grasp.touch.detected_contacts].
     friction_edges, slip
-        Passed to :class:`~mjtvm.core.state.GraspState`.
+        Passed to [`GraspState`][mjtvm.core.state.GraspState].
     contact_tolerance
-        A geom within this distance (m) of the object touches it (:func:`forward_touching`);
+        A geom within this distance (m) of the object touches it ([`forward_touching()`][mjtvm.sim.grasp.touch.forward_touching]);
         ``None``: the contacts MuJoCo reports.
     joint_damping
         With a transmission: the joints' ``dof_damping`` in the torque balance (``False``: none,
         as a grasp file's ``joint_losses = "ignore"``). Without one (each joint its own
         actuator's) this function puts no damping anywhere: the operation ranges given are
         used as they are, and a grasp file folds the model's damping and friction loss into
-        them beforehand (:func:`~mjtvm.sim.grasp.ranges.joint_ranges`, ``joint_losses``).
+        them beforehand ([`joint_ranges()`][mjtvm.sim.grasp.ranges.joint_ranges], ``joint_losses``).
     joint_limits
         The tolerance and horizon of the joints' position limits
-        (:class:`JointLimitOptions`): each joint with ``jnt_limited`` carries its
-        ``jnt_range`` and its ``qpos`` (:func:`joint_limits_of`); ``None``: no limits (the
+        ([`JointLimitOptions`][mjtvm.sim.grasp.state.JointLimitOptions]): each joint with ``jnt_limited`` carries its
+        ``jnt_range`` and its ``qpos`` ([`joint_limits_of()`][mjtvm.sim.grasp.state.joint_limits_of]); ``None``: no limits (the
         paper's LPs).
 
     Returns
@@ -233,9 +233,9 @@ def grasp_state(
         ``qfrc_bias - qfrc_passive`` at zero velocity, the bias torque: gravity plus the
         passive springs at the state, the joint torques that hold the fingers still.
         ``transmission``: read from MuJoCo at the configuration
-        (:func:`~mjtvm.sim.grasp.transmission.model_transmission`) unless every driving
+        ([`model_transmission()`][mjtvm.sim.grasp.transmission.model_transmission]) unless every driving
         actuator is a joint transmission on its own state joint and no equality acts on
-        them (:func:`~mjtvm.sim.grasp.transmission.is_independent`): then ``None`` and one
+        them ([`is_independent()`][mjtvm.sim.grasp.transmission.is_independent]): then ``None`` and one
         operation range per joint, as in the paper; else the moment matrix, the equality
         rows and the damping, and one operation range per actuator.
 
@@ -369,7 +369,7 @@ def _detect_contacts(
     one_per_body: bool,
     tolerance: float | None,
 ) -> list[DetectedContact]:
-    """The object's contacts (:func:`detected_contacts`); at least one must be on a finger
+    """The object's contacts ([`detected_contacts()`][mjtvm.sim.grasp.touch.detected_contacts]); at least one must be on a finger
     (a body moved by one of ``joint_ids``)."""
     detected = detected_contacts(
         model, work, object_body=object_body, one_per_body=one_per_body, tolerance=tolerance

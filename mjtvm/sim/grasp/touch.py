@@ -1,6 +1,6 @@
 r"""Which geoms touch the object, as MuJoCo reports them: labels for unnamed geoms, contact
 detection within a distance tolerance (exact: every pair within it, checked against
-``mj_geomDistance``, :mod:`mjtvm.sim.grasp.pairs`), MuJoCo's iterative collision run to a tight
+``mj_geomDistance``, [`mjtvm.sim.grasp.pairs`][mjtvm.sim.grasp.pairs]), MuJoCo's iterative collision run to a tight
 tolerance, exact normals where it would give approximate ones, and MuJoCo's round-off removed.
 
 Frames and units: world frame, SI. Normals point into the object.
@@ -51,12 +51,12 @@ ROUND_OFF_REL = 1e-15
 
 
 def without_round_off(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A copy of ``x`` with the entries at most :data:`ROUND_OFF_REL` times its largest set to 0.
+    """A copy of ``x`` with the entries at most [`ROUND_OFF_REL`][mjtvm.sim.grasp.touch.ROUND_OFF_REL] times its largest set to 0.
 
     MuJoCo computes contact normals and ``mj_jac`` columns (cross products of joint axes and
     lever arms) in double precision; an exact zero comes out as ~1e-17 beside entries ~0.1.
     Such round-off, passed on, sits in the LPs beside O(1) entries of its row and column,
-    where the equilibration (:func:`mjtvm.core.solvers.equilibrate`) cannot tell it from data: on
+    where the equilibration (`mjtvm.core.solvers.equilibrate()`) cannot tell it from data: on
     the generated 8-finger hand it made Problem 1 9x slower and put a TVMS vertex 3e-8
     (relative) outside. Entries of a genuinely small scale keep theirs: the cut is relative.
     """
@@ -73,7 +73,7 @@ class DetectedContact:
     ----------
     geom
         Label of the geom touching the object (finger link, fingertip or palm): its name, or
-        ``"<body>/geom<n>"`` when unnamed (:func:`geom_label`).
+        ``"<body>/geom<n>"`` when unnamed (`geom_label()`).
     body
         Id of that geom's body.
     position
@@ -83,7 +83,7 @@ class DetectedContact:
     distance
         Signed distance between the surfaces (m); negative when they penetrate.
     object_geom
-        Label of the object's geom it touches (:func:`geom_label`).
+        Label of the object's geom it touches (`geom_label()`).
     """
 
     geom: str
@@ -117,7 +117,7 @@ def geom_label(model: mujoco.MjModel, geom: int) -> str:
 
 
 def geom_id(model: mujoco.MjModel, label: str, what: str = "geom") -> int:
-    """The id of the geom with this name or :func:`geom_label`; ModelError naming ``what`` if none."""
+    """The id of the geom with this name or `geom_label()`; ModelError naming ``what`` if none."""
     i = mujoco.mj_name2id(model, _OBJ.mjOBJ_GEOM, label)
     if i >= 0:
         return int(i)
@@ -158,7 +158,7 @@ def forward_touching(model: mujoco.MjModel, data: mujoco.MjData, object_body: in
     mid-phase culls with bounding volumes built at compile time without that margin (a pair
     1.94 mm apart was missed at a 2 mm tolerance), so it is disabled: every pair the broad
     phase passes reaches the narrow phase. What still escapes (an explicit ``<pair>``, whose
-    margin is its own) :func:`detected_contacts` adds from ``mj_geomDistance``. Margins and
+    margin is its own) [`detected_contacts()`][mjtvm.sim.grasp.touch.detected_contacts] adds from ``mj_geomDistance``. Margins and
     flags are restored afterwards: they serve detection only, the model is unchanged.
     """
     geoms = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in subtree(model, object_body)]
@@ -177,11 +177,11 @@ def forward_touching(model: mujoco.MjModel, data: mujoco.MjData, object_body: in
 @contextlib.contextmanager
 def precise_collision(model: mujoco.MjModel) -> Iterator[None]:
     r"""MuJoCo's iterative convex collision (GJK/EPA: box, cylinder, ellipsoid pairs) run to
-    :data:`CCD_TOLERANCE` instead of the simulation's 1e-6 m, then restored.
+    [`CCD_TOLERANCE`][mjtvm.sim.grasp.touch.CCD_TOLERANCE] instead of the simulation's 1e-6 m, then restored.
 
     Where a flat face or edge meets a curved surface, the distance grows only quadratically
     along the tangency, so a 1e-6 m tolerance leaves the contact point uncertain by about
-    :math:`\sqrt{2 R \cdot 10^{-6}}` (0.24 mm on a 3 cm cylinder; its normal 3e-3 off);
+    $\sqrt{2 R \cdot 10^{-6}}$ (0.24 mm on a 3 cm cylinder; its normal 3e-3 off);
     1e-12 m makes that 0.25 um. Closed-form pairs (spheres, capsules, planes) are unaffected.
     """
     saved = (float(model.opt.ccd_tolerance), int(model.opt.ccd_iterations))
@@ -206,15 +206,15 @@ def detected_contacts(
     contact frame normal points from ``geom1`` to ``geom2``; it is flipped when the object is
     ``geom1``. For pairs MuJoCo collides iteratively (an ellipsoid, or a cylinder with a
     capsule, cylinder or box) the normal is the object's exact surface normal at the contact
-    point instead (:mod:`mjtvm.sim.grasp.normals`).
+    point instead ([`mjtvm.sim.grasp.normals`][mjtvm.sim.grasp.normals]).
 
     Parameters
     ----------
     tolerance
-        Detect anew with :func:`forward_touching` (``data`` is updated) and keep the contacts
+        Detect anew with [`forward_touching()`][mjtvm.sim.grasp.touch.forward_touching] (``data`` is updated) and keep the contacts
         at a distance of at most ``tolerance`` (m); a pair that MuJoCo's pipeline still did
         not report while ``mj_geomDistance`` puts it within ``tolerance`` is added with its
-        witness points' midpoint and direction (:func:`~mjtvm.sim.grasp.pairs.pair_distance`),
+        witness points' midpoint and direction ([`pair_distance()`][mjtvm.sim.grasp.pairs.pair_distance]),
         so the contacts are exactly the pairs within ``tolerance``. ``None``: the contacts
         MuJoCo reports.
     one_per_body
@@ -291,7 +291,7 @@ def _missed_pairs(
 ) -> list[tuple[int, int, DetectedContact, int]]:
     """The ``near`` pairs that ``data.contact`` lacks (none of its contacts of the pair within
     the tolerance), as contacts after MuJoCo's (index ``ncon + k``), with the normal
-    convention of :func:`detected_contacts`."""
+    convention of [`detected_contacts()`][mjtvm.sim.grasp.touch.detected_contacts]."""
     out: list[tuple[int, int, DetectedContact, int]] = []
     for pair in near.values():
         if (pair.geom, pair.object_geom) in reported:
@@ -309,7 +309,7 @@ def _missed_pairs(
 
 
 def _pair_normal(model: mujoco.MjModel, data: mujoco.MjData, pair: GeomPair) -> NDArray[np.float64]:
-    """The pair's normal into the object: the object's exact one where :func:`detected_contacts`
+    """The pair's normal into the object: the object's exact one where [`detected_contacts()`][mjtvm.sim.grasp.touch.detected_contacts]
     would take it, else the witness points' direction."""
     exact = None
     if needs_exact_normal(model, pair.object_geom, pair.geom) or pair.normal is None:

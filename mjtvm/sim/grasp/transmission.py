@@ -22,9 +22,9 @@ needs, over the state's joints (their dofs, in the state's order, ``M`` of them)
 
 An actuator drives the hand when its moment is nonzero on a state joint. The joint springs
 (``qfrc_spring``) are not part of the transmission: they are in the state's bias torque
-(gravity plus passive springs at the state, :func:`~mjtvm.sim.grasp.state.grasp_state`).
+(gravity plus passive springs at the state, `grasp_state()`).
 
-:func:`is_independent` says when none of this is needed: every driving actuator a joint
+[`is_independent()`][mjtvm.sim.grasp.transmission.is_independent] says when none of this is needed: every driving actuator a joint
 transmission on its own state joint, no equality, as in the paper (eq. 19 unchanged).
 """
 
@@ -239,7 +239,7 @@ def model_transmission(
     Raises
     ------
     ModelError
-        As :func:`actuator_moments` and :func:`equality_rows`.
+        As [`actuator_moments()`][mjtvm.sim.grasp.transmission.actuator_moments] and [`equality_rows()`][mjtvm.sim.grasp.transmission.equality_rows].
     """
     dofs = [int(model.jnt_dofadr[j]) for j in joint_ids]
     ids, moment = actuator_moments(model, data, dofs)

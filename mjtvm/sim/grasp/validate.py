@@ -1,9 +1,9 @@
 r"""The rules of ``mjtvm.grasp/1`` beyond its JSON Schema, and the schema's verdict on a document.
 
 The schema (``mjtvm/data/schema/grasp.schema.json``) is the format's one definition of
-structure, types, bounds and option pairs: :func:`mjtvm.sim.grasp.document.read_grasp_document`
-refuses every document it refuses (:mod:`mjtvm.core.schema`). The field checks of
-:mod:`mjtvm.sim.grasp.checks` word most refusals and are alone only on :data:`BEYOND_SCHEMA`.
+structure, types, bounds and option pairs: `mjtvm.sim.grasp.document.read_grasp_document()`
+refuses every document it refuses ([`mjtvm.core.schema`][mjtvm.core.schema]). The field checks of
+`mjtvm.sim.grasp.checks` word most refusals and are alone only on `BEYOND_SCHEMA`.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
-r"""The predictor-corrector of a scripted lift (:mod:`mjtvm.sim.lift.trajectory`, whose docstring
+r"""The predictor-corrector of a scripted lift ([`mjtvm.sim.lift.trajectory`][mjtvm.sim.lift.trajectory], whose docstring
 describes the method): per finger its role, contact geometry and IK target; one step; admissibility.
 
-World frame, m, rad; s is the motion's parameter (:mod:`mjtvm.sim.lift.motion`).
+World frame, m, rad; s is the motion's parameter (`mjtvm.sim.lift.motion`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ _MAX_ROUNDS = 30  # retargeting rounds of one correction (each converges quadrat
 
 
 class GraspLike(Protocol):
-    """What the lift reads of a grasp: a :class:`~mjtvm.sim.paper_hand.scenario.Scenario` or the grasp
+    """What the lift reads of a grasp: a `Scenario` or the grasp
     file's ``Grasp`` (which adds ``lift`` and ``ik_bounds``, read with ``getattr``)."""
 
     @property
@@ -363,7 +363,7 @@ class Marcher:
         return work, info
 
     def copy_to_scratch(self, data: mujoco.MjData) -> mujoco.MjData:
-        """:attr:`scratch` holding a copy of ``data`` (valid until the next use of the scratch)."""
+        """`scratch` holding a copy of ``data`` (valid until the next use of the scratch)."""
         mujoco.mj_copyData(self.scratch, self.model, data)
         return self.scratch
 
@@ -400,7 +400,7 @@ class Marcher:
 
 def start_tolerance(grasp: GraspLike) -> float:
     """How far a finger geom may be from the object at the start and count as touching (m): the
-    grasp file's ``contact_tolerance``, else :data:`TOUCH_TOL`."""
+    grasp file's ``contact_tolerance``, else `TOUCH_TOL`."""
     value = getattr(grasp, "contact_tolerance", None)
     if value is None:
         value = grasp.document.get("contact_tolerance", TOUCH_TOL)

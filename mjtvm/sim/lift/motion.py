@@ -1,17 +1,17 @@
 r"""The object's motion in a scripted lift: a piecewise-constant twist along a path parameter s.
 
 A motion is a sequence of segments; on segment j the object moves with the constant twist
-:math:`\dot r_j = (v_j, \omega_j)` per unit s, world frame, about the object's origin
-:math:`c`: the origin moves by :math:`v_j\,\mathrm ds`, the orientation turns by
-:math:`\exp(\omega_j\,\mathrm ds)` (left-multiplied: :math:`\omega` is a world-frame angular
-velocity), and an object-fixed point :math:`p` moves with :math:`G^T \dot r = v + \omega \times
-(p - c)` (the paper's :math:`G_c^T \dot r`, eq. 7-8).
+$\dot r_j = (v_j, \omega_j)$ per unit s, world frame, about the object's origin
+$c$: the origin moves by $v_j\,\mathrm ds$, the orientation turns by
+$\exp(\omega_j\,\mathrm ds)$ (left-multiplied: $\omega$ is a world-frame angular
+velocity), and an object-fixed point $p$ moves with $G^T \dot r = v + \omega \times
+(p - c)$ (the paper's $G_c^T \dot r$, eq. 7-8).
 
-* a *direction* d: one segment, twist :math:`(d/|d|, 0)`, s the distance travelled (m);
+* a *direction* d: one segment, twist $(d/|d|, 0)$, s the distance travelled (m);
 * a *twist*: one segment, s its parameter (time-like: the motion per unit s);
-* *poses* :math:`P_1 \dots P_K` (position, unit quaternion w x y z): from the start pose through
+* *poses* $P_1 \dots P_K$ (position, unit quaternion w x y z): from the start pose through
   each in turn, segment j the constant twist (linear position, slerp orientation) taking
-  :math:`P_{j-1}` to :math:`P_j`; s advances by the origin's travel (m), or by the turning
+  $P_{j-1}$ to $P_j$; s advances by the origin's travel (m), or by the turning
   angle (rad) on a segment that only rotates.
 
 Poses are 7-vectors (position m, quaternion w x y z) as in a free joint's ``qpos``.
@@ -98,7 +98,7 @@ class Motion:
         return len(self.segments) - 1
 
     def twist(self, s: float) -> NDArray[np.float64]:
-        r"""``(6,)`` :math:`(v, \omega)` per unit s at ``s`` (the segment the motion enters there)."""
+        r"""``(6,)`` $(v, \omega)$ per unit s at ``s`` (the segment the motion enters there)."""
         return self.segments[self._segment(s)][2]
 
     def segment_end(self, s: float) -> float:

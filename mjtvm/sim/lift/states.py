@@ -1,17 +1,17 @@
-r"""The grasp states of a scripted lift (:class:`~mjtvm.sim.lift.trajectory.Lift`): each state's
+r"""The grasp states of a scripted lift ([`Lift`][mjtvm.sim.lift.trajectory.Lift]): each state's
 contacts retyped as the lift's variant asks, and the S-points' slide directions.
 
-Slide directions :math:`\hat p_{C_s}` of the S-points, from the lift's motion (:mod:`mjtvm.sim.lift.trajectory`):
+Slide directions $\hat p_{C_s}$ of the S-points, from the lift's motion ([`mjtvm.sim.lift.trajectory`][mjtvm.sim.lift.trajectory]):
 
-* ``"physical"`` (default): :math:`T^T T (G^T \dot r - J \dot q)`, the object's contact-point
+* ``"physical"`` (default): $T^T T (G^T \dot r - J \dot q)$, the object's contact-point
   velocity relative to the finger's, i.e. the slip the motion produces (eq. 13 with
-  :math:`\rho > 0`): kinetic friction (eq. 16-17) resists the motion;
-* ``"literal"``: the paper's printed :math:`A_s [(J_c^+ G_c^T)^T\ I]^T \dot r =
-  T^T T (J \dot q - G^T \dot r)`, the reverse: friction helps it.
+  $\rho > 0$): kinetic friction (eq. 16-17) resists the motion;
+* ``"literal"``: the paper's printed $A_s [(J_c^+ G_c^T)^T\ I]^T \dot r =
+  T^T T (J \dot q - G^T \dot r)$, the reverse: friction helps it.
 
 A state's contacts are the lift's finger and support geoms within the grasp's contact
-tolerance of the object (:func:`~mjtvm.sim.lift.march.start_tolerance`: the grasp file's
-``contact_tolerance``, at least :data:`~mjtvm.sim.lift.march.TOUCH_TOL`), the contacts
+tolerance of the object (`start_tolerance()`: the grasp file's
+``contact_tolerance``, at least `TOUCH_TOL`), the contacts
 ``mjtvm solve`` finds on the grasp itself: a D-point (e.g. the palm under the object)
 exists only while it is that near. With the grasp's slip mode and contact preloads, state 0
 of a lift at the grasp's own configuration is the grasp's state (``Grasp.state``) with its
@@ -52,7 +52,7 @@ def _index(lift: Lift, index: int) -> int:
 
 
 def slide_directions(lift: Lift, index: int, *, reading: Reading = "physical") -> dict[str, NDArray]:
-    r"""Unit slide direction :math:`\hat p_{C_s}` of each L/S geom at state ``index`` (module doc).
+    r"""Unit slide direction $\hat p_{C_s}$ of each L/S geom at state ``index`` (module doc).
 
     Raises
     ------
@@ -82,7 +82,7 @@ def lift_state(
     mg: float | None = None,
     base: GraspState | None = None,
 ) -> GraspState:
-    r"""The grasp state (:func:`~mjtvm.sim.grasp.state.grasp_state`, space 3) of state ``index`` of the lift.
+    r"""The grasp state (`grasp_state()`, space 3) of state ``index`` of the lift.
 
     Contacts: the touching finger geoms (F-geoms ``"F"``; L/S geoms of type ``variant``, with
     the slide directions of ``reading`` when ``"S"``) and, while they touch, the support

@@ -1,12 +1,12 @@
 r"""Nearest points and normals between an object geom and a finger geom (``mj_geomDistance``).
 
-The lift (:mod:`mjtvm.sim.lift.trajectory`) keeps fingers on the object's surface; it needs, for a
+The lift ([`mjtvm.sim.lift.trajectory`][mjtvm.sim.lift.trajectory]) keeps fingers on the object's surface; it needs, for a
 pair (object geom, finger geom), the signed surface distance, the two
 *witness points* (the nearest points, or the deepest ones when the geoms penetrate) and the
 contact normal. MuJoCo's ``mj_geomDistance`` gives the distance and the witness points; its
 normal is the direction between them, which is undefined when the surfaces touch (the case
-the lift lives in). :func:`witness` therefore backs the finger geom off along a guess of the
-normal (by :data:`BACKOFF`, in a scratch copy of its pose) and queries again: for smooth
+the lift lives in). [`witness()`][mjtvm.sim.lift.surface.witness] therefore backs the finger geom off along a guess of the
+normal (by [`BACKOFF`][mjtvm.sim.lift.surface.BACKOFF], in a scratch copy of its pose) and queries again: for smooth
 surfaces the witness pair is unchanged by a shift along the common normal, so the direction
 between the backed-off witnesses is the normal, and two or three shifts make the guess exact.
 
@@ -14,7 +14,7 @@ A sphere fingertip on a sphere object is done in closed form (radial projection)
 the paper's Case 2 keeps today's arithmetic to the last bit.
 
 World frame, m. Normals point *into the object* (from the finger toward the object), as in
-:mod:`mjtvm.sim.grasp.state`.
+[`mjtvm.sim.grasp.state`][mjtvm.sim.grasp.state].
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def is_sphere(model: mujoco.MjModel, geom: int) -> bool:
 
 def distance_model(model: mujoco.MjModel) -> mujoco.MjModel:
     """A copy of ``model`` for distance queries: the convex solver (GJK/EPA, used for cylinders
-    and ellipsoids) run to :data:`~mjtvm.sim.grasp.touch.CCD_TOLERANCE` (1e-12 m, as the grasp is read)
+    and ellipsoids) run to [`CCD_TOLERANCE`][mjtvm.sim.grasp.touch.CCD_TOLERANCE] (1e-12 m, as the grasp is read)
     instead of the model's tolerance (MuJoCo's default 1e-6 is coarser
     than the lift's 1e-10 m); the model itself is left as its author set it."""
     out = copy.deepcopy(model)
@@ -100,7 +100,7 @@ def witness(model: mujoco.MjModel, data: mujoco.MjData, object_geom: int, finger
     Parameters
     ----------
     model
-        The model, or its :func:`distance_model`.
+        The model, or its [`distance_model()`][mjtvm.sim.lift.surface.distance_model].
     data
         Geom poses (``mj_kinematics`` done); ``data`` is left as it was.
 

@@ -1,20 +1,20 @@
 r"""The scripted lift (paper section 5, Fig. 7-8): grasp states along a prescribed object motion.
 
 The object (its free joint) moves from the grasp's configuration along a constant or
-piecewise-constant twist :math:`\dot r = (v, \omega)` about its origin :math:`c`, per unit of a
-path parameter s (:mod:`mjtvm.sim.lift.motion`: a direction, a twist or a list of poses; default
+piecewise-constant twist $\dot r = (v, \omega)$ about its origin $c$, per unit of a
+path parameter s (`mjtvm.sim.lift.motion`: a direction, a twist or a list of poses; default
 +z, the paper's Case 2, where s is the height gained in m). F-points stay fixed on the object
 (the finger-fixed point on the object-fixed point). Every finger moves by the paper's
-minimum-norm joint motion :math:`\dot q = J_c^+ G_c^T \dot r`, where :math:`J_c, G_c` hold the
-constraint rows: the three rows of an F-point (eq. 7), the normal row :math:`n^T` of an L- or
-S-point (eq. 8). :math:`J_c` is block diagonal, so per finger :math:`\dot q_i = J_i^+ u` (F)
-or :math:`\dot q_i = J_{n,i}^T (n^T u) / |J_{n,i}|^2`, :math:`J_{n,i} = n^T J_i` (L/S), with
-:math:`u = G^T \dot r = v + \omega \times (p - c)` the velocity of the object's point at the
-contact :math:`p`. The motion is integrated (explicit Euler, steps of at most ``max_step`` in s);
-after every step an IK correction (:func:`~mjtvm.sim.grasp.ik.solve_ik`, within the lift's joint
+minimum-norm joint motion $\dot q = J_c^+ G_c^T \dot r$, where $J_c, G_c$ hold the
+constraint rows: the three rows of an F-point (eq. 7), the normal row $n^T$ of an L- or
+S-point (eq. 8). $J_c$ is block diagonal, so per finger $\dot q_i = J_i^+ u$ (F)
+or $\dot q_i = J_{n,i}^T (n^T u) / |J_{n,i}|^2$, $J_{n,i} = n^T J_i$ (L/S), with
+$u = G^T \dot r = v + \omega \times (p - c)$ the velocity of the object's point at the
+contact $p$. The motion is integrated (explicit Euler, steps of at most ``max_step`` in s);
+after every step an IK correction (`solve_ik()`, within the lift's joint
 bounds) puts each F-point back on its object-fixed point and each L/S finger back on the surface:
 
-* contact geometry (:mod:`mjtvm.sim.lift.surface`): the finger geom (any primitive) and the nearest
+* contact geometry (`mjtvm.sim.lift.surface`): the finger geom (any primitive) and the nearest
   object geom (sphere, box, cylinder or capsule) give witness points and the normal by
   ``mj_geomDistance``; a sphere fingertip on a sphere object in closed form (radial projection);
 * a sphere fingertip is placed by its centre: on an L/S-point at the object's witness point
@@ -32,12 +32,12 @@ The lift ends at the *reach limit*, the largest s where the correction converges
 ``tolerance`` for every finger and the pose is admissible: no geom other than the grasp's
 contacts (the lift's fingers, its D geoms) and ignored geoms touches the object, and no
 finger geom penetrates a support (D) geom deeper than at the start (by more than
-:data:`TOUCH_TOL`; a link anchored in the palm keeps its start penetration): marching with
+`TOUCH_TOL`; a link anchored in the palm keeps its start penetration): marching with
 ``max_step``, then bisecting the failing step to ``limit_tolerance``. The N states are evenly
 spaced in s on the marched path (the marched state below each, plus one partial step).
 
 The grasp states along a lift, with the S-points' slide directions, are
-:mod:`mjtvm.sim.lift.states`.
+[`mjtvm.sim.lift.states`][mjtvm.sim.lift.states].
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ __all__ = ["STOP_MARGIN", "TOUCH_TOL", "Lift", "LiftSpec", "scripted_lift"]
 
 STOP_MARGIN = 0.25
 """Default stop margin: a finger's contact Jacobian keeps at least a quarter of its smallest
-singular value at the start (:func:`scripted_lift`)."""
+singular value at the start ([`scripted_lift()`][mjtvm.sim.lift.trajectory.scripted_lift])."""
 _MAX_STEPS = 100_000  # marched steps: a motion the fingers follow forever is a scripting error
 _Path = list[tuple[float, mujoco.MjData, dict[str, Any]]]
 
@@ -73,8 +73,8 @@ class LiftSpec:
     Attributes
     ----------
     twist
-        ``(6,)`` :math:`(v, \omega)` per unit s about the object's origin, world frame (m, rad);
-        a direction d is the twist ``(d / |d|, 0)`` (:meth:`from_direction`). With ``poses``
+        ``(6,)`` $(v, \omega)$ per unit s about the object's origin, world frame (m, rad);
+        a direction d is the twist ``(d / |d|, 0)`` (`from_direction()`). With ``poses``
         ``None``; both ``None``: +z.
     poses
         ``(K, 7)`` object poses (position m, quaternion w x y z) to pass through, or ``None``.
@@ -118,12 +118,12 @@ class Lift:
     Attributes
     ----------
     scenario
-        The grasp at its initial state (a :class:`~mjtvm.sim.paper_hand.scenario.Scenario` or a grasp
+        The grasp at its initial state (a `Scenario` or a grasp
         file's ``Grasp``: model, joints, REFS, RVDS, ...).
     s, z, poses, twists
-        ``(N,)`` path parameter, evenly spaced from 0 (:mod:`mjtvm.sim.lift.motion`; m for a
+        ``(N,)`` path parameter, evenly spaced from 0 (`mjtvm.sim.lift.motion`; m for a
         direction, the height gained for +z); ``(N,)`` the object origin's height; ``(N, 7)``
-        its pose (m; quaternion w x y z); ``(N, 6)`` the twist :math:`\dot r` per unit s there.
+        its pose (m; quaternion w x y z); ``(N, 6)`` the twist $\dot r$ per unit s there.
     qpos
         ``(N, nq)`` MuJoCo configuration.
     joints
@@ -134,9 +134,9 @@ class Lift:
     points
         ``(N, G, 3)`` contact point of each geom (on the finger's surface).
     rates
-        ``(N, M)`` minimum-norm joint motion per unit s :math:`J_c^+ G_c^T \dot r` (rad per unit s).
+        ``(N, M)`` minimum-norm joint motion per unit s $J_c^+ G_c^T \dot r$ (rad per unit s).
     slips
-        ``(N, G, 3)`` physical slip :math:`T^T T (G^T \dot r - J \dot q)` of each N-geom per unit
+        ``(N, G, 3)`` physical slip $T^T T (G^T \dot r - J \dot q)$ of each N-geom per unit
         s (not normalised; zero rows for F-geoms).
     drift, residual
         ``(N, G)`` IK residual before and after the correction that produced the state (m);
@@ -180,7 +180,7 @@ class Lift:
 
 
 def _as_spec(value: LiftSpec | Mapping[str, Any] | None, grasp: GraspLike) -> LiftSpec | None:
-    """A grasp's ``lift``: a :class:`LiftSpec`, or the grasp file's normalised ``[lift]`` table
+    """A grasp's ``lift``: a [`LiftSpec`][mjtvm.sim.lift.trajectory.LiftSpec], or the grasp file's normalised ``[lift]`` table
     (``direction``/``twist``/``poses`` of ``{position, quaternion}``, ``height``, ``bounds``; a pose
     without quaternion keeps the orientation before it)."""
     if value is None or isinstance(value, LiftSpec):
@@ -256,15 +256,15 @@ def scripted_lift(
     ----------
     grasp, variant
         A shipped scenario name and hand variant (``"default"``, ``"humanlike"``), or a grasp
-        at its initial state: a :class:`~mjtvm.sim.paper_hand.scenario.Scenario` or a grasp file's ``Grasp``.
+        at its initial state: a `Scenario` or a grasp file's ``Grasp``.
     num_states
         N >= 2, evenly spaced in s from the start to the end of the lift; 1: the grasp's own
         state alone, nothing marched (its ``rates`` and ``slips`` those of the motion at s = 0).
     direction, twist, poses
-        At most one: the object's motion (:mod:`mjtvm.sim.lift.motion`): ``(3,)`` a direction
-        (normalised), ``(6,)`` a twist :math:`(v, \omega)` about the object's origin (world
+        At most one: the object's motion (`mjtvm.sim.lift.motion`): ``(3,)`` a direction
+        (normalised), ``(6,)`` a twist $(v, \omega)$ about the object's origin (world
         frame), or ``(K, 7)`` poses (position, quaternion w x y z). Default: the grasp's
-        ``lift`` (:class:`LiftSpec`), else +z.
+        ``lift`` ([`LiftSpec`][mjtvm.sim.lift.trajectory.LiftSpec]), else +z.
     height
         Move by this much of s (m for a direction) instead of up to the reach limit (or the
         last pose); must be within reach.
@@ -275,7 +275,7 @@ def scripted_lift(
         End the lift where a finger's contact Jacobian's smallest singular value falls below
         this fraction of its value at the start (a margin from the singular, stretched pose
         where the paper's "nearly stretched" finger ends; 0: go to the reach limit). Default:
-        the grasp's ``lift.stop_margin``, else :data:`STOP_MARGIN`.
+        the grasp's ``lift.stop_margin``, else [`STOP_MARGIN`][mjtvm.sim.lift.trajectory.STOP_MARGIN].
 
     Raises
     ------

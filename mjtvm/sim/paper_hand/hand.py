@@ -1,7 +1,7 @@
 r"""The paper's four-finger hand and its sphere as a MuJoCo model (MJCF), section 5, Fig. 4.
 
-:func:`hand_mjcf` writes the model; ``models/paper_hand/*.xml`` are its committed output
-(``scripts/make_models.py``). :func:`~mjtvm.sim.grasp.actuator.operation_range_from_actuator` reads a joint's
+[`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf] writes the model; ``models/paper_hand/*.xml`` are its committed output
+(``scripts/make_models.py``). [`operation_range_from_actuator()`][mjtvm.sim.grasp.actuator.operation_range_from_actuator] reads a joint's
 operation range back from the compiled ``<dcmotor>``: the MJCF is the single source of truth.
 
 Geometry (world frame, m). Palm: the plane z = 0 (geom ``palm``). Finger i (``f1`` ... ``f4``)
@@ -19,7 +19,7 @@ them (its contacts are on the sphere's -x side), so it is turned by 180 deg and 
 Flexion then turns every finger's palmar side (+z of the straight link) towards the object,
 and the paper's contacts need pitches up to about 180 deg and yaws within +-90 deg.
 
-Actuators: one ``<dcmotor>`` per joint, named like it (:class:`DCMotor`).
+Actuators: one ``<dcmotor>`` per joint, named like it (`DCMotor`).
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ def hand_mjcf(
         MuJoCo 4 ``gap`` of the sphere (m): contacts up to this separation are reported in
         ``mjData.contact`` as inactive (no contact force), so that touching geoms are found.
     motor
-        The actuator of every joint (default :meth:`DCMotor.from_datasheet`).
+        The actuator of every joint (default [`DCMotor.from_datasheet()`][mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet]).
     model_name
         ``<mujoco model=...>``.
 
@@ -191,7 +191,7 @@ def hand_mjcf(
 def _check_hand(
     finger_bases: Sequence[Sequence[float]], finger_headings: Sequence[float], mg: float, **sizes: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The bases ``(F, 3)`` and headings ``(F,)`` of :func:`hand_mjcf`, its sizes positive, ``mg >= 0``."""
+    """The bases ``(F, 3)`` and headings ``(F,)`` of [`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf], its sizes positive, ``mg >= 0``."""
     bases = np.asarray(finger_bases, dtype=float)
     headings = np.asarray(finger_headings, dtype=float)
     if bases.ndim != 2 or bases.shape[1] != 3 or headings.shape != (bases.shape[0],):

@@ -1,13 +1,13 @@
 r"""The generator of the paper's grasp files: each scenario variant's contacts placed by IK.
 
-Contact placement (:func:`solve_variant`). Each paper point ``p`` is projected radially onto
+Contact placement ([`solve_variant()`][mjtvm.sim.paper_hand.placement.solve_variant]). Each paper point ``p`` is projected radially onto
 the sphere, ``p_s = c + R (p - c) / |p - c|``, and the geom is placed by
-:func:`~mjtvm.sim.grasp.ik.geom_contact_target` (tip sphere: surfaces touching at ``p_s``; capsule: the
+[`geom_contact_target()`][mjtvm.sim.grasp.ik.geom_contact_target] (tip sphere: surfaces touching at ``p_s``; capsule: the
 point ``along`` its axis at ``p_s - offset n``, axis tangent). The solution is accepted only
 if the contacts MuJoCo then detects (one per body, ignored geoms aside) are exactly the
 scenario's, each within 3 mm of its ``p_s``, and no link goes below the palm (z < 0).
-:func:`make_documents` is what ``scripts/make_scenarios.py`` writes; :func:`posture_grasp` and
-:func:`finger1_tvmm_curve` vary finger 1's posture, which the paper does not print.
+`make_documents()` is what ``scripts/make_scenarios.py`` writes; [`posture_grasp()`][mjtvm.sim.paper_hand.placement.posture_grasp] and
+[`finger1_tvmm_curve()`][mjtvm.sim.paper_hand.placement.finger1_tvmm_curve] vary finger 1's posture, which the paper does not print.
 
 World frame, SI units.
 """
@@ -50,7 +50,7 @@ def _check_name(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str, label: st
 
 
 def _hand_options(v: Mapping[str, Any]) -> dict[str, Any]:
-    """:func:`~mjtvm.sim.paper_hand.hand.hand_mjcf` keywords of a variant: its finger joints and optional link radii."""
+    """[`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf] keywords of a variant: its finger joints and optional link radii."""
     options: dict[str, Any] = {"finger_joints": v["finger_joints"]}
     for key in ("capsule_radius", "tip_radius"):
         if key in v.get("hand", {}):
@@ -175,8 +175,8 @@ def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e
     r"""Rerun the IK of one variant; return its ``solution`` section.
 
     Starts from the variant's ``start`` angles (0 for the others; a variant with a
-    ``posture`` rule starts its finger at :func:`rule_posture`, which the IK then leaves
-    unchanged, checked to 1e-9 rad), solves every finger contact at once (:func:`~mjtvm.sim.grasp.ik.solve_ik`, within the variant's ``bounds``), and
+    ``posture`` rule starts its finger at [`rule_posture()`][mjtvm.sim.paper_hand.placement.rule_posture], which the IK then leaves
+    unchanged, checked to 1e-9 rad), solves every finger contact at once (`solve_ik()`, within the variant's ``bounds``), and
     checks the pose (module docstring).
 
     Returns
@@ -230,7 +230,7 @@ def rule_posture(
 ) -> FingerPosture:
     r"""The posture the variant's ``posture`` rule gives its finger (no IK start angles).
 
-    ``{"finger": i, "rule": "planar_fingertip"}``: :func:`~mjtvm.sim.paper_hand.posture.planar_fingertip`
+    ``{"finger": i, "rule": "planar_fingertip"}``: [`planar_fingertip()`][mjtvm.sim.paper_hand.posture.planar_fingertip]
     on the finger's tip target (the tip sphere's centre placed so that its surface touches the
     paper's point projected on the sphere): the fingertip on the point, both links in the
     vertical plane through the base (distal yaw 0), elbow up. Finger 3 in Case 1 is planar
@@ -285,10 +285,10 @@ def finger1_tvmm_curve(
     r"""Case 1's TVMM (Problem 1, scaled affine volume, 1/s^4) over finger 1's feasible postures.
 
     Finger 1's contact on the paper's point, every other joint at the stored solution:
-    fingertip postures (:func:`~mjtvm.sim.paper_hand.posture.fingertip_family` at the elbow angles
+    fingertip postures ([`fingertip_family()`][mjtvm.sim.paper_hand.posture.fingertip_family] at the elbow angles
     ``tip_angles``, rad; default every 2.5 deg) and contacts on link 2 at ``alongs`` (m) from
     its joint (default every 2.5 mm)
-    (:func:`~mjtvm.sim.paper_hand.posture.side_postures`). Postures whose grasp is not the scenario's
+    ([`side_postures()`][mjtvm.sim.paper_hand.posture.side_postures]). Postures whose grasp is not the scenario's
     (another geom touching) are left out.
 
     Returns

@@ -5,20 +5,20 @@ finger 1 (four joints, one point contact: three equations) is redundant: its pos
 choice, and the TVMM depends on it strongly (``docs/paper-results.md``). This module states
 the choice as a rule instead of IK start angles, and enumerates the alternatives:
 
-* :func:`planar_fingertip` (the rule): the fingertip (the end of link 2) on the point, the
+* [`planar_fingertip()`][mjtvm.sim.paper_hand.posture.planar_fingertip] (the rule): the fingertip (the end of link 2) on the point, the
   finger planar (distal yaw 0, so both links lie in the vertical plane through the base and
   the point, as finger 3 in the same case), elbow up.
-* :func:`fingertip_family`: every posture with the fingertip on the point (the elbow on the
+* [`fingertip_family()`][mjtvm.sim.paper_hand.posture.fingertip_family]: every posture with the fingertip on the point (the elbow on the
   circle of points 1 link from both the base and the point), by the elbow's angle on that circle.
-* :func:`side_postures`: link 2 touching the point at a distance ``along`` from its joint,
+* [`side_postures()`][mjtvm.sim.paper_hand.posture.side_postures]: link 2 touching the point at a distance ``along`` from its joint,
   tangent to the sphere (a contact on the link, like finger 3's two contacts).
 
-Geometry (the model of :func:`~mjtvm.sim.paper_hand.hand.hand_mjcf`): finger ``i`` starts at the origin of
+Geometry (the model of [`hand_mjcf()`][mjtvm.sim.paper_hand.hand.hand_mjcf]): finger ``i`` starts at the origin of
 body ``f<i>_link1``, its frame turned by the heading ``H`` about +z; link 1 points along
 ``Rz(H) Rz(y0) Ry(-p0) e_x`` = ``Rz(H) (cos y0 cos p0, sin y0 cos p0, sin p0)``, link 2 along
 ``R1 Ry(-p1) Rz(y1) e_x`` = ``R1 (cos p1 cos y1, sin y1, sin p1 cos y1)``; every link has the
 length of the offset of body ``f<i>_link2``. Each direction has at most one joint solution
-inside the model's ranges (yaw within +-90 deg): :func:`finger_angles`.
+inside the model's ranges (yaw within +-90 deg): [`finger_angles()`][mjtvm.sim.paper_hand.posture.finger_angles].
 
 World frame, SI units (m, rad).
 """

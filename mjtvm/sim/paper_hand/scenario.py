@@ -7,14 +7,14 @@ geom reaches it, contact types by geom name, slide directions of S-points, REFS,
 geoms whose contacts are modelling artefacts (``ignored_geoms``), and per model variant
 (``default``: [yaw, pitch] + [pitch, yaw] fingers; ``humanlike``: yaw + three pitches) the
 finger joints, the IK start and bounds, and the ``solution`` written by
-``scripts/make_scenarios.py`` (:func:`~mjtvm.sim.paper_hand.placement.make_documents`): joint angles, IK residuals and the
-achieved contacts. From each variant's solution :func:`grasp_document` writes the grasp
+``scripts/make_scenarios.py`` (`make_documents()`): joint angles, IK residuals and the
+achieved contacts. From each variant's solution [`grasp_document()`][mjtvm.sim.paper_hand.scenario.grasp_document] writes the grasp
 file ``models/paper_hand/<name>[-humanlike].toml`` (``mjtvm.grasp/1``): the paper's
-cases are loaded like any grasp (:func:`load_scenario` is
-:func:`~mjtvm.sim.grasp.file.load_grasp` of that file, with ``mg`` and ``mu`` options); the
+cases are loaded like any grasp ([`load_scenario()`][mjtvm.sim.paper_hand.scenario.load_scenario] is
+[`load_grasp()`][mjtvm.sim.grasp.file.load_grasp] of that file, with ``mg`` and ``mu`` options); the
 IK runs only in the generator.
 
-The IK that places the contacts is :mod:`mjtvm.sim.paper_hand.placement`.
+The IK that places the contacts is `mjtvm.sim.paper_hand.placement`.
 
 World frame, SI units.
 """
@@ -73,7 +73,7 @@ _REQUIRED = (
 
 
 def scenario_path(name: str) -> Path:
-    """Path of the shipped scenario ``name`` (one of :data:`SCENARIOS`)."""
+    """Path of the shipped scenario ``name`` (one of `SCENARIOS`)."""
     if name not in SCENARIOS:
         raise ModelError(f"scenario {name!r}", f"unknown (shipped: {', '.join(SCENARIOS)})")
     return Path(str(resources.files("mjtvm.data").joinpath("scenarios").joinpath(f"{name}.json")))
@@ -140,19 +140,19 @@ def load_scenario(
     mu: float | Mapping[str, float] | None = None,
     friction_margin: float | None = None,
 ) -> Grasp:
-    r"""A paper case as a :class:`~mjtvm.sim.grasp.loaded.Grasp`: its shipped grasp file.
+    r"""A paper case as a [`Grasp`][mjtvm.sim.grasp.loaded.Grasp]: its shipped grasp file.
 
     Parameters
     ----------
     source
-        A shipped scenario name (:data:`SCENARIOS`; the grasp file
-        :func:`grasp_file_name` of ``variant`` in ``models/paper_hand/``), or any grasp
+        A shipped scenario name (`SCENARIOS`; the grasp file
+        [`grasp_file_name()`][mjtvm.sim.paper_hand.scenario.grasp_file_name] of ``variant`` in ``models/paper_hand/``), or any grasp
         file or shipped grasp name (then ``variant`` must stay ``"default"``).
     variant
         Hand of a shipped scenario: ``"default"`` or ``"humanlike"``.
     mg, mu, friction_margin
         Object weight (N), friction coefficient and friction margin instead of the file's
-        (:meth:`~mjtvm.sim.grasp.loaded.Grasp.with_options`).
+        ([`with_options()`][mjtvm.sim.grasp.loaded.Grasp.with_options]).
 
     Raises
     ------
@@ -169,7 +169,7 @@ def load_scenario(
 
 
 def export_state(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
-    """The ``mjtvm.state/1`` document of a scenario's state (``options`` go to :func:`load_scenario`)."""
+    """The ``mjtvm.state/1`` document of a scenario's state (``options`` go to [`load_scenario()`][mjtvm.sim.paper_hand.scenario.load_scenario])."""
     return state_to_dict(load_scenario(name, **options).state())
 
 
