@@ -36,3 +36,28 @@ def test_every_package_is_installed():
     found = {".".join(p.parent.relative_to(root).parts) for p in (root / "mjtvm").rglob("__init__.py")}
     assert found | {"mjtvm.models"} == listed
     assert (root / "models" / "__init__.py").is_file()
+
+
+def _without_cvxpy(code: str) -> subprocess.CompletedProcess[str]:
+    """Run ``code`` in a child where ``import cvxpy`` fails, as on ``pip install .`` alone."""
+    return subprocess.run(
+        [sys.executable, "-c", "import sys; sys.modules['cvxpy'] = None\n" + code],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_a_solve_and_a_grasp_solve_need_no_cvxpy():
+    """cvxpy is the ``reference`` extra: the main commands run without it."""
+    code = "from mjtvm.cli import main\nraise SystemExit(main(['solve', 'allegro-ik']))"
+    out = _without_cvxpy(code)
+    assert out.returncode == 0, out.stderr
+    assert '"tvmmp"' in out.stdout
+
+
+def test_the_reference_without_cvxpy_is_one_line_naming_the_extra():
+    out = _without_cvxpy("from mjtvm.cli import main\nraise SystemExit(main(['bench', '--quick']))")
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines()[-1].endswith('cvxpy is not installed: pip install "mjtvm[reference]"')
+    assert "Traceback" not in out.stderr

@@ -27,11 +27,15 @@ from __future__ import annotations
 
 import warnings
 
-import cvxpy as cp
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SolverError, StateError
+from ..errors import ParamError, SolverError, StateError
+
+try:  # an optional dependency: the cross-checks and the benchmark's baseline need it, a solve does not
+    import cvxpy as cp
+except ImportError as e:
+    raise ParamError("reference", 'cvxpy is not installed: pip install "mjtvm[reference]"') from e
 from .contacts import Contact, slide_unit, tangent_basis
 from .state import GraspState
 
