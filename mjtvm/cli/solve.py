@@ -23,6 +23,7 @@ from .options import (
     grasp_option,
     hand_option,
     limit_horizon_option,
+    refused_option,
     with_limit_horizon,
 )
 from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
@@ -275,6 +276,11 @@ def add_tvms(sub: Subparsers) -> None:
         "--quiet",
         action="store_true",
         help="no progress (LPs solved, volume bracket) and no contact warnings on stderr",
+    )
+    refused_option(
+        p,
+        "--limit-horizon",
+        "Problem 1 has no travel horizon, only the on-limit rows (its twist has no alpha: docs/joint-limits.md)",
     )
     p.set_defaults(func=_cmd_tvms)
 

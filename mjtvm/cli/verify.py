@@ -15,7 +15,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, friction_margin_option, grasp_option, out_options, states_option
+from .options import (
+    Parser,
+    friction_margin_option,
+    grasp_option,
+    limit_horizon_option,
+    out_options,
+    states_option,
+)
 from .output import EXIT_OK
 from .values import (
     CONTACTS,
@@ -87,6 +94,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="object weight (N) (default: the grasp's)",
     )
     friction_margin_option(p)
+    limit_horizon_option(p)
     p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
     p.add_argument(
         "--start-method",
@@ -190,7 +198,15 @@ def _cmd_gears(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         states = verify.state_indices(args.states, args.stride)
-        rows = gear_sweep(args.grasp, args.gears, num_states=args.states, states=states, mu=mu, mg=mg)
+        rows = gear_sweep(
+            args.grasp,
+            args.gears,
+            num_states=args.states,
+            states=states,
+            mu=mu,
+            mg=mg,
+            limit_horizon=args.limit_horizon,
+        )
         files: dict[Path, bytes | str] = {outdir / "gears.csv": verify.rows_csv(rows)}
         if not args.no_plots:
             files[outdir / "gears.png"] = plot_gears(
@@ -251,6 +267,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             hold_time=args.hold,
             launch_distance=args.launch,
             friction_margin=args.friction_margin,
+            limit_horizon=args.limit_horizon,
             jobs=args.jobs,
             start_method=args.start_method,
             out=None,
