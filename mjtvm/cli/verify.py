@@ -23,7 +23,7 @@ from .options import (
     out_options,
     states_option,
 )
-from .output import EXIT_OK
+from .output import EXIT_OK, emit
 from .values import (
     CONTACTS,
     MAX_FORCE,
@@ -217,11 +217,11 @@ def _cmd_gears(args: argparse.Namespace) -> int:
         sel = [r for r in rows if r["ratio"] == n]
         qs = [r["tvmmp"] for r in sel if r["tvmmp"] is not None]
         dy = [r["tvmmp_dyn"] for r in sel if "tvmmp_dyn" in r]
-        print(
+        emit(
             f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
             f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)"
         )
-    print(f"rows in {outdir / 'gears.csv'}")
+    emit(f"rows in {outdir / 'gears.csv'}")
     return EXIT_OK
 
 
@@ -293,7 +293,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         from ..viewer.viz import record_verify  # rerun is imported only here
 
         record_verify(rows, args.rrd)
-        print(f"wrote {args.rrd}")
+        emit(f"wrote {args.rrd}")
     return EXIT_OK
 
 
@@ -310,20 +310,20 @@ def _print_holds(rows: Sequence[dict[str, Any]], grasp: str) -> None:
 def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, csv_path: Path) -> None:
     for run_name, s in summary.items():
         verdicts = s.pop("verdicts", {})
-        print(
+        emit(
             f"{run_name}: "
             + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
         )
         if verdicts:
-            print(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
-    print(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
+            emit(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
+    emit(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
 
 
 def _print_slide_check(srows: Sequence[dict[str, Any]]) -> None:
     for mode in ("physical", "literal", "frictionless"):
         sel = [r for r in srows if r["mode"] == mode]
         fc = [r["friction_cos_phys"] for r in sel if not math.isnan(r["friction_cos_phys"])]
-        print(
+        emit(
             f"slide check {mode}: friction cos with physical slide direction: median "
             f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
             f"/{len(sel) // 2} states"
