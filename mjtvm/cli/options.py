@@ -7,6 +7,7 @@ import argparse
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from ..core.limits import with_limit_horizon  # the commands' --limit-horizon, one meaning
+from ..errors import OptionError
 from .output import EXIT_INPUT, one_line
 from .values import (
     CONTACTS,
@@ -34,6 +35,7 @@ __all__ = [
     "hand_option",
     "lift_options",
     "limit_horizon_option",
+    "one_grasp",
     "out_options",
     "parallel_options",
     "refused_option",
@@ -160,6 +162,22 @@ def grasp_option(
 ) -> None:
     """``--grasp NAME|FILE``."""
     p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
+
+
+def one_grasp(positional: str | None, option: str | None, *, name: str = "GRASP") -> str:
+    """The grasp of a command that takes it as ``name`` or as ``--grasp``: one of them.
+
+    Raises
+    ------
+    OptionError
+        Both given (which one was meant is not for the command to guess), or neither.
+    """
+    if positional is not None and option is not None:
+        raise OptionError("--grasp", f"give {name} or --grasp, not both")
+    source = positional if positional is not None else option
+    if source is None:
+        raise OptionError(name, "give a grasp file or a shipped grasp name (e.g. case2)")
+    return source
 
 
 def friction_margin_option(p: argparse.ArgumentParser) -> None:

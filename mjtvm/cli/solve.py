@@ -23,6 +23,7 @@ from .options import (
     grasp_option,
     hand_option,
     limit_horizon_option,
+    one_grasp,
     refused_option,
     with_limit_horizon,
 )
@@ -202,9 +203,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     from ..core.state_file import state_to_dict
     from ..sim.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
-    source = args.grasp_file or args.grasp
-    if source is None:
-        raise OptionError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
+    source = one_grasp(args.grasp_file, args.grasp)
     grasp = load_scenario(
         source, variant=args.hand, mg=args.mg, mu=args.mu, friction_margin=args.friction_margin
     )

@@ -187,6 +187,29 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
 
 
+_ROLLOUT_ONLY = {
+    "--launch": lambda a: a.launch is not None,
+    "--hold": lambda a: a.hold is not None,
+    "--dynamics": lambda a: a.dynamics,
+    "--slide-check": lambda a: a.slide_check,
+    "--preload": lambda a: a.preload != 0.0,
+    "--rrd": lambda a: a.rrd is not None,
+}
+"""The options of the rollouts and their checks, given (not at their defaults): ``--gears``
+runs none of them, so each would be ignored without a word."""
+
+
+def _refuse_with_gears(args: argparse.Namespace) -> None:
+    """``--gears`` replaces the rollouts: refuse an option that only they use."""
+    from ..errors import OptionError
+
+    given = [name for name, is_given in _ROLLOUT_ONLY.items() if is_given(args)]
+    if given:
+        raise OptionError(
+            "--gears", f"replaces the rollouts, which {given[0]} is an option of: give one of them, not both"
+        )
+
+
 def _cmd_gears(args: argparse.Namespace) -> int:
     """``mjtvm verify --gears``: :func:`~mjtvm.physics.gears.gear_sweep` to gears.csv and gears.png."""
     from ..apps.replay import grasp_defaults
@@ -237,6 +260,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     from ..physics.slide_check import slide_check
 
     if args.gears is not None:
+        _refuse_with_gears(args)
         return _cmd_gears(args)
     settings = SimSettings(
         armature_scale=args.armature_scale,

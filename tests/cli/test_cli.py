@@ -600,3 +600,31 @@ def test_stdout_closed_after_the_first_byte_exits_141(unbuffered):
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 141
     assert err == ""
+
+
+@pytest.mark.parametrize(
+    ("words", "message"),
+    [
+        (["show", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
+        (["export-state", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
+        (
+            ["verify", "--launch", "0.01", "--gears", "10,20"],
+            "error: --gears: replaces the rollouts, which --launch is an option of: give one of them, not both\n",
+        ),
+        (
+            ["verify", "--gears", "10", "--dynamics"],
+            "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both\n",
+        ),
+        (["--version", "x"], "error: --version: takes no other arguments, got 'x' (try 'mjtvm --help')\n"),
+    ],
+)
+def test_contradictory_invocations_are_one_line_and_exit_2(words, message, capsys, tmp_path):
+    """Two answers to one question (which grasp; rollouts or the gear sweep; the version or a
+    command): refused before any work, in one line, never one of them silently dropped."""
+    if words[0] == "verify":
+        words = [*words, "--out", str(tmp_path)]
+    assert main(words) == 2
+    captured = capsys.readouterr()
+    assert captured.err == message
+    assert captured.out == ""
+    assert not any(tmp_path.iterdir())  # nothing written
