@@ -21,6 +21,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from ..core.limits import with_limit_horizon
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import ModelError, ParamError, SolverError, StateError
@@ -97,8 +98,11 @@ def _object_name(entry: DatasetGrasp, batch: BatchModels) -> str:
     return str(batch.doc["object"]["body"])
 
 
-def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
-    r"""The row of one grasp: evaluated, or failed with its reason.
+def rank_row(
+    batch: BatchModels, entry: DatasetGrasp, *, limit_horizon: float | None = None
+) -> dict[str, Any]:
+    r"""The row of one grasp: evaluated, or failed with its reason (Problem 2 with the travel
+    horizon ``limit_horizon`` of the joint limits, m; ``None``: the grasp file's).
 
     Returns
     -------
@@ -136,7 +140,7 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
         found = [c for c in kept_contacts(grasp) if c.geom not in ignored]
         row["contacts"] = len(found)
         row["penetration"] = max([0.0, *(-float(c.distance) for c in found)])
-        state = grasp.state()
+        state = with_limit_horizon(grasp.state(), limit_horizon)
         row["contacts"] = len(state.contacts)
         result = tvmmp(state, witnesses=False, diagnose=True)
     except (ModelError, StateError, SolverError) as e:
@@ -161,10 +165,12 @@ def rank_row(batch: BatchModels, entry: DatasetGrasp) -> dict[str, Any]:
     return row
 
 
-def _solve_chunk(grasp: str, entries: Sequence[DatasetGrasp]) -> list[dict[str, Any]]:
+def _solve_chunk(
+    grasp: str, entries: Sequence[DatasetGrasp], limit_horizon: float | None = None
+) -> list[dict[str, Any]]:
     """The rows of some grasps of one grasp file (runs in a worker)."""
     batch = batch_models(grasp)
-    return [rank_row(batch, e) for e in entries]
+    return [rank_row(batch, e, limit_horizon=limit_horizon) for e in entries]
 
 
 def _chunks(entries: Sequence[DatasetGrasp], parts: int) -> list[list[DatasetGrasp]]:
@@ -181,6 +187,7 @@ def rank_rows(
     progress: bool = True,
     done: Mapping[str, dict[str, Any]] | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+    limit_horizon: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""The row of every grasp ([`rank_row()`][mjtvm.apps.rank.rank_row]), in the order of ``entries``.
 
@@ -200,6 +207,8 @@ def rank_rows(
         Rows already computed, by id: not evaluated again, returned as given.
     on_rows
         Called in this process with the rows of every finished task (checkpointing).
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's.
 
     Raises
     ------
@@ -226,25 +235,34 @@ def rank_rows(
         if not todo:
             pass
         elif cluster is not None:
-            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished)
+            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished, limit_horizon)
         elif jobs == 1:
             for e in todo:
-                finished(_solve_chunk(grasp, [e]))
+                finished(_solve_chunk(grasp, [e], limit_horizon))
         else:
             # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
-            _run_pool(grasp, _chunks(todo, max(8 * jobs, math.ceil(len(todo) / TASK_GRASPS))), jobs, finished)
+            tasks = _chunks(todo, max(8 * jobs, math.ceil(len(todo) / TASK_GRASPS)))
+            _run_pool(grasp, tasks, jobs, finished, limit_horizon)
     finally:
         bar.close()
     return [table[e.id] for e in items]
 
 
 def _run_pool(
-    grasp: str, tasks: list[list[DatasetGrasp]], jobs: int, finished: Callable[[list[dict[str, Any]]], None]
+    grasp: str,
+    tasks: list[list[DatasetGrasp]],
+    jobs: int,
+    finished: Callable[[list[dict[str, Any]]], None],
+    limit_horizon: float | None = None,
 ) -> None:
     """The tasks on ``jobs`` local processes, read as they finish: forked on Linux (the
     compiled model inherited), else started from a forkserver (each worker compiles it)."""
     run_calls(
-        [(_solve_chunk, (grasp, task)) for task in tasks], jobs, finished, fork=_forks(), in_order=False
+        [(_solve_chunk, (grasp, task, limit_horizon)) for task in tasks],
+        jobs,
+        finished,
+        fork=_forks(),
+        in_order=False,
     )
 
 
@@ -253,12 +271,15 @@ def _run_dask(
     tasks: list[list[DatasetGrasp]],
     cluster: Any,
     finished: Callable[[list[dict[str, Any]]], None],
+    limit_horizon: float | None = None,
 ) -> None:
     """The tasks on a Dask cluster (the grasp file and the dataset's object files must be
     readable by the workers at the same paths)."""
     with dask_client(cluster) as client:
         from distributed import as_completed
 
-        futures = client.map(_solve_chunk, [grasp] * len(tasks), tasks, pure=False)
+        futures = client.map(
+            _solve_chunk, [grasp] * len(tasks), tasks, [limit_horizon] * len(tasks), pure=False
+        )
         for fut in as_completed(futures):
             finished(fut.result())

@@ -76,6 +76,9 @@ class RankFiles:
         No progress bar.
     plots
         Write the three PNG figures.
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's
+        ``joint_limits.horizon``.
     """
 
     grasp: str
@@ -87,6 +90,7 @@ class RankFiles:
     resume: bool = False
     quiet: bool = False
     plots: bool = True
+    limit_horizon: float | None = None
 
     def __post_init__(self) -> None:
         if not self.datasets:
@@ -126,14 +130,21 @@ def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
     return entries
 
 
-def inputs_digest(grasp: str, datasets: Sequence[str], entries: Sequence[DatasetGrasp] = ()) -> str:
+def inputs_digest(
+    grasp: str,
+    datasets: Sequence[str],
+    entries: Sequence[DatasetGrasp] = (),
+    limit_horizon: float | None = None,
+) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
-    the dataset files and the object files they name. ``--resume`` keeps a row only if its
-    ``inputs`` equals this."""
+    the dataset files, the object files they name and a ``limit_horizon`` other than the grasp
+    file's. ``--resume`` keeps a row only if its ``inputs`` equals this."""
     from .. import __version__
 
     batch = batch_models(grasp)
     h = hashlib.sha256(f"mjtvm {__version__}\n".encode())
+    if limit_horizon is not None:  # None: the digest of earlier versions, whose rows had the file's
+        h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
     files = _model_files(batch.model_path) + [Path(p) for p in datasets]
@@ -296,7 +307,7 @@ def run_rank_files(
     from ..core.files import check_output_dir, output_lock, write_files
 
     entries = read_datasets(run.grasp, run.datasets)
-    digest = inputs_digest(run.grasp, run.datasets, entries)
+    digest = inputs_digest(run.grasp, run.datasets, entries, run.limit_horizon)
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
     checkpoint = outdir / f"{run.name}.partial.json"
@@ -319,6 +330,7 @@ def run_rank_files(
                 progress=not run.quiet,
                 done=done,
                 on_rows=on_rows,
+                limit_horizon=run.limit_horizon,
             ),
             resume=run.resume,
             earlier=out_json,

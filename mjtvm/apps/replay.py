@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from ..core.limits import with_limit_horizon
 from ..core.state import GraspState
 from ..errors import ParamError
 from ..sim.lift.states import READINGS, VARIANTS, lift_state
@@ -271,6 +272,7 @@ def run_replay(
     sweeps: bool = True,
     progress: bool = False,
     on_replay: Callable[[ReplayOutput], None] | None = None,
+    limit_horizon: float | None = None,
 ) -> ReplayOutput:
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
 
@@ -279,6 +281,8 @@ def run_replay(
     Case 2. ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
     plots: the CLI starts the rerun recording there ([`start_recording()`][mjtvm.viewer.recording.start_recording]).
+    ``limit_horizon`` (m): Problem 2's travel horizon of the joint limits at every state, the
+    replay's and the sweeps' (``None``: the grasp file's ``joint_limits.horizon``).
 
     The files are written as one set, atomically ([`mjtvm.core.files.write_files()`][mjtvm.core.files.write_files]), after
     everything is computed; the output folder is checked before any work.
@@ -301,7 +305,8 @@ def run_replay(
     mu, mg = grasp_defaults(lift.scenario, mu, mg)
     if "N" not in lift.roles:  # every finger an F-point: the L/S variants are one and the same
         variants = ("L",)
-    bases = [lift_state(lift, i) for i in range(lift.num_states)]
+    # the retyped states of the replay and the sweeps keep their base's joint limits
+    bases = [with_limit_horizon(lift_state(lift, i), limit_horizon) for i in range(lift.num_states)]
     times["lift_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     records = replay_lift(
         lift, variants=variants, readings=readings, mu=mu, mg=mg, progress=progress, bases=bases
@@ -327,6 +332,7 @@ def run_replay(
         "mg": mg,
         "variants": list(variants),
         "readings": list(readings),
+        "limit_horizon": limit_horizon,
         "refs": records[0].state.refs.tolist() if records else None,
         "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
         "lift": _lift_dict(lift),

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from ..core.limits import with_limit_horizon
 from ..core.state import GraspState
 from ..core.tvmmp import tvmmp
 from ..errors import ParamError
@@ -69,6 +70,8 @@ class SweepPoint:
         Index of the lift state (0 = the initial grasp).
     num_states
         Number of states of the lift the index refers to.
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's.
     """
 
     scenario: str = "case2"
@@ -79,6 +82,7 @@ class SweepPoint:
     mg: float = 1.0
     state: int = 0
     num_states: int = 30
+    limit_horizon: float | None = None
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
@@ -93,6 +97,9 @@ class SweepPoint:
             raise ParamError(
                 "state", f"expected 0 <= state < num_states = {self.num_states}, got {self.state}"
             )
+        h = self.limit_horizon
+        if h is not None and not (np.isfinite(h) and h >= 0):
+            raise ParamError("limit_horizon", f"expected a travel horizon >= 0 (m), got {h!r}")
 
 
 def grid(
@@ -105,11 +112,13 @@ def grid(
     mgs: Sequence[float] = (1.0,),
     states: Sequence[int] | None = None,
     num_states: int = 30,
+    limit_horizon: float | None = None,
 ) -> tuple[SweepPoint, ...]:
-    """The full product of the given values (every state of the lift when ``states`` is None)."""
+    """The full product of the given values (every state of the lift when ``states`` is None),
+    every point with the travel horizon ``limit_horizon`` (``None``: the grasp file's)."""
     chosen = range(num_states) if states is None else states
     return tuple(
-        SweepPoint(sc, h, v, r, float(mu), float(mg), int(i), num_states)
+        SweepPoint(sc, h, v, r, float(mu), float(mg), int(i), num_states, limit_horizon)
         for sc, h, v, r, mu, mg, i in itertools.product(
             scenarios, hands, variants, readings, mus, mgs, chosen
         )
@@ -128,21 +137,21 @@ def _base(scenario: str, hand: str, num_states: int, index: int) -> GraspState:
     return lift_state(_lift(scenario, hand, num_states), index)
 
 
-_Key = tuple[str, str, int, str, str, float, float]
+_Key = tuple[str, str, int, str, str, float, float, float | None]
 
 
 def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
     """Solve the given states of one lift configuration (runs in a worker)."""
-    scenario, hand, num_states, variant, reading, mu, mg = key
+    scenario, hand, num_states, variant, reading, mu, mg, horizon = key
     lift = _lift(scenario, hand, num_states)
     rows = []
     for i in states:
-        base = _base(scenario, hand, num_states, i)
+        base = with_limit_horizon(_base(scenario, hand, num_states, i), horizon)
         state = lift_state(lift, i, variant=variant, reading=reading, mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
         doc = tvmmp(state, witnesses=False).to_dict(witnesses=False)
         rows.append(
             {
-                **asdict(SweepPoint(scenario, hand, variant, reading, mu, mg, i, num_states)),
+                **asdict(SweepPoint(scenario, hand, variant, reading, mu, mg, i, num_states, horizon)),
                 "z": float(lift.z[i]),
                 **{key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")},
                 "certified": all(c is not False for row in doc["certified"] for c in row),
@@ -154,7 +163,7 @@ def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
 def _groups(points: Sequence[SweepPoint], chunk: int) -> list[tuple[_Key, list[int]]]:
     by_key: dict[_Key, list[int]] = {}
     for p in points:
-        key = (p.scenario, p.hand, p.num_states, p.variant, p.reading, p.mu, p.mg)
+        key = (p.scenario, p.hand, p.num_states, p.variant, p.reading, p.mu, p.mg, p.limit_horizon)
         by_key.setdefault(key, []).append(p.state)
     tasks = []
     for key, states in by_key.items():
@@ -166,8 +175,8 @@ def _groups(points: Sequence[SweepPoint], chunk: int) -> list[tuple[_Key, list[i
 def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
     """The identity of a row or point: what a checkpointed row must match to be kept."""
     if isinstance(r, SweepPoint):
-        return (r.scenario, r.hand, r.num_states, r.variant, r.reading, r.mu, r.mg, r.state)
-    return (
+        return (r.scenario, r.hand, r.num_states, r.variant, r.reading, r.mu, r.mg, r.state, r.limit_horizon)
+    return (  # a row of an earlier version, without the field, had the grasp file's horizon
         r["scenario"],
         r["hand"],
         r["num_states"],
@@ -176,10 +185,11 @@ def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
         r["mu"],
         r["mg"],
         r["state"],
+        r.get("limit_horizon"),
     )
 
 
-_RowKey = tuple[str, str, int, str, str, float, float, int]
+_RowKey = tuple[str, str, int, str, str, float, float, int, float | None]
 
 
 _PR_SET_PDEATHSIG = 1

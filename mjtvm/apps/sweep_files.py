@@ -133,6 +133,9 @@ class SweepFiles:
         Keep the finished rows of an earlier run ([`run_sweep_files()`][mjtvm.apps.sweep_files.run_sweep_files]).
     quiet
         No progress bar and no resume summary.
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m) at every point; ``None``: the
+        grasp file's ``joint_limits.horizon``.
     """
 
     scenarios: tuple[str, ...] = ("case2",)
@@ -149,6 +152,7 @@ class SweepFiles:
     cluster: str | None = None
     resume: bool = False
     quiet: bool = False
+    limit_horizon: float | None = None
 
     def __post_init__(self) -> None:
         bad = [i for i in (self.states or ()) if not 0 <= i < self.num_states]
@@ -218,6 +222,7 @@ def run_sweep_files(
             mgs=mgs,
             states=run.states,
             num_states=run.num_states,
+            limit_horizon=run.limit_horizon,
         )
         wanted = {_key(p) for p in points}
         ck = RowCheckpoint(

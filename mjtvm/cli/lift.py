@@ -14,6 +14,7 @@ from .options import (
     command,
     grasp_option,
     lift_options,
+    limit_horizon_option,
     out_options,
     parallel_options,
     states_option,
@@ -63,6 +64,7 @@ def add_replay(sub: Subparsers) -> None:
     """``mjtvm replay``: the lift's CSV, JSON and plots, optionally a rerun recording."""
     p = command(sub, "replay", *_TEXTS["replay"])
     lift_options(p, contacts="L,S", reading="both")
+    limit_horizon_option(p)
     out_options(p, name=None)
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
@@ -123,6 +125,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
                 sweeps=not args.no_sweeps,
                 progress=not args.quiet,
                 on_replay=record if args.rrd is not None or args.spawn else None,
+                limit_horizon=args.limit_horizon,
             )
         except BaseException:
             for job in jobs:
@@ -152,6 +155,7 @@ def add_sweep(sub: Subparsers) -> None:
     """``mjtvm sweep``: Problem 2 over a grid, rows to NAME.json and NAME.csv."""
     p = command(sub, "sweep", *_TEXTS["sweep"])
     _sweep_grid(p)
+    limit_horizon_option(p)
     parallel_options(p)
     out_options(p, name="sweep")
     p.add_argument(
@@ -242,6 +246,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         cluster=args.cluster,
         resume=args.resume,
         quiet=args.quiet,
+        limit_horizon=args.limit_horizon,
     )
     try:
         files = run_sweep_files(run, emit=emit)

@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any, NoReturn
 
+from ..core.limits import with_limit_horizon  # the commands' --limit-horizon, one meaning
+from ..errors import OptionError
 from .output import EXIT_INPUT, one_line
 from .values import (
     CONTACTS,
@@ -33,8 +35,10 @@ __all__ = [
     "hand_option",
     "lift_options",
     "limit_horizon_option",
+    "one_grasp",
     "out_options",
     "parallel_options",
+    "refused_option",
     "removed_option",
     "with_limit_horizon",
 ]
@@ -54,8 +58,6 @@ class Parser(argparse.ArgumentParser):
 
 
 if TYPE_CHECKING:
-    from ..core.state import GraspState
-
     Subparsers = argparse._SubParsersAction[Parser]
 else:
     Subparsers = argparse._SubParsersAction
@@ -72,10 +74,19 @@ class Formatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 class _Removed(argparse.Action):
-    """A hidden option that is no longer one: a one-line error with a ``hint`` of what replaces it."""
+    """A hidden option that is no longer one (or not one of this command): a one-line error
+    ``OPTION: WHAT: HINT``."""
 
-    def __init__(self, option_strings: list[str], dest: str, *, hint: str, **kwargs: Any) -> None:
-        self.hint = hint
+    def __init__(
+        self,
+        option_strings: list[str],
+        dest: str,
+        *,
+        hint: str,
+        what: str = "no longer an option",
+        **kwargs: Any,
+    ) -> None:
+        self.hint, self.what = hint, what
         super().__init__(option_strings, dest, **kwargs)
 
     def __call__(
@@ -85,12 +96,25 @@ class _Removed(argparse.Action):
         values: Any,
         option_string: str | None = None,
     ) -> None:
-        parser.error(f"{option_string}: no longer an option: {self.hint}")
+        parser.error(f"{option_string}: {self.what}: {self.hint}")
 
 
 def removed_option(parser: argparse.ArgumentParser, old: str, hint: str) -> None:
     """Refuse ``old`` (one value) with a hint, instead of argparse's bare "unrecognized"."""
     parser.add_argument(old, action=_Removed, hint=hint, help=argparse.SUPPRESS, default=argparse.SUPPRESS)
+
+
+def refused_option(parser: argparse.ArgumentParser, option: str, why: str) -> None:
+    """Refuse ``option`` (one value), which other commands have, saying ``why`` this one has
+    not (argparse would answer "unrecognized arguments", with the next word)."""
+    parser.add_argument(
+        option,
+        action=_Removed,
+        hint=why,
+        what=f"not an option of {parser.prog.split()[-1]}",
+        help=argparse.SUPPRESS,
+        default=argparse.SUPPRESS,
+    )
 
 
 def command(sub: Subparsers, name: str, help: str, description: str) -> argparse.ArgumentParser:
@@ -138,6 +162,22 @@ def grasp_option(
 ) -> None:
     """``--grasp NAME|FILE``."""
     p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
+
+
+def one_grasp(positional: str | None, option: str | None, *, name: str = "GRASP") -> str:
+    """The grasp of a command that takes it as ``name`` or as ``--grasp``: one of them.
+
+    Raises
+    ------
+    OptionError
+        Both given (which one was meant is not for the command to guess), or neither.
+    """
+    if positional is not None and option is not None:
+        raise OptionError("--grasp", f"give {name} or --grasp, not both")
+    source = positional if positional is not None else option
+    if source is None:
+        raise OptionError(name, "give a grasp file or a shipped grasp name (e.g. case2)")
+    return source
 
 
 def friction_margin_option(p: argparse.ArgumentParser) -> None:
@@ -226,14 +266,6 @@ def limit_horizon_option(p: argparse.ArgumentParser) -> None:
         default=None,
         metavar="M",
         help="metres of object travel within which no joint may reach its position limit "
-        "(Problem 2; 0: only joints on a limit are held; default: the state's, 0.001 from a grasp)",
+        "(Problem 2; 0: only joints on a limit are held; default: the state's, or the grasp "
+        "file's joint_limits.horizon, 0.001)",
     )
-
-
-def with_limit_horizon(state: GraspState, horizon: float | None) -> GraspState:
-    """``state`` with the joint limits' horizon ``horizon`` (``None``, or a state without
-    limits: unchanged)."""
-    lim = state.joint_limits
-    if horizon is None or lim is None:
-        return state
-    return state.with_(joint_limits=lim.with_options(horizon=horizon))

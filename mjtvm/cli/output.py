@@ -48,11 +48,36 @@ def stdout_to_devnull() -> None:
     os.close(devnull)
 
 
+def _write_all(text: str) -> None:
+    """Write ``text`` to stdout, all of it, and flush.
+
+    Unbuffered (``PYTHONUNBUFFERED=1``, ``python -u``), ``sys.stdout.write`` hands the bytes to
+    the raw file, whose partial write (a pipe whose reader left: 64 KiB of 140 kB written)
+    the text layer ignores: the rest would be lost without an error, and ``mjtvm tvms | head
+    -c 1`` would exit 0. Writing to the binary layer until every byte is taken makes the next
+    write after a partial one raise ``BrokenPipeError``.
+    """
+    stream = sys.stdout
+    buffer = getattr(stream, "buffer", None)
+    if buffer is None:  # a text stream without a binary layer (a test's StringIO)
+        stream.write(text)
+        stream.flush()
+        return
+    stream.flush()  # what the text layer holds goes first
+    data = memoryview(text.encode(stream.encoding or "utf-8", stream.errors or "strict"))
+    while data:
+        n = buffer.write(data)
+        if n is None:  # a non-blocking raw stdout that is full: what a buffered one raises
+            raise BlockingIOError("standard output is full and non-blocking")
+        data = data[n:]
+    buffer.flush()
+
+
 def emit(text: str) -> None:
-    """Print a line to stdout and flush, so that a full or closed stdout is reported here."""
+    """Print a line to stdout and flush, so that a full or closed stdout is reported here
+    (``BrokenPipeError``: [`mjtvm.cli.main()`][mjtvm.cli.main] exits 141)."""
     try:
-        sys.stdout.write(text + "\n")
-        sys.stdout.flush()
+        _write_all(text + "\n")
     except BrokenPipeError:
         raise
     except OSError as e:

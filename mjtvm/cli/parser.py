@@ -74,6 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _parse(words: list[str]) -> argparse.Namespace:
+    if words[:1] == ["--version"] and len(words) > 1:  # argparse would print it and drop the rest
+        build_parser().error(f"--version: takes no other arguments, got {words[1]!r}")
     if words[:1] == ["verify"]:
         return verify_parser().parse_args(words[1:])
     return build_parser().parse_args(words)

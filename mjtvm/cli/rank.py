@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .options import Subparsers, command, out_options, parallel_options
+from .options import Subparsers, command, limit_horizon_option, out_options, parallel_options
 from .output import EXIT_OK, emit
 from .values import input_file, source
 
@@ -26,6 +26,7 @@ def add_rank(sub: Subparsers) -> None:
         "grasp", type=source, metavar="GRASP", help="a mjtvm.grasp/1 file or a shipped grasp's name"
     )
     p.add_argument("datasets", type=input_file, nargs="+", metavar="DATASET", help="dataset files")
+    limit_horizon_option(p)
     parallel_options(p)
     out_options(p, name="rank")
     p.add_argument(
@@ -49,6 +50,7 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         resume=args.resume,
         quiet=args.quiet,
         plots=not args.no_plots,
+        limit_horizon=args.limit_horizon,
     )
     for path in run_rank_files(run, emit=emit):
         emit(f"wrote {path}")

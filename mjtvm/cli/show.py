@@ -10,9 +10,9 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ModelError, OptionError
+from ..errors import ModelError
 from .lift import check_file_folder
-from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option
+from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option, one_grasp
 from .output import EXIT_OK, emit, warn
 from .values import MAX_INDENT, integer, number, output_file, source
 
@@ -148,9 +148,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     from ..sim.grasp.report import NEAR_TOLERANCES, contact_rows
     from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only here
 
-    source = args.grasp_file or args.grasp
-    if source is None:
-        raise OptionError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
+    source = one_grasp(args.grasp_file, args.grasp)
     check_file_folder(args.rrd, "--rrd")
     check_file_folder(args.png, "--png")
     grasp = load_scenario(source, variant=args.hand)

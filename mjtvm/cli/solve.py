@@ -23,6 +23,8 @@ from .options import (
     grasp_option,
     hand_option,
     limit_horizon_option,
+    one_grasp,
+    refused_option,
     with_limit_horizon,
 )
 from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
@@ -201,9 +203,7 @@ def _cmd_export_state(args: argparse.Namespace) -> int:
     from ..core.state_file import state_to_dict
     from ..sim.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
-    source = args.grasp_file or args.grasp
-    if source is None:
-        raise OptionError("GRASP", "give a grasp file or a shipped grasp name (e.g. case2)")
+    source = one_grasp(args.grasp_file, args.grasp)
     grasp = load_scenario(
         source, variant=args.hand, mg=args.mg, mu=args.mu, friction_margin=args.friction_margin
     )
@@ -275,6 +275,11 @@ def add_tvms(sub: Subparsers) -> None:
         "--quiet",
         action="store_true",
         help="no progress (LPs solved, volume bracket) and no contact warnings on stderr",
+    )
+    refused_option(
+        p,
+        "--limit-horizon",
+        "Problem 1 has no travel horizon, only the on-limit rows (its twist has no alpha: docs/joint-limits.md)",
     )
     p.set_defaults(func=_cmd_tvms)
 

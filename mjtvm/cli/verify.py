@@ -15,8 +15,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import Parser, friction_margin_option, grasp_option, out_options, states_option
-from .output import EXIT_OK
+from .options import (
+    Parser,
+    friction_margin_option,
+    grasp_option,
+    limit_horizon_option,
+    out_options,
+    states_option,
+)
+from .output import EXIT_OK, emit
 from .values import (
     CONTACTS,
     MAX_FORCE,
@@ -87,6 +94,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="object weight (N) (default: the grasp's)",
     )
     friction_margin_option(p)
+    limit_horizon_option(p)
     p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
     p.add_argument(
         "--start-method",
@@ -179,6 +187,29 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
 
 
+_ROLLOUT_ONLY = {
+    "--launch": lambda a: a.launch is not None,
+    "--hold": lambda a: a.hold is not None,
+    "--dynamics": lambda a: a.dynamics,
+    "--slide-check": lambda a: a.slide_check,
+    "--preload": lambda a: a.preload != 0.0,
+    "--rrd": lambda a: a.rrd is not None,
+}
+"""The options of the rollouts and their checks, given (not at their defaults): ``--gears``
+runs none of them, so each would be ignored without a word."""
+
+
+def _refuse_with_gears(args: argparse.Namespace) -> None:
+    """``--gears`` replaces the rollouts: refuse an option that only they use."""
+    from ..errors import OptionError
+
+    given = [name for name, is_given in _ROLLOUT_ONLY.items() if is_given(args)]
+    if given:
+        raise OptionError(
+            "--gears", f"replaces the rollouts, which {given[0]} is an option of: give one of them, not both"
+        )
+
+
 def _cmd_gears(args: argparse.Namespace) -> int:
     """``mjtvm verify --gears``: [`gear_sweep()`][mjtvm.physics.gears.gear_sweep] to gears.csv and gears.png."""
     from ..apps.replay import grasp_defaults
@@ -190,7 +221,15 @@ def _cmd_gears(args: argparse.Namespace) -> int:
     with output_lock(outdir):
         mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         states = verify.state_indices(args.states, args.stride)
-        rows = gear_sweep(args.grasp, args.gears, num_states=args.states, states=states, mu=mu, mg=mg)
+        rows = gear_sweep(
+            args.grasp,
+            args.gears,
+            num_states=args.states,
+            states=states,
+            mu=mu,
+            mg=mg,
+            limit_horizon=args.limit_horizon,
+        )
         files: dict[Path, bytes | str] = {outdir / "gears.csv": verify.rows_csv(rows)}
         if not args.no_plots:
             files[outdir / "gears.png"] = plot_gears(
@@ -201,11 +240,11 @@ def _cmd_gears(args: argparse.Namespace) -> int:
         sel = [r for r in rows if r["ratio"] == n]
         qs = [r["tvmmp"] for r in sel if r["tvmmp"] is not None]
         dy = [r["tvmmp_dyn"] for r in sel if "tvmmp_dyn" in r]
-        print(
+        emit(
             f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
             f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)"
         )
-    print(f"rows in {outdir / 'gears.csv'}")
+    emit(f"rows in {outdir / 'gears.csv'}")
     return EXIT_OK
 
 
@@ -221,6 +260,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     from ..physics.slide_check import slide_check
 
     if args.gears is not None:
+        _refuse_with_gears(args)
         return _cmd_gears(args)
     settings = SimSettings(
         armature_scale=args.armature_scale,
@@ -251,6 +291,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             hold_time=args.hold,
             launch_distance=args.launch,
             friction_margin=args.friction_margin,
+            limit_horizon=args.limit_horizon,
             jobs=args.jobs,
             start_method=args.start_method,
             out=None,
@@ -276,7 +317,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         from ..viewer.viz import record_verify  # rerun is imported only here
 
         record_verify(rows, args.rrd)
-        print(f"wrote {args.rrd}")
+        emit(f"wrote {args.rrd}")
     return EXIT_OK
 
 
@@ -293,20 +334,20 @@ def _print_holds(rows: Sequence[dict[str, Any]], grasp: str) -> None:
 def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, csv_path: Path) -> None:
     for run_name, s in summary.items():
         verdicts = s.pop("verdicts", {})
-        print(
+        emit(
             f"{run_name}: "
             + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
         )
         if verdicts:
-            print(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
-    print(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
+            emit(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
+    emit(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
 
 
 def _print_slide_check(srows: Sequence[dict[str, Any]]) -> None:
     for mode in ("physical", "literal", "frictionless"):
         sel = [r for r in srows if r["mode"] == mode]
         fc = [r["friction_cos_phys"] for r in sel if not math.isnan(r["friction_cos_phys"])]
-        print(
+        emit(
             f"slide check {mode}: friction cos with physical slide direction: median "
             f"{statistics.median(fc) if fc else math.nan:.3f}; passed {sum(r['passed'] for r in sel) // 2}"
             f"/{len(sel) // 2} states"

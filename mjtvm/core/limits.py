@@ -37,7 +37,7 @@ from .bounds import MAX_ABS, describe, number
 if TYPE_CHECKING:
     from .state import GraspState
 
-__all__ = ["DEFAULT_HORIZON", "DEFAULT_TOLERANCE", "JointLimits", "travel_speed"]
+__all__ = ["DEFAULT_HORIZON", "DEFAULT_TOLERANCE", "JointLimits", "travel_speed", "with_limit_horizon"]
 
 #: A joint within this of its limit (rad for a hinge, m for a slide) is on it. Five times the
 #: largest gap a lift's IK leaves at a clamped joint (the Allegro thumb's thj1 at states 25-29
@@ -184,6 +184,28 @@ class JointLimits:
             self.tolerance if tolerance is None else tolerance,
             self.horizon if horizon is None else horizon,
         )
+
+
+def with_limit_horizon(state: GraspState, horizon: float | None) -> GraspState:
+    """``state`` with Problem 2's travel horizon ``horizon`` (m) in its joint limits.
+
+    Parameters
+    ----------
+    state
+        A grasp state.
+    horizon
+        Metres of object travel (0: the on-limit rows only); ``None`` keeps the state's.
+
+    Returns
+    -------
+    GraspState
+        ``state`` itself when ``horizon`` is ``None`` or the state has no joint limits (a
+        horizon without limits bounds nothing), else a copy with the new horizon.
+    """
+    lim = state.joint_limits
+    if horizon is None or lim is None:
+        return state
+    return state.with_(joint_limits=lim.with_options(horizon=horizon))
 
 
 def travel_speed(state: GraspState, r: NDArray[np.float64]) -> float:

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core.limits import with_limit_horizon
 from ..core.tvmmp import tvmmp
 from ..errors import ParamError
 from ..sim.lift.states import lift_state
@@ -45,6 +46,7 @@ def gear_sweep(
     variant: str = "L",
     mu: float = 0.3,
     mg: float = 1.0,
+    limit_horizon: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (ratio, state, TVMMP, dynamic TVMMP, limiting joint and term) of the sweep (module docstring).
 
@@ -56,6 +58,8 @@ def gear_sweep(
         Gear ratios (motor turns per joint turn).
     states
         Lift state indices (of ``num_states``).
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's.
     """
     if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
         raise ParamError("ratios", f"expected positive gear ratios, got {list(ratios)!r}", list(ratios))
@@ -66,7 +70,7 @@ def gear_sweep(
     base = motor_model(lift.scenario)
     rows = []
     for i in states:
-        state0 = lift_state(lift, i, variant=variant, mu=mu, mg=mg)  # type: ignore[arg-type]
+        state0 = with_limit_horizon(lift_state(lift, i, variant=variant, mu=mu, mg=mg), limit_horizon)  # type: ignore[arg-type]
         model = sim_model(base, _types(state0), mu=mu, mg=mg, object_body=ob)
         acts = [a for a in range(model.nactuator) if model.actuator_gear[a, 0] > 0]
         gear0 = float(np.median(model.actuator_gear[acts, 0]))

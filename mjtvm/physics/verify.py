@@ -33,6 +33,7 @@ from tqdm import tqdm
 from ..apps.figures import lift_x
 from ..apps.replay import grasp_defaults
 from ..core.friction import cone_margin
+from ..core.limits import with_limit_horizon
 from ..core.state import GraspState
 from ..core.tvmmp import TvmmpResult, tvmmp
 from ..errors import MjtvmError, ModelError, StateError
@@ -197,6 +198,7 @@ def verify_state(
     hold_time: float | None = None,
     launch_distance: float | None = None,
     friction_margin: float | None = None,
+    limit_horizon: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of [`RUNS`][mjtvm.physics.verify.RUNS]).
 
@@ -209,11 +211,14 @@ def verify_state(
     minimum normal force of every L contact (``mjtvm.state/1``'s contact ``preload``), which the
     witnesses then press on the object. ``friction_margin``: the margin delta of the LPs whose
     witness is driven (default the grasp file's, 0), on the rollouts' cone
-    (`cone_margin()`: pyramidal adds 1/sqrt(2)).
+    ([`cone_margin()`][mjtvm.core.friction.cone_margin]: pyramidal adds 1/sqrt(2)). ``limit_horizon``:
+    the LPs' travel horizon of the joint limits (m; default the grasp file's).
     """
     delta = lift_margin(lift) if friction_margin is None else friction_margin
     margin = cone_margin((settings or SimSettings()).cone, delta)
-    state, res, lp = verify_lp(lift, index, run, mu=mu, mg=mg, preload=preload, friction_margin=margin)
+    state, res, lp = verify_lp(
+        lift, index, run, mu=mu, mg=mg, preload=preload, friction_margin=margin, limit_horizon=limit_horizon
+    )
     ob = lift.scenario.object_body
     model = sim_model(
         motor_model(lift.scenario), _types(state), mu=mu, mg=mg, settings=settings, object_body=ob
@@ -295,6 +300,7 @@ def verify_lp(
     mg: float,
     preload: float = 0.0,
     friction_margin: float | None = None,
+    limit_horizon: float | None = None,
 ) -> tuple[GraspState, TvmmpResult | MjtvmError, dict[str, str]]:
     r"""The state [`verify_state()`][mjtvm.physics.verify.verify_state] checks at lift state ``index`` for ``run``, its Problem 2
     (``alpha_lp``, without a rollout) and the row's ``lp_state`` and ``lp_note``.
@@ -306,7 +312,7 @@ def verify_lp(
     solve's state and why: a state further along the lift (``lp_state`` ``lift``), another
     ``mu`` or ``mg`` (``--mu``, ``--mg``), the L contacts' preload (``--preload``), the
     contacts the run retypes, a ``friction_margin`` (the state's, on the rollouts' cone) other
-    than the grasp's. The LP is solved on the initial configuration, never on the
+    than the grasp's, a ``limit_horizon`` (``--limit-horizon``) other than the state's. The LP is solved on the initial configuration, never on the
     settled one of the hold test or a rollout (those move the object by at most
     ``hold_reach``).
 
@@ -335,6 +341,8 @@ def verify_lp(
     own_margin = state.friction_margin
     if friction_margin is not None:
         state = state.with_(friction_margin=friction_margin)
+    own_limits = state.joint_limits
+    state = with_limit_horizon(state, limit_horizon)
     notes = []
     if index > 0 or float(lift.s[index]) != 0.0:
         notes.append(
@@ -350,6 +358,15 @@ def verify_lp(
         notes.append(
             f"friction margin {state.friction_margin:g} (--friction-margin on the rollouts' cone), "
             f"not the grasp's {own_margin:g}"
+        )
+    if (
+        own_limits is not None
+        and state.joint_limits is not None
+        and state.joint_limits.horizon != own_limits.horizon
+    ):
+        notes.append(
+            f"joint-limit horizon {state.joint_limits.horizon:g} m (--limit-horizon), "
+            f"not the grasp's {own_limits.horizon:g}"
         )
     own = getattr(sc, "contact_types", {})
     retyped = sorted(
@@ -457,6 +474,7 @@ def verify_lift(
     hold_time: float | None = None,
     launch_distance: float | None = None,
     friction_margin: float | None = None,
+    limit_horizon: float | None = None,
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -476,7 +494,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of [`RUNS`][mjtvm.physics.verify.RUNS].
-    dynamics, preload, hold_time, launch_distance, friction_margin
+    dynamics, preload, hold_time, launch_distance, friction_margin, limit_horizon
         As in [`verify_state()`][mjtvm.physics.verify.verify_state].
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -506,6 +524,7 @@ def verify_lift(
         "hold_time": hold_time,
         "launch_distance": launch_distance,
         "friction_margin": friction_margin,
+        "limit_horizon": limit_horizon,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)

@@ -114,11 +114,11 @@ def test_interrupted_and_resumed_is_identical(tmp_path: Path, monkeypatch: pytes
     calls = {"n": 0}
     real = mjtvm.apps.rank.rank_row
 
-    def interrupted(batch: Any, entry: Any) -> dict[str, Any]:
+    def interrupted(batch: Any, entry: Any, **options: Any) -> dict[str, Any]:
         calls["n"] += 1
         if calls["n"] > 15:
             raise KeyboardInterrupt
-        return real(batch, entry)
+        return real(batch, entry, **options)
 
     monkeypatch.setattr(mjtvm.apps.rank, "rank_row", interrupted)
     part = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True)

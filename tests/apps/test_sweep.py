@@ -50,7 +50,8 @@ def test_forked_tasks_cover_every_point_once(chunk):
     tasks = _fork_tasks(_groups(points, chunk), jobs=2)
     solved = [(key, i) for task in tasks for key, states in task for i in states]
     assert sorted(solved) == sorted(
-        ((p.scenario, p.hand, p.num_states, p.variant, p.reading, p.mu, p.mg), p.state) for p in points
+        ((p.scenario, p.hand, p.num_states, p.variant, p.reading, p.mu, p.mg, p.limit_horizon), p.state)
+        for p in points
     )
     for task in tasks:  # one lift per task, at most `chunk` states of it
         assert len({key[:3] for key, _ in task}) == 1

@@ -576,3 +576,55 @@ def test_solve_warns_on_stderr_of_a_pair_that_is_not_certified(monkeypatch, caps
     doc = json.loads(out)
     assert doc["certified"][0][1] is False and doc["notes"][0]["pair"] == [0, 1]
     assert err == "mjtvm: warning: alpha[0][1] is not certified: not certified: highs: gap 1e-3\n"
+
+
+@pytest.mark.parametrize("unbuffered", ["", "1"])
+def test_stdout_closed_after_the_first_byte_exits_141(unbuffered):
+    """`mjtvm tvms allegro-ik | head -c 1`: 140 kB of JSON, the reader gone after one byte.
+    Unbuffered (PYTHONUNBUFFERED=1), the text layer used to drop the rest of a partial write
+    silently and exit 0; now every command exits 141, without a traceback."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    if unbuffered:
+        env["PYTHONUNBUFFERED"] = unbuffered
+    proc = subprocess.Popen(
+        [*_console_script(), "tvms", "allegro-ik", "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    assert len(proc.stdout.read(1)) == 1  # the output has started: more than the pipe holds follows
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141
+    assert err == ""
+
+
+@pytest.mark.parametrize(
+    ("words", "message"),
+    [
+        (["show", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
+        (["export-state", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
+        (
+            ["verify", "--launch", "0.01", "--gears", "10,20"],
+            "error: --gears: replaces the rollouts, which --launch is an option of: give one of them, not both\n",
+        ),
+        (
+            ["verify", "--gears", "10", "--dynamics"],
+            "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both\n",
+        ),
+        (["--version", "x"], "error: --version: takes no other arguments, got 'x' (try 'mjtvm --help')\n"),
+    ],
+)
+def test_contradictory_invocations_are_one_line_and_exit_2(words, message, capsys, tmp_path):
+    """Two answers to one question (which grasp; rollouts or the gear sweep; the version or a
+    command): refused before any work, in one line, never one of them silently dropped."""
+    if words[0] == "verify":
+        words = [*words, "--out", str(tmp_path)]
+    assert main(words) == 2
+    captured = capsys.readouterr()
+    assert captured.err == message
+    assert captured.out == ""
+    assert not any(tmp_path.iterdir())  # nothing written
