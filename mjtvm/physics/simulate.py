@@ -222,6 +222,11 @@ class RolloutResult:
     joints
         The driven joints (the column order of the trace's ``qvel`` and ``torque``, the joint
         torques ``qfrc_actuator`` with a transmission).
+    limit_margin, limit_joint
+        The smallest distance of a driven joint to either end of its ``jnt_range``, less its
+        ``jnt_margin`` (rad or m), over the run (startup and window), and that joint: 0 or
+        below, MuJoCo's limit constraint engages. ``inf`` and ``""`` when no driven joint is
+        limited.
     failure
         The first violation's kind (``"twist magnitude"``, ``"twist direction"``, ``"moves at
         rest"``, ``"slip"``, ``"contact lost"``, ``"torque limit"``; ``""`` when passed) and
@@ -243,6 +248,13 @@ class RolloutResult:
     joints: tuple[str, ...] = ()
     failure: tuple[str, str] = ("", "")
     trace: Mapping[str, _F64] = field(default_factory=dict, repr=False)
+    limit_margin: float = math.inf
+    limit_joint: str = ""
+
+    @property
+    def limit_reached(self) -> bool:
+        """Whether a driven joint reached its limit in the run (`limit_margin` <= 0)."""
+        return self.limit_margin <= 0.0
 
 
 def held(m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive) -> mujoco.MjData:
@@ -269,6 +281,25 @@ def settle(
     if st.steps(st.settle):
         mujoco.mj_step(m, d, nstep=st.steps(st.settle))
     return d, float(np.linalg.norm(d.xpos[rig.ob] - p0))
+
+
+def _joint_ranges(m: mujoco.MjModel, joints: tuple[str, ...]) -> tuple[_F64, _F64, _F64, _F64]:
+    """Of the limited ``joints`` (hinge or slide): their indices in ``joints``, ``qpos``
+    addresses, and their ranges narrowed by ``jnt_margin``, where MuJoCo's limit engages."""
+    idx, adr, lo, hi = [], [], [], []
+    for i, name in enumerate(joints):
+        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+        if (
+            j < 0
+            or not m.jnt_limited[j]
+            or int(m.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+        ):
+            continue
+        idx.append(i)
+        adr.append(int(m.jnt_qposadr[j]))
+        lo.append(float(m.jnt_range[j, 0] + m.jnt_margin[j]))
+        hi.append(float(m.jnt_range[j, 1] - m.jnt_margin[j]))
+    return np.array(idx, dtype=int), np.array(adr, dtype=int), np.array(lo), np.array(hi)
 
 
 def _start(d: mujoco.MjData, rig: Rig, drive: Drive, st: SimSettings) -> None:
@@ -316,6 +347,8 @@ def rollout(
     trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
     f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
     names = drive.actuators or drive.joints
+    lim_idx, lim_adr, lim_lo, lim_hi = _joint_ranges(m, drive.joints)
+    lim_margin, lim_joint = math.inf, ""
     for step in range(n1):
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
         sp, ff = rig.controls(d, drive, qset)
@@ -324,6 +357,12 @@ def rollout(
         d.ctrl[rig.cadr] = sp
         d.ctrl[rig.cadr + 1] = ff / rig.gear
         mujoco.mj_step(m, d)
+        if len(lim_adr):  # over the startup too: the joints move from the start
+            q = d.qpos[lim_adr]
+            room = np.minimum(q - lim_lo, lim_hi - q)
+            near = int(np.argmin(room))
+            if room[near] < lim_margin:
+                lim_margin, lim_joint = float(room[near]), drive.joints[lim_idx[near]]
         if step < n0:
             continue
         lvel = d.actuator_velocity[rig.acts]
@@ -369,6 +408,8 @@ def rollout(
         joints=drive.joints,
         failure=(failure[0], failure[1]),
         trace={k: np.array(v, dtype=float) for k, v in trace.items()} if record else {},
+        limit_margin=lim_margin,
+        limit_joint=lim_joint,
     )
 
 

@@ -278,6 +278,9 @@ def verify_state(
                 inertia_max=float(demand[j]),
                 inertia_joint=state.joint_names[j],
                 settle_drift=chk.settle_drift,
+                limit_margin=chk.limit_margin,
+                limit_joint=chk.limit_joint,
+                limit_reached=chk.limit_reached,
             )
             if launch_distance is not None:
                 row.update(launch_row(model, lift.qpos[index], one, launch_distance, settings, ob))

@@ -32,7 +32,9 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     r"""The least-motion, force-centred solution of eq. (31) at a fixed ``alpha`` (Clarabel QP).
 
     Minimises $\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2$ over the
-    constraints of `assemble()` with $\dot r = \alpha \hat r_l$;
+    constraints of Problem 2 (`assemble()` with ``horizon=True``: the
+    joint limits' on-limit and travel-horizon rows, `limits`) with
+    $\dot r = \alpha \hat r_l$;
     returns ``speeds``, ``torques``, ``forces`` and ``slip_speeds`` (and ``actuator_speeds``
     ``P qd`` with a transmission). With a transmission the ranges bound actuators and
     $\omega_{0j}$ is joint j's fastest speed through them
@@ -46,15 +48,17 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
-    asm = assemble(state)
+    asm = assemble(state, horizon=True)
     w, r = state.refs[k], state.rvds[l]
     n = asm.num_variables
-    a = sp.hstack([asm.A, sp.csc_matrix((asm.A_twist @ r).reshape(-1, 1))], format="csr")
+    # alpha's column: A_twist r, and -rate_j s(r) on the travel-horizon rows, as in Problem 2:
+    # at the fixed alpha they bound qd, so that the driven witness, like the LP's, reaches no
+    # joint limit within the horizon's travel.
+    col = np.asarray(asm.A_twist @ r, dtype=float).reshape(-1)
+    col[asm.horizon_rows] = asm.horizon_column(state, r)
+    a = sp.hstack([asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csr")
     lo, hi = asm.statics_bounds(w)
     cl, cu = np.append(asm.col_lower, alpha), np.append(asm.col_upper, alpha)
-    # The joints on a position limit are held (assemble's on-limit rows); Problem 2's travel
-    # horizon (mjtvm.core.limits) is not imposed here: with it, as rows or as bounds on qd,
-    # Clarabel called Shadow's rollout QP at 1 % of alpha_kl infeasible (not isolated).
     eq = np.isfinite(lo) & (lo == hi)
     up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
     ceq = cl == cu
