@@ -21,8 +21,8 @@ set to 0, by two rules (one constant, `DROP_REL`):
   the sum of the magnitudes of the terms it was computed from (``n . (r x n)``, the
   tangent ``n x t1``, ``A_twist r``), however small the terms are in the state's units.
 
-The largest entry of the Jacobians is their scale only when another entry comes near it
-([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]): a single coefficient of 1e12 among lever arms of 0.1 m (within
+The largest entry of the Jacobians is their scale only when no gap sets it apart from the bulk
+([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]): a coefficient of 1e12 among lever arms of 0.1 m (within
 the format's bounds) is data, but it is not what the other entries were computed from,
 and relative to it every lever arm of the hand (0.1 < 1e-12 x 1e12) would be "round-off".
 
@@ -38,7 +38,14 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["DROP_REL", "LONE_ENTRY", "drop_cancellation", "drop_data_roundoff", "jacobian_scale"]
+__all__ = [
+    "DROP_REL",
+    "LONE_ENTRY",
+    "OUTLIER_SHARE",
+    "drop_cancellation",
+    "drop_data_roundoff",
+    "jacobian_scale",
+]
 
 #: Round-off, relative: see the module docstring; also the equilibrated LP's rule
 #: ([`scale_lp()`][mjtvm.core.scaling.scale_lp]).
@@ -49,6 +56,9 @@ DROP_REL = 1e-12
 #: every entry above DROP_REL times the others is kept, and the round-off of a real state
 #: (1e-16 of its largest entry) is dropped as long as its two largest are within 1e4.
 LONE_ENTRY = 10.0
+#: The share of a state's non-zero Jacobian entries, the largest, that may stand as outliers
+#: above a gap of ``LONE_ENTRY`` ([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]).
+OUTLIER_SHARE = 0.25
 
 
 def drop_cancellation(values: NDArray[np.float64], magnitudes: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -84,14 +94,17 @@ def drop_data_roundoff(data: NDArray[np.float64], reference: float | None = None
 
 def jacobian_scale(jacobians: list[NDArray[np.float64]]) -> float:
     """The scale of a state's contact Jacobians: their largest magnitude, or ``LONE_ENTRY``
-    times the second largest where that is smaller (the reference of their round-off,
+    times the largest entry below a few outliers (the reference of their round-off,
     [`drop_data_roundoff()`][mjtvm.core.roundoff.drop_data_roundoff], and of the certificate's contact speeds).
 
     A lever arm is computed from the robot's geometry, as are its round-off and every other
-    lever arm: an entry more than ``LONE_ENTRY`` times every other one (one coefficient of
-    1e12 in a hand of 0.1 m) was not, and taken as the scale it would make the hand's lever
-    arms round-off (the LP would lose them and its alphas with them). Equal to the largest
-    magnitude whenever the two largest are within ``LONE_ENTRY``, as in every real state.
+    lever arm: entries more than ``LONE_ENTRY`` times all the others (one or two coefficients
+    of 1e12 in a hand of 0.1 m) were not, and taken as the scale they would make the hand's
+    lever arms round-off (the LP would lose them and its alphas with them). Outliers are the
+    entries above the deepest gap of more than ``LONE_ENTRY`` between consecutive magnitudes
+    among the largest quarter of the non-zero entries (``OUTLIER_SHARE``): at most a quarter of
+    a state's entries can be set aside, so the bulk of its lever arms always sets the scale.
+    Equal to the largest magnitude when there is no such gap, as in every real state.
 
     Parameters
     ----------
@@ -104,7 +117,11 @@ def jacobian_scale(jacobians: list[NDArray[np.float64]]) -> float:
         0 when every entry is 0.
     """
     mags = np.concatenate([np.abs(np.ravel(j)) for j in jacobians]) if jacobians else np.zeros(0)
+    mags = np.sort(mags[mags > 0.0])[::-1]
     if mags.size < 2:
         return float(mags.max(initial=0.0))
-    second, first = np.partition(mags, mags.size - 2)[-2:]
-    return float(min(first, LONE_ENTRY * second))
+    top = max(1, int(OUTLIER_SHARE * mags.size))  # candidates for outliers: mags[:top]
+    gaps = np.flatnonzero(mags[:top] > LONE_ENTRY * mags[1 : top + 1])
+    if gaps.size == 0:
+        return float(mags[0])
+    return float(LONE_ENTRY * mags[gaps[-1] + 1])

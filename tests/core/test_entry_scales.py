@@ -209,16 +209,17 @@ def with_entry(state: GraspState, ci: int, ij: tuple[int, int], value: float) ->
 CASES = [
     (name, which, value)
     for name in ("allegro-sphere", "gripper3-box")
-    for which in (0, 1)
+    for which in (0, 1, 2)  # 2: both entries at once
     for value in VALUES
 ]
 
 
 @pytest.mark.parametrize(("name", "which", "value"), CASES)
-def test_one_entry_at_any_scale_is_certified_right_or_flagged(name, which, value):
+def test_one_or_two_entries_at_any_scale_are_certified_right_or_flagged(name, which, value):
     base = grasp(name)
-    ci, ij = entries(base)[which]
-    state = with_entry(base, ci, ij, value)
+    state = base
+    for ci, ij in entries(base) if which == 2 else [entries(base)[which]]:
+        state = with_entry(state, ci, ij, value)
     got = tvmmp(state)
     assert state.rvds is not None
     truth = np.full(got.alpha.shape, np.nan)

@@ -81,3 +81,17 @@ def test_one_entry_of_1e12_keeps_the_other_entries_of_the_lp():
     a, b = assemble(state).A.toarray()[rows], assemble(big).A.toarray()[rows]
     changed = a != b
     assert changed.sum() == 1 and b[changed][0] == 1e12
+
+
+def test_two_entries_far_above_the_rest_are_both_outliers():
+    """Eight non-zero entries: up to a quarter (two) may stand above a gap of LONE_ENTRY."""
+    j = np.array([[0.1, -0.05, 0.02, 0.03], [0.04, 0.06, 0.07, 0.08]])
+    two = j.copy()
+    two[0, 0], two[1, 3] = 1e12, -3e10  # two outliers, in either sign
+    assert jacobian_scale([two]) == LONE_ENTRY * 0.07  # the largest of the bulk
+    three = two.copy()
+    three[1, 2] = 1e11  # three of eight: more than a quarter, no longer outliers
+    assert jacobian_scale([three]) == 1e12
+    noise = j.copy()
+    noise[0, 2] = 1e-17  # round-off at the bottom is no gap among the largest
+    assert jacobian_scale([noise]) == 0.1
