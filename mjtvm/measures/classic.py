@@ -17,7 +17,7 @@ import numpy as np
 
 from ..core.state import GraspState
 from ..errors import ParamError
-from .kinematics import manipulability, velocity_polytope
+from .kinematics import kinematic_polytope, manipulability
 from .wrenches import (
     checked_torque_scale,
     closure_margin,
@@ -186,7 +186,7 @@ def classic_measures(
     w, determined = manipulability(state, rho)
     volume, dim, status = (float("nan"), -1, "skipped")
     if polytope:
-        volume, dim, _ = velocity_polytope(state, rho)
+        volume, dim, _ = kinematic_polytope(state, rho)
         status = "unbounded" if math.isinf(volume) else "incomplete" if math.isnan(volume) else "bounded"
     return GraspMeasures(
         torque_scale=rho,

@@ -29,7 +29,7 @@ from ..polytopes.projection import project_lp
 from ..polytopes.volume import hull_volume
 from .wrenches import RANK_REL_TOL
 
-__all__ = ["contact_kinematics", "manipulability", "speed_only_state", "velocity_polytope"]
+__all__ = ["contact_kinematics", "kinematic_polytope", "manipulability", "speed_only_state"]
 
 
 def _twist_scale(state: GraspState, rho: float) -> NDArray[np.float64]:
@@ -107,7 +107,7 @@ def speed_only_state(state: GraspState) -> GraspState:
     """``state`` with its statics made void: no REFS wrench, no gravity torque, no preload, no
     damping, and each operation range replaced by the box of its largest torque and speed, so
     that Problem 1's polytope is the set of twists of joint speeds within those speeds
-    ([`velocity_polytope()`][mjtvm.measures.kinematics.velocity_polytope]). The contact forces may then all be 0, which leaves every
+    ([`kinematic_polytope()`][mjtvm.measures.kinematics.kinematic_polytope]). The contact forces may then all be 0, which leaves every
     torque at 0, where the (down-closed) ranges allow their largest speed."""
     boxes = tuple(OperationRange.box(r.max_torque, r.max_speed) for r in state.operation_ranges)
     t = state.transmission
@@ -123,7 +123,7 @@ def speed_only_state(state: GraspState) -> GraspState:
     )
 
 
-def velocity_polytope(state: GraspState, torque_scale: float) -> tuple[float, int, NDArray[np.float64]]:
+def kinematic_polytope(state: GraspState, torque_scale: float) -> tuple[float, int, NDArray[np.float64]]:
     """The kinematic velocity polytope: the twists reached with joint (actuator) speeds within
     each operation range's largest speed, ``|P qd| <= s_max`` and ``J_eq qd = 0`` with a
     transmission, under the contact kinematics of eq. (9)-(13) (D-points' ``<=`` included),

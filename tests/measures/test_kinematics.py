@@ -9,7 +9,7 @@ from scipy.optimize import linprog
 
 from mjtvm import Contact, GraspState, OperationRange, Transmission
 from mjtvm.measures import classic_measures
-from mjtvm.measures.kinematics import contact_kinematics, manipulability, velocity_polytope
+from mjtvm.measures.kinematics import contact_kinematics, kinematic_polytope, manipulability
 
 L = (0.3, 0.5, 0.7, 0.2)  # lever arms of the fingers' joints (m)
 S = (2.0, 3.0, 5.0, 4.0)  # largest joint speeds (rad/s)
@@ -82,14 +82,14 @@ def test_undetermined_twist_and_too_few_joints() -> None:
     """Two contacts leave the object free to move with the hand at rest: w = 0, not
     determined; the polytope is unbounded."""
     assert manipulability(pushers(contacts=2), RHO) == (0.0, False)
-    vol, _, _ = velocity_polytope(pushers(contacts=2), RHO)
+    vol, _, _ = kinematic_polytope(pushers(contacts=2), RHO)
     assert vol == float("inf")
 
 
 def test_velocity_parallelepiped_in_closed_form() -> None:
     """|qd_i| <= S_i: the twists K [-S, S]^3 form a parallelepiped of volume
     8 S0 S1 S2 |det K| = 8 S0 S1 S2 L0 L1 L2 rho."""
-    vol, dim, _ = velocity_polytope(pushers(), RHO)
+    vol, dim, _ = kinematic_polytope(pushers(), RHO)
     assert dim == 3
     assert vol == pytest.approx(8 * S[0] * S[1] * S[2] * L[0] * L[1] * L[2] * RHO, rel=1e-9)
     m = classic_measures(pushers(), torque_scale=RHO)
@@ -102,7 +102,7 @@ def test_velocity_prism_in_closed_form_and_by_monte_carlo() -> None:
     contact 2 with the other two): volume 8 rho L0 S0 L1 S1 (L2 S2 + L3 S3). Checked again
     by the membership LP (exists |qd| <= S with A qd = B t) of uniform samples."""
     state = pushers(joints=4)
-    vol, dim, verts = velocity_polytope(state, RHO)
+    vol, dim, verts = kinematic_polytope(state, RHO)
     assert dim == 3
     expected = 8 * RHO * L[0] * S[0] * L[1] * S[1] * (L[2] * S[2] + L[3] * S[3])
     assert vol == pytest.approx(expected, rel=1e-9)
@@ -126,7 +126,7 @@ def test_velocity_polytope_through_a_transmission() -> None:
     8 rho L0 S0 L1 S1 (L2 + L3) S2 / 2."""
     p = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 1.0, 1.0]])
     t = Transmission(("a0", "a1", "a2"), p, ("couple",), np.array([[0.0, 0.0, 1.0, -1.0]]))
-    vol, dim, _ = velocity_polytope(pushers(joints=4, transmission=t), RHO)
+    vol, dim, _ = kinematic_polytope(pushers(joints=4, transmission=t), RHO)
     assert dim == 3
     assert vol == pytest.approx(8 * RHO * L[0] * S[0] * L[1] * S[1] * (L[2] + L[3]) * S[2] / 2, rel=1e-9)
 
@@ -204,8 +204,8 @@ def test_a_d_point_halves_the_polytope_and_leaves_the_manipulability() -> None:
     base = pushers()
     d_point = Contact("base", "D", [-1.0, 0.0], [1.0, 0.0], np.zeros((2, 3)))
     state = base.with_(contacts=(*base.contacts, d_point))
-    vol, _, verts = velocity_polytope(state, RHO)
-    full, _, _ = velocity_polytope(base, RHO)
+    vol, _, verts = kinematic_polytope(state, RHO)
+    full, _, _ = kinematic_polytope(base, RHO)
     assert vol == pytest.approx(full / 2.0, rel=1e-9)
     assert verts[:, 0].min() == pytest.approx(0.0, abs=1e-12)
     assert manipulability(state, RHO) == manipulability(base, RHO)

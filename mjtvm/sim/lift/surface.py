@@ -30,7 +30,7 @@ from ...errors import ModelError
 from ..grasp.state import geom_label
 from ..grasp.touch import CCD_TOLERANCE
 
-__all__ = ["BACKOFF", "OBJECT_TYPES", "Witness", "distance_model", "is_sphere", "witness"]
+__all__ = ["BACKOFF", "OBJECT_TYPES", "WitnessPoints", "distance_model", "is_sphere", "witness"]
 
 #: m: how far the finger geom is backed off along the normal guess when the surfaces touch.
 BACKOFF = 1e-3
@@ -50,7 +50,7 @@ OBJECT_TYPES = (
 
 
 @dataclass(frozen=True, eq=False)
-class Witness:
+class WitnessPoints:
     r"""The nearest (or deepest) points of an object geom and a finger geom.
 
     Attributes
@@ -94,7 +94,7 @@ def _query(model: mujoco.MjModel, data: mujoco.MjData, og: int, fg: int) -> tupl
     return dist, fromto
 
 
-def witness(model: mujoco.MjModel, data: mujoco.MjData, object_geom: int, finger_geom: int) -> Witness:
+def witness(model: mujoco.MjModel, data: mujoco.MjData, object_geom: int, finger_geom: int) -> WitnessPoints:
     r"""The witness points and normal of ``object_geom`` and ``finger_geom`` at ``data``'s geom poses.
 
     Parameters
@@ -113,10 +113,10 @@ def witness(model: mujoco.MjModel, data: mujoco.MjData, object_geom: int, finger
         c, tip = np.array(data.geom_xpos[object_geom]), np.array(data.geom_xpos[finger_geom])
         u = (tip - c) / np.linalg.norm(tip - c)  # radial projection (Case 2)
         big, small = float(model.geom_size[object_geom, 0]), float(model.geom_size[finger_geom, 0])
-        return Witness(float(np.linalg.norm(tip - c)) - big - small, c + big * u, tip - small * u, -u)
+        return WitnessPoints(float(np.linalg.norm(tip - c)) - big - small, c + big * u, tip - small * u, -u)
     dist, ft = _query(model, data, object_geom, finger_geom)
     if abs(dist) > 0.1 * BACKOFF:  # far enough apart: the witnesses' direction is the normal
-        return Witness(dist, ft[:3].copy(), ft[3:].copy(), (ft[:3] - ft[3:]) / dist)
+        return WitnessPoints(dist, ft[:3].copy(), ft[3:].copy(), (ft[:3] - ft[3:]) / dist)
     # touching: back the finger off along a guess of the normal (module docstring)
     guess = ft[:3] - np.array(data.geom_xpos[finger_geom])
     if float(np.linalg.norm(guess)) < 1e-12:
@@ -139,4 +139,4 @@ def witness(model: mujoco.MjModel, data: mujoco.MjData, object_geom: int, finger
     finally:
         data.geom_xpos[finger_geom] = saved
     finger = ft[3:] + shift * used  # the backed-off witness, shifted back
-    return Witness(float(d_b - shift), ft[:3].copy(), finger, n)
+    return WitnessPoints(float(d_b - shift), ft[:3].copy(), finger, n)
