@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm import MjtvmError, SolverError, StateError, load_state, tvmmp
-from mjtvm.sim.paper_hand.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import scenario_document
 
 # The test oracles live in tests/support, outside the installed package: import them from
 # this checkout.
@@ -49,7 +49,7 @@ def sources() -> dict[str, str]:
     """The JSON text of every state to mutate, by name."""
     examples = resources.files("mjtvm.data").joinpath("examples")
     out = {p.name: p.read_text(encoding="utf-8") for p in examples.iterdir() if p.name.endswith(".json")}
-    out.update({name: json.dumps(export_state(name)) for name in ("case1", "case1-s", "case2")})
+    out.update({name: json.dumps(scenario_document(name)) for name in ("case1", "case1-s", "case2")})
     return dict(sorted(out.items()))
 
 

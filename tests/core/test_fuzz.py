@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mjtvm import MjtvmError, StateError, load_state, tvmmp
-from mjtvm.sim.paper_hand.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import scenario_document
 from tests.support.fuzz import mutate_bytes, mutate_document
 
 EXAMPLES = resources.files("mjtvm.data").joinpath("examples")
@@ -29,7 +29,7 @@ SOURCES = tuple(sorted(p.name for p in EXAMPLES.iterdir() if p.name.endswith(".j
 def _doc_text(name: str) -> str:
     # Cached as text: every example decodes a fresh copy, so no mutation leaks between them.
     if name in SCENARIOS:
-        return json.dumps(export_state(name))
+        return json.dumps(scenario_document(name))
     return EXAMPLES.joinpath(name).read_text(encoding="utf-8")
 
 

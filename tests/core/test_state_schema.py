@@ -15,7 +15,7 @@ import jsonschema
 import pytest
 
 from mjtvm import StateError, load_state, tvmmp
-from mjtvm.sim.paper_hand.scenario import export_state
+from mjtvm.sim.paper_hand.scenario import scenario_document
 from tests.support.mutate import mutations
 
 DATA = resources.files("mjtvm.data")
@@ -49,7 +49,7 @@ def test_every_shipped_example_passes_the_schema(validator, name):
 
 @pytest.mark.parametrize("name", SCENARIOS)
 def test_every_exported_scenario_state_passes_the_schema(validator, name):
-    doc = json.loads(json.dumps(export_state(name)))  # as another tool would read the file
+    doc = json.loads(json.dumps(scenario_document(name)))  # as another tool would read the file
     assert list(validator.iter_errors(doc)) == []
     assert load_state(doc).num_joints == len(doc["joints"])
 
@@ -192,7 +192,7 @@ EXTRA = {"slide_direction": [1, 0, 0], "preload": 1.0, "mu": 0.5, "zzz": 1, "fri
 
 @pytest.mark.parametrize("name", ["pinch.json", "case1-s"])
 def test_load_state_refuses_what_the_schema_refuses_and_only_beyond_it_more(validator, name):
-    doc = example(name) if name.endswith(".json") else json.loads(json.dumps(export_state(name)))
+    doc = example(name) if name.endswith(".json") else json.loads(json.dumps(scenario_document(name)))
     counts = {"both accept": 0, "both refuse": 0, "beyond": 0}
     for mutated in mutations(doc, VALUES, EXTRA, every_item=False):
         schema_accepts = not list(validator.iter_errors(mutated))

@@ -5,7 +5,7 @@ finger on the sphere, and the scenarios of Cases 1 and 2 with the generator of t
 from .hand import DEFAULT_FINGER_JOINTS, HUMANLIKE_FINGER_JOINTS, finger_joint_names, hand_mjcf, model_files
 from .placement import finger1_tvmm_curve, make_documents, posture_grasp, solve_variant
 from .posture import FingerGeometry, FingerPosture
-from .scenario import SCENARIOS, export_state, load_scenario, read_scenario
+from .scenario import SCENARIOS, load_scenario, read_scenario, scenario_document
 
 __all__ = [
     "DEFAULT_FINGER_JOINTS",
@@ -13,7 +13,6 @@ __all__ = [
     "SCENARIOS",
     "FingerGeometry",
     "FingerPosture",
-    "export_state",
     "finger1_tvmm_curve",
     "finger_joint_names",
     "hand_mjcf",
@@ -22,5 +21,6 @@ __all__ = [
     "model_files",
     "posture_grasp",
     "read_scenario",
+    "scenario_document",
     "solve_variant",
 ]

@@ -41,12 +41,12 @@ __all__ = [
     "SCENARIOS",
     "SCHEMA",
     "Scenario",
-    "export_state",
     "format_document",
     "grasp_document",
     "grasp_file_name",
     "load_scenario",
     "read_scenario",
+    "scenario_document",
     "scenario_path",
 ]
 
@@ -168,7 +168,7 @@ def load_scenario(
     return load_grasp(source).with_options(mg=mg, mu=mu, friction_margin=friction_margin)
 
 
-def export_state(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
+def scenario_document(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
     """The ``mjtvm.state/1`` document of a scenario's state (``options`` go to [`load_scenario()`][mjtvm.sim.paper_hand.scenario.load_scenario])."""
     return state_to_dict(load_scenario(name, **options).state())
 

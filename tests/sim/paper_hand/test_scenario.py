@@ -36,7 +36,7 @@ from mjtvm.sim.paper_hand.scenario import (
     read_scenario,
     scenario_path,
 )
-from mjtvm.sim.paper_hand.scenario import export_state as export
+from mjtvm.sim.paper_hand.scenario import scenario_document as export
 
 ROOT = Path(__file__).resolve().parents[3]
 RANK_TOL = 1e-9  # singular values below this count as zero (the others are > 0.5, the zeros < 1e-14)
