@@ -45,6 +45,8 @@ __all__ = [
     "SWEEP_MUS",
     "SWEEP_MU_MG",
     "ReplayOutput",
+    "hand_name",
+    "paper_hand",
     "replay_lift",
     "run_replay",
     "sweep_lift",
@@ -107,6 +109,28 @@ def grasp_defaults(grasp: Any, mu: float | None, mg: float | None) -> tuple[floa
                 "(N), or make the grasp file's [refs] the weight alone (weight = true, no wrenches)",
             )
     return float(mu), float(mg)
+
+
+def paper_hand(name: str) -> str | None:
+    """The paper's hand variant (``"default"``, ``"humanlike"``) of a shipped paper grasp's name
+    (``case2``, ``case2-humanlike``, ...), ``None`` for any other grasp."""
+    from ..sim.paper_hand.scenario import SCENARIOS
+
+    for variant in ("humanlike", "default"):
+        base = name if variant == "default" else name.removesuffix("-" + variant)
+        if base in SCENARIOS and (variant == "default" or base != name):
+            return variant
+    return None
+
+
+def hand_name(grasp: Any, hand: str = "default") -> str:
+    """The hand of a lift's grasp: the paper's hand variant for the paper's grasps, else the
+    grasp's MJCF model (its file's stem, ``allegro_right_hand``)."""
+    variant = paper_hand(str(grasp.name))
+    if variant is not None:
+        return variant
+    model_path = getattr(grasp, "model_path", None)
+    return hand if model_path is None else Path(model_path).stem
 
 
 def _check(variants: Sequence[str], readings: Sequence[str], mu: float, mg: float) -> None:
@@ -218,7 +242,7 @@ def _figures(
 ) -> dict[str, bytes]:
     """Fig. 8 (solid L, dashed S) and, with the sweeps, Fig. 9a/9b: TVMMP vs z, as PNG bytes."""
     name = str(lift.scenario.name)
-    paper = name.startswith(("case1", "case2"))  # the paper's figures keep the paper's names
+    paper = paper_hand(name) is not None  # the paper's figures keep the paper's names
     tag = f"{name.removesuffix('-' + hand)}, {hand} hand" if paper else name
     fig8, fig9a, fig9b = (
         ("Fig. 8", "Fig. 9a", "Fig. 9b") if paper else ("TVMMP along the lift", "mu sweep", "mg sweep")
@@ -237,12 +261,14 @@ def _figures(
         for v, rd in runs
     ]
     x = lift_x(lift)
-    files = {"fig8.png": _plot(curves, f"{fig8}: {tag}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N", x)}
+    swept_points = "L-points" if "N" in lift.roles else "every finger an F-point"
+    points = "" if "N" in lift.roles else f", {swept_points}"  # the curves' labels name L and S
+    files = {"fig8.png": _plot(curves, f"{fig8}: {tag}{points}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N", x)}
     if swept is not None:
         a = [(f"$\\mu$ = {m:g}", "-", [r for r in swept["mu"] if r.mu == m]) for m in SWEEP_MUS]
-        files["fig9a.png"] = _plot(a, f"{fig9a}: {tag}, L-points, $mg$ = {SWEEP_MU_MG:g} N", x)
+        files["fig9a.png"] = _plot(a, f"{fig9a}: {tag}, {swept_points}, $mg$ = {SWEEP_MU_MG:g} N", x)
         b = [(f"$mg$ = {g:g} N", "-", [r for r in swept["mg"] if r.mg == g]) for g in SWEEP_MGS]
-        files["fig9b.png"] = _plot(b, f"{fig9b}: {tag}, L-points, $\\mu$ = {SWEEP_MG_MU:g}", x)
+        files["fig9b.png"] = _plot(b, f"{fig9b}: {tag}, {swept_points}, $\\mu$ = {SWEEP_MG_MU:g}", x)
     return files
 
 
@@ -269,7 +295,7 @@ def run_replay(
     readings: Sequence[str] = ("physical", "literal"),
     out: str | Path = "results",
     plots: bool = True,
-    sweeps: bool = True,
+    sweeps: bool | None = None,
     progress: bool = False,
     on_replay: Callable[[ReplayOutput], None] | None = None,
     limit_horizon: float | None = None,
@@ -277,6 +303,8 @@ def run_replay(
     r"""The main job: lift, replay, sweeps, ``lift.csv``/``lift.json`` and the plots in ``out``.
 
     ``stop_margin``: [`scripted_lift()`][mjtvm.sim.lift.trajectory.scripted_lift]'s (the grasp's by default).
+    ``sweeps``: the paper's Fig. 9 sweeps (mu 0.1-0.5 at mg 2 N, mg 0-3 N at mu 0.3); ``None``:
+    for the paper's grasps only ([`paper_hand()`][mjtvm.apps.replay.paper_hand]), not for a grasp file of one's own.
     ``mu`` and ``mg`` default to the grasp's ([`grasp_defaults()`][mjtvm.apps.replay.grasp_defaults]): 0.3 and 1 N for the paper's
     Case 2. ``on_replay``, if given, is called with the lift and the replay's records (``sweeps``,
     ``files`` and ``timings`` still empty) as soon as they exist, before the sweeps and the
@@ -314,8 +342,11 @@ def run_replay(
     times["replay_s"], t0 = time.perf_counter() - t0, time.perf_counter()
     if on_replay is not None:
         on_replay(ReplayOutput(lift, records, None, {}, {}))
+    if sweeps is None:
+        sweeps = paper_hand(str(lift.scenario.name)) is not None
     swept = sweep_lift(lift, progress=progress, bases=bases) if sweeps else None
     times["sweeps_s"], t0 = time.perf_counter() - t0, time.perf_counter()
+    hand = hand_name(lift.scenario, hand)
     meta = {"scenario": lift.scenario.name, "hand": hand}
     # every file is rendered in memory first, then the set is written at once (mjtvm.core.files)
     contents: dict[str, bytes | str] = {"lift.csv": _csv(records, meta)}

@@ -44,11 +44,12 @@ _T = TypeVar("_T")
 _TEXTS: dict[str, tuple[str, str]] = {
     # command: (help in the list of commands, description of its --help)
     "replay": (
-        "TVMMP along a grasp's scripted lift (default: Case 2, Fig. 8) and the Fig. 9 sweeps; CSV, JSON, PNG",
+        "TVMMP along a grasp's scripted lift (default: Case 2, Fig. 8), the paper's Fig. 9 sweeps; CSV, JSON, PNG",
         "Move the grasp's object as its [lift] says (Case 2: along +z to the fingers' reach), solve "
         "Problem 2 at every state with the lift's L/S fingers (Case 2: fingers 2 and 4) as L- and "
-        "S-points, sweep mu and mg (Fig. 9), and write lift.csv, lift.json, lift-sweeps.csv and "
-        "fig8/fig9a/fig9b.png to --out, as one set, atomically.",
+        "S-points at the grasp's mu and weight, for the paper's grasps (or with --sweeps) sweep mu and "
+        "mg (Fig. 9), and write lift.csv, lift.json, lift-sweeps.csv and fig8/fig9a/fig9b.png to --out, "
+        "as one set, atomically.",
     ),
     "sweep": (
         "Problem 2 over a grid of lift states and conditions (process pool or Dask)",
@@ -67,7 +68,13 @@ def add_replay(sub: Subparsers) -> None:
     limit_horizon_option(p)
     out_options(p, name=None)
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
-    p.add_argument("--no-sweeps", action="store_true", help="skip the Fig. 9 mu and mg sweeps")
+    p.add_argument(
+        "--sweeps",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="the paper's Fig. 9 sweeps (mu 0.1-0.5 at mg 2 N, mg 0-3 N at mu 0.3): lift-sweeps.csv, "
+        "fig9a/fig9b.png (default: for the paper's grasps only, not for a grasp file of one's own)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument(
         "--rrd",
@@ -122,7 +129,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
                 readings=args.reading,
                 out=outdir,
                 plots=not args.no_plots,
-                sweeps=not args.no_sweeps,
+                sweeps=args.sweeps,
                 progress=not args.quiet,
                 on_replay=record if args.rrd is not None or args.spawn else None,
                 limit_horizon=args.limit_horizon,

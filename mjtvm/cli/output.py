@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from ..errors import OutputError
@@ -17,8 +17,10 @@ __all__ = [
     "EXIT_OK",
     "EXIT_PIPE",
     "EXIT_SOLVER",
+    "LISTED",
     "bracket_progress",
     "emit",
+    "grouped",
     "lp_progress",
     "one_line",
     "stdout_to_devnull",
@@ -92,11 +94,34 @@ def warn(text: str) -> None:
     print(one_line(f"mjtvm: warning: {text}"), file=sys.stderr, flush=True)
 
 
+LISTED = 5
+"""Subjects a grouped warning names before "and N more"."""
+
+
+def grouped(items: Iterable[tuple[str, str]], noun: str = "pairs") -> list[tuple[str, str, int]]:
+    """``(subjects, cause, count)`` per distinct cause of ``(subject, cause)`` items, in first-seen
+    order: ``subjects`` the one subject, or the first ``LISTED`` of them,
+    ``and N more`` where there are more, and the count (``"alpha[0][0], alpha[0][1] (2 pairs)"``)."""
+    causes: dict[str, list[str]] = {}
+    for subject, cause in items:
+        causes.setdefault(cause, []).append(subject)
+    out = []
+    for cause, subjects in causes.items():
+        text = ", ".join(subjects[:LISTED])
+        if len(subjects) > LISTED:
+            text += f" and {len(subjects) - LISTED} more"
+        n = len(subjects)
+        out.append((text if n == 1 else f"{text} ({n} {noun})", cause, n))
+    return out
+
+
 def warn_uncertified(result: Any) -> None:
-    """One stderr line per pair of a [`TvmmpResult`][mjtvm.core.result.TvmmpResult] whose answer
-    is not certified, with its note (the JSON holds the same in ``certified`` and ``notes``)."""
-    for k, l in result.uncertified():
-        warn(f"alpha[{k}][{l}] is not certified: {result.note((k, l))}")
+    """One stderr line per note of the pairs of a [`TvmmpResult`][mjtvm.core.result.TvmmpResult]
+    whose answer is not certified, naming and counting them (the JSON holds each pair's
+    ``certified`` and ``notes``)."""
+    pairs = [(f"alpha[{k}][{l}]", str(result.note((k, l)))) for k, l in result.uncertified()]
+    for subjects, note, n in grouped(pairs):
+        warn(f"{subjects} {'is' if n == 1 else 'are'} not certified: {note}")
 
 
 @contextlib.contextmanager

@@ -27,7 +27,7 @@ from .options import (
     refused_option,
     with_limit_horizon,
 )
-from .output import EXIT_OK, bracket_progress, emit, lp_progress, one_line, warn, warn_uncertified
+from .output import EXIT_OK, bracket_progress, emit, grouped, lp_progress, one_line, warn, warn_uncertified
 from .show import warn_contacts
 from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
 
@@ -173,9 +173,12 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
     warn_uncertified(result)
+    zeros = [(f"alpha[{d.pair[0]}][{d.pair[1]}]", d.message) for d in result.diagnosis if d.pair[1] >= 0]
     for d in result.diagnosis:
-        k, l = d.pair
-        warn(f"alpha[{k}][{l}] = 0: {d.message}" if l >= 0 else d.message)
+        if d.pair[1] < 0:
+            warn(d.message)
+    for subjects, message, _ in grouped(zeros):  # one line per cause, counting its pairs
+        warn(f"{subjects} = 0: {message}")
     return EXIT_OK
 
 

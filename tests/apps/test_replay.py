@@ -199,3 +199,47 @@ def test_default_replay_draws_the_readme_fig8(tmp_path: Path, monkeypatch: pytes
                 assert float(a[key]) == pytest.approx(float(value), rel=1e-7, abs=1e-12), key
             elif not key.startswith(("alpha", "tvmmp", "z", "s")):
                 assert a[key] == value, key
+
+
+def test_a_grasp_of_ones_own_writes_its_own_conditions(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`mjtvm replay --grasp FILE`: the grasp's mu and weight, its hand, its contact types in the
+    titles, and the paper's Fig. 9 sweeps only with --sweeps."""
+    import mjtvm.apps.replay as replay
+
+    titles: list[str] = []
+    monkeypatch.setattr(replay, "_plot", lambda curves, title, x="z": titles.append(title) or b"png")
+    grasp = Path(__file__).resolve().parents[2] / "models" / "allegro" / "allegro-ik.toml"  # every tip F
+    args = ["replay", "--grasp", str(grasp), "--states", "2", "--quiet"]
+    assert main([*args, "--out", str(tmp_path / "own")]) == 0
+    assert sorted(p.name for p in (tmp_path / "own").iterdir()) == [
+        ".mjtvm.lock",
+        "fig8.png",
+        "lift.csv",
+        "lift.json",
+    ]
+    rows = _rows(tmp_path / "own" / "lift.csv")
+    assert {(r["scenario"], r["hand"], r["mu"]) for r in rows} == {
+        ("allegro-ik", "allegro_right_hand", "0.6")
+    }
+    assert {round(float(r["mg"]), 9) for r in rows} == {round(0.1 * 9.81, 9)}
+    doc = json.loads((tmp_path / "own" / "lift.json").read_text(encoding="utf-8"))
+    assert doc["hand"] == "allegro_right_hand" and doc["sweeps"] is None
+    assert titles == [
+        "TVMMP along the lift: allegro-ik, every finger an F-point, $\\mu$ = 0.6, $mg$ = 0.981 N"
+    ]
+    titles.clear()
+    assert main([*args, "--sweeps", "--no-plots", "--out", str(tmp_path / "swept")]) == 0
+    assert (tmp_path / "swept" / "lift-sweeps.csv").exists() and titles == []
+    assert main([*args, "--sweeps", "--out", str(tmp_path / "figs")]) == 0
+    assert [t.split(",")[1:2] for t in titles] == [[" every finger an F-point"]] * 3
+    assert not any("L-points" in t for t in titles)
+
+
+def test_the_paper_grasps_sweep_by_default(monkeypatch: pytest.MonkeyPatch) -> None:
+    import mjtvm.apps.replay as replay
+
+    assert replay.paper_hand("case2") == "default" and replay.paper_hand("case1-s-humanlike") == "humanlike"
+    assert replay.paper_hand("gripper3-box") is None and replay.paper_hand("case2-mine") is None
+    assert replay.paper_hand("humanlike") is None

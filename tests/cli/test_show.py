@@ -65,9 +65,8 @@ def test_show_reports_penetration_and_what_export_state_refuses(
     out, err = capsys.readouterr()
     assert "palm" in out.splitlines()[2] and "-1.5" in out.splitlines()[2]
     assert err.splitlines() == [
-        "mjtvm: warning: contacts[0]: geom 'palm' is 1.5 mm inside the object's geom 'object' (max_penetration 1 mm)",
-        "mjtvm: warning: contacts[1]: geom 'f1_tip' is 0.231 mm inside the object's geom 'object' (max_penetration 1 mm)",
-        "mjtvm: warning: contacts[3]: geom 'f3_tip' is 0.378 mm inside the object's geom 'object' (max_penetration 1 mm)",
+        "mjtvm: warning: 3 contacts are inside the object's geom 'object', by up to 1.5 mm (max_penetration "
+        "1 mm): contacts[0] 'palm' 1.5 mm, contacts[1] 'f1_tip' 0.231 mm, contacts[3] 'f3_tip' 0.378 mm",
         f"mjtvm: warning: the grasp's state would be refused: {path}: contacts[0]: geom 'palm' is 1.5 mm inside the "
         "object's geom 'object' > max_penetration 1 mm: move the finger out (or raise max_penetration)",
     ]

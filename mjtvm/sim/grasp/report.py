@@ -130,39 +130,63 @@ def check_penetration(grasp: Grasp) -> None:
 
 
 def contact_warnings(grasp: Grasp) -> list[str]:
-    """One line per selected contact that penetrates (deeper than [`REPORTED_PENETRATION`][mjtvm.sim.grasp.report.REPORTED_PENETRATION],
-    within ``max_penetration``) and per IK target geom that does not touch the object (naming
-    the geom of its body that does)."""
-    out = []
+    """One line per cause: the selected contacts that penetrate an object geom (deeper than
+    [`REPORTED_PENETRATION`][mjtvm.sim.grasp.report.REPORTED_PENETRATION], within ``max_penetration``; one line per object geom,
+    counting them), each IK target geom that does not touch the object (naming the geom of its
+    body that does) and each pair of hand geoms that overlap (however many contact points
+    MuJoCo gives the pair)."""
     limit = _max_penetration(grasp)
+    deep: dict[str, list[tuple[str, str, float]]] = {}  # object geom -> (field, geom, depth)
     for c in kept_contacts(grasp):
         field = _field_of(grasp, c.geom)
         if field is not None and -c.distance > REPORTED_PENETRATION:
+            deep.setdefault(c.object_geom, []).append((field, c.geom, -c.distance))
+    out = []
+    for object_geom, found in deep.items():
+        if len(found) == 1:
+            field, geom, depth = found[0]
             out.append(
-                f"{field}: geom {c.geom!r} is {-1e3 * c.distance:.3g} mm inside the object's geom "
-                f"{c.object_geom!r} (max_penetration {1e3 * limit:.3g} mm)"
+                f"{field}: geom {geom!r} is {1e3 * depth:.3g} mm inside the object's geom "
+                f"{object_geom!r} (max_penetration {1e3 * limit:.3g} mm)"
             )
+            continue
+        listed = ", ".join(f"{f} {g!r} {1e3 * d:.3g} mm" for f, g, d in found[:_LISTED])
+        more = f" and {len(found) - _LISTED} more" if len(found) > _LISTED else ""
+        out.append(
+            f"{len(found)} contacts are inside the object's geom {object_geom!r}, by up to "
+            f"{1e3 * max(d for _, _, d in found):.3g} mm (max_penetration {1e3 * limit:.3g} mm): "
+            f"{listed}{more}"
+        )
     return out + _ik_warnings(grasp) + _self_overlaps(grasp)
+
+
+_LISTED = 5
+"""Contacts a grouped warning names before "and N more"."""
 
 
 def _self_overlaps(grasp: Grasp) -> list[str]:
     """One line per pair of hand geoms (neither the object's nor the world's) that overlap
     deeper than [`REPORTED_PENETRATION`][mjtvm.sim.grasp.report.REPORTED_PENETRATION] at the configuration: a contact no LP sees, whose
-    force the physics check would feel."""
+    force the physics check would feel. MuJoCo's several contact points of one pair (boxes,
+    meshes) are one line: the deepest, counting them."""
     model = grasp.model
     inside = subtree(model, model.body(grasp.object_body).id)
     data = mujoco.MjData(model)
     data.qpos[:] = grasp.data.qpos
     data.mocap_pos[:], data.mocap_quat[:] = grasp.data.mocap_pos, grasp.data.mocap_quat
     mujoco.mj_forward(model, data)
-    out = []
+    pairs: dict[tuple[int, int], list[float]] = {}
     for c in data.contact[: data.ncon]:
         bodies = (int(model.geom_bodyid[c.geom1]), int(model.geom_bodyid[c.geom2]))
         if c.dist < -REPORTED_PENETRATION and not any(b in inside or b == 0 for b in bodies):
-            out.append(
-                f"hand geoms {geom_label(model, int(c.geom1))!r} and {geom_label(model, int(c.geom2))!r} "
-                f"overlap by {_mm(-c.dist)} mm: a contact of the hand with itself, which no LP sees"
-            )
+            pairs.setdefault((int(c.geom1), int(c.geom2)), []).append(-float(c.dist))
+    out = []
+    for (g1, g2), depths in pairs.items():
+        points = f" ({len(depths)} contact points)" if len(depths) > 1 else ""
+        out.append(
+            f"hand geoms {geom_label(model, g1)!r} and {geom_label(model, g2)!r} "
+            f"overlap by {_mm(max(depths))} mm{points}: a contact of the hand with itself, which no LP sees"
+        )
     return out
 
 

@@ -53,10 +53,20 @@ def test_smaller_penetration_is_reported() -> None:
     grasp = load_grasp(_sunk(max_penetration=2e-3))
     grasp.state()  # accepted
     warnings = contact_warnings(grasp)
-    assert warnings == [
-        "contacts[0]: geom 'palm' is 1.5 mm inside the object's geom 'object' (max_penetration 2 mm)",
-        "contacts[1]: geom 'f1_tip' is 0.231 mm inside the object's geom 'object' (max_penetration 2 mm)",
-        "contacts[3]: geom 'f3_tip' is 0.378 mm inside the object's geom 'object' (max_penetration 2 mm)",
+    assert warnings == [  # one cause, one line, counting its contacts
+        "3 contacts are inside the object's geom 'object', by up to 1.5 mm (max_penetration 2 mm): "
+        "contacts[0] 'palm' 1.5 mm, contacts[1] 'f1_tip' 0.231 mm, contacts[3] 'f3_tip' 0.378 mm"
+    ]
+    doc = _sunk(max_penetration=2e-3)
+    doc["contacts"], doc["ignore"] = doc["contacts"][1:], [*doc["ignore"], {"geom": "palm"}]
+    assert contact_warnings(load_grasp(doc)) == [
+        "2 contacts are inside the object's geom 'object', by up to 0.378 mm (max_penetration 2 mm): "
+        "contacts[0] 'f1_tip' 0.231 mm, contacts[2] 'f3_tip' 0.378 mm"
+    ]
+    doc["contacts"] = doc["contacts"][:1]
+    doc["ignore"] = [*doc["ignore"], {"geom": "f3_tip"}]
+    assert contact_warnings(load_grasp(doc)) == [
+        "contacts[0]: geom 'f1_tip' is 0.231 mm inside the object's geom 'object' (max_penetration 2 mm)"
     ]
 
 
@@ -136,4 +146,28 @@ def test_a_contact_typed_by_a_rule_is_checked_for_penetration_too() -> None:
         load_grasp(doc).state()
     doc["max_penetration"] = 2e-3
     warnings = contact_warnings(load_grasp(doc))
-    assert any(w.startswith("contact_rules[0]: geom 'palm' is 1.5 mm inside") for w in warnings), warnings
+    assert any("contact_rules[0] 'palm' 1.5 mm" in w for w in warnings), warnings
+
+
+def test_a_self_overlap_of_several_contact_points_is_one_line() -> None:
+    """MuJoCo gives a capsule beside a box two contact points: one warning for the pair, counting
+    them, at the deeper one's depth."""
+    import mujoco
+
+    from mjtvm.sim.grasp.report import REPORTED_PENETRATION
+
+    grasp = load_grasp("shadow_hand-sphere")
+    model = grasp.model
+    for name in ("ff_middle", "mf_middle"):  # capsules made boxes of the same extent
+        i = model.geom(name).id
+        r, h, _ = model.geom_size[i]
+        model.geom_type[i], model.geom_size[i] = mujoco.mjtGeom.mjGEOM_BOX, [r, r, h]
+    data = mujoco.MjData(model)
+    data.qpos[:] = grasp.data.qpos
+    mujoco.mj_forward(model, data)
+    pair = {model.geom("ff_distal").id, model.geom("mf_middle").id}
+    depths = [-c.dist for c in data.contact[: data.ncon] if {int(c.geom1), int(c.geom2)} == pair]
+    assert len(depths) == 2 and min(depths) > REPORTED_PENETRATION
+    lines = [w for w in contact_warnings(grasp) if w.startswith("hand geoms")]
+    assert len(lines) == 2 and len([w for w in lines if "'ff_distal'" in w]) == 1
+    assert f"overlap by {round(1e3 * max(depths), 6):.3g} mm (2 contact points): a contact" in lines[1]
