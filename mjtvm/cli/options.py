@@ -35,6 +35,8 @@ __all__ = [
     "hand_option",
     "lift_options",
     "limit_horizon_option",
+    "mg_option",
+    "mu_option",
     "one_grasp",
     "out_options",
     "parallel_options",
@@ -200,6 +202,28 @@ def hand_option(
     p.add_argument("--hand", default="default", help=help)
 
 
+def mu_option(p: argparse.ArgumentParser) -> None:
+    """``--mu X``: one friction coefficient for every contact instead of the grasp's
+    ([`with_options()`][mjtvm.sim.grasp.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
+    p.add_argument(
+        "--mu",
+        type=number(0.0, MAX_MU),
+        default=None,
+        help="friction coefficient (default: the grasp's, 0.3 for case2)",
+    )
+
+
+def mg_option(p: argparse.ArgumentParser) -> None:
+    """``--mg X``: the object's weight (N) instead of the grasp's (its REFS scaled to it;
+    [`with_options()`][mjtvm.sim.grasp.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
+    p.add_argument(
+        "--mg",
+        type=number(0.0, MAX_FORCE),
+        default=None,
+        help="object weight (N) (default: the grasp's, 1 for case2)",
+    )
+
+
 def states_option(p: argparse.ArgumentParser, *, hint: str = "", minimum: int = 2) -> None:
     """``--states N``: the number of states along the lift (``hint``: added to its error;
     ``minimum``: 1 where one state, the grasp's own, is a check of its own)."""
@@ -217,18 +241,8 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     """The scripted lift of ``replay``: grasp, hand, friction, weight, states, contacts, reading."""
     grasp_option(p, default="case2")
     hand_option(p)
-    p.add_argument(
-        "--mu",
-        type=number(0.0, MAX_MU),
-        default=None,
-        help="friction coefficient (default: the grasp's, 0.3 for case2)",
-    )
-    p.add_argument(
-        "--mg",
-        type=number(0.0, MAX_FORCE),
-        default=None,
-        help="object weight (N) (default: the grasp's, 1 for case2)",
-    )
+    mu_option(p)
+    mg_option(p)
     states_option(p)
     p.add_argument(
         "--stop-margin",

@@ -3,8 +3,19 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from .options import Subparsers, command, limit_horizon_option, out_options, parallel_options
+from ..errors import OptionError
+from .options import (
+    GRASP_HELP,
+    Subparsers,
+    command,
+    grasp_option,
+    limit_horizon_option,
+    one_grasp,
+    out_options,
+    parallel_options,
+)
 from .output import EXIT_OK, emit
 from .values import input_file, source
 
@@ -20,12 +31,18 @@ _DESCRIPTION = (
 
 
 def add_rank(sub: Subparsers) -> None:
-    """``mjtvm rank GRASP DATASET...``."""
+    """``mjtvm rank GRASP DATASET...`` or ``mjtvm rank --grasp GRASP DATASET...``."""
     p = command(sub, "rank", _HELP, _DESCRIPTION)
     p.add_argument(
-        "grasp", type=source, metavar="GRASP", help="a mjtvm.grasp/1 file or a shipped grasp's name"
+        "grasp_file",
+        nargs="?",
+        default=None,
+        type=source,
+        metavar="GRASP",
+        help="a mjtvm.grasp/1 file or a shipped grasp's name (or --grasp)",
     )
     p.add_argument("datasets", type=input_file, nargs="+", metavar="DATASET", help="dataset files")
+    grasp_option(p, default=None, help="the same as GRASP: " + GRASP_HELP)
     limit_horizon_option(p)
     parallel_options(p)
     out_options(p, name="rank")
@@ -40,9 +57,10 @@ def add_rank(sub: Subparsers) -> None:
 def _cmd_rank(args: argparse.Namespace) -> int:
     from ..apps.rank_files import RankFiles, run_rank_files
 
+    grasp, datasets = _grasp_and_datasets(args.grasp_file, args.grasp, args.datasets)
     run = RankFiles(
-        grasp=args.grasp,
-        datasets=tuple(str(p) for p in args.datasets),
+        grasp=grasp,
+        datasets=datasets,
         out=args.out,
         name=args.name,
         jobs=args.jobs,
@@ -55,3 +73,20 @@ def _cmd_rank(args: argparse.Namespace) -> int:
     for path in run_rank_files(run, emit=emit):
         emit(f"wrote {path}")
     return EXIT_OK
+
+
+def _grasp_and_datasets(
+    positional: str | None, option: str | None, datasets: list[Path]
+) -> tuple[str, tuple[str, ...]]:
+    """The grasp (GRASP or ``--grasp``, one of them: [`one_grasp()`][mjtvm.cli.options.one_grasp])
+    and the datasets. With ``--grasp``, argparse gives the first word to GRASP: a dataset file
+    unless it names a grasp (``.toml``, a ``mjtvm.grasp/1`` JSON file, a shipped name)."""
+    from .solve import is_grasp_source
+
+    if option is not None and positional is not None and not is_grasp_source(positional):
+        try:
+            datasets = [input_file(positional), *datasets]
+        except argparse.ArgumentTypeError as e:
+            raise OptionError("DATASET", str(e)) from e
+        positional = None
+    return one_grasp(positional, option), tuple(str(p) for p in datasets)

@@ -23,6 +23,8 @@ from .options import (
     grasp_option,
     hand_option,
     limit_horizon_option,
+    mg_option,
+    mu_option,
     one_grasp,
     refused_option,
     with_limit_horizon,
@@ -81,6 +83,8 @@ def add_solve(sub: Subparsers) -> None:
         help=_SOURCE_HELP + " (default: the shipped example pinch.json)",
     )
     hand_option(p)
+    mu_option(p)
+    mg_option(p)
     friction_margin_option(p)
     p.add_argument("--solver", choices=SOLVERS, default="highs", help="LP backend")
     p.add_argument(
@@ -92,6 +96,9 @@ def add_solve(sub: Subparsers) -> None:
     p.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
     limit_horizon_option(p)
     _indent_option(p)
+    p.add_argument(
+        "--quiet", action="store_true", help="no warnings (contacts, zero alphas, certificates) on stderr"
+    )
     p.set_defaults(func=_cmd_solve)
 
 
@@ -135,11 +142,22 @@ def load_source(
     default: str | None = None,
     warnings: bool = True,
     friction_margin: float | None = None,
+    mu: float | None = None,
+    mg: float | None = None,
 ) -> GraspState:
     """The state of ``source``: a state file, ``-`` (standard input), or a grasp (MuJoCo; its
     contact warnings on stderr unless ``warnings`` is false). ``friction_margin``: the margin
-    instead of the state's ``friction_margin`` or the grasp file's (on its ``cone``)."""
+    instead of the state's ``friction_margin`` or the grasp file's (on its ``cone``); ``mu``,
+    ``mg``: the grasp's friction coefficient and object weight (N) instead of its own, as
+    ``replay`` takes them (a grasp only: a state file's are refused).
+
+    Raises
+    ------
+    OptionError
+        ``mu`` or ``mg`` (``--mu``, ``--mg``) or a ``hand`` other than the default for a state file.
+    """
     if source == "-":
+        _refuse_for_state(mu, mg)
         return _with_margin(load_state(_read_stdin()), friction_margin)
     if source is None:
         if default is None:
@@ -150,14 +168,24 @@ def load_source(
     if is_grasp_source(source):
         from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
-        grasp = load_scenario(source, variant=hand, friction_margin=friction_margin)
+        grasp = load_scenario(source, variant=hand, mu=mu, mg=mg, friction_margin=friction_margin)
         state = grasp.state()
         if warnings:
             warn_contacts(grasp)
         return state
     if hand != "default":
         raise OptionError("--hand", "applies to the paper's shipped grasps, not to a state file")
+    _refuse_for_state(mu, mg)
     return _with_margin(load_state(source), friction_margin)
+
+
+def _refuse_for_state(mu: float | None, mg: float | None) -> None:
+    """A state file has its contacts' friction and its REFS written out: ``--mu``/``--mg``
+    (a grasp's coefficient, its weight) have nothing to replace there."""
+    if mu is not None:
+        raise OptionError("--mu", "applies to a grasp (its contacts' friction), not to a state file")
+    if mg is not None:
+        raise OptionError("--mg", "applies to a grasp (the weight in its REFS), not to a state file")
 
 
 def _with_margin(state: GraspState, friction_margin: float | None) -> GraspState:
@@ -167,11 +195,21 @@ def _with_margin(state: GraspState, friction_margin: float | None) -> GraspState
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     state = with_limit_horizon(
-        load_source(args.state, hand=args.hand, default=example_path(), friction_margin=args.friction_margin),
+        load_source(
+            args.state,
+            hand=args.hand,
+            default=example_path(),
+            warnings=not args.quiet,
+            friction_margin=args.friction_margin,
+            mu=args.mu,
+            mg=args.mg,
+        ),
         args.limit_horizon,
     )
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
     emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
+    if args.quiet:
+        return EXIT_OK
     warn_uncertified(result)
     zeros = [(f"alpha[{d.pair[0]}][{d.pair[1]}]", d.message) for d in result.diagnosis if d.pair[1] >= 0]
     for d in result.diagnosis:

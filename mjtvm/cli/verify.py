@@ -19,6 +19,7 @@ from .options import (
     Parser,
     friction_margin_option,
     grasp_option,
+    hand_option,
     limit_horizon_option,
     out_options,
     states_option,
@@ -62,6 +63,7 @@ def verify_parser() -> argparse.ArgumentParser:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
+    hand_option(p)
     states_option(p, minimum=1)
     p.add_argument(
         "--stride",
@@ -258,7 +260,9 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     from ..physics import verify
     from ..physics.simulate import SimSettings
     from ..physics.slide_check import slide_check
+    from ..sim.paper_hand.scenario import with_variant
 
+    args.grasp = str(with_variant(args.grasp, args.hand))  # replay's --hand: case2 + humanlike
     if args.gears is not None:
         _refuse_with_gears(args)
         return _cmd_gears(args)

@@ -48,6 +48,7 @@ __all__ = [
     "read_scenario",
     "scenario_document",
     "scenario_path",
+    "with_variant",
 ]
 
 SCHEMA = "mjtvm.scenario/1"
@@ -159,13 +160,27 @@ def load_scenario(
     ModelError
         Unknown scenario or variant, or a grasp file that does not load.
     """
+    source = with_variant(source, variant)
+    return load_grasp(source).with_options(mg=mg, mu=mu, friction_margin=friction_margin)
+
+
+def with_variant(source: str | Path | Mapping[str, Any], variant: str) -> str | Path | Mapping[str, Any]:
+    """The grasp of ``source`` with the hand ``variant``: a shipped scenario's name becomes its
+    variant's grasp name (``case2`` + ``humanlike``: ``case2-humanlike``); any other grasp as
+    given, with the variant ``"default"`` only.
+
+    Raises
+    ------
+    ModelError
+        An unknown variant of a scenario, or a variant other than ``"default"`` for another grasp.
+    """
     if isinstance(source, str) and source in SCENARIOS:
         if variant not in ("default", "humanlike"):
             raise ModelError(f"scenario {source!r}", f"no variant {variant!r} (has: default, humanlike)")
-        source = grasp_file_name(source, variant)[: -len(".toml")]
-    elif variant != "default":
+        return grasp_file_name(source, variant)[: -len(".toml")]
+    if variant != "default":
         raise ModelError("variant", f"applies to the shipped scenarios ({', '.join(SCENARIOS)}) only")
-    return load_grasp(source).with_options(mg=mg, mu=mu, friction_margin=friction_margin)
+    return source
 
 
 def scenario_document(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
