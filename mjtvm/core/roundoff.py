@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 __all__ = [
     "DROP_REL",
     "LONE_ENTRY",
+    "OUTLIER_COUNT",
     "OUTLIER_SHARE",
     "drop_cancellation",
     "drop_data_roundoff",
@@ -56,8 +57,12 @@ DROP_REL = 1e-12
 #: every entry above DROP_REL times the others is kept, and the round-off of a real state
 #: (1e-16 of its largest entry) is dropped as long as its two largest are within 1e4.
 LONE_ENTRY = 10.0
-#: The share of a state's non-zero Jacobian entries, the largest, that may stand as outliers
-#: above a gap of ``LONE_ENTRY`` ([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]).
+#: How many of a state's largest non-zero Jacobian entries may stand as outliers above a gap
+#: of ``LONE_ENTRY`` ([`jacobian_scale()`][mjtvm.core.roundoff.jacobian_scale]): at most
+#: ``OUTLIER_COUNT`` and at most ``OUTLIER_SHARE`` of them. Few, because the other reading of
+#: the same numbers, a few lever arms above many round-off entries (a state whose zeros carry
+#: 1e-17 noise), has as many large entries as the hand has lever arms.
+OUTLIER_COUNT = 3
 OUTLIER_SHARE = 0.25
 
 
@@ -102,8 +107,8 @@ def jacobian_scale(jacobians: list[NDArray[np.float64]]) -> float:
     of 1e12 in a hand of 0.1 m) were not, and taken as the scale they would make the hand's
     lever arms round-off (the LP would lose them and its alphas with them). Outliers are the
     entries above the deepest gap of more than ``LONE_ENTRY`` between consecutive magnitudes
-    among the largest quarter of the non-zero entries (``OUTLIER_SHARE``): at most a quarter of
-    a state's entries can be set aside, so the bulk of its lever arms always sets the scale.
+    among the largest ``OUTLIER_COUNT`` (and at most a quarter, ``OUTLIER_SHARE``) of the
+    non-zero entries: a few entries can be set aside, so the bulk of the lever arms sets the scale.
     Equal to the largest magnitude when there is no such gap, as in every real state.
 
     Parameters
@@ -120,7 +125,7 @@ def jacobian_scale(jacobians: list[NDArray[np.float64]]) -> float:
     mags = np.sort(mags[mags > 0.0])[::-1]
     if mags.size < 2:
         return float(mags.max(initial=0.0))
-    top = max(1, int(OUTLIER_SHARE * mags.size))  # candidates for outliers: mags[:top]
+    top = max(1, min(OUTLIER_COUNT, int(OUTLIER_SHARE * mags.size)))  # candidates: mags[:top]
     gaps = np.flatnonzero(mags[:top] > LONE_ENTRY * mags[1 : top + 1])
     if gaps.size == 0:
         return float(mags[0])
