@@ -1,32 +1,32 @@
 r"""mjtvm: joint torque-velocity pair based manipulability (Watanabe) on top of MuJoCo.
 
 The core (this namespace) needs neither MuJoCo nor rerun: grasp states, operation
-ranges, contacts, Problem 2 (TVMMP, [`tvmmp()`][mjtvm.core.tvmmp.tvmmp]) and Problem 1 (TVMS, [`tvms()`][mjtvm.polytopes.tvms.tvms]). The
+ranges, contacts, Problem 2 (TVMMP, [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp]) and Problem 1 (TVMS, [`tvms()`][mjtvm.polytopes.tvms.tvms]). The
 MuJoCo coupling (`mjtvm.sim`: ``grasp``, ``lift``, ``paper_hand``; `mjtvm.physics`)
 and the rerun recording (`mjtvm.viewer`) live in their own packages. The grasp-file names
-here ([`load_grasp()`][mjtvm.sim.grasp.file.load_grasp], [`export_state()`][mjtvm.sim.grasp.file.export_state], [`Grasp`][mjtvm.sim.grasp.loaded.Grasp], `GraspError`,
-[`shipped_grasps()`][mjtvm.sim.grasp.file.shipped_grasps]) are imported on first use, so that ``import mjtvm`` does not load MuJoCo;
+here ([`load_grasp()`][mjtvm.grasp.resolve.file.load_grasp], [`export_state()`][mjtvm.grasp.resolve.file.export_state], [`Grasp`][mjtvm.grasp.resolve.loaded.Grasp], `GraspError`,
+[`shipped_grasps()`][mjtvm.grasp.resolve.file.shipped_grasps]) are imported on first use, so that ``import mjtvm`` does not load MuJoCo;
 so are the classic grasp measures ([`classic_measures()`][mjtvm.measures.classic.classic_measures], [`GraspMeasures`][mjtvm.measures.classic.GraspMeasures],
 `mjtvm.measures`), which a solve does not need.
 """
 
 from typing import TYPE_CHECKING
 
-from ._lazy import lazy_attributes
-from .core.assembly import Assembly, assemble
-from .core.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
-from .core.operation_range import OperationRange, default_operation_range, load_motor_data
-from .core.result import Diagnosis
-from .core.state import GraspState
-from .core.state_file import dump_state, load_state, parse_state, state_to_dict
-from .core.transmission import Transmission
-from .core.tvmmp import Timings, TvmmpResult, Witness, tvmmp
-from .errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
+from mjtvm._lazy import lazy_attributes
+from mjtvm.errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
+from mjtvm.formats.state_file import dump_state, load_state, parse_state, state_to_dict
+from mjtvm.model.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
+from mjtvm.model.operation_range import OperationRange, default_operation_range, load_motor_data
+from mjtvm.model.state import GraspState
+from mjtvm.model.transmission import Transmission
+from mjtvm.problem2.assembly import Assembly, assemble
+from mjtvm.problem2.result import Diagnosis
+from mjtvm.problem2.tvmmp import Timings, TvmmpResult, Witness, tvmmp
 
 if TYPE_CHECKING:
-    from .measures import GraspMeasures, classic_measures
-    from .polytopes.tvms import TvmsResult, tvms
-    from .sim.grasp import Grasp, GraspError, export_state, load_grasp, shipped_grasps
+    from mjtvm.grasp import Grasp, GraspError, export_state, load_grasp, shipped_grasps
+    from mjtvm.measures import GraspMeasures, classic_measures
+    from mjtvm.polytopes.tvms import TvmsResult, tvms
 
 __version__ = "0.1.0"
 
@@ -80,7 +80,7 @@ __all__ = [
 __getattr__ = lazy_attributes(
     __name__,
     {
-        **dict.fromkeys(_MUJOCO_NAMES, "sim.grasp"),
+        **dict.fromkeys(_MUJOCO_NAMES, "grasp"),
         **dict.fromkeys(_MEASURE_NAMES, "measures"),
         "TvmsResult": "polytopes.tvms",
         "tvms": "polytopes.tvms",

@@ -1,7 +1,7 @@
 r"""Case 1's TVMM over finger 1's feasible postures, and the factors between ours and the paper's.
 
 Usage: ``python scripts/case1_posture.py [OUT_PNG]`` (default ``docs/case1_tvmm_posture.png``).
-Plots :func:`mjtvm.sim.paper_hand.placement.finger1_tvmm_curve` (TVMM = the scaled 4-D affine volume of
+Plots :func:`mjtvm.paper_hand.placement.finger1_tvmm_curve` (TVMM = the scaled 4-D affine volume of
 Problem 1, 1/s^4, against the elbow angle psi for fingertip contacts and against the contact's
 distance from link 2's joint for contacts on link 2) with the rule's posture, the posture IK from
 hand-picked start angles gives and the paper's 8.4e5 marked; prints the curve's extremes.
@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from mjtvm.sim.paper_hand.placement import finger1_tvmm_curve
+from mjtvm.paper_hand.placement import finger1_tvmm_curve
 
 PAPER = 8.4e5  # 1/s^4, Case 1, all F (section 5)
 PREVIOUS = 1.7436e6  # at the posture IK from hand-picked start angles gives (4 mm capsules)

@@ -41,7 +41,7 @@ TIMING_KEYS = frozenset({"timings", "assemble_s", "solve_s", "total_s", "wall_s"
 def _package_dirs() -> tuple[Path, Path]:
     """Return the installed package's examples folder and models folder."""
     import mjtvm.data
-    from mjtvm.sim.grasp.file import models_root
+    from mjtvm.grasp.resolve.file import models_root
 
     data = Path(mjtvm.data.__file__).resolve().parent
     models = models_root().resolve()

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 r"""Differential run at scale: ``tvmmp`` (HiGHS eliminated / literal, Clarabel) against the cvxpy
-reference (:func:`~mjtvm.core.reference.reference_tvmmp`, solver HiGHS; Clarabel where the
+reference (:func:`~oracles.reference.reference_tvmmp`, solver HiGHS; Clarabel where the
 HiGHS reference and ``tvmmp`` disagree, to tell a reference that cannot decide).
 
 States: ``--states N`` seeded random states (:func:`~tests.support.perturb.random_case`), each
@@ -38,10 +38,10 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from mjtvm.core.reference import reference_tvmmp
-from mjtvm.core.state import GraspState
-from mjtvm.core.state_file import load_state
-from mjtvm.core.tvmmp import tvmmp
+from mjtvm.formats.state_file import load_state
+from mjtvm.model.state import GraspState
+from mjtvm.problem2.tvmmp import tvmmp
+from oracles.reference import reference_tvmmp
 
 # The test oracles live in tests/support, outside the installed package: import them from
 # this checkout.
@@ -56,7 +56,7 @@ from tests.support.perturb import (
 )
 
 CONFIGS = (("highs", "eliminated"), ("highs", "literal"), ("clarabel", "eliminated"))
-REL, ZERO_REL = 1e-6, 1e-9  # as tests/core/test_differential.py
+REL, ZERO_REL = 1e-6, 1e-9  # as tests/problem2/test_differential.py
 SHIPPED = ("allegro-ik", "allegro-sphere", "gripper3-box", "case1", "case1-s", "case2")
 COLUMNS = [
     "state",
@@ -98,7 +98,7 @@ def _variants(
 
 
 def _cases(n: int, seed: int) -> Iterator[tuple[str, str, GraspState, str]]:
-    from mjtvm.sim.paper_hand.scenario import load_scenario
+    from mjtvm.paper_hand.scenario import load_scenario
 
     shipped = {"pinch": load_state(Path(__file__).resolve().parents[1] / "mjtvm/data/examples/pinch.json")}
     for name in SHIPPED:

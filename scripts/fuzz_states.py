@@ -3,7 +3,7 @@ r"""Fuzz the state loader at scale: mutated shipped states and damaged bytes.
 
 Every shipped example (``mjtvm/data/examples/*.json``) and the states exported from the
 scenarios ``case1``, ``case1-s``, ``case2`` are mutated by :mod:`tests.support.fuzz` (the same
-mutations as ``tests/core/test_fuzz.py``); a fraction of the runs feeds damaged bytes
+mutations as ``tests/problem2/test_fuzz.py``); a fraction of the runs feeds damaged bytes
 (truncated JSON, invalid UTF-8, deep brackets, huge literals) through ``load_state``.
 A state that loads is solved with ``mjtvm.tvmmp``. Outcomes are counted:
 
@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm import MjtvmError, SolverError, StateError, load_state, tvmmp
-from mjtvm.sim.paper_hand.scenario import scenario_document
+from mjtvm.paper_hand.scenario import scenario_document
 
 # The test oracles live in tests/support, outside the installed package: import them from
 # this checkout.

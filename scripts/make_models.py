@@ -1,7 +1,7 @@
-r"""Write the committed MJCF models (``models/paper_hand/*.xml``) from :func:`mjtvm.sim.paper_hand.hand.model_files`.
+r"""Write the committed MJCF models (``models/paper_hand/*.xml``) from :func:`mjtvm.paper_hand.hand.model_files`.
 
 Usage: ``python scripts/make_models.py [OUTPUT_DIR]`` (default: the repository's
-``models/paper_hand/``). ``tests/sim/paper_hand/test_hand.py`` checks that the committed files equal this output.
+``models/paper_hand/``). ``tests/paper_hand/test_hand.py`` checks that the committed files equal this output.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mjtvm.sim.paper_hand.hand import model_files
+from mjtvm.paper_hand.hand import model_files
 
 
 def main(argv: list[str] | None = None) -> int:

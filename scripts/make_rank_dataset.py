@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from mjtvm.errors import ModelError
-from mjtvm.sim.grasp.batch import hand_joints
-from mjtvm.sim.grasp.file import load_grasp
+from mjtvm.grasp.resolve.batch import hand_joints
+from mjtvm.grasp.resolve.file import load_grasp
 
 ROOT = Path(__file__).resolve().parents[1]
 GRASP = ROOT / "models" / "shadow_hand" / "shadow_hand_coupled-sphere.toml"

@@ -4,11 +4,11 @@ Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
 ``mjtvm/data/scenarios`` for the sources and ``models/paper_hand`` for the grasp files).
 Each source's scenario data (the paper's points, IK start and bounds) is kept; each variant's
 ``solution`` (joint angles, IK residuals, achieved contacts) is recomputed by
-:func:`mjtvm.sim.paper_hand.placement.make_documents`, a variant's own hand model (one not in
-:func:`mjtvm.sim.paper_hand.hand.model_files`, e.g. Case 1's ``four_finger_hand_thin.xml``) is written by
-:func:`mjtvm.sim.paper_hand.placement.variant_model_text`, and the variant's ``mjtvm.grasp/1`` file
-(:func:`mjtvm.sim.paper_hand.scenario.grasp_document`) is written from it: ``case2.toml``,
-``case2-humanlike.toml``, ... ``tests/sim/paper_hand/test_scenario.py`` checks that the committed files
+:func:`mjtvm.paper_hand.placement.make_documents`, a variant's own hand model (one not in
+:func:`mjtvm.paper_hand.hand.model_files`, e.g. Case 1's ``four_finger_hand_thin.xml``) is written by
+:func:`mjtvm.paper_hand.placement.variant_model_text`, and the variant's ``mjtvm.grasp/1`` file
+(:func:`mjtvm.paper_hand.scenario.grasp_document`) is written from it: ``case2.toml``,
+``case2-humanlike.toml``, ... ``tests/paper_hand/test_scenario.py`` checks that the committed files
 equal this output.
 """
 
@@ -17,11 +17,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mjtvm.sim.grasp.document import format_toml
-from mjtvm.sim.grasp.file import models_root
-from mjtvm.sim.paper_hand.hand import model_files
-from mjtvm.sim.paper_hand.placement import make_documents, variant_model_text
-from mjtvm.sim.paper_hand.scenario import format_document, grasp_document, grasp_file_name, scenario_path
+from mjtvm.grasp.document.document import format_toml
+from mjtvm.grasp.resolve.file import models_root
+from mjtvm.paper_hand.hand import model_files
+from mjtvm.paper_hand.placement import make_documents, variant_model_text
+from mjtvm.paper_hand.scenario import format_document, grasp_document, grasp_file_name, scenario_path
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -12,7 +12,7 @@ Usage::
     python scripts/make_test_hands.py            # print each keyframe and its distances
     python scripts/make_test_hands.py --write    # also rewrite <key name="grasp"> in the XML
 
-The committed XML files hold the printed values; ``tests/sim/grasp/test_hands.py`` checks them.
+The committed XML files hold the printed values; ``tests/grasp/resolve/test_hands.py`` checks them.
 """
 
 from __future__ import annotations

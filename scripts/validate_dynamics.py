@@ -1,7 +1,7 @@
 r"""alpha_dyn as a prediction: the three-hand validation of docs/dynamics.md ("Validation").
 
 For each hand, over its scripted lift, ``mjtvm verify --dynamics``
-(:func:`~mjtvm.physics.verify.verify_lift`): per pair (state, RVDS vertex) alpha_kl, alpha_sim
+(:func:`~mjtvm.jobs.verify.verify_lift`): per pair (state, RVDS vertex) alpha_kl, alpha_sim
 (rollout bisection), alpha_dyn (eq. 31 with the demand M qdd + c along the rollout's checked
 span) and one rollout at 0.9 alpha_dyn. Per hand and run it prints the median (and quartiles)
 of alpha_sim / alpha_dyn, the pairs failing at 0.9 alpha_dyn with their causes (the rollout's
@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.errors import MjtvmError
-from mjtvm.physics.verify import verify_lift
+from mjtvm.jobs.verify import verify_lift
 
 # hand -> the runs checked: Case 2's fingers 2 and 4 as L-points and as S-points (literal reading,
 # docs/dynamics.md's table); the other hands have F-points only, so one run

@@ -10,13 +10,13 @@ from typing import Any
 import pytest
 
 from mjtvm import tvmmp
-from mjtvm.core.assembly import assemble
-from mjtvm.core.dynamic import pair_alpha
-from mjtvm.core.state import GraspState
-from mjtvm.core.state_file import load_state
 from mjtvm.errors import MjtvmError, ParamError, StateError
+from mjtvm.formats.state_file import load_state
+from mjtvm.model.state import GraspState
 from mjtvm.polytopes.budget import Limits
 from mjtvm.polytopes.tvms import tvms
+from mjtvm.problem2.assembly import assemble
+from mjtvm.problem2.dynamic import pair_alpha
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "mjtvm" / "data" / "examples" / "pinch.json"
 
@@ -27,19 +27,19 @@ def pinch() -> GraspState:
 
 
 def _sweep_point(**kwargs: Any) -> Any:
-    from mjtvm.apps.sweep import SweepPoint
+    from mjtvm.jobs.sweep import SweepPoint
 
     return SweepPoint(**kwargs)
 
 
 def _sweep_files(**kwargs: Any) -> Any:
-    from mjtvm.apps.sweep_files import SweepFiles
+    from mjtvm.jobs.sweep_files import SweepFiles
 
     return SweepFiles(**kwargs)
 
 
 def _run_sweep(**kwargs: Any) -> Any:
-    from mjtvm.apps.sweep import run_sweep
+    from mjtvm.jobs.sweep import run_sweep
 
     return run_sweep([], progress=False, **kwargs)
 
@@ -51,7 +51,7 @@ def _sim_settings(**kwargs: Any) -> Any:
 
 
 def _gear_sweep(**kwargs: Any) -> Any:
-    from mjtvm.physics.gears import gear_sweep
+    from mjtvm.jobs.gears import gear_sweep
 
     return gear_sweep(**kwargs)
 

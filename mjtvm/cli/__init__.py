@@ -26,16 +26,16 @@ Exit codes
 
 Modules: [`parser`][mjtvm.cli.parser] (the parser, [`main()`][mjtvm.cli.parser.main]), [`solve`][mjtvm.cli.solve]
 (``solve``, ``export-state``, ``tvms``), [`lift`][mjtvm.cli.lift] (``replay``, ``sweep``),
-[`verify`][mjtvm.cli.verify], [`bench`][mjtvm.cli.bench], [`options`][mjtvm.cli.options] (parser, removed
+[`verify`][mjtvm.cli.verify], [`options`][mjtvm.cli.options] (parser, removed
 spellings, shared options), [`values`][mjtvm.cli.values] (option types), [`output`][mjtvm.cli.output]
 (exit codes, standard output).
 """
 
 from __future__ import annotations
 
-from .output import emit
-from .parser import build_parser, main
-from .solve import example_path
-from .verify import verify_parser
+from mjtvm.cli.output import emit
+from mjtvm.cli.parser import build_parser, guarded, main
+from mjtvm.cli.solve import example_path
+from mjtvm.cli.verify import verify_parser
 
-__all__ = ["build_parser", "emit", "example_path", "main", "verify_parser"]
+__all__ = ["build_parser", "emit", "example_path", "guarded", "main", "verify_parser"]

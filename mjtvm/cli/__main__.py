@@ -4,6 +4,6 @@ from __future__ import annotations
 
 import sys
 
-from .parser import main
+from mjtvm.cli.parser import main
 
 sys.exit(main())

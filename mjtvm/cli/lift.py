@@ -7,8 +7,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TypeVar
 
-from ..errors import OptionError, ParamError
-from .options import (
+from mjtvm.cli.options import (
     GRASP_HELP,
     Subparsers,
     command,
@@ -19,8 +18,8 @@ from .options import (
     parallel_options,
     states_option,
 )
-from .output import EXIT_OK, emit, warn
-from .values import (
+from mjtvm.cli.output import EXIT_OK, emit, warn
+from mjtvm.cli.values import (
     CONTACTS,
     MAX_FORCE,
     MAX_GRID,
@@ -35,6 +34,7 @@ from .values import (
     numbers,
     output_file,
 )
+from mjtvm.errors import OptionError, ParamError
 
 __all__ = ["add_replay", "add_sweep"]
 
@@ -98,16 +98,19 @@ def add_replay(sub: Subparsers) -> None:
 def check_file_folder(path: str | None, option: str) -> None:
     """Check, before any work, that the folder of an output file (``--rrd``) can be written."""
     if path is not None:
-        from ..core.files import check_output_dir
+        from mjtvm.formats.files import check_output_dir
 
         check_output_dir(Path(path).parent if str(Path(path).parent) else ".", option=option)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from ..apps.figures import lift_x
-    from ..apps.replay import ReplayOutput, run_replay  # MuJoCo and matplotlib: only the coupling commands
-    from ..core.files import check_output_dir, output_lock
-    from ..viewer.recording import RecordingJob, start_recording
+    from mjtvm.formats.files import check_output_dir, output_lock
+    from mjtvm.jobs.figures import lift_x
+    from mjtvm.jobs.replay import (  # MuJoCo and matplotlib: only the coupling commands
+        ReplayOutput,
+        run_replay,
+    )
+    from mjtvm.viewer.recording import RecordingJob, start_recording
 
     outdir = check_output_dir(args.out)
     check_file_folder(args.rrd, "--rrd")
@@ -222,12 +225,12 @@ def grid_size(args: argparse.Namespace) -> int:
 
 
 _SWEEP_OPTIONS = {"mus": "--mu", "mgs": "--mg", "cluster": "--cluster", "states": "--state-indices"}
-"""The options of the [`SweepFiles`][mjtvm.apps.sweep_files.SweepFiles] fields whose values only the run
+"""The options of the [`SweepFiles`][mjtvm.jobs.sweep_files.SweepFiles] fields whose values only the run
 can judge (the grasps' own mu and mg, a scheduler's answer)."""
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from ..apps.sweep_files import SweepFiles, run_sweep_files
+    from mjtvm.jobs.sweep_files import SweepFiles, run_sweep_files
 
     size = grid_size(args)
     if size > MAX_GRID:  # the points are built before the first is solved

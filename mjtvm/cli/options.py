@@ -6,10 +6,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from ..core.limits import with_limit_horizon  # the commands' --limit-horizon, one meaning
-from ..errors import OptionError
-from .output import EXIT_INPUT, one_line
-from .values import (
+from mjtvm.cli.output import EXIT_INPUT, one_line
+from mjtvm.cli.values import (
     CONTACTS,
     MAX_FORCE,
     MAX_JOBS,
@@ -25,6 +23,8 @@ from .values import (
     source,
     stem,
 )
+from mjtvm.errors import OptionError
+from mjtvm.model.limits import with_limit_horizon  # the commands' --limit-horizon, one meaning
 
 __all__ = [
     "Formatter",
@@ -204,7 +204,7 @@ def hand_option(
 
 def mu_option(p: argparse.ArgumentParser) -> None:
     """``--mu X``: one friction coefficient for every contact instead of the grasp's
-    ([`with_options()`][mjtvm.sim.grasp.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
+    ([`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
     p.add_argument(
         "--mu",
         type=number(0.0, MAX_MU),
@@ -215,7 +215,7 @@ def mu_option(p: argparse.ArgumentParser) -> None:
 
 def mg_option(p: argparse.ArgumentParser) -> None:
     """``--mg X``: the object's weight (N) instead of the grasp's (its REFS scaled to it;
-    [`with_options()`][mjtvm.sim.grasp.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
+    [`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
     p.add_argument(
         "--mg",
         type=number(0.0, MAX_FORCE),

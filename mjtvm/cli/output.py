@@ -8,7 +8,7 @@ import sys
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from ..errors import OutputError
+from mjtvm.errors import OutputError
 
 __all__ = [
     "EXIT_FAILURE",
@@ -116,7 +116,7 @@ def grouped(items: Iterable[tuple[str, str]], noun: str = "pairs") -> list[tuple
 
 
 def warn_uncertified(result: Any) -> None:
-    """One stderr line per note of the pairs of a [`TvmmpResult`][mjtvm.core.result.TvmmpResult]
+    """One stderr line per note of the pairs of a [`TvmmpResult`][mjtvm.problem2.result.TvmmpResult]
     whose answer is not certified, naming and counting them (the JSON holds each pair's
     ``certified`` and ``notes``)."""
     pairs = [(f"alpha[{k}][{l}]", str(result.note((k, l)))) for k, l in result.uncertified()]
@@ -133,7 +133,7 @@ def lp_progress(enabled: bool, desc: str) -> Iterator[None]:
         return
     from tqdm import tqdm
 
-    from ..core.highs import observe_runs
+    from mjtvm.lp.highs import observe_runs
 
     bar = tqdm(desc=desc, unit=" LP", file=sys.stderr, mininterval=0.25, leave=False)
     try:

@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
-from .bench import add_bench
-from .lift import add_replay, add_sweep
-from .options import Parser
-from .output import (
+from mjtvm.cli.lift import add_replay, add_sweep
+from mjtvm.cli.options import Parser
+from mjtvm.cli.output import (
     EXIT_FAILURE,
     EXIT_INPUT,
     EXIT_INTERRUPTED,
@@ -20,12 +18,13 @@ from .output import (
     one_line,
     stdout_to_devnull,
 )
-from .rank import add_rank
-from .show import add_show
-from .solve import add_export_state, add_solve, add_tvms
-from .verify import verify_parser
+from mjtvm.cli.rank import add_rank
+from mjtvm.cli.show import add_show
+from mjtvm.cli.solve import add_export_state, add_solve, add_tvms
+from mjtvm.cli.verify import verify_parser
+from mjtvm.errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "guarded", "main"]
 
 
 def _version() -> str:
@@ -69,7 +68,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_sweep(sub)
     add_rank(sub)
-    add_bench(sub)
     return parser
 
 
@@ -84,12 +82,31 @@ def _parse(words: list[str]) -> argparse.Namespace:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mjtvm`` console script; returns the exit code ([`mjtvm.cli`][mjtvm.cli])."""
     words = list(sys.argv[1:] if argv is None else argv)
+    return guarded(lambda: _parse(words), lambda args: int(args.func(args)))
+
+
+def guarded(parse: Callable[[], argparse.Namespace], run: Callable[[argparse.Namespace], int]) -> int:
+    """Parse and run a command, mapping the error family to exit codes (``docs/cli.md``).
+
+    Parameters
+    ----------
+    parse
+        Returns the parsed options (argparse's ``SystemExit`` is its exit code).
+    run
+        Runs the command on them; returns its exit code.
+
+    Returns
+    -------
+    int
+        0 ok, 1 another failure, 2 bad input, 3 solver trouble, 130 interrupted, 141 a closed
+        standard output; each error printed as one line on stderr, never a traceback.
+    """
     try:
         try:
-            args = _parse(words)
+            args = parse()
         except SystemExit as e:  # --help, --version and argparse's (one-line) errors
             return e.code if isinstance(e.code, int) else EXIT_INPUT
-        code: int = args.func(args)
+        code = run(args)
         sys.stdout.flush()  # a closed or full stdout is reported here, not at interpreter exit
         return code
     except KeyboardInterrupt:

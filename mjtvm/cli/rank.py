@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import OptionError
-from .options import (
+from mjtvm.cli.options import (
     GRASP_HELP,
     Subparsers,
     command,
@@ -16,8 +15,9 @@ from .options import (
     out_options,
     parallel_options,
 )
-from .output import EXIT_OK, emit
-from .values import input_file, source
+from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.values import input_file, source
+from mjtvm.errors import OptionError
 
 __all__ = ["add_rank"]
 
@@ -55,7 +55,7 @@ def add_rank(sub: Subparsers) -> None:
 
 
 def _cmd_rank(args: argparse.Namespace) -> int:
-    from ..apps.rank_files import RankFiles, run_rank_files
+    from mjtvm.jobs.rank_files import RankFiles, run_rank_files
 
     grasp, datasets = _grasp_and_datasets(args.grasp_file, args.grasp, args.datasets)
     run = RankFiles(
@@ -81,7 +81,7 @@ def _grasp_and_datasets(
     """The grasp (GRASP or ``--grasp``, one of them: [`one_grasp()`][mjtvm.cli.options.one_grasp])
     and the datasets. With ``--grasp``, argparse gives the first word to GRASP: a dataset file
     unless it names a grasp (``.toml``, a ``mjtvm.grasp/1`` JSON file, a shipped name)."""
-    from .solve import is_grasp_source
+    from mjtvm.cli.solve import is_grasp_source
 
     if option is not None and positional is not None and not is_grasp_source(positional):
         try:

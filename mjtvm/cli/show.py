@@ -10,15 +10,15 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ModelError
-from .lift import check_file_folder
-from .options import GRASP_HELP, Subparsers, command, grasp_option, hand_option, one_grasp
-from .output import EXIT_OK, emit, warn
-from .values import MAX_INDENT, integer, number, output_file, source
+from mjtvm.cli.lift import check_file_folder
+from mjtvm.cli.options import GRASP_HELP, Subparsers, command, grasp_option, hand_option, one_grasp
+from mjtvm.cli.output import EXIT_OK, emit, warn
+from mjtvm.cli.values import MAX_INDENT, integer, number, output_file, source
+from mjtvm.errors import ModelError
 
 if TYPE_CHECKING:
-    from ..sim.grasp.loaded import Grasp
-    from ..sim.grasp.report import ContactRow
+    from mjtvm.grasp.contacts.report import ContactRow
+    from mjtvm.grasp.resolve.loaded import Grasp
 
 __all__ = ["COLUMNS", "add_show", "report_document", "warn_contacts"]
 
@@ -80,8 +80,8 @@ def add_show(sub: Subparsers) -> None:
 
 
 def warn_contacts(grasp: Grasp) -> None:
-    """A stderr warning per line of [`contact_warnings()`][mjtvm.sim.grasp.report.contact_warnings]."""
-    from ..sim.grasp.report import contact_warnings
+    """A stderr warning per line of [`contact_warnings()`][mjtvm.grasp.contacts.report.contact_warnings]."""
+    from mjtvm.grasp.contacts.report import contact_warnings
 
     for line in contact_warnings(grasp):
         warn(line)
@@ -105,7 +105,7 @@ def report_document(
     grasp: Grasp, rows: list[ContactRow], within: float, problem: str | None
 ) -> dict[str, Any]:
     """The JSON of ``mjtvm show --json`` (``docs/outputs.md``)."""
-    from ..sim.grasp.report import contact_warnings
+    from mjtvm.grasp.contacts.report import contact_warnings
 
     return {
         "grasp": grasp.name,
@@ -145,8 +145,8 @@ def _table(rows: list[ContactRow]) -> list[str]:
 def _cmd_show(args: argparse.Namespace) -> int:
     if args.png is not None:  # MuJoCo picks its GL back end when imported: headless, EGL
         os.environ.setdefault("MUJOCO_GL", "egl")
-    from ..sim.grasp.report import NEAR_TOLERANCES, contact_rows
-    from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only here
+    from mjtvm.grasp.contacts.report import NEAR_TOLERANCES, contact_rows
+    from mjtvm.paper_hand.scenario import load_scenario  # MuJoCo only here
 
     source = one_grasp(args.grasp_file, args.grasp)
     check_file_folder(args.rrd, "--rrd")
@@ -180,8 +180,8 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _record(grasp: Grasp, rows: list[ContactRow], path: str) -> None:
-    from ..sim.grasp.shapes import geom_shapes
-    from ..viewer.grasp_view import record_grasp  # rerun: only with --rrd
+    from mjtvm.grasp.contacts.shapes import geom_shapes
+    from mjtvm.viewer.grasp_view import record_grasp  # rerun: only with --rrd
 
     record_grasp(
         path, geom_shapes(grasp.model, grasp.data, grasp.object_body), rows, grasp.mu, name=grasp.name
@@ -192,7 +192,7 @@ def _record(grasp: Grasp, rows: list[ContactRow], path: str) -> None:
 def _picture(grasp: Grasp, path: str) -> None:
     from matplotlib.image import imsave
 
-    from ..sim.grasp.picture import render_grasp
+    from mjtvm.grasp.contacts.picture import render_grasp
 
     imsave(path, render_grasp(grasp.model, grasp.data, grasp.object_body, grasp.contact_tolerance))
     print(f"wrote {path}", file=sys.stderr)

@@ -8,14 +8,7 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from ..core.bounds import MAX_FILE_BYTES
-from ..core.solvers import SOLVERS
-from ..core.state import GraspState
-from ..core.state_file import load_state
-from ..core.tvmmp import tvmmp
-from ..errors import OptionError, StateError
-from ..polytopes.budget import DEFAULT_CONFIDENCE
-from .options import (
+from mjtvm.cli.options import (
     GRASP_HELP,
     Subparsers,
     command,
@@ -29,9 +22,35 @@ from .options import (
     refused_option,
     with_limit_horizon,
 )
-from .output import EXIT_OK, bracket_progress, emit, grouped, lp_progress, one_line, warn, warn_uncertified
-from .show import warn_contacts
-from .values import MAX_FORCE, MAX_INDENT, MAX_MU, MAX_SECONDS, fraction, integer, memory_size, number, source
+from mjtvm.cli.output import (
+    EXIT_OK,
+    bracket_progress,
+    emit,
+    grouped,
+    lp_progress,
+    one_line,
+    warn,
+    warn_uncertified,
+)
+from mjtvm.cli.show import warn_contacts
+from mjtvm.cli.values import (
+    MAX_FORCE,
+    MAX_INDENT,
+    MAX_MU,
+    MAX_SECONDS,
+    fraction,
+    integer,
+    memory_size,
+    number,
+    source,
+)
+from mjtvm.errors import OptionError, StateError
+from mjtvm.formats.state_file import load_state
+from mjtvm.lp.solvers import SOLVERS
+from mjtvm.model.bounds import MAX_FILE_BYTES
+from mjtvm.model.state import GraspState
+from mjtvm.polytopes.budget import DEFAULT_CONFIDENCE
+from mjtvm.problem2.tvmmp import tvmmp
 
 __all__ = ["add_export_state", "add_solve", "add_tvms", "example_path", "is_grasp_source", "load_source"]
 
@@ -166,7 +185,7 @@ def load_source(
             )
         source = default
     if is_grasp_source(source):
-        from ..sim.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
+        from mjtvm.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
 
         grasp = load_scenario(source, variant=hand, mu=mu, mg=mg, friction_margin=friction_margin)
         state = grasp.state()
@@ -241,8 +260,8 @@ def add_export_state(sub: Subparsers) -> None:
 
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
-    from ..core.state_file import state_to_dict
-    from ..sim.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
+    from mjtvm.formats.state_file import state_to_dict
+    from mjtvm.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
 
     source = one_grasp(args.grasp_file, args.grasp)
     grasp = load_scenario(
@@ -326,7 +345,7 @@ def add_tvms(sub: Subparsers) -> None:
 
 
 def _cmd_tvms(args: argparse.Namespace) -> int:
-    from ..polytopes.tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
+    from mjtvm.polytopes.tvms import tvms  # Problem 1 needs scipy's Qhull and (for cdd) pycddlib
 
     if args.grasp is not None and args.state is not None:
         raise OptionError("--grasp", "give STATE or --grasp, not both")

@@ -155,7 +155,7 @@ def memory_size(text: str) -> int:
             share = float(t[:-1])
             if not 0.0 < share <= 100.0:
                 raise ValueError
-            from ..polytopes.budget import available_memory
+            from mjtvm.polytopes.budget import available_memory
 
             value = share / 100.0 * available_memory()
         else:

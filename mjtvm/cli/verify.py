@@ -1,4 +1,4 @@
-"""``mjtvm verify``: the physics check of [`mjtvm.physics.verify`][mjtvm.physics.verify] on the command line.
+"""``mjtvm verify``: the physics check of [`mjtvm.jobs.verify`][mjtvm.jobs.verify] on the command line.
 
 Its parser is built only when the command runs (the options' defaults come from
 [`SimSettings`][mjtvm.physics.simulate.SimSettings], which imports MuJoCo).
@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .options import (
+from mjtvm.cli.options import (
     Parser,
     friction_margin_option,
     grasp_option,
@@ -24,8 +24,8 @@ from .options import (
     out_options,
     states_option,
 )
-from .output import EXIT_OK, emit
-from .values import (
+from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.values import (
     CONTACTS,
     MAX_FORCE,
     MAX_GEAR,
@@ -61,7 +61,7 @@ def verify_parser() -> argparse.ArgumentParser:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
+    """Options of ``mjtvm verify`` ; the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
     hand_option(p)
     states_option(p, minimum=1)
@@ -163,7 +163,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _simulation_options(p: argparse.ArgumentParser) -> None:
     """The rollouts' [`SimSettings`][mjtvm.physics.simulate.SimSettings] (ablations)."""
-    from ..physics.simulate import SimSettings  # MuJoCo
+    from mjtvm.physics.simulate import SimSettings  # MuJoCo
 
     p.add_argument(
         "--armature-scale",
@@ -203,7 +203,7 @@ runs none of them, so each would be ignored without a word."""
 
 def _refuse_with_gears(args: argparse.Namespace) -> None:
     """``--gears`` replaces the rollouts: refuse an option that only they use."""
-    from ..errors import OptionError
+    from mjtvm.errors import OptionError
 
     given = [name for name, is_given in _ROLLOUT_ONLY.items() if is_given(args)]
     if given:
@@ -213,11 +213,11 @@ def _refuse_with_gears(args: argparse.Namespace) -> None:
 
 
 def _cmd_gears(args: argparse.Namespace) -> int:
-    """``mjtvm verify --gears``: [`gear_sweep()`][mjtvm.physics.gears.gear_sweep] to gears.csv and gears.png."""
-    from ..apps.replay import grasp_defaults
-    from ..core.files import check_output_dir, output_lock, write_files
-    from ..physics import verify
-    from ..physics.gears import gear_sweep, plot_gears
+    """``mjtvm verify --gears``: [`gear_sweep()`][mjtvm.jobs.gears.gear_sweep] to gears.csv and gears.png."""
+    from mjtvm.formats.files import check_output_dir, output_lock, write_files
+    from mjtvm.jobs import verify
+    from mjtvm.jobs.gears import gear_sweep, plot_gears
+    from mjtvm.jobs.replay import grasp_defaults
 
     outdir = check_output_dir(args.out)
     with output_lock(outdir):
@@ -254,13 +254,13 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     """Run ``mjtvm verify`` with parsed [`add_arguments()`][mjtvm.cli.verify.add_arguments] options; print the summary.
 
     The output folder is checked and locked before any work; the CSV, PNG and the slide
-    check's CSV are written together, atomically, at the end ([`mjtvm.core.files`][mjtvm.core.files]).
+    check's CSV are written together, atomically, at the end ([`mjtvm.formats.files`][mjtvm.formats.files]).
     """
-    from ..core.files import check_output_dir, output_lock, write_files
-    from ..physics import verify
-    from ..physics.simulate import SimSettings
-    from ..physics.slide_check import slide_check
-    from ..sim.paper_hand.scenario import with_variant
+    from mjtvm.formats.files import check_output_dir, output_lock, write_files
+    from mjtvm.jobs import verify
+    from mjtvm.jobs.slide_check import slide_check
+    from mjtvm.paper_hand.scenario import with_variant
+    from mjtvm.physics.simulate import SimSettings
 
     args.grasp = str(with_variant(args.grasp, args.hand))  # replay's --hand: case2 + humanlike
     if args.gears is not None:
@@ -277,7 +277,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     if args.rrd is not None:
         check_output_dir(Path(args.rrd).parent, option="--rrd")
     with output_lock(outdir):
-        from ..apps.replay import grasp_defaults
+        from mjtvm.jobs.replay import grasp_defaults
 
         mu, mg = grasp_defaults(verify.checked_lift(args.grasp, args.states).scenario, args.mu, args.mg)
         t0 = time.perf_counter()
@@ -318,7 +318,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     if args.slide_check:
         _print_slide_check(srows)
     if args.rrd is not None:
-        from ..viewer.viz import record_verify  # rerun is imported only here
+        from mjtvm.viewer.viz import record_verify  # rerun is imported only here
 
         record_verify(rows, args.rrd)
         emit(f"wrote {args.rrd}")

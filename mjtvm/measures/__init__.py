@@ -3,10 +3,10 @@ r"""Classic grasp measures beside TVMMP, without MuJoCo (``docs/measures.md``).
 [`classic_measures()`][mjtvm.measures.classic.classic_measures] gives a [`GraspMeasures`][mjtvm.measures.classic.GraspMeasures]: force closure, the Ferrari-Canny
 epsilons, the grasp matrix's smallest singular value, Yoshikawa's hand-object
 manipulability and the kinematic velocity polytope's volume of one
-[`GraspState`][mjtvm.core.state.GraspState]. The wrench measures live in
+[`GraspState`][mjtvm.model.state.GraspState]. The wrench measures live in
 [`wrenches`][mjtvm.measures.wrenches], the kinematic ones in [`kinematics`][mjtvm.measures.kinematics].
 """
 
-from .classic import GraspMeasures, classic_measures
+from mjtvm.measures.classic import GraspMeasures, classic_measures
 
 __all__ = ["GraspMeasures", "classic_measures"]

@@ -1,6 +1,6 @@
 r"""The classic grasp measures of one grasp state beside its TVMMP (``docs/measures.md``).
 
-[`classic_measures()`][mjtvm.measures.classic.classic_measures] computes, on the same [`GraspState`][mjtvm.core.state.GraspState] that
+[`classic_measures()`][mjtvm.measures.classic.classic_measures] computes, on the same [`GraspState`][mjtvm.model.state.GraspState] that
 Problem 2 solves, force closure, the Ferrari-Canny epsilons (L1 and L-infinity), the
 smallest singular value of the grasp matrix, Yoshikawa's hand-object manipulability and
 the kinematic velocity polytope's volume, each with the torque scale that makes moments
@@ -15,10 +15,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..core.state import GraspState
-from ..errors import ParamError
-from .kinematics import kinematic_polytope, manipulability
-from .wrenches import (
+from mjtvm.errors import ParamError
+from mjtvm.measures.kinematics import kinematic_polytope, manipulability
+from mjtvm.measures.wrenches import (
     checked_torque_scale,
     closure_margin,
     epsilon_l1,
@@ -27,6 +26,7 @@ from .wrenches import (
     primitive_wrenches,
     scaled_rank,
 )
+from mjtvm.model.state import GraspState
 
 __all__ = ["GraspMeasures", "classic_measures"]
 

@@ -20,14 +20,14 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.assembly import grasp_map_transpose
-from ..core.operation_range import OperationRange
-from ..core.state import GraspState
-from ..core.transmission import Transmission
-from ..polytopes.lifted import lifted_polytope
-from ..polytopes.projection import project_lp
-from ..polytopes.volume import hull_volume
-from .wrenches import RANK_REL_TOL
+from mjtvm.measures.wrenches import RANK_REL_TOL
+from mjtvm.model.operation_range import OperationRange
+from mjtvm.model.state import GraspState
+from mjtvm.model.transmission import Transmission
+from mjtvm.polytopes.lifted import lifted_polytope
+from mjtvm.polytopes.projection import project_lp
+from mjtvm.polytopes.volume import hull_volume
+from mjtvm.problem2.assembly import grasp_map_transpose
 
 __all__ = ["contact_kinematics", "kinematic_polytope", "manipulability", "speed_only_state"]
 

@@ -17,11 +17,11 @@ from numpy.typing import NDArray
 from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
-from ..core.assembly import grasp_map_transpose
-from ..core.contacts import force_generators
-from ..core.friction import margin_contacts
-from ..core.state import GraspState
-from ..errors import ParamError, SolverError
+from mjtvm.errors import ParamError, SolverError
+from mjtvm.model.contacts import force_generators
+from mjtvm.model.friction import margin_contacts
+from mjtvm.model.state import GraspState
+from mjtvm.problem2.assembly import grasp_map_transpose
 
 __all__ = [
     "LINF_REL_TOL",

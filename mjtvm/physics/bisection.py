@@ -12,11 +12,11 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.state import GraspState
-from ..core.tvmmp import tvmmp
-from ..errors import StateError
-from .simulate import SimSettings, rollout
-from .witness import WitnessKind, witness_drive
+from mjtvm.errors import StateError
+from mjtvm.model.state import GraspState
+from mjtvm.physics.simulate import SimSettings, rollout
+from mjtvm.physics.witness import WitnessKind, witness_drive
+from mjtvm.problem2.tvmmp import tvmmp
 
 _F64 = NDArray[np.float64]
 
@@ -73,7 +73,7 @@ def alpha_sim(
     r"""alpha_sim of pair (k, l): $s^* \alpha_{kl}$, s* by [`bisect()`][mjtvm.physics.bisection.bisect] on rollouts.
 
     ``model`` from `sim_model()`; ``result``: the state's
-    [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult] (solved here when omitted). Returns
+    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult] (solved here when omitted). Returns
     ``(alpha_sim, alpha_kl, bisection)``.
 
     Raises

@@ -20,15 +20,15 @@ A rollout checks a span of motion (``startup + window``, 7 ms by default), not a
 and near a stretched finger the demand grows within it. [`window_demand()`][mjtvm.physics.dynamic.window_demand] integrates the
 same motion kinematically over such a span and keeps each joint's largest and least demand;
 with a ``window`` ([`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair]) both must fit the joint's operation range with the
-torque of eq. (19) ([`mjtvm.core.dynamic`][mjtvm.core.dynamic], "Demands along a window"). The demand covers
+torque of eq. (19) ([`mjtvm.problem2.dynamic`][mjtvm.problem2.dynamic], "Demands along a window"). The demand covers
 every driven joint, those of fingers whose witness force is zero included: their motors alone
 must accelerate them. With a transmission the demand is per joint and joins the balance
 ``P^T u - J^T f + J_eq^T lambda = g_f + d`` (the damping a loss of the ranges,
-[`mjtvm.core.assembly`][mjtvm.core.assembly]); the
+[`mjtvm.problem2.assembly`][mjtvm.problem2.assembly]); the
 motion keeps the equality rows of a forward pass at each configuration.
 
 [`dynamic_pair()`][mjtvm.physics.dynamic.dynamic_pair] hands this demand, as a function of alpha, to the simulator-free core
-([`dynamic_alpha()`][mjtvm.core.dynamic.dynamic_alpha]), which bisects over LPs for
+([`dynamic_alpha()`][mjtvm.problem2.dynamic.dynamic_alpha]), which bisects over LPs for
 $\alpha^{dyn}_{kl}$. The joint speeds grow as alpha and the demand as alpha^2; the
 witness (and with it the joint motion of redundant fingers) is recomputed at each candidate
 alpha, as the rollout at that speed would drive it.
@@ -44,13 +44,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.dynamic import DynamicAlpha, dynamic_alpha, limiting_term
-from ..core.state import GraspState
-from ..core.tvmmp import tvmmp
-from ..errors import ParamError, SolverError
-from .rig import Rig
-from .simulate import _gravity
-from .witness import Drive, WitnessKind, central_witness, witness_drive
+from mjtvm.errors import ParamError, SolverError
+from mjtvm.model.state import GraspState
+from mjtvm.physics.rig import Rig
+from mjtvm.physics.simulate import _gravity
+from mjtvm.physics.witness import Drive, WitnessKind, central_witness, witness_drive
+from mjtvm.problem2.dynamic import DynamicAlpha, dynamic_alpha, limiting_term
+from mjtvm.problem2.tvmmp import tvmmp
 
 __all__ = ["JointDemand", "demand_of", "dynamic_pair", "joint_demand", "window_demand"]
 
@@ -169,7 +169,7 @@ def window_demand(
     (``mj_integratePos``), and [`joint_demand()`][mjtvm.physics.dynamic.joint_demand] taken at every configuration passed,
     ``qpos`` and the last included. Row 0 is the per-joint maximum, row 1 the minimum (N m):
     the operation range bounds $|\tau_j|$, so both ends of each joint's demand must fit
-    ([`mjtvm.core.dynamic`][mjtvm.core.dynamic], "Demands along a window"). ``duration = 0``: the demand at
+    ([`mjtvm.problem2.dynamic`][mjtvm.problem2.dynamic], "Demands along a window"). ``duration = 0``: the demand at
     ``qpos`` twice.
     """
     if not (math.isfinite(duration) and duration >= 0):
@@ -201,7 +201,7 @@ def demand_of(
     object_body: str = "object",
     window: float = 0.0,
 ) -> Any:
-    r"""The demand $a \mapsto M\ddot q + c$ of pair (k, l) for [`dynamic_alpha()`][mjtvm.core.dynamic.dynamic_alpha].
+    r"""The demand $a \mapsto M\ddot q + c$ of pair (k, l) for [`dynamic_alpha()`][mjtvm.problem2.dynamic.dynamic_alpha].
 
     At a candidate alpha ``a`` the motion is the rollout's drive at speed factor
     ``a / alpha_kl`` ([`witness_drive()`][mjtvm.physics.witness.witness_drive]: the central witness at
@@ -242,7 +242,7 @@ def dynamic_pair(
 
     ``model`` from [`sim_model()`][mjtvm.physics.simulate.sim_model] (the grasp's model with its
     motors), ``qpos`` the state's configuration, ``result`` the state's quasi-static
-    [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult] (solved here when omitted). ``window`` (s): the
+    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult] (solved here when omitted). ``window`` (s): the
     demand is taken along the motion's first ``window`` seconds ([`demand_of()`][mjtvm.physics.dynamic.demand_of]); a
     rollout's is its ``startup + window``, the span over which it is checked.
 

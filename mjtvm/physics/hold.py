@@ -34,11 +34,11 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.state import GraspState
-from ..errors import ParamError
-from .rig import Rig
-from .simulate import SimSettings, held
-from .witness import Drive, witness_drive
+from mjtvm.errors import ParamError
+from mjtvm.model.state import GraspState
+from mjtvm.physics.rig import Rig
+from mjtvm.physics.simulate import SimSettings, held
+from mjtvm.physics.witness import Drive, witness_drive
 
 __all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test", "state_hold"]
 
@@ -234,7 +234,7 @@ def state_hold(
 ) -> HoldResult | None:
     """The hold test of a grasp state with the central witness at alpha = 0 (the same for every
     RVDS vertex: no twist to produce); ``None`` when no pair of ``result`` (the state's
-    [`TvmmpResult`][mjtvm.core.tvmmp.TvmmpResult]) has a witness."""
+    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness."""
     optimal = [l for l, status in enumerate(result.status[0]) if status == "optimal"]
     if not optimal:
         return None

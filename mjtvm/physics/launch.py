@@ -36,10 +36,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ParamError
-from .rig import Rig, finger_contacts
-from .simulate import SimSettings, settle
-from .witness import Drive
+from mjtvm.errors import ParamError
+from mjtvm.physics.rig import Rig, finger_contacts
+from mjtvm.physics.simulate import SimSettings, settle
+from mjtvm.physics.witness import Drive
 
 __all__ = ["LAUNCH_DISTANCE", "LaunchResult", "launch", "launch_row"]
 

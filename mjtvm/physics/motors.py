@@ -4,15 +4,15 @@ The physics check ([`mjtvm.physics.simulate`][mjtvm.physics.simulate]) drives ea
 ``<dcmotor>`` (``input="vel ff"``: a velocity setpoint in actuator-length units and a
 motor-side torque feedforward; drive voltage clamped at Vmax; torque saturated at the
 continuous torque; rotor inertia as the actuator's ``armature``). The generated hand has
-them ([`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf]); a public hand usually has position servos.
+them ([`mjcf()`][mjtvm.grasp.actuation.dcmotor.DCMotor.mjcf]); a public hand usually has position servos.
 [`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors] replaces the actuators of the given joints by ``<dcmotor>`` elements
 through MuJoCo's model-editing API, with exactly the attributes
-[`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf] writes, so the compiled arrays are the template's.
+[`mjcf()`][mjtvm.grasp.actuation.dcmotor.DCMotor.mjcf] writes, so the compiled arrays are the template's.
 
 Where a joint's motor comes from (the ``[ranges]`` of a grasp file, ``docs/grasp-format.md``,
-resolved by [`mjtvm.sim.grasp.ranges.joint_ranges()`][mjtvm.sim.grasp.ranges.joint_ranges] into ``Grasp.motors``): a ``<dcmotor>`` of
+resolved by [`mjtvm.grasp.actuation.ranges.joint_ranges()`][mjtvm.grasp.actuation.ranges.joint_ranges] into ``Grasp.motors``): a ``<dcmotor>`` of
 the model ([`motor_of_actuator()`][mjtvm.physics.motors.motor_of_actuator] reads it back) or a datasheet
-([`from_datasheet()`][mjtvm.sim.grasp.dcmotor.DCMotor.from_datasheet]); a polygon or an actuator with a speed limit
+([`from_datasheet()`][mjtvm.grasp.actuation.dcmotor.DCMotor.from_datasheet]); a polygon or an actuator with a speed limit
 is an operation range without a motor, and a datasheet with a gear efficiency other than 1
 cannot be a ``<dcmotor>`` (MuJoCo's gear is ideal): [`require_motors()`][mjtvm.physics.motors.require_motors] refuses those,
 naming the joint and how to give motor data.
@@ -34,8 +34,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from ..errors import ModelError
-from ..sim.grasp.dcmotor import DCMotor
+from mjtvm.errors import ModelError
+from mjtvm.grasp.actuation.dcmotor import DCMotor
 
 __all__ = [
     "BOX_SPEED_MARGIN",
@@ -115,7 +115,7 @@ def motor_of_actuator(model: mujoco.MjModel, actuator: int) -> DCMotor:
     r"""The `DCMotor` of a compiled ``<dcmotor>`` (inverse of [`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors]).
 
     ``actuator_gainprm`` holds R (Ohm), K (V s/rad), ..., kd, Vmax
-    ([`operation_range_from_actuator()`][mjtvm.sim.grasp.actuator.operation_range_from_actuator]): voltage = Vmax, stall
+    ([`operation_range_from_actuator()`][mjtvm.grasp.actuation.actuator.operation_range_from_actuator]): voltage = Vmax, stall
     torque K V / R, no-load speed V / K, continuous torque the upper ``forcerange``.
     """
     label = f"actuator {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator) or f'#{actuator}'!r}"
@@ -164,7 +164,7 @@ def attach_dcmotors(
     ``gear``, ``nominal = "voltage stall_torque no_load_speed"``, ``saturation =
     "max_continuous_torque 0 0"``, ``armature = rotor_inertia``, ``input = "vel ff"`` and
     ``controller = "0 0 velocity_gain 0 0 voltage"``: what
-    [`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf] writes. The new actuators come after the kept ones,
+    [`mjcf()`][mjtvm.grasp.actuation.dcmotor.DCMotor.mjcf] writes. The new actuators come after the kept ones,
     in the joints' model order; no control range, no damping (the joint's own damping,
     armature and ``actuatorfrcrange`` stay, and the latter caps the torque).
 
@@ -343,7 +343,7 @@ def _add_dcmotor(
     trntype: mujoco.mjtTrn = mujoco.mjtTrn.mjTRN_JOINT,
     gear: float | None = None,
 ) -> None:
-    """One ``<dcmotor>`` as [`mjcf()`][mjtvm.sim.grasp.dcmotor.DCMotor.mjcf] writes it, on the
+    """One ``<dcmotor>`` as [`mjcf()`][mjtvm.grasp.actuation.dcmotor.DCMotor.mjcf] writes it, on the
     transmission ``trntype`` to ``joint`` (a joint, tendon, ... name) with ``gear`` (default
     ``motor.gear``)."""
     act = spec.add_actuator(name=name, target=joint, trntype=trntype)
@@ -369,7 +369,7 @@ def require_motors(
 ) -> dict[str, DCMotor]:
     r"""The motors to attach so that every joint of ``joints`` has its ``<dcmotor>``.
 
-    ``motors`` follows [`mjtvm.sim.grasp.loaded.Grasp.motors`][mjtvm.sim.grasp.loaded.Grasp.motors] ([`mjtvm.sim.grasp.ranges.joint_ranges()`][mjtvm.sim.grasp.ranges.joint_ranges]):
+    ``motors`` follows [`mjtvm.grasp.resolve.loaded.Grasp.motors`][mjtvm.grasp.resolve.loaded.Grasp.motors] ([`mjtvm.grasp.actuation.ranges.joint_ranges()`][mjtvm.grasp.actuation.ranges.joint_ranges]):
     a `DCMotor` (from a datasheet), ``None`` (the model's own
     ``<dcmotor>`` drives the joint) or a string saying why the joint's range has no motor
     (a polygon, an actuator with a speed limit, a gear efficiency other than 1). Joints that

@@ -12,11 +12,11 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ModelError
-from ..sim.grasp.state import geom_id, model_id
-from ..sim.grasp.transmission import dense_efc_jacobian, dense_moment
-from .motors import dcmotor_of_actuator, dcmotor_of_joint
-from .witness import Drive
+from mjtvm.errors import ModelError
+from mjtvm.grasp.actuation.transmission import dense_efc_jacobian, dense_moment
+from mjtvm.grasp.resolve.state import geom_id, model_id
+from mjtvm.physics.motors import dcmotor_of_actuator, dcmotor_of_joint
+from mjtvm.physics.witness import Drive
 
 __all__ = ["Rig", "finger_contacts", "geom_force", "twist_errors", "unit"]
 
@@ -29,7 +29,7 @@ class Rig:
     Any hand: each driven joint's actuator is the single ``<dcmotor>`` (``input="vel ff"``)
     whose transmission is that joint ([`dcmotor_of_joint()`][mjtvm.physics.motors.dcmotor_of_joint]), not
     an actuator of the joint's name; finger geoms are found by label
-    ([`geom_id()`][mjtvm.sim.grasp.state.geom_id]: a name or ``"<body>/geom<n>"``); each finger's
+    ([`geom_id()`][mjtvm.grasp.resolve.state.geom_id]: a name or ``"<body>/geom<n>"``); each finger's
     contact point is its nearest point to the object (``mj_geomDistance``), so fingertips and
     objects of any primitive or mesh shape work.
 
@@ -49,7 +49,7 @@ class Rig:
         ``<dcmotor>`` s (found by name), ``gear`` their ratio ``c`` to the state's moment rows
         (set by `bind()`: motor moment = ``c x P``, so motor torque ``u / c`` and motor speed
         ``c x P qd``), ``friction`` each actuator's share of its joints' friction loss,
-        ``max_j frictionloss_j / |P_aj|`` (what [`actuator_ranges()`][mjtvm.sim.grasp.ranges.actuator_ranges]
+        ``max_j frictionloss_j / |P_aj|`` (what [`actuator_ranges()`][mjtvm.grasp.actuation.ranges.actuator_ranges]
         takes off its range).
     """
 
@@ -137,7 +137,7 @@ class Rig:
     def hold_torques(self, drive: Drive) -> _F64:
         """The feedforward that holds the state at rest (settle, hold test): the drive's torques,
         which hold the grasp and carry no damping (the LP's damping is a loss,
-        [`assembly`][mjtvm.core.assembly])."""
+        [`assembly`][mjtvm.problem2.assembly])."""
         return drive.torques
 
     def command(self, d: mujoco.MjData, drive: Drive, qset: _F64) -> tuple[_F64, _F64]:

@@ -17,7 +17,7 @@ physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
    constraints of eq. (31) at $\alpha = \min(s, 1)\alpha_{kl}$ minimising
    $\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2$ (least joint motion,
    forces inside the pyramids); above 1 its speeds are scaled. ``"vertex"`` scales the
-   simplex witness of [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] (Supplement 1).
+   simplex witness of [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp] (Supplement 1).
 3. *Settle* (``settle`` s): setpoints 0, feedforward $\tau^*$, from the lift state's
    ``qpos`` at rest: the fingers hold the object with the witness forces.
 4. *Start* (impulsive): joint and object velocities are set to the drive's (they satisfy
@@ -55,10 +55,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ModelError, ParamError
-from ..sim.grasp.state import geom_id
-from .rig import Rig, finger_contacts, twist_errors
-from .witness import Drive
+from mjtvm.errors import ModelError, ParamError
+from mjtvm.grasp.resolve.state import geom_id
+from mjtvm.physics.rig import Rig, finger_contacts, twist_errors
+from mjtvm.physics.witness import Drive
 
 __all__ = [
     "RolloutResult",

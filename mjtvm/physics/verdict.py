@@ -19,8 +19,8 @@ s* and a failing one just above it; the failing rollout's first violation
 
 from __future__ import annotations
 
-from .bisection import Bisection
-from .simulate import RolloutResult
+from mjtvm.physics.bisection import Bisection
+from mjtvm.physics.simulate import RolloutResult
 
 __all__ = ["failure_words", "verdict"]
 

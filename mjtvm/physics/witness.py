@@ -1,6 +1,6 @@
 r"""Witnesses to drive in a rollout: the motion and forces attaining alpha_kl (Supplement 1).
 
-The simplex witness of [`tvmmp()`][mjtvm.core.tvmmp.tvmmp] sits at a vertex of the feasible set
+The simplex witness of [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp] sits at a vertex of the feasible set
 (redundant joints at their speed limits, friction on the pyramid's edges); a rollout drives a
 more central one: the same constraints (eq. 31, assembled by `assemble()`)
 at a given alpha, with the least joint motion and the forces inside the pyramids.
@@ -17,10 +17,10 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..core.assembly import assemble
-from ..core.state import GraspState
-from ..core.transmission import joint_speed_limits
-from ..errors import ParamError, SolverError
+from mjtvm.errors import ParamError, SolverError
+from mjtvm.model.state import GraspState
+from mjtvm.model.transmission import joint_speed_limits
+from mjtvm.problem2.assembly import assemble
 
 __all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
 
@@ -38,7 +38,7 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     returns ``speeds``, ``torques``, ``forces`` and ``slip_speeds`` (and ``actuator_speeds``
     ``P qd`` with a transmission). With a transmission the ranges bound actuators and
     $\omega_{0j}$ is joint j's fastest speed through them
-    ([`joint_speed_limits()`][mjtvm.core.transmission.joint_speed_limits]): the weight stays per joint speed;
+    ([`joint_speed_limits()`][mjtvm.model.transmission.joint_speed_limits]): the weight stays per joint speed;
     ``torques`` are then the actuator forces ``u``.
 
     Raises
@@ -157,7 +157,7 @@ def witness_drive(
 ) -> Drive:
     r"""The drive of pair (k, l) at speed factor ``s`` (module docstring, step 2).
 
-    ``vertex``: the [`Witness`][mjtvm.core.tvmmp.Witness] of the pair, required for ``"vertex"``.
+    ``vertex``: the [`Witness`][mjtvm.problem2.tvmmp.Witness] of the pair, required for ``"vertex"``.
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")

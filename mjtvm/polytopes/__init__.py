@@ -13,11 +13,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_attributes
+from mjtvm._lazy import lazy_attributes
 
 if TYPE_CHECKING:
-    from .bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume, ray_lengths
-    from .budget import (
+    from mjtvm.polytopes.bracket import (
+        Bracket,
+        InnerHull,
+        hausdorff_bound,
+        inner_hull,
+        outer_volume,
+        ray_lengths,
+    )
+    from mjtvm.polytopes.budget import (
         DEFAULT_CONFIDENCE,
         DEFAULT_MEMORY_FRACTION,
         Budget,
@@ -27,10 +34,16 @@ if TYPE_CHECKING:
         default_memory_budget,
         rss_bytes,
     )
-    from .capacity import DUPLICATE_TOL, CapacityPolytope, force_polytope, velocity_polytope
-    from .enumeration import force_form, project_cdd
-    from .estimate import FIRST_BATCH, MIN_INSIDE, VolumeEstimate, clopper_pearson, estimate_volume
-    from .hull import (
+    from mjtvm.polytopes.capacity import DUPLICATE_TOL, CapacityPolytope, force_polytope, velocity_polytope
+    from mjtvm.polytopes.enumeration import force_form, project_cdd
+    from mjtvm.polytopes.estimate import (
+        FIRST_BATCH,
+        MIN_INSIDE,
+        VolumeEstimate,
+        clopper_pearson,
+        estimate_volume,
+    )
+    from mjtvm.polytopes.hull import (
         CDD_REL_TOL,
         ZERO_TOL,
         cone_facets,
@@ -42,15 +55,27 @@ if TYPE_CHECKING:
         triangulate,
         vertex_mask,
     )
-    from .lattice import FaceLattice
-    from .lifted import Approximation, LiftedPolytope, Projection, ProjectionStatus, lifted_polytope
-    from .oracles import DistanceOracle, RayShooter, SupportOracle
-    from .polar import FLAT, PolarHull, polar_vertices
-    from .projection import REL_TOL, project_lp, twist_rows
-    from .refine import GROWTH, REFINE_SHARE, Cutter, Meter
-    from .tvms import CHARACTERISTIC_LENGTH, TVMS_SCHEMA, TvmsResult, TvmsTimings, default_scale
-    from .volume import facet_volume, hausdorff, hull_volume
-    from .zonotope import MAX_CANDIDATES, PLANE_TOL, RANK_TOL, Zonotope
+    from mjtvm.polytopes.lattice import FaceLattice
+    from mjtvm.polytopes.lifted import (
+        Approximation,
+        LiftedPolytope,
+        Projection,
+        ProjectionStatus,
+        lifted_polytope,
+    )
+    from mjtvm.polytopes.oracles import DistanceOracle, RayShooter, SupportOracle
+    from mjtvm.polytopes.polar import FLAT, PolarHull, polar_vertices
+    from mjtvm.polytopes.projection import REL_TOL, project_lp, twist_rows
+    from mjtvm.polytopes.refine import GROWTH, REFINE_SHARE, Cutter, Meter
+    from mjtvm.polytopes.tvms import (
+        CHARACTERISTIC_LENGTH,
+        TVMS_SCHEMA,
+        TvmsResult,
+        TvmsTimings,
+        default_scale,
+    )
+    from mjtvm.polytopes.volume import facet_volume, hausdorff, hull_volume
+    from mjtvm.polytopes.zonotope import MAX_CANDIDATES, PLANE_TOL, RANK_TOL, Zonotope
 
 _HOMES = {
     "Bracket": "bracket",

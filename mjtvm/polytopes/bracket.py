@@ -33,10 +33,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from .budget import Budget, LimitReached
-from .hull import JOGGLE
-from .lattice import FaceLattice
-from .polar import PolarHull
+from mjtvm.polytopes.budget import Budget, LimitReached
+from mjtvm.polytopes.hull import JOGGLE
+from mjtvm.polytopes.lattice import FaceLattice
+from mjtvm.polytopes.polar import PolarHull
 
 __all__ = ["Bracket", "InnerHull", "hausdorff_bound", "inner_hull", "outer_volume", "ray_lengths"]
 

@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import ParamError
+from mjtvm.errors import ParamError
 
 __all__ = [
     "DEFAULT_CONFIDENCE",

@@ -22,10 +22,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from ..errors import ParamError, SolverError
-from .hull import distinct
-from .volume import hull_volume
-from .zonotope import RANK_TOL, zonotope
+from mjtvm.errors import ParamError, SolverError
+from mjtvm.polytopes.hull import distinct
+from mjtvm.polytopes.volume import hull_volume
+from mjtvm.polytopes.zonotope import RANK_TOL, zonotope
 
 __all__ = ["DUPLICATE_TOL", "CapacityPolytope", "force_polytope", "velocity_polytope"]
 

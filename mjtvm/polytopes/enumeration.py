@@ -21,10 +21,10 @@ import scipy.linalg
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..core.solvers import DROP_REL
-from ..errors import SolverError
-from .hull import CDD_REL_TOL, cone_facets, reduce_points
-from .lifted import LiftedPolytope, Projection, ProjectionStatus
+from mjtvm.errors import SolverError
+from mjtvm.lp.solvers import DROP_REL
+from mjtvm.polytopes.hull import CDD_REL_TOL, cone_facets, reduce_points
+from mjtvm.polytopes.lifted import LiftedPolytope, Projection, ProjectionStatus
 
 __all__ = ["force_form", "project_cdd"]
 

@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ParamError
-from .budget import Budget, LimitReached
-from .lattice import FaceLattice
+from mjtvm.errors import ParamError
+from mjtvm.polytopes.budget import Budget, LimitReached
+from mjtvm.polytopes.lattice import FaceLattice
 
 __all__ = ["FIRST_BATCH", "MIN_INSIDE", "VolumeEstimate", "clopper_pearson", "estimate_volume"]
 

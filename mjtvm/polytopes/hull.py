@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from ..errors import SolverError
+from mjtvm.errors import SolverError
 
 __all__ = [
     "CDD_REL_TOL",

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .budget import Budget
+from mjtvm.polytopes.budget import Budget
 
 __all__ = ["FaceLattice"]
 

@@ -17,11 +17,11 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..core.assembly import Assembly, BoxForm, assemble
-from ..core.state import GraspState
+from mjtvm.model.state import GraspState
+from mjtvm.problem2.assembly import Assembly, BoxForm, assemble
 
 if TYPE_CHECKING:
-    from .estimate import VolumeEstimate
+    from mjtvm.polytopes.estimate import VolumeEstimate
 
 __all__ = ["Approximation", "LiftedPolytope", "Projection", "ProjectionStatus", "lifted_polytope"]
 
@@ -44,7 +44,7 @@ class LiftedPolytope:
         ``(D, len(z))``: the twist $\dot r$ = ``generators @ z`` (identity without
         the cone, $R^T$ with it).
     assembly
-        The [`Assembly`][mjtvm.core.assembly.Assembly] the rows come from.
+        The [`Assembly`][mjtvm.problem2.assembly.Assembly] the rows come from.
     cone
         Whether ``z`` are the cone coefficients $c_l \ge 0$ of the RVDS vertices.
     """

@@ -17,9 +17,9 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..core.solvers import HighsSession, LinearProgram, LPSolution
-from ..errors import SolverError
-from .lifted import LiftedPolytope
+from mjtvm.errors import SolverError
+from mjtvm.lp.solvers import HighsSession, LinearProgram, LPSolution
+from mjtvm.polytopes.lifted import LiftedPolytope
 
 __all__ = ["DistanceOracle", "RayShooter", "SupportOracle"]
 

@@ -12,10 +12,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from ..errors import SolverError
-from .budget import Budget
-from .hull import JOGGLE, distinct
-from .lattice import FaceLattice
+from mjtvm.errors import SolverError
+from mjtvm.polytopes.budget import Budget
+from mjtvm.polytopes.hull import JOGGLE, distinct
+from mjtvm.polytopes.lattice import FaceLattice
 
 __all__ = ["FLAT", "PolarHull", "polar_vertices"]
 

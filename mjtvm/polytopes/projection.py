@@ -54,11 +54,11 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .budget import Budget, Limits
-from .hull import ZERO_TOL, cone_facets, distinct, span
-from .lifted import Approximation, LiftedPolytope, Projection, ProjectionStatus
-from .oracles import SupportOracle
-from .refine import refine
+from mjtvm.polytopes.budget import Budget, Limits
+from mjtvm.polytopes.hull import ZERO_TOL, cone_facets, distinct, span
+from mjtvm.polytopes.lifted import Approximation, LiftedPolytope, Projection, ProjectionStatus
+from mjtvm.polytopes.oracles import SupportOracle
+from mjtvm.polytopes.refine import refine
 
 __all__ = ["REL_TOL", "project_lp", "twist_rows"]
 

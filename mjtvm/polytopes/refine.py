@@ -18,15 +18,15 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from ..errors import SolverError
-from .bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume
-from .budget import Budget, LimitReached, Limits
-from .estimate import VolumeEstimate, estimate_volume
-from .hull import polish_vertices
-from .lattice import FaceLattice
-from .lifted import Approximation, Projection
-from .oracles import DistanceOracle, RayShooter, SupportOracle
-from .polar import PolarHull
+from mjtvm.errors import SolverError
+from mjtvm.polytopes.bracket import Bracket, InnerHull, hausdorff_bound, inner_hull, outer_volume
+from mjtvm.polytopes.budget import Budget, LimitReached, Limits
+from mjtvm.polytopes.estimate import VolumeEstimate, estimate_volume
+from mjtvm.polytopes.hull import polish_vertices
+from mjtvm.polytopes.lattice import FaceLattice
+from mjtvm.polytopes.lifted import Approximation, Projection
+from mjtvm.polytopes.oracles import DistanceOracle, RayShooter, SupportOracle
+from mjtvm.polytopes.polar import PolarHull
 
 __all__ = ["GROWTH", "REFINE_SHARE", "Cutter", "Meter", "refine"]
 

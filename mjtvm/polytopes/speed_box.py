@@ -46,12 +46,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.assembly import grasp_map_transpose
-from ..core.operation_range import OperationRange
-from ..core.state import GraspState
-from ..errors import ParamError
-from .lifted import Projection
-from .zonotope import RANK_TOL, zonotope
+from mjtvm.errors import ParamError
+from mjtvm.model.operation_range import OperationRange
+from mjtvm.model.state import GraspState
+from mjtvm.polytopes.lifted import Projection
+from mjtvm.polytopes.zonotope import RANK_TOL, zonotope
+from mjtvm.problem2.assembly import grasp_map_transpose
 
 __all__ = [
     "FULL_SPEED_TOL",

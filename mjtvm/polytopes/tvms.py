@@ -25,18 +25,18 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.assembly import BoxForm
-from ..core.state import GraspState
-from ..core.tvmmp import finite_floats, finite_or_none
-from ..errors import ParamError
-from .bracket import ray_lengths
-from .budget import DEFAULT_CONFIDENCE, Limits
-from .enumeration import project_cdd
-from .estimate import VolumeEstimate
-from .lifted import Projection, ProjectionStatus, lifted_polytope
-from .projection import REL_TOL, project_lp
-from .speed_box import BoxImage, ray_lengths_in, speed_box_projection
-from .volume import facet_volume, hull_volume
+from mjtvm.errors import ParamError
+from mjtvm.model.state import GraspState
+from mjtvm.polytopes.bracket import ray_lengths
+from mjtvm.polytopes.budget import DEFAULT_CONFIDENCE, Limits
+from mjtvm.polytopes.enumeration import project_cdd
+from mjtvm.polytopes.estimate import VolumeEstimate
+from mjtvm.polytopes.lifted import Projection, ProjectionStatus, lifted_polytope
+from mjtvm.polytopes.projection import REL_TOL, project_lp
+from mjtvm.polytopes.speed_box import BoxImage, ray_lengths_in, speed_box_projection
+from mjtvm.polytopes.volume import facet_volume, hull_volume
+from mjtvm.problem2.assembly import BoxForm
+from mjtvm.problem2.tvmmp import finite_floats, finite_or_none
 
 __all__ = [
     "CHARACTERISTIC_LENGTH",

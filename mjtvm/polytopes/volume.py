@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 from scipy.spatial.distance import cdist
 
-from .hull import _joggled, incidence
+from mjtvm.polytopes.hull import _joggled, incidence
 
 __all__ = ["facet_volume", "hausdorff", "hull_volume"]
 

@@ -34,7 +34,7 @@ from itertools import combinations, product
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ParamError
+from mjtvm.errors import ParamError
 
 __all__ = ["MAX_CANDIDATES", "PLANE_TOL", "RANK_TOL", "Zonotope", "zonotope"]
 

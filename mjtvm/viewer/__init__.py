@@ -9,12 +9,19 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_attributes
+from mjtvm._lazy import lazy_attributes
 
 if TYPE_CHECKING:
-    from .drawing import FORCE_SCALE, SLIDE_LENGTH, TYPE_COLORS, VELOCITY_SCALE, hull_mesh, translational_tvms
-    from .recording import RecordingError, RecordingJob, start_recording
-    from .viz import APPLICATION_ID, TVMS_EVERY, Z_UNIT, blueprint, record_replay, record_verify
+    from mjtvm.viewer.drawing import (
+        FORCE_SCALE,
+        SLIDE_LENGTH,
+        TYPE_COLORS,
+        VELOCITY_SCALE,
+        hull_mesh,
+        translational_tvms,
+    )
+    from mjtvm.viewer.recording import RecordingError, RecordingJob, start_recording
+    from mjtvm.viewer.viz import APPLICATION_ID, TVMS_EVERY, Z_UNIT, blueprint, record_replay, record_verify
 
 _HOMES = {
     "FORCE_SCALE": "drawing",

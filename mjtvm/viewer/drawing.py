@@ -13,15 +13,15 @@ import rerun as rr
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from ..apps.replay_records import Record
-from ..core.contacts import slide_unit
-from ..core.operation_range import OperationRange
-from ..core.state import GraspState
-from ..polytopes.lifted import lifted_polytope
-from ..polytopes.projection import project_lp
-from ..polytopes.tvms import default_scale
-from ..sim.lift.trajectory import Lift
-from ..sim.scene import scene_geometry, scene_poses
+from mjtvm.grasp.scene import scene_geometry, scene_poses
+from mjtvm.jobs.replay_records import Record
+from mjtvm.lift.trajectory import Lift
+from mjtvm.model.contacts import slide_unit
+from mjtvm.model.operation_range import OperationRange
+from mjtvm.model.state import GraspState
+from mjtvm.polytopes.lifted import lifted_polytope
+from mjtvm.polytopes.projection import project_lp
+from mjtvm.polytopes.tvms import default_scale
 
 __all__ = ["FORCE_SCALE", "SLIDE_LENGTH", "TYPE_COLORS", "VELOCITY_SCALE", "hull_mesh", "translational_tvms"]
 
@@ -94,7 +94,7 @@ def _mirrored(rng: OperationRange) -> NDArray[np.float64]:
 
 
 class _Scene:
-    """The hand's and the object's geoms ([`scene`][mjtvm.sim.scene]) and their poses along the lift."""
+    """The hand's and the object's geoms ([`scene`][mjtvm.grasp.scene]) and their poses along the lift."""
 
     def __init__(self, lift: Lift) -> None:
         sc = lift.scenario

@@ -3,10 +3,10 @@ r"""Rerun recording of one grasp as loaded, before any solve (``mjtvm show GRASP
 Entities (world frame, m; static, no timeline):
 
 * ``/grasp/hand/<kind>`` and ``/grasp/object/<kind>``: the colliding geoms
-  ([`geom_shapes()`][mjtvm.sim.grasp.shapes.geom_shapes]), boxes, spheres and ellipsoids, capsules,
+  ([`geom_shapes()`][mjtvm.grasp.contacts.shapes.geom_shapes]), boxes, spheres and ellipsoids, capsules,
   cylinders, planes (a thin box) and meshes, labelled with their geom labels; the object as
   a wireframe;
-* ``/grasp/contacts``: the report's pairs ([`contact_rows()`][mjtvm.sim.grasp.report.contact_rows]) at
+* ``/grasp/contacts``: the report's pairs ([`contact_rows()`][mjtvm.grasp.contacts.report.contact_rows]) at
   their contact points, coloured by type ([`TYPE_COLORS`][mjtvm.viewer.drawing.TYPE_COLORS]; grey
   when not selected), labelled ``geom type distance``;
 * ``/grasp/normals``: unit normals into the object, [`NORMAL_LENGTH`][mjtvm.viewer.grasp_view.NORMAL_LENGTH] m long;
@@ -25,9 +25,9 @@ import numpy as np
 import rerun as rr
 from numpy.typing import NDArray
 
-from ..sim.grasp.report import ContactRow
-from ..sim.grasp.shapes import GeomShape
-from .drawing import TYPE_COLORS
+from mjtvm.grasp.contacts.report import ContactRow
+from mjtvm.grasp.contacts.shapes import GeomShape
+from mjtvm.viewer.drawing import TYPE_COLORS
 
 __all__ = ["APPLICATION_ID", "CONE_HEIGHT", "CONE_SIDES", "NORMAL_LENGTH", "cone_mesh", "record_grasp"]
 

@@ -25,10 +25,10 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import MjtvmError
+from mjtvm.errors import MjtvmError
 
 if TYPE_CHECKING:
-    from ..apps.replay import ReplayOutput
+    from mjtvm.jobs.replay import ReplayOutput
 
 __all__ = ["RecordingError", "RecordingJob", "start_recording"]
 
@@ -53,7 +53,7 @@ class RecordingError(MjtvmError, RuntimeError):
 def _record(
     output: ReplayOutput, path: str | Path | None, spawn: bool, tvms_every: int | None
 ) -> dict[str, Any]:
-    from .viz import TVMS_EVERY, record_replay  # rerun is imported here, in the child
+    from mjtvm.viewer.viz import TVMS_EVERY, record_replay  # rerun is imported here, in the child
 
     every = TVMS_EVERY if tvms_every is None else tvms_every
     return record_replay(output, path, spawn=spawn, tvms_every=every)
@@ -146,7 +146,7 @@ def start_recording(
     Parameters
     ----------
     output
-        [`run_replay()`][mjtvm.apps.replay.run_replay]'s result, or the partial one its ``on_replay``
+        [`run_replay()`][mjtvm.jobs.replay.run_replay]'s result, or the partial one its ``on_replay``
         hook receives.
     path, spawn, tvms_every
         As [`record_replay()`][mjtvm.viewer.viz.record_replay] (``tvms_every=None``: its default).

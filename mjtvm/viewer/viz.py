@@ -1,7 +1,7 @@
 r"""Rerun recording of the lift replay (``mjtvm replay --rrd FILE``); with [`drawing`][mjtvm.viewer.drawing]
 (what is drawn), the only modules importing rerun.
 
-[`record_replay()`][mjtvm.viewer.viz.record_replay] logs a [`ReplayOutput`][mjtvm.apps.replay.ReplayOutput] on two timelines, ``state``
+[`record_replay()`][mjtvm.viewer.viz.record_replay] logs a [`ReplayOutput`][mjtvm.jobs.replay.ReplayOutput] on two timelines, ``state``
 (the state index) and ``lift_z`` (the object centre's height in micrometres: rerun timelines
 are integer sequences, durations or timestamps). Entities (world frame, m; ``docs/rerun.md``):
 
@@ -43,8 +43,8 @@ from typing import Any
 import rerun as rr
 import rerun.blueprint as rrb
 
-from ..apps.replay import ReplayOutput
-from .drawing import _Columns, _log_run, _mirrored, _panel, _Scene, translational_tvms
+from mjtvm.jobs.replay import ReplayOutput
+from mjtvm.viewer.drawing import _Columns, _log_run, _mirrored, _panel, _Scene, translational_tvms
 
 __all__ = [
     "APPLICATION_ID",
@@ -124,7 +124,7 @@ def record_replay(
     Parameters
     ----------
     output
-        [`run_replay()`][mjtvm.apps.replay.run_replay]'s result.
+        [`run_replay()`][mjtvm.jobs.replay.run_replay]'s result.
     path
         The recording file (``None``: none).
     spawn
@@ -202,7 +202,7 @@ def record_replay(
 def record_verify(
     rows: Sequence[Mapping[str, Any]], path: str | Path, *, recording_id: str | None = None
 ) -> dict[str, Any]:
-    r"""Record the physics check of ``mjtvm verify`` ([`verify_lift()`][mjtvm.physics.verify.verify_lift] rows).
+    r"""Record the physics check of ``mjtvm verify`` ([`verify_lift()`][mjtvm.jobs.verify.verify_lift] rows).
 
     On the ``state`` and ``lift_z`` timelines of [`record_replay()`][mjtvm.viewer.viz.record_replay], per run (``L``,
     ``S_literal``, ...): ``verify/<run>/tvmmp`` (min over l of the LP's alpha_kl),

@@ -9,9 +9,17 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks.__main__ import main as bench_main
 from mjtvm import load_state, tvmmp
-from mjtvm.cli import example_path, main
-from mjtvm.sim.grasp.file import shipped_grasps
+from mjtvm.cli import example_path
+from mjtvm.cli import main as mjtvm_main
+from mjtvm.grasp.resolve.file import shipped_grasps
+
+
+def main(words: list[str]) -> int:
+    """``mjtvm WORDS``, or ``python -m benchmarks WORDS[1:]`` where WORDS[0] is ``bench``: the
+    benchmark run shares the vocabulary, the value checks and the exit codes of ``mjtvm``."""
+    return bench_main(words[1:]) if words[:1] == ["bench"] else mjtvm_main(words)
 
 
 def test_solve_prints_the_result_schema(capsys):
@@ -73,7 +81,7 @@ def test_console_script_stdout_is_pure_json(words):
 def test_export_state_round_trips_through_solve(tmp_path, capsys):
     """The exported JSON is an ordinary mjtvm.state/1 file: solving it gives exactly the
     alphas of the state built in memory from MuJoCo."""
-    from mjtvm.sim.paper_hand.scenario import load_scenario
+    from mjtvm.paper_hand.scenario import load_scenario
 
     assert main(["export-state", "case2", "--quiet"]) == 0
     path = tmp_path / "case2.json"
@@ -269,7 +277,7 @@ def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, m
     [
         (["verify", "--rrd", "folder"], "error: --rrd: expected a file name, got the folder 'folder' (try 'mjtvm verify --help')"),
         (["replay", "--rrd", "folder/"], "error: --rrd: expected a file name, got the folder 'folder/'"),
-        (["bench", "--notes", "folder"], "error: --notes: expected a file, got the folder 'folder' (try 'mjtvm bench --help')"),
+        (["bench", "--notes", "folder"], "error: --notes: expected a file, got the folder 'folder' (try 'python -m benchmarks --help')"),
         (["bench", "--quick", "--out", "out", "--notes", "/dev/zero"],
          "error: --notes: expected a text file of at most 1048576 bytes, got a larger one"),
         (["bench", "--quick", "--out", "out", "--notes", "big.txt"],
@@ -279,12 +287,12 @@ def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, m
     ],
 )  # fmt: skip  # a table: one command line and its error per row
 def test_a_folder_for_a_file_and_unbounded_notes_exit_2(words, line, tmp_path, monkeypatch, capsys):
-    import mjtvm.bench.suite
+    import benchmarks.suite
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("the suite started before --notes was read")
 
-    monkeypatch.setattr(mjtvm.bench.suite, "run_suite", no_work)
+    monkeypatch.setattr(benchmarks.suite, "run_suite", no_work)
     monkeypatch.chdir(tmp_path)
     (tmp_path / "folder").mkdir()
     (tmp_path / "big.txt").write_bytes(b"x" * (2**20 + 1))
@@ -296,10 +304,10 @@ def test_a_folder_for_a_file_and_unbounded_notes_exit_2(words, line, tmp_path, m
 
 
 def test_notes_are_read_into_the_table(tmp_path, monkeypatch, capsys):
-    from mjtvm.bench import report as bench_report
-    from mjtvm.bench import suite as bench_suite
+    from benchmarks import report as bench_report
+    from benchmarks import suite as bench_suite
 
-    monkeypatch.setattr(bench_suite, "run_suite", lambda **kwargs: {"schema": "mjtvm.bench-suite/1"})
+    monkeypatch.setattr(bench_suite, "run_suite", lambda **kwargs: {"schema": "benchmarks-suite/1"})
     monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
     monkeypatch.setattr(bench_report, "format_suite_table", lambda report, notes: "\n".join(notes))
     notes = tmp_path / "notes.txt"
@@ -310,12 +318,12 @@ def test_notes_are_read_into_the_table(tmp_path, monkeypatch, capsys):
 
 def test_a_grid_too_large_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
     """1000 x 10 x 30 points: refused before a lift is computed or a point is built."""
-    import mjtvm.apps.sweep_files
+    import mjtvm.jobs.sweep_files
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("work started before the grid was checked")
 
-    monkeypatch.setattr(mjtvm.apps.sweep_files, "run_sweep_files", no_work)
+    monkeypatch.setattr(mjtvm.jobs.sweep_files, "run_sweep_files", no_work)
     mgs = ",".join(["1"] * 10)
     assert main(["sweep", "--mu", MUS, "--mg", mgs, "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err == (
@@ -372,19 +380,18 @@ def test_one_vocabulary_the_old_spellings_are_not_options(words, old, capsys):
 
 @pytest.mark.parametrize("command", [["sweep"], ["replay"], ["verify"], ["bench", "--quick"]])
 def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys, monkeypatch):
-    import mjtvm.apps.replay  # imported before the patches below: they must not bind the stubs
-    import mjtvm.apps.sweep_files
-    import mjtvm.bench.suite
-    import mjtvm.physics.verify
+    import mjtvm.jobs.replay  # imported before the patches below: they must not bind the stubs
+    import mjtvm.jobs.sweep_files
+    import mjtvm.jobs.verify
 
     def no_work(*args, **kwargs):  # pragma: no cover - reached only if the check came too late
         raise AssertionError("work started before --out was checked")
 
-    monkeypatch.setattr(mjtvm.apps.sweep_files, "run_sweep", no_work)
-    monkeypatch.setattr("mjtvm.bench.suite.run_suite", no_work)
-    monkeypatch.setattr("mjtvm.sim.lift.trajectory.scripted_lift", no_work)
-    monkeypatch.setattr("mjtvm.apps.replay.scripted_lift", no_work)
-    monkeypatch.setattr("mjtvm.physics.verify.verify_lift", no_work)
+    monkeypatch.setattr(mjtvm.jobs.sweep_files, "run_sweep", no_work)
+    monkeypatch.setattr("benchmarks.suite.run_suite", no_work)
+    monkeypatch.setattr("mjtvm.lift.trajectory.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.jobs.replay.scripted_lift", no_work)
+    monkeypatch.setattr("mjtvm.jobs.verify.verify_lift", no_work)
     blocker = tmp_path / "file"
     blocker.write_text("x")
     for out, problem in (
@@ -399,7 +406,7 @@ def test_out_that_is_a_file_is_refused_before_any_work(command, tmp_path, capsys
 
 def test_a_second_run_into_a_locked_folder_is_refused(tmp_path, capsys):
     """Two runs into one folder (two replays with different --mu) must not interleave rows."""
-    from mjtvm.core.files import output_lock
+    from mjtvm.formats.files import output_lock
 
     with output_lock(tmp_path):
         assert main(["replay", "--out", str(tmp_path), "--states", "2", "--no-sweeps", "--quiet"]) == 2
@@ -416,8 +423,8 @@ def test_write_failure_leaves_the_old_files_and_no_temporaries(tmp_path, monkeyp
     import errno
     import os
 
-    from mjtvm.core.files import write_files
     from mjtvm.errors import OutputError
+    from mjtvm.formats.files import write_files
 
     old = {tmp_path / "lift.csv": "old csv", tmp_path / "lift.json": "old json"}
     write_files(old)
@@ -440,9 +447,9 @@ def test_write_failure_leaves_the_old_files_and_no_temporaries(tmp_path, monkeyp
 def test_unreachable_cluster_is_one_line_after_the_timeout(tmp_path, monkeypatch, capsys):
     import socket
 
-    import mjtvm.apps.sweep
+    import mjtvm.jobs.sweep
 
-    monkeypatch.setattr(mjtvm.apps.sweep, "CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(mjtvm.jobs.sweep, "CONNECT_TIMEOUT_S", 1.0)
     with socket.socket() as s:  # a port that nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
@@ -535,13 +542,13 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert main(["tvms", "--grasp", "case1", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
 
-    from mjtvm.bench import report as bench_report
-    from mjtvm.bench import suite as bench_suite
+    from benchmarks import report as bench_report
+    from benchmarks import suite as bench_suite
 
     def suite(**kwargs):
         for step in ("case 1, problem 1", "case 1, problem 2", "scaling"):
             kwargs["progress"](step)
-        return {"schema": "mjtvm.bench-suite/1"}
+        return {"schema": "benchmarks-suite/1"}
 
     monkeypatch.setattr(bench_suite, "run_suite", suite)
     monkeypatch.setattr(bench_report, "auto_notes", lambda report: [])
@@ -549,7 +556,7 @@ def test_progress_of_tvms_and_bench_goes_to_stderr(tmp_path, monkeypatch, capsys
     assert main(["bench", "--quick", "--out", str(tmp_path), "--name", "b"]) == 0
     captured = capsys.readouterr()
     assert "bench: scaling" in captured.err and captured.out.startswith("TABLE\n")
-    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "mjtvm.bench-suite/1"
+    assert json.loads((tmp_path / "b.json").read_text())["schema"] == "benchmarks-suite/1"
     assert (tmp_path / "b.md").read_text() == "```\nTABLE\n```\n"
 
 

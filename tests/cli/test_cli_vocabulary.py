@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from mjtvm.cli import main
-from mjtvm.core.state_file import state_to_dict
-from tests.core.test_diagnosis import A, link_point, state
+from mjtvm.formats.state_file import state_to_dict
+from tests.problem2.test_diagnosis import A, link_point, state
 
 
 def _solve(capsys: pytest.CaptureFixture[str], *argv: str) -> float:
@@ -22,7 +22,7 @@ def test_solve_mu_and_mg_are_the_grasps_friction_and_weight(capsys: pytest.Captu
     """case2 (mu 0.3, mg 1 N): more friction, a lighter object: a larger TVMMP; each value is the
     library's for the grasp with those options (what replay and export-state load)."""
     from mjtvm import tvmmp
-    from mjtvm.sim.paper_hand.scenario import load_scenario
+    from mjtvm.paper_hand.scenario import load_scenario
 
     base = _solve(capsys)
     assert base == pytest.approx(tvmmp(load_scenario("case2").state()).tvmmp, rel=1e-9)
@@ -64,7 +64,7 @@ def test_solve_quiet_empties_stderr_and_keeps_stdout(
 def test_rank_takes_grasp_as_option_or_argument_not_both(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import mjtvm.apps.rank_files as rank_files
+    import mjtvm.jobs.rank_files as rank_files
 
     seen = []
     monkeypatch.setattr(rank_files, "run_rank_files", lambda run, emit: seen.append(run) or [])
@@ -83,7 +83,7 @@ def test_verify_hand_is_replays(tmp_path: Path, capsys: pytest.CaptureFixture[st
     """--hand humanlike: the paper's grasp of that hand; for another grasp a one-line refusal,
     replay's (tests/cli: replay refuses it the same)."""
     from mjtvm.cli import verify_parser
-    from mjtvm.sim.paper_hand.scenario import with_variant
+    from mjtvm.paper_hand.scenario import with_variant
 
     args = verify_parser().parse_args(["--grasp", "case2", "--hand", "humanlike"])
     assert args.hand == "humanlike" and with_variant(args.grasp, args.hand) == "case2-humanlike"

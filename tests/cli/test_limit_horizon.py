@@ -71,7 +71,7 @@ def test_sweep_takes_the_horizon_and_resumes_only_its_rows(
 
 
 def test_rank_takes_the_horizon_and_its_digest(tmp_path: Path) -> None:
-    from mjtvm.sim.paper_hand.scenario import load_scenario
+    from mjtvm.paper_hand.scenario import load_scenario
 
     qpos = np.asarray(load_scenario(GRASP).data.qpos)  # the grasp file's own configuration
     dataset = tmp_path / "one.npz"

@@ -8,12 +8,12 @@ from pathlib import Path
 import pytest
 
 from mjtvm.cli import main
-from mjtvm.core.state_file import state_to_dict
-from tests.core.test_diagnosis import A, link_point, state
+from mjtvm.formats.state_file import state_to_dict
+from tests.problem2.test_diagnosis import A, link_point, state
 
 
 def test_solve_prints_why_an_alpha_is_0(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """Two sticking points on one rigid link lock the straight lift (tests/core/test_diagnosis.py)."""
+    """Two sticking points on one rigid link lock the straight lift (tests/problem2/test_diagnosis.py)."""
     path = tmp_path / "locked.json"
     path.write_text(json.dumps(state_to_dict(state([link_point("tip", A), link_point("mid", 0.03)]))))
     assert main(["solve", str(path), "--no-witnesses"]) == 0
@@ -43,7 +43,7 @@ def test_solve_prints_which_torque_limit_makes_a_pair_infeasible(
 def test_solve_says_which_way_a_vertex_is_unbalanced_and_what_relieves_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """The tilted support of tests/core/test_diagnosis.py (normal 60 deg from vertical, mu 0.3):
+    """The tilted support of tests/problem2/test_diagnosis.py (normal 60 deg from vertical, mu 0.3):
     stderr names the vertex, the direction and the contact with the friction that holds it
     (tan 60 deg = 1.732, rounded up); the JSON has the same in direction and relief."""
     from mjtvm import Contact

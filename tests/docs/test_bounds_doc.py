@@ -1,5 +1,5 @@
 """The documented bounds and exit codes are the code's: the state format's bounds table
-(docs/state-format.md) against mjtvm.core.bounds and the JSON Schema, and the exit-code
+(docs/state-format.md) against mjtvm.model.bounds and the JSON Schema, and the exit-code
 table (docs/cli.md) against mjtvm.cli.output."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from importlib import resources
 from pathlib import Path
 
 from mjtvm.cli import output
-from mjtvm.core import bounds
+from mjtvm.model import bounds
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 

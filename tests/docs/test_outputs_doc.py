@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from mjtvm.apps.sweep_files import SweepFiles
+from mjtvm.jobs.sweep_files import SweepFiles
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "outputs.md"
 _MARKER = re.compile(r"<!--\s*fields:\s*(\S+)\s*-->")
@@ -127,7 +127,7 @@ def test_every_table_is_parsed() -> None:
 # ------------------------------------------------------------------ mjtvm replay
 @pytest.fixture(scope="module")
 def replay_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from mjtvm.apps.replay import run_replay
+    from mjtvm.jobs.replay import run_replay
 
     out = tmp_path_factory.mktemp("replay")
     run_replay(num_states=3, plots=False, sweeps=True, out=out)
@@ -167,7 +167,7 @@ def _sweep_args(out: Path) -> SweepFiles:
 
 
 def test_sweep_files(tmp_path: Path) -> None:
-    from mjtvm.apps.sweep_files import run_sweep_files
+    from mjtvm.jobs.sweep_files import run_sweep_files
 
     run_sweep_files(_sweep_args(tmp_path), emit=lambda _: None, notice=lambda _: None)
     rows = json.loads((tmp_path / "sweep.json").read_text(encoding="utf-8"))
@@ -180,7 +180,7 @@ def test_sweep_files(tmp_path: Path) -> None:
 
 def test_sweep_checkpoint(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The checkpoint a failing sweep leaves behind (the rows finished before the failure)."""
-    from mjtvm.apps import sweep_files
+    from mjtvm.jobs import sweep_files
 
     real = sweep_files.run_sweep
 
@@ -204,7 +204,7 @@ def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Rows of evaluated, infeasible and failed grasps; the Parquet file's columns; the checkpoint."""
     import numpy as np
 
-    from mjtvm.apps import rank, rank_files
+    from mjtvm.jobs import rank, rank_files
 
     root = Path(__file__).resolve().parents[2]
     z = np.load(root / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz")
@@ -241,13 +241,13 @@ def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 # ------------------------------------------------------------------ mjtvm verify
 @pytest.fixture(scope="module")
 def lift2() -> Any:
-    from mjtvm.physics import verify
+    from mjtvm.jobs import verify
 
     return verify.cached_lift("case2", 2)
 
 
 def test_verify_csv(tmp_path: Path, lift2: Any) -> None:
-    from mjtvm.physics import verify
+    from mjtvm.jobs import verify
 
     rows = verify.verify_lift(
         "case2",
@@ -266,8 +266,8 @@ def test_verify_csv(tmp_path: Path, lift2: Any) -> None:
 
 
 def test_slide_check_csv(lift2: Any) -> None:
-    from mjtvm.physics import verify
-    from mjtvm.physics.slide_check import slide_check
+    from mjtvm.jobs import verify
+    from mjtvm.jobs.slide_check import slide_check
 
     rows = slide_check(lift2, [0])
     assert rows
@@ -275,19 +275,19 @@ def test_slide_check_csv(lift2: Any) -> None:
 
 
 def test_gears_csv(lift2: Any) -> None:
-    from mjtvm.physics import verify
-    from mjtvm.physics.gears import gear_sweep
+    from mjtvm.jobs import verify
+    from mjtvm.jobs.gears import gear_sweep
 
     rows = gear_sweep("case2", [40.0], num_states=2, states=[0])
     assert_documented("gears.csv", _csv_header(verify.rows_csv(rows)))
 
 
-# ------------------------------------------------------------------ mjtvm bench
+# ------------------------------------------------------------------ python -m benchmarks
 def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     """The suite with each section on its smallest input (the report's structure is the same)."""
-    from mjtvm.bench import cases, dataset, hands, peers, scaling, suite
-    from mjtvm.core.state_file import load_state
+    from benchmarks import cases, dataset, hands, peers, scaling, suite
     from mjtvm.data import __file__ as data_init
+    from mjtvm.formats.state_file import load_state
 
     pinch = load_state(Path(data_init).parent / "examples" / "pinch.json")
 
@@ -316,12 +316,12 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     )
     real_peers = peers.bench_peers
     monkeypatch.setattr(peers, "bench_peers", lambda **_: real_peers((3,), repeats=1, lp_repeats=1))
-    from mjtvm.bench import floor
+    from benchmarks import floor
 
     real_floor = floor.bench_floor
     monkeypatch.setattr(floor, "bench_floor", lambda **_: real_floor(repeats=1, warmup=0))
     report = suite.run_suite(scale=False, progress=False)
-    report["notes"] = []  # added by the command (mjtvm.cli.bench) before writing
+    report["notes"] = []  # added by the command (benchmarks.__main__) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
     assert_documented("bench.json", report)
     assert_documented("bench.json:machine", report["machine"])

@@ -9,15 +9,15 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm.core.state import GraspState
-from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ModelError
+from mjtvm.grasp.actuation.dcmotor import DCMotor
+from mjtvm.grasp.resolve.state import grasp_state
+from mjtvm.model.state import GraspState
 from mjtvm.physics.motors import attach_dcmotors
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.simulate import rollout, sim_model
 from mjtvm.physics.witness import Drive, witness_drive
-from mjtvm.sim.grasp.dcmotor import DCMotor
-from mjtvm.sim.grasp.state import grasp_state
+from mjtvm.problem2.tvmmp import tvmmp
 
 HALF = 0.03  # m: the box's half size
 # Finger a (x < 0): a vertical link from z = 0.02 to 0.1, then a horizontal one towards the box
@@ -136,7 +136,7 @@ def test_physics_check_on_the_allegro_grasp_of_the_readme() -> None:
     forward in the rollouts): at the LP's speeds the simulated hand reaches 0.85-1.0 of every
     alpha_kl of the first lift state (measured 0.875-1.0; damping-limited, slow enough that the
     reflected rotor inertia does not matter)."""
-    from mjtvm.physics import verify as V
+    from mjtvm.jobs import verify as V
 
     lift = V.cached_lift("allegro-ik", 5)
     rows = V.verify_state(lift, 0, "L", mu=0.6, mg=0.981)

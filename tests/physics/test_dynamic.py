@@ -15,12 +15,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm.core.contacts import Contact
-from mjtvm.core.dynamic import dynamic_alpha, quadratic
-from mjtvm.core.operation_range import OperationRange
-from mjtvm.core.state import GraspState
+from mjtvm.model.contacts import Contact
+from mjtvm.model.operation_range import OperationRange
+from mjtvm.model.state import GraspState
 from mjtvm.physics.dynamic import demand_of, dynamic_pair, joint_demand, window_demand
 from mjtvm.physics.witness import Drive
+from mjtvm.problem2.dynamic import dynamic_alpha, quadratic
 
 L, R_TIP, HALF = 0.1, 0.005, 0.02
 I_ROTOR = 1.08e-6 * 40**2
@@ -177,7 +177,7 @@ def test_gear_sweep_shows_the_dynamic_optimum() -> None:
     """Case 2, state 0 (L): at 30:1 inertia limits (dynamic 0.786 against quasi-static 1.594); at
     100:1 the speed does and both agree (0.509 and 0.500; the dynamic one is a little higher:
     decelerating joints give torque back); at 10:1 the grasp's torque no longer fits."""
-    from mjtvm.physics.gears import gear_sweep
+    from mjtvm.jobs.gears import gear_sweep
 
     rows = {r["ratio"]: r for r in gear_sweep("case2", (10.0, 30.0, 100.0), states=(0,))}
     assert rows[10.0]["tvmmp"] is None
@@ -200,9 +200,9 @@ def test_verify_options_parse() -> None:
 
 def test_verify_takes_the_demand_along_the_rollouts_span(monkeypatch: pytest.MonkeyPatch) -> None:
     """verify's dynamic alpha uses the span its rollouts check (startup + window), whatever they are."""
-    import mjtvm.physics.verify as verify
-    from mjtvm.core.dynamic import DynamicAlpha
+    import mjtvm.jobs.verify as verify
     from mjtvm.physics.simulate import SimSettings
+    from mjtvm.problem2.dynamic import DynamicAlpha
 
     seen: list[float] = []
 

@@ -11,13 +11,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ParamError
-from mjtvm.physics import verify
+from mjtvm.jobs import verify
+from mjtvm.lift.states import lift_state
 from mjtvm.physics.hold import hold_test
 from mjtvm.physics.simulate import SimSettings, sim_model
 from mjtvm.physics.witness import witness_drive
-from mjtvm.sim.lift.states import lift_state
+from mjtvm.problem2.tvmmp import tvmmp
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +97,7 @@ def test_verify_says_in_one_line_that_the_grasp_does_not_hold(tmp_path: Any) -> 
 
 
 def test_verify_refuses_the_sum_tendon_shadow_for_the_lps_reason(tmp_path: Any) -> None:
-    """The public models' sum tendon alone: the LP cannot hold the grasp (mjtvm.core.holding),
+    """The public models' sum tendon alone: the LP cannot hold the grasp (mjtvm.problem2.holding),
     so every row is infeasible with that reason and no rollout runs."""
     proc = _verify(
         "--grasp", "shadow_hand-sphere", "--states", "1", "--contacts", "L", "--out", str(tmp_path)

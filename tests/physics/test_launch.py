@@ -7,13 +7,13 @@ from typing import Any
 
 import pytest
 
-from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ParamError
-from mjtvm.physics import verify
+from mjtvm.jobs import verify
+from mjtvm.lift.states import lift_state
 from mjtvm.physics.launch import LAUNCH_DISTANCE, launch
 from mjtvm.physics.simulate import SimSettings, sim_model
 from mjtvm.physics.witness import witness_drive
-from mjtvm.sim.lift.states import lift_state
+from mjtvm.problem2.tvmmp import tvmmp
 
 
 def _pair(grasp: str, l: int, mu: float, mg: float) -> tuple[Any, Any, Any, float, str]:

@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 
 from mjtvm.errors import ModelError
+from mjtvm.grasp.actuation.actuator import operation_range_from_actuator
+from mjtvm.grasp.actuation.dcmotor import DCMotor
+from mjtvm.grasp.actuation.dcmotor import mjcf_numbers as _fmt
 from mjtvm.physics.motors import (
     attach_dcmotors,
     dcmotor_of_joint,
     motor_of_actuator,
     require_motors,
 )
-from mjtvm.sim.grasp.actuator import operation_range_from_actuator
-from mjtvm.sim.grasp.dcmotor import DCMotor
-from mjtvm.sim.grasp.dcmotor import mjcf_numbers as _fmt
 
 HAND = Path(__file__).resolve().parents[2] / "models" / "paper_hand" / "four_finger_hand.xml"
 SERVOS = """<mujoco>
@@ -123,7 +123,7 @@ def test_motors_of_a_grasp_are_required() -> None:
 def test_motor_model_attaches_or_refuses(tmp_path: Path) -> None:
     from types import SimpleNamespace
 
-    from mjtvm.physics.verify import motor_model
+    from mjtvm.jobs.verify import motor_model
 
     path = tmp_path / "servos.xml"
     path.write_text(SERVOS)

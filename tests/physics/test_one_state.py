@@ -71,7 +71,7 @@ def test_states_must_be_a_positive_count(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("grasp", ["case2"])
 def test_a_grasp_with_l_fingers_keeps_its_variants(grasp: str) -> None:
-    from mjtvm.physics import verify
+    from mjtvm.jobs import verify
 
     lift = verify.checked_lift(grasp, 2)
     assert lift.num_states == 2

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mjtvm.apps.replay import grasp_defaults
-from mjtvm.core.assembly import assemble
-from mjtvm.core.limits import travel_speed
-from mjtvm.physics import verify
+from mjtvm.jobs import verify
+from mjtvm.jobs.replay import grasp_defaults
+from mjtvm.model.limits import travel_speed
 from mjtvm.physics.simulate import SimSettings
 from mjtvm.physics.witness import central_witness
+from mjtvm.problem2.assembly import assemble
 
 GRASP = "shadow_hand_coupled-sphere"
 

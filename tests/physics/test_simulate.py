@@ -1,4 +1,4 @@
-"""MuJoCo rollouts (mjtvm.physics.simulate, mjtvm.physics.verify): motor physics, holding still, bisection."""
+"""MuJoCo rollouts (mjtvm.physics.simulate, mjtvm.jobs.verify): motor physics, holding still, bisection."""
 
 from __future__ import annotations
 
@@ -9,17 +9,17 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ParamError, StateError
+from mjtvm.grasp.actuation.actuator import operation_range_from_actuator
+from mjtvm.grasp.actuation.dcmotor import DCMotor
+from mjtvm.jobs.verify import verify_lift
+from mjtvm.jobs.verify_report import summarize
+from mjtvm.lift.states import lift_state
+from mjtvm.lift.trajectory import Lift, scripted_lift
 from mjtvm.physics.bisection import bisect
 from mjtvm.physics.simulate import SimSettings, rerun_data, rollout, sim_model
-from mjtvm.physics.verify import verify_lift
-from mjtvm.physics.verify_report import summarize
 from mjtvm.physics.witness import central_witness, witness_drive
-from mjtvm.sim.grasp.actuator import operation_range_from_actuator
-from mjtvm.sim.grasp.dcmotor import DCMotor
-from mjtvm.sim.lift.states import lift_state
-from mjtvm.sim.lift.trajectory import Lift, scripted_lift
+from mjtvm.problem2.tvmmp import tvmmp
 
 from ..helpers import Q_MAX, T_MAX
 

@@ -14,8 +14,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm.core.tvmmp import tvmmp
 from mjtvm.errors import ModelError, ParamError
+from mjtvm.grasp.actuation.dcmotor import DCMotor
+from mjtvm.grasp.actuation.transmission import dense_moment
+from mjtvm.jobs.verify import _types, cached_lift, motor_model
+from mjtvm.lift.states import lift_state
 from mjtvm.physics.motors import (
     BOX_SPEED_MARGIN,
     CTRLSPEC,
@@ -26,11 +29,8 @@ from mjtvm.physics.motors import (
 )
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.simulate import sim_model
-from mjtvm.physics.verify import _types, cached_lift, motor_model
 from mjtvm.physics.witness import Drive, central_witness, witness_drive
-from mjtvm.sim.grasp.dcmotor import DCMotor
-from mjtvm.sim.grasp.transmission import dense_moment
-from mjtvm.sim.lift.states import lift_state
+from mjtvm.problem2.tvmmp import tvmmp
 
 MODELS = Path(__file__).resolve().parents[2] / "models"
 F85 = MODELS / "robotiq_2f85" / "robotiq_2f85-sphere.toml"
@@ -172,7 +172,7 @@ def test_damping_share_of_a_tendon_in_closed_form() -> None:
 
 
 def test_gear_sweep_refuses_a_transmission() -> None:
-    from mjtvm.physics.gears import gear_sweep
+    from mjtvm.jobs.gears import gear_sweep
 
     with pytest.raises(ParamError, match="gears: not available for a hand with a transmission"):
         gear_sweep(str(F85), (10.0,), num_states=2, states=(0,))
@@ -183,8 +183,8 @@ def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
     keeps MuJoCo's equality rows J_eq qd = 0 at the state; alpha_dyn is a fixed point of
     alpha -> A(d(alpha)) (eq. 31 with the binding demand), at most alpha_kl when the demand costs
     torque, and the limit is named per actuator."""
-    from mjtvm.core.dynamic import pair_alpha
     from mjtvm.physics.dynamic import dynamic_pair, joint_demand
+    from mjtvm.problem2.dynamic import pair_alpha
 
     lift = cached_lift(F85, 2)
     grasp = lift.scenario

@@ -1,5 +1,5 @@
 """The rollout witness keeps Problem 2's travel horizon (mjtvm.physics.witness, docs/joint-limits.md):
-hand-derived least-motion speeds of the planar finger of tests/core/test_limits.py with the
+hand-derived least-motion speeds of the planar finger of tests/model/test_limits.py with the
 horizon row of its first joint active."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mjtvm.core.limits import JointLimits, travel_speed
+from mjtvm.model.limits import JointLimits, travel_speed
 from mjtvm.physics.witness import central_witness
-from tests.core.test_limits import finger
+from tests.model.test_limits import finger
 
 
 def test_central_witness_keeps_the_horizon_bound() -> None:

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
+from benchmarks.synthetic import random_state
 from mjtvm import SolverError, tvmmp
-from mjtvm.bench.synthetic import random_state
 from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import inner_hull, outer_volume, ray_lengths
 from mjtvm.polytopes.budget import Budget, LimitReached, Limits

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import mjtvm.polytopes.refine as refine_module
-from mjtvm.bench.synthetic import random_state
+from benchmarks.synthetic import random_state
 from mjtvm.errors import ParamError
 from mjtvm.polytopes.bracket import outer_volume
 from mjtvm.polytopes.budget import Budget, Limits

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benchmarks.synthetic import random_state
 from mjtvm import Contact, GraspState, assemble, default_operation_range
-from mjtvm.bench.synthetic import random_state
 from mjtvm.polytopes.enumeration import force_form, project_cdd
 from mjtvm.polytopes.lifted import lifted_polytope
 from mjtvm.polytopes.projection import project_lp

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from mjtvm.bench.peers import TRANSLATIONS, fingertip_jacobian, fingertip_state
-from mjtvm.core.contacts import Contact
-from mjtvm.core.operation_range import OperationRange
-from mjtvm.core.transmission import Transmission
+from benchmarks.peers import TRANSLATIONS, fingertip_jacobian, fingertip_state
 from mjtvm.errors import ParamError
+from mjtvm.model.contacts import Contact
+from mjtvm.model.operation_range import OperationRange
+from mjtvm.model.transmission import Transmission
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.polytopes.volume import hausdorff
 
@@ -177,7 +177,7 @@ def test_command_line_takes_the_zonotope_by_default(tmp_path, capsys) -> None:
     """`mjtvm tvms STATE`: method auto gives the zonotope; --method zonotope on a loaded grasp
     is one line naming the option's field, exit 2."""
     from mjtvm.cli import main
-    from mjtvm.core.state_file import state_to_dict
+    from mjtvm.formats.state_file import state_to_dict
 
     path = tmp_path / "tip.json"
     path.write_text(json.dumps(state_to_dict(fingertip_state(4))))
@@ -192,7 +192,7 @@ def test_command_line_takes_the_zonotope_by_default(tmp_path, capsys) -> None:
 def test_speeds_at_gravity_torques_match_the_operation_range() -> None:
     """The box's half-widths (one vectorised pass per distinct range) equal
     OperationRange.max_speed_at to the bit, and -inf beyond the largest torque."""
-    from mjtvm.core.operation_range import default_operation_range
+    from mjtvm.model.operation_range import default_operation_range
     from mjtvm.polytopes.speed_box import _speeds_at
 
     motor, box = default_operation_range(), OperationRange.box(2.0, 10.0)

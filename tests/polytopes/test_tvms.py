@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from benchmarks.synthetic import random_state
 from mjtvm import ParamError, tvmmp
-from mjtvm.bench.synthetic import random_state
-from mjtvm.core.operation_range import OperationRange, default_operation_range
+from mjtvm.grasp.resolve.state import without_round_off
+from mjtvm.model.operation_range import OperationRange, default_operation_range
+from mjtvm.paper_hand.scenario import load_scenario
 from mjtvm.polytopes.tvms import TVMS_SCHEMA, tvms
-from mjtvm.sim.grasp.state import without_round_off
-from mjtvm.sim.paper_hand.scenario import load_scenario
 
 from ..helpers import distance_to_hull
 
@@ -61,7 +61,7 @@ def test_case1_is_four_dimensional(case1_result):
 
 def test_case1_scaled_volume_and_the_motor(case1, case1_result):
     r"""The paper reports 8.4e5 1/s^4; ours is 1.65e6 (finger 1's posture, which the paper's text
-    does not fix, accounts for x1.97 of it: docs/paper-results.md, tests/sim/paper_hand/test_scenario.py).
+    does not fix, accounts for x1.97 of it: docs/paper-results.md, tests/paper_hand/test_scenario.py).
 
     Every constraint is homogeneous in (qd, rdot) once the torques are fixed, so scaling
     every joint's speed axis by c scales S_ov by c and its 4-D volume by c^4 (checked with

@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.core.state import GraspState
-from mjtvm.sim.grasp.touch import geom_id
+from mjtvm.grasp.contacts.touch import geom_id
+from mjtvm.model.state import GraspState
 
 
 def contact_jacobians_fd(

@@ -1,10 +1,10 @@
 r"""Mutations of ``mjtvm.state/1`` documents, for robustness tests of the loader.
 
-Used by ``tests/core/test_fuzz.py`` (driven by hypothesis) and ``scripts/fuzz_states.py``
+Used by ``tests/problem2/test_fuzz.py`` (driven by hypothesis) and ``scripts/fuzz_states.py``
 (at scale). Every mutation takes a :class:`random.Random`, so one seed replays one
 mutated document exactly. The contract they test: :func:`mjtvm.load_state` raises
 nothing but :class:`~mjtvm.errors.MjtvmError` (a :class:`~mjtvm.errors.StateError`
-naming the field), and a state that loads is solved by :func:`mjtvm.core.tvmmp` with only
+naming the field), and a state that loads is solved by :func:`mjtvm.problem2.tvmmp` with only
 package errors and JSON-clean (finite) output.
 """
 
@@ -16,7 +16,7 @@ import random
 from collections.abc import Callable
 from typing import Any
 
-from mjtvm.core.bounds import (
+from mjtvm.model.bounds import (
     MAX_ABS,
     MAX_CONTACTS,
     MAX_FRICTION_EDGES,

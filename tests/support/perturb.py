@@ -1,14 +1,14 @@
 r"""Perturbed grasp states for the differential tests: unit changes, S-points, near-singular
 Jacobians and round-off noise.
 
-Every function returns a new :class:`~mjtvm.core.state.GraspState`; none needs MuJoCo. Which
+Every function returns a new :class:`~mjtvm.model.state.GraspState`; none needs MuJoCo. Which
 ones keep the alphas of Problem 2 (eq. 31-35) exactly, and why:
 
 * :func:`rescale` (length, force, time units) and :func:`rescale_joints` (the joints' unit)
   are changes of unit: every row of the LP is multiplied by one factor and every variable by
   one factor, and ``alpha`` (dimensionless, eq. 31) is unchanged;
 * :func:`add_jacobian_roundoff` writes noise below the round-off rule of
-  :mod:`~mjtvm.core.roundoff` into the exact zeros of the Jacobians: the state is the same
+  :mod:`~mjtvm.lp.roundoff` into the exact zeros of the Jacobians: the state is the same
   state written inexactly, and its alphas are those of the clean one;
 * :func:`scale_joint_column` (a joint that barely moves its contacts, a finger near its
   stretched pose) and :func:`slide_contact` (an S-point) change the problem.
@@ -21,11 +21,11 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.core.contacts import tangent_basis
-from mjtvm.core.limits import JointLimits
-from mjtvm.core.operation_range import OperationRange
-from mjtvm.core.roundoff import DROP_REL
-from mjtvm.core.state import GraspState
+from mjtvm.lp.roundoff import DROP_REL
+from mjtvm.model.contacts import tangent_basis
+from mjtvm.model.limits import JointLimits
+from mjtvm.model.operation_range import OperationRange
+from mjtvm.model.state import GraspState
 
 __all__ = [
     "RANDOM_TYPES",
@@ -188,7 +188,7 @@ def scale_joint_column(state: GraspState, joint: int, factor: float) -> GraspSta
 
 def slide_contact(state: GraspState, index: int, angle: float) -> GraspState:
     r"""``state`` with contact ``index`` made an S-point sliding along
-    :math:`\cos\theta\, t_1 + \sin\theta\, t_2` (:func:`~mjtvm.core.contacts.tangent_basis`
+    :math:`\cos\theta\, t_1 + \sin\theta\, t_2` (:func:`~mjtvm.model.contacts.tangent_basis`
     of its normal and tangent; in the plane :math:`\pm t_1` by the sign of :math:`\cos\theta`).
 
     Parameters
@@ -224,7 +224,7 @@ def add_jacobian_roundoff(
     """``state`` with noise of magnitude in ``[low, high]`` (log-uniform, random sign) in every
     exact zero of every contact Jacobian (also the all-zero Jacobians of D-points).
 
-    The noise must be round-off by :mod:`~mjtvm.core.roundoff`'s rule: ``high`` at most
+    The noise must be round-off by :mod:`~mjtvm.lp.roundoff`'s rule: ``high`` at most
     ``DROP_REL`` times the state's largest Jacobian entry (else it would be data, and the
     alphas would not be the clean state's).
 
@@ -279,7 +279,7 @@ RANDOM_TYPES: tuple[tuple[str, ...], ...] = (
 
 
 def random_case(seed: int) -> tuple[str, GraspState]:
-    """A seeded random state of :func:`~mjtvm.bench.synthetic.random_state` and its family name
+    """A seeded random state of :func:`~benchmarks.synthetic.random_state` and its family name
     (``random-<space>d-<types>``): the seed picks the space (2 or 3), the contact types among
     :data:`RANDOM_TYPES`, one or two REFS vertices, 4 or 6 RVDS vertices and the slip mode.
 
@@ -293,7 +293,7 @@ def random_case(seed: int) -> tuple[str, GraspState]:
     tuple
         ``(family, state)``.
     """
-    from mjtvm.bench.synthetic import random_state
+    from benchmarks.synthetic import random_state
 
     rng = np.random.default_rng([seed, 0x5EED])
     space = int(rng.choice([2, 3]))
@@ -317,8 +317,8 @@ def random_transmission(state: GraspState, rng: np.random.Generator, *, hold: bo
     small joint damping; each actuator's range the first ranges of ``state``. With ``hold`` a
     second coupling row ties the tendon's two joints, so that no joint motion is left free;
     without it the tendon's split is free (the Shadow hand's sum tendon), which the REFS
-    usually need held (mjtvm.core.holding)."""
-    from mjtvm.core.transmission import Transmission
+    usually need held (mjtvm.problem2.holding)."""
+    from mjtvm.model.transmission import Transmission
 
     m = state.num_joints
     a = max(1, m - 1)

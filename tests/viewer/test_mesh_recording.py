@@ -16,9 +16,9 @@ import pytest
 from rerun.server import Server
 
 from mjtvm.cli import main
-from mjtvm.sim.grasp.file import shipped_grasps
-from mjtvm.sim.lift.trajectory import scripted_lift
-from mjtvm.sim.scene import scene_geometry, scene_poses
+from mjtvm.grasp.resolve.file import shipped_grasps
+from mjtvm.grasp.scene import scene_geometry, scene_poses
+from mjtvm.lift.trajectory import scripted_lift
 
 NAME = "allegro-jenga"
 STATES = 2

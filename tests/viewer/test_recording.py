@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from mjtvm.apps.replay import run_replay
+from mjtvm.jobs.replay import run_replay
 from mjtvm.viewer.recording import RecordingError, start_recording
 
 # Run in a fresh interpreter: this pytest process has rerun loaded (test_viz), where the
@@ -19,7 +19,7 @@ CHILD = textwrap.dedent(
     """
     import json, sys
     from mjtvm.viewer.recording import RecordingError, start_recording
-    from mjtvm.apps.replay import run_replay
+    from mjtvm.jobs.replay import run_replay
 
     out = run_replay(num_states=4, out=sys.argv[1], plots=False, sweeps=False)
     assert "rerun" not in sys.modules

@@ -12,10 +12,10 @@ import pytest
 from rerun.server import Server
 from scipy.spatial import ConvexHull
 
-from mjtvm.apps.replay import ReplayOutput, run_replay
 from mjtvm.cli import main
+from mjtvm.jobs.replay import ReplayOutput, run_replay
+from mjtvm.lift.states import lift_state
 from mjtvm.polytopes.tvms import tvms
-from mjtvm.sim.lift.states import lift_state
 from mjtvm.viewer.viz import Z_UNIT, record_replay
 
 STATES = 4

@@ -1,0 +1,377 @@
+r"""Each joint's operation range (eq. 1-3) from a grasp file's ``ranges`` table.
+
+A joint's entry is its exact name, else the first glob pattern (``fnmatch``, in file order)
+that matches it, else ``"*"``. Four sources (``docs/grasp-format.md``):
+
+* ``dcmotor``: the model's ``<dcmotor>`` driving the joint
+  ([`operation_range_from_actuator()`][mjtvm.grasp.actuation.actuator.operation_range_from_actuator]), exact;
+* ``datasheet``: a motor datasheet entry, in maxon's form (no-load speed, nominal point, max
+  permissible speed, gear ratio and efficiency) through
+  [`from_datasheet()`][mjtvm.model.operation_range.OperationRange.from_datasheet], exact for the motor's
+  continuous operation, or in the servo form (stall torque, no-load speed, optional gear,
+  continuous torque, rotor inertia) through [`ServoDatasheet`][mjtvm.grasp.actuation.servo.ServoDatasheet];
+  the same entry gives the physics check its ``<dcmotor>``
+  ([`from_datasheet()`][mjtvm.grasp.actuation.dcmotor.DCMotor.from_datasheet],
+  [`motor()`][mjtvm.grasp.actuation.servo.ServoDatasheet.motor]) when the gear is ideal;
+* ``actuator`` + ``speed_limit``: the box ``|tau| <= gear x forcerange``,
+  ``|qdot| <= speed_limit`` of a (e.g. position) actuator. **An approximation**: a real
+  motor's speed falls with torque (the datasheet's speed-torque line), so the box promises
+  more than the motor gives at high torque and speed together;
+* ``polygon``: the vertices (|tau| N m, |qdot| rad/s) of a down-closed polygon, as given.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import json
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from mjtvm.errors import MjtvmError
+from mjtvm.grasp.actuation.actuator import operation_range_from_actuator
+from mjtvm.grasp.actuation.dcmotor import DCMotor
+from mjtvm.grasp.actuation.servo import ServoDatasheet, is_servo_form
+from mjtvm.grasp.document.checks import GraspError, key_of
+from mjtvm.model.bounds import MAX_FILE_BYTES
+from mjtvm.model.operation_range import OperationRange
+
+__all__ = ["actuator_ranges", "joint_ranges", "range_entry", "shipped_datasheets"]
+
+_DATASHEET_KEYS = (
+    "no_load_speed_rpm",
+    "nominal_speed_rpm",
+    "nominal_torque_mNm",
+    "max_permissible_speed_rpm",
+)
+_HINT = (
+    'add [ranges."{j}"] (or a glob pattern, or "*") with one of: dcmotor = true, '
+    'datasheet = "maxon_re25_20w" (+ gear_ratio), actuator = true + speed_limit, polygon = [...]'
+)
+
+
+def range_entry(ranges: Mapping[str, Mapping[str, Any]], joint: str) -> tuple[str, Mapping[str, Any]] | None:
+    """The ``(key, entry)`` of ``ranges`` that applies to ``joint`` (module docstring), or None."""
+    if joint in ranges:
+        return joint, ranges[joint]
+    for key, entry in ranges.items():
+        if key != "*" and fnmatch.fnmatchcase(joint, key):
+            return key, entry
+    return ("*", ranges["*"]) if "*" in ranges else None
+
+
+def _drivers(model: mujoco.MjModel, j: int) -> list[int]:
+    return [
+        a
+        for a in range(model.nactuator)
+        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+        and int(model.actuator_trnid[a, 0]) == j
+    ]
+
+
+def _actuator(model: mujoco.MjModel, j: int, joint: str, value: Any, fail: Any) -> int:
+    if isinstance(value, str):
+        a = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, value)
+        if a < 0:
+            raise fail(f"actuator {value!r} is not in the model")
+        if int(model.actuator_trnid[a, 0]) != j or int(model.actuator_trntype[a]) != int(
+            mujoco.mjtTrn.mjTRN_JOINT
+        ):
+            raise fail(f"actuator {value!r} does not drive joint {joint!r}")
+        return int(a)
+    drivers = _drivers(model, j)
+    if len(drivers) != 1:
+        if not drivers:
+            raise fail(
+                "no actuator drives this joint (a passive joint): give its range as a datasheet or a polygon"
+            )
+        raise fail(f"{len(drivers)} actuators drive this joint: name one")
+    return drivers[0]
+
+
+def shipped_datasheets() -> list[str]:
+    """The names of the datasheets shipped in ``mjtvm/data`` (``maxon_re25_20w``, ...)."""
+    return sorted(p.name[:-5] for p in resources.files("mjtvm.data").iterdir() if p.name.endswith(".json"))
+
+
+def datasheet(value: Any, base: Path | None, fail: Any) -> dict[str, Any]:
+    """The datasheet figures of a ``datasheet`` value: a shipped name, a JSON path or a table."""
+    if isinstance(value, Mapping):
+        return dict(value)
+    text = str(value)
+    if not text.endswith(".json"):
+        shipped = resources.files("mjtvm.data").joinpath(f"{text}.json")
+        if not shipped.is_file():
+            names = ", ".join(shipped_datasheets())
+            raise fail(f"no shipped datasheet {text!r} (shipped: {names}; or give a .json path)")
+        return dict(json.loads(shipped.read_text(encoding="utf-8")))
+    path = Path(text) if base is None or Path(text).is_absolute() else base / text
+    try:
+        with path.open("rb") as f:
+            raw = f.read(MAX_FILE_BYTES + 1)  # bounded: a device or a huge file is refused
+    except OSError as e:
+        raise fail(f"cannot read datasheet {str(path)!r}: {e.strerror or e}") from e
+    except ValueError as e:  # a NUL in the path
+        raise fail(f"cannot read datasheet {str(path)!r}: {e}") from e
+    if len(raw) > MAX_FILE_BYTES:
+        raise fail(f"datasheet {str(path)!r}: larger than {MAX_FILE_BYTES} bytes: not a datasheet")
+    try:
+        doc = json.loads(raw.decode("utf-8"))
+    except ValueError as e:  # not UTF-8, malformed JSON
+        raise fail(f"cannot read datasheet {str(path)!r}: {' '.join(str(e).split())}") from e
+    if not isinstance(doc, dict):
+        raise fail(f"datasheet {str(path)!r}: expected a JSON object")
+    return doc
+
+
+def _from_datasheet(
+    entry: Mapping[str, Any], base: Path | None, fail: Any
+) -> tuple[OperationRange, DCMotor | str]:
+    figures = datasheet(entry["datasheet"], base, fail)
+    for k in ("gear_ratio", "gear_efficiency"):
+        if k in entry:
+            figures[k] = entry[k]
+    if is_servo_form(figures):
+        try:
+            servo = ServoDatasheet.from_figures(figures)
+        except MjtvmError as e:
+            raise fail(f"datasheet: {e}") from e
+        try:
+            servo_motor: DCMotor | str = servo.motor()
+        except MjtvmError as e:
+            servo_motor = f"its datasheet gives no <dcmotor> ({e})"
+        return servo.operation_range(), servo_motor
+    missing = [k for k in _DATASHEET_KEYS if k not in figures]
+    if missing:
+        raise fail(f"datasheet lacks {', '.join(missing)}")
+    try:
+        kwargs = {k: float(figures[k]) for k in _DATASHEET_KEYS}
+        rng = OperationRange.from_datasheet(
+            **kwargs,
+            gear_ratio=float(figures.get("gear_ratio", 1.0)),
+            gear_efficiency=float(figures.get("gear_efficiency", 1.0)),
+        )
+    except (MjtvmError, TypeError, ValueError) as e:
+        raise fail(f"datasheet: {e}") from e
+    try:
+        motor: DCMotor | str = DCMotor.from_datasheet(figures)
+    except (MjtvmError, KeyError, TypeError, ValueError) as e:  # e.g. a gear efficiency below 1
+        motor = f"its datasheet gives no <dcmotor> ({e})"
+    return rng, motor
+
+
+def _force_limit(model: mujoco.MjModel, a: int, fail: Any) -> float:
+    """The largest force (or torque) of actuator ``a`` both ways: its ``forcerange``."""
+    if not model.actuator_forcelimited[a]:
+        raise fail("the actuator has no forcerange: give a datasheet or a polygon instead")
+    lo, hi = model.actuator_forcerange[a]
+    return min(-float(lo), float(hi))
+
+
+def _box(model: mujoco.MjModel, a: int, j: int, speed: float, fail: Any) -> OperationRange:
+    """gear x forcerange (capped by the joint's actuatorfrcrange) by the speed limit: a box."""
+    torque = abs(float(model.actuator_gear[a, 0])) * _force_limit(model, a, fail)
+    if model.jnt_actfrclimited[j]:
+        flo, fhi = model.jnt_actfrcrange[j]
+        torque = min(torque, -float(flo), float(fhi))
+    if not torque > 0:
+        raise fail("the actuator's force range gives no positive torque")
+    return OperationRange.box(torque, speed)
+
+
+def joint_ranges(
+    model: mujoco.MjModel,
+    joints: tuple[str, ...],
+    ranges: Mapping[str, Mapping[str, Any]],
+    *,
+    base: Path | None,
+    file: str,
+    losses: bool = True,
+) -> tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]:
+    r"""Operation range and motor of each joint (module docstring).
+
+    With ``losses`` (the grasp file's ``joint_losses = "fold"``, the default) each range is the
+    torque left after the joint's own damping and friction loss in the model
+    ([`with_losses()`][mjtvm.model.operation_range.OperationRange.with_losses]): public hand models often
+    carry joint damping (the Allegro's 1 N m s/rad eats 1.5 N m at 1.5 rad/s, more than its
+    0.7 N m motors give), which the motor must overcome before it moves the object.
+
+    Returns
+    -------
+    ranges
+        Joint name -> `OperationRange` at the joint.
+    motors
+        Joint name -> a `DCMotor` (datasheet source), ``None`` when the
+        model's own ``<dcmotor>`` drives it, or a string saying why there is no motor model
+        (the physics check refuses such joints with it).
+
+    Raises
+    ------
+    GraspError
+        A joint without an entry (the message says how to give one), or an entry that
+        does not fit the model (named by its key).
+    """
+    out: dict[str, OperationRange] = {}
+    motors: dict[str, DCMotor | str | None] = {}
+    for joint in joints:
+        found = range_entry(ranges, joint)
+        if found is None:
+            raise GraspError(
+                file,
+                f"ranges.{key_of(joint)}",
+                "no operation range for this joint: " + _HINT.format(j=json.dumps(joint)[1:-1]),
+            )
+        key, entry = found
+        j = int(model.joint(joint).id)
+
+        def fail(problem: str, key: str = key, joint: str = joint) -> GraspError:
+            return GraspError(file, f"ranges.{key_of(key)}", f"joint {joint!r}: {problem}")
+
+        source = entry["source"]
+        if source == "dcmotor":
+            a = _actuator(model, j, joint, entry["dcmotor"], fail)
+            try:
+                out[joint] = operation_range_from_actuator(model, a)
+            except MjtvmError as e:
+                raise fail(str(e)) from e
+            motors[joint] = None
+        elif source == "datasheet":
+            out[joint], motors[joint] = _from_datasheet(entry, base, fail)
+        elif source == "actuator":
+            a = _actuator(model, j, joint, entry["actuator"], fail)
+            out[joint] = _box(model, a, j, float(entry["speed_limit"]), fail)
+            motors[joint] = "its range is an actuator's force range and a speed limit, not a motor model"
+        else:
+            try:
+                out[joint] = OperationRange(np.array(entry["polygon"], dtype=float))
+            except MjtvmError as e:
+                raise fail(f"polygon: {e}") from e
+            motors[joint] = "its range is a polygon, not a motor model"
+        dof = int(model.jnt_dofadr[j])
+        if losses and (model.dof_damping[dof] > 0 or model.dof_frictionloss[dof] > 0):
+            try:
+                out[joint] = out[joint].with_losses(
+                    damping=float(model.dof_damping[dof]), friction=float(model.dof_frictionloss[dof])
+                )
+            except MjtvmError as e:
+                raise fail(f"its damping and friction loss in the model leave no range: {e}") from e
+    return out, motors
+
+
+def _actuator_box(model: mujoco.MjModel, a: int, speed: float, fail: Any) -> OperationRange:
+    """|u| <= forcerange (capped by a driven joint's actuatorfrcrange / gear), |s| <= speed."""
+    force = _force_limit(model, a, fail)
+    gear = abs(float(model.actuator_gear[a, 0]))
+    if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT) and gear > 0:
+        j = int(model.actuator_trnid[a, 0])
+        if model.jnt_actfrclimited[j]:
+            flo, fhi = model.jnt_actfrcrange[j]
+            force = min(force, -float(flo) / gear, float(fhi) / gear)
+    if not force > 0:
+        raise fail("the actuator's force range gives no positive force")
+    return OperationRange.box(force, speed)
+
+
+def _output_to_actuator(rng: OperationRange, gear: float) -> OperationRange:
+    """A range at the gear's output (the joint or tendon the actuator pulls on) in the actuator's
+    units: MuJoCo's moment includes the gear g, so u = tau / g and s = g x speed."""
+    if gear == 1.0:
+        return rng
+    return rng.scaled(torque=1.0 / gear, speed=gear)
+
+
+def actuator_ranges(
+    model: mujoco.MjModel,
+    actuators: tuple[str, ...],
+    moment: np.ndarray,
+    dofs: tuple[int, ...],
+    ranges: Mapping[str, Mapping[str, Any]],
+    *,
+    base: Path | None,
+    file: str,
+    losses: bool = True,
+) -> tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]:
+    r"""Operation range and motor of each actuator of a transmission (``docs/grasp-format.md``).
+
+    The ranges are in the actuator's units: force ``u`` (MuJoCo's ``actuator_force``) and speed
+    ``s = moment @ qd`` (``actuator_velocity``), the moment including the actuator's gear. An
+    entry is found by the actuator's name as a joint's is ([`range_entry()`][mjtvm.grasp.actuation.ranges.range_entry]). Sources:
+
+    * ``actuator = true`` (or the actuator's own name) + ``speed_limit``: the box
+      ``|u| <= forcerange``, ``|s| <= speed_limit`` (s in the actuator's units: for the Shadow
+      hand's tendon J2 + J1, rad/s of J2 + J1). **An approximation**, as for a joint;
+    * ``datasheet``: the motor behind its ``gear_ratio``, the range at the gear's output, i.e.
+      at the joint or tendon MuJoCo's actuator pulls on; converted with the actuator's MuJoCo
+      gear g (u = tau / g, s = g x speed; g = 1 for the shipped hands);
+    * ``dcmotor``: the model's ``<dcmotor>`` (a joint transmission only), converted likewise;
+    * ``polygon``: vertices (|u|, |s|) as given.
+
+    With ``losses`` the joints' friction loss is folded into the actuators' ranges: each
+    actuator's force must overcome ``max_j frictionloss_j / |moment_aj|`` over the joints it
+    moves (exact for an actuator on one joint, conservative for a tendon); a passive joint's
+    friction loss has no actuator to take it and is not modelled. The joints' damping is not
+    folded: the transmission carries it (``b qd`` in the balance).
+
+    Raises
+    ------
+    GraspError
+        An actuator without an entry (the message says how to give one), an ``actuator``
+        entry naming another actuator, or an entry that does not fit the model.
+    """
+    out: dict[str, OperationRange] = {}
+    motors: dict[str, DCMotor | str | None] = {}
+    hint = _HINT.replace("dcmotor = true, ", "dcmotor = true (joint actuators), ")
+    for row, name in enumerate(actuators):
+        found = range_entry(ranges, name)
+        if found is None:
+            raise GraspError(
+                file,
+                f"ranges.{key_of(name)}",
+                "no operation range for this actuator (the hand has coupled joints: ranges are "
+                "keyed by actuator): " + hint.format(j=json.dumps(name)[1:-1]),
+            )
+        key, entry = found
+        a = int(model.actuator(name).id)
+
+        def fail(problem: str, key: str = key, name: str = name) -> GraspError:
+            return GraspError(file, f"ranges.{key_of(key)}", f"actuator {name!r}: {problem}")
+
+        gear = abs(float(model.actuator_gear[a, 0])) or 1.0
+        source = entry["source"]
+        if source in ("actuator", "dcmotor") and isinstance(entry[source], str) and entry[source] != name:
+            raise fail(
+                f"names actuator {entry[source]!r}: a range keyed by actuator takes true or its own name"
+            )
+        if source == "dcmotor":
+            try:
+                out[name] = _output_to_actuator(operation_range_from_actuator(model, a), gear)
+            except MjtvmError as e:
+                raise fail(str(e)) from e
+            motors[name] = None
+        elif source == "datasheet":
+            rng, motors[name] = _from_datasheet(entry, base, fail)
+            out[name] = _output_to_actuator(rng, gear)
+        elif source == "actuator":
+            out[name] = _actuator_box(model, a, float(entry["speed_limit"]), fail)
+            motors[name] = "its range is an actuator's force range and a speed limit, not a motor model"
+        else:
+            try:
+                out[name] = OperationRange(np.array(entry["polygon"], dtype=float))
+            except MjtvmError as e:
+                raise fail(f"polygon: {e}") from e
+            motors[name] = "its range is a polygon, not a motor model"
+        arms = np.abs(moment[row])
+        friction = max(
+            (float(model.dof_frictionloss[d]) / r for d, r in zip(dofs, arms, strict=True) if r > 0),
+            default=0.0,
+        )
+        if losses and friction > 0:
+            try:
+                out[name] = out[name].with_losses(damping=0.0, friction=friction)
+            except MjtvmError as e:
+                raise fail(f"the friction loss of its joints in the model leaves no range: {e}") from e
+    return out, motors

@@ -1,0 +1,285 @@
+r"""Rank a grasp dataset by TVMMP: one row per grasp, in this process, a local pool or on Dask.
+
+[`rank_row()`][mjtvm.jobs.rank.rank_row] evaluates one [`DatasetGrasp`][mjtvm.grasp.document.dataset.DatasetGrasp] on the grasp
+file's model ([`BatchModels`][mjtvm.grasp.resolve.batch.BatchModels]): the contacts MuJoCo finds, the
+deepest penetration, the grasp state, Problem 2 ([`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp] with
+``diagnose=True``, which says why an alpha is 0 or a pair infeasible). A grasp that cannot be
+evaluated (no contact where the file expects one, a finger too deep, a solver failure, a bad
+base) is a row with ``failure`` and ``reason``: it never stops the batch. [`rank_rows()`][mjtvm.jobs.rank.rank_rows]
+runs the rows serially, on ``jobs`` local processes (forked on Linux after the model is
+compiled, as [`mjtvm.jobs.sweep`][mjtvm.jobs.sweep] does) or on a Dask cluster; rows come back in the
+dataset's order whichever way ran them. The files of ``mjtvm rank`` are
+[`mjtvm.jobs.rank_files`][mjtvm.jobs.rank_files].
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from mjtvm.errors import ModelError, ParamError, SolverError, StateError
+from mjtvm.grasp.contacts.report import kept_contacts
+from mjtvm.grasp.document.dataset import DatasetGrasp
+from mjtvm.grasp.resolve.batch import BatchModels
+from mjtvm.jobs.sweep import _forks, dask_client, run_calls
+from mjtvm.model.limits import with_limit_horizon
+from mjtvm.model.state import GraspState
+from mjtvm.problem2.tvmmp import tvmmp
+
+__all__ = ["FAILURES", "batch_models", "rank_row", "rank_rows"]
+
+FAILURES = ("no contact", "penetration", "grasp", "state", "solver")
+"""The values of a failed row's ``failure``: a selection that does not touch the object, a
+finger deeper than ``max_penetration``, another grasp-file or configuration error (an untyped
+touching geom, an equality the configuration breaks, an unusable root), a state the core refuses, a
+solver that fails."""
+
+_BATCHES: dict[str, BatchModels] = {}
+"""Grasp file -> its compiled models, per process (a worker compiles each model once)."""
+
+
+def batch_models(grasp: str) -> BatchModels:
+    """The [`BatchModels`][mjtvm.grasp.resolve.batch.BatchModels] of a grasp file, cached in this process.
+
+    Raises
+    ------
+    GraspError
+        The grasp file does not read.
+    """
+    if grasp not in _BATCHES:
+        _BATCHES[grasp] = BatchModels.from_file(grasp)
+    return _BATCHES[grasp]
+
+
+def _classify(error: Exception) -> str:
+    text = str(error)
+    if isinstance(error, SolverError):
+        return "solver"
+    if "does not touch the object" in text:
+        return "no contact"
+    if "max_penetration" in text:
+        return "penetration"
+    return "grasp" if isinstance(error, ModelError) else "state"
+
+
+#: Grasps per task of a process pool, at most: what an interruption can lose per worker.
+TASK_GRASPS = 20
+
+#: The classic measures a row carries ([`GraspMeasures`][mjtvm.measures.GraspMeasures]'s fields): all
+#: but the kinematic velocity polytope, whose support LPs cost 1-3.5 s a grasp on a 16-joint
+#: hand (``mjtvm.classic_measures(state)`` computes it).
+CLASSIC_COLUMNS = (
+    "force_closure",
+    "epsilon_l1",
+    "epsilon_linf",
+    "epsilon_linf_gap",
+    "grasp_sigma_min",
+    "manipulability",
+    "torque_scale",
+)
+
+
+def _classic_columns(state: GraspState) -> dict[str, Any]:
+    """The classic measures of the state the TVMMP was computed on
+    ([`classic_measures()`][mjtvm.measures.classic_measures], without the velocity polytope)."""
+    from mjtvm.measures import classic_measures
+
+    doc = classic_measures(state, polytope=False).to_dict()
+    return {key: doc[key] for key in CLASSIC_COLUMNS}
+
+
+def _object_name(entry: DatasetGrasp, batch: BatchModels) -> str:
+    if entry.obj_path is not None:
+        return Path(entry.obj_path).stem
+    return str(batch.doc["object"]["body"])
+
+
+def rank_row(
+    batch: BatchModels, entry: DatasetGrasp, *, limit_horizon: float | None = None
+) -> dict[str, Any]:
+    r"""The row of one grasp: evaluated, or failed with its reason (Problem 2 with the travel
+    horizon ``limit_horizon`` of the joint limits, m; ``None``: the grasp file's).
+
+    Returns
+    -------
+    dict
+        ``id``, ``source``, ``index``, ``object``, ``scale``, ``contacts`` (contacts of the
+        state, or found before it failed), ``penetration`` (m, the deepest contact's depth
+        inside the object, 0 when none penetrates), ``feasible``, ``tvmmp``, ``alpha``
+        (K x R, ``None`` where not optimal), ``status`` (K x R), ``limiting`` ([k, l]),
+        ``certified``, ``failure`` (one of [`FAILURES`][mjtvm.jobs.rank.FAILURES], or ``None``) and ``reason``
+        (the error of a failed grasp, the diagnosis of a zero or infeasible TVMMP, else
+        ``None``), then the [`CLASSIC_COLUMNS`][mjtvm.jobs.rank.CLASSIC_COLUMNS] (``None`` for a failed grasp);
+        ``docs/outputs.md`` documents each.
+    """
+    row: dict[str, Any] = {
+        "id": entry.id,
+        "source": Path(entry.source).name,
+        "index": entry.index,
+        "object": _object_name(entry, batch),
+        "scale": entry.obj_scale,
+        "contacts": None,
+        "penetration": None,
+        "feasible": False,
+        "tvmmp": None,
+        "limiting": None,
+        "alpha": None,
+        "status": None,
+        "certified": None,
+        "failure": None,
+        "reason": None,
+        **dict.fromkeys(CLASSIC_COLUMNS),
+    }
+    try:
+        grasp = batch.grasp(entry)
+        ignored = set(grasp.ignored_geoms)
+        found = [c for c in kept_contacts(grasp) if c.geom not in ignored]
+        row["contacts"] = len(found)
+        row["penetration"] = max([0.0, *(-float(c.distance) for c in found)])
+        state = with_limit_horizon(grasp.state(), limit_horizon)
+        row["contacts"] = len(state.contacts)
+        result = tvmmp(state, witnesses=False, diagnose=True)
+    except (ModelError, StateError, SolverError) as e:
+        row["failure"] = _classify(e)
+        row["reason"] = " ".join(str(e).split())
+        return row
+    doc = result.to_dict(witnesses=False)
+    row.update({key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")})
+    row["certified"] = all(c is not False for line in doc["certified"] for c in line)
+    if result.diagnosis and (result.tvmmp is None or result.tvmmp <= 0.0):
+        limiting = result.limiting
+        first = next(
+            (d for d in result.diagnosis if limiting is not None and tuple(d.pair) == tuple(limiting)), None
+        )
+        chosen = first or result.diagnosis[0]
+        row["reason"] = f"pair {list(chosen.pair)}: {chosen.cause}: {' '.join(chosen.message.split())}"
+    try:
+        row.update(_classic_columns(state))
+    except Exception as e:  # Qhull, a solver: the TVMMP stands, the measures are flagged as missing
+        why = f"classic measures not computed: {type(e).__name__}: {' '.join(str(e).split())[:200]}"
+        row["reason"] = why if row["reason"] is None else f"{row['reason']}; {why}"
+    return row
+
+
+def _solve_chunk(
+    grasp: str, entries: Sequence[DatasetGrasp], limit_horizon: float | None = None
+) -> list[dict[str, Any]]:
+    """The rows of some grasps of one grasp file (runs in a worker)."""
+    batch = batch_models(grasp)
+    return [rank_row(batch, e, limit_horizon=limit_horizon) for e in entries]
+
+
+def _chunks(entries: Sequence[DatasetGrasp], parts: int) -> list[list[DatasetGrasp]]:
+    n = max(1, min(len(entries), parts))
+    return [list(entries[i::n]) for i in range(n)]
+
+
+def rank_rows(
+    grasp: str,
+    entries: Iterable[DatasetGrasp],
+    *,
+    jobs: int = 1,
+    cluster: Any = None,
+    progress: bool = True,
+    done: Mapping[str, dict[str, Any]] | None = None,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+    limit_horizon: float | None = None,
+) -> list[dict[str, Any]]:
+    r"""The row of every grasp ([`rank_row()`][mjtvm.jobs.rank.rank_row]), in the order of ``entries``.
+
+    Parameters
+    ----------
+    grasp
+        The grasp file.
+    entries
+        The dataset's grasps (ids unique).
+    jobs
+        Local worker processes (1 = in this process).
+    cluster
+        A Dask scheduler address or a ``distributed.Client``; overrides ``jobs``.
+    progress
+        Show a tqdm progress bar over the grasps to evaluate.
+    done
+        Rows already computed, by id: not evaluated again, returned as given.
+    on_rows
+        Called in this process with the rows of every finished task (checkpointing).
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's.
+
+    Raises
+    ------
+    ParamError
+        ``jobs`` below 1 or an unreachable ``cluster``.
+    GraspError
+        The grasp file does not read, or its model does not compile.
+    """
+    if jobs < 1:
+        raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
+    items = list(entries)
+    table: dict[str, dict[str, Any]] = dict(done or {})
+    todo = [e for e in items if e.id not in table]
+    batch_models(grasp).model()  # compiled before any fork, and its errors are the command's
+    bar = tqdm(total=len(todo), desc="rank", unit="grasp", disable=not progress)
+
+    def finished(rows: list[dict[str, Any]]) -> None:
+        table.update((r["id"], r) for r in rows)
+        if on_rows is not None:
+            on_rows(rows)
+        bar.update(len(rows))
+
+    try:
+        if not todo:
+            pass
+        elif cluster is not None:
+            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished, limit_horizon)
+        elif jobs == 1:
+            for e in todo:
+                finished(_solve_chunk(grasp, [e], limit_horizon))
+        else:
+            # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
+            tasks = _chunks(todo, max(8 * jobs, math.ceil(len(todo) / TASK_GRASPS)))
+            _run_pool(grasp, tasks, jobs, finished, limit_horizon)
+    finally:
+        bar.close()
+    return [table[e.id] for e in items]
+
+
+def _run_pool(
+    grasp: str,
+    tasks: list[list[DatasetGrasp]],
+    jobs: int,
+    finished: Callable[[list[dict[str, Any]]], None],
+    limit_horizon: float | None = None,
+) -> None:
+    """The tasks on ``jobs`` local processes, read as they finish: forked on Linux (the
+    compiled model inherited), else started from a forkserver (each worker compiles it)."""
+    run_calls(
+        [(_solve_chunk, (grasp, task, limit_horizon)) for task in tasks],
+        jobs,
+        finished,
+        fork=_forks(),
+        in_order=False,
+    )
+
+
+def _run_dask(
+    grasp: str,
+    tasks: list[list[DatasetGrasp]],
+    cluster: Any,
+    finished: Callable[[list[dict[str, Any]]], None],
+    limit_horizon: float | None = None,
+) -> None:
+    """The tasks on a Dask cluster (the grasp file and the dataset's object files must be
+    readable by the workers at the same paths)."""
+    with dask_client(cluster) as client:
+        from distributed import as_completed
+
+        futures = client.map(
+            _solve_chunk, [grasp] * len(tasks), tasks, [limit_horizon] * len(tasks), pure=False
+        )
+        for fut in as_completed(futures):
+            finished(fut.result())

@@ -1,0 +1,355 @@
+r"""The files of ``mjtvm rank``: the rows as JSON, CSV (and Parquet), the plots, the summary,
+the checkpoint and ``--resume``.
+
+[`run_rank_files()`][mjtvm.jobs.rank_files.run_rank_files] reads the datasets ([`read_dataset()`][mjtvm.grasp.document.dataset.read_dataset]),
+ranks them ([`rank_rows()`][mjtvm.jobs.rank.rank_rows]) into ``NAME.json``, ``NAME.csv``,
+``NAME.parquet`` (when ``pyarrow`` imports), ``NAME-objects.png`` (TVMMP per object) and
+``NAME-tvmmp.png`` (the TVMMP histogram), ``NAME-epsilon.png`` (TVMMP against the epsilon), keeping every finished row in
+``NAME.partial.json`` while it runs, as ``mjtvm sweep`` does ([`mjtvm.jobs.sweep_files`][mjtvm.jobs.sweep_files]).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mjtvm.errors import ParamError
+from mjtvm.grasp import GraspError
+from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
+from mjtvm.grasp.resolve.batch import hand_joints
+from mjtvm.jobs.checkpoint import RowCheckpoint
+from mjtvm.jobs.rank import batch_models, rank_rows
+from mjtvm.jobs.sweep_files import _model_files, _stderr
+
+__all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
+
+CHECKPOINT_SCHEMA = "mjtvm.rank-checkpoint/1"
+CHECKPOINT_EVERY_S = 5.0
+"""At most this often (s) the checkpoint is rewritten (and always on an interrupt or failure)."""
+
+_COLUMNS = (
+    "id",
+    "source",
+    "index",
+    "object",
+    "scale",
+    "contacts",
+    "penetration",
+    "feasible",
+    "tvmmp",
+    "limiting_k",
+    "limiting_l",
+    "certified",
+    "failure",
+    "reason",
+)
+"""The CSV's first columns, in order; then ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` and any
+columns a row adds (the classic measures)."""
+
+
+@dataclass(frozen=True)
+class RankFiles:
+    """What ``mjtvm rank`` runs.
+
+    Parameters
+    ----------
+    grasp
+        The grasp file (or a shipped grasp's name).
+    datasets
+        The dataset files (``.npz``, ``.npy``, ``.csv``: ``docs/datasets.md``).
+    out, name
+        The output folder and the files' stem.
+    jobs, cluster
+        Local worker processes, or a Dask scheduler address (overrides ``jobs``).
+    resume
+        Keep the finished rows of an earlier run whose inputs are unchanged.
+    quiet
+        No progress bar.
+    plots
+        Write the three PNG figures.
+    limit_horizon
+        Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's
+        ``joint_limits.horizon``.
+    """
+
+    grasp: str
+    datasets: tuple[str, ...]
+    out: str | Path = "results"
+    name: str = "rank"
+    jobs: int = 1
+    cluster: str | None = None
+    resume: bool = False
+    quiet: bool = False
+    plots: bool = True
+    limit_horizon: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.datasets:
+            raise ParamError("datasets", "expected at least one dataset file")
+
+
+def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
+    """Every grasp of the datasets, checked against the grasp file's model.
+
+    Raises
+    ------
+    GraspError
+        A malformed grasp (naming its file, index and field), an id used twice, a grasp file
+        without RVDS, or a root pose (``grasp_qpos``) for a model whose hand root cannot be
+        found or posed.
+    """
+    batch = batch_models(grasp)
+    if batch.doc["rvds"] is None:
+        raise GraspError(batch.file, "rvds", "mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices")
+    model = batch.model()
+    num_joints = len(hand_joints(model, batch.doc["object"]["body"]))
+    entries: list[DatasetGrasp] = []
+    seen: dict[str, DatasetGrasp] = {}
+    for path in datasets:
+        for e in read_dataset(path, nq=int(model.nq), num_joints=num_joints):
+            if e.id in seen:
+                first = seen[e.id]
+                raise GraspError(
+                    e.source,
+                    f"grasp {e.index}: id",
+                    f"{e.id!r} is also grasp {first.index} of {first.source}",
+                )
+            seen[e.id] = e
+            entries.append(e)
+    if any(e.root is not None for e in entries):
+        batch.model(root=True)  # a hand root that cannot be posed is the command's error, not every row's
+    return entries
+
+
+def inputs_digest(
+    grasp: str,
+    datasets: Sequence[str],
+    entries: Sequence[DatasetGrasp] = (),
+    limit_horizon: float | None = None,
+) -> str:
+    """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
+    the dataset files, the object files they name and a ``limit_horizon`` other than the grasp
+    file's. ``--resume`` keeps a row only if its ``inputs`` equals this."""
+    from mjtvm import __version__
+
+    batch = batch_models(grasp)
+    h = hashlib.sha256(f"mjtvm {__version__}\n".encode())
+    if limit_horizon is not None:  # None: the digest of earlier versions, whose rows had the file's
+        h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
+    h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
+    objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
+    files = _model_files(batch.model_path) + [Path(p) for p in datasets]
+    files += [f for p in objects for f in _model_files(Path(p))]
+    for path in files:
+        h.update(f"{path.name}\n".encode())
+        h.update(hashlib.sha256(path.read_bytes()).digest())
+    return h.hexdigest()[:32]
+
+
+def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows flattened for CSV and Parquet: ``limiting`` -> ``limiting_k``, ``limiting_l``;
+    ``alpha`` and ``status`` -> ``alpha_k<k>_l<l>``, ``status_k<k>_l<l>``; ``None`` -> ``""``
+    in the caller's CSV."""
+    flat = []
+    for r in rows:
+        out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting")}
+        out["limiting_k"], out["limiting_l"] = r["limiting"] if r["limiting"] is not None else (None, None)
+        for k, line in enumerate(r["alpha"] or ()):
+            for l, a in enumerate(line):
+                out[f"alpha_k{k}_l{l}"] = a
+                out[f"status_k{k}_l{l}"] = r["status"][k][l]
+        flat.append(out)
+    return flat
+
+
+def _columns(flat: Sequence[dict[str, Any]]) -> list[str]:
+    extra = list(dict.fromkeys(k for r in flat for k in r if k not in _COLUMNS))
+    pairs = sorted(
+        (k for k in extra if k.startswith(("alpha_k", "status_k"))),
+        key=lambda k: (k.startswith("status"), *(int(x[1:]) for x in k.split("_")[1:])),
+    )
+    return [*_COLUMNS, *pairs, *(k for k in extra if k not in pairs)]
+
+
+def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
+    """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
+    flat = rows_table(rows)
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=_columns(flat), restval="")
+    writer.writeheader()
+    writer.writerows({k: "" if v is None else v for k, v in r.items()} for r in flat)
+    return buf.getvalue()
+
+
+def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
+    """The rows as Parquet ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]), or ``None`` when ``pyarrow`` is not installed."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        return None
+    flat = rows_table(rows)
+    columns = _columns(flat)
+    table = pa.Table.from_pylist([{c: r.get(c) for c in columns} for r in flat])
+    buf = io.BytesIO()
+    pq.write_table(table, buf)
+    return buf.getvalue()
+
+
+def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
+    """The summary ``mjtvm rank`` prints on stderr: counts, TVMMP quantiles, failures by reason."""
+    failed = [r for r in rows if r["failure"] is not None]
+    solved = [r for r in rows if r["failure"] is None]
+    positive = np.array([r["tvmmp"] for r in solved if r["tvmmp"] is not None and r["tvmmp"] > 0.0])
+    zero = sum(r["tvmmp"] is not None and r["tvmmp"] <= 0.0 for r in solved)
+    infeasible = sum(r["tvmmp"] is None for r in solved)
+    lines = [
+        f"rank: {len(rows)} grasps: {len(positive)} with TVMMP > 0, {zero} with TVMMP 0, "
+        f"{infeasible} infeasible, {len(failed)} failed"
+    ]
+    if len(positive):
+        q = np.quantile(positive, [0.0, 0.25, 0.5, 0.75, 1.0])
+        lines.append(
+            "TVMMP (> 0): min {:.4g}, q25 {:.4g}, median {:.4g}, q75 {:.4g}, max {:.4g}; max/min {:.3g}".format(
+                *q, q[-1] / q[0]
+            )
+        )
+    if failed:
+        counts = Counter(r["failure"] for r in failed)
+        lines.append("failed: " + ", ".join(f"{k} {n}" for k, n in counts.most_common()))
+    causes = Counter(
+        r["reason"].split(": ")[1] for r in solved if r["reason"] and (r["tvmmp"] is None or r["tvmmp"] <= 0)
+    )
+    if causes:
+        lines.append(
+            "TVMMP 0 or infeasible, by cause: " + ", ".join(f"{k} {n}" for k, n in causes.most_common())
+        )
+    doubtful = sum(r["certified"] is False for r in rows)
+    if doubtful:
+        lines.append(f"warning: {doubtful} rows have an alpha that is not certified (column certified)")
+    return "\n".join(lines)
+
+
+def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
+    """``objects``: TVMMP per object (every evaluated grasp a point, failed grasps left out);
+    ``tvmmp``: the histogram of TVMMP; ``epsilon``: TVMMP against the L1 epsilon. PNG bytes."""
+    from mjtvm.jobs.figures import lift_axes
+
+    solved = [r for r in rows if r["failure"] is None]
+    objects = sorted({r["object"] for r in solved}) or ["(none)"]
+    fig, ax = lift_axes(max(4.0, 0.8 * len(objects) + 2.0), 3.2)
+    for i, name in enumerate(objects):
+        values = [r["tvmmp"] or 0.0 for r in solved if r["object"] == name]
+        jitter = np.linspace(-0.2, 0.2, len(values)) if len(values) > 1 else np.zeros(len(values))
+        ax.plot(i + jitter, values, "o", ms=3, alpha=0.7)
+    ax.set_xticks(range(len(objects)), objects, rotation=30, fontsize=7)
+    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
+    ax.set_title(f"TVMMP per object ({len(solved)} grasps evaluated)", fontsize=9)
+    ax.set_ylim(bottom=0.0)
+    ax.grid(alpha=0.3)
+    out = {"objects": _png(fig)}
+    fig, ax = lift_axes(4.5, 3.2)
+    ax.hist([r["tvmmp"] or 0.0 for r in solved], bins=20)
+    ax.set_xlabel("TVMMP (0 where infeasible)", fontsize=8)
+    ax.set_ylabel("grasps", fontsize=8)
+    ax.set_title("TVMMP histogram", fontsize=9)
+    out["tvmmp"] = _png(fig)
+    fig, ax = lift_axes(4.5, 3.2)
+    pairs = [(r["epsilon_l1"], r["tvmmp"] or 0.0) for r in solved if r.get("epsilon_l1") is not None]
+    ax.plot([e for e, _ in pairs], [v for _, v in pairs], "o", ms=3, alpha=0.7)
+    ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
+    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
+    ax.set_title(f"TVMMP against the epsilon ({len(pairs)} grasps)", fontsize=9)
+    ax.grid(alpha=0.3)
+    out["epsilon"] = _png(fig)
+    return out
+
+
+def _png(fig: Any) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
+
+
+def run_rank_files(
+    run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+) -> list[Path]:
+    r"""``mjtvm rank``: read the datasets, lock ``run.out``, resume, rank, write the files; the
+    summary ([`rank_summary()`][mjtvm.jobs.rank_files.rank_summary]) goes to ``notice``.
+
+    While it runs, ``NAME.partial.json`` (schema ``mjtvm.rank-checkpoint/1``) holds every
+    finished row, rewritten atomically at most every [`CHECKPOINT_EVERY_S`][mjtvm.jobs.rank_files.CHECKPOINT_EVERY_S] s and on an
+    interrupt or failure, removed once the outputs are written. Every row carries ``inputs``
+    ([`inputs_digest()`][mjtvm.jobs.rank_files.inputs_digest]); with ``run.resume`` the rows of the checkpoint and of an earlier
+    ``NAME.json`` whose id is in the datasets and whose ``inputs`` are unchanged are kept. The
+    result equals an uninterrupted run (tested).
+
+    Raises
+    ------
+    GraspError
+        The grasp file, or a malformed dataset (one line naming the file, index and field).
+    OutputError
+        ``run.out`` cannot be written, or another run holds its lock.
+    StateError
+        An unreadable checkpoint or earlier ``NAME.json`` with ``resume``.
+    ParamError
+        An unreachable ``cluster``.
+    """
+    from mjtvm.formats.files import check_output_dir, output_lock, write_files
+
+    entries = read_datasets(run.grasp, run.datasets)
+    digest = inputs_digest(run.grasp, run.datasets, entries, run.limit_horizon)
+    outdir = check_output_dir(run.out)
+    out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
+    checkpoint = outdir / f"{run.name}.partial.json"
+    ck: RowCheckpoint[str] = RowCheckpoint(
+        checkpoint,
+        CHECKPOINT_SCHEMA,
+        key=lambda r: str(r["id"]),
+        digest=lambda _: digest,
+        every_s=CHECKPOINT_EVERY_S,
+        again="run again without --resume",
+    )
+    with output_lock(outdir):
+        wanted = {e.id for e in entries}
+        rows = ck.run(
+            lambda done, on_rows: rank_rows(
+                run.grasp,
+                entries,
+                jobs=run.jobs,
+                cluster=run.cluster,
+                progress=not run.quiet,
+                done=done,
+                on_rows=on_rows,
+                limit_horizon=run.limit_horizon,
+            ),
+            resume=run.resume,
+            earlier=out_json,
+            wanted=wanted,
+            quiet=run.quiet,
+            emit=emit,
+            notice=notice,
+        )
+        files: dict[Path, bytes | str] = {
+            out_json: json.dumps(rows, indent=1) + "\n",
+            out_csv: rows_csv(rows),
+        }
+        parquet = rows_parquet(rows)
+        if parquet is not None:
+            files[outdir / f"{run.name}.parquet"] = parquet
+        if run.plots:
+            for key, png in rank_plots(rows).items():
+                files[outdir / f"{run.name}-{key}.png"] = png
+        written = write_files(files)
+        checkpoint.unlink(missing_ok=True)
+    notice(rank_summary(rows))
+    return written

@@ -1,0 +1,463 @@
+r"""The LPs of Problem 2 for one grasp state (eq. 31-35), solved and certified.
+
+[`StateLPs`][mjtvm.problem2.lps.StateLPs] assembles a state's constraints once (`assemble()`)
+and equilibrates them once; the LP of a pair (k, l) differs from the others only in the
+column of ``alpha`` (``A_twist r_l``) and the right-hand side of the balance rows
+(``-w_k``), so one HiGHS session is modified and re-solved from its last basis. Every
+answer is certified on the unscaled LP ([`certificate`][mjtvm.lp.certificate]) and solved again
+other ways when it is not ([`StateLPs.certified()`][mjtvm.problem2.lps.StateLPs.certified]). [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp]
+runs the pairs and reports them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mjtvm.errors import SolverError
+from mjtvm.lp.certificate import Certificate, Certifier
+from mjtvm.lp.roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
+from mjtvm.lp.scaling import ScaledMatrix
+from mjtvm.lp.solvers import (
+    HighsSession,
+    LinearProgram,
+    LPSolution,
+    Scaling,
+    Settled,
+    clarabel_checked,
+    column_factor,
+    cost_scale,
+    equilibrate,
+    fallback,
+    solve_clarabel,
+)
+from mjtvm.model.state import GraspState
+from mjtvm.model.transmission import joint_speed_limits
+from mjtvm.problem2.assembly import Assembly, BoxForm, assemble
+
+__all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs", "Verdict"]
+
+ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
+#: HiGHS options of Problem 2's sessions: dual edge weights Devex (1) rather than HiGHS'
+#: choice (steepest edge here). On Case 2's initial state the 4 runs take 1.59 ms instead of
+#: 1.70 ms (medians of 200 states, back to back; the cold first LP 87 iterations instead of 94).
+#: The vertex is the same, reached along another path: over 378 solves (Case 1, 1-S, 2 in
+#: three unit systems, the pinch, 120 lift states, 60 random states; both box forms) the
+#: alphas moved by at most 1.0e-11 relative and no status, note or backend changed. Rejected:
+#: HiGHS' scaling off (simplex_scale_strategy 0; the LP is equilibrated already), 1.10 ms, but
+#: it certified Case 2 "unbounded" in a rescaled unit system (tests/problem2/test_units.py, length
+#: x1e6, force x1e-6, time x1e-3); scaling by largest values (4), 1.29 ms, but the pinch in
+#: lengths of 1e12 m and forces of 1e-11 N came out 0.5 % low.
+P2_HIGHS_OPTIONS: dict[str, object] = {"simplex_dual_edge_weight_strategy": 1}
+
+
+def _physical_sizes(state: GraspState, asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(n + 1,)`` the sizes the certificate measures a row's violation, and a reduced cost
+    of the wrong sign, at where the solution is ~0 ([`certify()`][mjtvm.lp.certificate.certify]'s
+    ``col_ref``): each joint's largest speed and torque (its operation range) for the
+    speeds, torques, damping losses and the literal box's variables; for the force generators' weights the
+    larger of the weight and the largest torque over the Jacobians' scale; for the
+    slip speeds the largest joint speed times that scale; alpha its own value. From the
+    state, never from the equilibration, which the certificate must not trust.
+
+    And ``(m,)`` the largest a term at those sizes may add to a row's scale (the
+    [`Certifier`][mjtvm.lp.certificate.Certifier]'s ``row_cap``): on the kinematic rows (a
+    contact's relative velocity, eq. 11-13) the speed the hand's joints move a contact at,
+    ``sqrt(d)`` times the Jacobians' scale ([`jacobian_scale()`][mjtvm.lp.roundoff.jacobian_scale])
+    times the fastest joint; ``inf`` on every other row. A row of unit vectors times the
+    Jacobians has entries at most ``sqrt(d)`` times their largest, so no term reaches the
+    cap unless one entry stands alone far above the others (1e12 among lever arms of
+    0.1 m): that joint at its top speed is not a speed the row has in any solution whose
+    contacts move with the object, and as the row's scale it would pass a contact velocity
+    missed by 100 % for round-off (the solution's own term ``|A_ij qd_j|`` counts in full)."""
+    size = np.zeros(asm.num_variables + 1)
+    speed = np.array([op.max_speed for op in state.operation_ranges])
+    torque = np.array([op.max_torque for op in state.operation_ranges])
+    joint_speed, joint_torque = speed, torque
+    if state.transmission is not None:
+        # Through the moment P: a joint's speed is at most the fastest |s_a / P_aj| of the
+        # actuators moving it, its torque at most sum_a |P_aj| u_a; a passive joint's speed
+        # (no actuator) is measured at the fastest of them all.
+        joint_speed = joint_speed_limits(state.transmission.moment, speed)
+        joint_torque = np.abs(state.transmission.moment).T @ torque
+    # A contact force is at most what the weight and the strongest joint through the largest
+    # Jacobian entry give; a slip speed at most the fastest joint through it (the largest
+    # entry unless it stands alone, roundoff.jacobian_scale: then the hand's lever arms).
+    jac = jacobian_scale([c.jacobian for c in state.contacts])
+    weight = float(np.max(np.linalg.norm(state.refs[:, : state.dim], axis=1), initial=0.0))
+    force = max(weight, float(joint_torque.max(initial=0.0)) / jac if jac > 0.0 else 0.0)
+    slip = float(joint_speed.max(initial=0.0)) * jac
+    for name, sl in asm.blocks.items():
+        if name.startswith("tau") or name == "loss":
+            size[sl] = torque
+        elif name.startswith("qd"):
+            size[sl] = speed if name != "qd" else joint_speed
+        elif name.startswith("lam"):
+            size[sl] = force
+        elif name == "rho":
+            size[sl] = slip
+        elif name.startswith("eq"):  # a constraint force: a torque through its row's largest entry
+            assert state.transmission is not None and state.transmission.constraint_jacobian is not None
+            jeq = state.transmission.constraint_jacobian
+            size[sl] = float(joint_torque.max(initial=0.0)) / np.max(np.abs(jeq), axis=1)
+    cap = np.full(asm.csc.shape[0], np.inf)
+    cap[asm.kinematic_rows] = np.sqrt(state.dim) * slip
+    return size, cap
+
+
+class StateLPs:
+    """The LPs of one state: variables of the assembly, then ``alpha`` (last column).
+
+    The equilibration (`equilibrate()`) is computed once per state, on
+    ``A`` with the largest REFS magnitudes as right-hand side (rows of twist coefficients
+    only are scaled to the twist's); only the factor of the alpha column is chosen per RVDS
+    vertex (its largest entry ``A_twist r_l`` brought to 1, `column_factor()`).
+    """
+
+    def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
+        self.state, self.solver = state, solver
+        self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
+        n = asm.num_variables
+        self.alpha_col = n
+        self.c = np.zeros(n + 1)
+        self.c[n] = -1.0  # maximise alpha
+        self.col_lower = np.append(asm.col_lower, 0.0)  # alpha >= 0 (the gauge of eq. 31)
+        self.col_upper = np.append(asm.col_upper, np.inf)
+        # The rows alpha enters: the kinematics (A_twist r_l) and the joint limits' horizon
+        # rows (-rate s(r_l), mjtvm.model.limits), last.
+        self.kin = np.concatenate([asm.kinematic_rows, asm.horizon_rows])
+        self._num_kinematic = len(asm.kinematic_rows)
+        self.physical_sizes, self.row_cap = _physical_sizes(state, asm)
+        self.force_like = np.zeros(asm.num_variables + 1, dtype=bool)  # the lam and rho columns
+        for name, sl in asm.blocks.items():
+            if name.startswith("lam") or name == "rho":
+                self.force_like[sl] = True
+        twist = asm.twist_csc.toarray()  # (m, D), D <= 6: dense is cheaper than sparse slicing
+        self.twist_rows = twist[self.kin]
+        self.abs_twist_rows = np.abs(self.twist_rows)
+        self.wrench_rows = np.concatenate([np.arange(sl.start, sl.stop) for sl in asm.wrench_rows])
+        lower, upper = asm.statics_bounds(np.max(np.abs(state.refs), axis=0))
+        rhs = np.fmax(
+            np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
+        )
+        s = equilibrate(asm.csc, rhs=rhs)
+        # The twist columns are scaled after the rows, each so that its largest entry is 1:
+        # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
+        # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
+        # coefficient 1 of G^T dominated rows in small units and alpha r_l ended 1e-11 in
+        # the scaled rows, below the solver's tolerance (Case 1 in ms: alpha -19.95).
+        has_a = np.bincount(asm.csc.indices, minlength=asm.csc.shape[0]) > 0
+        tw_max = np.max(np.abs(twist[has_a] * s.row[has_a, None]), axis=0, initial=0.0)
+        self.twist_scale = np.where(
+            tw_max > 0.0, np.exp2(np.round(-np.log2(np.where(tw_max > 0.0, tw_max, 1.0)))), 1.0
+        )
+        # A row of twist coefficients only (a support no joint moves: n^T G^T rdot >= 0) has
+        # no J qd side: its factor brings its twist coefficients to those of the other rows
+        # (largest 1 in the scaled twist). Left at 1, a table's row in um and ms held the
+        # largest entry of every alpha column, 1e9 times the rest.
+        only_twist = ~has_a & np.any(twist != 0.0, axis=1)
+        if only_twist.any():
+            big = np.max(np.abs(twist[only_twist] * self.twist_scale), axis=1)
+            row = s.row.copy()
+            row[only_twist] = np.exp2(np.clip(np.round(-np.log2(big)), -400.0, 400.0))
+            s = replace(s, row=row)
+        self.row_scale, self.col_scale = s.row, s.col
+        self._scaled_a = ScaledMatrix(asm.csc, s)
+        self.session: HighsSession | None = None
+        self._dense: NDArray[np.float64] | None = None  # pair_matrix's
+        self._abs_dense: NDArray[np.float64] | None = None
+        self._cert: Certifier | None = None  # _certifier's
+        # Per RVDS vertex r (its bytes): its alpha column and zero threshold, asked by every
+        # LP of that r (its session, its certificate, tvmmp's rounding).
+        self._of_r: dict[bytes, tuple[NDArray[np.float64], float]] = {}
+        # _bounds' answers per (w, alpha_max): one per REFS vertex, asked again for every l.
+        self._bounds_of: dict[tuple[bytes, float], tuple[NDArray[np.float64], ...]] = {}
+        self._matrix_of: bytes | None = None  # the r whose column pair_matrix holds
+        # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
+        self._last: tuple[bytes, bytes, float] = (b"", b"", np.nan)  # as bytes: cheaper to compare
+
+    def column(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(len(kin),)`` the alpha column ``A_twist r`` on the kinematic rows (then the joint
+        limits' horizon rows, ``-rate s(r)``: `horizon_column()`), without
+        round-off ([`roundoff`][mjtvm.lp.roundoff]): components of ``r`` at most DROP_REL times
+        its largest, and entries at most DROP_REL times the sum of the magnitudes they were
+        computed from. A twist written with 1e-16 in a component that is exactly 0 (a
+        projection onto the TVMS's span) would otherwise ask for a motion the fingers
+        cannot make, and the exact LP's alpha would be 0."""
+        return self._r_values(r)[0]
+
+    def zero_alpha(self, r: NDArray[np.float64]) -> float:
+        """The alpha below which the twist alpha r_l is within ZERO_ALPHA (the solver's
+        tolerance) of 0 in the equilibrated twist variables (the columns of ``A_twist``,
+        whose factors follow the units of the state): such an alpha is reported as 0, the
+        same in every unit system."""
+        return self._r_values(r)[1]
+
+    def _r_values(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
+        """`column()` and `zero_alpha()` of ``r``, computed once per state."""
+        key = r.tobytes()
+        if key not in self._of_r:
+            big = float((np.abs(r) / self.twist_scale).max(initial=0.0))
+            rr = drop_data_roundoff(r)  # an RVDS vertex's round-off (roundoff module) is 0 too
+            col = drop_cancellation(self.twist_rows @ rr, self.abs_twist_rows @ np.abs(rr))
+            if len(self.asm.horizon_rows):  # the horizon rows: -rate_j s(r) (mjtvm.model.limits)
+                col[self._num_kinematic :] = self.asm.horizon_column(self.state, rr)
+            col.setflags(write=False)
+            self._of_r[key] = (col, ZERO_ALPHA / big if big > 0.0 else ZERO_ALPHA)
+        return self._of_r[key]
+
+    def lp(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
+    ) -> tuple[LinearProgram, Scaling]:
+        """The LP of pair (w, r) and its scaling (the alpha factor from its column)."""
+        import scipy.sparse as sp  # the fallbacks' and Clarabel's LP only (module csc)
+
+        kin_col = self.column(r)
+        col = np.zeros(self.asm.csc.shape[0])
+        col[self.kin] = kin_col
+        lower, upper, cu = self._bounds(w, alpha_max)
+        lp = LinearProgram(
+            self.c,
+            sp.hstack([self.asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csc"),
+            lower,
+            upper,
+            self.col_lower,
+            cu,
+        )
+        factor = column_factor(self.row_scale[self.kin] * kin_col)
+        col_s = np.append(self.col_scale, factor)
+        return lp, Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
+
+    def _session(self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float) -> HighsSession:
+        """A HiGHS session holding the LP of (w, r), built from the per-state scaled matrix
+        (the arrays `lp()` then ``scale_lp`` would give, without their sparse copies)."""
+        kin_col = self.column(r)
+        factor = column_factor(self.row_scale[self.kin] * kin_col)
+        col_s = np.append(self.col_scale, factor)
+        s = Scaling(self.row_scale, col_s, cost_scale(self.c, col_s))
+        lower, upper, cu = self._bounds(w, alpha_max)
+        nz = np.flatnonzero(kin_col)
+        a_s = self._scaled_a.with_column(self.kin[nz], kin_col[nz], factor)
+        with np.errstate(invalid="ignore"):  # inf * positive stays inf (as in scale_lp)
+            slp = LinearProgram(
+                s.cost * col_s * self.c, a_s, s.row * lower, s.row * upper, self.col_lower / col_s, cu / col_s
+            )
+        session = HighsSession.from_scaled(slp, s, self.c, self.col_lower, cu, options=P2_HIGHS_OPTIONS)
+        # The torques are free and fixed by their rows (tau - J^T E lam = g_f, eq. 19): basic
+        # there from the start, the cold first LP of Case 2 takes 45 iterations instead of 87
+        # (0.41 ms instead of 0.61; HiGHS' slack basis has every free column to bring in).
+        if self.state.transmission is None:  # then tau and the torque rows pair one to one
+            tau, rows = self.asm.blocks["tau[0]"], self.asm.torque_rows[0]
+            session.start_basis(np.arange(tau.start, tau.stop), np.arange(rows.start, rows.stop))
+        return session
+
+    def solve(self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf) -> Settled:
+        """The settled LP of (w, r): HiGHS warm, Clarabel on failure; or Clarabel checked."""
+        if self.solver != "highs":
+            lp, s = self.lp(w, r, alpha_max=alpha_max)
+            return clarabel_checked(lp, scaling=s)
+        try:
+            if self.session is None:
+                self.session = self._session(w, r, alpha_max)
+            else:
+                ses = self.session
+                # The column changes with l, the bounds with k (set_column re-sends alpha's
+                # bounds when it rescales).
+                if r.tobytes() != self._last[1]:
+                    ses.set_column(self.alpha_col, self.kin, self.column(r), rescale=True)
+                if w.tobytes() != self._last[0]:
+                    ses.set_row_bounds(self.wrench_rows, -w, -w)
+                if alpha_max != self._last[2]:
+                    ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
+            self._last = (w.tobytes(), r.tobytes(), alpha_max)
+            return Settled(self.session.solve(duals=True), "highs")
+        except SolverError as e:
+            self.session = None  # its basis may be what went wrong: the next LP starts afresh
+            lp, s = self.lp(w, r, alpha_max=alpha_max)
+            return fallback(lp, e, scaling=s)
+
+    def pair_matrix(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(m, n + 1)`` the unscaled ``[A | A_twist r]`` of the pair (nothing dropped but the
+        state's round-off), dense, and its magnitudes: the LP every answer is certified on.
+        Dense: a state's LP has a few hundred rows and columns, where numpy's dense products
+        cost a fraction of scipy's sparse ones (both arrays are the state's, overwritten)."""
+        if self._dense is None:
+            m, n = self.asm.csc.shape
+            self._dense = np.zeros((m, n + 1))
+            self._dense[:, :n] = self.asm.csc.toarray()
+            self._abs_dense = np.abs(self._dense)
+        assert self._abs_dense is not None
+        key = r.tobytes()
+        if self._matrix_of != key:
+            col = np.zeros(self._dense.shape[0])
+            col[self.kin] = self.column(r)
+            self._dense[:, -1] = col
+            self._abs_dense[:, -1] = np.abs(col)
+            self._matrix_of = key
+        return self._dense, self._abs_dense
+
+    def certify(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
+    ) -> Certificate:
+        """The certificate ([`certificate`][mjtvm.lp.certificate]) of an optimal ``sol`` of pair (w, r)."""
+        lower, upper, cu = self._bounds(w, alpha_max)
+        assert sol.x is not None
+        return self._certifier(r).check(
+            self.c, lower, upper, cu, sol.x, sol.row_dual, floor=self.zero_alpha(r)
+        )
+
+    def certify_many(
+        self, answers: list[tuple[NDArray[np.float64], NDArray[np.float64], float, LPSolution]]
+    ) -> list[Certificate]:
+        """`certify()` of several optimal answers ``(w, r, alpha_max, sol)`` of this
+        state at once ([`check_many()`][mjtvm.lp.certificate.Certifier.check_many]): the same
+        measures, one matrix product instead of one matrix-vector product per answer."""
+        if not answers:
+            return []
+        cert = self._certifier(answers[0][1])
+        p, (m, n) = len(answers), cert.a.shape
+        lower, upper, cu = np.empty((p, m)), np.empty((p, m)), np.empty((p, n))
+        x, y, last, floor = np.empty((p, n)), np.empty((p, m)), np.zeros((p, m)), np.empty(p)
+        for i, (w, r, alpha_max, sol) in enumerate(answers):
+            lower[i], upper[i], cu[i] = self._bounds(w, alpha_max)
+            col, floor[i] = self._r_values(r)
+            last[i, self.kin] = col
+            assert sol.x is not None and sol.row_dual is not None
+            x[i], y[i] = sol.x, sol.row_dual
+        return cert.check_many(self.c, lower, upper, cu, x, y, last, floor=floor)
+
+    def _certifier(self, r: NDArray[np.float64]) -> Certifier:
+        """The state's [`Certifier`][mjtvm.lp.certificate.Certifier], its alpha column that of ``r``."""
+        a, abs_a = self.pair_matrix(r)
+        if self._cert is None:
+            primal = np.where(self.force_like, 0.0, self.physical_sizes)  # forces, slips: their own values
+            self._cert = Certifier(
+                a,
+                self.col_lower,
+                col_ref=primal,
+                abs_a=abs_a,
+                row_groups=self.asm.row_groups,
+                dual_ref=self.physical_sizes,
+                row_cap=self.row_cap,
+            )
+        return self._cert
+
+    def _bounds(
+        self, w: NDArray[np.float64], alpha_max: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The row bounds of pair (w, .) and the column upper bounds with ``alpha <= alpha_max``
+        (read only: kept for the LPs of the same w)."""
+        key = (w.tobytes(), alpha_max)
+        if key not in self._bounds_of:
+            lower, upper = self.asm.statics_bounds(w)
+            cu = self.col_upper.copy()
+            cu[-1] = alpha_max
+            for a in (lower, upper, cu):
+                a.setflags(write=False)
+            self._bounds_of[key] = (lower, upper, cu)
+        lower, upper, cu = self._bounds_of[key]
+        return lower, upper, cu
+
+    def proves_infeasible(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
+    ) -> bool:
+        """Whether ``sol``'s Farkas multipliers (HiGHS' dual ray, Clarabel's certificate) prove
+        pair (w, r) infeasible on the unscaled LP ([`farkas()`][mjtvm.lp.certificate.farkas])."""
+        lower, upper, cu = self._bounds(w, alpha_max)
+        return self._certifier(r).farkas(lower, upper, cu, sol.row_dual)
+
+    def certified(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], *, alpha_max: float = np.inf
+    ) -> Verdict:
+        """The LP of (w, r) settled (`solve()`) and its answer certified on the unscaled LP.
+
+        An optimal answer is certified by `certify()`, an infeasible one by its Farkas
+        multipliers (`proves_infeasible()`). An answer that is not is solved again
+        other ways, in turn: HiGHS from a cold start on the pair's own equilibration (which
+        includes the alpha column), Clarabel, and HiGHS on the LP as assembled (its own
+        scaling, no equilibration of ours); the first certified answer is reported, with a
+        note. If none is, the first answer is reported with a note naming what failed, and
+        ``certified`` False. An unbounded verdict (no certificate here) must be confirmed
+        by the cold HiGHS solve.
+        """
+        settled = self.solve(w, r, alpha_max=alpha_max)
+        return self.conclude(w, r, alpha_max, settled, self.check(w, r, alpha_max, settled.solution))
+
+    def conclude(
+        self,
+        w: NDArray[np.float64],
+        r: NDArray[np.float64],
+        alpha_max: float,
+        settled: Settled,
+        cert: tuple[bool, Certificate | None] | None,
+    ) -> Verdict:
+        """The verdict of pair (w, r) from its settled LP and the check of its answer
+        (`certified()`'s second half: the other ways where the check failed)."""
+        first = settled.solution
+        if cert is not None and cert[0]:
+            return Verdict(settled, cert[1], True)
+        tried = [f"{settled.solver}: {_describe(first, cert)}"]
+        lp, _ = self.lp(w, r, alpha_max=alpha_max)
+        ones = Scaling(np.ones(lp.A.shape[0]), np.ones(lp.A.shape[1]), 1.0)
+        ways = (
+            ("highs (cold)", "highs", lambda: HighsSession(lp).solve(duals=True)),
+            ("clarabel", "clarabel", lambda: solve_clarabel(lp)),
+            ("highs (own scaling)", "highs", lambda: HighsSession(lp, scaling=ones).solve(duals=True)),
+        )
+        for name, solver, run in ways:
+            try:
+                other = run()
+            except SolverError as e:
+                tried.append(f"{name}: {e.status}")
+                continue
+            c2 = self.check(w, r, alpha_max, other)
+            if first.status == "unbounded" and other.status == "unbounded":
+                return Verdict(settled, None, True)  # confirmed by a second solve
+            if c2 is not None and c2[0]:
+                note = f"{settled.solver}'s answer ({first.status}) not certified ({_describe(first, cert)}); certified by {name}: {other.status}"
+                return Verdict(Settled(other, solver, _join(settled.note, note)), c2[1], True)
+            tried.append(f"{name}: {_describe(other, c2)}")
+        note = "not certified: " + "; ".join(tried)
+        return Verdict(
+            Settled(first, settled.solver, _join(settled.note, note)),
+            None if cert is None else cert[1],
+            False,
+        )
+
+    def check(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
+    ) -> tuple[bool, Certificate | None] | None:
+        """``(certified, certificate)`` of an optimal or infeasible ``sol``; ``None`` for an
+        unbounded one (no certificate)."""
+        if sol.status == "optimal":
+            cert = self.certify(w, r, alpha_max, sol)
+            return cert.ok, cert
+        if sol.status == "infeasible":
+            return self.proves_infeasible(w, r, alpha_max, sol), None
+        return None
+
+
+def _describe(sol: LPSolution, check: tuple[bool, Certificate | None] | None) -> str:
+    """What a failed check of ``sol`` found, in a few words."""
+    if sol.status == "optimal" and check is not None and check[1] is not None:
+        return check[1].describe()
+    if sol.status == "infeasible":
+        return "infeasible without Farkas multipliers that prove it"
+    return f"{sol.status} (not certified by itself)"
+
+
+def _join(a: str | None, b: str) -> str:
+    return b if a is None else f"{a}; {b}"
+
+
+@dataclass(frozen=True, eq=False)
+class Verdict:
+    """A settled LP, the certificate of its optimal answer (``None`` otherwise), and whether
+    the answer is certified (optimal: its certificate holds; infeasible: Farkas multipliers
+    prove it; unbounded: a second solve agrees)."""
+
+    settled: Settled
+    certificate: Certificate | None
+    certified: bool

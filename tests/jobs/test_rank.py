@@ -1,0 +1,294 @@
+"""``mjtvm rank``: the rows, the summary, failures as rows, resume (mjtvm.jobs.rank, rank_files)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import mjtvm.jobs.rank
+from mjtvm.grasp.resolve.file import load_grasp
+from mjtvm.jobs.rank_files import RankFiles, run_rank_files
+from mjtvm.problem2.tvmmp import tvmmp
+
+ROOT = Path(__file__).resolve().parents[2]
+GRASP = str(ROOT / "models" / "shadow_hand" / "shadow_hand_coupled-sphere.toml")
+DATASET = ROOT / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz"
+
+
+def _mjtvm() -> list[str]:
+    script = Path(sys.executable).with_name("mjtvm")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "mjtvm.cli"]
+
+
+def test_rank_command_on_the_example_dataset(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [*_mjtvm(), "rank", GRASP, str(DATASET), "--out", str(tmp_path), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    rows = json.loads((tmp_path / "rank.json").read_text())
+    n = len(np.load(DATASET)["id"])
+    assert len(rows) == n == 36
+    assert (tmp_path / "rank.csv").read_text().count("\n") == n + 1
+    for suffix in ("-objects.png", "-tvmmp.png"):
+        assert (tmp_path / f"rank{suffix}").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # The summary's counts are the rows'.
+    solved = [r for r in rows if r["failure"] is None]
+    positive = [r for r in solved if r["tvmmp"] is not None and r["tvmmp"] > 0]
+    assert f"rank: {n} grasps: {len(positive)} with TVMMP > 0" in proc.stderr
+    assert "failed: " in proc.stderr and len(positive) >= 10
+    # The generator's broken grasps (the last four) fail with their reason; the others evaluate.
+    broken = {r["id"]: r for r in rows if r["id"].endswith(("-open", "-closed"))}
+    assert len(broken) == 4
+    for r in broken.values():
+        expected = "no contact" if r["id"].endswith("-open") else "penetration"
+        assert r["failure"] == expected and r["reason"] and r["tvmmp"] is None
+    assert all(r["contacts"] == 3 for r in solved)
+    # An infeasible grasp says why: the diagnosis of its pair.
+    for r in solved:
+        if r["tvmmp"] is None:
+            assert r["reason"].startswith("pair [") and not r["feasible"]
+
+
+def test_a_row_is_the_grasp_files_tvmmp_at_that_configuration(tmp_path: Path) -> None:
+    # Row 1 of the example, rebuilt as a grasp file (its joint values, palm pose, sphere pose
+    # and radius) and solved by load_grasp: the same TVMMP as the row.
+    z = np.load(DATASET)
+    rows = mjtvm.jobs.rank.rank_rows(GRASP, _entries()[1:2], progress=False)
+    g = z["grasp_qpos"][1]
+    from mjtvm.grasp.resolve.batch import hand_joints
+
+    base = load_grasp(GRASP)
+    names = hand_joints(base.model, "ball")
+    s = float(z["obj_scale"][1])
+    doc: dict[str, Any] = {
+        "schema": "mjtvm.grasp/1",
+        "model": str(ROOT / "models" / "shadow_hand" / "shadow_right_3f_coupled.xml"),
+        "mu": 0.6,
+        "rvds": [list(map(float, r)) for r in base.rvds],
+        "object": {
+            "body": "ball",
+            "shape": "sphere",
+            "size": [0.025 * s],
+            "mass": 0.08 * s**3,
+            "position": [float(x) for x in z["obj_pose"][1][:3]],
+        },
+        "configuration": {"qpos": {n: float(v) for n, v in zip(names, g[7:], strict=True)}},
+        "contacts": [{"geom": n, "type": "F"} for n in ("ff_distal", "mf_distal", "th_distal")],
+        "ranges": {"rh_A_*": {"actuator": True, "speed_limit": 2.0}},
+    }
+    assert np.allclose(
+        g[:7],
+        [*base.data.xpos[base.model.body("rh_palm").id], *base.data.xquat[base.model.body("rh_palm").id]],
+    )
+    state = load_grasp(doc).state()
+    expected = tvmmp(state, witnesses=False).tvmmp
+    assert expected is not None and rows[0]["tvmmp"] == pytest.approx(expected, rel=1e-9)
+    # The classic measures of the row are those of the same state.
+    from mjtvm.jobs.rank import CLASSIC_COLUMNS
+    from mjtvm.measures import classic_measures
+
+    measures = classic_measures(state, polytope=False).to_dict()
+    assert rows[0]["force_closure"] is True
+    for key in CLASSIC_COLUMNS:
+        assert rows[0][key] == pytest.approx(measures[key], rel=1e-9), key
+
+
+def _entries() -> list[Any]:
+    from mjtvm.jobs.rank_files import read_datasets
+
+    return read_datasets(GRASP, [str(DATASET)])
+
+
+def test_interrupted_and_resumed_is_identical(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    whole = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "whole", quiet=True)
+    run_rank_files(whole, notice=lambda _: None)
+    calls = {"n": 0}
+    real = mjtvm.jobs.rank.rank_row
+
+    def interrupted(batch: Any, entry: Any, **options: Any) -> dict[str, Any]:
+        calls["n"] += 1
+        if calls["n"] > 15:
+            raise KeyboardInterrupt
+        return real(batch, entry, **options)
+
+    monkeypatch.setattr(mjtvm.jobs.rank, "rank_row", interrupted)
+    part = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True)
+    with pytest.raises(KeyboardInterrupt):
+        run_rank_files(part, notice=lambda _: None)
+    saved = json.loads((tmp_path / "part" / "rank.partial.json").read_text())["rows"]
+    assert len(saved) == 15
+    monkeypatch.setattr(mjtvm.jobs.rank, "rank_row", real)
+    calls["n"] = 0
+    resumed = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True, resume=True)
+    run_rank_files(resumed, notice=lambda _: None)
+    for name in ("rank.json", "rank.csv", "rank.parquet"):
+        assert (tmp_path / "part" / name).read_bytes() == (tmp_path / "whole" / name).read_bytes(), name
+    assert not (tmp_path / "part" / "rank.partial.json").exists()
+
+
+def test_malformed_dataset_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    z = dict(np.load(DATASET))
+    z["grasp_qpos"] = z["grasp_qpos"].copy()
+    z["grasp_qpos"][5, 10] = np.nan
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **z)
+    proc = subprocess.run(
+        [*_mjtvm(), "rank", GRASP, str(bad), "--out", str(tmp_path / "o"), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f"error: {bad}: grasp 5: grasp_qpos: expected finite numbers, got nan at position 10"
+    ]
+
+
+_ORB = """<mujoco model="orb">
+  <worldbody>
+    <body name="orb"><freejoint/><geom name="orb" type="sphere" size="0.025" mass="0.08"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_object_file_per_grasp_and_two_processes(tmp_path: Path) -> None:
+    # The same sphere given as an object file (obj_path, relative to the dataset) in place of
+    # the grasp file's: every alpha the same; two local processes give the rows of one.
+    (tmp_path / "orb.xml").write_text(_ORB)
+    z = {k: v[:6] for k, v in np.load(DATASET).items()}
+    np.savez(tmp_path / "a.npz", **z)
+    np.savez(tmp_path / "b.npz", **z, obj_path=np.array(["orb.xml"] * 6))
+    from mjtvm.jobs.rank_files import read_datasets
+
+    a = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "a.npz")]), progress=False)
+    b = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "b.npz")]), progress=False)
+    assert [r["object"] for r in b] == ["orb"] * 6 and [r["object"] for r in a] == ["ball"] * 6
+    assert [r["alpha"] for r in a] == [r["alpha"] for r in b]
+    assert sum(r["tvmmp"] is not None for r in a) >= 3
+    two = mjtvm.jobs.rank.rank_rows(
+        GRASP, read_datasets(GRASP, [str(tmp_path / "a.npz")]), jobs=2, progress=False
+    )
+    assert two == a
+
+
+def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
+    # The generator's mesh mode (two convex pieces per object, one object file per grasp):
+    # every grasp it closes by IK is evaluated with its three fingertip contacts on the mesh,
+    # the broken ones fail with their reason.
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "make_rank_dataset", ROOT / "scripts" / "make_rank_dataset.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    arrays = module.make(8, 2, 5, mesh=2, folder=tmp_path / "d-objects")
+    np.savez(tmp_path / "d.npz", **arrays)
+    from mjtvm.jobs.rank_files import read_datasets
+
+    rows = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "d.npz")]), progress=False)
+    assert {r["object"] for r in rows} == {"ellipsoid0", "ellipsoid1"}
+    good, bad = rows[:6], rows[6:]
+    assert all(r["failure"] is None and r["contacts"] == 3 and r["penetration"] < 1e-4 for r in good)
+    # The closed one: on the coupled hand (J1 = J2) the first finger's middle link reaches the
+    # mesh 3.75 mm deep before its tip does, a touching geom no contact selects ("grasp").
+    assert [r["failure"] for r in bad] == ["no contact", "grasp"]
+    assert "geom 'ff_middle' touches the object" in bad[1]["reason"]
+    assert any(r["tvmmp"] for r in good)
+
+
+def test_qpos_layout_gives_the_rows_of_grasp_qpos(tmp_path: Path) -> None:
+    # The same grasps as the model's whole qpos (N x nq: the hand's joints and the object's
+    # free joint; the palm is fixed, so its pose is the model's, as in the example): the same rows.
+    from mjtvm.jobs.rank_files import read_datasets
+
+    z = {k: v[:5] for k, v in np.load(DATASET).items()}
+    batch = mjtvm.jobs.rank.batch_models(GRASP)
+    model = batch.model()
+    from mjtvm.grasp.resolve.batch import hand_joints
+
+    names = hand_joints(model, "ball")
+    qpos = np.zeros((5, model.nq))
+    for i in range(5):
+        for n, v in zip(names, z["grasp_qpos"][i][7:], strict=True):
+            qpos[i, model.joint(n).qposadr[0]] = v
+        adr = model.joint("ball").qposadr[0]
+        qpos[i, adr : adr + 7] = z["obj_pose"][i]
+    np.savez(tmp_path / "q.npz", qpos=qpos, obj_scale=z["obj_scale"], id=z["id"])
+    np.savez(tmp_path / "g.npz", **z)
+    a = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "g.npz")]), progress=False)
+    b = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "q.npz")]), progress=False)
+    assert [r["alpha"] for r in a] == [r["alpha"] for r in b]
+    assert sum(r["tvmmp"] is not None for r in a) >= 3
+
+
+def test_dask_gives_the_same_rows() -> None:
+    import distributed  # the "cluster" extra, part of the "test" extra: never skipped
+
+    entries = _entries()[:8]
+    serial = mjtvm.jobs.rank.rank_rows(GRASP, entries, progress=False)
+    with distributed.Client(
+        processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+    ) as client:
+        assert mjtvm.jobs.rank.rank_rows(GRASP, entries, cluster=client, progress=False) == serial
+
+
+def test_grasp_file_without_rvds_is_refused_up_front(tmp_path: Path) -> None:
+    import tomllib
+
+    from mjtvm.grasp import format_toml
+
+    doc = tomllib.loads(Path(GRASP).read_text())
+    del doc["rvds"]
+    doc["model"] = str(Path(GRASP).parent / doc["model"])
+    grasp = tmp_path / "g.toml"
+    grasp.write_text(format_toml(doc))
+    proc = subprocess.run(
+        [*_mjtvm(), "rank", str(grasp), str(DATASET), "--out", str(tmp_path / "o"), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f"error: {grasp}: rvds: mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices"
+    ]
+
+
+def test_contact_rules_type_each_grasps_own_contacts(tmp_path: Path) -> None:
+    # With contact_rules instead of named contacts, each grasp's touching geoms are typed by
+    # the rule: the evaluated grasps get the alphas of the named F contacts, and the grasp with
+    # its first finger opened (a failure with named contacts) is evaluated on the two left.
+    import tomllib
+
+    from mjtvm.grasp import format_toml
+
+    doc = tomllib.loads(Path(GRASP).read_text())
+    del doc["contacts"]
+    doc["contact_rules"] = [{"body": "*distal*", "type": "F"}]
+    doc["model"] = str(Path(GRASP).parent / doc["model"])
+    grasp = tmp_path / "rules.toml"
+    grasp.write_text(format_toml(doc))
+    z = np.load(DATASET)
+    keep = [1, 2, 3, len(z["id"]) - 4]  # three evaluated, one "-open"
+    np.savez(tmp_path / "d.npz", **{k: v[keep] for k, v in z.items()})
+    from mjtvm.jobs.rank_files import read_datasets
+
+    named = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "d.npz")]), progress=False)
+    ruled = mjtvm.jobs.rank.rank_rows(
+        str(grasp), read_datasets(str(grasp), [str(tmp_path / "d.npz")]), progress=False
+    )
+    assert [r["alpha"] for r in ruled[:3]] == [r["alpha"] for r in named[:3]]
+    assert named[3]["failure"] == "no contact" and ruled[3]["id"].endswith("-open")
+    assert ruled[3]["failure"] is None and ruled[3]["contacts"] == 2
