@@ -11,16 +11,21 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.cli import guarded
-from mjtvm.cli.options import Parser, out_options, removed_option
+from mjtvm.cli.options import (
+    Parser,
+    computed_default,
+    out_options,
+    quiet_option,
+    removed_option,
+    time_limit_option,
+)
 from mjtvm.cli.output import EXIT_OK, emit
 from mjtvm.cli.values import (
     MAX_BASELINE_REPEATS,
     MAX_NOTES_BYTES,
     MAX_REPEATS,
-    MAX_SECONDS,
     input_file,
     integer,
-    number,
     shown,
 )
 from mjtvm.errors import StateError
@@ -60,25 +65,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="timed cvxpy calls per state",
     )
-    parser.add_argument(
-        "--time-limit",
-        type=number(0.0, MAX_SECONDS, strict=True),
-        default=120.0,
-        metavar="S",
-        help="cap of each cdd baseline run (s)",
-    )
-    out_options(
-        parser, name="bench", out_help="output folder of NAME.json (the report) and NAME.md (the table)"
-    )
+    time_limit_option(parser)
+    out_options(parser, name="bench")
     removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
-    parser.add_argument(
+    notes = parser.add_argument(
         "--notes",
         type=input_file,
         default=None,
         metavar="FILE",
-        help="text file whose lines are appended to the table's notes",
+        help="text file whose lines are appended to the table's notes "
+        f"(at most {MAX_NOTES_BYTES >> 20} MiB of UTF-8 text)",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    computed_default(notes, "none")
+    quiet_option(parser)
 
 
 def _steps(quick: bool) -> int:

@@ -88,7 +88,11 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_no_import_cycle_between_modules() -> None:
     # a package's __init__ importing its own modules is not a cycle through them
     graph = {
-        m: {t for t, _, _ in targets if t != m and not (m.startswith(f"{t}.") and MODULES[t].name == "__init__.py")}
+        m: {
+            t
+            for t, _, _ in targets
+            if t != m and not (m.startswith(f"{t}.") and MODULES[t].name == "__init__.py")
+        }
         for m, targets in _imports().items()
     }
     assert _cycles(graph) == []
@@ -105,7 +109,9 @@ def test_no_private_name_imported_from_another_module() -> None:
 
 
 def test_no_module_over_450_lines() -> None:
-    long = {m: n for m, p in MODULES.items() if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
+    long = {
+        m: n for m, p in MODULES.items() if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES
+    }
     assert long == {}
 
 
@@ -133,5 +139,9 @@ def test_the_architecture_page_lists_the_rooms_of_the_layers_contract() -> None:
     page = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
     table = re.findall(r"^\| `(mjtvm[\w.]*)` \|", page.split("## Rooms", 1)[1], re.M)
     assert table == contract["layers"]
-    rooms = {m for m, p in MODULES.items() if m.count(".") == 1 and (p.name == "__init__.py" or m == "mjtvm.errors")}
+    rooms = {
+        m
+        for m, p in MODULES.items()
+        if m.count(".") == 1 and (p.name == "__init__.py" or m == "mjtvm.errors")
+    }
     assert rooms - {"mjtvm.data"} == set(table)

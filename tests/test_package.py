@@ -59,5 +59,9 @@ def test_a_solve_and_a_grasp_solve_need_no_cvxpy():
 def test_the_reference_without_cvxpy_is_one_line_naming_the_extra():
     out = _without_cvxpy("from benchmarks.__main__ import main\nraise SystemExit(main(['--quick']))")
     assert out.returncode == 2
-    assert out.stderr.strip().splitlines()[-1].endswith('cvxpy is not installed: pip install -e ".[reference]" in a clone')
+    assert (
+        out.stderr.strip()
+        .splitlines()[-1]
+        .endswith('cvxpy is not installed: pip install -e ".[reference]" in a clone')
+    )
     assert "Traceback" not in out.stderr

@@ -8,31 +8,31 @@ from pathlib import Path
 from typing import TypeVar
 
 from mjtvm.cli.options import (
-    GRASP_HELP,
     Subparsers,
     command,
+    computed_default,
+    contacts_option,
     grasp_option,
+    hand_option,
     lift_options,
     limit_horizon_option,
+    mg_option,
+    mu_option,
+    no_plots_option,
     out_options,
     parallel_options,
+    quiet_option,
+    reading_option,
+    resume_option,
+    rrd_option,
     states_option,
 )
 from mjtvm.cli.output import EXIT_OK, emit, warn
 from mjtvm.cli.values import (
-    CONTACTS,
-    MAX_FORCE,
     MAX_GRID,
-    MAX_MU,
     MAX_STATES,
-    READINGS,
-    choices,
-    grasps,
     integer,
     integers,
-    names,
-    numbers,
-    output_file,
 )
 from mjtvm.errors import OptionError, ParamError
 
@@ -67,23 +67,21 @@ def add_replay(sub: Subparsers) -> None:
     lift_options(p, contacts="L,S", reading="both")
     limit_horizon_option(p)
     out_options(p, name=None)
-    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
-    p.add_argument(
+    no_plots_option(p)
+    sweeps = p.add_argument(
         "--sweeps",
         action=argparse.BooleanOptionalAction,
         default=None,
-        help="the paper's Fig. 9 sweeps (mu 0.1-0.5 at mg 2 N, mg 0-3 N at mu 0.3): lift-sweeps.csv, "
-        "fig9a/fig9b.png (default: for the paper's grasps only, not for a grasp file of one's own)",
+        help="the paper's Fig. 9 sweeps (mu 0.1-0.5 at mg 2 N, mg 0-3 N at mu 0.3): `lift-sweeps.csv`, "
+        "`fig9a.png`, `fig9b.png`",
     )
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
-    p.add_argument(
-        "--rrd",
-        type=output_file,
-        metavar="FILE",
-        default=None,
-        help="also write a rerun recording of the lift (scene, contacts, velocity polytopes, TVMMP, "
-        "joint operation points); open it with `rerun FILE`",
+    computed_default(
+        sweeps,
+        "for the paper's grasps (`case1`, `case1-s`, `case2` and their `-humanlike` hands) only: "
+        "a grasp file of one's own gets its own mu and weight alone",
     )
+    quiet_option(p)
+    rrd_option(p)
     p.add_argument("--spawn", action="store_true", help="also stream the recording to a new rerun viewer")
     p.add_argument(
         "--tvms-every",
@@ -168,47 +166,28 @@ def add_sweep(sub: Subparsers) -> None:
     limit_horizon_option(p)
     parallel_options(p)
     out_options(p, name="sweep")
-    p.add_argument(
-        "--resume",
-        action="store_true",
-        help="keep the finished rows of NAME.partial.json / NAME.json that belong to this grid",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    resume_option(p)
+    quiet_option(p)
     p.set_defaults(func=_cmd_sweep)
 
 
 def _sweep_grid(p: argparse.ArgumentParser) -> None:
     """The grid's axes: grasps, hands, contacts, readings, mu, mg and the lift's states."""
-    grasp_option(p, default="case2", type=grasps, help="grasps (comma-separated): " + GRASP_HELP)
-    p.add_argument("--hand", type=names, default="default", help="hand models: default, humanlike")
-    p.add_argument(
-        "--contacts",
-        type=choices(CONTACTS),
-        default="L",
-        metavar="L,S",
-        help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4)",
-    )
-    p.add_argument(
-        "--reading",
-        type=choices(READINGS, every="both"),
-        default="physical",
-        metavar="READING",
-        help="slide directions of S-points: physical, literal or both",
-    )
-    p.add_argument(
-        "--mu", type=numbers(0.0, MAX_MU), default=None, help="friction coefficients (default: the grasp's)"
-    )
-    p.add_argument(
-        "--mg", type=numbers(0.0, MAX_FORCE), default=None, help="object weights (N) (default: the grasp's)"
-    )
+    grasp_option(p, default="case2", many=True)
+    hand_option(p, many=True)
+    contacts_option(p, default="L")
+    reading_option(p, default="physical")
+    mu_option(p, many=True)
+    mg_option(p, many=True)
     states_option(p, hint="state indices are --state-indices")
-    p.add_argument(
+    indices = p.add_argument(
         "--state-indices",
         type=integers(0, MAX_STATES - 1),
         default=None,
         metavar="I,J",
-        help="solve only these states of the lift (default: all)",
+        help="solve only these states of the lift (0 <= I < `--states`)",
     )
+    computed_default(indices, "all")
 
 
 def _tuple(values: Sequence[_T] | None) -> tuple[_T, ...] | None:

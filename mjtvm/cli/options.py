@@ -1,5 +1,6 @@
-"""The parser and help formatter, removed options (refused with a hint), and option groups
-that several commands share (the vocabulary of ``docs/cli.md``)."""
+"""The parser and help formatter, removed options (refused with a hint), and the options that
+several commands share (the vocabulary of ``docs/cli.md``, whose tables are generated from the
+parsers by ``tools/cli_tables.py``)."""
 
 from __future__ import annotations
 
@@ -10,16 +11,23 @@ from mjtvm.cli.output import EXIT_INPUT, one_line
 from mjtvm.cli.values import (
     CONTACTS,
     MAX_FORCE,
+    MAX_INDENT,
     MAX_JOBS,
     MAX_MU,
+    MAX_SECONDS,
     MAX_STATES,
     READINGS,
+    accepted,
     choices,
     cluster_address,
     folder,
     fraction,
+    grasps,
     integer,
+    names,
     number,
+    numbers,
+    output_file,
     source,
     stem,
 )
@@ -27,21 +35,35 @@ from mjtvm.errors import OptionError
 from mjtvm.model.limits import with_limit_horizon  # the commands' --limit-horizon, one meaning
 
 __all__ = [
+    "GRASP_HELP",
     "Formatter",
     "Parser",
     "Subparsers",
     "command",
+    "computed_default",
+    "contacts_option",
     "friction_margin_option",
+    "grasp_option",
     "hand_option",
+    "indent_option",
+    "jobs_option",
     "lift_options",
     "limit_horizon_option",
     "mg_option",
     "mu_option",
+    "no_plots_option",
     "one_grasp",
     "out_options",
     "parallel_options",
+    "quiet_option",
+    "reading_option",
     "refused_option",
     "removed_option",
+    "resume_option",
+    "rrd_option",
+    "shown_default",
+    "states_option",
+    "time_limit_option",
     "with_limit_horizon",
 ]
 
@@ -66,13 +88,38 @@ else:
 """The subcommands of ``mjtvm`` (``parser.add_subparsers()``)."""
 
 
-class Formatter(argparse.ArgumentDefaultsHelpFormatter):
-    """Show every option's default, except for flags (off) and options without one."""
+def computed_default(action: argparse.Action, text: str) -> argparse.Action:
+    """Say what the default of ``action`` is where the parser's is None and the command computes
+    it (``"the grasp's"``): ``--help`` and docs/cli.md show ``text`` (backticks: literals)."""
+    action.computed_default = text  # type: ignore[attr-defined]
+    return action
+
+
+def shown_default(action: argparse.Action) -> str | None:
+    """The default of ``action`` as ``--help`` and docs/cli.md show it: its
+    [`computed_default()`][mjtvm.cli.options.computed_default], else the value in backticks; None
+    for a flag (off) and an option without a default."""
+    text = getattr(action, "computed_default", None)
+    if isinstance(text, str):
+        return text
+    if action.default is None or isinstance(action.default, bool) or action.default is argparse.SUPPRESS:
+        return None
+    return f"`{action.default}`"
+
+
+class Formatter(argparse.HelpFormatter):
+    """Every option's help followed by what it accepts and its default (``(integer in [0, 16];
+    default: 1)``; flags: off, no default shown); backticks, which mark literals for
+    docs/cli.md, are left out."""
 
     def _get_help_string(self, action: argparse.Action) -> str:
-        if action.default is None or isinstance(action.default, bool) or action.default is argparse.SUPPRESS:
-            return action.help or ""
-        return super()._get_help_string(action) or ""
+        default = shown_default(action)
+        extras = [
+            text.replace("%", "%%")  # help strings are %-formatted (%(default)s)
+            for text in (accepted(action.type), None if default is None else f"default: {default}")
+            if text
+        ]
+        return ((action.help or "") + (f" ({'; '.join(extras)})" if extras else "")).replace("`", "")
 
 
 class _Removed(argparse.Action):
@@ -124,46 +171,35 @@ def command(sub: Subparsers, name: str, help: str, description: str) -> argparse
     return sub.add_parser(name, help=help, description=description)  # a Parser, with the Formatter
 
 
-# ------------------------------------------------------------ shared option groups
-_OUT_HELP = "output folder (created if missing; locked while the run writes)"
-
-
-def out_options(
-    p: argparse.ArgumentParser,
-    *,
-    name: str | None,
-    out_help: str = _OUT_HELP,
-    name_help: str = "file stem of the outputs in --out",
-) -> None:
-    """``--out DIR`` and (unless ``name`` is None) ``--name STEM`` with the default ``name``."""
-    p.add_argument("--out", type=folder, default="results", metavar="DIR", help=out_help)
-    if name is not None:
-        p.add_argument("--name", type=stem, default=name, help=name_help)
-
-
-def parallel_options(p: argparse.ArgumentParser) -> None:
-    """``--jobs N`` local worker processes and ``--cluster tcp://HOST:PORT`` (a Dask scheduler)."""
-    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="local worker processes")
-    p.add_argument(
-        "--cluster",
-        type=cluster_address,
-        default=None,
-        metavar="tcp://HOST:PORT",
-        help="Dask scheduler address (overrides --jobs; connection timeout 10 s)",
-    )
-
+# ------------------------------------------------------------ the vocabulary
+# One help text per option, whichever command has it: docs/cli.md's table is generated from them
+# (tools/cli_tables.py), and a command's remark names the command. Backticks mark literals (the
+# table keeps them, --help leaves them out); docs/NAME.md becomes a link in the table.
 
 GRASP_HELP = (
     "grasp: a mjtvm.grasp/1 file (.toml or .json), or a shipped grasp: the paper's case1, case1-s, "
     "case2 (with --hand), or any name in models/*/ (installed as mjtvm.models)"
 )
+"""The help of a command's GRASP argument (``--grasp``'s is the vocabulary's)."""
+
+_POSITIONAL = "the positional argument instead, or `--grasp`, not both"
 
 
-def grasp_option(
-    p: argparse.ArgumentParser, *, default: str | None, type: Any = None, help: str = GRASP_HELP
-) -> None:
-    """``--grasp NAME|FILE``."""
-    p.add_argument("--grasp", default=default, type=type or source, metavar="GRASP", help=help)
+def grasp_option(p: argparse.ArgumentParser, *, default: str | None, many: bool = False) -> None:
+    """``--grasp GRASP`` (``many``: a comma list, ``sweep``); default None: the command's
+    positional argument is the other way to give it."""
+    action = p.add_argument(
+        "--grasp",
+        default=default,
+        type=grasps if many else source,
+        metavar="GRASP",
+        help="a grasp file (`mjtvm.grasp/1`, `.toml` or `.json`, docs/grasp-format.md) or a shipped "
+        "grasp's name (`case1`, `case1-s`, `case2`, `allegro-ik`, `allegro-sphere`, `allegro-jenga`, "
+        "`gripper3-box`, ...: the `*.toml` files of `models/*/`, installed as `mjtvm.models`); "
+        "`sweep`: a comma list",
+    )
+    if default is None:
+        computed_default(action, _POSITIONAL)
 
 
 def one_grasp(positional: str | None, option: str | None, *, name: str = "GRASP") -> str:
@@ -182,46 +218,108 @@ def one_grasp(positional: str | None, option: str | None, *, name: str = "GRASP"
     return source
 
 
+def hand_option(p: argparse.ArgumentParser, *, many: bool = False) -> None:
+    """``--hand NAME`` (``many``: a comma list, ``sweep``)."""
+    p.add_argument(
+        "--hand",
+        default="default",
+        type=names if many else str,
+        metavar="NAME",
+        help="the paper's hand variant of a shipped case: `default` or `humanlike` (`case2` + "
+        "`humanlike` is `case2-humanlike`; any other grasp: refused in one line); `sweep`: a comma list",
+    )
+
+
+def contacts_option(p: argparse.ArgumentParser, *, default: str) -> None:
+    """``--contacts L,S``: the contact types of the lift's L/S fingers."""
+    p.add_argument(
+        "--contacts",
+        type=choices(CONTACTS),
+        default=default,
+        metavar="L,S",
+        help="contact types of the lift's L/S fingers (fingers 2 and 4 of Case 2): `L` (rolling, "
+        "line) and/or `S` (sliding), distinct, comma-separated",
+    )
+
+
+def reading_option(p: argparse.ArgumentParser, *, default: str) -> None:
+    """``--reading R``: the slide direction of the S-points."""
+    p.add_argument(
+        "--reading",
+        type=choices(READINGS, every="both"),
+        default=default,
+        metavar="R",
+        help="slide direction of S-points: `physical` (the slip of the minimum-norm lift motion: "
+        "friction resists the lift, what the physics supports), `literal` (the paper's printed "
+        "vector, the reverse: the curve of its Fig. 8, docs/paper-results.md), a comma list of "
+        "them, or `both`",
+    )
+
+
+_STATE_FILE = "`solve`: a grasp only (a state file: refused, exit 2)"
+
+
+def mu_option(p: argparse.ArgumentParser, *, many: bool = False) -> None:
+    """``--mu X``: one friction coefficient for every contact instead of the grasp's
+    ([`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``many``: a comma list)."""
+    action = p.add_argument(
+        "--mu",
+        type=numbers(0.0, MAX_MU) if many else number(0.0, MAX_MU),
+        default=None,
+        metavar="X",
+        help=f"friction coefficient, for every contact of the grasp; `sweep`: a comma list; {_STATE_FILE}",
+    )
+    computed_default(action, "the grasp's (`0.3` for `case2`)")
+
+
+def mg_option(p: argparse.ArgumentParser, *, many: bool = False, positive: bool = False) -> None:
+    """``--mg X``: the object's weight (N) instead of the grasp's (its REFS scaled to it;
+    [`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``many``: a comma list;
+    ``positive``: not 0, ``verify``)."""
+    action = p.add_argument(
+        "--mg",
+        type=numbers(0.0, MAX_FORCE, unit="weights (N)")
+        if many
+        else number(0.0, MAX_FORCE, strict=positive, unit="N"),
+        default=None,
+        metavar="X",
+        help="object weight in N (the grasp's REFS scaled to it); `sweep`: a comma list; "
+        f"{_STATE_FILE}; `verify`: not 0 (its rollouts need a weight)",
+    )
+    computed_default(action, "the grasp's (`1.0` for `case2`)")
+
+
 def friction_margin_option(p: argparse.ArgumentParser) -> None:
     """``--friction-margin D``: the LPs use (1 - D) mu for every F contact (docs/state-format.md)."""
-    p.add_argument(
+    action = p.add_argument(
         "--friction-margin",
         type=fraction,
         default=None,
         metavar="D",
-        help="friction margin in [0, 1): the LPs use (1 - D) mu for every F contact's cone; replaces the "
-        "state's friction_margin or the grasp file's (combined with its cone: pyramidal x 1/sqrt(2)) "
-        "(default: the state's or grasp's, 0)",
+        help="friction margin delta: every LP uses (1 - D) mu for each F contact's pyramid "
+        "(docs/state-format.md#friction-margin-and-friction-intervals); replaces a state's "
+        "`friction_margin` or a grasp file's (whose `cone` still applies: pyramidal makes it "
+        "1 - (1 - D) / sqrt(2)); `verify`: on the rollouts' `--cone` instead; the result's "
+        "`friction` object reports it with the TVMMP at margin 0",
     )
+    computed_default(action, "the state's or grasp's (`0`)")
 
 
-def hand_option(
-    p: argparse.ArgumentParser, help: str = "hand model of the paper's cases: default or humanlike"
-) -> None:
-    """``--hand``."""
-    p.add_argument("--hand", default="default", help=help)
-
-
-def mu_option(p: argparse.ArgumentParser) -> None:
-    """``--mu X``: one friction coefficient for every contact instead of the grasp's
-    ([`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
-    p.add_argument(
-        "--mu",
-        type=number(0.0, MAX_MU),
+def limit_horizon_option(p: argparse.ArgumentParser) -> None:
+    """``--limit-horizon M``: Problem 2's travel horizon of the joint limits (m of object travel;
+    ``docs/joint-limits.md``), replacing the state's."""
+    action = p.add_argument(
+        "--limit-horizon",
+        type=number(0.0, 1e3, unit="metres"),
         default=None,
-        help="friction coefficient (default: the grasp's, 0.3 for case2)",
+        metavar="M",
+        help="metres of object travel within which no joint may reach its position limit (Problem 2, "
+        "docs/joint-limits.md); `0`: only the joints on a limit are held; replaces the state's or "
+        "the grasp file's `joint_limits.horizon` at every state the command solves (`sweep`, `rank`: "
+        "part of what `--resume` matches; `verify`: named in `lp_note`); `tvms` refuses it "
+        "(Problem 1 has no horizon)",
     )
-
-
-def mg_option(p: argparse.ArgumentParser) -> None:
-    """``--mg X``: the object's weight (N) instead of the grasp's (its REFS scaled to it;
-    [`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``replay``, ``solve``)."""
-    p.add_argument(
-        "--mg",
-        type=number(0.0, MAX_FORCE),
-        default=None,
-        help="object weight (N) (default: the grasp's, 1 for case2)",
-    )
+    computed_default(action, "the state's, or the grasp file's (`0.001`)")
 
 
 def states_option(p: argparse.ArgumentParser, *, hint: str = "", minimum: int = 2) -> None:
@@ -232,8 +330,7 @@ def states_option(p: argparse.ArgumentParser, *, hint: str = "", minimum: int = 
         type=integer(minimum, MAX_STATES, hint=hint),
         default=30,
         metavar="N",
-        help="number of states along the lift"
-        + (" (1: the grasp's own state, no lift)" if minimum == 1 else ""),
+        help="number of states along the lift (a count; `verify`: 1 is the grasp's own state, no lift)",
     )
 
 
@@ -244,42 +341,113 @@ def lift_options(p: argparse.ArgumentParser, *, contacts: str, reading: str) -> 
     mu_option(p)
     mg_option(p)
     states_option(p)
-    p.add_argument(
+    action = p.add_argument(
         "--stop-margin",
         type=fraction,
         default=None,
         metavar="F",
         help="end the lift where a finger's contact Jacobian keeps this fraction of its smallest singular "
-        "value at the start (default: the grasp's, 0.25; 0: to the reach limit)",
+        "value at the start (0: to the reach limit)",
     )
-    p.add_argument(
-        "--contacts",
-        type=choices(CONTACTS),
-        default=contacts,
-        metavar="L,S",
-        help="contact types of the lift's L/S fingers (Case 2: fingers 2 and 4; L: line/rolling, "
-        "S: sliding), comma-separated",
-    )
-    p.add_argument(
-        "--reading",
-        type=choices(READINGS, every="both"),
-        default=reading,
-        metavar="READING",
-        help="slide direction of S-points: physical (the slip of the min-norm motion: friction "
-        "resists the lift, what the physics check supports), literal (the paper's printed vector: "
-        "reproduces its Fig. 8), a comma list, or both",
-    )
+    computed_default(action, "the grasp's `lift.stop_margin`, else `0.25`")
+    contacts_option(p, default=contacts)
+    reading_option(p, default=reading)
 
 
-def limit_horizon_option(p: argparse.ArgumentParser) -> None:
-    """``--limit-horizon M``: Problem 2's travel horizon of the joint limits (m of object travel;
-    ``docs/joint-limits.md``), replacing the state's."""
+def out_options(p: argparse.ArgumentParser, *, name: str | None) -> None:
+    """``--out DIR`` and (unless ``name`` is None) ``--name STEM`` with the default ``name``."""
     p.add_argument(
-        "--limit-horizon",
-        type=number(0.0, 1e3),
+        "--out",
+        type=folder,
+        default="results",
+        metavar="DIR",
+        help="output folder (created if missing, checked writable before any work, locked while the "
+        "run writes)",
+    )
+    if name is not None:
+        p.add_argument(
+            "--name", type=stem, default=name, metavar="STEM", help="file stem of the outputs inside `--out`"
+        )
+
+
+def jobs_option(p: argparse.ArgumentParser) -> None:
+    """``--jobs N``: local worker processes."""
+    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, metavar="N", help="local worker processes")
+
+
+def parallel_options(p: argparse.ArgumentParser) -> None:
+    """``--jobs N`` local worker processes and ``--cluster tcp://HOST:PORT`` (a Dask scheduler)."""
+    jobs_option(p)
+    action = p.add_argument(
+        "--cluster",
+        type=cluster_address,
         default=None,
-        metavar="M",
-        help="metres of object travel within which no joint may reach its position limit "
-        "(Problem 2; 0: only joints on a limit are held; default: the state's, or the grasp "
-        "file's joint_limits.horizon, 0.001)",
+        metavar="tcp://HOST:PORT",
+        help="Dask scheduler address (the `cluster` extra; overrides `--jobs`; connection timeout 10 s)",
+    )
+    computed_default(action, "none: local processes")
+
+
+def resume_option(p: argparse.ArgumentParser) -> None:
+    """``--resume``: keep the finished rows of an interrupted or earlier run."""
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="keep the finished rows of `NAME.partial.json` / `NAME.json` that belong to this run "
+        "(`sweep`: to its grid) and whose inputs are unchanged",
+    )
+
+
+def indent_option(p: argparse.ArgumentParser) -> None:
+    """``--indent N``: the indentation of the JSON printed."""
+    p.add_argument(
+        "--indent",
+        type=integer(0, MAX_INDENT),
+        default=1,
+        metavar="N",
+        help="JSON indentation (`show`: with `--json`)",
+    )
+
+
+def time_limit_option(p: argparse.ArgumentParser) -> None:
+    """``--time-limit S``: wall-clock seconds of a projection (``tvms``) or a cdd run (``python -m benchmarks``)."""
+    p.add_argument(
+        "--time-limit",
+        type=number(0.0, MAX_SECONDS, strict=True, unit="seconds"),
+        default=120.0,
+        metavar="S",
+        help="wall-clock seconds: `tvms`: the projection's limit for both methods: `lp` then stops with "
+        '`status: "approximate"` and the volume bracket, `cdd` with `status: "timeout"`; the benchmarks: '
+        "the cap of each cdd run",
+    )
+
+
+def no_plots_option(p: argparse.ArgumentParser) -> None:
+    """``--no-plots``."""
+    p.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
+
+
+def rrd_option(p: argparse.ArgumentParser) -> None:
+    """``--rrd FILE``: a rerun recording of what the command computes (docs/rerun.md)."""
+    action = p.add_argument(
+        "--rrd",
+        type=output_file,
+        default=None,
+        metavar="FILE",
+        help="also write a rerun recording (docs/rerun.md; open it with `rerun FILE`) of what the "
+        "command computes: `replay`: the lift (scene, contacts, velocity polytopes, TVMMP, joint "
+        "operation points); `show`: the grasp (geoms, contact points, normals, friction cones); "
+        "`verify`: the results",
+    )
+    computed_default(action, "none")
+
+
+def quiet_option(p: argparse.ArgumentParser) -> None:
+    """``--quiet``: less on stderr."""
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar / spinner on stderr (`export-state`, `tvms`: no contact report or "
+        "warnings either; `solve`: no warnings (contacts, zero alphas, certificates), standard "
+        "output unchanged)",
     )

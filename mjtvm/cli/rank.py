@@ -6,14 +6,16 @@ import argparse
 from pathlib import Path
 
 from mjtvm.cli.options import (
-    GRASP_HELP,
     Subparsers,
     command,
     grasp_option,
     limit_horizon_option,
+    no_plots_option,
     one_grasp,
     out_options,
     parallel_options,
+    quiet_option,
+    resume_option,
 )
 from mjtvm.cli.output import EXIT_OK, emit
 from mjtvm.cli.values import input_file, source
@@ -42,15 +44,13 @@ def add_rank(sub: Subparsers) -> None:
         help="a mjtvm.grasp/1 file or a shipped grasp's name (or --grasp)",
     )
     p.add_argument("datasets", type=input_file, nargs="+", metavar="DATASET", help="dataset files")
-    grasp_option(p, default=None, help="the same as GRASP: " + GRASP_HELP)
+    grasp_option(p, default=None)
     limit_horizon_option(p)
     parallel_options(p)
     out_options(p, name="rank")
-    p.add_argument(
-        "--resume", action="store_true", help="keep the finished rows of NAME.partial.json / NAME.json"
-    )
-    p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    resume_option(p)
+    no_plots_option(p)
+    quiet_option(p)
     p.set_defaults(func=_cmd_rank)
 
 

@@ -11,9 +11,19 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from mjtvm.cli.lift import check_file_folder
-from mjtvm.cli.options import GRASP_HELP, Subparsers, command, grasp_option, hand_option, one_grasp
+from mjtvm.cli.options import (
+    GRASP_HELP,
+    Subparsers,
+    command,
+    computed_default,
+    grasp_option,
+    hand_option,
+    indent_option,
+    one_grasp,
+    rrd_option,
+)
 from mjtvm.cli.output import EXIT_OK, emit, warn
-from mjtvm.cli.values import MAX_INDENT, integer, number, output_file, source
+from mjtvm.cli.values import number, output_file, source
 from mjtvm.errors import ModelError
 
 if TYPE_CHECKING:
@@ -49,33 +59,28 @@ def add_show(sub: Subparsers) -> None:
         "export-state (the table is printed first).",
     )
     p.add_argument("grasp_file", nargs="?", default=None, type=source, metavar="GRASP", help=GRASP_HELP)
-    grasp_option(p, default=None, help="the same as GRASP")
+    grasp_option(p, default=None)
     hand_option(p)
-    p.add_argument(
+    within = p.add_argument(
         "--within",
-        type=number(0.0, _MAX_WITHIN_MM),
+        type=number(0.0, _MAX_WITHIN_MM, unit="mm"),
         default=None,
         metavar="MM",
-        help="list the geoms within this distance of the object (mm; default: 10 contact tolerances, "
-        "at least 1 mm)",
+        help="list the geoms within this distance of the object (mm)",
     )
+    computed_default(within, "10 contact tolerances, at least 1 mm")
     p.add_argument("--json", action="store_true", help="print the report as JSON instead of a table")
-    p.add_argument("--indent", type=integer(0, MAX_INDENT), default=1, help="JSON indentation (with --json)")
-    p.add_argument(
-        "--rrd",
-        type=output_file,
-        default=None,
-        metavar="FILE",
-        help="write a rerun recording: the geoms, contact points, normals and friction cones",
-    )
-    p.add_argument(
+    indent_option(p)
+    rrd_option(p)
+    png = p.add_argument(
         "--png",
         type=output_file,
         default=None,
         metavar="FILE",
         help="write a picture by MuJoCo's renderer: three views around the object with the contact "
-        "points (headless: MUJOCO_GL=egl, set when unset)",
+        "points (headless: `MUJOCO_GL=egl`, set when unset)",
     )
+    computed_default(png, "none")
     p.set_defaults(func=_cmd_show)
 
 

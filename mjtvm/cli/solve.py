@@ -12,14 +12,18 @@ from mjtvm.cli.options import (
     GRASP_HELP,
     Subparsers,
     command,
+    computed_default,
     friction_margin_option,
     grasp_option,
     hand_option,
+    indent_option,
     limit_horizon_option,
     mg_option,
     mu_option,
     one_grasp,
+    quiet_option,
     refused_option,
+    time_limit_option,
     with_limit_horizon,
 )
 from mjtvm.cli.output import (
@@ -33,17 +37,7 @@ from mjtvm.cli.output import (
     warn_uncertified,
 )
 from mjtvm.cli.show import warn_contacts
-from mjtvm.cli.values import (
-    MAX_FORCE,
-    MAX_INDENT,
-    MAX_MU,
-    MAX_SECONDS,
-    fraction,
-    integer,
-    memory_size,
-    number,
-    source,
-)
+from mjtvm.cli.values import fraction, memory_size, source
 from mjtvm.errors import OptionError, StateError
 from mjtvm.formats.state_file import load_state
 from mjtvm.lp.solvers import SOLVERS
@@ -79,10 +73,6 @@ def example_path(name: str = "pinch.json") -> str:
     return str(resources.files("mjtvm.data").joinpath("examples").joinpath(name))
 
 
-def _indent_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--indent", type=integer(0, MAX_INDENT), default=1, help="JSON indentation")
-
-
 # ------------------------------------------------------------------ solve
 _SOURCE_HELP = (
     "a mjtvm.state/1 JSON file, - for standard input, or a mjtvm.grasp/1 file (.toml, or .json "
@@ -114,10 +104,8 @@ def add_solve(sub: Subparsers) -> None:
     )
     p.add_argument("--no-witnesses", action="store_true", help="omit forces, torques, speeds and boxes")
     limit_horizon_option(p)
-    _indent_option(p)
-    p.add_argument(
-        "--quiet", action="store_true", help="no warnings (contacts, zero alphas, certificates) on stderr"
-    )
+    indent_option(p)
+    quiet_option(p)
     p.set_defaults(func=_cmd_solve)
 
 
@@ -244,18 +232,14 @@ def add_export_state(sub: Subparsers) -> None:
     """``mjtvm export-state GRASP``: prints the grasp's mjtvm.state/1."""
     p = command(sub, "export-state", *_TEXTS["export-state"])
     p.add_argument("grasp_file", nargs="?", default=None, type=source, metavar="GRASP", help=GRASP_HELP)
-    grasp_option(p, default=None, help="the same as GRASP")
+    grasp_option(p, default=None)
     hand_option(p)
-    p.add_argument(
-        "--mg", type=number(0.0, MAX_FORCE), default=None, help="object weight (N); default: the grasp's REFS"
-    )
-    p.add_argument(
-        "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient; default: the grasp's"
-    )
+    mg_option(p)
+    mu_option(p)
     friction_margin_option(p)
     limit_horizon_option(p)
-    _indent_option(p)
-    p.add_argument("--quiet", action="store_true", help="no contact report on stderr")
+    indent_option(p)
+    quiet_option(p)
     p.set_defaults(func=_cmd_export_state)
 
 
@@ -287,7 +271,7 @@ def add_tvms(sub: Subparsers) -> None:
     """``mjtvm tvms [STATE|GRASP|-] [--grasp NAME]``: prints mjtvm.tvms/1."""
     p = command(sub, "tvms", *_TEXTS["tvms"])
     p.add_argument("state", nargs="?", default=None, type=source, metavar="STATE|GRASP", help=_SOURCE_HELP)
-    grasp_option(p, default=None, help="a grasp instead of STATE: " + GRASP_HELP)
+    grasp_option(p, default=None)
     hand_option(p)
     p.add_argument("--no-rvds", action="store_true", help="ignore the state's RVDS (no cone restriction)")
     p.add_argument(
@@ -297,45 +281,37 @@ def add_tvms(sub: Subparsers) -> None:
         help="auto: the joint-speed box's image when no force binds, else lp; lp: LP projection; "
         "cdd: vertex enumeration; zonotope: the box's image or exit 2",
     )
-    p.add_argument(
-        "--time-limit",
-        type=number(0.0, MAX_SECONDS, strict=True),
-        default=120.0,
-        metavar="S",
-        help="wall-clock seconds for the projection: lp then stops with status approximate and the "
-        "volume bracket, cdd with status timeout (default 120)",
-    )
+    time_limit_option(p)
     p.add_argument(
         "--tolerance",
         type=fraction,
         default=0.0,
         metavar="REL",
-        help="lp: stop once (outer - inner) / outer of the volume bracket is at most REL, in [0, 1) "
-        "(default 0: exact within floating point)",
+        help="`tvms --method lp`: stop once the volume bracket's relative gap `(outer - inner) / outer` "
+        "is at most REL (`0`: exact within floating point)",
     )
-    p.add_argument(
+    memory = p.add_argument(
         "--memory",
         type=memory_size,
         default=None,
         metavar="SIZE",
-        help="lp: memory the projection may use, e.g. 2G, 512M or 25%% of the available memory "
-        "(default 25%%); reaching it stops with status approximate",
+        help="`tvms --method lp`: memory the projection may add to the process (`512M`, `2G`, `1.5GiB`, "
+        'bytes, or `25%%` of the available memory); reaching it stops with `status: "approximate"`, '
+        "or exit 3 naming the budget when not even a bracket fits",
     )
+    computed_default(memory, "`25%` of the available memory")
     p.add_argument(
         "--confidence",
         type=fraction,
         default=DEFAULT_CONFIDENCE,
         metavar="P",
-        help="lp with --tolerance: if the certified bracket stays wider, estimate the volume by "
-        "random points and LPs until an interval that holds it with probability P is that narrow "
-        "(volume_estimate; the cutting planes then stop at half of --time-limit); 0: none",
+        help="`tvms --method lp` with `--tolerance`: when the certified bracket stays wider than REL, "
+        "estimate the volume by random points and LPs until an interval (`volume_estimate`) that "
+        "holds it with probability P is that narrow (`0`: none); the cutting planes then stop at "
+        "half of `--time-limit`",
     )
-    _indent_option(p)
-    p.add_argument(
-        "--quiet",
-        action="store_true",
-        help="no progress (LPs solved, volume bracket) and no contact warnings on stderr",
-    )
+    indent_option(p)
+    quiet_option(p)
     refused_option(
         p,
         "--limit-horizon",

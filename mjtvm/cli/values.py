@@ -1,5 +1,7 @@
 """The value types of the options (argparse ``type=``) and the range of each option, in one
-place: one-line errors naming what is expected (the ranges: ``docs/cli.md``, "Bounds")."""
+place: one-line errors naming what is expected. Every type with a range says what it accepts
+in its ``accepted`` attribute ([`accepted()`][mjtvm.cli.values.accepted]): ``--help`` shows it,
+and ``docs/cli.md``'s "Bounds" table is generated from it (``tools/cli_tables.py``)."""
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ import re
 import stat
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any, TypeVar
 
 __all__ = [
     "CONTACTS",
@@ -34,6 +37,7 @@ __all__ = [
     "NAME_MAX",
     "PATH_MAX",
     "READINGS",
+    "accepted",
     "choices",
     "cluster_address",
     "folder",
@@ -81,6 +85,22 @@ MAX_STEM = 200  # characters of --name: NAME.partial.json's temporary file must 
 MAX_NOTES_BYTES = 2**20  # bench --notes: read at most this much
 
 
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _accepting(parse: _F, text: str) -> _F:
+    """``parse``, saying in ``parse.accepted`` what it accepts (``--help``, docs/cli.md's "Bounds")."""
+    parse.accepted = text  # type: ignore[attr-defined]
+    return parse
+
+
+def accepted(type_: object) -> str | None:
+    """What an option's type accepts, as ``--help`` and docs/cli.md's "Bounds" say it (backticks:
+    literals), or None for a type without a range (a path, a choice, a name)."""
+    text = getattr(type_, "accepted", None)
+    return text if isinstance(text, str) else None
+
+
 def shown(text: str, limit: int = 60) -> str:
     """``text`` for a one-line message: ``repr`` (a newline or a lone surrogate stays escaped),
     cut to ``limit`` characters."""
@@ -110,7 +130,7 @@ def integer(low: int, high: int, *, hint: str = "") -> Callable[[str], int]:
             )
         return value
 
-    return parse
+    return _accepting(parse, f"integer in {_interval(low, high)}")
 
 
 def _float(text: str) -> float | None:
@@ -121,8 +141,9 @@ def _float(text: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def number(low: float, high: float, *, strict: bool = False) -> Callable[[str], float]:
-    """An argparse type: a finite number in ``[low, high]``, or ``(low, high]`` when ``strict``."""
+def number(low: float, high: float, *, strict: bool = False, unit: str = "number") -> Callable[[str], float]:
+    """An argparse type: a finite number in ``[low, high]``, or ``(low, high]`` when ``strict``
+    (``unit``: what it accepts, ``"seconds"``, ``"N"``, ...)."""
 
     def parse(text: str) -> float:
         value = _float(text)
@@ -132,7 +153,7 @@ def number(low: float, high: float, *, strict: bool = False) -> Callable[[str], 
             )
         return value
 
-    return parse
+    return _accepting(parse, f"{unit} in {_interval(low, high, strict=strict)}")
 
 
 def fraction(text: str) -> float:
@@ -141,6 +162,9 @@ def fraction(text: str) -> float:
     if value is None or not 0.0 <= value < 1.0:
         raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {shown(text)}")
     return value
+
+
+fraction.accepted = "number in [0, 1)"  # type: ignore[attr-defined]
 
 
 _UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
@@ -171,6 +195,11 @@ def memory_size(text: str) -> int:
         ) from None
 
 
+memory_size.accepted = (  # type: ignore[attr-defined]
+    f"1 byte to {MAX_MEMORY // _UNITS['T']}T, or a share in (0, 100] % of the available memory"
+)
+
+
 def _items(text: str, what: str) -> list[str]:
     values = text.split(",")
     if len(values) > MAX_LIST:
@@ -180,9 +209,11 @@ def _items(text: str, what: str) -> list[str]:
     return values
 
 
-def numbers(low: float, high: float, *, strict: bool = False) -> Callable[[str], tuple[float, ...]]:
+def numbers(
+    low: float, high: float, *, strict: bool = False, unit: str = "numbers"
+) -> Callable[[str], tuple[float, ...]]:
     """An argparse type: at most [`MAX_LIST`][mjtvm.cli.values.MAX_LIST] comma-separated finite numbers in ``[low, high]``
-    (``(low, high]`` when ``strict``)."""
+    (``(low, high]`` when ``strict``; ``unit``: what they are, as [`number()`][mjtvm.cli.values.number] has it)."""
     one = number(low, high, strict=strict)
 
     def parse(text: str) -> tuple[float, ...]:
@@ -195,7 +226,9 @@ def numbers(low: float, high: float, *, strict: bool = False) -> Callable[[str],
                 f"expected comma-separated numbers in {_interval(low, high, strict=strict)}, got {shown(text)}"
             ) from None
 
-    return parse
+    return _accepting(
+        parse, f"comma-separated {unit} in {_interval(low, high, strict=strict)}, at most {MAX_LIST}"
+    )
 
 
 def integers(low: int, high: int) -> Callable[[str], tuple[int, ...]]:
@@ -212,7 +245,7 @@ def integers(low: int, high: int) -> Callable[[str], tuple[int, ...]]:
                 f"expected comma-separated integers in {_interval(low, high)}, got {shown(text)}"
             ) from None
 
-    return parse
+    return _accepting(parse, f"comma-separated integers in {_interval(low, high)}, at most {MAX_LIST}")
 
 
 def choices(allowed: Sequence[str], *, every: str | None = None) -> Callable[[str], tuple[str, ...]]:
@@ -238,6 +271,9 @@ def names(text: str) -> tuple[str, ...]:
     return values
 
 
+names.accepted = f"comma-separated names, at most {MAX_LIST}"  # type: ignore[attr-defined]
+
+
 _STEM = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 
 
@@ -249,6 +285,12 @@ def stem(text: str) -> str:
             f"expected a file stem of 1 to {MAX_STEM} letters, digits, '_', '.', '-' (no '/'), got {shown(text)}"
         )
     return text
+
+
+stem.accepted = (  # type: ignore[attr-defined]
+    f"1 to {MAX_STEM} letters, digits, `_ . -` (no `/`; its files and their temporary files "
+    "must fit a file name)"
+)
 
 
 # ------------------------------------------------------------------ paths
@@ -328,6 +370,9 @@ def grasps(text: str) -> tuple[str, ...]:
     for value in values:
         source(value)
     return values
+
+
+grasps.accepted = f"comma-separated grasps, at most {MAX_LIST}"  # type: ignore[attr-defined]
 
 
 _CLUSTER = re.compile(r"(?:(tcp|tls|ucx|ws|wss)://)?\[?[A-Za-z0-9_.:-]+\]?:\d{1,5}")

@@ -17,31 +17,34 @@ from typing import Any
 
 from mjtvm.cli.options import (
     Parser,
+    computed_default,
+    contacts_option,
     friction_margin_option,
     grasp_option,
     hand_option,
+    jobs_option,
     limit_horizon_option,
+    mg_option,
+    mu_option,
+    no_plots_option,
     out_options,
+    quiet_option,
+    reading_option,
+    rrd_option,
     states_option,
 )
 from mjtvm.cli.output import EXIT_OK, emit
 from mjtvm.cli.values import (
-    CONTACTS,
     MAX_FORCE,
     MAX_GEAR,
-    MAX_JOBS,
     MAX_LAUNCH,
-    MAX_MU,
     MAX_SCALE,
     MAX_SIM_SECONDS,
     MAX_STATES,
     MIN_GEAR,
-    READINGS,
-    choices,
     integer,
     number,
     numbers,
-    output_file,
 )
 
 __all__ = ["add_arguments", "verify_parser"]
@@ -61,7 +64,7 @@ def verify_parser() -> argparse.ArgumentParser:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of ``mjtvm verify`` ; the vocabulary of ``docs/cli.md``."""
+    """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
     hand_option(p)
     states_option(p, minimum=1)
@@ -72,32 +75,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="N",
         help="check every N-th state (and the last)",
     )
-    p.add_argument(
-        "--contacts",
-        type=choices(CONTACTS),
-        default="L,S",
-        metavar="L,S",
-        help="contact types of the lift's L/S fingers to check (Case 2: fingers 2 and 4)",
-    )
-    p.add_argument(
-        "--reading",
-        type=choices(READINGS, every="both"),
-        default="both",
-        metavar="READING",
-        help="slide directions of the S-points: physical, literal or both",
-    )
-    p.add_argument(
-        "--mu", type=number(0.0, MAX_MU), default=None, help="friction coefficient (default: the grasp's)"
-    )
-    p.add_argument(
-        "--mg",
-        type=number(0.0, MAX_FORCE, strict=True),
-        default=None,
-        help="object weight (N) (default: the grasp's)",
-    )
+    contacts_option(p, default="L,S")
+    reading_option(p, default="both")
+    mu_option(p)
+    mg_option(p, positive=True)
     friction_margin_option(p)
     limit_horizon_option(p)
-    p.add_argument("--jobs", type=integer(1, MAX_JOBS), default=1, help="worker processes")
+    jobs_option(p)
     p.add_argument(
         "--start-method",
         default="forkserver",
@@ -118,47 +102,44 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--preload",
-        type=number(0.0, MAX_FORCE),
+        type=number(0.0, MAX_FORCE, unit="N"),
         default=0.0,
         metavar="N",
         help="minimum normal force (N) of every L contact (the state's contact preload)",
     )
-    p.add_argument(
+    hold = p.add_argument(
         "--hold",
-        type=number(0.0, MAX_SIM_SECONDS, strict=True),
+        type=number(0.0, MAX_SIM_SECONDS, strict=True, unit="seconds"),
         default=None,
-        metavar="SECONDS",
-        help="length of the hold test at rest before the speeds (default: a rollout's, settle + "
-        "startup + window)",
+        metavar="S",
+        help="length of the hold test at rest that comes first (a state that does not hold is not "
+        "checked further; docs/physics-check.md#the-hold-test)",
     )
-    p.add_argument(
+    computed_default(hold, "a rollout's length, settle + startup + window (37 ms)")
+    launch = p.add_argument(
         "--launch",
-        type=number(0.0, MAX_LAUNCH, strict=True),
+        type=number(0.0, MAX_LAUNCH, strict=True, unit="metres"),
         default=None,
         metavar="M",
         help="also launch every pair from rest and report the speed reached within M metres "
-        "(e.g. 0.01; docs/physics-check.md, 'From rest')",
+        "(e.g. `0.01`; docs/physics-check.md#from-rest)",
     )
-    p.add_argument(
+    computed_default(launch, "none")
+    gears = p.add_argument(
         "--gears",
-        type=numbers(MIN_GEAR, MAX_GEAR),
+        type=numbers(MIN_GEAR, MAX_GEAR, unit="reductions"),
         default=None,
         metavar="N,N,...",
-        help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP "
-        "(e.g. 10,20,30,40,60,100; writes gears.csv and gears.png)",
+        help="instead of the rollouts: the gear-ratio sweep of the TVMMP and the dynamic TVMMP at the "
+        "states of `--states`/`--stride` (e.g. `10,20,30,40,60,100`; writes `gears.csv` and `gears.png`)",
     )
+    computed_default(gears, "none: the rollouts")
     _simulation_options(p)
     p.add_argument("--slide-check", action="store_true", help="also run the slide-direction check")
-    out_options(p, name="verify", name_help="file stem of the CSV and PNG in --out")
-    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plot")
-    p.add_argument(
-        "--rrd",
-        type=output_file,
-        default=None,
-        metavar="FILE",
-        help="also write a rerun recording of the results",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    out_options(p, name="verify")
+    no_plots_option(p)
+    rrd_option(p)
+    quiet_option(p)
 
 
 def _simulation_options(p: argparse.ArgumentParser) -> None:
@@ -169,22 +150,29 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
         "--armature-scale",
         type=number(0.0, MAX_SCALE, strict=True),
         default=1.0,
+        metavar="X",
         help="ablation: scale the rotor inertia (armature)",
     )
     p.add_argument(
         "--window",
-        type=number(0.0, MAX_SIM_SECONDS, strict=True),
+        type=number(0.0, MAX_SIM_SECONDS, strict=True, unit="seconds"),
         default=SimSettings.window,
+        metavar="S",
         help="measurement window of a rollout (s)",
     )
     p.add_argument(
         "--startup",
-        type=number(0.0, MAX_SIM_SECONDS),
+        type=number(0.0, MAX_SIM_SECONDS, unit="seconds"),
         default=SimSettings.startup,
+        metavar="S",
         help="settling time before the window (s)",
     )
     p.add_argument(
-        "--cone", default="elliptic", choices=("elliptic", "pyramidal"), help="MuJoCo friction cone"
+        "--cone",
+        default="elliptic",
+        choices=("elliptic", "pyramidal"),
+        help="the rollouts' MuJoCo friction cone (pyramidal also drives the witnesses of the LPs at "
+        "mu / sqrt(2), times 1 - `--friction-margin`)",
     )
     p.add_argument("--no-track", action="store_true", help="constant joint-speed setpoints (no tracking)")
 

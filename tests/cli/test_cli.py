@@ -139,7 +139,7 @@ def test_sweep_writes_rows_and_rejects_bad_numbers(tmp_path, capsys):
 def test_verify_has_its_own_options(capsys):
     assert main(["verify", "--help"]) == 0
     out = " ".join(capsys.readouterr().out.split())  # argparse wraps lines at the terminal width
-    assert "--armature-scale" in out and "(default: 1.0)" in out
+    assert "--armature-scale X" in out and "(number in (0, 1000]; default: 1.0)" in out
 
 
 # ------------------------------------------------------- malformed calls (issue 12)
@@ -356,7 +356,9 @@ def test_version_and_help_show_defaults(capsys):
     )
     assert main(["sweep", "--help"]) == 0
     out = capsys.readouterr().out
-    assert "(default: 30)" in out and "(default: results)" in out and "--state-indices" in out
+    out = " ".join(out.split())  # argparse wraps lines at the terminal width
+    assert "(integer in [2, 10000]; default: 30)" in out and "(default: results)" in out
+    assert "--state-indices" in out and "default: the grasp's (0.3 for case2))" in out  # no backticks
 
 
 @pytest.mark.parametrize(

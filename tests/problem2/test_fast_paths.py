@@ -23,8 +23,8 @@ from mjtvm.lp.scaling import scale_lp
 from mjtvm.paper_hand.scenario import load_scenario
 from mjtvm.problem2.assembly import assemble
 from mjtvm.problem2.lps import StateLPs
-
 from tests.lp.test_solvers import mixed_scale
+
 from .test_units import rescale
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "mjtvm" / "data" / "examples" / "pinch.json"
