@@ -1,27 +1,33 @@
 r"""mjtvm: joint torque-velocity pair based manipulability (Watanabe) on top of MuJoCo.
 
-The core (this namespace) needs neither MuJoCo nor rerun: grasp states, operation
-ranges, contacts, Problem 2 (TVMMP, [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp]) and Problem 1 (TVMS, [`tvms()`][mjtvm.polytopes.tvms.tvms]). The
-MuJoCo coupling (`mjtvm.sim`: ``grasp``, ``lift``, ``paper_hand``; `mjtvm.physics`)
-and the rerun recording (`mjtvm.viewer`) live in their own packages. The grasp-file names
-here ([`load_grasp()`][mjtvm.grasp.resolve.file.load_grasp], [`export_state()`][mjtvm.grasp.resolve.file.export_state], [`Grasp`][mjtvm.grasp.resolve.loaded.Grasp], `GraspError`,
+The names here are what a user calls; each lives in a room (a subpackage, the layers of
+``docs/architecture.md``): the grasp states, contacts, operation ranges and transmissions
+(`mjtvm.model`), the state file (`mjtvm.formats`), Problem 2 (TVMMP, [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp];
+`mjtvm.problem2`, on the LP engine `mjtvm.lp`), Problem 1 (TVMS, [`tvms()`][mjtvm.polytopes.tvms.tvms];
+`mjtvm.polytopes`) and the errors (`mjtvm.errors`). The core needs neither MuJoCo nor rerun.
+The MuJoCo coupling (`mjtvm.grasp`, `mjtvm.lift`, `mjtvm.paper_hand`; `mjtvm.physics`) and the
+rerun recording (`mjtvm.viewer`) live in their own rooms. The grasp-file names here
+([`load_grasp()`][mjtvm.grasp.resolve.file.load_grasp], [`export_state()`][mjtvm.grasp.resolve.file.export_state], [`Grasp`][mjtvm.grasp.resolve.loaded.Grasp], `GraspError`,
 [`shipped_grasps()`][mjtvm.grasp.resolve.file.shipped_grasps]) are imported on first use, so that ``import mjtvm`` does not load MuJoCo;
-so are the classic grasp measures ([`classic_measures()`][mjtvm.measures.classic.classic_measures], [`GraspMeasures`][mjtvm.measures.classic.GraspMeasures],
-`mjtvm.measures`), which a solve does not need.
+so are Problem 1 and the classic grasp measures ([`classic_measures()`][mjtvm.measures.classic.classic_measures], [`GraspMeasures`][mjtvm.measures.classic.GraspMeasures],
+`mjtvm.measures`), which a solve does not need. The rest of each room's API is in its own
+package (`mjtvm.model.force_generators`, `mjtvm.problem2.assemble`, ...).
 """
 
 from typing import TYPE_CHECKING
 
 from mjtvm._lazy import lazy_attributes
 from mjtvm.errors import MjtvmError, ModelError, OptionError, OutputError, ParamError, SolverError, StateError
-from mjtvm.formats.state_file import dump_state, load_state, parse_state, state_to_dict
-from mjtvm.model.contacts import CONTACT_TYPES, Contact, force_generators, tangent_basis
-from mjtvm.model.operation_range import OperationRange, default_operation_range, load_motor_data
-from mjtvm.model.state import GraspState
-from mjtvm.model.transmission import Transmission
-from mjtvm.problem2.assembly import Assembly, assemble
-from mjtvm.problem2.result import Diagnosis
-from mjtvm.problem2.tvmmp import Timings, TvmmpResult, Witness, tvmmp
+from mjtvm.formats import dump_state, load_state, parse_state, state_to_dict
+from mjtvm.model import (
+    Contact,
+    GraspState,
+    OperationRange,
+    Transmission,
+    default_operation_range,
+    load_motor_data,
+)
+from mjtvm.problem2 import Diagnosis, TvmmpResult, Witness, tvmmp
 
 if TYPE_CHECKING:
     from mjtvm.grasp import Grasp, GraspError, export_state, load_grasp, shipped_grasps
@@ -36,8 +42,6 @@ _MUJOCO_NAMES = frozenset({"Grasp", "GraspError", "export_state", "load_grasp", 
 _MEASURE_NAMES = frozenset({"GraspMeasures", "classic_measures"})
 
 __all__ = [
-    "CONTACT_TYPES",
-    "Assembly",
     "Contact",
     "Diagnosis",
     "Grasp",
@@ -52,24 +56,20 @@ __all__ = [
     "ParamError",
     "SolverError",
     "StateError",
-    "Timings",
     "Transmission",
     "TvmmpResult",
     "TvmsResult",
     "Witness",
-    "assemble",
     "classic_measures",
     "default_operation_range",
     "dump_state",
     "export_state",
-    "force_generators",
     "load_grasp",
     "load_motor_data",
     "load_state",
     "parse_state",
     "shipped_grasps",
     "state_to_dict",
-    "tangent_basis",
     "tvmmp",
     "tvms",
 ]

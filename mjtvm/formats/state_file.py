@@ -24,6 +24,7 @@ from mjtvm.model.bounds import (
     MAX_FILE_BYTES,
     MAX_JOINTS,
     check_json_tree,
+    checked_name,
     describe,
     float_array,
     number,
@@ -31,7 +32,7 @@ from mjtvm.model.bounds import (
 from mjtvm.model.contacts import Contact
 from mjtvm.model.limits import JointLimits
 from mjtvm.model.operation_range import OperationRange
-from mjtvm.model.state import SCHEMA, SCHEMA_V2, GraspState, _name
+from mjtvm.model.state import SCHEMA, SCHEMA_V2, GraspState
 from mjtvm.model.transmission import transmission_from_dict, transmission_to_dict
 
 __all__ = ["dump_state", "load_state", "parse_state", "state_to_dict"]
@@ -112,7 +113,7 @@ def parse_state(data: Mapping[str, Any]) -> GraspState:
     for i, j in enumerate(joints):
         keys = _JOINT_KEYS if driven else {"name"}
         _check_keys(j, keys | _LIMIT_KEYS, tuple(sorted(keys)), f"joints[{i}]")
-        names.append(_name(j["name"], f"joints[{i}].name"))
+        names.append(checked_name(j["name"], f"joints[{i}].name"))
         if driven:
             try:
                 ranges.append(OperationRange(j["operation_range"]))

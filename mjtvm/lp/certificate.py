@@ -40,18 +40,19 @@ reported alpha is feasible and within ``GAP_TOL + DUAL_TOL`` (2e-7) of the maxim
 bound holds to ``DUAL_TOL``, not rigorously: that would need finite bounds on every
 variable, and the forces and slip speeds have none. An infeasible verdict is certified by
 Farkas multipliers ([`farkas()`][mjtvm.lp.certificate.farkas]): the same dual bound with zero costs, positive.
+
+The tolerances and the record of a check are [`tolerances`][mjtvm.lp.tolerances]'; the batch
+checker that every function here runs is [`Certifier`][mjtvm.lp.certifier.Certifier]
+(``mjtvm.lp.certifier``). Their names are importable from here too.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Any, TypeAlias
-
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.lp.roundoff import drop_cancellation
+from mjtvm.lp.certifier import BATCH_ENTRIES, Certifier, Matrix
+from mjtvm.lp.tolerances import DUAL_TOL, GAP_TOL, PRIMAL_TOL, Certificate, clip, finite_part
 
 __all__ = [
     "BATCH_ENTRIES",
@@ -65,375 +66,6 @@ __all__ = [
     "farkas",
     "primal_violation",
 ]
-
-Matrix: TypeAlias = Any  #: a dense ``NDArray[np.float64]`` or a scipy sparse matrix
-#: ``(P, .)`` arrays in, the two products of `Certifier._measure()` out
-_Products: TypeAlias = Callable[[NDArray[np.float64], NDArray[np.float64]], tuple[NDArray[np.float64], ...]]
-
-#: Largest violation of a row, relative to the magnitudes of its terms (the solvers hold
-#: 1e-9 on the equilibrated rows; a row whose terms cancel keeps that scale here).
-PRIMAL_TOL = 1e-8
-#: Largest move of the dual bound by the multipliers and reduced costs of the wrong sign,
-#: relative to the objective. HiGHS holds its dual tolerance (1e-9) on the equilibrated LP;
-#: summed over a few hundred columns at their physical sizes that reaches a few 1e-8 on
-#: Case 1's zero alphas, which are right. With GAP_TOL, a certified alpha is within 2e-7 of
-#: the LP's maximum.
-DUAL_TOL = 1e-7
-#: Largest duality gap, relative to the objective (or ``floor``): with DUAL_TOL, alphas
-#: reported as certified are within 2e-7 of the LP's maximum, five times inside the 1e-6 of
-#: the differential tests.
-GAP_TOL = 1e-7
-
-
-#: Most multiply-adds in one matrix product of [`Certifier.check_many()`][mjtvm.lp.certificate.Certifier.check_many] (answers x rows x
-#: columns); more answers are certified in chunks. numpy's OpenBLAS (0.3.31) ran the 22-joint
-#: dataset state's products on one thread up to 18 answers (390,600) and on two for its 36
-#: (781,200), whose second thread then spins between calls: two cores for 2 % less time, and
-#: two such processes side by side halved their throughput. A margin below that: 11 answers.
-BATCH_ENTRIES = 2**18
-
-
-@dataclass(frozen=True)
-class Certificate:
-    """The check of one answer (every measure relative, see the module docstring).
-
-    Attributes
-    ----------
-    primal
-        Largest relative violation of a row by the clipped solution.
-    dual
-        What the multipliers and reduced costs of the wrong sign move the bound by, relative
-        to the objective (``inf`` without multipliers).
-    gap
-        ``|c^T x - D| / max(|c^T x|, |D|, floor)`` (``inf`` without multipliers).
-    bound
-        The dual objective ``D``: for a minimisation, a lower bound of the optimum.
-    """
-
-    primal: float
-    dual: float
-    gap: float
-    bound: float
-
-    @property
-    def ok(self) -> bool:
-        """Whether every measure is within its tolerance."""
-        return self.primal <= PRIMAL_TOL and self.dual <= DUAL_TOL and self.gap <= GAP_TOL
-
-    def describe(self) -> str:
-        """One line: the measures against their tolerances."""
-        return (
-            f"primal violation {self.primal:.1e} (tol {PRIMAL_TOL:.0e}), dual {self.dual:.1e} "
-            f"(tol {DUAL_TOL:.0e}), gap {self.gap:.1e} (tol {GAP_TOL:.0e})"
-        )
-
-
-def clip(
-    x: NDArray[np.float64], lower: NDArray[np.float64], upper: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """``x`` clipped to its bounds (infinite bounds leave it as it is)."""
-    return np.minimum(np.maximum(x, lower), upper)
-
-
-def _finite(bound: NDArray[np.float64]) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
-    """Where ``bound`` is finite, and ``bound`` with its infinite entries 0."""
-    ok = np.isfinite(bound)
-    return ok, np.where(ok, bound, 0.0)
-
-
-def _relative(value: float, ref: float) -> float:
-    """``value / ref``; 0 for ``0 / 0``, ``inf`` for a positive value over 0."""
-    if ref > 0.0:
-        return value / ref
-    return 0.0 if value == 0.0 else np.inf
-
-
-class Certifier:
-    """The checks of [`certify()`][mjtvm.lp.certificate.certify] and [`farkas()`][mjtvm.lp.certificate.farkas] for a family of LPs that share their
-    matrix object, column lower bounds, variables' sizes and row groups: Problem 2 checks
-    every LP of a state with one (its matrix's last column, the alpha column, overwritten
-    in place between LPs), so what depends on those alone is computed once.
-
-    Parameters
-    ----------
-    a
-        ``(m, n)`` the matrix (dense or sparse); read at every check, never copied.
-    col_lower
-        ``(n,)`` the column lower bounds.
-    col_ref, abs_a, row_groups
-        As in [`certify()`][mjtvm.lp.certificate.certify]; ``abs_a`` must follow ``a`` if ``a`` changes.
-    dual_ref
-        ``(n,)`` the sizes a reduced cost of the wrong sign is weighed with (default
-        ``col_ref``): a force that is 0 in this solution may be large at another, while the
-        rows' violations are measured at ``col_ref`` (a physical force size would drown an
-        unbalanced weight in a state whose Jacobians are 1e-100).
-    row_cap
-        ``(m,)`` the largest a term ``|A_ij| col_ref_j`` may add to row i's scale (``inf``:
-        no cap), a physical size of the row (module docstring); the term counts as
-        ``max(|A_ij x_j|, row_cap_i)`` where ``|A_ij| col_ref_j`` exceeds it. Read from
-        ``abs_a`` once, here: the entries it caps must not change later (Problem 2's last
-        column, alpha, has ``col_ref`` 0 and is never capped).
-    """
-
-    def __init__(
-        self,
-        a: Matrix,
-        col_lower: NDArray[np.float64],
-        *,
-        col_ref: NDArray[np.float64] | None = None,
-        abs_a: Matrix | None = None,
-        row_groups: NDArray[np.int64] | None = None,
-        dual_ref: NDArray[np.float64] | None = None,
-        row_cap: NDArray[np.float64] | None = None,
-    ) -> None:
-        self.a = a
-        self.dual_ref = col_ref if dual_ref is None else dual_ref
-        self.abs_a = abs(a) if abs_a is None else abs_a
-        self.col_lower = np.asarray(col_lower, dtype=float)
-        self.lower_ok, self.lower0 = _finite(self.col_lower)
-        self.col_ref = col_ref
-        self.starts: NDArray[np.int64] | None = None
-        if row_groups is not None and row_groups.size:
-            # Groups are runs of consecutive rows (Assembly.row_groups): one reduceat, not ufunc.at.
-            self.starts = np.flatnonzero(np.concatenate([[True], row_groups[1:] != row_groups[:-1]]))
-            self.counts = np.diff(np.append(self.starts, row_groups.size))
-        # The capped terms (row, column, |A_ij|, cap): none in a state whose rows' terms are
-        # all within their caps, which then costs nothing at each check.
-        self.capped: (
-            tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]] | None
-        )
-        self.capped = None
-        # The rows' terms are |A| s with the capped entries left out (abs_terms), so that a
-        # term of 1e20 is not added and then taken off again (the others lost in its round-off).
-        self.abs_terms = self.abs_a
-        if row_cap is not None and col_ref is not None:
-            rows = np.flatnonzero(np.isfinite(row_cap))
-            if rows.size and rows[-1] - rows[0] + 1 == rows.size:  # consecutive: a view
-                sub = self.abs_a[rows[0] : rows[-1] + 1, :-1]
-            else:
-                sub = self.abs_a[rows, :-1]  # the last column may change in place: never capped
-            sub = sub if isinstance(sub, np.ndarray) else sub.toarray()
-            r = cols = np.zeros(0, dtype=np.int64)
-            if rows.size and np.any(
-                sub.max(axis=1, initial=0.0) * col_ref[:-1].max(initial=0.0) > row_cap[rows]
-            ):
-                r, cols = np.nonzero(sub * col_ref[:-1] > row_cap[rows, None])
-            if r.size:
-                self.capped = (rows[r], cols, sub[r, cols], np.asarray(row_cap, dtype=float)[rows[r]])
-                if isinstance(self.abs_a, np.ndarray):
-                    self.abs_terms = self.abs_a.copy()
-                    self.abs_terms[rows[r], cols] = 0.0
-                else:
-                    lil = self.abs_a.tolil(copy=True)
-                    lil[rows[r], cols] = 0.0
-                    self.abs_terms = lil.tocsr()
-
-    def _scale(self, scale: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Each row's scale (along the last axis) raised to the largest of its group's."""
-        if self.starts is None:
-            return scale
-        return np.repeat(np.maximum.reduceat(scale, self.starts, axis=-1), self.counts, axis=-1)
-
-    def _violation(
-        self,
-        ax: NDArray[np.float64],
-        terms: NDArray[np.float64],
-        lower: tuple[NDArray[np.bool_], NDArray[np.float64]],
-        upper: tuple[NDArray[np.bool_], NDArray[np.float64]],
-    ) -> NDArray[np.float64]:
-        """[`primal_violation()`][mjtvm.lp.certificate.primal_violation] from the row activities ``ax`` and the rows' terms, along
-        the last axis (``(m,)`` or ``(P, m)`` in, ``()`` or ``(P,)`` out)."""
-        (lo_ok, lo), (up_ok, up) = lower, upper
-        below = np.where(lo_ok, lo - ax, 0.0)
-        above = np.where(up_ok, ax - up, 0.0)
-        viol = np.maximum(np.maximum(below, above), 0.0)
-        scale = self._scale(terms + np.where(below > above, np.abs(lo), np.abs(up)))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rel = np.where(viol > 0.0, viol / scale, 0.0)  # viol > 0 = scale: inf
-        return np.max(rel, axis=-1, initial=0.0)
-
-    def check(
-        self,
-        c: NDArray[np.float64],
-        row_lower: NDArray[np.float64],
-        row_upper: NDArray[np.float64],
-        col_upper: NDArray[np.float64],
-        x: NDArray[np.float64],
-        y: NDArray[np.float64] | None,
-        *,
-        floor: float = 0.0,
-    ) -> Certificate:
-        """[`certify()`][mjtvm.lp.certificate.certify] on this family's matrix and column lower bounds."""
-        a, abs_a, abs_terms = self.a, self.abs_a, self.abs_terms
-
-        def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            if abs_terms is abs_a:
-                return (a @ xc[0])[None], (abs_a @ size[0])[None]
-            # A copy without the capped entries; its last column read from abs_a (in place).
-            last = abs_a[:, -1] if isinstance(abs_a, np.ndarray) else abs_a[:, -1:].toarray().ravel()
-            return (a @ xc[0])[None], (abs_terms[:, :-1] @ size[0, :-1] + last * size[0, -1])[None]
-
-        def transposed(
-            yy: NDArray[np.float64], abs_y: NDArray[np.float64]
-        ) -> tuple[NDArray[np.float64], ...]:
-            return (a.T @ yy[0])[None], (abs_a.T @ abs_y[0])[None]
-
-        zero = np.zeros_like(row_lower) if y is None else y
-        one = self._measure(
-            c,
-            row_lower[None],
-            row_upper[None],
-            col_upper[None],
-            x[None],
-            zero[None],
-            [floor],
-            products,
-            transposed,
-        )[0]
-        return one if y is not None else Certificate(one.primal, np.inf, np.inf, -np.inf)
-
-    def check_many(
-        self,
-        c: NDArray[np.float64],
-        row_lower: NDArray[np.float64],
-        row_upper: NDArray[np.float64],
-        col_upper: NDArray[np.float64],
-        x: NDArray[np.float64],
-        y: NDArray[np.float64],
-        last: NDArray[np.float64],
-        *,
-        floor: NDArray[np.float64],
-    ) -> list[Certificate]:
-        """`check()` of ``P`` answers at once, for LPs that differ from this family's
-        matrix only in its last column: the same measures, from matrix products instead of
-        ``P`` matrix-vector ones (Problem 2 certifies a state's pairs together).
-
-        Parameters
-        ----------
-        c
-            ``(n,)`` the costs, shared.
-        row_lower, row_upper, y
-            ``(P, m)`` each answer's row bounds and row multipliers.
-        col_upper, x
-            ``(P, n)`` each answer's column upper bounds and solution.
-        last
-            ``(P, m)`` each LP's last column (Problem 2: the alpha column of its RVDS vertex),
-            in place of the matrix's; ``self.a`` must be dense.
-        floor
-            ``(P,)`` each answer's ``floor`` ([`certify()`][mjtvm.lp.certificate.certify]).
-        """
-        m, n = self.a.shape
-        step = max(1, BATCH_ENTRIES // max(m * n, 1))
-        if len(x) > step:  # in products that BLAS runs on one thread (BATCH_ENTRIES)
-            return [
-                cert
-                for i in range(0, len(x), step)
-                for cert in self.check_many(
-                    c,
-                    row_lower[i : i + step],
-                    row_upper[i : i + step],
-                    col_upper[i : i + step],
-                    x[i : i + step],
-                    y[i : i + step],
-                    last[i : i + step],
-                    floor=floor[i : i + step],
-                )
-            ]
-        a0, abs0, terms0 = self.a[:, :-1], self.abs_a[:, :-1], self.abs_terms[:, :-1]
-        abs_last = np.abs(last)
-
-        def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            # The shared columns, then each LP's last one.
-            return xc[:, :-1] @ a0.T + xc[:, -1:] * last, size[:, :-1] @ terms0.T + size[:, -1:] * abs_last
-
-        def transposed(
-            yy: NDArray[np.float64], abs_y: NDArray[np.float64]
-        ) -> tuple[NDArray[np.float64], ...]:
-            ya, abs_ya = np.empty((len(yy), n)), np.empty((len(yy), n))
-            ya[:, :-1], ya[:, -1] = yy @ a0, np.sum(yy * last, axis=1)
-            abs_ya[:, :-1], abs_ya[:, -1] = abs_y @ abs0, np.sum(abs_y * abs_last, axis=1)
-            return ya, abs_ya
-
-        return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, products, transposed)
-
-    def _measure(
-        self,
-        c: NDArray[np.float64],
-        row_lower: NDArray[np.float64],
-        row_upper: NDArray[np.float64],
-        col_upper: NDArray[np.float64],
-        x: NDArray[np.float64],
-        y: NDArray[np.float64],
-        floor: Sequence[float] | NDArray[np.float64],
-        products: _Products,
-        transposed: _Products,
-    ) -> list[Certificate]:
-        """The certificates of ``P`` answers (the arrays of `check_many()`), the matrix
-        reached through ``products(xc, size) -> (A x, |A| size)`` and
-        ``transposed(y, |y|) -> (y A, |y| |A|)``, each ``(P, .)``."""
-        xc = np.minimum(np.maximum(x, self.col_lower), col_upper)  # clip (bounds may be inf)
-        size = np.abs(xc) if self.col_ref is None else np.maximum(np.abs(xc), self.col_ref)
-        lower, upper = _finite(row_lower), _finite(row_upper)
-        (lo_ok, lo), (up_ok, up) = lower, upper
-        ax, terms = products(xc, size)
-        if self.capped is not None:  # those terms at max(|A_ij x_j|, cap), not |A_ij| s_j
-            rows, cols, mag, cap = self.capped
-            np.add.at(terms.T, rows, np.maximum(mag * np.abs(xc[:, cols]), cap).T)  # terms.T: a view
-        primal = self._violation(ax, terms, lower, upper)
-        y = np.array(y, dtype=float)
-        c = np.asarray(c, dtype=float)
-        # Rows: y_i > 0 pairs with a finite lower bound, y_i < 0 with a finite upper one. A
-        # multiplier of the wrong sign is taken as 0; what that moves the bound by is measured
-        # by its size times the row's (|A_i| s + |lower bound|), added up with the columns'.
-        wrong_row = ((y > 0.0) & ~lo_ok) | ((y < 0.0) & ~up_ok)
-        moved = np.sum(np.where(wrong_row, np.abs(y) * (terms + np.abs(lo)), 0.0), axis=1)
-        y[wrong_row] = 0.0
-        ya, abs_ya = transposed(y, np.abs(y))
-        d = c - ya
-        # A reduced cost within round-off of its terms is 0 (roundoff.drop_cancellation): the
-        # free joint speeds and torques have d = 1e-17 where their terms are 1.
-        drop_cancellation(d, np.abs(c) + abs_ya)
-        cu_ok, cu = _finite(col_upper)
-        wrong_col = ((d > 0.0) & ~self.lower_ok) | ((d < 0.0) & ~cu_ok)
-        dual_size = size if self.dual_ref is None else np.maximum(np.abs(xc), self.dual_ref)
-        moved += np.sum(np.where(wrong_col, np.abs(d) * dual_size, 0.0), axis=1)
-        d[wrong_col] = 0.0
-        bound = (
-            np.sum(np.maximum(y, 0.0) * lo + np.minimum(y, 0.0) * up, axis=1)
-            + np.maximum(d, 0.0) @ self.lower0
-            + np.sum(np.minimum(d, 0.0) * cu, axis=1)
-        )
-        objective = xc @ c
-        out = []
-        for i in range(len(xc)):
-            b, obj, fl = float(bound[i]), float(objective[i]), float(floor[i])
-            size_obj = max(abs(obj), abs(b))
-            out.append(
-                Certificate(
-                    float(primal[i]),
-                    _relative(float(moved[i]), max(size_obj, fl / DUAL_TOL)),
-                    _relative(abs(obj - b), max(size_obj, fl / GAP_TOL)),
-                    b,
-                )
-            )
-        return out
-
-    def farkas(
-        self,
-        row_lower: NDArray[np.float64],
-        row_upper: NDArray[np.float64],
-        col_upper: NDArray[np.float64],
-        y: NDArray[np.float64] | None,
-    ) -> bool:
-        """[`farkas()`][mjtvm.lp.certificate.farkas] on this family's matrix and column lower bounds."""
-        if y is None or not np.all(np.isfinite(y)):
-            return False
-        zero = np.zeros(self.a.shape[1])
-        for sign in (1.0, -1.0):
-            cert = self.check(zero, row_lower, row_upper, col_upper, zero, sign * np.asarray(y))
-            if cert.bound > 0.0 and cert.dual <= DUAL_TOL:
-                return True
-        return False
 
 
 def primal_violation(
@@ -452,7 +84,7 @@ def primal_violation(
     their scales."""
     one = Certifier(a, np.zeros(a.shape[1]), abs_a=abs_a, row_groups=groups)
     terms = one.abs_a @ (np.abs(x) if size is None else size)
-    return float(one._violation(a @ x, terms, _finite(lower), _finite(upper)))
+    return float(one.violation(a @ x, terms, finite_part(lower), finite_part(upper)))
 
 
 def certify(
@@ -497,7 +129,7 @@ def certify(
         consecutive ([`primal_violation()`][mjtvm.lp.certificate.primal_violation]).
     row_cap
         ``(m,)`` the largest a term at its variable's size may add to its row's scale
-        ([`Certifier`][mjtvm.lp.certificate.Certifier]).
+        ([`Certifier`][mjtvm.lp.certifier.Certifier]).
 
     Returns
     -------

@@ -3,15 +3,14 @@ it after changing one column and some row bounds from the previous basis (the LP
 state differ only there).
 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from any
-call raises [`SolverError`][mjtvm.errors.SolverError].
+call raises [`SolverError`][mjtvm.errors.SolverError]. A ``Highs`` is constructed by
+[`new_highs()`][mjtvm.lp.highspy_start.new_highs] (``mjtvm.lp.highspy_start``; importable from here).
 """
 
 from __future__ import annotations
 
 import math
 import os
-import sys
-import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -21,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError, SolverError
+from mjtvm.lp.highspy_start import highspy_module, new_highs
 from mjtvm.lp.lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from mjtvm.lp.scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
@@ -60,53 +60,13 @@ _TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 _THREADS = [1]
 
 
-def _highs():  # type: ignore[no-untyped-def]
-    import highspy
-
-    return highspy
-
-
-_FD_LOCK = threading.Lock()
-
-
-def new_highs():  # type: ignore[no-untyped-def]
-    """A new ``highspy.Highs`` whose start-up banner does not reach standard output.
-
-    highspy >= 1.16 writes "Running HiGHS ..." to file descriptor 1 from C++ when the first
-    ``Highs`` of a process is constructed, before any option (``output_flag``) can be set;
-    that breaks every JSON consumer of ``mjtvm solve``. File descriptor 1 is pointed at
-    ``/dev/null`` for the construction only (Python's own buffered output is flushed first,
-    so nothing of ours is lost); where descriptors cannot be duplicated it is left alone.
-    """
-    highspy = _highs()
-    with _FD_LOCK:
-        try:
-            sys.stdout.flush()
-        except (OSError, ValueError):  # closed or broken stdout: nothing of ours to keep
-            pass
-        try:
-            saved = os.dup(1)
-        except OSError:  # no descriptor 1 at all: nothing to protect
-            return highspy.Highs()
-        try:
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            try:
-                os.dup2(devnull, 1)
-            finally:
-                os.close(devnull)
-            return highspy.Highs()
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-
-
 _IDLE: list[Any] = []  # Highs instances given back by finished sessions (release), this process's
 _IDLE_PID = [os.getpid()]
 _IDLE_MAX = 4
 
 
 def _acquire_highs():  # type: ignore[no-untyped-def]
-    """An idle ``Highs`` given back by [`HighsSession.release()`][mjtvm.lp.highs.HighsSession.release], else [`new_highs()`][mjtvm.lp.highs.new_highs].
+    """An idle ``Highs`` given back by [`HighsSession.release()`][mjtvm.lp.highs.HighsSession.release], else [`new_highs()`][mjtvm.lp.highspy_start.new_highs].
 
     Constructing a ``Highs`` costs ~50 us, 2 % of a Problem 2 state; a reused one gets a new
     model (``passModel`` discards the old model, basis and solution) and the session's options,
@@ -177,7 +137,7 @@ class HighsSession:
             raise ParamError(
                 "options", f"only {sorted(_TUNABLE_DEFAULTS)} may be chosen, got {sorted(tuned)}", tuned
             )
-        highspy = _highs()
+        highspy = highspy_module()
         self._hs = highspy
         self._error = highspy.HighsStatus.kError
         self.scaling = s

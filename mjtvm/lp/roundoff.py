@@ -43,6 +43,7 @@ __all__ = [
     "LONE_ENTRY",
     "OUTLIER_COUNT",
     "OUTLIER_SHARE",
+    "cancelling_product",
     "drop_cancellation",
     "drop_data_roundoff",
     "jacobian_scale",
@@ -72,6 +73,23 @@ def drop_cancellation(values: NDArray[np.float64], magnitudes: NDArray[np.float6
     the value was computed from (``|a| @ |b|`` for ``a @ b``)."""
     values[np.abs(values) <= DROP_REL * magnitudes] = 0.0
     return values
+
+
+def cancelling_product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a @ b`` with the round-off of exact cancellations set to 0, e.g. ``n . (r x n)``.
+
+    Parameters
+    ----------
+    a, b
+        Two matrices (or a matrix and a vector) whose product is taken.
+
+    Returns
+    -------
+    NDArray[np.float64]
+        ``a @ b`` through [`drop_cancellation()`][mjtvm.lp.roundoff.drop_cancellation] with
+        the magnitudes ``|a| @ |b|``.
+    """
+    return drop_cancellation(a @ b, np.abs(a) @ np.abs(b))
 
 
 def drop_data_roundoff(data: NDArray[np.float64], reference: float | None = None) -> NDArray[np.float64]:

@@ -33,6 +33,7 @@ __all__ = [
     "MAX_RVDS",
     "MIN_FRICTION_EDGES",
     "check_json_tree",
+    "checked_name",
     "describe",
     "float_array",
     "integer",
@@ -105,6 +106,38 @@ def integer(value: Any, field: str, lo: int, hi: int) -> int:
     if not lo <= value <= hi:
         raise StateError(field, f"expected an integer in [{lo}, {hi}], got {describe(value)}", value)
     return int(value)
+
+
+def checked_name(value: Any, field: str) -> str:
+    """A joint's or contact's name, checked.
+
+    Parameters
+    ----------
+    value
+        The name as read (any JSON value).
+    field
+        The field it came from, for the error (``joints[0].name``).
+
+    Returns
+    -------
+    str
+        ``value``: a non-empty string of at most [`MAX_NAME`][mjtvm.model.bounds.MAX_NAME]
+        characters that encodes as UTF-8.
+
+    Raises
+    ------
+    StateError
+        Naming ``field`` when ``value`` is not such a string.
+    """
+    if not isinstance(value, str) or not value:
+        raise StateError(field, f"expected a non-empty string, got {describe(value)}", value)
+    if len(value) > MAX_NAME:
+        raise StateError(field, f"expected at most {MAX_NAME} characters, got {len(value)}", value)
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError as e:  # a lone surrogate from a JSON escape such as "\ud800"
+        raise StateError(field, "expected valid Unicode text (no lone surrogates)", value) from e
+    return value
 
 
 def float_array(

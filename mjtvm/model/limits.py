@@ -25,17 +25,15 @@ LP entry for entry.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import StateError
 from mjtvm.model.bounds import MAX_ABS, describe, number
-
-if TYPE_CHECKING:
-    from mjtvm.model.state import GraspState
 
 __all__ = ["DEFAULT_HORIZON", "DEFAULT_TOLERANCE", "JointLimits", "travel_speed", "with_limit_horizon"]
 
@@ -56,6 +54,38 @@ def _scalar(value: Any, field: str) -> float:
     if x < 0.0:
         raise StateError(field, f"expected a number >= 0, got {describe(value)}", value)
     return x
+
+
+class _Point(Protocol):
+    """What `travel_speed()` reads of a contact: its position."""
+
+    @property
+    def position(self) -> NDArray[np.float64]: ...
+
+
+class _Travel(Protocol):
+    """What `travel_speed()` reads of a state (a `GraspState`; limits stays below state)."""
+
+    @property
+    def dim(self) -> int: ...
+
+    @property
+    def object_position(self) -> NDArray[np.float64]: ...
+
+    @property
+    def contacts(self) -> Sequence[_Point]: ...
+
+
+_Limited = TypeVar("_Limited", bound="_Horizon")
+
+
+class _Horizon(Protocol):
+    """What `with_limit_horizon()` reads and calls of a state (a `GraspState`)."""
+
+    @property
+    def joint_limits(self) -> JointLimits | None: ...
+
+    def with_(self: _Limited, **changes: Any) -> _Limited: ...
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,7 +216,7 @@ class JointLimits:
         )
 
 
-def with_limit_horizon(state: GraspState, horizon: float | None) -> GraspState:
+def with_limit_horizon(state: _Limited, horizon: float | None) -> _Limited:
     """``state`` with Problem 2's travel horizon ``horizon`` (m) in its joint limits.
 
     Parameters
@@ -208,7 +238,7 @@ def with_limit_horizon(state: GraspState, horizon: float | None) -> GraspState:
     return state.with_(joint_limits=lim.with_options(horizon=horizon))
 
 
-def travel_speed(state: GraspState, r: NDArray[np.float64]) -> float:
+def travel_speed(state: _Travel, r: NDArray[np.float64]) -> float:
     r"""``s(r)``: how fast the object travels along twist ``r`` (m/s per unit of ``r``).
 
     The largest speed of the object's point ``p_O`` (``|v|``) and of its contact points

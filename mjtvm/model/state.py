@@ -22,10 +22,10 @@ from mjtvm.model.bounds import (
     MAX_CONTACTS,
     MAX_FRICTION_EDGES,
     MAX_JOINTS,
-    MAX_NAME,
     MAX_REFS,
     MAX_RVDS,
     MIN_FRICTION_EDGES,
+    checked_name,
     describe,
     float_array,
     integer,
@@ -49,18 +49,6 @@ def _matrix(value: Any, field: str, cols: int, max_rows: int) -> NDArray[np.floa
     if m.shape[1:] != (cols,) or m.shape[0] == 0:
         raise StateError(field, f"expected {what}, got shape {m.shape}", value)
     return m
-
-
-def _name(value: Any, field: str) -> str:
-    if not isinstance(value, str) or not value:
-        raise StateError(field, f"expected a non-empty string, got {describe(value)}", value)
-    if len(value) > MAX_NAME:
-        raise StateError(field, f"expected at most {MAX_NAME} characters, got {len(value)}", value)
-    try:
-        value.encode("utf-8")
-    except UnicodeEncodeError as e:  # a lone surrogate from a JSON escape such as "\ud800"
-        raise StateError(field, "expected valid Unicode text (no lone surrogates)", value) from e
-    return value
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,7 +125,7 @@ class GraspState:
         if len(names) > MAX_JOINTS:
             raise StateError("joints", f"expected at most {MAX_JOINTS} joints, got {len(names)}")
         for i, name in enumerate(names):
-            _name(name, f"joints[{i}].name")
+            checked_name(name, f"joints[{i}].name")
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
             raise StateError("joints", f"joint names must be unique; repeated: {dup}")
@@ -172,7 +160,7 @@ class GraspState:
         for i, c in enumerate(contacts):
             if not isinstance(c, Contact):
                 raise StateError(f"contacts[{i}]", "expected a Contact")
-            _name(c.name, f"contacts[{i}].name")
+            checked_name(c.name, f"contacts[{i}].name")
             if c.dim != d:
                 raise StateError(f"contacts[{i}].position", f"expected {d} numbers in a space-{d} state")
             if c.num_joints != m:

@@ -23,6 +23,10 @@ Problem 1 can keep it as D free variables. The rows are
   ``sign qd_j - rate s alpha <= 0`` per limited side, whose ``alpha`` coefficient the caller
   puts in with ``alpha`` (`Assembly.horizon_column()`).
 
+This module lays out the variables and writes the statics and kinematic rows; the bound rows
+after them (operation ranges, preloads, damping losses, joint limits) are
+``mjtvm.problem2.range_rows``'.
+
 Variables, in order: ``lam_1, tau_1, ..., lam_K, tau_K, qd, rho[, loss][, tau_max, tau_min,
 qd_max, qd_min]``, then the twist (or ``alpha``) appended by the caller.
 
@@ -56,12 +60,20 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError
 from mjtvm.lp.csc import Csc
-from mjtvm.lp.roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
+from mjtvm.lp.roundoff import cancelling_product, drop_cancellation, drop_data_roundoff, jacobian_scale
 from mjtvm.lp.rows import Rows as _Rows
 from mjtvm.model.contacts import force_generators, slide_unit, tangent_basis
 from mjtvm.model.friction import margin_contacts
 from mjtvm.model.limits import travel_speed
 from mjtvm.model.state import GraspState
+from mjtvm.problem2.range_rows import (
+    damping_loss,
+    joint_limit_rows,
+    loss_rows,
+    preload_rows,
+    range_rows_eliminated,
+    range_rows_literal,
+)
 
 if TYPE_CHECKING:
     import scipy.sparse as sp
@@ -87,12 +99,6 @@ def grasp_map_transpose(
         return np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
     skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
     return np.hstack([np.eye(3), -skew])
-
-
-def _product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``a @ b`` with the round-off of exact cancellations set to 0
-    ([`drop_cancellation()`][mjtvm.lp.roundoff.drop_cancellation]), e.g. ``n . (r x n)``."""
-    return drop_cancellation(a @ b, np.abs(a) @ np.abs(b))
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,12 +261,14 @@ def _statics_rows(
     the torque rows."""
     contacts, big_d, m = state.contacts, state.twist_dim, state.num_joints
     wrench_map = (
-        np.hstack([_product(gt[i].T, gens[i]) for i in range(len(contacts))])
+        np.hstack([cancelling_product(gt[i].T, gens[i]) for i in range(len(contacts))])
         if contacts
         else np.zeros((big_d, 0))
     )
     torque_map = (
-        np.hstack([_product(j.T, g) for j, g in zip(jacobians, gens)]) if contacts else np.zeros((m, 0))
+        np.hstack([cancelling_product(j.T, g) for j, g in zip(jacobians, gens)])
+        if contacts
+        else np.zeros((m, 0))
     )
     wrench_rows, torque_rows = [], []
     d = state.dim
@@ -300,152 +308,20 @@ def _kinematic_rows(
         else:
             sel = c.normal.reshape(1, -1)
         r0 = out.add(-np.inf if c.type == "D" else 0.0, 0.0, sel.shape[0], vector=True)
-        out.coo.add(r0, qd0, _product(sel, jacobians[ci]))
-        out.twist.add(r0, 0, -_product(sel, gt[ci]))
+        out.coo.add(r0, qd0, cancelling_product(sel, jacobians[ci]))
+        out.twist.add(r0, 0, -cancelling_product(sel, gt[ci]))
         if c.type == "S":
             tb = tangent_basis(c.normal)
             r0 = out.add(0.0, 0.0, d - 1, join=True)  # the same relative velocity
-            out.coo.add(r0, qd0, _product(tb, jacobians[ci]))
-            out.twist.add(r0, 0, -_product(tb, gt[ci]))
+            out.coo.add(r0, qd0, cancelling_product(tb, jacobians[ci]))
+            out.twist.add(r0, 0, -cancelling_product(tb, gt[ci]))
             k = s_contacts.index(ci)
             if state.slip == "shared":
                 s = c.slide_direction - (c.slide_direction @ c.normal) * c.normal  # type: ignore[operator]
-                out.coo.add(r0, rho0, _product(tb, s).reshape(-1, 1))
+                out.coo.add(r0, rho0, cancelling_product(tb, s).reshape(-1, 1))
             else:
-                out.coo.add(r0, rho0 + k, _product(tb, slide_unit(c)).reshape(-1, 1))
+                out.coo.add(r0, rho0 + k, cancelling_product(tb, slide_unit(c)).reshape(-1, 1))
     return np.arange(kin_start, out.count)
-
-
-def _range_rows_eliminated(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
-    """The operation ranges (eq. 1-3) by the exact reduction: per copy i, row h of joint j
-    is ``c_tau tau_ij + c_qd qd_j <= b`` (`OperationRange.mirrored_halfplanes`), with
-    ``|c_tau| loss_j`` on the left under joint damping (module docstring)."""
-    qd0 = blocks["qd"].start
-    hps = [op.mirrored_halfplanes for op in state.operation_ranges]
-    joint_of_row = np.repeat(np.arange(len(hps)), [len(hp) for hp in hps])
-    hp_all = np.vstack(hps)
-    t = state.transmission
-    for i in range(copies):
-        r0 = out.add(-np.inf, hp_all[:, 2], len(hp_all))
-        row_idx = r0 + np.arange(len(hp_all))
-        out.coo.add_entries(row_idx, blocks[f"tau[{i}]"].start + joint_of_row, hp_all[:, 0])
-        if t is None:
-            out.coo.add_entries(row_idx, qd0 + joint_of_row, hp_all[:, 1])
-        else:  # the actuator's speed P_a qd
-            out.coo.add(r0, qd0, hp_all[:, 1:2] * t.moment[joint_of_row])
-        if "loss" in blocks:  # a_tau (|u| + loss) + a_qd |s| <= b
-            out.coo.add_entries(row_idx, blocks["loss"].start + joint_of_row, np.abs(hp_all[:, 0]))
-
-
-def _range_rows_literal(out: _Rows, state: GraspState, blocks: dict[str, slice], copies: int) -> None:
-    """The paper's literal box (eq. 2) with four variables per joint:
-    ``tau_min <= tau_i <= tau_max``, ``qd_min <= qd <= qd_max``, and the operation range's
-    half-planes (eq. 3) at the box's four corners, in their mirrored copies. Under joint
-    damping the torque's box holds ``tau_i +- loss`` (module docstring)."""
-    qd0 = blocks["qd"].start
-    for j, op in enumerate(state.operation_ranges):
-        tmax, tmin = blocks["tau_max"].start + j, blocks["tau_min"].start + j
-        qmax, qmin = blocks["qd_max"].start + j, blocks["qd_min"].start + j
-        for i in range(copies):
-            tau = blocks[f"tau[{i}]"].start + j
-            r0 = out.add(-np.inf, 0.0, 2)
-            out.coo.add(r0, tau, np.array([[1.0], [-1.0]]))
-            out.coo.add(r0, tmax, np.array([[-1.0], [0.0]]))
-            out.coo.add(r0, tmin, np.array([[0.0], [1.0]]))
-            if "loss" in blocks:
-                out.coo.add(r0, blocks["loss"].start + j, np.array([[1.0], [1.0]]))
-        r0 = out.add(-np.inf, 0.0, 2)
-        if state.transmission is None:
-            out.coo.add(r0, qd0 + j, np.array([[1.0], [-1.0]]))
-        else:  # the actuator's speed P_a qd
-            out.coo.add(r0, qd0, np.outer([1.0, -1.0], state.transmission.moment[j]))
-        out.coo.add(r0, qmax, np.array([[-1.0], [0.0]]))
-        out.coo.add(r0, qmin, np.array([[0.0], [1.0]]))
-        for a_t, a_q, b in op.halfplanes:
-            for t_col, st in ((tmax, 1.0), (tmin, -1.0)):
-                for q_col, sq in ((qmax, 1.0), (qmin, -1.0)):
-                    r0 = out.add(-np.inf, b, 1)
-                    out.coo.add(r0, t_col, np.array([[st * a_t]]))
-                    out.coo.add(r0, q_col, np.array([[sq * a_q]]))
-
-
-def damping_loss(state: GraspState) -> NDArray[np.float64] | None:
-    r"""``(A, M)`` the loss coefficients ``b_j / |P_aj|`` of joint damping (0 where actuator a
-    does not move joint j), or ``None`` without damping: actuator a pays
-    ``loss_a >= max_j (b_j / |P_aj|) |qd_j|`` (module docstring). Its force ``P_aj loss_a`` on
-    joint j then overcomes that joint's damping torque ``b_j |qd_j|``; exact for an actuator
-    on one joint, an upper bound for a tendon over several (each joint charged in full). A
-    joint no actuator moves has no motor to pay its damping: not modelled
-    (``docs/state-format.md``)."""
-    t = state.transmission
-    if t is None or t.joint_damping is None:
-        return None
-    arm = np.abs(t.moment)
-    with np.errstate(divide="ignore"):
-        return np.where(arm > 0.0, t.joint_damping / np.where(arm > 0.0, arm, 1.0), 0.0)
-
-
-def _loss_rows(out: _Rows, state: GraspState, blocks: dict[str, slice]) -> None:
-    """``+- (b_j / |P_aj|) qd_j - loss_a <= 0`` for every actuator a and damped joint j it
-    moves ([`damping_loss()`][mjtvm.problem2.assembly.damping_loss])."""
-    coef = damping_loss(state)
-    if coef is None:
-        return
-    a_idx, j_idx = np.nonzero(coef)
-    values = coef[a_idx, j_idx]
-    for sign in (1.0, -1.0):
-        r0 = out.add(-np.inf, 0.0, len(values))
-        rows = r0 + np.arange(len(values))
-        out.coo.add_entries(rows, blocks["qd"].start + j_idx, sign * values)
-        out.coo.add_entries(rows, blocks["loss"].start + a_idx, -np.ones(len(values)))
-
-
-def _preload_rows(
-    out: _Rows,
-    state: GraspState,
-    gens: tuple[NDArray[np.float64], ...],
-    gen_slices: tuple[slice, ...],
-    blocks: dict[str, slice],
-    copies: int,
-) -> None:
-    """Per copy i and per contact c with a preload: ``n_c^T E_c lam_ic >= preload_c`` (the
-    normal force of eq. 22 bounded below by the contact's preload, N)."""
-    for ci, c in enumerate(state.contacts):
-        if c.preload <= 0.0 or gens[ci].shape[1] == 0:
-            continue
-        row = _product(c.normal.reshape(1, -1), gens[ci])
-        for i in range(copies):
-            r0 = out.add(c.preload, np.inf, 1)
-            out.coo.add(r0, blocks[f"lam[{i}]"].start + gen_slices[ci].start, row)
-
-
-def _limit_rows(
-    out: _Rows, state: GraspState, blocks: dict[str, slice], horizon: bool
-) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
-    """The position-limit rows (`limits`): ``qd_j <= 0`` per joint on its
-    upper limit, then ``qd_j >= 0`` per joint on its lower; with ``horizon`` the horizon
-    rows ``sign qd_j <= rate_j s alpha`` (bounds ``(-inf, 0]``, their ``alpha`` coefficient
-    the caller's). Returns the limit rows, the horizon rows and their rates."""
-    empty = np.zeros(0, dtype=np.int64)
-    lim = state.joint_limits
-    if lim is None:
-        return empty, empty, np.zeros(0)
-    qd0 = blocks["qd"].start
-    start = out.count
-    for joints, lo, hi in (
-        (np.flatnonzero(lim.at_upper), -np.inf, 0.0),
-        (np.flatnonzero(lim.at_lower), 0.0, np.inf),
-    ):
-        if len(joints):
-            r0 = out.add(lo, hi, len(joints))
-            out.coo.add_entries(r0 + np.arange(len(joints)), qd0 + joints, np.ones(len(joints)))
-    limit_rows = np.arange(start, out.count)
-    joints, sign, rate = lim.horizon_sides() if horizon else (empty, np.zeros(0), np.zeros(0))
-    if not len(joints):
-        return limit_rows, empty, np.zeros(0)
-    r0 = out.add(-np.inf, 0.0, len(joints))
-    out.coo.add_entries(r0 + np.arange(len(joints)), qd0 + joints, sign)
-    return limit_rows, r0 + np.arange(len(joints)), rate
 
 
 def assemble(
@@ -490,16 +366,16 @@ def assemble(
     wrench_rows, torque_rows = _statics_rows(out, state, gens, gt, jacobians, blocks, copies)
     kinematic_rows = _kinematic_rows(out, state, gt, jacobians, blocks)
     if box == "eliminated":
-        _range_rows_eliminated(out, state, blocks, copies)
+        range_rows_eliminated(out, state, blocks, copies)
     else:
-        _range_rows_literal(out, state, blocks, copies)
-    _preload_rows(out, state, gens, gen_slices, blocks, copies)
-    _loss_rows(out, state, blocks)
+        range_rows_literal(out, state, blocks, copies)
+    preload_rows(out, state, gens, gen_slices, blocks, copies)
+    loss_rows(out, state, blocks)
     t = state.transmission
     if t is not None and t.constraint_jacobian is not None:  # J_eq qd = 0
         r0 = out.add(0.0, 0.0, t.num_constraints)
         out.coo.add(r0, blocks["qd"].start, t.constraint_jacobian)
-    limit_rows, horizon_rows, horizon_rates = _limit_rows(out, state, blocks, horizon)
+    limit_rows, horizon_rows, horizon_rates = joint_limit_rows(out, state, blocks, horizon)
     return Assembly(
         csc=out.coo.build((out.count, len(col_lower))),
         twist_csc=out.twist.build((out.count, state.twist_dim)),

@@ -6,7 +6,8 @@ column of ``alpha`` (``A_twist r_l``) and the right-hand side of the balance row
 (``-w_k``), so one HiGHS session is modified and re-solved from its last basis. Every
 answer is certified on the unscaled LP ([`certificate`][mjtvm.lp.certificate]) and solved again
 other ways when it is not ([`StateLPs.certified()`][mjtvm.problem2.lps.StateLPs.certified]). [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp]
-runs the pairs and reports them.
+runs the pairs and reports them. The sizes the certificates measure against come from the
+state alone ([`physical_sizes()`][mjtvm.problem2.sizes.physical_sizes]).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import SolverError
 from mjtvm.lp.certificate import Certificate, Certifier
-from mjtvm.lp.roundoff import drop_cancellation, drop_data_roundoff, jacobian_scale
+from mjtvm.lp.roundoff import drop_cancellation, drop_data_roundoff
 from mjtvm.lp.scaling import ScaledMatrix
 from mjtvm.lp.solvers import (
     HighsSession,
@@ -34,8 +35,8 @@ from mjtvm.lp.solvers import (
     solve_clarabel,
 )
 from mjtvm.model.state import GraspState
-from mjtvm.model.transmission import joint_speed_limits
-from mjtvm.problem2.assembly import Assembly, BoxForm, assemble
+from mjtvm.problem2.assembly import BoxForm, assemble
+from mjtvm.problem2.sizes import physical_sizes
 
 __all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs", "Verdict"]
 
@@ -51,60 +52,6 @@ ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an ex
 #: x1e6, force x1e-6, time x1e-3); scaling by largest values (4), 1.29 ms, but the pinch in
 #: lengths of 1e12 m and forces of 1e-11 N came out 0.5 % low.
 P2_HIGHS_OPTIONS: dict[str, object] = {"simplex_dual_edge_weight_strategy": 1}
-
-
-def _physical_sizes(state: GraspState, asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(n + 1,)`` the sizes the certificate measures a row's violation, and a reduced cost
-    of the wrong sign, at where the solution is ~0 ([`certify()`][mjtvm.lp.certificate.certify]'s
-    ``col_ref``): each joint's largest speed and torque (its operation range) for the
-    speeds, torques, damping losses and the literal box's variables; for the force generators' weights the
-    larger of the weight and the largest torque over the Jacobians' scale; for the
-    slip speeds the largest joint speed times that scale; alpha its own value. From the
-    state, never from the equilibration, which the certificate must not trust.
-
-    And ``(m,)`` the largest a term at those sizes may add to a row's scale (the
-    [`Certifier`][mjtvm.lp.certificate.Certifier]'s ``row_cap``): on the kinematic rows (a
-    contact's relative velocity, eq. 11-13) the speed the hand's joints move a contact at,
-    ``sqrt(d)`` times the Jacobians' scale ([`jacobian_scale()`][mjtvm.lp.roundoff.jacobian_scale])
-    times the fastest joint; ``inf`` on every other row. A row of unit vectors times the
-    Jacobians has entries at most ``sqrt(d)`` times their largest, so no term reaches the
-    cap unless one entry stands alone far above the others (1e12 among lever arms of
-    0.1 m): that joint at its top speed is not a speed the row has in any solution whose
-    contacts move with the object, and as the row's scale it would pass a contact velocity
-    missed by 100 % for round-off (the solution's own term ``|A_ij qd_j|`` counts in full)."""
-    size = np.zeros(asm.num_variables + 1)
-    speed = np.array([op.max_speed for op in state.operation_ranges])
-    torque = np.array([op.max_torque for op in state.operation_ranges])
-    joint_speed, joint_torque = speed, torque
-    if state.transmission is not None:
-        # Through the moment P: a joint's speed is at most the fastest |s_a / P_aj| of the
-        # actuators moving it, its torque at most sum_a |P_aj| u_a; a passive joint's speed
-        # (no actuator) is measured at the fastest of them all.
-        joint_speed = joint_speed_limits(state.transmission.moment, speed)
-        joint_torque = np.abs(state.transmission.moment).T @ torque
-    # A contact force is at most what the weight and the strongest joint through the largest
-    # Jacobian entry give; a slip speed at most the fastest joint through it (the largest
-    # entry unless it stands alone, roundoff.jacobian_scale: then the hand's lever arms).
-    jac = jacobian_scale([c.jacobian for c in state.contacts])
-    weight = float(np.max(np.linalg.norm(state.refs[:, : state.dim], axis=1), initial=0.0))
-    force = max(weight, float(joint_torque.max(initial=0.0)) / jac if jac > 0.0 else 0.0)
-    slip = float(joint_speed.max(initial=0.0)) * jac
-    for name, sl in asm.blocks.items():
-        if name.startswith("tau") or name == "loss":
-            size[sl] = torque
-        elif name.startswith("qd"):
-            size[sl] = speed if name != "qd" else joint_speed
-        elif name.startswith("lam"):
-            size[sl] = force
-        elif name == "rho":
-            size[sl] = slip
-        elif name.startswith("eq"):  # a constraint force: a torque through its row's largest entry
-            assert state.transmission is not None and state.transmission.constraint_jacobian is not None
-            jeq = state.transmission.constraint_jacobian
-            size[sl] = float(joint_torque.max(initial=0.0)) / np.max(np.abs(jeq), axis=1)
-    cap = np.full(asm.csc.shape[0], np.inf)
-    cap[asm.kinematic_rows] = np.sqrt(state.dim) * slip
-    return size, cap
 
 
 class StateLPs:
@@ -129,7 +76,7 @@ class StateLPs:
         # rows (-rate s(r_l), mjtvm.model.limits), last.
         self.kin = np.concatenate([asm.kinematic_rows, asm.horizon_rows])
         self._num_kinematic = len(asm.kinematic_rows)
-        self.physical_sizes, self.row_cap = _physical_sizes(state, asm)
+        self.physical_sizes, self.row_cap = physical_sizes(state, asm)
         self.force_like = np.zeros(asm.num_variables + 1, dtype=bool)  # the lam and rho columns
         for name, sl in asm.blocks.items():
             if name.startswith("lam") or name == "rho":
@@ -312,7 +259,7 @@ class StateLPs:
         self, answers: list[tuple[NDArray[np.float64], NDArray[np.float64], float, LPSolution]]
     ) -> list[Certificate]:
         """`certify()` of several optimal answers ``(w, r, alpha_max, sol)`` of this
-        state at once ([`check_many()`][mjtvm.lp.certificate.Certifier.check_many]): the same
+        state at once ([`check_many()`][mjtvm.lp.certifier.Certifier.check_many]): the same
         measures, one matrix product instead of one matrix-vector product per answer."""
         if not answers:
             return []
@@ -329,7 +276,7 @@ class StateLPs:
         return cert.check_many(self.c, lower, upper, cu, x, y, last, floor=floor)
 
     def _certifier(self, r: NDArray[np.float64]) -> Certifier:
-        """The state's [`Certifier`][mjtvm.lp.certificate.Certifier], its alpha column that of ``r``."""
+        """The state's [`Certifier`][mjtvm.lp.certifier.Certifier], its alpha column that of ``r``."""
         a, abs_a = self.pair_matrix(r)
         if self._cert is None:
             primal = np.where(self.force_like, 0.0, self.physical_sizes)  # forces, slips: their own values

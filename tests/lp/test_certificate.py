@@ -173,7 +173,7 @@ def _family(seed: int, p: int):
 @pytest.mark.parametrize(("seed", "entries"), [(s, BATCH_ENTRIES) for s in range(5)] + [(5, 63 * 4), (6, 1)])
 def test_check_many_gives_each_answer_the_certificate_check_gives_it(seed, entries, monkeypatch):
     """Also in chunks (4 answers of 9 x 7 per product, or one): the chunks keep BLAS on one thread."""
-    monkeypatch.setattr("mjtvm.lp.certificate.BATCH_ENTRIES", entries)
+    monkeypatch.setattr("mjtvm.lp.certifier.BATCH_ENTRIES", entries)
     a, col_lower, c, lower, upper, cu, x, y, last, ref, groups, floor = _family(seed, 6)
     one = Certifier(a.copy(), col_lower, col_ref=ref, row_groups=groups, dual_ref=2 * ref)
     many = one.check_many(c, lower, upper, cu, x, y, last, floor=floor)

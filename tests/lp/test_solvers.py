@@ -283,8 +283,9 @@ def test_pyramid_edges_and_mujoco_data_carry_exact_zeros():
     exact zeros (grasp.without_round_off, contacts.force_generators): left in, they sat in the
     LPs beside O(1) entries where no equilibration can tell them from data."""
     from benchmarks.suite import scaling_hand
-    from mjtvm import Contact, force_generators
+    from mjtvm import Contact
     from mjtvm.grasp.resolve.state import without_round_off
+    from mjtvm.model import force_generators
 
     contact = Contact("c", "F", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], np.ones((3, 1)), mu=0.5)
     edges = force_generators(contact, 16)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mjtvm import Contact, StateError, force_generators, tangent_basis
+from mjtvm import Contact, StateError
+from mjtvm.model import force_generators, tangent_basis
 
 Z3 = np.zeros((3, 1))
 

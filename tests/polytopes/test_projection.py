@@ -6,12 +6,13 @@ import numpy as np
 import pytest
 
 from benchmarks.synthetic import random_state
-from mjtvm import Contact, GraspState, assemble, default_operation_range
+from mjtvm import Contact, GraspState, default_operation_range
 from mjtvm.polytopes.enumeration import force_form, project_cdd
 from mjtvm.polytopes.lifted import lifted_polytope
 from mjtvm.polytopes.projection import project_lp
 from mjtvm.polytopes.tvms import tvms
 from mjtvm.polytopes.volume import hausdorff
+from mjtvm.problem2 import assemble
 
 from ..helpers import T_MAX, distance_to_hull, max_speed
 
