@@ -13,7 +13,6 @@ import pytest
 from mjtvm.grasp.contacts.report import contact_rows, contact_warnings
 from mjtvm.grasp.document.document import GraspError
 from mjtvm.grasp.resolve.file import load_grasp
-
 from tests.grasp.resolve.test_file import _doc
 
 R_BALL = 0.1  # m: case 2's ball, centre at z = 0.1 on the palm plane z = 0
