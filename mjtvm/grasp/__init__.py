@@ -3,48 +3,36 @@ MJCF model with the object, the configuration (keyframe, joint values or IK), th
 MuJoCo detects, each joint's operation range (a motor or servo datasheet, ``<dcmotor>``, polygon) and the
 [`GraspState`][mjtvm.model.state.GraspState] read from ``mjData``; datasets of configurations on one grasp
 file ([`dataset`][mjtvm.grasp.document.dataset], [`batch`][mjtvm.grasp.resolve.batch]).
+
+Floors, top first (import-linter keeps them): ``resolve`` (the loader, the state, IK,
+batches) above ``actuation`` (operation ranges, transmissions) above ``contacts`` (what
+touches) above ``document`` (the file's format, no MuJoCo model). The room may import
+``mjtvm.model``, ``mjtvm.formats``, ``mjtvm.errors`` and MuJoCo. Everything else is
+importable from its module.
 """
 
-from mjtvm.grasp.actuation.actuator import operation_range_from_actuator
 from mjtvm.grasp.actuation.dcmotor import DCMotor
-from mjtvm.grasp.actuation.ranges import joint_ranges
 from mjtvm.grasp.actuation.servo import ServoDatasheet
 from mjtvm.grasp.document.checks import GraspError
 from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
-from mjtvm.grasp.document.document import SCHEMA, format_toml, read_grasp_document
+from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.batch import BatchModels, hand_joints
-from mjtvm.grasp.resolve.file import export_state, grasp_from_model, load_grasp, shipped_grasps
-from mjtvm.grasp.resolve.ik import IkResult, IkTarget, geom_contact_target, solve_ik
+from mjtvm.grasp.resolve.file import export_state, load_grasp, shipped_grasps
+from mjtvm.grasp.resolve.ik import solve_ik
 from mjtvm.grasp.resolve.loaded import Grasp
-from mjtvm.grasp.resolve.model import build_spec
-from mjtvm.grasp.resolve.rules import RuleMatch, expand_rules
-from mjtvm.grasp.resolve.state import DetectedContact, detected_contacts, grasp_state, object_weight
+from mjtvm.grasp.resolve.state import grasp_state
 
 __all__ = [
-    "SCHEMA",
     "BatchModels",
     "DCMotor",
     "DatasetGrasp",
-    "DetectedContact",
     "Grasp",
     "GraspError",
-    "IkResult",
-    "IkTarget",
-    "RuleMatch",
     "ServoDatasheet",
-    "build_spec",
-    "detected_contacts",
-    "expand_rules",
     "export_state",
-    "format_toml",
-    "geom_contact_target",
-    "grasp_from_model",
     "grasp_state",
     "hand_joints",
-    "joint_ranges",
     "load_grasp",
-    "object_weight",
-    "operation_range_from_actuator",
     "read_dataset",
     "read_grasp_document",
     "shipped_grasps",

@@ -35,7 +35,7 @@ from mjtvm.paper_hand.posture import (
     planar_fingertip,
     side_postures,
 )
-from mjtvm.paper_hand.scenario import _OBJ, SCENARIOS, _variant, grasp_document, read_scenario
+from mjtvm.paper_hand.scenario import SCENARIOS, grasp_document, read_scenario, scenario_variant
 
 __all__ = [
     "CONTACT_TOLERANCE",
@@ -47,6 +47,7 @@ __all__ = [
     "variant_model_text",
 ]
 
+_OBJ = mujoco.mjtObj
 CONTACT_TOLERANCE = 3e-3  # m: largest accepted distance of a contact from the paper's point
 
 
@@ -66,13 +67,13 @@ def _hand_options(v: Mapping[str, Any]) -> dict[str, Any]:
 
 def variant_model_text(doc: Mapping[str, Any], variant: str) -> str:
     """The MJCF of a variant's hand (``models/paper_hand/<model>``), as the generator writes it."""
-    v = _variant(doc, variant)
+    v = scenario_variant(doc, variant)
     return hand_mjcf(**_hand_options(v), model_name=Path(str(v["model"])).stem)
 
 
 def _build(doc: Mapping[str, Any], variant: str, mg: float) -> mujoco.MjModel:
     """The variant's model, every name the scenario uses checked against it."""
-    v = _variant(doc, variant)
+    v = scenario_variant(doc, variant)
     model = mujoco.MjModel.from_xml_string(
         hand_mjcf(
             **_hand_options(v),
@@ -124,7 +125,7 @@ def _data(model: mujoco.MjModel, doc: Mapping[str, Any], qpos: Mapping[str, floa
 
 def _check_pose(model: mujoco.MjModel, data: mujoco.MjData, doc: Mapping[str, Any], variant: str) -> dict:
     """Achieved contacts vs the paper's; raises when the pose is not the scenario's."""
-    ignored = {*doc["ignored_geoms"], *_variant(doc, variant).get("ignored_geoms", [])}
+    ignored = {*doc["ignored_geoms"], *scenario_variant(doc, variant).get("ignored_geoms", [])}
     found = {
         c.geom: c
         for c in detected_contacts(model, data, object_body=doc["object_body"])
@@ -198,7 +199,7 @@ def solve_variant(doc: Mapping[str, Any], variant: str, *, tolerance: float = 1e
         Unknown names, an unreachable target (named, with its residual), or a pose
         that fails the checks.
     """
-    v = _variant(doc, variant)
+    v = scenario_variant(doc, variant)
     model = _build(doc, variant, float(doc["mg"]))
     bounds = {k: (float(lo), float(hi)) for k, (lo, hi) in v.get("bounds", {}).items()}
     targets = _targets(model, doc)
@@ -243,7 +244,7 @@ def rule_posture(
     too (its printed points lie in the x-z plane through its base); the paper's text does not
     give finger 1's posture (``docs/paper-results.md``).
     """
-    rule = _variant(doc, variant)["posture"]
+    rule = scenario_variant(doc, variant)["posture"]
     if rule.get("rule") != "planar_fingertip":
         raise ModelError(f"scenario {doc['name']!r}", f"unknown posture rule {rule.get('rule')!r}")
     finger = int(rule["finger"])

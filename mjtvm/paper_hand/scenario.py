@@ -28,7 +28,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from mjtvm.errors import ModelError
@@ -48,12 +47,12 @@ __all__ = [
     "read_scenario",
     "scenario_document",
     "scenario_path",
+    "scenario_variant",
     "with_variant",
 ]
 
 SCHEMA = "mjtvm.scenario/1"
 SCENARIOS = ("case1", "case1-s", "case2")
-_OBJ = mujoco.mjtObj
 _REQUIRED = (
     "schema",
     "name",
@@ -99,7 +98,26 @@ def read_scenario(source: str | Path | Mapping[str, Any]) -> dict[str, Any]:
     return doc
 
 
-def _variant(doc: Mapping[str, Any], variant: str) -> Mapping[str, Any]:
+def scenario_variant(doc: Mapping[str, Any], variant: str) -> Mapping[str, Any]:
+    """One variant of a scenario document (``doc["variants"][variant]``).
+
+    Parameters
+    ----------
+    doc
+        A scenario document (`read_scenario()`).
+    variant
+        The variant's name, e.g. ``"default"``.
+
+    Returns
+    -------
+    Mapping
+        The variant's table.
+
+    Raises
+    ------
+    ModelError
+        The scenario has no such variant (naming those it has).
+    """
     if variant not in doc["variants"]:
         raise ModelError(
             f"scenario {doc['name']!r}", f"no variant {variant!r} (has: {', '.join(doc['variants'])})"
@@ -200,7 +218,7 @@ def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
     joint angles with the object at ``object_position``; REFS = the weight ``mg`` along
     gravity; the fingers' joints in finger order; ignored geoms as ``ignore``.
     """
-    v = _variant(doc, variant)
+    v = scenario_variant(doc, variant)
     if "solution" not in v:
         raise ModelError(
             f"scenario {doc['name']!r}", f"variant {variant!r} has no solution: run the generator"

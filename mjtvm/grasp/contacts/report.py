@@ -11,8 +11,9 @@ deepest). World frame, SI units.
 from __future__ import annotations
 
 import copy
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import mujoco
 import numpy as np
@@ -29,13 +30,12 @@ from mjtvm.grasp.contacts.touch import (
 )
 from mjtvm.grasp.document.checks import GraspError
 
-if TYPE_CHECKING:
-    from mjtvm.grasp.resolve.loaded import Grasp
-
 __all__ = [
     "NEAR_TOLERANCES",
     "REPORTED_PENETRATION",
     "ContactRow",
+    "LoadedGrasp",
+    "TypedRule",
     "check_penetration",
     "contact_rows",
     "contact_warnings",
@@ -50,6 +50,81 @@ NEAR_TOLERANCES = 10.0
 #: placement's round-off (the IK stops at about 1e-9 m, the collision at 1e-12 m; the shipped
 #: IK grasps penetrate by up to 1.3e-8 m), not a finger inside the object.
 REPORTED_PENETRATION = 1e-6
+
+
+class TypedRule(Protocol):
+    """What the report reads of a contact rule's match
+    ([`RuleMatch`][mjtvm.grasp.resolve.rules.RuleMatch])."""
+
+    @property
+    def field(self) -> str:
+        """The rule's field, e.g. ``"contact_rules[0]"``."""
+        ...
+
+    @property
+    def type(self) -> str:
+        """``"F"``, ``"L"``, ``"D"`` or ``"ignore"``."""
+        ...
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The touching geoms it typed."""
+        ...
+
+
+class LoadedGrasp(Protocol):
+    """What the report reads of a loaded grasp ([`Grasp`][mjtvm.grasp.resolve.loaded.Grasp], which
+    satisfies it): the report sits below the loader, so it names the attributes, not the class."""
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The compiled model."""
+        ...
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """``mjData`` at the configuration."""
+        ...
+
+    @property
+    def object_body(self) -> str:
+        """The object's body."""
+        ...
+
+    @property
+    def contact_tolerance(self) -> float:
+        """m: a geom within this distance of the object touches it."""
+        ...
+
+    @property
+    def contact_types(self) -> Mapping[str, str]:
+        """Geom label -> contact type."""
+        ...
+
+    @property
+    def selections(self) -> Sequence[tuple[str, Sequence[str]]]:
+        """Per ``contacts`` entry: its description and the labels it selects."""
+        ...
+
+    @property
+    def rule_matches(self) -> Sequence[TypedRule]:
+        """Per ``contact_rules`` entry: the touching geoms it typed."""
+        ...
+
+    @property
+    def ignored_geoms(self) -> Sequence[str]:
+        """Labels whose contacts with the object are dropped."""
+        ...
+
+    @property
+    def document(self) -> Mapping[str, Any]:
+        """The normalised grasp document."""
+        ...
+
+    @property
+    def file(self) -> str:
+        """The grasp file, for messages."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -90,7 +165,7 @@ class ContactRow:
     why: str
 
 
-def kept_contacts(grasp: Grasp) -> list[DetectedContact]:
+def kept_contacts(grasp: LoadedGrasp) -> list[DetectedContact]:
     """The contacts the grasp state is built from (before the ignored are dropped)."""
     return detected_contacts(
         grasp.model,
@@ -101,11 +176,11 @@ def kept_contacts(grasp: Grasp) -> list[DetectedContact]:
     )
 
 
-def _max_penetration(grasp: Grasp) -> float:
+def _max_penetration(grasp: LoadedGrasp) -> float:
     return float(grasp.document.get("max_penetration", 1e-3))
 
 
-def _field_of(grasp: Grasp, label: str) -> str | None:
+def _field_of(grasp: LoadedGrasp, label: str) -> str | None:
     """The field that types the geom ``label``: ``contacts[i]``, or ``contact_rules[j]`` for a
     geom a rule typed; None for an ignored or untyped geom."""
     i = next((i for i, (_, labels) in enumerate(grasp.selections) if label in labels), None)
@@ -114,7 +189,7 @@ def _field_of(grasp: Grasp, label: str) -> str | None:
     return next((m.field for m in grasp.rule_matches if m.type != "ignore" and label in m.labels), None)
 
 
-def check_penetration(grasp: Grasp) -> None:
+def check_penetration(grasp: LoadedGrasp) -> None:
     """No contact of the state (selected, or typed by a rule) is deeper inside the object than
     ``max_penetration``.
 
@@ -136,7 +211,7 @@ def check_penetration(grasp: Grasp) -> None:
             )
 
 
-def contact_warnings(grasp: Grasp) -> list[str]:
+def contact_warnings(grasp: LoadedGrasp) -> list[str]:
     """One line per cause: the selected contacts that penetrate an object geom (deeper than
     [`REPORTED_PENETRATION`][mjtvm.grasp.contacts.report.REPORTED_PENETRATION], within ``max_penetration``; one line per object geom,
     counting them), each IK target geom that does not touch the object (naming the geom of its
@@ -171,7 +246,7 @@ _LISTED = 5
 """Contacts a grouped warning names before "and N more"."""
 
 
-def _self_overlaps(grasp: Grasp) -> list[str]:
+def _self_overlaps(grasp: LoadedGrasp) -> list[str]:
     """One line per pair of hand geoms (neither the object's nor the world's) that overlap
     deeper than [`REPORTED_PENETRATION`][mjtvm.grasp.contacts.report.REPORTED_PENETRATION] at the configuration: a contact no LP sees, whose
     force the physics check would feel. MuJoCo's several contact points of one pair (boxes,
@@ -202,7 +277,7 @@ def _mm(d: float) -> str:
     return f"{round(1e3 * d, 6) + 0.0:.3g}"
 
 
-def _ik_warnings(grasp: Grasp) -> list[str]:
+def _ik_warnings(grasp: LoadedGrasp) -> list[str]:
     config = grasp.document["configuration"]
     if "ik" not in config:
         return []
@@ -240,7 +315,7 @@ def _ik_warnings(grasp: Grasp) -> list[str]:
     return out
 
 
-def contact_rows(grasp: Grasp, within: float | None = None) -> list[ContactRow]:
+def contact_rows(grasp: LoadedGrasp, within: float | None = None) -> list[ContactRow]:
     r"""Every geom pair (hand geom, object geom) that may collide within ``within`` (m; default
     [`NEAR_TOLERANCES`][mjtvm.grasp.contacts.report.NEAR_TOLERANCES] contact tolerances, at least 1 mm), ordered by hand geom id.
 

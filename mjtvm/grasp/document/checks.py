@@ -12,7 +12,23 @@ from typing import Any
 from mjtvm.errors import ModelError
 from mjtvm.model.bounds import MAX_ABS
 
-__all__ = ["SCHEMA", "GraspError", "key_of"]
+__all__ = [
+    "CONTACT_TYPES",
+    "MAX_DEPTH",
+    "MAX_ITEMS",
+    "RANGE_SOURCES",
+    "REQUIRED_KEYS",
+    "SCHEMA",
+    "SELECTORS",
+    "SHAPES",
+    "SUPPORT_SHAPES",
+    "TOP_KEYS",
+    "Checker",
+    "GraspError",
+    "check_text",
+    "key_of",
+    "kind_of",
+]
 
 SCHEMA = "mjtvm.grasp/1"
 CONTACT_TYPES = ("F", "L", "S", "D")
@@ -21,7 +37,7 @@ RANGE_SOURCES = ("dcmotor", "datasheet", "actuator", "polygon")
 MAX_ITEMS = 256  # contacts, targets, joints, poses, wrenches, RVDS vertices
 MAX_DEPTH = 16  # a grasp document nests 6 levels (ranges.<pattern>.datasheet.<key>)
 
-_TOP = {
+TOP_KEYS = {  # the keys a grasp document may have at the top level
     "schema",
     "name",
     "description",
@@ -52,7 +68,7 @@ _TOP = {
 }
 SHAPES = {"sphere": 1, "capsule": 2, "ellipsoid": 3, "cylinder": 2, "box": 3}  # geom size entries used
 SUPPORT_SHAPES = {**SHAPES, "plane": 3}
-_REQUIRED = ("schema", "model", "object", "configuration")  # and contacts or contact_rules
+REQUIRED_KEYS = ("schema", "model", "object", "configuration")  # and contacts or contact_rules
 
 
 class GraspError(ModelError):
@@ -74,8 +90,14 @@ class GraspError(ModelError):
         super().__init__(f"{file}: {field}" if field else file, problem)
 
 
-class _Checker:
-    """Field checks that raise `GraspError` naming the field."""
+class Checker:
+    """Field checks that raise `GraspError` naming the field.
+
+    Parameters
+    ----------
+    file
+        The grasp file (or ``"grasp"`` for a mapping), named by every error.
+    """
 
     def __init__(self, file: str) -> None:
         self.file = file
@@ -91,7 +113,7 @@ class _Checker:
         self, value: Any, field: str, allowed: set[str], required: Sequence[str] = ()
     ) -> Mapping[str, Any]:
         if not isinstance(value, Mapping):
-            raise self.fail(field, f"expected a table (object), got {_kind(value)}")
+            raise self.fail(field, f"expected a table (object), got {kind_of(value)}")
         unknown = sorted(key_of(k) for k in value if k not in allowed)
         if unknown:
             raise self.fail(
@@ -105,12 +127,12 @@ class _Checker:
 
     def string(self, value: Any, field: str) -> str:
         if not isinstance(value, str) or not value or len(value) > 1000:
-            raise self.fail(field, f"expected a non-empty string, got {_kind(value)}")
+            raise self.fail(field, f"expected a non-empty string, got {kind_of(value)}")
         return value
 
     def number(self, value: Any, field: str, *, low: float | None = None, positive: bool = False) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(field, f"expected a number, got {_kind(value)}")
+            raise self.fail(field, f"expected a number, got {kind_of(value)}")
         x = float(value) if abs(value) < 1e300 else math.inf
         if not math.isfinite(x) or abs(x) > MAX_ABS:
             raise self.fail(field, f"expected a finite number with |x| <= {MAX_ABS:g}, got {value!r}")
@@ -128,7 +150,7 @@ class _Checker:
 
     def vector(self, value: Any, field: str, n: int) -> list[float]:
         if not isinstance(value, list) or len(value) != n:
-            raise self.fail(field, f"expected a list of {n} numbers, got {_kind(value)}")
+            raise self.fail(field, f"expected a list of {n} numbers, got {kind_of(value)}")
         return [self.number(x, f"{field}[{i}]") for i, x in enumerate(value)]
 
     def vectors(self, value: Any, field: str, n: int) -> list[list[float]]:
@@ -143,12 +165,12 @@ class _Checker:
 
     def number_map(self, value: Any, field: str) -> dict[str, float]:
         if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
-            raise self.fail(field, f"expected a table of name = number, got {_kind(value)}")
+            raise self.fail(field, f"expected a table of name = number, got {kind_of(value)}")
         return {str(k): self.number(v, f"{field}.{key_of(k)}") for k, v in value.items()}
 
     def bounds(self, value: Any, field: str) -> dict[str, tuple[float, float]]:
         if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
-            raise self.fail(field, f"expected a table of joint = [low, high], got {_kind(value)}")
+            raise self.fail(field, f"expected a table of joint = [low, high], got {kind_of(value)}")
         out = {}
         for k, v in value.items():
             lo, hi = self.vector(v, f"{field}.{key_of(k)}", 2)
@@ -178,9 +200,22 @@ def key_of(key: Any) -> str:
     return text if text.isprintable() and text == text.strip() and text else repr(text)
 
 
-def _check_text(doc: Mapping[str, Any], c: _Checker) -> None:
+def check_text(doc: Mapping[str, Any], c: Checker) -> None:
     """Refuse a lone surrogate (JSON's ``"\\ud800"``) or a NUL character in any key or string:
-    neither reaches MuJoCo's C names (nor a UTF-8 stream) intact."""
+    neither reaches MuJoCo's C names (nor a UTF-8 stream) intact.
+
+    Parameters
+    ----------
+    doc
+        The raw document, as read.
+    c
+        The checker naming the file.
+
+    Raises
+    ------
+    GraspError
+        The first such key or string (beyond the schema), or nesting deeper than `MAX_DEPTH`.
+    """
     stack: list[tuple[Any, str, int]] = [(doc, "", 0)]
     while stack:
         node, field, depth = stack.pop()
@@ -197,7 +232,7 @@ def _check_text(doc: Mapping[str, Any], c: _Checker) -> None:
             _check_string(node, field, c, "string")
 
 
-def _check_string(text: str, field: str, c: _Checker, what: str) -> None:
+def _check_string(text: str, field: str, c: Checker, what: str) -> None:
     if "\0" in text:
         raise c.beyond(field, f"expected a {what} without NUL characters, got {text[:40]!r}")
     try:
@@ -209,7 +244,21 @@ def _check_string(text: str, field: str, c: _Checker, what: str) -> None:
         ) from e
 
 
-def _kind(value: Any) -> str:
+def kind_of(value: Any) -> str:
+    """What ``value`` is, for a message: ``"nothing"``, ``"a boolean (true)"``, ``"the number 3"``,
+    ``"the string 'x'"`` (its first 40 characters), ``"a list of 2"``, ``"a table"`` or its type's
+    name.
+
+    Parameters
+    ----------
+    value
+        A value of the document.
+
+    Returns
+    -------
+    str
+        Its description.
+    """
     if value is None:
         return "nothing"
     if isinstance(value, bool):

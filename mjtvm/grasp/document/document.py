@@ -20,30 +20,30 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.grasp.document.checks import (
-    _REQUIRED,
-    _TOP,
     MAX_ITEMS,
+    REQUIRED_KEYS,
     SCHEMA,
     SHAPES,
     SUPPORT_SHAPES,
+    TOP_KEYS,
+    Checker,
     GraspError,
-    _check_text,
-    _Checker,
-    _kind,
+    check_text,
+    kind_of,
 )
 from mjtvm.grasp.document.sections import (
-    _configuration,
-    _contacts,
-    _lift,
-    _quaternion,
-    _ranges,
-    _refs,
-    _shape,
+    check_configuration,
+    check_contact_rules,
+    check_contacts,
+    check_joint_limits,
+    check_lift,
+    check_quaternion,
+    check_ranges,
+    check_refs,
+    check_shape,
     mu_range,
 )
 from mjtvm.grasp.document.validate import schema_problem
-from mjtvm.grasp.resolve.rules import check_contact_rules
-from mjtvm.grasp.resolve.state import JointLimitOptions
 from mjtvm.model.bounds import MAX_FILE_BYTES, MAX_FRICTION_EDGES, MIN_FRICTION_EDGES
 
 __all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
@@ -98,8 +98,8 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
         Unreadable file, malformed TOML/JSON, or a field breaking the format (named).
     """
     raw, path, label = _load(source)
-    c = _Checker(label)
-    _check_text(raw, c)  # before the validator: it recurses as deep as the document
+    c = Checker(label)
+    check_text(raw, c)  # before the validator: it recurses as deep as the document
     problem = schema_problem(raw)
     doc = _normalise(raw, path, c)  # its refusal is worded for the field; the schema refuses too
     if problem is not None:
@@ -107,20 +107,20 @@ def read_grasp_document(source: str | Path | Mapping[str, Any]) -> tuple[dict[st
     return doc, path
 
 
-def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[str, Any]:
+def _normalise(raw: Mapping[str, Any], path: Path | None, c: Checker) -> dict[str, Any]:
     """The document with defaults filled in, selectors and numbers normalised; a
     `GraspError` for the first field breaking the format."""
-    doc = dict(c.table(raw, "", _TOP, _REQUIRED))
+    doc = dict(c.table(raw, "", TOP_KEYS, REQUIRED_KEYS))
     if doc["schema"] != SCHEMA:
         raise c.fail("schema", f"expected {SCHEMA!r}, got {doc['schema']!r}")
     doc["name"] = c.string(doc.get("name", path.stem if path else "grasp"), "name")
     for key in ("description", "source"):
         if key in doc and not isinstance(doc[key], str):
-            raise c.fail(key, f"expected a string, got {_kind(doc[key])}")
+            raise c.fail(key, f"expected a string, got {kind_of(doc[key])}")
     if "notes" in doc and not (
         isinstance(doc["notes"], list) and all(isinstance(n, str) for n in doc["notes"])
     ):
-        raise c.fail("notes", f"expected a list of strings, got {_kind(doc['notes'])}")
+        raise c.fail("notes", f"expected a list of strings, got {kind_of(doc['notes'])}")
     doc["model"] = c.string(doc["model"], "model")
     obj = c.table(
         doc["object"], "object", {"body", "position", "quaternion", "shape", "size", "mass"}, ("body",)
@@ -128,12 +128,14 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
     doc["object"] = {
         "body": c.string(obj["body"], "object.body"),
         "position": c.vector(obj["position"], "object.position", 3) if "position" in obj else None,
-        "quaternion": _quaternion(c, obj["quaternion"], "object.quaternion") if "quaternion" in obj else None,
-        **_shape(c, obj, "object", SHAPES, mass=True),
+        "quaternion": check_quaternion(c, obj["quaternion"], "object.quaternion")
+        if "quaternion" in obj
+        else None,
+        **check_shape(c, obj, "object", SHAPES, mass=True),
     }
     supports = doc.get("supports", [])
     if not isinstance(supports, list) or len(supports) > MAX_ITEMS:
-        raise c.fail("supports", f"expected a list of support geoms to add, got {_kind(supports)}")
+        raise c.fail("supports", f"expected a list of support geoms to add, got {kind_of(supports)}")
     doc["supports"] = []
     for i, item in enumerate(supports):
         t = c.table(
@@ -148,13 +150,13 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
                 "position": c.vector(t["position"], f"supports[{i}].position", 3)
                 if "position" in t
                 else [0.0] * 3,
-                "quaternion": _quaternion(c, t["quaternion"], f"supports[{i}].quaternion")
+                "quaternion": check_quaternion(c, t["quaternion"], f"supports[{i}].quaternion")
                 if "quaternion" in t
                 else [1.0, 0.0, 0.0, 0.0],
-                **_shape(c, t, f"supports[{i}]", SUPPORT_SHAPES, mass=False),
+                **check_shape(c, t, f"supports[{i}]", SUPPORT_SHAPES, mass=False),
             }
         )
-    doc["configuration"] = _configuration(c, doc["configuration"])
+    doc["configuration"] = check_configuration(c, doc["configuration"])
     doc["joints"] = c.names(doc["joints"], "joints") if "joints" in doc else None
     doc["mu"] = c.number(doc["mu"], "mu", low=0.0) if "mu" in doc else None
     doc["friction_margin"] = c.number(doc.get("friction_margin", 0.0), "friction_margin", low=0.0)
@@ -182,40 +184,23 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: _Checker) -> dict[s
         raise c.fail("max_penetration", f"expected at most 0.01 m, got {doc['max_penetration']:g}")
     if "contacts" not in doc and "contact_rules" not in doc:
         raise c.fail("contacts", "required (or contact_rules)")
-    doc["contacts"] = _contacts(c, doc["contacts"]) if "contacts" in doc else []
+    doc["contacts"] = check_contacts(c, doc["contacts"]) if "contacts" in doc else []
     ignore = doc.get("ignore", [])
     if not isinstance(ignore, list) or len(ignore) > MAX_ITEMS:
-        raise c.fail("ignore", f"expected a list of selections (geom, body or geom_id), got {_kind(ignore)}")
+        raise c.fail(
+            "ignore", f"expected a list of selections (geom, body or geom_id), got {kind_of(ignore)}"
+        )
     doc["ignore"] = [c.selector(s, f"ignore[{i}]", set()) for i, s in enumerate(ignore)]
     doc["contact_rules"] = check_contact_rules(c, doc["contact_rules"]) if "contact_rules" in doc else []
-    doc["refs"] = _refs(c, doc.get("refs", {}))
+    doc["refs"] = check_refs(c, doc.get("refs", {}))
     doc["rvds"] = c.vectors(doc["rvds"], "rvds", 6) if doc.get("rvds") is not None else None
-    doc["ranges"] = _ranges(c, doc.get("ranges", {}))
+    doc["ranges"] = check_ranges(c, doc.get("ranges", {}))
     doc["joint_losses"] = doc.get("joint_losses", "fold")
     if doc["joint_losses"] not in ("fold", "ignore"):
         raise c.fail("joint_losses", f"expected 'fold' or 'ignore', got {doc['joint_losses']!r}")
-    doc["lift"] = _lift(c, doc["lift"]) if "lift" in doc else None
-    doc["joint_limits"] = _joint_limits(c, doc.get("joint_limits", {}))
+    doc["lift"] = check_lift(c, doc["lift"]) if "lift" in doc else None
+    doc["joint_limits"] = check_joint_limits(c, doc.get("joint_limits", {}))
     return doc
-
-
-def _joint_limits(c: Any, value: Any) -> dict[str, float] | bool:
-    """``joint_limits``: ``false`` (the paper's LPs, no position limits) or a table of
-    ``tolerance`` and ``horizon`` (``docs/joint-limits.md``), completed with the defaults
-    ([`limit_options()`][mjtvm.grasp.resolve.state.limit_options] reads it)."""
-    if value is False:
-        return False
-    if not isinstance(value, Mapping):
-        raise c.fail(
-            "joint_limits", f"expected false or a table of tolerance and horizon, got {_kind(value)}"
-        )
-    for key in sorted(set(value) - {"tolerance", "horizon"}):
-        raise c.fail(f"joint_limits.{key}", "unknown key (allowed: horizon, tolerance)")
-    default = JointLimitOptions()
-    return {
-        k: c.number(value[k], f"joint_limits.{k}", low=0.0) if k in value else float(getattr(default, k))
-        for k in ("tolerance", "horizon")
-    }
 
 
 def _toml_value(value: Any) -> str:

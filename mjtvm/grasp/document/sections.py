@@ -1,19 +1,41 @@
-r"""The section checks of a ``mjtvm.grasp/1`` document (configuration, contacts, refs, ranges,
-lift), built on the value checks of `mjtvm.grasp.document.checks`;
-`mjtvm.grasp.document.document` runs them.
+r"""The section checks of a ``mjtvm.grasp/1`` document (configuration, contacts, contact rules,
+refs, ranges, lift, joint limits), built on the value checks of `mjtvm.grasp.document.checks`;
+`mjtvm.grasp.document.document` runs them. Each takes the `Checker` naming the file and the
+section's raw value and returns it normalised, or raises a `GraspError` naming the first bad
+field. None needs the model: names are checked against it in `mjtvm.grasp.resolve`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
-from mjtvm.grasp.document.checks import CONTACT_TYPES, MAX_ITEMS, RANGE_SOURCES, _Checker, _kind, key_of
+from mjtvm.grasp.document.checks import CONTACT_TYPES, MAX_ITEMS, RANGE_SOURCES, Checker, key_of, kind_of
+from mjtvm.model.limits import DEFAULT_HORIZON, DEFAULT_TOLERANCE
+
+__all__ = [
+    "RULE_TYPES",
+    "JointLimitOptions",
+    "check_configuration",
+    "check_contact_rules",
+    "check_contacts",
+    "check_joint_limits",
+    "check_lift",
+    "check_quaternion",
+    "check_ranges",
+    "check_refs",
+    "check_shape",
+    "mu_range",
+]
+
+RULE_TYPES = ("F", "L", "D", "ignore")
+_RULE_KEYS = {"geom", "body", "type", "mu"}
 
 
-def _shape(
-    c: _Checker, t: Mapping[str, Any], field: str, shapes: Mapping[str, int], *, mass: bool
+def check_shape(
+    c: Checker, t: Mapping[str, Any], field: str, shapes: Mapping[str, int], *, mass: bool
 ) -> dict[str, Any]:
     """``shape``, ``size`` (and ``mass``) of a geom to add; all None for an existing object body."""
     if "shape" not in t:
@@ -28,7 +50,7 @@ def _shape(
     size = t.get("size")
     if not isinstance(size, list) or len(size) != n:
         raise c.fail(
-            f"{field}.size", f"expected {n} numbers (MuJoCo's size of a {shape}, m), got {_kind(size)}"
+            f"{field}.size", f"expected {n} numbers (MuJoCo's size of a {shape}, m), got {kind_of(size)}"
         )
     out: dict[str, Any] = {
         "shape": shape,
@@ -41,7 +63,7 @@ def _shape(
     return out
 
 
-def _quaternion(c: _Checker, value: Any, field: str) -> list[float]:
+def check_quaternion(c: Checker, value: Any, field: str) -> list[float]:
     q = c.vector(value, field, 4)
     norm = math.sqrt(sum(x * x for x in q))
     if abs(norm - 1.0) > 1e-6:
@@ -49,12 +71,12 @@ def _quaternion(c: _Checker, value: Any, field: str) -> list[float]:
     return [x / norm for x in q]
 
 
-def _qpos(c: _Checker, value: Any) -> dict[str, float | list[float]]:
+def _qpos(c: Checker, value: Any) -> dict[str, float | list[float]]:
     """``configuration.qpos``: joint = a number (hinge, slide) or a free joint's 7 numbers."""
     field = "configuration.qpos"
     if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
         raise c.fail(
-            field, f"expected a table of joint = number (or a free joint's 7 numbers), got {_kind(value)}"
+            field, f"expected a table of joint = number (or a free joint's 7 numbers), got {kind_of(value)}"
         )
     out: dict[str, float | list[float]] = {}
     for k, v in value.items():
@@ -62,7 +84,7 @@ def _qpos(c: _Checker, value: Any) -> dict[str, float | list[float]]:
         if isinstance(v, list):
             if len(v) != 7:
                 raise c.fail(
-                    name, f"expected a free joint's 7 numbers [x, y, z, qw, qx, qy, qz], got {_kind(v)}"
+                    name, f"expected a free joint's 7 numbers [x, y, z, qw, qx, qy, qz], got {kind_of(v)}"
                 )
             pose = c.vector(v, name, 7)
             norm = math.sqrt(sum(x * x for x in pose[3:]))
@@ -76,7 +98,7 @@ def _qpos(c: _Checker, value: Any) -> dict[str, float | list[float]]:
     return out
 
 
-def _base(c: _Checker, value: Any) -> dict[str, Any]:
+def _base(c: Checker, value: Any) -> dict[str, Any]:
     """``configuration.base``: the pose of a mocap body or of a body on a free joint."""
     t = c.table(value, "configuration.base", {"body", "position", "quaternion"}, ("body",))
     if "position" not in t and "quaternion" not in t:
@@ -84,13 +106,13 @@ def _base(c: _Checker, value: Any) -> dict[str, Any]:
     return {
         "body": c.string(t["body"], "configuration.base.body"),
         "position": c.vector(t["position"], "configuration.base.position", 3) if "position" in t else None,
-        "quaternion": _quaternion(c, t["quaternion"], "configuration.base.quaternion")
+        "quaternion": check_quaternion(c, t["quaternion"], "configuration.base.quaternion")
         if "quaternion" in t
         else None,
     }
 
 
-def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
+def check_configuration(c: Checker, value: Any) -> dict[str, Any]:
     t = c.table(value, "configuration", {"keyframe", "qpos", "ik", "base"})
     chosen = [k for k in ("keyframe", "qpos", "ik") if k in t]
     if len(chosen) != 1:
@@ -138,7 +160,7 @@ def _configuration(c: _Checker, value: Any) -> dict[str, Any]:
     }
 
 
-def mu_range(c: _Checker, value: Any, field: str) -> tuple[float, float]:
+def mu_range(c: Checker, value: Any, field: str) -> tuple[float, float]:
     """A friction interval ``[mu_lo, mu_hi]``, ``0 <= mu_lo <= mu_hi`` (``docs/grasp-format.md``)."""
     lo, hi = c.vector(value, field, 2)
     if not 0.0 <= lo <= hi:
@@ -146,9 +168,9 @@ def mu_range(c: _Checker, value: Any, field: str) -> tuple[float, float]:
     return (lo, hi)
 
 
-def _contacts(c: _Checker, value: Any) -> list[dict[str, Any]]:
+def check_contacts(c: Checker, value: Any) -> list[dict[str, Any]]:
     if not isinstance(value, list) or not value or len(value) > MAX_ITEMS:
-        raise c.fail("contacts", f"expected a list of 1 to {MAX_ITEMS} contact tables, got {_kind(value)}")
+        raise c.fail("contacts", f"expected a list of 1 to {MAX_ITEMS} contact tables, got {kind_of(value)}")
     out = []
     for i, item in enumerate(value):
         field = f"contacts[{i}]"
@@ -177,11 +199,11 @@ def _contacts(c: _Checker, value: Any) -> list[dict[str, Any]]:
     return out
 
 
-def _refs(c: _Checker, value: Any) -> dict[str, Any]:
+def check_refs(c: Checker, value: Any) -> dict[str, Any]:
     t = c.table(value, "refs", {"weight", "mg", "wrenches"})
     weight = t.get("weight", True)
     if not isinstance(weight, bool):
-        raise c.fail("refs.weight", f"expected true or false, got {_kind(weight)}")
+        raise c.fail("refs.weight", f"expected true or false, got {kind_of(weight)}")
     mg = c.number(t["mg"], "refs.mg", low=0.0) if "mg" in t else None
     if mg is not None and not weight:
         raise c.fail("refs.mg", "given with weight = false")
@@ -191,9 +213,9 @@ def _refs(c: _Checker, value: Any) -> dict[str, Any]:
     return {"weight": weight, "mg": mg, "wrenches": wrenches}
 
 
-def _ranges(c: _Checker, value: Any) -> dict[str, dict[str, Any]]:
+def check_ranges(c: Checker, value: Any) -> dict[str, dict[str, Any]]:
     if not isinstance(value, Mapping) or len(value) > MAX_ITEMS:
-        raise c.fail("ranges", f"expected a table of joint (or pattern) = range, got {_kind(value)}")
+        raise c.fail("ranges", f"expected a table of joint (or pattern) = range, got {kind_of(value)}")
     out = {}
     for key, entry in value.items():
         field = f"ranges.{key_of(key)}"
@@ -217,7 +239,7 @@ def _ranges(c: _Checker, value: Any) -> dict[str, dict[str, Any]]:
             raise c.fail(f"{field}.speed_limit", "required with actuator (joint speed limit, rad/s)")
         named = isinstance(t[source], str) and 0 < len(t[source]) <= 1000
         if source in ("dcmotor", "actuator") and not (t[source] is True or named):
-            raise c.fail(f"{field}.{source}", f"expected true or an actuator name, got {_kind(t[source])}")
+            raise c.fail(f"{field}.{source}", f"expected true or an actuator name, got {kind_of(t[source])}")
         if source == "datasheet" and not (named or isinstance(t["datasheet"], Mapping)):
             raise c.fail(f"{field}.datasheet", "expected a datasheet name, a JSON path or a table")
         if source == "polygon":
@@ -226,7 +248,7 @@ def _ranges(c: _Checker, value: Any) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _lift(c: _Checker, value: Any) -> dict[str, Any]:
+def check_lift(c: Checker, value: Any) -> dict[str, Any]:
     t = c.table(value, "lift", {"direction", "twist", "poses", "height", "bounds", "stop_margin"})
     chosen = [k for k in ("direction", "twist", "poses") if k in t]
     if len(chosen) > 1:
@@ -252,7 +274,7 @@ def _lift(c: _Checker, value: Any) -> dict[str, Any]:
             out["poses"].append(
                 {
                     "position": c.vector(pt["position"], f"lift.poses[{i}].position", 3),
-                    "quaternion": _quaternion(c, pt["quaternion"], f"lift.poses[{i}].quaternion")
+                    "quaternion": check_quaternion(c, pt["quaternion"], f"lift.poses[{i}].quaternion")
                     if "quaternion" in pt
                     else None,
                 }
@@ -267,4 +289,65 @@ def _lift(c: _Checker, value: Any) -> dict[str, Any]:
     return out
 
 
-# ------------------------------------------------------------------ writing
+def check_contact_rules(c: Checker, value: Any) -> list[dict[str, Any]]:
+    """The ``contact_rules`` list normalised to ``{"select": "geom"|"body", "pattern", "type",
+    "mu"}`` (``mu`` None when not given); a `GraspError` naming the first bad field."""
+    if not isinstance(value, list) or not value or len(value) > MAX_ITEMS:
+        raise c.fail(
+            "contact_rules", f"expected a list of 1 to {MAX_ITEMS} rule tables, got {kind_of(value)}"
+        )
+    out = []
+    for i, item in enumerate(value):
+        field = f"contact_rules[{i}]"
+        t = c.table(item, field, _RULE_KEYS)
+        chosen = [k for k in ("geom", "body") if k in t]
+        if len(chosen) != 1:
+            raise c.fail(field, f"expected exactly one of geom, body, got {len(chosen)}")
+        if "type" not in t:
+            raise c.fail(f"{field}.type", f"required ({', '.join(RULE_TYPES)})")
+        if t["type"] not in RULE_TYPES:
+            raise c.fail(
+                f"{field}.type", f"expected one of {', '.join(RULE_TYPES)}, got {kind_of(t['type'])}"
+            )
+        mu = c.number(t["mu"], f"{field}.mu", low=0.0) if "mu" in t else None
+        if mu is not None and t["type"] == "ignore":
+            raise c.fail(f"{field}.mu", "an ignore rule types nothing: no mu")
+        select = chosen[0]
+        out.append(
+            {
+                "select": select,
+                "pattern": c.string(t[select], f"{field}.{select}"),
+                "type": t["type"],
+                "mu": mu,
+            }
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class JointLimitOptions:
+    """How `grasp_state()` states the joints' position limits (`mjtvm.model.limits`):
+    a joint within ``tolerance`` (rad or m) of a limit is on it, and ``horizon`` (m of
+    object travel; 0: on-limit rows only) is Problem 2's travel horizon."""
+
+    tolerance: float = DEFAULT_TOLERANCE
+    horizon: float = DEFAULT_HORIZON
+
+
+def check_joint_limits(c: Checker, value: Any) -> dict[str, float] | bool:
+    """``joint_limits``: ``false`` (the paper's LPs, no position limits) or a table of
+    ``tolerance`` and ``horizon`` (``docs/joint-limits.md``), completed with the defaults
+    ([`limit_options()`][mjtvm.grasp.resolve.state.limit_options] reads it)."""
+    if value is False:
+        return False
+    if not isinstance(value, Mapping):
+        raise c.fail(
+            "joint_limits", f"expected false or a table of tolerance and horizon, got {kind_of(value)}"
+        )
+    for key in sorted(set(value) - {"tolerance", "horizon"}):
+        raise c.fail(f"joint_limits.{key}", "unknown key (allowed: horizon, tolerance)")
+    default = JointLimitOptions()
+    return {
+        k: c.number(value[k], f"joint_limits.{k}", low=0.0) if k in value else float(getattr(default, k))
+        for k in ("tolerance", "horizon")
+    }

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from mjtvm.formats.schema import schema_problem as _schema_problem
-from mjtvm.grasp.document.checks import _kind, key_of
+from mjtvm.grasp.document.checks import key_of, kind_of
 
 __all__ = ["BEYOND_SCHEMA", "schema_problem"]
 
@@ -37,4 +37,4 @@ def schema_problem(doc: Mapping[str, Any]) -> tuple[str, str] | None:
     doc
         A raw grasp document (the parsed TOML or JSON).
     """
-    return _schema_problem("grasp", doc, describe=_kind, key=key_of)
+    return _schema_problem("grasp", doc, describe=kind_of, key=key_of)

@@ -47,7 +47,7 @@ from mjtvm.grasp.document.checks import GraspError, key_of
 from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.base import hold_mocap_poses, set_base_pose, set_joint_values
 from mjtvm.grasp.resolve.configure import solve_configuration
-from mjtvm.grasp.resolve.loaded import Grasp, weight_refs
+from mjtvm.grasp.resolve.loaded import Grasp, document_refs
 from mjtvm.grasp.resolve.model import (
     build_spec,
     geom_labels,
@@ -393,7 +393,7 @@ def grasp_from_model(
         friction_margin=cone_margin(_cone(model, doc["cone"]), doc["friction_margin"]),
         cone=_cone(model, doc["cone"]),
         slide_directions=MappingProxyType(slides),
-        refs=weight_refs(model, data, doc, doc["object"]["body"], file),
+        refs=document_refs(model, data, doc, doc["object"]["body"], file),
         rvds=rvds,
         ignored_geoms=tuple(ignored),
         operation_ranges=MappingProxyType(ranges),

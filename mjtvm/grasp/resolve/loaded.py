@@ -196,7 +196,7 @@ class Grasp:
         if not self.document["refs"]["weight"]:
             raise GraspError(self.file, "refs", "has no weight (weight = false): mg cannot replace it")
         spec = {**self.document["refs"], "mg": float(mg)}
-        return weight_refs(self.model, self.data, {"refs": spec}, self.object_body, self.file)
+        return document_refs(self.model, self.data, {"refs": spec}, self.object_body, self.file)
 
     def spec(self) -> mujoco.MjSpec:
         """A fresh ``MjSpec`` of the model file with the grasp's additions (object, supports), e.g.
@@ -367,10 +367,33 @@ def with_mu_ranges(
     )
 
 
-def weight_refs(
+def document_refs(
     model: mujoco.MjModel, data: mujoco.MjData, doc: Mapping[str, Any], obj: str, file: str
 ) -> NDArray[np.float64]:
-    """REFS vertices: (weight +) each wrench (eq. 25-26's required external wrenches)."""
+    """REFS vertices of a document's ``refs``: (weight +) each wrench (eq. 25-26's required
+    external wrenches).
+
+    Parameters
+    ----------
+    model, data
+        The compiled model and ``mjData`` at the configuration.
+    doc
+        A mapping with the normalised ``refs`` table (``weight``, ``mg``, ``wrenches``).
+    obj
+        The object's body.
+    file
+        The grasp file, for messages.
+
+    Returns
+    -------
+    NDArray
+        ``(K, 6)`` read-only REFS [N; N m about the object's origin].
+
+    Raises
+    ------
+    GraspError
+        ``refs.mg`` given for an object without weight in the model.
+    """
     spec = doc["refs"]
     weight = np.zeros(6)
     if spec["weight"]:

@@ -38,9 +38,12 @@ import mujoco
 import numpy as np
 
 from mjtvm.grasp.contacts.touch import detected_contacts, geom_label, subtree
-from mjtvm.grasp.document.checks import MAX_ITEMS, GraspError, _Checker, _kind
+from mjtvm.grasp.document.checks import GraspError
+from mjtvm.grasp.document.sections import RULE_TYPES, check_contact_rules
 from mjtvm.grasp.resolve.model import suggest
 
+# The rules' document check lives with the other section checks (it needs no model); its
+# names are re-exported here, where the rules' callers have always found them.
 __all__ = [
     "RULE_TYPES",
     "RuleExpansion",
@@ -49,40 +52,6 @@ __all__ = [
     "expand_rules",
     "touching_geoms",
 ]
-
-RULE_TYPES = ("F", "L", "D", "ignore")
-_RULE_KEYS = {"geom", "body", "type", "mu"}
-
-
-def check_contact_rules(c: _Checker, value: Any) -> list[dict[str, Any]]:
-    """The ``contact_rules`` list normalised to ``{"select": "geom"|"body", "pattern", "type",
-    "mu"}`` (``mu`` None when not given); a `GraspError` naming the first bad field."""
-    if not isinstance(value, list) or not value or len(value) > MAX_ITEMS:
-        raise c.fail("contact_rules", f"expected a list of 1 to {MAX_ITEMS} rule tables, got {_kind(value)}")
-    out = []
-    for i, item in enumerate(value):
-        field = f"contact_rules[{i}]"
-        t = c.table(item, field, _RULE_KEYS)
-        chosen = [k for k in ("geom", "body") if k in t]
-        if len(chosen) != 1:
-            raise c.fail(field, f"expected exactly one of geom, body, got {len(chosen)}")
-        if "type" not in t:
-            raise c.fail(f"{field}.type", f"required ({', '.join(RULE_TYPES)})")
-        if t["type"] not in RULE_TYPES:
-            raise c.fail(f"{field}.type", f"expected one of {', '.join(RULE_TYPES)}, got {_kind(t['type'])}")
-        mu = c.number(t["mu"], f"{field}.mu", low=0.0) if "mu" in t else None
-        if mu is not None and t["type"] == "ignore":
-            raise c.fail(f"{field}.mu", "an ignore rule types nothing: no mu")
-        select = chosen[0]
-        out.append(
-            {
-                "select": select,
-                "pattern": c.string(t[select], f"{field}.{select}"),
-                "type": t["type"],
-                "mu": mu,
-            }
-        )
-    return out
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any, cast
 
 import mujoco
@@ -36,14 +35,16 @@ from mjtvm.grasp.contacts.touch import (
     subtree,
     without_round_off,
 )
+from mjtvm.grasp.document.sections import JointLimitOptions
 from mjtvm.model.contacts import CONTACT_TYPES, Contact
-from mjtvm.model.limits import DEFAULT_HORIZON, DEFAULT_TOLERANCE, JointLimits
+from mjtvm.model.limits import JointLimits
 from mjtvm.model.operation_range import OperationRange, as_operation_range
 from mjtvm.model.state import GraspState, SlipMode
 from mjtvm.model.transmission import Transmission
 
-# The contact detection lives in .touch; its names are re-exported here, where the grasp
-# state's callers have always found them.
+# The contact detection lives in .touch and JointLimitOptions with the document's checks
+# (.sections); their names are re-exported here, where the grasp state's callers have
+# always found them.
 __all__ = [
     "DetectedContact",
     "JointLimitOptions",
@@ -62,16 +63,6 @@ __all__ = [
 ]
 
 _OBJ = mujoco.mjtObj
-
-
-@dataclass(frozen=True)
-class JointLimitOptions:
-    """How `grasp_state()` states the joints' position limits (`mjtvm.model.limits`):
-    a joint within ``tolerance`` (rad or m) of a limit is on it, and ``horizon`` (m of
-    object travel; 0: on-limit rows only) is Problem 2's travel horizon."""
-
-    tolerance: float = DEFAULT_TOLERANCE
-    horizon: float = DEFAULT_HORIZON
 
 
 def limit_options(value: Mapping[str, float] | bool | None) -> JointLimitOptions | None:
@@ -166,7 +157,7 @@ def grasp_state(
     slip: SlipMode = "per_contact",
     contact_tolerance: float | None = None,
     joint_damping: bool = True,
-    joint_limits: JointLimitOptions | None = JointLimitOptions(),
+    joint_limits: JointLimitOptions | None = JointLimitOptions(),  # noqa: B008 - frozen, so shared safely
 ) -> GraspState:
     r"""The grasp state (space = 3) at the configuration ``data.qpos``.
 
