@@ -14,7 +14,8 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import StateError
 from mjtvm.model.state import GraspState
-from mjtvm.physics.simulate import SimSettings, rollout
+from mjtvm.physics.settings import SimSettings
+from mjtvm.physics.simulate import rollout
 from mjtvm.physics.witness import WitnessKind, witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
 

@@ -46,8 +46,8 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.model.state import GraspState
+from mjtvm.physics.inertia import gravity_bias
 from mjtvm.physics.rig import Rig
-from mjtvm.physics.simulate import _gravity
 from mjtvm.physics.witness import Drive, WitnessKind, central_witness, witness_drive
 from mjtvm.problem2.dynamic import DynamicAlpha, dynamic_alpha, limiting_term
 from mjtvm.problem2.tvmmp import tvmmp
@@ -116,7 +116,7 @@ def joint_demand(
     ----------
     model
         A model whose driven joints have ``<dcmotor>`` actuators
-        ([`sim_model()`][mjtvm.physics.simulate.sim_model]); the armature (rotor inertia) is part of
+        ([`sim_model()`][mjtvm.physics.settings.sim_model]); the armature (rotor inertia) is part of
         its mass matrix.
     drive
         The motion: object twist, joint speeds and contact types ([`Drive`][mjtvm.physics.witness.Drive]).
@@ -149,7 +149,7 @@ def _demand_at(
     full[rig.dofs] = acc
     out = np.zeros(m.nv)
     mujoco.mj_mulM(m, d, out, full)
-    bias = d.qfrc_bias - _gravity(m, probe, np.asarray(qpos, dtype=float))
+    bias = d.qfrc_bias - gravity_bias(m, probe, np.asarray(qpos, dtype=float))
     return JointDemand(out[rig.dofs].copy(), bias[rig.dofs].copy(), acc, speeds), qvel
 
 
@@ -240,7 +240,7 @@ def dynamic_pair(
 ) -> DynamicAlpha:
     r"""$\alpha^{dyn}_{kl}$ of one pair of a MuJoCo grasp state (module docstring).
 
-    ``model`` from [`sim_model()`][mjtvm.physics.simulate.sim_model] (the grasp's model with its
+    ``model`` from [`sim_model()`][mjtvm.physics.settings.sim_model] (the grasp's model with its
     motors), ``qpos`` the state's configuration, ``result`` the state's quasi-static
     [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult] (solved here when omitted). ``window`` (s): the
     demand is taken along the motion's first ``window`` seconds ([`demand_of()`][mjtvm.physics.dynamic.demand_of]); a

@@ -37,7 +37,8 @@ from numpy.typing import NDArray
 from mjtvm.errors import ParamError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.rig import Rig
-from mjtvm.physics.simulate import SimSettings, held
+from mjtvm.physics.settings import SimSettings
+from mjtvm.physics.simulate import held
 from mjtvm.physics.witness import Drive, witness_drive
 
 __all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test", "state_hold"]
@@ -150,7 +151,7 @@ def hold_test(
     Parameters
     ----------
     model
-        From [`sim_model()`][mjtvm.physics.simulate.sim_model].
+        From [`sim_model()`][mjtvm.physics.settings.sim_model].
     drive
         The witness drive at speed factor 0 (its torques hold the object; its speeds are 0).
     settings

@@ -38,7 +38,8 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError
 from mjtvm.physics.rig import Rig, finger_contacts
-from mjtvm.physics.simulate import SimSettings, settle
+from mjtvm.physics.settings import SimSettings
+from mjtvm.physics.simulate import settle
 from mjtvm.physics.witness import Drive
 
 __all__ = ["LAUNCH_DISTANCE", "LaunchResult", "launch", "launch_row"]
@@ -95,7 +96,7 @@ def launch(
     Parameters
     ----------
     model
-        From [`sim_model()`][mjtvm.physics.simulate.sim_model].
+        From [`sim_model()`][mjtvm.physics.settings.sim_model].
     drive
         The pair's witness drive at the speed to reach (s = 1: $\alpha_{kl}\hat r_l$).
     distance

@@ -6,7 +6,7 @@ feedforward; drive voltage clamped at Vmax; motor torque clamped at the continuo
 so the speed-torque line, the torque saturation and the rotor inertia are MuJoCo's motor
 physics. The object is free under gravity. Protocol (``docs/physics-check.md``):
 
-1. *Model* ([`sim_model()`][mjtvm.physics.simulate.sim_model]): a copy of the lift's model with elliptic friction cones,
+1. *Model* ([`sim_model()`][mjtvm.physics.settings.sim_model]): a copy of the lift's model with elliptic friction cones,
    contact ``solref = (2 ms, 1)``, ``impratio = 10``, a 0.25 ms step; finger geoms take
    priority in contact mixing: F- and S-geoms get friction ``mu`` (condim 3), L-geoms and the
    base D-geom are frictionless (condim 1), other finger geoms keep ``mu``.
@@ -35,6 +35,10 @@ by more than ``speed_tol`` in magnitude or ``angle_tol`` degrees in direction; a
 tangential slip above ``slip_tol`` x the object's travel (+ ``slip_floor``); a finger geom
 more than ``lost_gap`` from the object; a motor torque at its saturation.
 
+The settings and the model (step 1) are [`mjtvm.physics.settings`][mjtvm.physics.settings], the
+inertial torques (``inertial_ff``, [`inertial_demand()`][mjtvm.physics.inertia.inertial_demand])
+[`mjtvm.physics.inertia`][mjtvm.physics.inertia]; their names are importable from here too.
+
 Any hand: the model needs one ``<dcmotor>`` per state joint (found by its transmission;
 [`mjtvm.physics.motors`][mjtvm.physics.motors] attaches them to a hand with servos), or, for a state with a
 transmission, one per actuator on the actuator's own joint or tendon (found by name; the
@@ -45,19 +49,19 @@ label (`geom_label()`), and contact points come from
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.errors import ModelError, ParamError
-from mjtvm.grasp.resolve.state import geom_id
+from mjtvm.errors import ParamError
+from mjtvm.physics.inertia import inertial_demand, inertial_feedforward
 from mjtvm.physics.rig import Rig, finger_contacts, twist_errors
+from mjtvm.physics.settings import SimSettings, sim_model
 from mjtvm.physics.witness import Drive
 
 __all__ = [
@@ -72,127 +76,6 @@ __all__ = [
 ]
 
 _F64 = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class SimSettings:
-    r"""Simulation and pass/fail settings (module docstring; SI units, angles in degrees).
-
-    ``armature_scale`` scales the actuators' rotor inertia and ``inertial_ff`` adds the
-    computed inertial and Coriolis torques of the tracked setpoints to the feedforward:
-    both are ablations of the quasi-static assumption, off by default.
-    """
-
-    timestep: float = 2.5e-4
-    cone: Literal["elliptic", "pyramidal"] = "elliptic"
-    solref: tuple[float, float] = (0.002, 1.0)
-    solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
-    impratio: float = 10.0
-    settle: float = 0.03
-    startup: float = 0.002
-    window: float = 0.005
-    track: bool = True
-    inertial_ff: bool = False
-    armature_scale: float = 1.0
-    speed_tol: float = 0.10
-    angle_tol: float = 10.0
-    slip_tol: float = 0.05
-    slip_floor: float = 1e-5
-    lost_gap: float = 5e-4
-
-    def __post_init__(self) -> None:
-        for name in (
-            "timestep",
-            "settle",
-            "startup",
-            "window",
-            "speed_tol",
-            "angle_tol",
-            "slip_tol",
-            "slip_floor",
-            "lost_gap",
-            "impratio",
-            "armature_scale",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0) or (name in ("timestep", "window") and value == 0):
-                raise ParamError(name, f"expected a finite number >= 0, got {value!r}", value)
-        if self.cone not in ("elliptic", "pyramidal"):
-            raise ParamError("cone", f"expected 'elliptic' or 'pyramidal', got {self.cone!r}", self.cone)
-
-    def steps(self, seconds: float) -> int:
-        return round(seconds / self.timestep)
-
-
-def sim_model(
-    model: mujoco.MjModel,
-    contact_types: Mapping[str, str],
-    *,
-    mu: float,
-    mg: float | None = None,
-    object_body: str = "object",
-    settings: SimSettings | None = None,
-) -> mujoco.MjModel:
-    r"""A copy of ``model`` set up for rollouts (step 1 of the module docstring).
-
-    Parameters
-    ----------
-    model
-        A model whose state joints each have one ``<dcmotor>`` with ``input="vel ff"``
-        ([`attach_dcmotors()`][mjtvm.physics.motors.attach_dcmotors] gives any hand those).
-    contact_types
-        Geom label (`geom_label()`: its name, or ``"<body>/geom<n>"``
-        when unnamed) -> ``"F"``, ``"L"``, ``"S"`` or ``"D"`` (a state's contacts). Geoms
-        not listed: ``"D"`` on the world body, else ``"F"``.
-    mu
-        Coulomb coefficient of the F- and S-geoms (and of finger geoms not listed).
-    mg
-        Object weight (N); the object body's mass and inertia are scaled to it. Default: as is.
-
-    Raises
-    ------
-    ModelError
-        Unknown object body or a contact-type key that is no geom of the model.
-    """
-    st = settings or SimSettings()
-    m = copy.deepcopy(model)
-    m.opt.timestep = st.timestep
-    m.opt.cone = int(
-        mujoco.mjtCone.mjCONE_ELLIPTIC if st.cone == "elliptic" else mujoco.mjtCone.mjCONE_PYRAMIDAL
-    )
-    m.opt.impratio = st.impratio
-    m.actuator_armature[:] *= st.armature_scale
-    ob = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, object_body)
-    if ob < 0:
-        raise ModelError(f"body {object_body!r}", "not in the model")
-    if mg is not None:
-        if not (math.isfinite(mg) and mg > 0):
-            raise ParamError("mg", f"expected a positive weight (N), got {mg!r}", mg)
-        g = float(np.linalg.norm(m.opt.gravity))  # the weight along the model's gravity, as the REFS
-        if g == 0.0 or float(m.body_mass[ob]) == 0.0:
-            raise ParamError(
-                "mg",
-                "the object has no weight to scale (the model's gravity or the object's mass is 0): "
-                'give the model a gravity (<option gravity="0 0 -9.81"/>) and the object a mass',
-            )
-        scale = mg / (float(m.body_mass[ob]) * g)
-        m.body_mass[ob] *= scale
-        m.body_inertia[ob] *= scale
-    kinds = {geom_id(m, label, "contact_types geom"): kind for label, kind in contact_types.items()}
-    inside = {ob}
-    for b in range(ob + 1, m.nbody):  # parents precede children: the object's subtree
-        if int(m.body_parentid[b]) in inside:
-            inside.add(b)
-    for g in range(m.ngeom):
-        m.geom_solref[g] = st.solref
-        m.geom_solimp[g] = st.solimp
-        if int(m.geom_bodyid[g]) in inside:
-            continue
-        kind = kinds.get(g, "D" if int(m.geom_bodyid[g]) == 0 else "F")
-        m.geom_priority[g] = 1  # the finger's (palm's) parameters decide the contact
-        m.geom_condim[g] = 3 if kind in ("F", "S") else 1
-        m.geom_friction[g] = (mu, 0.005, 0.0001)
-    return m
 
 
 # ------------------------------------------------------------------ witnesses
@@ -322,7 +205,7 @@ def rollout(
 ) -> RolloutResult:
     r"""Settle, start and run one drive from ``qpos`` (module docstring, steps 3-5).
 
-    ``model`` comes from [`sim_model()`][mjtvm.physics.simulate.sim_model]. ``record`` keeps per-step arrays (``trace``).
+    ``model`` comes from [`sim_model()`][mjtvm.physics.settings.sim_model]. ``record`` keeps per-step arrays (``trace``).
     """
     st = settings or SimSettings()
     rig, m = Rig(model, drive, object_body), model
@@ -353,7 +236,7 @@ def rollout(
         qset = rig.setpoints(d, drive) if st.track else drive.speeds
         sp, ff = rig.controls(d, drive, qset)
         if st.inertial_ff and pred is not None:
-            ff += _inertial(m, d, pred, rig, drive, qset)
+            ff += inertial_feedforward(m, d, pred, rig, drive, qset)
         d.ctrl[rig.cadr] = sp
         d.ctrl[rig.cadr + 1] = ff / rig.gear
         mujoco.mj_step(m, d)
@@ -438,68 +321,6 @@ def _violation(
         names = ", ".join(sorted(saturated))
         return f"torque saturated ({names})", "torque limit", names
     return "", "", ""
-
-
-def _inertial(
-    m: mujoco.MjModel, d: mujoco.MjData, pred: mujoco.MjData, rig: Rig, drive: Drive, qset: _F64
-) -> _F64:
-    """Computed torque of the tracked setpoints: M qdd (one-step prediction) + Coriolis (ablation)."""
-    pred.qpos[:] = d.qpos
-    mujoco.mj_integratePos(m, pred.qpos, d.qvel, m.opt.timestep)
-    mujoco.mj_kinematics(m, pred)
-    mujoco.mj_comPos(m, pred)
-    acc = np.zeros(m.nv)
-    acc[rig.dofs] = (rig.setpoints(pred, drive) - qset) / m.opt.timestep
-    out = np.zeros(m.nv)
-    mujoco.mj_mulM(m, d, out, acc)
-    return np.asarray((out + d.qfrc_bias - _gravity(m, pred, d.qpos))[rig.dofs], dtype=float)
-
-
-def _gravity(m: mujoco.MjModel, scratch: mujoco.MjData, qpos: _F64) -> _F64:
-    """Gravity part of ``qfrc_bias`` at ``qpos`` (RNE at zero velocity, on ``scratch``)."""
-    scratch.qpos[:] = qpos
-    scratch.qvel[:] = 0.0
-    mujoco.mj_kinematics(m, scratch)
-    mujoco.mj_comPos(m, scratch)
-    mujoco.mj_comVel(m, scratch)
-    out = np.zeros(m.nv)
-    mujoco.mj_rne(m, scratch, 0, out)
-    return out
-
-
-def inertial_demand(
-    model: mujoco.MjModel, qpos: _F64, drive: Drive, *, duration: float = 0.005, object_body: str = "object"
-) -> _F64:
-    r"""``(M,)`` largest joint torque (N m) that inertia and Coriolis forces add along the ideal motion.
-
-    The drive's motion (tracked setpoints, object at the drive's twist) is integrated
-    kinematically for ``duration``; the torque is $M(q)\ddot q + c(q, \dot q)$ on the
-    driven joints (rotor inertia included, object excluded): what the quasi-static TVMMP
-    (eq. 19) leaves out.
-    """
-    m, d, scratch = model, mujoco.MjData(model), mujoco.MjData(model)
-    rig = Rig(m, drive, object_body)
-    d.qpos[:] = qpos
-    dt, fa, worst = m.opt.timestep, rig.fadr, np.zeros(len(drive.joints))
-    mujoco.mj_forward(m, d)
-    qset = rig.setpoints(d, drive)
-    for _ in range(max(2, round(duration / dt))):
-        d.qvel[:] = 0.0
-        d.qvel[rig.dofs] = qset
-        d.qvel[fa : fa + 3] = drive.twist[:3]
-        d.qvel[fa + 3 : fa + 6] = d.xmat[rig.ob].reshape(3, 3).T @ drive.twist[3:]
-        mujoco.mj_forward(m, d)
-        grav = _gravity(m, scratch, d.qpos)
-        mujoco.mj_integratePos(m, d.qpos, d.qvel, dt)
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        nxt = rig.setpoints(d, drive)
-        acc, out = np.zeros(m.nv), np.zeros(m.nv)
-        acc[rig.dofs] = (nxt - qset) / dt
-        mujoco.mj_mulM(m, d, out, acc)
-        worst = np.maximum(worst, np.abs((out + d.qfrc_bias - grav)[rig.dofs]))
-        qset = nxt
-    return worst
 
 
 def rerun_data(result: RolloutResult, *, prefix: str = "rollout") -> dict[str, dict[str, _F64]]:
