@@ -33,9 +33,8 @@ spellings, shared options), [`values`][mjtvm.cli.values] (option types), [`outpu
 
 from __future__ import annotations
 
-from mjtvm.cli.output import emit
 from mjtvm.cli.parser import build_parser, guarded, main
 from mjtvm.cli.solve import example_path
 from mjtvm.cli.verify import verify_parser
 
-__all__ = ["build_parser", "emit", "example_path", "guarded", "main", "verify_parser"]
+__all__ = ["build_parser", "example_path", "guarded", "main", "verify_parser"]

@@ -40,12 +40,6 @@ JOGGLE = 1e-9  #: relative perturbation of points before Qhull (polar points, a 
 WELL_APART = 0.05  #: facets through a point whose normals' smallest singular value exceeds this
 
 
-def _joggled(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``points`` moved by a seeded uniform perturbation of [`JOGGLE`][mjtvm.polytopes.hull.JOGGLE] x their extent."""
-    rng = np.random.default_rng(0)
-    return points + rng.uniform(-1.0, 1.0, points.shape) * JOGGLE * np.max(np.abs(points))
-
-
 def _hull_residual(point: NDArray[np.float64], others: NDArray[np.float64], scale: float) -> float:
     """Non-negative least squares on ``[(Q - p) / scale; 1] mu = [0; 1]``, ``mu >= 0``: the
     residual is about the distance from ``p`` to the hull of the rows of ``Q``, over ``scale``."""

@@ -16,9 +16,15 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 from scipy.spatial.distance import cdist
 
-from mjtvm.polytopes.hull import _joggled, incidence
+from mjtvm.polytopes.hull import JOGGLE, incidence
 
 __all__ = ["facet_volume", "hausdorff", "hull_volume"]
+
+
+def _joggled(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``points`` moved by a seeded uniform perturbation of [`JOGGLE`][mjtvm.polytopes.hull.JOGGLE] x their extent."""
+    rng = np.random.default_rng(0)
+    return points + rng.uniform(-1.0, 1.0, points.shape) * JOGGLE * np.max(np.abs(points))
 
 
 def hull_volume(points: NDArray[np.float64]) -> float:

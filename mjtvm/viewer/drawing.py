@@ -23,7 +23,19 @@ from mjtvm.polytopes.lifted import lifted_polytope
 from mjtvm.polytopes.projection import project_lp
 from mjtvm.polytopes.tvms import default_scale
 
-__all__ = ["FORCE_SCALE", "SLIDE_LENGTH", "TYPE_COLORS", "VELOCITY_SCALE", "hull_mesh", "translational_tvms"]
+__all__ = [
+    "FORCE_SCALE",
+    "SLIDE_LENGTH",
+    "TYPE_COLORS",
+    "VELOCITY_SCALE",
+    "Columns",
+    "Scene",
+    "hull_mesh",
+    "log_run",
+    "mirrored",
+    "panel",
+    "translational_tvms",
+]
 
 VELOCITY_SCALE = 0.06  #: m drawn per m/s of object velocity
 FORCE_SCALE = 0.05  #: m drawn per N of contact force
@@ -80,21 +92,51 @@ def _rgb(rgba: NDArray[np.float32]) -> tuple[int, ...]:
     return tuple(round(255 * float(c)) for c in rgba)
 
 
-def _panel(rng: OperationRange, points: Any) -> NDArray[np.float64]:
-    """(tau, qdot) to joint-panel coordinates (module docstring)."""
+def panel(rng: OperationRange, points: Any) -> NDArray[np.float64]:
+    """Joint-panel coordinates of (tau, qdot) points (the panels: [`viz`][mjtvm.viewer.viz]).
+
+    Parameters
+    ----------
+    rng
+        The joint's operation range.
+    points
+        ``(..., 2)`` (tau, qdot) pairs.
+
+    Returns
+    -------
+    numpy.ndarray
+        The points with tau over the range's maximum torque and -qdot over its maximum speed.
+    """
     return np.asarray(points, dtype=float) * [1 / rng.max_torque, -1 / rng.max_speed]
 
 
-def _mirrored(rng: OperationRange) -> NDArray[np.float64]:
-    """Closed outline (tau, qdot) of the range mirrored into the four quadrants."""
+def mirrored(rng: OperationRange) -> NDArray[np.float64]:
+    """The closed outline of an operation range mirrored into the four quadrants.
+
+    Parameters
+    ----------
+    rng
+        The joint's operation range.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 2)`` (tau, qdot) points, the first repeated at the end.
+    """
     v = rng.vertices[np.any(rng.vertices > 0, axis=1)]
     v = v[np.argsort(np.arctan2(v[:, 1], v[:, 0]))]  # from the torque axis to the speed axis
     out = np.vstack([v, v[::-1] * [-1, 1], v * [-1, -1], v[::-1] * [1, -1]])
     return np.vstack([out, out[:1]])
 
 
-class _Scene:
-    """The hand's and the object's geoms ([`scene`][mjtvm.grasp.scene]) and their poses along the lift."""
+class Scene:
+    """The hand's and the object's geoms ([`scene`][mjtvm.grasp.scene]) and their poses along the lift.
+
+    Parameters
+    ----------
+    lift
+        The lift whose scenario's geoms are drawn at each of its states.
+    """
 
     def __init__(self, lift: Lift) -> None:
         sc = lift.scenario
@@ -102,6 +144,7 @@ class _Scene:
         self.poses = scene_poses(sc.model, self.geometry, lift.qpos)
 
     def static(self, rec: rr.RecordingStream) -> None:
+        """Log the geoms' shapes, sizes and colours once (static entities)."""
         geo = self.geometry
         links, planes = geo.links, geo.planes
         rec.log("scene", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
@@ -154,7 +197,7 @@ class _Scene:
                 static=True,
             )
 
-    def log(self, cols: _Columns, i: int) -> NDArray[np.float64]:
+    def log(self, cols: Columns, i: int) -> NDArray[np.float64]:
         """Add the geoms' poses at state ``i`` (their sizes and colours are static); returns the
         object body's origin."""
         poses, links = self.poses, self.geometry.links
@@ -182,8 +225,11 @@ class _Scene:
         return np.array(poses.object_origin[i])
 
 
-class _Columns:
-    """Rows of the temporal entities per state, sent with ``send_columns`` at the end (fast)."""
+class Columns:
+    """Rows of the temporal entities per state, sent with ``send_columns`` at the end (fast).
+
+    One rerun call per entity for the whole replay, instead of one per state.
+    """
 
     def __init__(self) -> None:
         self.rows: dict[str, tuple[Any, dict[str, list[Any]], list[int]]] = {}
@@ -196,6 +242,7 @@ class _Columns:
         lengths.append(n)
 
     def send(self, rec: rr.RecordingStream, times: list[rr.TimeColumn]) -> None:
+        """Send every entity's rows, one partition per state of ``times``."""
         for path, (archetype, store, lengths) in self.rows.items():
             rec.send_columns(path, indexes=times, columns=archetype.columns(**store).partition(lengths))
 
@@ -222,9 +269,9 @@ def _log_mesh(
         )
 
 
-def _log_run(
+def log_run(
     rec: rr.RecordingStream,
-    cols: _Columns,
+    cols: Columns,
     name: str,
     r: Record,
     state: GraspState,
@@ -232,7 +279,27 @@ def _log_run(
     tvms_points: NDArray | None,
     color: tuple[int, ...],
 ) -> None:
-    """One run (variant, reading) at one state: contacts, forces, polytopes, scalars, joints."""
+    """Log one run (variant, reading) at one state: contacts, forces, polytopes, scalars, joints.
+
+    Parameters
+    ----------
+    rec
+        The recording.
+    cols
+        Where the temporal scalars and joint panels are collected.
+    name
+        The run's entity name.
+    r
+        The run's replay record at this state.
+    state
+        The grasp state of the record.
+    centre
+        Where the velocity polytopes are drawn (the object body's origin).
+    tvms_points
+        ``(n, 3)`` the translational TVMS's points, or ``None`` (nothing drawn).
+    color
+        The run's RGB colour.
+    """
     res, contacts = r.result, state.contacts
     rec.log(
         f"scene/{name}/contacts",
@@ -293,14 +360,14 @@ def _log_run(
             cols.add(witness, rr.Points2D, 0, positions=[], colors=[], labels=[], show_labels=[])
             continue
         tau, qd, sat = float(w.torques[j]), float(w.speeds[j]), joint in r.saturated
-        lo, hi = _panel(rng, w.box[j, [0, 2]]), _panel(rng, w.box[j, [1, 3]])
+        lo, hi = panel(rng, w.box[j, [0, 2]]), panel(rng, w.box[j, [1, 3]])
         cols.add(box, rr.Boxes2D, 1, half_sizes=[np.abs(hi - lo) / 2], centers=[(hi + lo) / 2])
         label = f"{name}: {tau:.3g} N m, {qd:.3g} rad/s" + (" (saturated)" if sat else "")
         cols.add(
             witness,
             rr.Points2D,
             1,
-            positions=[_panel(rng, [tau, qd])],
+            positions=[panel(rng, [tau, qd])],
             colors=[_SATURATED if sat else color],
             labels=[label],
             show_labels=[False],

@@ -44,7 +44,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from mjtvm.jobs.replay import ReplayOutput
-from mjtvm.viewer.drawing import _Columns, _log_run, _mirrored, _panel, _Scene, translational_tvms
+from mjtvm.viewer.drawing import Columns, Scene, log_run, mirrored, panel, translational_tvms
 
 __all__ = [
     "APPLICATION_ID",
@@ -152,7 +152,7 @@ def record_replay(
     first = records[0].state
     joints = first.joint_names
     rec.set_sinks(*sinks, default_blueprint=blueprint(joints, list(names.values())))
-    scene = _Scene(lift)
+    scene = Scene(lift)
     scene.static(rec)
     axes = [[[-1.1, 0.0], [1.1, 0.0]], [[0.0, -1.1], [0.0, 1.1]]]
     for j, rng in zip(joints, first.operation_ranges, strict=True):
@@ -160,7 +160,7 @@ def record_replay(
         rec.log(
             f"joints/{j}/range",
             rr.LineStrips2D(
-                [_panel(rng, _mirrored(rng))],
+                [panel(rng, mirrored(rng))],
                 colors=(200, 200, 200),
                 radii=-1.5,
                 show_labels=False,
@@ -179,7 +179,7 @@ def record_replay(
     by_state = {(r.variant, r.reading, r.index): r for r in records}
     n = lift.num_states
     info["tvms_states"] = [] if tvms_every <= 0 else sorted({*range(0, n, tvms_every), n - 1})
-    cols, z_steps = _Columns(), [round(float(z) / Z_UNIT) for z in lift.z]
+    cols, z_steps = Columns(), [round(float(z) / Z_UNIT) for z in lift.z]
     for i in range(n):
         rec.set_time("state", sequence=i)
         rec.set_time("lift_z", sequence=z_steps[i])
@@ -192,7 +192,7 @@ def record_replay(
             wanted = i in info["tvms_states"] and r.result.feasible
             points = translational_tvms(state) if wanted else None
             info["tvms_seconds"] += time.perf_counter() - t1
-            _log_run(rec, cols, name, r, state, centre, points, colors[key])
+            log_run(rec, cols, name, r, state, centre, points, colors[key])
     cols.send(rec, [rr.TimeColumn("state", sequence=range(n)), rr.TimeColumn("lift_z", sequence=z_steps)])
     rec.flush()
     rec.disconnect()
