@@ -11,14 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.cli import guarded
-from mjtvm.cli.options import (
-    Parser,
-    computed_default,
-    out_options,
-    quiet_option,
-    removed_option,
-    time_limit_option,
-)
+from mjtvm.cli.options import Parser, computed_default, removed_option
 from mjtvm.cli.output import EXIT_OK, emit
 from mjtvm.cli.values import (
     MAX_BASELINE_REPEATS,
@@ -28,6 +21,7 @@ from mjtvm.cli.values import (
     integer,
     shown,
 )
+from mjtvm.cli.vocabulary import out_options, quiet_option, time_limit_option
 from mjtvm.errors import StateError
 
 __all__ = ["add_arguments", "main"]

@@ -7,10 +7,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TypeVar
 
-from mjtvm.cli.options import (
-    Subparsers,
-    command,
-    computed_default,
+from mjtvm.cli.options import Subparsers, command, computed_default
+from mjtvm.cli.output import EXIT_OK, emit, warn
+from mjtvm.cli.values import (
+    MAX_GRID,
+    MAX_STATES,
+    integer,
+    integers,
+)
+from mjtvm.cli.vocabulary import (
     contacts_option,
     grasp_option,
     hand_option,
@@ -26,13 +31,6 @@ from mjtvm.cli.options import (
     resume_option,
     rrd_option,
     states_option,
-)
-from mjtvm.cli.output import EXIT_OK, emit, warn
-from mjtvm.cli.values import (
-    MAX_GRID,
-    MAX_STATES,
-    integer,
-    integers,
 )
 from mjtvm.errors import OptionError, ParamError
 

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mjtvm.cli.options import (
-    Subparsers,
-    command,
+from mjtvm.cli.options import Subparsers, command
+from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.values import input_file, source
+from mjtvm.cli.vocabulary import (
     grasp_option,
     limit_horizon_option,
     no_plots_option,
@@ -17,8 +18,6 @@ from mjtvm.cli.options import (
     quiet_option,
     resume_option,
 )
-from mjtvm.cli.output import EXIT_OK, emit
-from mjtvm.cli.values import input_file, source
 from mjtvm.errors import OptionError
 
 __all__ = ["add_rank"]

@@ -11,19 +11,10 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from mjtvm.cli.lift import check_file_folder
-from mjtvm.cli.options import (
-    GRASP_HELP,
-    Subparsers,
-    command,
-    computed_default,
-    grasp_option,
-    hand_option,
-    indent_option,
-    one_grasp,
-    rrd_option,
-)
+from mjtvm.cli.options import Subparsers, command, computed_default
 from mjtvm.cli.output import EXIT_OK, emit, warn
 from mjtvm.cli.values import number, output_file, source
+from mjtvm.cli.vocabulary import GRASP_HELP, grasp_option, hand_option, indent_option, one_grasp, rrd_option
 from mjtvm.errors import ModelError
 
 if TYPE_CHECKING:

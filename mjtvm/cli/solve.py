@@ -8,24 +8,7 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from mjtvm.cli.options import (
-    GRASP_HELP,
-    Subparsers,
-    command,
-    computed_default,
-    friction_margin_option,
-    grasp_option,
-    hand_option,
-    indent_option,
-    limit_horizon_option,
-    mg_option,
-    mu_option,
-    one_grasp,
-    quiet_option,
-    refused_option,
-    time_limit_option,
-    with_limit_horizon,
-)
+from mjtvm.cli.options import Subparsers, command, computed_default, refused_option
 from mjtvm.cli.output import (
     EXIT_OK,
     bracket_progress,
@@ -38,6 +21,20 @@ from mjtvm.cli.output import (
 )
 from mjtvm.cli.show import warn_contacts
 from mjtvm.cli.values import fraction, memory_size, source
+from mjtvm.cli.vocabulary import (
+    GRASP_HELP,
+    friction_margin_option,
+    grasp_option,
+    hand_option,
+    indent_option,
+    limit_horizon_option,
+    mg_option,
+    mu_option,
+    one_grasp,
+    quiet_option,
+    time_limit_option,
+    with_limit_horizon,
+)
 from mjtvm.errors import OptionError, StateError
 from mjtvm.formats.state_file import load_state
 from mjtvm.lp.solvers import SOLVERS

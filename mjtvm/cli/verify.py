@@ -15,9 +15,21 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from mjtvm.cli.options import (
-    Parser,
-    computed_default,
+from mjtvm.cli.options import Parser, computed_default
+from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.values import (
+    MAX_FORCE,
+    MAX_GEAR,
+    MAX_LAUNCH,
+    MAX_SCALE,
+    MAX_SIM_SECONDS,
+    MAX_STATES,
+    MIN_GEAR,
+    integer,
+    number,
+    numbers,
+)
+from mjtvm.cli.vocabulary import (
     contacts_option,
     friction_margin_option,
     grasp_option,
@@ -32,19 +44,6 @@ from mjtvm.cli.options import (
     reading_option,
     rrd_option,
     states_option,
-)
-from mjtvm.cli.output import EXIT_OK, emit
-from mjtvm.cli.values import (
-    MAX_FORCE,
-    MAX_GEAR,
-    MAX_LAUNCH,
-    MAX_SCALE,
-    MAX_SIM_SECONDS,
-    MAX_STATES,
-    MIN_GEAR,
-    integer,
-    number,
-    numbers,
 )
 
 __all__ = ["add_arguments", "verify_parser"]
