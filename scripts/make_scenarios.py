@@ -19,9 +19,10 @@ from pathlib import Path
 
 from mjtvm.grasp.document.document import format_toml
 from mjtvm.grasp.resolve.file import models_root
+from mjtvm.grasp.resolve.variants import grasp_file_name
 from mjtvm.paper_hand.hand import model_files
 from mjtvm.paper_hand.placement import make_documents, variant_model_text
-from mjtvm.paper_hand.scenario import format_document, grasp_document, grasp_file_name, scenario_path
+from mjtvm.paper_hand.scenario import format_document, grasp_document, scenario_path
 
 
 def main(argv: list[str] | None = None) -> int:

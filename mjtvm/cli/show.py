@@ -141,13 +141,13 @@ def _table(rows: list[ContactRow]) -> list[str]:
 def _cmd_show(args: argparse.Namespace) -> int:
     if args.png is not None:  # MuJoCo picks its GL back end when imported: headless, EGL
         os.environ.setdefault("MUJOCO_GL", "egl")
+    from mjtvm.grasp import load_grasp  # MuJoCo only here
     from mjtvm.grasp.contacts.report import NEAR_TOLERANCES, contact_rows
-    from mjtvm.paper_hand.scenario import load_scenario  # MuJoCo only here
 
     source = one_grasp(args.grasp_file, args.grasp)
     check_file_folder(args.rrd, "--rrd")
     check_file_folder(args.png, "--png")
-    grasp = load_scenario(source, variant=args.hand)
+    grasp = load_grasp(source, hand=args.hand)
     tol = grasp.contact_tolerance
     within = max(NEAR_TOLERANCES * tol, 1e-3) if args.within is None else 1e-3 * args.within
     rows = contact_rows(grasp, within)

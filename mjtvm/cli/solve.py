@@ -170,9 +170,9 @@ def load_source(
             )
         source = default
     if is_grasp_source(source):
-        from mjtvm.paper_hand.scenario import load_scenario  # MuJoCo only for grasps
+        from mjtvm.grasp import load_grasp  # MuJoCo only for grasps
 
-        grasp = load_scenario(source, variant=hand, mu=mu, mg=mg, friction_margin=friction_margin)
+        grasp = load_grasp(source, hand=hand).with_options(mu=mu, mg=mg, friction_margin=friction_margin)
         state = grasp.state()
         if warnings:
             warn_contacts(grasp)
@@ -242,11 +242,11 @@ def add_export_state(sub: Subparsers) -> None:
 
 def _cmd_export_state(args: argparse.Namespace) -> int:
     from mjtvm.formats.state_file import state_to_dict
-    from mjtvm.paper_hand.scenario import load_scenario  # MuJoCo is imported only by the coupling commands
+    from mjtvm.grasp import load_grasp  # MuJoCo is imported only by the coupling commands
 
     source = one_grasp(args.grasp_file, args.grasp)
-    grasp = load_scenario(
-        source, variant=args.hand, mg=args.mg, mu=args.mu, friction_margin=args.friction_margin
+    grasp = load_grasp(source, hand=args.hand).with_options(
+        mg=args.mg, mu=args.mu, friction_margin=args.friction_margin
     )
     state = with_limit_horizon(grasp.state(), args.limit_horizon)
     if not args.quiet:

@@ -244,12 +244,12 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     check's CSV are written together, atomically, at the end ([`mjtvm.formats.files`][mjtvm.formats.files]).
     """
     from mjtvm.formats.files import check_output_dir, output_lock, write_files
+    from mjtvm.grasp.resolve.variants import with_hand
     from mjtvm.jobs import verify
     from mjtvm.jobs.slide_check import slide_check
-    from mjtvm.paper_hand.scenario import with_variant
     from mjtvm.physics.simulate import SimSettings
 
-    args.grasp = str(with_variant(args.grasp, args.hand))  # replay's --hand: case2 + humanlike
+    args.grasp = str(with_hand(args.grasp, args.hand))  # replay's --hand: case2 + humanlike
     if args.gears is not None:
         _refuse_with_gears(args)
         return _cmd_gears(args)

@@ -53,9 +53,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mjtvm.errors import ModelError, StateError
+from mjtvm.grasp.resolve.file import load_grasp
 from mjtvm.lift.march import TOUCH_TOL, GraspLike, Marcher
 from mjtvm.lift.motion import Motion
-from mjtvm.paper_hand.scenario import load_scenario
 
 __all__ = ["STOP_MARGIN", "TOUCH_TOL", "Lift", "LiftSpec", "scripted_lift"]
 
@@ -295,7 +295,7 @@ def scripted_lift(
     ):
         if not (math.isfinite(value) and value > 0):
             raise StateError(name, f"expected a positive length (m), got {value!r}")
-    sc: GraspLike = load_scenario(grasp, variant=variant) if isinstance(grasp, str) else grasp
+    sc: GraspLike = load_grasp(grasp, hand=variant) if isinstance(grasp, str) else grasp
     spec, bounds = _motion_options(sc, direction, twist, poses, height)
     ob = int(sc.model.body(sc.object_body).id)
     start = np.concatenate([sc.data.xpos[ob], sc.data.xquat[ob]])

@@ -34,6 +34,7 @@ from mjtvm.errors import ModelError
 from mjtvm.formats.state_file import state_to_dict
 from mjtvm.grasp.resolve.file import load_grasp
 from mjtvm.grasp.resolve.loaded import Grasp
+from mjtvm.grasp.resolve.variants import VARIANT_GRASPS, grasp_file_name
 from mjtvm.paper_hand.hand import finger_joint_names
 
 __all__ = [
@@ -42,17 +43,15 @@ __all__ = [
     "Scenario",
     "format_document",
     "grasp_document",
-    "grasp_file_name",
     "load_scenario",
     "read_scenario",
     "scenario_document",
     "scenario_path",
     "scenario_variant",
-    "with_variant",
 ]
 
 SCHEMA = "mjtvm.scenario/1"
-SCENARIOS = ("case1", "case1-s", "case2")
+SCENARIOS = VARIANT_GRASPS  # the paper's cases: the grasps with both hands
 _REQUIRED = (
     "schema",
     "name",
@@ -165,7 +164,7 @@ def load_scenario(
     ----------
     source
         A shipped scenario name (`SCENARIOS`; the grasp file
-        [`grasp_file_name()`][mjtvm.paper_hand.scenario.grasp_file_name] of ``variant`` in ``models/paper_hand/``), or any grasp
+        [`grasp_file_name()`][mjtvm.grasp.resolve.variants.grasp_file_name] of ``variant`` in ``models/paper_hand/``), or any grasp
         file or shipped grasp name (then ``variant`` must stay ``"default"``).
     variant
         Hand of a shipped scenario: ``"default"`` or ``"humanlike"``.
@@ -178,37 +177,12 @@ def load_scenario(
     ModelError
         Unknown scenario or variant, or a grasp file that does not load.
     """
-    source = with_variant(source, variant)
-    return load_grasp(source).with_options(mg=mg, mu=mu, friction_margin=friction_margin)
-
-
-def with_variant(source: str | Path | Mapping[str, Any], variant: str) -> str | Path | Mapping[str, Any]:
-    """The grasp of ``source`` with the hand ``variant``: a shipped scenario's name becomes its
-    variant's grasp name (``case2`` + ``humanlike``: ``case2-humanlike``); any other grasp as
-    given, with the variant ``"default"`` only.
-
-    Raises
-    ------
-    ModelError
-        An unknown variant of a scenario, or a variant other than ``"default"`` for another grasp.
-    """
-    if isinstance(source, str) and source in SCENARIOS:
-        if variant not in ("default", "humanlike"):
-            raise ModelError(f"scenario {source!r}", f"no variant {variant!r} (has: default, humanlike)")
-        return grasp_file_name(source, variant)[: -len(".toml")]
-    if variant != "default":
-        raise ModelError("variant", f"applies to the shipped scenarios ({', '.join(SCENARIOS)}) only")
-    return source
+    return load_grasp(source, hand=variant).with_options(mg=mg, mu=mu, friction_margin=friction_margin)
 
 
 def scenario_document(name: str | Path | Mapping[str, Any], **options: Any) -> dict[str, Any]:
     """The ``mjtvm.state/1`` document of a scenario's state (``options`` go to [`load_scenario()`][mjtvm.paper_hand.scenario.load_scenario])."""
     return state_to_dict(load_scenario(name, **options).state())
-
-
-def grasp_file_name(name: str, variant: str) -> str:
-    """The shipped grasp file of a scenario and hand variant: ``case2.toml``, ``case2-humanlike.toml``."""
-    return f"{name}.toml" if variant == "default" else f"{name}-{variant}.toml"
 
 
 def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:

@@ -83,10 +83,10 @@ def test_verify_hand_is_replays(tmp_path: Path, capsys: pytest.CaptureFixture[st
     """--hand humanlike: the paper's grasp of that hand; for another grasp a one-line refusal,
     replay's (tests/cli: replay refuses it the same)."""
     from mjtvm.cli import verify_parser
-    from mjtvm.paper_hand.scenario import with_variant
+    from mjtvm.grasp.resolve.variants import with_hand
 
     args = verify_parser().parse_args(["--grasp", "case2", "--hand", "humanlike"])
-    assert args.hand == "humanlike" and with_variant(args.grasp, args.hand) == "case2-humanlike"
+    assert args.hand == "humanlike" and with_hand(args.grasp, args.hand) == "case2-humanlike"
     assert main(["verify", "--grasp", "allegro-ik", "--hand", "humanlike", "--out", str(tmp_path)]) == 2
     (line,) = capsys.readouterr().err.splitlines()
     assert line == "error: variant: applies to the shipped scenarios (case1, case1-s, case2) only"

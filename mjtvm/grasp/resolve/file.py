@@ -64,6 +64,7 @@ from mjtvm.grasp.resolve.state import (
     geom_label,
     subtree,
 )
+from mjtvm.grasp.resolve.variants import with_hand
 from mjtvm.model.friction import cone_margin
 from mjtvm.model.state import GraspState
 
@@ -247,10 +248,12 @@ def _drive(
     return transmission, ranges, motors
 
 
-def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
+def load_grasp(source: str | Path | Mapping[str, Any], *, hand: str = "default") -> Grasp:
     r"""Read a grasp file (TOML or JSON), a shipped grasp by name, or a document; build the grasp.
 
-    A mapping's ``model`` path is taken relative to the working directory.
+    A mapping's ``model`` path is taken relative to the working directory. ``hand``: the hand
+    of one of the paper's grasps ([`with_hand()`][mjtvm.grasp.resolve.variants.with_hand]:
+    ``case2`` + ``"humanlike"`` is ``case2-humanlike``); ``"default"`` for any other grasp.
 
     Raises
     ------
@@ -260,8 +263,10 @@ def load_grasp(source: str | Path | Mapping[str, Any]) -> Grasp:
         joints an actuator, without an operation range, with how to give one; an unreachable
         IK target, with its residual; an equality the configuration violates, or one that
         ties a state joint to a joint the ``joints`` list leaves out).
+    ModelError
+        A ``hand`` the grasp does not have.
     """
-    doc, path = read_grasp_document(_resolve(source))
+    doc, path = read_grasp_document(_resolve(with_hand(source, hand)))
     file = str(path) if path is not None else "grasp"
     model, model_path = load_model(doc, path, file)
     return grasp_from_model(doc, path, model, model_path)
