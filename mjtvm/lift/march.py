@@ -29,7 +29,7 @@ _MAX_ROUNDS = 30  # retargeting rounds of one correction (each converges quadrat
 
 
 class GraspLike(Protocol):
-    """What the lift reads of a grasp: a `Scenario` or the grasp
+    """What the lift reads of a grasp: a [`Grasp`][mjtvm.grasp.resolve.loaded.Grasp] or the grasp
     file's ``Grasp`` (which adds ``lift`` and ``ik_bounds``, read with ``getattr``)."""
 
     @property

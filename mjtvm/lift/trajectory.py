@@ -118,7 +118,7 @@ class Lift:
     Attributes
     ----------
     scenario
-        The grasp at its initial state (a `Scenario` or a grasp
+        The grasp at its initial state (a paper case's or another grasp
         file's ``Grasp``: model, joints, REFS, RVDS, ...).
     s, z, poses, twists
         ``(N,)`` path parameter, evenly spaced from 0 (`mjtvm.lift.motion`; m for a
@@ -256,7 +256,7 @@ def scripted_lift(
     ----------
     grasp, variant
         A shipped scenario name and hand variant (``"default"``, ``"humanlike"``), or a grasp
-        at its initial state: a `Scenario` or a grasp file's ``Grasp``.
+        at its initial state: a paper case's or another grasp file's ``Grasp``.
     num_states
         N >= 2, evenly spaced in s from the start to the end of the lift; 1: the grasp's own
         state alone, nothing marched (its ``rates`` and ``slips`` those of the motion at s = 0).

@@ -40,7 +40,6 @@ from mjtvm.paper_hand.hand import finger_joint_names
 __all__ = [
     "SCENARIOS",
     "SCHEMA",
-    "Scenario",
     "format_document",
     "grasp_document",
     "load_scenario",
@@ -147,7 +146,6 @@ def format_document(doc: Any, indent: int = 0) -> str:
     return "[\n" + ",\n".join(rows) + "\n" + " " * indent + "]"
 
 
-Scenario = Grasp  # the paper's cases are grasp files like any other (kept for old imports)
 
 
 def load_scenario(
