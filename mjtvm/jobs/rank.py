@@ -25,7 +25,8 @@ from mjtvm.errors import ModelError, ParamError, SolverError, StateError
 from mjtvm.grasp.contacts.report import kept_contacts
 from mjtvm.grasp.document.dataset import DatasetGrasp
 from mjtvm.grasp.resolve.batch import BatchModels
-from mjtvm.jobs.sweep import _forks, dask_client, run_calls
+from mjtvm.jobs.pool import forks, run_calls
+from mjtvm.jobs.sweep import dask_client
 from mjtvm.model.limits import with_limit_horizon
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.tvmmp import tvmmp
@@ -261,7 +262,7 @@ def _run_pool(
         [(_solve_chunk, (grasp, task, limit_horizon)) for task in tasks],
         jobs,
         finished,
-        fork=_forks(),
+        fork=forks(),
         in_order=False,
     )
 

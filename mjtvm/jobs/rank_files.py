@@ -10,7 +10,6 @@ ranks them ([`rank_rows()`][mjtvm.jobs.rank.rank_rows]) into ``NAME.json``, ``NA
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import io
 import json
@@ -27,8 +26,8 @@ from mjtvm.grasp import GraspError
 from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
 from mjtvm.grasp.resolve.batch import hand_joints
 from mjtvm.jobs.checkpoint import RowCheckpoint
+from mjtvm.jobs.files import csv_text, model_files, stderr
 from mjtvm.jobs.rank import batch_models, rank_rows
-from mjtvm.jobs.sweep_files import _model_files, _stderr
 
 __all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
 
@@ -147,8 +146,8 @@ def inputs_digest(
         h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
-    files = _model_files(batch.model_path) + [Path(p) for p in datasets]
-    files += [f for p in objects for f in _model_files(Path(p))]
+    files = model_files(batch.model_path) + [Path(p) for p in datasets]
+    files += [f for p in objects for f in model_files(Path(p))]
     for path in files:
         h.update(f"{path.name}\n".encode())
         h.update(hashlib.sha256(path.read_bytes()).digest())
@@ -183,11 +182,7 @@ def _columns(flat: Sequence[dict[str, Any]]) -> list[str]:
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
     flat = rows_table(rows)
-    buf = io.StringIO(newline="")
-    writer = csv.DictWriter(buf, fieldnames=_columns(flat), restval="")
-    writer.writeheader()
-    writer.writerows({k: "" if v is None else v for k, v in r.items()} for r in flat)
-    return buf.getvalue()
+    return csv_text(flat, _columns(flat), cell=lambda v: "" if v is None else v)
 
 
 def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
@@ -281,7 +276,7 @@ def _png(fig: Any) -> bytes:
 
 
 def run_rank_files(
-    run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+    run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = stderr
 ) -> list[Path]:
     r"""``mjtvm rank``: read the datasets, lock ``run.out``, resume, rank, write the files; the
     summary ([`rank_summary()`][mjtvm.jobs.rank_files.rank_summary]) goes to ``notice``.

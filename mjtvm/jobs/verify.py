@@ -541,16 +541,16 @@ def verify_lift(
             rows += _task(t)
             bar.update()
     else:
-        from mjtvm.jobs.sweep import _init_worker, _stop  # Ctrl-C: the parent alone reports it
+        from mjtvm.jobs.pool import init_worker, stop  # Ctrl-C: the parent alone reports it
 
         ctx = multiprocessing.get_context(start_method)
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_init_worker)
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=init_worker)
         try:
             for fut in as_completed([pool.submit(_task, t) for t in tasks]):
                 rows += fut.result()
                 bar.update()
         except BaseException:
-            _stop(pool)
+            stop(pool)
             raise
         pool.shutdown()
     bar.close()
