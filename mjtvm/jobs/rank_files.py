@@ -28,31 +28,13 @@ from mjtvm.grasp.resolve.batch import hand_joints
 from mjtvm.jobs.checkpoint import RowCheckpoint
 from mjtvm.jobs.files import csv_text, model_files, stderr
 from mjtvm.jobs.rank import batch_models, rank_rows
+from mjtvm.jobs.rank_row import flat_row, table_columns
 
 __all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
 
 CHECKPOINT_SCHEMA = "mjtvm.rank-checkpoint/1"
 CHECKPOINT_EVERY_S = 5.0
 """At most this often (s) the checkpoint is rewritten (and always on an interrupt or failure)."""
-
-_COLUMNS = (
-    "id",
-    "source",
-    "index",
-    "object",
-    "scale",
-    "contacts",
-    "penetration",
-    "feasible",
-    "tvmmp",
-    "limiting_k",
-    "limiting_l",
-    "certified",
-    "failure",
-    "reason",
-)
-"""The CSV's first columns, in order; then ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` and any
-columns a row adds (the classic measures)."""
 
 
 @dataclass(frozen=True)
@@ -155,34 +137,16 @@ def inputs_digest(
 
 
 def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rows flattened for CSV and Parquet: ``limiting`` -> ``limiting_k``, ``limiting_l``;
-    ``alpha`` and ``status`` -> ``alpha_k<k>_l<l>``, ``status_k<k>_l<l>``; ``None`` -> ``""``
-    in the caller's CSV."""
-    flat = []
-    for r in rows:
-        out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting")}
-        out["limiting_k"], out["limiting_l"] = r["limiting"] if r["limiting"] is not None else (None, None)
-        for k, line in enumerate(r["alpha"] or ()):
-            for l, a in enumerate(line):
-                out[f"alpha_k{k}_l{l}"] = a
-                out[f"status_k{k}_l{l}"] = r["status"][k][l]
-        flat.append(out)
-    return flat
-
-
-def _columns(flat: Sequence[dict[str, Any]]) -> list[str]:
-    extra = list(dict.fromkeys(k for r in flat for k in r if k not in _COLUMNS))
-    pairs = sorted(
-        (k for k in extra if k.startswith(("alpha_k", "status_k"))),
-        key=lambda k: (k.startswith("status"), *(int(x[1:]) for x in k.split("_")[1:])),
-    )
-    return [*_COLUMNS, *pairs, *(k for k in extra if k not in pairs)]
+    """The rows flattened for CSV and Parquet ([`flat_row()`][mjtvm.jobs.rank_row.flat_row]):
+    ``limiting`` -> ``limiting_k``, ``limiting_l``; ``alpha`` and ``status`` ->
+    ``alpha_k<k>_l<l>``, ``status_k<k>_l<l>``; ``None`` -> ``""`` in the caller's CSV."""
+    return [flat_row(r) for r in rows]
 
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
     flat = rows_table(rows)
-    return csv_text(flat, _columns(flat), cell=lambda v: "" if v is None else v)
+    return csv_text(flat, table_columns(flat), cell=lambda v: "" if v is None else v)
 
 
 def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
@@ -193,7 +157,7 @@ def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
     except ImportError:
         return None
     flat = rows_table(rows)
-    columns = _columns(flat)
+    columns = table_columns(flat)
     table = pa.Table.from_pylist([{c: r.get(c) for c in columns} for r in flat])
     buf = io.BytesIO()
     pq.write_table(table, buf)
