@@ -112,11 +112,11 @@ def _solve_chunk(states: Sequence[GraspState]) -> tuple[list[NDArrayList], float
 def _pool_batch(states: Sequence[GraspState], jobs: int) -> tuple[float, list[float], list[NDArrayList]]:
     """Wall time of the batch on a new pool of ``jobs`` workers (start-up included), each
     worker's CPU time, and the alphas."""
-    from mjtvm.jobs.sweep import _forks
+    from mjtvm.jobs.pool import forks
 
     chunks = [list(states[i::jobs]) for i in range(jobs)]
     t0 = time.perf_counter()
-    context = multiprocessing.get_context("fork" if _forks() else "forkserver")
+    context = multiprocessing.get_context("fork" if forks() else "forkserver")
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
         with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:

@@ -104,10 +104,10 @@ def _pool_startup(jobs: int) -> float:
     import warnings
     from concurrent.futures import ProcessPoolExecutor
 
-    from mjtvm.jobs.sweep import _forks
+    from mjtvm.jobs.pool import forks
 
     t0 = time.perf_counter()
-    context = multiprocessing.get_context("fork" if _forks() else "forkserver")
+    context = multiprocessing.get_context("fork" if forks() else "forkserver")
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
         with ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_import_sweep) as pool:
@@ -135,6 +135,7 @@ def bench_sweeps(*, jobs: Sequence[int] = (1, 2), repeats: int = 3, num_states: 
     construction alone and the start-up of an empty pool whose workers import mjtvm.jobs.sweep.
     """
     from mjtvm.jobs import sweep
+    from mjtvm.jobs.pool import forks
 
     points = sweep_points(num_states)
     rows_ref: list[Any] | None = None
@@ -142,8 +143,8 @@ def bench_sweeps(*, jobs: Sequence[int] = (1, 2), repeats: int = 3, num_states: 
     for j in jobs:
         runs = []
         for _ in range(max(repeats, 1)):
-            sweep._lift.cache_clear()
-            sweep._base.cache_clear()  # before, runs after the first kept the grasps of the states
+            sweep.point_lift.cache_clear()
+            sweep.point_state.cache_clear()  # before, runs after the first kept the grasps of the states
             t0 = time.perf_counter()
             rows = sweep.run_sweep(points, jobs=j, progress=False)
             runs.append(time.perf_counter() - t0)
@@ -152,9 +153,9 @@ def bench_sweeps(*, jobs: Sequence[int] = (1, 2), repeats: int = 3, num_states: 
             elif rows != rows_ref:  # every field, alphas and statuses included, to the bit
                 raise RuntimeError(f"run_sweep(jobs={j}) gave different rows")
         per_jobs[str(j)] = {"runs_s": runs, "first_s": runs[0], **stats(runs)}
-    sweep._lift.cache_clear()
+    sweep.point_lift.cache_clear()
     t0 = time.perf_counter()
-    sweep._lift("case2", "default", num_states)
+    sweep.point_lift("case2", "default", num_states)
     lift_s = time.perf_counter() - t0
     out: dict[str, Any] = {
         "points": len(points),
@@ -165,7 +166,7 @@ def bench_sweeps(*, jobs: Sequence[int] = (1, 2), repeats: int = 3, num_states: 
         "lift_build_s": lift_s,
         "pool_startup_s": {str(j): _pool_startup(j) for j in jobs if j > 1},
         "includes_pool_startup": True,
-        "start_method": "fork" if sweep._forks() else "forkserver",
+        "start_method": "fork" if forks() else "forkserver",
     }
     if "1" in per_jobs:
         serial = per_jobs["1"]["median_s"]

@@ -1,11 +1,25 @@
-r"""The applications of Problem 2 along a lift: [`mjtvm.jobs.replay`][mjtvm.jobs.replay] (the replay and the
-Fig. 8/9 sweeps; its records and files in [`mjtvm.jobs.replay_records`][mjtvm.jobs.replay_records]),
-[`mjtvm.jobs.sweep`][mjtvm.jobs.sweep] (parameter sweeps on a grid, a process pool or a Dask cluster; the
-files of ``mjtvm sweep`` in [`mjtvm.jobs.sweep_files`][mjtvm.jobs.sweep_files]), [`mjtvm.jobs.rank`][mjtvm.jobs.rank] (a grasp dataset ranked by TVMMP; the
-files of ``mjtvm rank`` in [`mjtvm.jobs.rank_files`][mjtvm.jobs.rank_files]) and [`mjtvm.jobs.figures`][mjtvm.jobs.figures].
+r"""The jobs: applications of Problem 2 along a lift or over a dataset, run serially, on a local
+pool or on Dask, and the files they write.
 
-The names below are imported on first use: the replay loads matplotlib, which a sweep's
-workers do not need.
+* [`mjtvm.jobs.replay`][mjtvm.jobs.replay]: the replay of the lift and the Fig. 8/9 sweeps
+  (records and their files in [`mjtvm.jobs.replay_records`][mjtvm.jobs.replay_records]);
+* [`mjtvm.jobs.sweep`][mjtvm.jobs.sweep]: parameter sweeps on a grid (the files of ``mjtvm sweep``
+  in [`mjtvm.jobs.sweep_files`][mjtvm.jobs.sweep_files]);
+* [`mjtvm.jobs.rank`][mjtvm.jobs.rank]: a grasp dataset ranked by TVMMP, one
+  [`RankRow`][mjtvm.jobs.rank_row.RankRow] per grasp (the files of ``mjtvm rank`` in
+  [`mjtvm.jobs.rank_files`][mjtvm.jobs.rank_files]);
+* [`mjtvm.jobs.verify`][mjtvm.jobs.verify]: the physics check, alpha_sim against alpha_kl
+  ([`mjtvm.jobs.verify_lp`][mjtvm.jobs.verify_lp], [`mjtvm.jobs.verify_report`][mjtvm.jobs.verify_report],
+  [`mjtvm.jobs.slide_check`][mjtvm.jobs.slide_check], [`mjtvm.jobs.gears`][mjtvm.jobs.gears]);
+* shared by them: [`mjtvm.jobs.pool`][mjtvm.jobs.pool] (local process pools),
+  [`mjtvm.jobs.files`][mjtvm.jobs.files] (CSV text, model files, notices),
+  [`mjtvm.jobs.checkpoint`][mjtvm.jobs.checkpoint] (checkpoints and ``--resume``) and
+  [`mjtvm.jobs.figures`][mjtvm.jobs.figures].
+
+The room may import every room below it (the physics, the lift, the coupling, the core); it
+never imports MuJoCo itself (the MuJoCo-using pieces are in ``mjtvm.physics``), the viewer or
+the CLI. The names below are imported on first use: the replay loads matplotlib and the
+physics check MuJoCo's rollouts, which a sweep's workers do not need.
 """
 
 from __future__ import annotations
@@ -15,73 +29,47 @@ from typing import TYPE_CHECKING
 from mjtvm._lazy import lazy_attributes
 
 if TYPE_CHECKING:
-    from mjtvm.jobs.rank import rank_row, rank_rows
+    from mjtvm.jobs.gears import gear_sweep
+    from mjtvm.jobs.rank import rank_rows
     from mjtvm.jobs.rank_files import RankFiles, run_rank_files
-    from mjtvm.jobs.replay import (
-        SCHEMA,
-        SWEEP_MG_MU,
-        SWEEP_MGS,
-        SWEEP_MU_MG,
-        SWEEP_MUS,
-        ReplayOutput,
-        grasp_defaults,
-        replay_lift,
-        run_replay,
-        sweep_lift,
-        time_replay,
-    )
-    from mjtvm.jobs.replay_records import Record, solve_state
+    from mjtvm.jobs.rank_row import RankRow
+    from mjtvm.jobs.replay import replay_lift, run_replay, sweep_lift
+    from mjtvm.jobs.slide_check import slide_check
     from mjtvm.jobs.sweep import SweepPoint, grid, run_sweep
-    from mjtvm.jobs.sweep_files import SweepFiles, run_sweep_files
+    from mjtvm.jobs.verify import verify_lift, verify_state
 
 _HOMES = {
-    "SCHEMA": "replay",
-    "SWEEP_MGS": "replay",
-    "SWEEP_MG_MU": "replay",
-    "SWEEP_MUS": "replay",
-    "SWEEP_MU_MG": "replay",
-    "ReplayOutput": "replay",
-    "grasp_defaults": "replay",
-    "replay_lift": "replay",
-    "run_replay": "replay",
-    "sweep_lift": "replay",
-    "time_replay": "replay",
-    "Record": "replay_records",
-    "solve_state": "replay_records",
-    "rank_row": "rank",
-    "rank_rows": "rank",
     "RankFiles": "rank_files",
-    "run_rank_files": "rank_files",
+    "RankRow": "rank_row",
     "SweepPoint": "sweep",
+    "gear_sweep": "gears",
     "grid": "sweep",
+    "rank_rows": "rank",
+    "replay_lift": "replay",
+    "run_rank_files": "rank_files",
+    "run_replay": "replay",
     "run_sweep": "sweep",
-    "SweepFiles": "sweep_files",
-    "run_sweep_files": "sweep_files",
+    "slide_check": "slide_check",
+    "sweep_lift": "replay",
+    "verify_lift": "verify",
+    "verify_state": "verify",
 }
 
 __all__ = [
-    "SCHEMA",
-    "SWEEP_MGS",
-    "SWEEP_MG_MU",
-    "SWEEP_MUS",
-    "SWEEP_MU_MG",
     "RankFiles",
-    "Record",
-    "ReplayOutput",
-    "SweepFiles",
+    "RankRow",
     "SweepPoint",
-    "grasp_defaults",
+    "gear_sweep",
     "grid",
-    "rank_row",
     "rank_rows",
     "replay_lift",
     "run_rank_files",
     "run_replay",
     "run_sweep",
-    "run_sweep_files",
-    "solve_state",
+    "slide_check",
     "sweep_lift",
-    "time_replay",
+    "verify_lift",
+    "verify_state",
 ]
 
 

@@ -24,9 +24,10 @@ from typing import Any
 import numpy as np
 
 from mjtvm.errors import ParamError
-from mjtvm.jobs.verify import _types, cached_lift, motor_model
+from mjtvm.jobs.verify import cached_lift
 from mjtvm.lift.states import lift_state
 from mjtvm.model.limits import with_limit_horizon
+from mjtvm.physics.check import contact_types, motor_model
 from mjtvm.physics.dynamic import dynamic_pair
 from mjtvm.physics.simulate import sim_model
 from mjtvm.problem2.tvmmp import tvmmp
@@ -71,7 +72,7 @@ def gear_sweep(
     rows = []
     for i in states:
         state0 = with_limit_horizon(lift_state(lift, i, variant=variant, mu=mu, mg=mg), limit_horizon)  # type: ignore[arg-type]
-        model = sim_model(base, _types(state0), mu=mu, mg=mg, object_body=ob)
+        model = sim_model(base, contact_types(state0), mu=mu, mg=mg, object_body=ob)
         acts = [a for a in range(model.nactuator) if model.actuator_gear[a, 0] > 0]
         gear0 = float(np.median(model.actuator_gear[acts, 0]))
         for n in ratios:

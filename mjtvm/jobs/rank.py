@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -25,12 +26,14 @@ from mjtvm.errors import ModelError, ParamError, SolverError, StateError
 from mjtvm.grasp.contacts.report import kept_contacts
 from mjtvm.grasp.document.dataset import DatasetGrasp
 from mjtvm.grasp.resolve.batch import BatchModels
-from mjtvm.jobs.sweep import _forks, dask_client, run_calls
+from mjtvm.jobs.pool import forks, run_calls
+from mjtvm.jobs.rank_row import CLASSIC_COLUMNS, RankRow
+from mjtvm.jobs.sweep import dask_client
 from mjtvm.model.limits import with_limit_horizon
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.tvmmp import tvmmp
 
-__all__ = ["FAILURES", "batch_models", "rank_row", "rank_rows"]
+__all__ = ["CLASSIC_COLUMNS", "FAILURES", "RankRow", "batch_models", "rank_row", "rank_rows"]
 
 FAILURES = ("no contact", "penetration", "grasp", "state", "solver")
 """The values of a failed row's ``failure``: a selection that does not touch the object, a
@@ -69,19 +72,6 @@ def _classify(error: Exception) -> str:
 #: Grasps per task of a process pool, at most: what an interruption can lose per worker.
 TASK_GRASPS = 20
 
-#: The classic measures a row carries ([`GraspMeasures`][mjtvm.measures.GraspMeasures]'s fields): all
-#: but the kinematic velocity polytope, whose support LPs cost 1-3.5 s a grasp on a 16-joint
-#: hand (``mjtvm.classic_measures(state)`` computes it).
-CLASSIC_COLUMNS = (
-    "force_closure",
-    "epsilon_l1",
-    "epsilon_linf",
-    "epsilon_linf_gap",
-    "grasp_sigma_min",
-    "manipulability",
-    "torque_scale",
-)
-
 
 def _classic_columns(state: GraspState) -> dict[str, Any]:
     """The classic measures of the state the TVMMP was computed on
@@ -107,62 +97,41 @@ def rank_row(
     Returns
     -------
     dict
-        ``id``, ``source``, ``index``, ``object``, ``scale``, ``contacts`` (contacts of the
-        state, or found before it failed), ``penetration`` (m, the deepest contact's depth
-        inside the object, 0 when none penetrates), ``feasible``, ``tvmmp``, ``alpha``
-        (K x R, ``None`` where not optimal), ``status`` (K x R), ``limiting`` ([k, l]),
-        ``certified``, ``failure`` (one of [`FAILURES`][mjtvm.jobs.rank.FAILURES], or ``None``) and ``reason``
-        (the error of a failed grasp, the diagnosis of a zero or infeasible TVMMP, else
-        ``None``), then the [`CLASSIC_COLUMNS`][mjtvm.jobs.rank.CLASSIC_COLUMNS] (``None`` for a failed grasp);
-        ``docs/outputs.md`` documents each.
+        The [`RankRow`][mjtvm.jobs.rank_row.RankRow] as a dict
+        ([`RankRow.to_dict()`][mjtvm.jobs.rank_row.RankRow.to_dict]: its fields, in order, with
+        their types and units there); ``docs/outputs.md`` documents each.
     """
-    row: dict[str, Any] = {
-        "id": entry.id,
-        "source": Path(entry.source).name,
-        "index": entry.index,
-        "object": _object_name(entry, batch),
-        "scale": entry.obj_scale,
-        "contacts": None,
-        "penetration": None,
-        "feasible": False,
-        "tvmmp": None,
-        "limiting": None,
-        "alpha": None,
-        "status": None,
-        "certified": None,
-        "failure": None,
-        "reason": None,
-        **dict.fromkeys(CLASSIC_COLUMNS),
-    }
+    row = RankRow(entry.id, Path(entry.source).name, entry.index, _object_name(entry, batch), entry.obj_scale)
     try:
         grasp = batch.grasp(entry)
         ignored = set(grasp.ignored_geoms)
         found = [c for c in kept_contacts(grasp) if c.geom not in ignored]
-        row["contacts"] = len(found)
-        row["penetration"] = max([0.0, *(-float(c.distance) for c in found)])
+        row = replace(row, contacts=len(found), penetration=max([0.0, *(-float(c.distance) for c in found)]))
         state = with_limit_horizon(grasp.state(), limit_horizon)
-        row["contacts"] = len(state.contacts)
+        row = replace(row, contacts=len(state.contacts))
         result = tvmmp(state, witnesses=False, diagnose=True)
     except (ModelError, StateError, SolverError) as e:
-        row["failure"] = _classify(e)
-        row["reason"] = " ".join(str(e).split())
-        return row
+        return replace(row, failure=_classify(e), reason=" ".join(str(e).split())).to_dict()
     doc = result.to_dict(witnesses=False)
-    row.update({key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")})
-    row["certified"] = all(c is not False for line in doc["certified"] for c in line)
+    row = replace(
+        row,
+        **{key: doc[key] for key in ("tvmmp", "feasible", "alpha", "status", "limiting")},
+        certified=all(c is not False for line in doc["certified"] for c in line),
+    )
+    reason = None
     if result.diagnosis and (result.tvmmp is None or result.tvmmp <= 0.0):
         limiting = result.limiting
         first = next(
             (d for d in result.diagnosis if limiting is not None and tuple(d.pair) == tuple(limiting)), None
         )
         chosen = first or result.diagnosis[0]
-        row["reason"] = f"pair {list(chosen.pair)}: {chosen.cause}: {' '.join(chosen.message.split())}"
+        reason = f"pair {list(chosen.pair)}: {chosen.cause}: {' '.join(chosen.message.split())}"
     try:
-        row.update(_classic_columns(state))
+        row = replace(row, **_classic_columns(state))
     except Exception as e:  # Qhull, a solver: the TVMMP stands, the measures are flagged as missing
         why = f"classic measures not computed: {type(e).__name__}: {' '.join(str(e).split())[:200]}"
-        row["reason"] = why if row["reason"] is None else f"{row['reason']}; {why}"
-    return row
+        reason = why if reason is None else f"{reason}; {why}"
+    return replace(row, reason=reason).to_dict()
 
 
 def _solve_chunk(
@@ -261,7 +230,7 @@ def _run_pool(
         [(_solve_chunk, (grasp, task, limit_horizon)) for task in tasks],
         jobs,
         finished,
-        fork=_forks(),
+        fork=forks(),
         in_order=False,
     )
 

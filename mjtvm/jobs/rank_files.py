@@ -10,7 +10,6 @@ ranks them ([`rank_rows()`][mjtvm.jobs.rank.rank_rows]) into ``NAME.json``, ``NA
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import io
 import json
@@ -27,33 +26,15 @@ from mjtvm.grasp import GraspError
 from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
 from mjtvm.grasp.resolve.batch import hand_joints
 from mjtvm.jobs.checkpoint import RowCheckpoint
+from mjtvm.jobs.files import csv_text, model_files, stderr
 from mjtvm.jobs.rank import batch_models, rank_rows
-from mjtvm.jobs.sweep_files import _model_files, _stderr
+from mjtvm.jobs.rank_row import flat_row, table_columns
 
 __all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
 
 CHECKPOINT_SCHEMA = "mjtvm.rank-checkpoint/1"
 CHECKPOINT_EVERY_S = 5.0
 """At most this often (s) the checkpoint is rewritten (and always on an interrupt or failure)."""
-
-_COLUMNS = (
-    "id",
-    "source",
-    "index",
-    "object",
-    "scale",
-    "contacts",
-    "penetration",
-    "feasible",
-    "tvmmp",
-    "limiting_k",
-    "limiting_l",
-    "certified",
-    "failure",
-    "reason",
-)
-"""The CSV's first columns, in order; then ``alpha_k<k>_l<l>`` / ``status_k<k>_l<l>`` and any
-columns a row adds (the classic measures)."""
 
 
 @dataclass(frozen=True)
@@ -147,8 +128,8 @@ def inputs_digest(
         h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
-    files = _model_files(batch.model_path) + [Path(p) for p in datasets]
-    files += [f for p in objects for f in _model_files(Path(p))]
+    files = model_files(batch.model_path) + [Path(p) for p in datasets]
+    files += [f for p in objects for f in model_files(Path(p))]
     for path in files:
         h.update(f"{path.name}\n".encode())
         h.update(hashlib.sha256(path.read_bytes()).digest())
@@ -156,38 +137,16 @@ def inputs_digest(
 
 
 def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rows flattened for CSV and Parquet: ``limiting`` -> ``limiting_k``, ``limiting_l``;
-    ``alpha`` and ``status`` -> ``alpha_k<k>_l<l>``, ``status_k<k>_l<l>``; ``None`` -> ``""``
-    in the caller's CSV."""
-    flat = []
-    for r in rows:
-        out = {k: v for k, v in r.items() if k not in ("alpha", "status", "limiting")}
-        out["limiting_k"], out["limiting_l"] = r["limiting"] if r["limiting"] is not None else (None, None)
-        for k, line in enumerate(r["alpha"] or ()):
-            for l, a in enumerate(line):
-                out[f"alpha_k{k}_l{l}"] = a
-                out[f"status_k{k}_l{l}"] = r["status"][k][l]
-        flat.append(out)
-    return flat
-
-
-def _columns(flat: Sequence[dict[str, Any]]) -> list[str]:
-    extra = list(dict.fromkeys(k for r in flat for k in r if k not in _COLUMNS))
-    pairs = sorted(
-        (k for k in extra if k.startswith(("alpha_k", "status_k"))),
-        key=lambda k: (k.startswith("status"), *(int(x[1:]) for x in k.split("_")[1:])),
-    )
-    return [*_COLUMNS, *pairs, *(k for k in extra if k not in pairs)]
+    """The rows flattened for CSV and Parquet ([`flat_row()`][mjtvm.jobs.rank_row.flat_row]):
+    ``limiting`` -> ``limiting_k``, ``limiting_l``; ``alpha`` and ``status`` ->
+    ``alpha_k<k>_l<l>``, ``status_k<k>_l<l>``; ``None`` -> ``""`` in the caller's CSV."""
+    return [flat_row(r) for r in rows]
 
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
     flat = rows_table(rows)
-    buf = io.StringIO(newline="")
-    writer = csv.DictWriter(buf, fieldnames=_columns(flat), restval="")
-    writer.writeheader()
-    writer.writerows({k: "" if v is None else v for k, v in r.items()} for r in flat)
-    return buf.getvalue()
+    return csv_text(flat, table_columns(flat), cell=lambda v: "" if v is None else v)
 
 
 def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
@@ -198,7 +157,7 @@ def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
     except ImportError:
         return None
     flat = rows_table(rows)
-    columns = _columns(flat)
+    columns = table_columns(flat)
     table = pa.Table.from_pylist([{c: r.get(c) for c in columns} for r in flat])
     buf = io.BytesIO()
     pq.write_table(table, buf)
@@ -281,7 +240,7 @@ def _png(fig: Any) -> bytes:
 
 
 def run_rank_files(
-    run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+    run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = stderr
 ) -> list[Path]:
     r"""``mjtvm rank``: read the datasets, lock ``run.out``, resume, rank, write the files; the
     summary ([`rank_summary()`][mjtvm.jobs.rank_files.rank_summary]) goes to ``notice``.

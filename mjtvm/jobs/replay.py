@@ -32,7 +32,7 @@ from tqdm import tqdm
 
 from mjtvm.errors import ParamError
 from mjtvm.jobs.figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
-from mjtvm.jobs.replay_records import Record, _csv, _lift_dict, _record
+from mjtvm.jobs.replay_records import Record, lift_dict, record_state, records_csv
 from mjtvm.lift.states import READINGS, VARIANTS, lift_state
 from mjtvm.lift.trajectory import Lift, scripted_lift
 from mjtvm.model.limits import with_limit_horizon
@@ -170,7 +170,7 @@ def replay_lift(
     for i in range(lift.num_states):
         base = lift_state(lift, i) if bases is None else bases[i]
         for v, r in runs:
-            out.append(_record(lift, i, base, v, r, float(mu), float(mg)))
+            out.append(record_state(lift, i, base, v, r, float(mu), float(mg)))
             bar.update()
     bar.close()
     order = {run: k for k, run in enumerate(runs)}
@@ -200,7 +200,7 @@ def sweep_lift(
     for i in range(lift.num_states):
         base = lift_state(lift, i) if bases is None else bases[i]
         for m, g in pairs:
-            done[(m, g)].append(_record(lift, i, base, "L", None, m, g))
+            done[(m, g)].append(record_state(lift, i, base, "L", None, m, g))
             bar.update()
     bar.close()
     return {
@@ -349,10 +349,10 @@ def run_replay(
     hand = hand_name(lift.scenario, hand)
     meta = {"scenario": lift.scenario.name, "hand": hand}
     # every file is rendered in memory first, then the set is written at once (mjtvm.formats.files)
-    contents: dict[str, bytes | str] = {"lift.csv": _csv(records, meta)}
+    contents: dict[str, bytes | str] = {"lift.csv": records_csv(records, meta)}
     if swept is not None:
         tags = ["mu"] * len(swept["mu"]) + ["mg"] * len(swept["mg"])
-        contents["lift-sweeps.csv"] = _csv([*swept["mu"], *swept["mg"]], meta, tags)
+        contents["lift-sweeps.csv"] = records_csv([*swept["mu"], *swept["mg"]], meta, tags)
     if plots:
         contents.update(_figures(lift, hand, records, swept, mu, mg))
     times["output_s"] = time.perf_counter() - t0  # CSV and PNG (the JSON holds the timings)
@@ -366,7 +366,7 @@ def run_replay(
         "limit_horizon": limit_horizon,
         "refs": records[0].state.refs.tolist() if records else None,
         "rvds": None if lift.scenario.rvds is None else lift.scenario.rvds.tolist(),
-        "lift": _lift_dict(lift),
+        "lift": lift_dict(lift),
         "records": [r.to_dict() for r in records],
         "sweeps": None
         if swept is None

@@ -19,7 +19,7 @@ from mjtvm.lift.trajectory import Lift
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.tvmmp import TvmmpResult, tvmmp
 
-__all__ = ["Record", "solve_state"]
+__all__ = ["Record", "lift_dict", "record_state", "records_csv", "solve_state"]
 
 _EDGE_TOL = 1e-6  # relative: an operating point this close to its range's edge is saturated
 
@@ -134,9 +134,27 @@ def solve_state(state: GraspState) -> tuple[TvmmpResult, str]:
     return result, "+".join(used)
 
 
-def _record(
+def record_state(
     lift: Lift, i: int, base: GraspState, variant: str, reading: str | None, mu: float, mg: float
 ) -> Record:
+    """The [`Record`][mjtvm.jobs.replay_records.Record] of lift state ``i`` under given contact conditions.
+
+    Parameters
+    ----------
+    lift, i
+        The lift and the state's index.
+    base
+        The state's grasp (``lift_state``'s ``base``), shared by every condition.
+    variant, reading
+        Type of the L/S contacts and the slide-direction reading (``None`` for L-points).
+    mu, mg
+        Friction coefficient and object weight (N).
+
+    Returns
+    -------
+    Record
+        Problem 2 at the state ([`solve_state()`][mjtvm.jobs.replay_records.solve_state]).
+    """
     state = lift_state(lift, i, variant=variant, reading=reading or "physical", mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
     result, solver = solve_state(state)
     return Record(
@@ -158,9 +176,24 @@ def _columns(records: Sequence[Record]) -> list[str]:
     return list(records[0].row()) if records else []
 
 
-def _csv(records: Sequence[Record], meta: dict[str, Any], sweeps: Sequence[str] | None = None) -> str:
-    """CSV text; ``sweeps`` (one name per record) adds the ``sweep`` column that tells the Fig. 9
-    curves apart (the (mu 0.3, mg 2) curve belongs to both sweeps)."""
+def records_csv(records: Sequence[Record], meta: dict[str, Any], sweeps: Sequence[str] | None = None) -> str:
+    """The records as CSV text (``lift.csv``, ``lift-sweeps.csv``).
+
+    Parameters
+    ----------
+    records
+        The records, one line each ([`Record.row()`][mjtvm.jobs.replay_records.Record.row]).
+    meta
+        ``scenario`` and ``hand``, the first columns of every line.
+    sweeps
+        One name per record: adds the ``sweep`` column that tells the Fig. 9 curves apart (the
+        (mu 0.3, mg 2) curve belongs to both sweeps).
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     extra = ["sweep"] if sweeps is not None else []
     buf = io.StringIO(newline="")
     writer = csv.DictWriter(buf, fieldnames=[*extra, "scenario", "hand", *_columns(records)])
@@ -171,7 +204,19 @@ def _csv(records: Sequence[Record], meta: dict[str, Any], sweeps: Sequence[str] 
     return buf.getvalue()
 
 
-def _lift_dict(lift: Lift) -> dict[str, Any]:
+def lift_dict(lift: Lift) -> dict[str, Any]:
+    """The lift as JSON (``lift.json``'s ``lift``): its states, contacts and slide directions.
+
+    Parameters
+    ----------
+    lift
+        The scripted lift.
+
+    Returns
+    -------
+    dict
+        JSON-ready lists (``z``, ``qpos``, ``drift``, ..., ``slide_directions`` per reading).
+    """
     slides = {
         reading: [
             {g: s.tolist() for g, s in slide_directions(lift, i, reading=reading).items()}  # type: ignore[arg-type]

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from mjtvm.jobs.verify import _types, motor_model
 from mjtvm.lift.states import lift_state
 from mjtvm.lift.trajectory import Lift
+from mjtvm.physics.check import contact_types, motor_model
 from mjtvm.physics.simulate import SimSettings, rollout, sim_model
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
@@ -82,7 +82,7 @@ def slide_check(
             )
             model = sim_model(
                 motor_model(lift.scenario),
-                _types(state),
+                contact_types(state),
                 mu=mu,
                 mg=mg,
                 settings=settings,

@@ -17,8 +17,7 @@ reads each state's MuJoCo grasp once per worker, and solves each requested state
   attaches to any existing scheduler (including batch-queue clusters via dask-jobqueue).
 
 Every way returns the same rows in the order of the points (tested). A local pool's workers
-never outlive the sweep: an interrupt ends them at once (`_stop()`), and on Linux the
-kernel kills them when their parent dies (`_die_with_parent()`). A scheduler address is
+never outlive the sweep ([`mjtvm.jobs.pool`][mjtvm.jobs.pool]). A scheduler address is
 checked by its handshake within [`CONNECT_TIMEOUT_S`][mjtvm.jobs.sweep.CONNECT_TIMEOUT_S] (`_check_scheduler()`).
 The files of ``mjtvm sweep`` (checkpoint, resume, lock) are [`mjtvm.jobs.sweep_files`][mjtvm.jobs.sweep_files].
 """
@@ -26,14 +25,7 @@ The files of ``mjtvm sweep`` (checkpoint, resume, lock) are [`mjtvm.jobs.sweep_f
 from __future__ import annotations
 
 import itertools
-import multiprocessing
-import os
-import signal
-import sys
-import time
-import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from functools import lru_cache
@@ -43,13 +35,14 @@ import numpy as np
 from tqdm import tqdm
 
 from mjtvm.errors import ParamError
+from mjtvm.jobs.pool import forks, run_calls
 from mjtvm.lift.states import READINGS, VARIANTS, lift_state
 from mjtvm.lift.trajectory import Lift, scripted_lift
 from mjtvm.model.limits import with_limit_horizon
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.tvmmp import tvmmp
 
-__all__ = ["SweepPoint", "dask_client", "grid", "run_calls", "run_sweep"]
+__all__ = ["SweepPoint", "dask_client", "grid", "point_lift", "point_state", "row_key", "run_sweep"]
 
 
 @dataclass(frozen=True)
@@ -126,15 +119,42 @@ def grid(
 
 
 @lru_cache(maxsize=8)
-def _lift(scenario: str, hand: str, num_states: int) -> Lift:
+def point_lift(scenario: str, hand: str, num_states: int) -> Lift:
+    """The scripted lift of a sweep's points, built once per process (cached).
+
+    Parameters
+    ----------
+    scenario, hand
+        As in [`SweepPoint`][mjtvm.jobs.sweep.SweepPoint].
+    num_states
+        Number of states of the lift.
+
+    Returns
+    -------
+    Lift
+        The lift every point of (scenario, hand, num_states) refers to.
+    """
     return scripted_lift(scenario, variant=hand, num_states=num_states)
 
 
 @lru_cache(maxsize=512)
-def _base(scenario: str, hand: str, num_states: int, index: int) -> GraspState:
+def point_state(scenario: str, hand: str, num_states: int, index: int) -> GraspState:
     """The MuJoCo grasp of one lift state, shared by every (variant, reading, mu, mg) in this
-    worker: only its contact types, friction and REFS differ (``lift_state``'s ``base``)."""
-    return lift_state(_lift(scenario, hand, num_states), index)
+    worker: only its contact types, friction and REFS differ (``lift_state``'s ``base``).
+
+    Parameters
+    ----------
+    scenario, hand, num_states
+        The lift ([`point_lift()`][mjtvm.jobs.sweep.point_lift]).
+    index
+        The lift state.
+
+    Returns
+    -------
+    GraspState
+        The state's grasp with the grasp file's contact types (cached).
+    """
+    return lift_state(point_lift(scenario, hand, num_states), index)
 
 
 _Key = tuple[str, str, int, str, str, float, float, float | None]
@@ -143,10 +163,10 @@ _Key = tuple[str, str, int, str, str, float, float, float | None]
 def _solve_group(key: _Key, states: Sequence[int]) -> list[dict[str, Any]]:
     """Solve the given states of one lift configuration (runs in a worker)."""
     scenario, hand, num_states, variant, reading, mu, mg, horizon = key
-    lift = _lift(scenario, hand, num_states)
+    lift = point_lift(scenario, hand, num_states)
     rows = []
     for i in states:
-        base = with_limit_horizon(_base(scenario, hand, num_states, i), horizon)
+        base = with_limit_horizon(point_state(scenario, hand, num_states, i), horizon)
         state = lift_state(lift, i, variant=variant, reading=reading, mu=mu, mg=mg, base=base)  # type: ignore[arg-type]
         doc = tvmmp(state, witnesses=False).to_dict(witnesses=False)
         rows.append(
@@ -172,8 +192,20 @@ def _groups(points: Sequence[SweepPoint], chunk: int) -> list[tuple[_Key, list[i
     return tasks
 
 
-def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
-    """The identity of a row or point: what a checkpointed row must match to be kept."""
+def row_key(r: dict[str, Any] | SweepPoint) -> _RowKey:
+    """The identity of a row or point: what a checkpointed row must match to be kept.
+
+    Parameters
+    ----------
+    r
+        A row of [`run_sweep()`][mjtvm.jobs.sweep.run_sweep] (or of an earlier version's
+        file) or a point.
+
+    Returns
+    -------
+    tuple
+        (scenario, hand, num_states, variant, reading, mu, mg, state, limit_horizon).
+    """
     if isinstance(r, SweepPoint):
         return (r.scenario, r.hand, r.num_states, r.variant, r.reading, r.mu, r.mg, r.state, r.limit_horizon)
     return (  # a row of an earlier version, without the field, had the grasp file's horizon
@@ -190,60 +222,6 @@ def _key(r: dict[str, Any] | SweepPoint) -> _RowKey:
 
 
 _RowKey = tuple[str, str, int, str, str, float, float, int, float | None]
-
-
-_PR_SET_PDEATHSIG = 1
-"""``prctl`` option (``<linux/prctl.h>``): the signal a process gets when its parent ends."""
-
-STOP_WAIT_S = 1.0
-"""How long an interrupted pool's workers get to end on SIGTERM before they are killed."""
-
-
-def _die_with_parent() -> None:
-    """Have the kernel kill this process when its parent ends (Linux; elsewhere nothing).
-
-    A pool worker blocks on its task queue, which its siblings hold open too: it would never
-    notice a parent killed by SIGKILL, and would live on as an orphan.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    import ctypes
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    except (OSError, AttributeError):  # pragma: no cover - a libc without prctl
-        return
-
-
-def _init_worker(parent: int = 0) -> None:
-    """Set up a pool worker: Ctrl-C is the parent's (a terminal sends SIGINT to the whole
-    process group; each worker would print its own KeyboardInterrupt traceback), and the
-    worker dies with its parent (`_die_with_parent()`). ``parent``: the pid of the process
-    that forked the worker (0 for a forkserver's worker, whose parent is the forkserver)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _die_with_parent()
-    if parent and os.getppid() != parent:  # the parent ended before the death signal was armed
-        os._exit(1)
-
-
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel the pending tasks and end the workers now.
-
-    ``shutdown(wait=True)``, what the ``with`` statement does, would first run every queued
-    task; ``shutdown`` also forgets the workers, so they are taken before it. Workers get
-    SIGTERM, and SIGKILL after [`STOP_WAIT_S`][mjtvm.jobs.sweep.STOP_WAIT_S].
-    """
-    procs = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in procs:
-        proc.terminate()
-    deadline = time.monotonic() + STOP_WAIT_S
-    for proc in procs:
-        proc.join(max(0.0, deadline - time.monotonic()))
-        if proc.is_alive():
-            proc.kill()
-            proc.join(STOP_WAIT_S)
 
 
 def run_sweep(
@@ -298,13 +276,13 @@ def run_sweep(
     if chunk < 1:
         raise ParamError("chunk", f"expected a positive number of states per task, got {chunk}")
     table: dict[_RowKey, dict[str, Any]] = dict(done or {})
-    todo = [p for p in pts if _key(p) not in table]
+    todo = [p for p in pts if row_key(p) not in table]
     serial = cluster is None and jobs == 1
     tasks = _groups(todo, 1 if serial else chunk)
     bar = tqdm(total=len(todo), desc="sweep", unit="row", disable=not progress)
 
     def finished(rows: list[dict[str, Any]]) -> None:
-        table.update((_key(r), r) for r in rows)
+        table.update((row_key(r), r) for r in rows)
         if on_rows is not None:
             on_rows(rows)
         bar.update(len(rows))
@@ -319,13 +297,13 @@ def run_sweep(
             _run_pool(tasks, jobs, finished)
     finally:
         bar.close()
-    return [table[_key(p)] for p in pts]
+    return [table[row_key(p)] for p in pts]
 
 
 def _fork_tasks(tasks: list[tuple[_Key, list[int]]], jobs: int) -> list[list[tuple[_Key, list[int]]]]:
     """The work regrouped for forked workers: per lift, its states dealt round-robin into
     about 8 tasks per worker (a state's cost varies along the lift), each task solving every
-    configuration of the lift at its states, so that a state's MuJoCo grasp (``_base``) is
+    configuration of the lift at its states, so that a state's MuJoCo grasp (``point_state``) is
     read in one worker only. Task sizes never exceed the given tasks' states."""
     by_lift: dict[tuple[str, str, int], dict[_Key, set[int]]] = {}
     size = max((len(states) for _, states in tasks), default=1)
@@ -345,11 +323,6 @@ def _solve_many(groups: list[tuple[_Key, list[int]]]) -> list[dict[str, Any]]:
     return [row for key, states in groups for row in _solve_group(key, states)]
 
 
-def _forks() -> bool:
-    """Whether local pools fork their workers (Linux) rather than start them from a forkserver."""
-    return sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods()
-
-
 def _run_pool(
     tasks: list[tuple[_Key, list[int]]], jobs: int, finished: Callable[[list[dict[str, Any]]], None]
 ) -> None:
@@ -363,44 +336,15 @@ def _run_pool(
     instances are not reused across the fork ([`mjtvm.lp.highs`][mjtvm.lp.highs]); MuJoCo holds no
     threads. Elsewhere (no safe fork) the forkserver's workers build the lift themselves.
     """
-    fork = _forks()
+    fork = forks()
     calls: list[tuple[Callable[..., list[dict[str, Any]]], tuple[Any, ...]]]
     if fork:
         for key in {(k[0], k[1], k[2]) for k, _ in tasks}:
-            _lift(*key)
+            point_lift(*key)
         calls = [(_solve_many, (groups,)) for groups in _fork_tasks(tasks, jobs)]
     else:
         calls = [(_solve_group, (key, states)) for key, states in tasks]
     run_calls(calls, jobs, finished, fork=fork)
-
-
-def run_calls(
-    calls: Sequence[tuple[Callable[..., list[dict[str, Any]]], tuple[Any, ...]]],
-    jobs: int,
-    finished: Callable[[list[dict[str, Any]]], None],
-    *,
-    fork: bool,
-    in_order: bool = True,
-) -> None:
-    """Each ``fn(*args)`` of ``calls`` on ``jobs`` local processes (forked, or started from a
-    forkserver), its rows passed to ``finished`` in the order of ``calls`` or, without
-    ``in_order``, as they finish. On an interrupt or a failure the pending calls are cancelled
-    and the workers ended (`_stop()`)."""
-    context = multiprocessing.get_context("fork" if fork else "forkserver")
-    pool = ProcessPoolExecutor(
-        max_workers=jobs, mp_context=context, initializer=_init_worker, initargs=(os.getpid() if fork else 0,)
-    )
-    try:
-        with warnings.catch_warnings():
-            # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see _run_pool).
-            warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
-            futures = [pool.submit(fn, *args) for fn, args in calls]
-        for f in futures if in_order else as_completed(futures):
-            finished(f.result())
-    except BaseException:
-        _stop(pool)
-        raise
-    pool.shutdown()
 
 
 CONNECT_TIMEOUT_S = 10.0

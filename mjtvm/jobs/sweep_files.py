@@ -7,13 +7,8 @@ keeping every finished row in ``NAME.partial.json`` while it runs.
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import json
-import os
-import re
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,8 +16,9 @@ from typing import Any
 
 from mjtvm.errors import ParamError
 from mjtvm.jobs.checkpoint import RowCheckpoint
+from mjtvm.jobs.files import csv_text, model_files, stderr
 from mjtvm.jobs.replay import grasp_defaults
-from mjtvm.jobs.sweep import _base, _key, _lift, grid, run_sweep
+from mjtvm.jobs.sweep import grid, point_lift, point_state, row_key, run_sweep
 
 __all__ = ["SweepFiles", "run_sweep_files"]
 
@@ -30,26 +26,6 @@ CHECKPOINT_SCHEMA = "mjtvm.sweep-checkpoint/1"
 CHECKPOINT_EVERY_S = 5.0
 """At most this often (s) the checkpoint is rewritten while a sweep runs (and always on an
 interrupt or a failure, with every finished row)."""
-
-
-_FILE_ATTRIBUTE = re.compile(rb"""\bfile\s*=\s*["']([^"']+)["']""")
-"""An MJCF ``file="..."`` attribute (``<include>``, meshes, textures, ...)."""
-
-
-def _model_files(model: Path) -> list[Path]:
-    """The MJCF file and the files it names (``file=`` attributes, through ``<include>`` files,
-    taken relative to the naming file's folder, where they exist)."""
-    seen: list[Path] = []
-    todo = [model]
-    while todo:
-        path = todo.pop()
-        if path in seen or not path.is_file():
-            continue
-        seen.append(path)
-        if path.suffix.lower() == ".xml":
-            for name in _FILE_ATTRIBUTE.findall(path.read_bytes()):
-                todo.append(path.parent / os.fsdecode(name))
-    return seen
 
 
 def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
@@ -69,7 +45,7 @@ def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
 
     loaded = load_scenario(grasp, variant=hand)
     h = hashlib.sha256(f"mjtvm {__version__}\n{grasp}\n{hand}\n{num_states}\n".encode())
-    files = ([loaded.path] if loaded.path is not None else []) + _model_files(loaded.model_path)
+    files = ([loaded.path] if loaded.path is not None else []) + model_files(loaded.model_path)
     if loaded.path is None:  # a grasp given as a document: its normalised content
         h.update(json.dumps(dict(loaded.document), sort_keys=True, default=str).encode())
     for path in files:
@@ -92,20 +68,12 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
         out["limiting_k"], out["limiting_l"] = ("", "") if r["limiting"] is None else r["limiting"]
         out["tvmmp"] = "" if r["tvmmp"] is None else r["tvmmp"]
         flat.append(out)
-    buf = io.StringIO(newline="")
-    writer = csv.DictWriter(buf, fieldnames=list(dict.fromkeys(k for r in flat for k in r)), restval="")
-    writer.writeheader()
-    writer.writerows(flat)
-    return buf.getvalue()
+    return csv_text(flat)
 
 
 _BUILT_FROM: dict[tuple[str, str, int], str] = {}
-"""(grasp, hand, states) -> the inputs digest its cached lift (`_lift()`) was built from;
+"""(grasp, hand, states) -> the inputs digest its cached lift ([`point_lift()`][mjtvm.jobs.sweep.point_lift]) was built from;
 a lift of unknown or other inputs is built again."""
-
-
-def _stderr(text: str) -> None:
-    print(text, file=sys.stderr)
 
 
 @dataclass(frozen=True)
@@ -163,7 +131,7 @@ class SweepFiles:
 
 
 def run_sweep_files(
-    run: SweepFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = _stderr
+    run: SweepFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = stderr
 ) -> list[Path]:
     r"""``mjtvm sweep``: check ``run.out``, lock it, resume, solve, write ``NAME.json`` and ``NAME.csv``.
 
@@ -194,14 +162,14 @@ def run_sweep_files(
     checkpoint = outdir / f"{run.name}.partial.json"
     digests = {(g, h): inputs_digest(g, h, run.num_states) for g in run.scenarios for h in run.hands}
     if any(_BUILT_FROM.get((g, h, run.num_states)) != d for (g, h), d in digests.items()):
-        _lift.cache_clear()  # a grasp file may have changed since this process built its lift
-        _base.cache_clear()
+        point_lift.cache_clear()  # a grasp file may have changed since this process built its lift
+        point_state.cache_clear()
         _BUILT_FROM.clear()
     _BUILT_FROM.update(((g, h, run.num_states), d) for (g, h), d in digests.items())
     mus, mgs = run.mus, run.mgs
     if mus is None or mgs is None:  # the grasps' own: they must agree to make one grid
         defaults = {
-            grasp_defaults(_lift(g, h, run.num_states).scenario, None, None)
+            grasp_defaults(point_lift(g, h, run.num_states).scenario, None, None)
             for g in run.scenarios
             for h in run.hands
         }
@@ -224,11 +192,11 @@ def run_sweep_files(
             num_states=run.num_states,
             limit_horizon=run.limit_horizon,
         )
-        wanted = {_key(p) for p in points}
+        wanted = {row_key(p) for p in points}
         ck = RowCheckpoint(
             checkpoint,
             CHECKPOINT_SCHEMA,
-            key=_key,
+            key=row_key,
             digest=lambda r: digests[r["scenario"], r["hand"]],
             every_s=CHECKPOINT_EVERY_S,
             again="run again without resuming",

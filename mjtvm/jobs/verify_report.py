@@ -4,8 +4,6 @@ per run the distribution of alpha_sim / alpha_kl ([`verify_lift()`][mjtvm.jobs.v
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import statistics
 from collections import Counter
@@ -16,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.jobs.figures import ALPHA_UNIT, lift_axes, lift_png
+from mjtvm.jobs.files import csv_text
 
 _F64 = NDArray[np.float64]
 
@@ -24,13 +23,7 @@ __all__ = ["plot_alpha", "rows_csv", "summarize"]
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV (columns in order of first appearance, floats to 6 significant digits)."""
-    cols = list(dict.fromkeys(k for r in rows for k in r))
-    buf = io.StringIO(newline="")
-    w = csv.DictWriter(buf, fieldnames=cols)
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-    return buf.getvalue()
+    return csv_text(rows, cell=lambda v: f"{v:.6g}" if isinstance(v, float) else v)
 
 
 def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndarray, np.ndarray]:

@@ -200,7 +200,7 @@ def test_verify_options_parse() -> None:
 
 def test_verify_takes_the_demand_along_the_rollouts_span(monkeypatch: pytest.MonkeyPatch) -> None:
     """verify's dynamic alpha uses the span its rollouts check (startup + window), whatever they are."""
-    import mjtvm.jobs.verify as verify
+    import mjtvm.physics.check as check
     from mjtvm.physics.simulate import SimSettings
     from mjtvm.problem2.dynamic import DynamicAlpha
 
@@ -210,9 +210,9 @@ def test_verify_takes_the_demand_along_the_rollouts_span(monkeypatch: pytest.Mon
         seen.append(window)
         return DynamicAlpha(0.0, 1.0, np.zeros(1), None, None, "", math.nan, 1, (0.0, 0.0))
 
-    monkeypatch.setattr(verify, "dynamic_pair", fake)
+    monkeypatch.setattr(check, "dynamic_pair", fake)
     settings = SimSettings(startup=0.001, window=0.004)
-    row = verify._dynamic_row(None, None, state(0.6), 0, None, 1.0, 1.0, "central", settings, "object", 0.9)
+    row = check.dynamic_row(None, None, state(0.6), 0, None, 1.0, 1.0, "central", settings, "object", 0.9)
     assert seen == [pytest.approx(0.005, rel=1e-12)] and row["alpha_dyn"] == 0.0
-    verify._dynamic_row(None, None, state(0.6), 0, None, 1.0, 1.0, "central", None, "object", 0.9)
+    check.dynamic_row(None, None, state(0.6), 0, None, 1.0, 1.0, "central", None, "object", 0.9)
     assert seen[-1] == pytest.approx(0.007, rel=1e-12)  # SimSettings' defaults: 2 ms + 5 ms

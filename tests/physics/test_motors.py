@@ -123,7 +123,7 @@ def test_motors_of_a_grasp_are_required() -> None:
 def test_motor_model_attaches_or_refuses(tmp_path: Path) -> None:
     from types import SimpleNamespace
 
-    from mjtvm.jobs.verify import motor_model
+    from mjtvm.physics.check import motor_model
 
     path = tmp_path / "servos.xml"
     path.write_text(SERVOS)

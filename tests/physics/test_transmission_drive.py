@@ -17,8 +17,9 @@ import pytest
 from mjtvm.errors import ModelError, ParamError
 from mjtvm.grasp.actuation.dcmotor import DCMotor
 from mjtvm.grasp.actuation.transmission import dense_moment
-from mjtvm.jobs.verify import _types, cached_lift, motor_model
+from mjtvm.jobs.verify import cached_lift
 from mjtvm.lift.states import lift_state
+from mjtvm.physics.check import contact_types, motor_model
 from mjtvm.physics.motors import (
     BOX_SPEED_MARGIN,
     CTRLSPEC,
@@ -113,7 +114,7 @@ def test_f85_motor_model_and_central_witness() -> None:
     drive = witness_drive(state, 0, 0, alpha, 0.5)
     assert drive.actuators == ("fingers_actuator",)
     np.testing.assert_allclose(drive.actuator_speeds, 0.5 * sol["actuator_speeds"], rtol=1e-5)
-    model = sim_model(motor_model(grasp), _types(state), mu=0.6, object_body=grasp.object_body)
+    model = sim_model(motor_model(grasp), contact_types(state), mu=0.6, object_body=grasp.object_body)
     rig = Rig(model, drive, grasp.object_body)
     data = mujoco.MjData(model)
     data.qpos[:] = lift.qpos[0]
@@ -193,7 +194,9 @@ def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
     # the default 1 mm horizon alpha_00 is 0; the linkage's witness is checked without it.
     assert state.joint_limits is not None
     state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
-    model = sim_model(motor_model(grasp), _types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body)
+    model = sim_model(
+        motor_model(grasp), contact_types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body
+    )
     res = tvmmp(state)
     alpha = float(res.alpha[0, 0])
     drive = witness_drive(state, 0, 0, alpha, 1.0)

@@ -350,7 +350,7 @@ def test_the_physics_check_refuses_a_hand_on_a_floating_base(tmp_path: Path, kin
     """The rollouts rebuild the model from its file and hold no base: a free base would fall
     and a mocap pose be lost, so alpha_sim would be another hand's."""
     from mjtvm.errors import ModelError
-    from mjtvm.jobs.verify import motor_model
+    from mjtvm.physics.check import motor_model
 
     grasp = load_grasp(_doc(based_gripper(kind, tmp_path), {"keyframe": "grasp"}, OBJECT))
     with pytest.raises(
