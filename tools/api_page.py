@@ -121,8 +121,10 @@ def api_page() -> str:
     listing = rooms()
     in_rooms = {f"{m}.{n}" for room, _, names in listing[1:] for n, m in names}
     parts = [_API_HEAD]
-    for i, (room, doc, names) in enumerate(listing):
-        parts.append(f"\n## `{room}`\n\n{doc}\n")
+    for i, (room, _, names) in enumerate(listing):
+        parts.append(
+            f"\n## `{room}`\n\n::: {room}\n    options:\n      show_root_heading: false\n      members: false\n"
+        )
         if i == 0:
             linked = [f"[`{n}`][{m}.{n}]" for n, m in names if f"{m}.{n}" in in_rooms]
             parts.append("\nFrom its rooms: " + ", ".join(linked) + ".\n")
@@ -145,8 +147,10 @@ def internals_page() -> str:
             parts.append(f"\n## `{room}`\n")
             current = room
         members = [n for n in _defined(_tree(path)) if f"{module}.{n}" not in public]
-        listed = "[" + ", ".join(members) + "]" if members else "false"
-        parts.append(f"\n::: {module}\n    options:\n      members: {listed}\n")
+        # the module's docstring, then each object on its own: a members list would also
+        # filter the members of its classes
+        parts.append(f"\n::: {module}\n    options:\n      members: false\n")
+        parts += [f"\n::: {module}.{n}\n    options:\n      heading_level: 3\n" for n in members]
     return "".join(parts)
 
 

@@ -5,13 +5,13 @@ this module:
 
 * [`check_output_dir()`][mjtvm.formats.files.check_output_dir] creates the output folder and proves it writable (by creating and
   removing a probe file) *before* any computation, so a bad ``--out`` costs nothing;
-* [`output_lock()`][mjtvm.formats.files.output_lock] takes an exclusive, non-blocking [`fcntl.flock()`][fcntl.flock] on
+* [`output_lock()`][mjtvm.formats.files.output_lock] takes an exclusive, non-blocking `fcntl.flock()` on
   ``<folder>/.mjtvm.lock`` for the whole run and writes its process id into the file; a
   second run into the same folder fails at once with [`OutputError`][mjtvm.errors.OutputError]
   instead of interleaving its rows. The lock file stays in the folder (removing it would let
   two runs lock two different files); the lock itself is released by the kernel when the
   last descriptor of it closes. Forked children close their copy of the descriptor at once
-  ([`os.register_at_fork()`][os.register_at_fork]): a flock belongs to the open file, so a child that outlived
+  (`os.register_at_fork()`): a flock belongs to the open file, so a child that outlived
   its parent would otherwise keep the folder locked. A lock held while the process id in the
   file is gone (leftover processes of a dead run, e.g. of an older mjtvm) is taken over: the
   lock file is replaced by a new one, locked, under a short lock of the folder itself, and a
@@ -19,7 +19,7 @@ this module:
 * [`write_files()`][mjtvm.formats.files.write_files] writes a run's files as one set: every file's content goes first to a
   temporary file in the same folder (``.<name>.<pid>.<random>.tmp``, flushed and fsynced),
   and only when *all* of them are complete are they renamed over their targets with
-  [`os.replace()`][os.replace], one after another. Each target is therefore always either its old
+  `os.replace()`, one after another. Each target is therefore always either its old
   complete content or its new complete content, never a truncated file; and a new file
   sits beside an old one of the same set only for the time the renames take (microseconds,
   no computation or I/O of content in between). A failure while writing the temporary files
@@ -356,5 +356,5 @@ def write_files(files: Mapping[Path, bytes | str], *, option: str = "--out") -> 
 
 
 def atomic_write(path: str | Path, data: bytes | str, *, option: str = "--out") -> Path:
-    """Write one file atomically (temporary file in the same folder, then [`os.replace()`][os.replace])."""
+    """Write one file atomically (temporary file in the same folder, then `os.replace()`)."""
     return write_files({Path(path): data}, option=option)[0]

@@ -37,7 +37,7 @@ class Record:
         Friction coefficient and object weight (N).
     index, z, s
         State index, object origin height (m) and travel along the lift (m; the lift's path
-        parameter, [`s`][mjtvm.lift.trajectory.Lift.s]).
+        parameter, `s`).
     result
         The [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult] (alpha_kl, status, TVMMP, limiting pair, timings).
     solver

@@ -41,9 +41,9 @@ def inputs_digest(grasp: str, hand: str, num_states: int) -> str:
         The grasp does not load (its own error, as the sweep would raise it).
     """
     from mjtvm import __version__
-    from mjtvm.paper_hand.scenario import load_scenario
+    from mjtvm.grasp import load_grasp
 
-    loaded = load_scenario(grasp, variant=hand)
+    loaded = load_grasp(grasp, hand=hand)
     h = hashlib.sha256(f"mjtvm {__version__}\n{grasp}\n{hand}\n{num_states}\n".encode())
     files = ([loaded.path] if loaded.path is not None else []) + model_files(loaded.model_path)
     if loaded.path is None:  # a grasp given as a document: its normalised content

@@ -92,9 +92,9 @@ def present_runs(lift: Lift, runs: Sequence[str]) -> list[str]:
 def _scenario(grasp: str | Path) -> Any:
     loaded = _grasp(grasp)
     if isinstance(loaded, str):
-        from mjtvm.paper_hand.scenario import load_scenario
+        from mjtvm.grasp import load_grasp
 
-        return load_scenario(loaded)
+        return load_grasp(loaded)
     return loaded
 
 

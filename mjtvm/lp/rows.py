@@ -67,7 +67,7 @@ class Rows:
     ) -> int:
         """Append ``count`` rows bounded by ``lo`` and ``hi``; the index of the first. With
         ``vector`` the rows are the components of one vector (one row group, see
-        [`mjtvm.problem2.assembly.Assembly.row_groups`][mjtvm.problem2.assembly.Assembly.row_groups]); with ``join`` they join the last group."""
+        `mjtvm.problem2.assembly.Assembly.row_groups`); with ``join`` they join the last group."""
         bounds = np.empty((2, count))
         bounds[0], bounds[1] = lo, hi
         self.lower.append(bounds[0])

@@ -7,7 +7,7 @@ that the contact really has (a simplex witness of Problem 2 puts F forces on the
 edges, a rollout of it is the first to slip there). The margin is applied to the contacts'
 ``mu`` before any assembly ([`margin_contacts()`][mjtvm.model.friction.margin_contacts], called by
 `assemble()`); the cvxpy transcription
-[`oracles.reference`][oracles.reference] applies it on its own.
+`oracles.reference` (the cvxpy transcription, outside the package) applies it on its own.
 
 S contacts keep ``mu``: kinetic friction is $\mu n_f$ exactly (eq. 16-17), there is
 no cone to keep away from, and a smaller coefficient may raise alpha as well as lower it;

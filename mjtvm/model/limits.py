@@ -6,12 +6,12 @@ each joint's position ``q_j`` and range ``[lo_j, hi_j]`` (MuJoCo's ``jnt_range``
 state's ``qpos``), and `assemble()` turns them into rows on the
 joint speeds ``qd`` (the module docstring's choice, documented in ``docs/joint-limits.md``):
 
-* **instantaneous** (Problems 1 and 2): a joint within [`JointLimits.tolerance`][mjtvm.model.limits.JointLimits.tolerance] of its
+* **instantaneous** (Problems 1 and 2): a joint within `JointLimits.tolerance` of its
   upper limit (``hi_j - q_j <= tol``) gets ``qd_j <= 0``; of its lower limit, ``qd_j >= 0``.
   The paper's instantaneous measure, made physically true: the joint can still leave its
   limit, never push past it;
 * **travel horizon** (Problem 2 only): while the object moves along ``alpha r_l`` by
-  [`JointLimits.horizon`][mjtvm.model.limits.JointLimits.horizon] metres of travel ([`travel_speed()`][mjtvm.model.limits.travel_speed]: the fastest of the
+  `JointLimits.horizon` metres of travel ([`travel_speed()`][mjtvm.model.limits.travel_speed]: the fastest of the
   object's point ``p_O`` and its contact points), no joint may cross its limit:
   ``H qd_j <= (hi_j - q_j) s_l alpha`` and ``-H qd_j <= (q_j - lo_j) s_l alpha`` with
   ``s_l`` the travel speed of ``r_l``, linear in ``(qd, alpha)``. Problem 1's twist is free

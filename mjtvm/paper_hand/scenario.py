@@ -146,8 +146,6 @@ def format_document(doc: Any, indent: int = 0) -> str:
     return "[\n" + ",\n".join(rows) + "\n" + " " * indent + "]"
 
 
-
-
 def load_scenario(
     source: str | Path | Mapping[str, Any],
     *,

@@ -172,7 +172,7 @@ def require_motors(
 ) -> dict[str, DCMotor]:
     r"""The motors to attach so that every joint of ``joints`` has its ``<dcmotor>``.
 
-    ``motors`` follows [`mjtvm.grasp.resolve.loaded.Grasp.motors`][mjtvm.grasp.resolve.loaded.Grasp.motors] ([`mjtvm.grasp.actuation.ranges.joint_ranges()`][mjtvm.grasp.actuation.ranges.joint_ranges]):
+    ``motors`` follows `mjtvm.grasp.resolve.loaded.Grasp.motors` ([`mjtvm.grasp.actuation.ranges.joint_ranges()`][mjtvm.grasp.actuation.ranges.joint_ranges]):
     a `DCMotor` (from a datasheet), ``None`` (the model's own
     ``<dcmotor>`` drives the joint) or a string saying why the joint's range has no motor
     (a polygon, an actuator with a speed limit, a gear efficiency other than 1). Joints that

@@ -45,7 +45,7 @@ class Rig:
     fingers
         Per drive contact: (label, geom id, body id, columns of the drive's joints moving it, type).
     coupled
-        The drive has a transmission ([`Drive.actuators`][mjtvm.physics.witness.Drive.actuators]): ``acts`` are the actuators'
+        The drive has a transmission (`Drive.actuators`): ``acts`` are the actuators'
         ``<dcmotor>`` s (found by name), ``gear`` their ratio ``c`` to the state's moment rows
         (set by `bind()`: motor moment = ``c x P``, so motor torque ``u / c`` and motor speed
         ``c x P qd``), ``friction`` each actuator's share of its joints' friction loss,

@@ -305,7 +305,7 @@ def _violation(
     tnorm: float,
     gap_geom: str,
 ) -> tuple[str, str, str]:
-    """The first violated criterion as (text, kind, where) ([`RolloutResult.failure`][mjtvm.physics.simulate.RolloutResult.failure])."""
+    """The first violated criterion as (text, kind, where) (`RolloutResult.failure`)."""
     if tnorm > 0 and worst["speed"] > st.speed_tol:
         return f"twist magnitude off by {100 * worst['speed']:.1f} %", "twist magnitude", ""
     if tnorm == 0 and worst["speed"] > st.slip_floor / max(st.window, 1e-12):

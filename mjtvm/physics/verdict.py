@@ -2,7 +2,7 @@
 
 The bisection ([`bisect()`][mjtvm.physics.bisection.bisect]) ends between a passing speed factor
 s* and a failing one just above it; the failing rollout's first violation
-([`failure`][mjtvm.physics.simulate.RolloutResult.failure]) is what limits alpha_sim:
+(`failure`) is what limits alpha_sim:
 
 * ``slip at contact C`` (an F-point's slip beyond its tolerance), ``contact lost at C`` (a
   finger more than 0.5 mm from the object), ``torque limit at joint J`` (``at actuator A`` for

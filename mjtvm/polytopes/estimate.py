@@ -186,7 +186,7 @@ def estimate_volume(
         ``normals @ u <= offsets`` added (``None`` when that would cost too much: the sampling
         then goes on in the O it has). Called when fewer than [`MIN_INSIDE`][mjtvm.polytopes.estimate.MIN_INSIDE] of the
         points of a batch are inside (then the sampling starts again in the smaller O, and the
-        certified bracket's outer volume comes down with it: [`VolumeEstimate.outer`][mjtvm.polytopes.estimate.VolumeEstimate.outer]).
+        certified bracket's outer volume comes down with it: `VolumeEstimate.outer`).
     """
     start = time.perf_counter()
     rng = np.random.default_rng(seed)

@@ -138,7 +138,7 @@ class Approximation:
     hausdorff
         Upper bound of their Hausdorff distance, scaled coordinates.
     inner_facets, outer_facets
-        ``(normals, offsets)`` in twist coordinates, as [`Projection.facets`][mjtvm.polytopes.lifted.Projection.facets].
+        ``(normals, offsets)`` in twist coordinates, as `Projection.facets`.
     estimate
         The randomized volume (scaled coordinates) when the bracket stayed wider than the
         tolerance and a confidence was asked for, else ``None``.

@@ -132,7 +132,7 @@ def project_lp(
     limits
         When to stop before the polytope is exact (`Limits`;
         default: exact, within `default_memory_budget()`). Then
-        the status is ``"approximate"`` and [`Projection.approximation`][mjtvm.polytopes.lifted.Projection.approximation] holds the bracket.
+        the status is ``"approximate"`` and `Projection.approximation` holds the bracket.
     """
     budget = Budget(limits)
     t0 = time.perf_counter()

@@ -41,7 +41,7 @@ converges to its end, halving the bracket with every LP. When the demand *helps*
 work, $A(d(\alpha_{kl})) > \alpha_{kl}$) the bracket is extended by doubling above
 $\alpha_{kl}$; there the interval property is assumed, not proved. At the end,
 $|A(d(\alpha^{dyn})) - \alpha^{dyn}|$ is within the tolerance when A and d are
-continuous (the fixed point of $\alpha \mapsto A(d(\alpha))$); [`DynamicAlpha.residual`][mjtvm.problem2.dynamic.DynamicAlpha.residual]
+continuous (the fixed point of $\alpha \mapsto A(d(\alpha))$); `DynamicAlpha.residual`
 reports it.
 
 Demands along a window
@@ -147,7 +147,7 @@ def limiting_term(
     state: GraspState, torques: ArrayLike, speeds: ArrayLike, demand: ArrayLike
 ) -> tuple[int, str]:
     """The limiting joint of a solution (joint ``torques`` and ``speeds``, the ``demand`` included
-    in the torques) and its dominant term ([`DynamicAlpha.term`][mjtvm.problem2.dynamic.DynamicAlpha.term]). With a transmission,
+    in the torques) and its dominant term (`DynamicAlpha.term`). With a transmission,
     the limiting actuator (its force and speed), the demand carried by the actuator forces
     that balance it in the least-squares sense."""
     d = np.asarray(demand, dtype=float)
