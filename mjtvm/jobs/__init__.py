@@ -34,7 +34,6 @@ if TYPE_CHECKING:
     from mjtvm.jobs.rank_files import RankFiles, run_rank_files
     from mjtvm.jobs.rank_row import RankRow
     from mjtvm.jobs.replay import replay_lift, run_replay, sweep_lift
-    from mjtvm.jobs.slide_check import slide_check
     from mjtvm.jobs.sweep import SweepPoint, grid, run_sweep
     from mjtvm.jobs.verify import verify_lift, verify_state
 
@@ -49,7 +48,6 @@ _HOMES = {
     "run_rank_files": "rank_files",
     "run_replay": "replay",
     "run_sweep": "sweep",
-    "slide_check": "slide_check",
     "sweep_lift": "replay",
     "verify_lift": "verify",
     "verify_state": "verify",
@@ -66,7 +64,6 @@ __all__ = [
     "run_rank_files",
     "run_replay",
     "run_sweep",
-    "slide_check",
     "sweep_lift",
     "verify_lift",
     "verify_state",

@@ -26,10 +26,12 @@ def test_the_api_and_internals_pages_are_the_generated_ones() -> None:
 
 
 def test_the_api_page_renders_each_public_name_once_and_nothing_else() -> None:
-    rendered = re.findall(r"^::: (\S+)$", (ROOT / "docs" / "api.md").read_text(encoding="utf-8"), re.M)
+    rooms = _tool().rooms()
+    blocks = re.findall(r"^::: (\S+)$", (ROOT / "docs" / "api.md").read_text(encoding="utf-8"), re.M)
+    rendered = [b for b in blocks if b not in {room for room, _, _ in rooms}]  # a room: its docstring
     assert len(rendered) == len(set(rendered))
     public = set()
-    for room, _, names in _tool().rooms():
+    for room, _, names in rooms:
         package = importlib.import_module(room)
         for name, module in names:
             # each listed name is what the room exports, and the page's object is that object
