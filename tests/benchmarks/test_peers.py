@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from benchmarks import peers
-from benchmarks.report import _peer_notes, _peer_rows
+from benchmarks.notes import peer_notes
+from benchmarks.report import _peer_rows
 
 
 def test_fingertip_jacobian_is_the_chain_geometry() -> None:
@@ -39,8 +40,8 @@ def test_report_rows_with_and_without_pycapacity(monkeypatch: pytest.MonkeyPatch
     assert alone["met"] is None and alone["fingers"]["3"]["tvms"]["peer_s"] is None
     assert alone["fingers"]["3"]["vs_peer"] is None
     assert "pycapacity -" in _peer_rows({"peers": alone})[0]
-    assert _peer_notes({"peers": alone}) == []
+    assert peer_notes({"peers": alone}) == []
     slow = json.loads(json.dumps(report))
     slow["met"] = False
     slow["fingers"]["3"]["tvms"]["ratio"] = 0.5
-    assert "3 joints tvms x0.50" in _peer_notes({"peers": slow})[0]
+    assert "3 joints tvms x0.50" in peer_notes({"peers": slow})[0]
