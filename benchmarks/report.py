@@ -11,7 +11,7 @@ from typing import Any
 from benchmarks.notes import auto_notes
 from benchmarks.suite import P2_TARGET_KEYS, TARGET_SWEEP_SPEEDUP, TARGETS_S
 
-__all__ = ["auto_notes", "format_suite_table"]
+__all__ = ["auto_notes", "format_suite_table", "peer_rows"]
 
 
 # ------------------------------------------------------------------ the table
@@ -229,8 +229,20 @@ def _dataset_rows(report: dict[str, Any]) -> list[str]:
     return lines
 
 
-def _peer_rows(report: dict[str, Any]) -> list[str]:
-    """Velocity and force polytopes against pycapacity, the same run, interleaved (benchmarks.peers)."""
+def peer_rows(report: dict[str, Any]) -> list[str]:
+    """The table's rows of the velocity and force polytopes against pycapacity (benchmarks.peers).
+
+    Parameters
+    ----------
+    report : dict
+        A [`run_suite()`][benchmarks.suite.run_suite] report.
+
+    Returns
+    -------
+    list of str
+        Three rows per chain, two for pycapacity's four-link robot and a summary line; none
+        without a ``peers`` section.
+    """
     pe = report.get("peers")
     if not pe:
         return []
@@ -310,7 +322,7 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
     notes and the machine."""
     lines = [_HEAD, "-" * len(_HEAD)]
     lines += _case_rows(report) + _lift_rows(report) + _sweep_rows(report) + _scaling_rows(report)
-    lines += _hand_rows(report) + _dataset_rows(report) + _floor_rows(report) + _peer_rows(report)
+    lines += _hand_rows(report) + _dataset_rows(report) + _floor_rows(report) + peer_rows(report)
     if "problem1_scale" in report:
         from benchmarks.problem1 import format_scale_table
 
