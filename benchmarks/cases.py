@@ -64,7 +64,7 @@ def bench_problem1(
     trace_memory: bool = True,
 ) -> dict[str, Any]:
     """Problem 1 by support LPs (median over ``repeats``), memory, and the capped cdd baseline."""
-    from benchmarks.problem1 import _hausdorff, _summary
+    from benchmarks.problem1 import tvms_hausdorff, tvms_summary
     from benchmarks.timing import highs_run_timer
     from mjtvm.polytopes.tvms import tvms
 
@@ -87,7 +87,7 @@ def bench_problem1(
     }
     out: dict[str, Any] = {
         "size": {"joints": state.num_joints, "contacts": len(state.contacts), "refs": len(state.refs)},
-        "lp": {**stats(totals), **split, **_summary(result)},
+        "lp": {**stats(totals), **split, **tvms_summary(result)},
         "memory_mib": {
             "ru_maxrss": rss_mib(),
             "tracemalloc_peak": traced_peak_mib(lambda: tvms(state, rvds_cone=rvds_cone))
@@ -104,9 +104,9 @@ def bench_problem1(
             "finished": other.status != "timeout",
             "wall_s": wall,
             "time_limit_s": time_limit,
-            "hausdorff_vs_lp": _hausdorff(result, other) if other.status == "bounded" else None,
+            "hausdorff_vs_lp": tvms_hausdorff(result, other) if other.status == "bounded" else None,
             "child_ru_maxrss_mib": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0,
-            **_summary(other),
+            **tvms_summary(other),
         }
     return out
 

@@ -55,6 +55,8 @@ __all__ = [
     "format_scale_table",
     "format_tvms_table",
     "run_tvms_benchmark",
+    "tvms_hausdorff",
+    "tvms_summary",
 ]
 
 PAPER_S = {"case1": 0.19, "case2": 129.0}  #: the paper's Problem 1 times (s)
@@ -66,15 +68,40 @@ def _rss_mib(who: int = resource.RUSAGE_SELF) -> float:
     return resource.getrusage(who).ru_maxrss / 1024.0
 
 
-def _hausdorff(a: TvmsResult, b: TvmsResult) -> float | None:
-    """Hausdorff distance of two vertex sets relative to the extent (``None`` if either is empty)."""
+def tvms_hausdorff(a: TvmsResult, b: TvmsResult) -> float | None:
+    """Hausdorff distance of two TVMS vertex sets relative to the extent.
+
+    Parameters
+    ----------
+    a, b : TvmsResult
+        Two results of the same state (e.g. mjtvm's and a baseline's); ``a`` sets the extent.
+
+    Returns
+    -------
+    float or None
+        The distance over ``a``'s largest absolute coordinate, in physical units; ``None`` if
+        either vertex set is empty.
+    """
     if not len(a.vertices) or not len(b.vertices):
         return None
     extent = float(np.max(np.abs(a.vertices * a.scale)))
     return hausdorff(a.vertices * a.scale, b.vertices * b.scale) / max(extent, 1e-300)
 
 
-def _summary(r: TvmsResult) -> dict[str, Any]:
+def tvms_summary(r: TvmsResult) -> dict[str, Any]:
+    """The report fields of one TVMS result.
+
+    Parameters
+    ----------
+    r : TvmsResult
+        A result of ``tvms`` (or of a baseline).
+
+    Returns
+    -------
+    dict of str to Any
+        ``status``, ``dimension``, ``vertices`` (their count), ``volume``, ``affine_volume``,
+        ``num_lps`` and ``lifted_vertices``.
+    """
     return {
         "status": r.status,
         "dimension": r.dimension,
@@ -124,14 +151,14 @@ def bench_tvms_state(
             "min_s": min(totals),
             "highs_run_s": statistics.median(runs),
             "repeats": len(totals),
-            **_summary(result),
+            **tvms_summary(result),
         },
         "cdd": {
             "finished": cdd.status != "timeout",
             "wall_s": cdd_s,
             "time_limit_s": time_limit,
-            "hausdorff_vs_lp": _hausdorff(result, cdd) if cdd.status == "bounded" else None,
-            **_summary(cdd),
+            "hausdorff_vs_lp": tvms_hausdorff(result, cdd) if cdd.status == "bounded" else None,
+            **tvms_summary(cdd),
         },
         "memory_mib": {
             "peak_rss_before": rss_before,

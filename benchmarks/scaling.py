@@ -88,9 +88,9 @@ def _scale_one(fingers: int, repeats: int, p1_repeats: int) -> dict[str, Any]:
         warmup=0 if big else 1,
     )
     p2_res = tvmmp(state, witnesses=False)
-    from benchmarks.timing import _split
+    from benchmarks.timing import highs_split
 
-    split = _split(state, max(1, min(repeats, 50)), 1)
+    split = highs_split(state, max(1, min(repeats, 50)), 1)
     return {
         "joints": state.num_joints,
         "contacts": len(state.contacts),

@@ -42,6 +42,7 @@ __all__ = [
     "TARGET_S",
     "case2_state",
     "format_table",
+    "highs_split",
     "machine_info",
     "run_benchmark",
     "timed_calls",
@@ -121,8 +122,22 @@ def timed_calls(state: GraspState, repeats: int, warmup: int) -> tuple[list[floa
     return totals, runs, len(spent)
 
 
-def _split(state: GraspState, repeats: int, warmup: int) -> dict[str, float]:
-    """Medians of one call's total, its HiGHS ``run()`` time and the rest (instrumented calls)."""
+def highs_split(state: GraspState, repeats: int, warmup: int) -> dict[str, float]:
+    """Medians of one Problem 2 call's total, its HiGHS ``run()`` time and the rest.
+
+    Parameters
+    ----------
+    state : GraspState
+        The state solved by ``tvmmp(state, witnesses=False)``.
+    repeats, warmup : int
+        Timed and untimed (first) instrumented calls.
+
+    Returns
+    -------
+    dict of str to float
+        ``total_s``, ``highs_run_s``, ``python_overhead_s`` (medians, s) and
+        ``highs_run_calls`` (HiGHS ``run()`` calls per Problem 2 call).
+    """
     totals, runs, calls = timed_calls(state, repeats, warmup)
     other = [t - r for t, r in zip(totals, runs)]
     return {
@@ -156,7 +171,7 @@ def bench_state(
     ours = _summary(_timed(lambda: tvmmp(state, witnesses=False), repeats, warmup))
     literal = _summary(_timed(lambda: tvmmp(state, witnesses=False, box="literal"), repeats, warmup))
     asm = _summary(_timed(lambda: assemble(state, copies=1, box="eliminated"), repeats, warmup))
-    split = _split(state, repeats, warmup)
+    split = highs_split(state, repeats, warmup)
     split["assemble_s"] = asm["median_s"]
     result = tvmmp(state, witnesses=False)
     ref_alpha: list[Any] = []

@@ -6,7 +6,7 @@ the sphere, ``p_s = c + R (p - c) / |p - c|``, and the geom is placed by
 point ``along`` its axis at ``p_s - offset n``, axis tangent). The solution is accepted only
 if the contacts MuJoCo then detects (one per body, ignored geoms aside) are exactly the
 scenario's, each within 3 mm of its ``p_s``, and no link goes below the palm (z < 0).
-`make_documents()` is what ``scripts/make_scenarios.py`` writes; [`posture_grasp()`][mjtvm.paper_hand.placement.posture_grasp] and
+`make_documents()` is what ``tools/make_scenarios.py`` writes; [`posture_grasp()`][mjtvm.paper_hand.placement.posture_grasp] and
 [`finger1_tvmm_curve()`][mjtvm.paper_hand.placement.finger1_tvmm_curve] vary finger 1's posture, which the paper does not print.
 
 World frame, SI units.

@@ -7,7 +7,7 @@ geom reaches it, contact types by geom name, slide directions of S-points, REFS,
 geoms whose contacts are modelling artefacts (``ignored_geoms``), and per model variant
 (``default``: [yaw, pitch] + [pitch, yaw] fingers; ``humanlike``: yaw + three pitches) the
 finger joints, the IK start and bounds, and the ``solution`` written by
-``scripts/make_scenarios.py`` (`make_documents()`): joint angles, IK residuals and the
+``tools/make_scenarios.py`` (`make_documents()`): joint angles, IK residuals and the
 achieved contacts. From each variant's solution [`grasp_document()`][mjtvm.paper_hand.scenario.grasp_document] writes the grasp
 file ``models/paper_hand/<name>[-humanlike].toml`` (``mjtvm.grasp/1``): the paper's
 cases are loaded like any grasp ([`load_scenario()`][mjtvm.paper_hand.scenario.load_scenario] is
@@ -207,7 +207,7 @@ def grasp_document(doc: Mapping[str, Any], variant: str) -> dict[str, Any]:
         "source": doc.get("source", ""),
         "notes": [
             *doc.get("notes", []),
-            "Written by scripts/make_scenarios.py from mjtvm/data/scenarios/"
+            "Written by tools/make_scenarios.py from mjtvm/data/scenarios/"
             f"{doc['name']}.json (its IK solution); do not edit by hand.",
         ],
         "model": str(v["model"]),

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from benchmarks import peers
-from benchmarks.report import _peer_notes, _peer_rows
+from benchmarks.notes import peer_notes
+from benchmarks.report import peer_rows
 
 
 def test_fingertip_jacobian_is_the_chain_geometry() -> None:
@@ -29,7 +30,7 @@ def test_report_rows_with_and_without_pycapacity(monkeypatch: pytest.MonkeyPatch
     assert row["method"] == "zonotope" and row["vertices"] == 8 and row["lp"]["num_lps"] > 0
     assert row["vs_lp"]["vertices"] == row["vs_lp"]["peer_vertices"] == 8
     assert row["vs_lp"]["hausdorff_rel"] < 1e-9
-    assert len(_peer_rows({"peers": report})) == 2 * 3 + 2 + 1
+    assert len(peer_rows({"peers": report})) == 2 * 3 + 2 + 1
     if report["peer_version"] is not None:
         assert row["vs_peer"]["hausdorff_rel"] < 1e-9 and row["vs_peer"]["peer_vertices"] == 8
         assert row["force_vs_peer"]["hausdorff_rel"] < 1e-6
@@ -38,9 +39,9 @@ def test_report_rows_with_and_without_pycapacity(monkeypatch: pytest.MonkeyPatch
     alone = peers.bench_peers((3,), repeats=1, lp_repeats=1)
     assert alone["met"] is None and alone["fingers"]["3"]["tvms"]["peer_s"] is None
     assert alone["fingers"]["3"]["vs_peer"] is None
-    assert "pycapacity -" in _peer_rows({"peers": alone})[0]
-    assert _peer_notes({"peers": alone}) == []
+    assert "pycapacity -" in peer_rows({"peers": alone})[0]
+    assert peer_notes({"peers": alone}) == []
     slow = json.loads(json.dumps(report))
     slow["met"] = False
     slow["fingers"]["3"]["tvms"]["ratio"] = 0.5
-    assert "3 joints tvms x0.50" in _peer_notes({"peers": slow})[0]
+    assert "3 joints tvms x0.50" in peer_notes({"peers": slow})[0]

@@ -188,7 +188,7 @@ def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(
-        "make_rank_dataset", ROOT / "scripts" / "make_rank_dataset.py"
+        "make_rank_dataset", ROOT / "tools" / "make_rank_dataset.py"
     )
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)

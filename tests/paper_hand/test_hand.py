@@ -119,12 +119,12 @@ def test_case1_finger3_configuration_is_reachable(hand: mujoco.MjModel) -> None:
 def test_committed_models_equal_generator_output() -> None:
     for name, text in model_files().items():
         path = ROOT / "models" / "paper_hand" / name
-        assert path.read_text(encoding="utf-8") == text, f"{path} is stale: run scripts/make_models.py"
+        assert path.read_text(encoding="utf-8") == text, f"{path} is stale: run tools/make_models.py"
         mujoco.MjModel.from_xml_path(str(path))
 
 
 def test_make_models_script_writes_the_files(tmp_path: Path) -> None:
-    spec = importlib.util.spec_from_file_location("make_models", ROOT / "scripts" / "make_models.py")
+    spec = importlib.util.spec_from_file_location("make_models", ROOT / "tools" / "make_models.py")
     module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(module)  # type: ignore[union-attr]
     assert module.main([str(tmp_path)]) == 0

@@ -134,7 +134,7 @@ def test_files_equal_generator_output(generated: dict, name: str) -> None:
 
 
 def test_make_scenarios_script(tmp_path: Path, generated: dict) -> None:
-    spec = importlib.util.spec_from_file_location("make_scenarios", ROOT / "scripts" / "make_scenarios.py")
+    spec = importlib.util.spec_from_file_location("make_scenarios", ROOT / "tools" / "make_scenarios.py")
     module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(module)  # type: ignore[union-attr]
     assert module.main([str(tmp_path)]) == 0

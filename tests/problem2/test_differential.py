@@ -30,7 +30,7 @@ Families (all seeds fixed; counts of states, reference LPs in brackets):
   compared with the clean state's reference [none].
 
 About 740 reference LPs at ~25 ms and ~270 x 3 ``tvmmp`` calls: 2925 pairs, measured 35 s.
-The full-scale run is ``scripts/differential.py``.
+The full-scale run is ``tools/differential.py``.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Fuzzing the loader: mutated shipped states raise only package errors, and those that
 load are solved with only package errors and JSON-clean output (issue 12, item 3).
 
-``scripts/fuzz_states.py`` runs the same mutations at scale.
+``tools/fuzz_states.py`` runs the same mutations at scale.
 """
 
 from __future__ import annotations

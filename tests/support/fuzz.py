@@ -1,6 +1,6 @@
 r"""Mutations of ``mjtvm.state/1`` documents, for robustness tests of the loader.
 
-Used by ``tests/problem2/test_fuzz.py`` (driven by hypothesis) and ``scripts/fuzz_states.py``
+Used by ``tests/problem2/test_fuzz.py`` (driven by hypothesis) and ``tools/fuzz_states.py``
 (at scale). Every mutation takes a :class:`random.Random`, so one seed replays one
 mutated document exactly. The contract they test: :func:`mjtvm.load_state` raises
 nothing but :class:`~mjtvm.errors.MjtvmError` (a :class:`~mjtvm.errors.StateError`

@@ -4,7 +4,7 @@ Needs a display and a graphics adapter; without a GPU, Debian's ``xvfb`` and Mes
 ``lavapipe`` Vulkan driver (package ``mesa-vulkan-drivers``) do::
 
     mjtvm replay --rrd results/lift.rrd
-    xvfb-run -a -s "-screen 0 1920x1200x24" python scripts/rerun_screenshot.py \
+    xvfb-run -a -s "-screen 0 1920x1200x24" python tools/rerun_screenshot.py \
         results/lift.rrd 25 docs/rerun_viewer.png
 
 The viewer (``rerun.experimental.ViewerClient``, rerun 0.41) opens the file with its

@@ -21,7 +21,7 @@ JSON: ``states``, ``seed``, ``random_states``, ``seconds`` and per family ``pair
 ``max_rel_err``, ``over_1e-6_noted``, ``over_1e-6_without_note`` (the acceptance: 0),
 ``ref_inconclusive``, ``negative_alphas``, ``uncertified``, ``noted``.
 
-Usage: ``python scripts/differential.py --states 200 --seed 0 --out results/differential``
+Usage: ``python tools/differential.py --states 200 --seed 0 --out results/differential``
 """
 
 from __future__ import annotations

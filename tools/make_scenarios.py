@@ -1,6 +1,6 @@
 r"""Rerun the IK of the paper's cases; write their sources and their grasp files.
 
-Usage: ``python scripts/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
+Usage: ``python tools/make_scenarios.py [OUTPUT_DIR]`` (default: the package's
 ``mjtvm/data/scenarios`` for the sources and ``models/paper_hand`` for the grasp files).
 Each source's scenario data (the paper's points, IK start and bounds) is kept; each variant's
 ``solution`` (joint angles, IK residuals, achieved contacts) is recomputed by

@@ -14,8 +14,8 @@ with the timing fields removed (they differ between any two runs).
 
 Usage::
 
-    python scripts/compare_outputs.py record DIR
-    python scripts/compare_outputs.py --compare OLD NEW
+    python tools/compare_outputs.py record DIR
+    python tools/compare_outputs.py --compare OLD NEW
 
 ``--compare`` prints every differing file with a unified diff and exits 1 on any difference,
 0 when the two folders hold the same files with the same contents.

@@ -14,7 +14,7 @@ finger's two dofs. The Shadow hand's grasp is found by the grasp file's own IK.
 
 Usage::
 
-    python scripts/make_coupled_hands.py     # print the joint values and the sphere's centre
+    python tools/make_coupled_hands.py     # print the joint values and the sphere's centre
 """
 
 from __future__ import annotations

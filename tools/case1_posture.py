@@ -1,6 +1,6 @@
 r"""Case 1's TVMM over finger 1's feasible postures, and the factors between ours and the paper's.
 
-Usage: ``python scripts/case1_posture.py [OUT_PNG]`` (default ``docs/case1_tvmm_posture.png``).
+Usage: ``python tools/case1_posture.py [OUT_PNG]`` (default ``docs/case1_tvmm_posture.png``).
 Plots :func:`mjtvm.paper_hand.placement.finger1_tvmm_curve` (TVMM = the scaled 4-D affine volume of
 Problem 1, 1/s^4, against the elbow angle psi for fingertip contacts and against the contact's
 distance from link 2's joint for contacts on link 2) with the rule's posture, the posture IK from

@@ -21,8 +21,8 @@ points on the surface: MuJoCo collides the convex hull), each grasp on one of th
 
 Usage::
 
-    python scripts/make_rank_dataset.py                      # 36 grasps (4 broken)
-    python scripts/make_rank_dataset.py -n 240 --mesh 6 --out /tmp/mesh/big.npz  # mesh objects
+    python tools/make_rank_dataset.py                      # 36 grasps (4 broken)
+    python tools/make_rank_dataset.py -n 240 --mesh 6 --out /tmp/mesh/big.npz  # mesh objects
 """
 
 from __future__ import annotations

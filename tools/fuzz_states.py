@@ -15,7 +15,7 @@ A state that loads is solved with ``mjtvm.tvmmp``. Outcomes are counted:
 
 Usage::
 
-    python scripts/fuzz_states.py --count 10000 --seed 1
+    python tools/fuzz_states.py --count 10000 --seed 1
 
 Exit status 0 when there is no failure, 1 otherwise.
 """

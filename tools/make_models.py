@@ -1,6 +1,6 @@
 r"""Write the committed MJCF models (``models/paper_hand/*.xml``) from :func:`mjtvm.paper_hand.hand.model_files`.
 
-Usage: ``python scripts/make_models.py [OUTPUT_DIR]`` (default: the repository's
+Usage: ``python tools/make_models.py [OUTPUT_DIR]`` (default: the repository's
 ``models/paper_hand/``). ``tests/paper_hand/test_hand.py`` checks that the committed files equal this output.
 """
 

@@ -9,8 +9,8 @@ smallest change of the joints, so that the soft terms cannot leave a residual ga
 
 Usage::
 
-    python scripts/make_test_hands.py            # print each keyframe and its distances
-    python scripts/make_test_hands.py --write    # also rewrite <key name="grasp"> in the XML
+    python tools/make_test_hands.py            # print each keyframe and its distances
+    python tools/make_test_hands.py --write    # also rewrite <key name="grasp"> in the XML
 
 The committed XML files hold the printed values; ``tests/grasp/resolve/test_hands.py`` checks them.
 """

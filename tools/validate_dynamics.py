@@ -8,7 +8,7 @@ of alpha_sim / alpha_dyn, the pairs failing at 0.9 alpha_dyn with their causes (
 first violation, grouped), and whether the targets hold: median in [0.9, 1.1], at most 10 %
 failing. Nothing is tuned here: the settings are the rollout's defaults (SimSettings).
 
-Usage: ``python scripts/validate_dynamics.py [--states 30] [--stride 1] [--jobs 1]
+Usage: ``python tools/validate_dynamics.py [--states 30] [--stride 1] [--jobs 1]
 [--out results/validate-dynamics] [--hands case2,allegro-ik,robotiq_2f85-sphere]``. Writes
 ``OUT/dyn-<hand>.csv`` (verify's columns, docs/outputs.md) and ``OUT/validate-dynamics.md``.
 """
