@@ -63,7 +63,7 @@ def verify_parser() -> argparse.ArgumentParser:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of ``mjtvm verify`` (also ``scripts/verify.py``); the vocabulary of ``docs/cli.md``."""
+    """Options of ``mjtvm verify``; the vocabulary of ``docs/cli.md``."""
     grasp_option(p, default="case2")
     hand_option(p)
     states_option(p, minimum=1)
