@@ -64,7 +64,7 @@ class StateLPs:
     """
 
     def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
-        self.state, self.solver = state, solver
+        self.state, self.solver, self.box = state, solver, box
         self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
         n = asm.num_variables
         self.alpha_col = n

@@ -15,7 +15,7 @@ reported (the limiting pair, the distribution of Supplement 4, the witnesses).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -114,6 +114,34 @@ def _settle(
         raise SolverError(e.solver, e.status, pair) from e
 
 
+def _unheld_at_rest(problem: StateLPs, w: NDArray[np.float64]) -> Verdict | None:
+    """The certified verdict "infeasible" of ``w``'s hold test at rest when the first LP of
+    its k fails in every backend, else None.
+
+    At ``qd = 0, alpha = 0`` every kinematic, range and joint-limit row holds, the travel
+    horizon's too (they bound joint speeds), so the first LP of a k is feasible exactly when
+    ``w`` is held at rest (`_solve_pairs()`). Without the horizon rows, alpha held at 0, the
+    same test is an LP both backends decide where the full one can leave a nearly balanced
+    ``w`` undecided (HiGHS "Unknown", Clarabel out of iterations)."""
+    state = problem.state
+    if state.joint_limits is None or state.joint_limits.horizon == 0.0:
+        return None
+    rest = StateLPs(
+        state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0)), problem.box, problem.solver
+    )
+    zero = np.zeros(state.twist_dim)
+    try:
+        settled = rest.solve(w, zero, alpha_max=0.0)
+    except SolverError:
+        return None
+    if settled.solution.status != "infeasible":
+        return None
+    verdict = rest.conclude(w, zero, 0.0, settled, rest.check(w, zero, 0.0, settled.solution))
+    if verdict.settled.solution.status != "infeasible" or not verdict.certified:
+        return None
+    return verdict
+
+
 def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pairs:
     """Every (k, l) pair's LP, the origin of the RVDS skipped (Supplement 3).
 
@@ -153,7 +181,20 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
                 continue
             pair = (k, -1 if l is None else l)
             alpha_max = np.inf if l is not None else 0.0
-            settled = _settle(problem, refs[k], r, alpha_max, pair)
+            try:
+                settled = _settle(problem, refs[k], r, alpha_max, pair)
+            except SolverError as e:
+                if any(p[0] == k for p, *_ in solved):  # w_k is held: this pair's failure stands
+                    raise
+                rest = _unheld_at_rest(problem, refs[k])
+                if rest is None:
+                    raise
+                note = f"{e.solver}: {e.status}; decided by the hold test at rest without the travel horizon"
+                rest = replace(rest, settled=replace(rest.settled, note=note))
+                out.num_lps += 2
+                solved.append((pair, r, alpha_max, rest.settled, rest))
+                unbalanced.add(k)
+                continue
             out.num_lps += 1
             sol = settled.solution
             verdict = None

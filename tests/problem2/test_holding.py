@@ -129,3 +129,24 @@ def test_the_coupled_shadow_model_holds_the_same_grasp() -> None:
 def test_hands_that_hold_report_it(grasp: str) -> None:
     result = tvmmp(load_grasp(MODELS / grasp).state())
     assert result.held == (True,) and result.feasible
+
+
+def test_a_nearly_balanced_refs_vertex_is_decided_by_the_hold_test_at_rest() -> None:
+    """Case 2, state 25 of the lift, gear 25:1, with an inertial torque offset of the dynamic
+    alpha (``mjtvm verify --gears``): the first LP, travel-horizon rows included, leaves both
+    backends undecided (HiGHS "Unknown", Clarabel out of iterations). The same hold test at
+    rest without the horizon (equivalent at qd = 0) is infeasible and certified, as the cvxpy
+    reference finds on the original state."""
+    from mjtvm import load_state
+    from mjtvm.model.limits import with_limit_horizon
+    from oracles.reference import reference_tvmmp
+
+    state = load_state(Path(__file__).parent / "data" / "undecided-hold.json")
+    assert state.joint_limits is not None and state.joint_limits.horizon == pytest.approx(1e-3)
+    res = tvmmp(state, diagnose=False)
+    assert res.feasible is False and res.held == (False,)
+    assert res.status == (("infeasible",),) and res.certified == ((True,),)
+    assert "hold test at rest without the travel horizon" in res.notes[0][1]
+    assert tvmmp(with_limit_horizon(state, 0.0), diagnose=False).status == (("infeasible",),)
+    _, status = reference_tvmmp(state, solver="CLARABEL")
+    assert status == (("infeasible",),)
