@@ -17,12 +17,14 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mjtvm.grasp.document.document import format_toml
 from mjtvm.grasp.resolve.file import models_root
 from mjtvm.grasp.resolve.variants import grasp_file_name
 from mjtvm.paper_hand.hand import model_files
 from mjtvm.paper_hand.placement import make_documents, variant_model_text
-from mjtvm.paper_hand.scenario import format_document, grasp_document, scenario_path
+from mjtvm.paper_hand.scenario import grasp_document, scenario_path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from tests.support.documents import format_document, format_toml
 
 
 def main(argv: list[str] | None = None) -> int:

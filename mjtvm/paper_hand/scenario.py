@@ -40,7 +40,6 @@ from mjtvm.paper_hand.hand import finger_joint_names
 __all__ = [
     "SCENARIOS",
     "SCHEMA",
-    "format_document",
     "grasp_document",
     "load_scenario",
     "read_scenario",
@@ -122,28 +121,6 @@ def scenario_variant(doc: Mapping[str, Any], variant: str) -> Mapping[str, Any]:
         )
     v: Mapping[str, Any] = doc["variants"][variant]
     return v
-
-
-def format_document(doc: Any, indent: int = 0) -> str:
-    """JSON text; a list or object of scalars and flat lists fitting in 100 columns stays on one line."""
-    text = json.dumps(doc)  # floats as repr: exact round trip
-    if not isinstance(doc, (dict, list)):
-        return text
-    items = list(doc.values()) if isinstance(doc, dict) else doc
-    flat = all(
-        not isinstance(x, dict) and not any(isinstance(y, (dict, list)) for y in x)
-        if isinstance(x, list)
-        else not isinstance(x, dict)
-        for x in items
-    )
-    if len(text) + indent <= 100 and flat:
-        return text
-    pad = " " * (indent + 1)
-    if isinstance(doc, dict):
-        rows = [f"{pad}{json.dumps(k)}: {format_document(v, indent + 1)}" for k, v in doc.items()]
-        return "{\n" + ",\n".join(rows) + "\n" + " " * indent + "}"
-    rows = [f"{pad}{format_document(x, indent + 1)}" for x in doc]
-    return "[\n" + ",\n".join(rows) + "\n" + " " * indent + "]"
 
 
 def load_scenario(

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from mjtvm.cli import main
-from mjtvm.grasp.document.document import format_toml
 from tests.cli.test_cli import _console_script
 from tests.docs.test_outputs_doc import assert_documented
 from tests.grasp.contacts.test_report import _sunk
+from tests.support.documents import format_toml
 
 
 def test_show_allegro_ik_as_a_user_runs_it() -> None:

@@ -247,7 +247,7 @@ def test_dask_gives_the_same_rows() -> None:
 def test_grasp_file_without_rvds_is_refused_up_front(tmp_path: Path) -> None:
     import tomllib
 
-    from mjtvm.grasp.document.document import format_toml
+    from tests.support.documents import format_toml
 
     doc = tomllib.loads(Path(GRASP).read_text())
     del doc["rvds"]
@@ -272,7 +272,7 @@ def test_contact_rules_type_each_grasps_own_contacts(tmp_path: Path) -> None:
     # its first finger opened (a failure with named contacts) is evaluated on the two left.
     import tomllib
 
-    from mjtvm.grasp.document.document import format_toml
+    from tests.support.documents import format_toml
 
     doc = tomllib.loads(Path(GRASP).read_text())
     del doc["contacts"]

@@ -13,7 +13,6 @@ import pytest
 
 from mjtvm.errors import ModelError
 from mjtvm.formats.state_file import load_state
-from mjtvm.grasp.document.document import format_toml
 from mjtvm.grasp.resolve.file import shipped_grasps
 from mjtvm.model.contacts import slide_unit
 from mjtvm.model.state import GraspState
@@ -27,7 +26,6 @@ from mjtvm.paper_hand.placement import (
 )
 from mjtvm.paper_hand.scenario import (
     SCENARIOS,
-    format_document,
     grasp_document,
     grasp_file_name,
     load_scenario,
@@ -37,6 +35,7 @@ from mjtvm.paper_hand.scenario import (
 from mjtvm.paper_hand.scenario import scenario_document as export
 from mjtvm.problem2.assembly import grasp_map_transpose
 from mjtvm.problem2.tvmmp import tvmmp
+from tests.support.documents import format_document, format_toml
 
 ROOT = Path(__file__).resolve().parents[2]
 RANK_TOL = 1e-9  # singular values below this count as zero (the others are > 0.5, the zeros < 1e-14)

@@ -13,7 +13,6 @@ what it refuses is refused, so the two cannot disagree.
 from __future__ import annotations
 
 import json
-import math
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -46,7 +45,7 @@ from mjtvm.grasp.document.sections import (
 from mjtvm.grasp.document.validate import schema_problem
 from mjtvm.model.bounds import MAX_FILE_BYTES, MAX_FRICTION_EDGES, MIN_FRICTION_EDGES
 
-__all__ = ["SCHEMA", "GraspError", "format_toml", "read_grasp_document"]
+__all__ = ["SCHEMA", "GraspError", "read_grasp_document"]
 
 
 def _load(source: str | Path | Mapping[str, Any]) -> tuple[dict[str, Any], Path | None, str]:
@@ -201,50 +200,3 @@ def _normalise(raw: Mapping[str, Any], path: Path | None, c: Checker) -> dict[st
     doc["lift"] = check_lift(c, doc["lift"]) if "lift" in doc else None
     doc["joint_limits"] = check_joint_limits(c, doc.get("joint_limits", {}))
     return doc
-
-
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, float)):
-        text = repr(float(value)) if isinstance(value, float) else str(value)
-        return text if math.isfinite(float(value)) else "nan"  # the reader refuses nan
-    if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)  # a JSON string is a TOML basic string
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    if isinstance(value, Mapping):
-        return "{ " + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) + " }"
-    raise TypeError(f"no TOML form for {type(value).__name__}")
-
-
-def _toml_key(key: str) -> str:
-    return key if key.replace("_", "").replace("-", "").isalnum() and key.isascii() else json.dumps(key)
-
-
-def format_toml(doc: Mapping[str, Any]) -> str:
-    """TOML text of a grasp document: scalars and lists at the top (a list of strings one item
-    per line), then one ``[table]`` per mapping (a mapping of more than three entries inside
-    it as its own ``[table.key]``), then ``[[array]]`` per list of mappings. Floats as
-    ``repr``: ``tomllib`` reads back the same doubles."""
-    head, tables, arrays = [], [], []
-    for key, value in doc.items():
-        k = _toml_key(key)
-        if isinstance(value, Mapping):
-            rows, subs = [], []
-            for a, b in value.items():
-                if isinstance(b, Mapping) and len(b) > 3:
-                    body = "\n".join(f"{_toml_key(x)} = {_toml_value(y)}" for x, y in b.items())
-                    subs.append(f"\n[{k}.{_toml_key(a)}]\n{body}\n")
-                else:
-                    rows.append(f"{_toml_key(a)} = {_toml_value(b)}")
-            tables.append(f"\n[{k}]\n" + "".join(r + "\n" for r in rows) + "".join(subs))
-        elif isinstance(value, list) and value and all(isinstance(v, Mapping) for v in value):
-            for item in value:
-                rows = [f"{_toml_key(a)} = {_toml_value(b)}\n" for a, b in item.items()]
-                arrays.append(f"\n[[{k}]]\n" + "".join(rows))
-        elif isinstance(value, list) and value and all(isinstance(v, (str, list)) for v in value):
-            head.append(f"{k} = [\n" + "".join(f"  {_toml_value(v)},\n" for v in value) + "]")
-        else:
-            head.append(f"{k} = {_toml_value(value)}")
-    return "\n".join(head) + "\n" + "".join(tables) + "".join(arrays)

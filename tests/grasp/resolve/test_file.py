@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 from mjtvm.formats.state_file import state_to_dict
-from mjtvm.grasp.document.document import GraspError, format_toml, read_grasp_document
+from mjtvm.grasp.document.document import GraspError, read_grasp_document
 from mjtvm.grasp.resolve.file import load_grasp, shipped_grasps
 from mjtvm.model.operation_range import default_operation_range
+from tests.support.documents import format_toml
 
 CASE2 = shipped_grasps()["case2"]
 MODEL = str(CASE2.parent / "four_finger_hand.xml")

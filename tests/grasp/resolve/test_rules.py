@@ -13,9 +13,10 @@ import pytest
 
 from mjtvm.cli import main
 from mjtvm.formats.state_file import state_to_dict
-from mjtvm.grasp.document.document import GraspError, format_toml, read_grasp_document
+from mjtvm.grasp.document.document import GraspError, read_grasp_document
 from mjtvm.grasp.document.validate import schema_problem
 from mjtvm.grasp.resolve.file import load_grasp, shipped_grasps
+from tests.support.documents import format_toml
 
 CASE2 = shipped_grasps()["case2"]
 TIPS = ("f1_tip", "f2_tip", "f3_tip", "f4_tip")
