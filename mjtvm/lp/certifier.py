@@ -244,7 +244,7 @@ class Certifier:
                 self._nonzero = NonzeroProducts(abs0)
             nz = self._nonzero
 
-            def products(
+            def nz_products(
                 xc: NDArray[np.float64], size: NDArray[np.float64]
             ) -> tuple[NDArray[np.float64], ...]:
                 return (
@@ -252,7 +252,7 @@ class Certifier:
                     nz.right(terms0, size[:, :-1]) + size[:, -1:] * abs_last,
                 )
 
-            def transposed(
+            def nz_transposed(
                 yy: NDArray[np.float64], abs_y: NDArray[np.float64]
             ) -> tuple[NDArray[np.float64], ...]:
                 ya, abs_ya = np.empty((len(yy), n)), np.empty((len(yy), n))
@@ -260,7 +260,7 @@ class Certifier:
                 abs_ya[:, :-1], abs_ya[:, -1] = nz.left(abs0, abs_y), np.sum(abs_y * abs_last, axis=1)
                 return ya, abs_ya
 
-            return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, products, transposed)
+            return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, nz_products, nz_transposed)
 
         def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
             # The shared columns, then each LP's last one.
