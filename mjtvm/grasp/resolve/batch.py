@@ -157,6 +157,7 @@ class BatchModels:
         self.file = str(path) if path is not None else "grasp"
         self.model_path = model_path_of(doc, path, self.file)
         self.cache_size = max(1, int(cache_size))
+        self._spec: mujoco.MjSpec | None = None  # the grasp file's model, as parsed
         # key -> (compiled model, its posable root body's name or None), oldest first
         self._models: OrderedDict[tuple[str | None, float, bool], tuple[mujoco.MjModel, str | None]] = (
             OrderedDict()
@@ -190,7 +191,9 @@ class BatchModels:
         if key in self._models:
             self._models.move_to_end(key)
         else:
-            spec = build_spec(self.doc, self.model_path, self.file)
+            if self._spec is None:  # parsed once: every compile edits its own copy
+                self._spec = build_spec(self.doc, self.model_path, self.file)
+            spec = self._spec.copy()
             name = self.doc["object"]["body"]
             if obj_path is not None:
                 _replace_object(spec, name, obj_path, self.file)
