@@ -77,7 +77,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _steps(quick: bool) -> int:
     """How many ``say`` steps [`run_suite()`][benchmarks.suite.run_suite] announces (the progress bar's total)."""
     cases = 3 if quick else 4
-    return cases + 5  # the lift, the sweeps, the scaling, the peers, the dataset scale
+    rank = 4 + (2 if quick else 3)  # throughput, P2 floor, fingers, jobs, one per memory size
+    return cases + 5 + rank  # the lift, the sweeps, the scaling, the peers, the dataset scale
 
 
 def _read_notes(path: Path | None) -> list[str]:

@@ -11,7 +11,7 @@ from typing import Any
 from benchmarks.notes import auto_notes
 from benchmarks.suite import P2_TARGET_KEYS, TARGET_SWEEP_SPEEDUP, TARGETS_S
 
-__all__ = ["auto_notes", "format_suite_table", "peer_rows"]
+__all__ = ["auto_notes", "format_suite_table", "peer_rows", "rank_rows"]
 
 
 # ------------------------------------------------------------------ the table
@@ -229,6 +229,82 @@ def _dataset_rows(report: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _verdict(r: dict[str, Any]) -> str:
+    """ "met", "NOT met", or "loaded" for a row whose core share is below the minimum."""
+    return "loaded" if r.get("loaded") else _met(r.get("met"))
+
+
+def rank_rows(report: dict[str, Any]) -> list[str]:
+    """``mjtvm rank`` ([`benchmarks.rank`][benchmarks.rank]): CPU time per grasp, Problem 2 over HiGHS on
+    the batch, 16 against 32 fingers, 2 processes, peak memory; each with its core share."""
+    rk = report.get("rank")
+    if not rk:
+        return []
+    lines, th = [], rk["throughput"]
+    for key, label in (("classic", "classic measures"), ("none", "TVMMP alone")):
+        r = th[key]
+        lines.append(
+            _row(
+                f"rank, {label}: {r['grasps_per_cpu_s']:.1f} grasps/CPU-s",
+                r["cpu_s"] / th["grasps"],
+                f"wall {_ms(r['wall_s'] / th['grasps'])}",
+                f"{r['core_share']:.2f}",
+                None,
+                f">= {r['target']:.0f}/s",
+                _verdict(r),
+            )
+        )
+    f = rk["p2_floor"]
+    lines.append(
+        _row(
+            f"rank batch P2 / HiGHS run ({f['states']} states, {f['lps']} LPs)",
+            f["wall_s"],
+            f"HiGHS run {_ms(f['highs_run_s'])}",
+            f"{f['ratio']:.2f}",
+            None,
+            f"<= x{f['target']}",
+            _verdict(f),
+        )
+    )
+    g = rk["fingers"]
+    per = g["per_fingers"]
+    lines.append(
+        _row(
+            "P2 per LP, 32 fingers / 16 (CPU)",
+            per["32"]["cpu_s_per_lp"],
+            f"16: {_ms(per['16']['cpu_s_per_lp'])}",
+            f"{g['ratio']:.2f}",
+            None,
+            f"<= x{g['target']}",
+            _verdict(g),
+        )
+    )
+    j = rk["jobs"]
+    lines.append(
+        _row(
+            f"rank on {j['jobs']} proc, {j['grasps']} grasps (wall)",
+            j[str(j["jobs"])]["wall_s"] / j["grasps"],
+            f"1 proc {_ms(j['1']['wall_s'] / j['grasps'])}",
+            f"x{j['speedup']:.2f}",
+            None,
+            f">= x{j['target']}",
+            _verdict(j),
+        )
+    )
+    mem = rk["memory"]
+    for n, r in mem["sizes"].items():
+        text = "error: " + r["error"] if "error" in r else f"peak RSS {r['peak_rss_mib']:.0f} MiB"
+        cpu = f"cpu {r['cpu_s']:.0f} s, share {r['core_share']:.2f}" if "cpu_s" in r else "-"
+        lines.append(f"{'rank memory, ' + n + ' grasps':<44} {text:>24} {cpu:>34}")
+    if "mib_per_1000_grasps" in mem:
+        lines.append(f"rank memory: {mem['mib_per_1000_grasps']:.2f} MiB more per 1,000 grasps")
+    lines.append(
+        f"rank: {rk['grasp']} on {rk['dataset']} ({th['grasps']} grasps) in this process; CPU time per grasp, "
+        "ratio column = core share (CPU over wall); a row below a core share of 0.8 is 'loaded', never met"
+    )
+    return lines
+
+
 def peer_rows(report: dict[str, Any]) -> list[str]:
     """The table's rows of the velocity and force polytopes against pycapacity (benchmarks.peers).
 
@@ -322,7 +398,8 @@ def format_suite_table(report: dict[str, Any], notes: Sequence[str] = ()) -> str
     notes and the machine."""
     lines = [_HEAD, "-" * len(_HEAD)]
     lines += _case_rows(report) + _lift_rows(report) + _sweep_rows(report) + _scaling_rows(report)
-    lines += _hand_rows(report) + _dataset_rows(report) + _floor_rows(report) + peer_rows(report)
+    lines += _hand_rows(report) + _dataset_rows(report) + _floor_rows(report) + rank_rows(report)
+    lines += peer_rows(report)
     if "problem1_scale" in report:
         from benchmarks.problem1 import format_scale_table
 

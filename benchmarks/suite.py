@@ -35,6 +35,10 @@ medians over repeats and [`time.perf_counter()`][time.perf_counter], the garbage
 * **Problem 2 against its solver's floor** ([`benchmarks.floor`][benchmarks.floor]): per state, the wall
   time of Problem 2 over its time inside HiGHS ``run()`` in the same calls, on Case 2, Case 1,
   the ``allegro-ik`` grasp and the 22-joint dataset hand (6 and 36 LPs);
+* **``mjtvm rank``** ([`benchmarks.rank`][benchmarks.rank]): grasps per CPU-second on the Shadow example
+  dataset with and without the classic measures, Problem 2 over HiGHS ``run()`` summed over its
+  batch, 32 against 16 fingers per LP, 2 processes, and peak RSS at 400, 4,000 (``--quick``)
+  and 40,000 generated grasps, each with its core share;
 * **Problem 1 at scale** ([`bench_p1_scale()`][benchmarks.problem1.bench_p1_scale], not with ``--quick``):
   Case 2 exact, the Allegro grasp's TVMS in 3-D to 6-D (exact or a 1 % bracket within 60 s),
   the 16-finger hand, each in a fresh process with its peak resident memory.
@@ -197,6 +201,8 @@ def run_suite(
     dataset: bool = True,
     peers: bool = True,
     floor: bool = True,
+    rank: bool = True,
+    rank_sizes: Sequence[int] | None = None,
     scale: bool = True,
     progress: bool | Callable[[str], None] = True,
 ) -> dict[str, Any]:
@@ -273,6 +279,11 @@ def run_suite(
         from benchmarks.floor import bench_floor
 
         report["floor"] = bench_floor(repeats=max(10, repeats // 2), say=say)
+    if rank:
+        from benchmarks.rank import RSS_GRASPS, bench_rank
+
+        sizes = rank_sizes if rank_sizes is not None else RSS_GRASPS[:2] if quick else RSS_GRASPS
+        report["rank"] = bench_rank(repeats=3, sizes=sizes, say=say)
     report["targets"] = _targets(report)
     report["total_wall_s"] = time.perf_counter() - t_start
     return report
@@ -300,4 +311,9 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
         out["peers_pycapacity"] = report["peers"]["met"]
     if "floor" in report:
         out.update({f"floor_{k}": v["met"] for k, v in report["floor"]["states"].items()})
+    if "rank" in report:  # None where the row was loaded: neither met nor missed
+        rk = report["rank"]
+        out["rank_classic"] = rk["throughput"]["classic"]["met"]
+        out["rank_none"] = rk["throughput"]["none"]["met"]
+        out.update({f"rank_{k}": rk[k]["met"] for k in ("p2_floor", "fingers", "jobs")})
     return out

@@ -248,6 +248,65 @@ def _floor(r: dict[str, Any]) -> list[str]:
     return _table(head, rows)
 
 
+def _verdict(row: dict[str, Any]) -> str:
+    """Met, not met, or "loaded" (a core share below 0.8: never reported as met)."""
+    if row.get("loaded"):
+        return "loaded"
+    return "-" if row.get("met") is None else "met" if row["met"] else "**not met**"
+
+
+def _rank(r: dict[str, Any]) -> list[str]:
+    rk = r["rank"]
+    th, f, g, j = rk["throughput"], rk["p2_floor"], rk["fingers"], rk["jobs"]
+    n = th["grasps"]
+    rows = [
+        [
+            f"`mjtvm rank`, {label} ({n} grasps)",
+            f"{th[key]['grasps_per_cpu_s']:.3g} grasps/CPU-s ({_t(th[key]['cpu_s'] / n)} CPU per grasp)",
+            _t(th[key]["wall_s"] / n),
+            f"{th[key]['core_share']:.2f}",
+            f">= {th[key]['target']:g}",
+            _verdict(th[key]),
+        ]
+        for key, label in (("classic", "classic measures"), ("none", "TVMMP alone"))
+    ]
+    rows.append([
+        f"Problem 2 over HiGHS `run`, summed over the batch ({f['states']} states, {f['lps']} LPs)",
+        f"x{f['ratio']:.3g} ({_t(f['wall_s'])} / {_t(f['highs_run_s'])})",
+        _t(f["wall_s"]), f"{f['core_share']:.2f}", f"<= x{f['target']:g}", _verdict(f),
+    ])  # fmt: skip
+    per = g["per_fingers"]
+    rows.append([
+        "Problem 2 per LP, 32 fingers over 16",
+        f"x{g['ratio']:.3g} ({_t(per['32']['cpu_s_per_lp'])} / {_t(per['16']['cpu_s_per_lp'])} CPU)",
+        f"{_t(per['32']['wall_s'] / per['32']['lps'])} / {_t(per['16']['wall_s'] / per['16']['lps'])}",
+        f"{g['core_share']:.2f}", f"<= x{g['target']:g}", _verdict(g),
+    ])  # fmt: skip
+    k = str(j["jobs"])
+    rows.append([
+        f"`rank_rows` on {k} processes ({j['grasps']} grasps; rows identical: {'yes' if j['rows_identical'] else 'no'})",
+        f"x{j['speedup']:.3g}",
+        f"{_t(j[k]['wall_s'])} ({_t(j['1']['wall_s'])} on 1)",
+        f"{j['core_share']:.2f}", f">= x{j['target']:g}", _verdict(j),
+    ])  # fmt: skip
+    for size, m in rk["memory"]["sizes"].items():
+        if "error" in m:
+            rows.append(
+                [f"peak RSS, {int(size):,} generated grasps", f"failed: {m['error']}", "-", "-", "-", "-"]
+            )
+            continue
+        rows.append([
+            f"peak RSS of `mjtvm rank`, {int(size):,} generated grasps",
+            f"{m['peak_rss_mib']:.0f} MiB ({m['cpu_s']:.3g} s CPU)",
+            _t(m["wall_s"]), f"{m['core_share']:.2f}", "flat", "loaded" if m["loaded"] else "-",
+        ])  # fmt: skip
+    head = ["measurement", "mjtvm", "wall", "core share", "target", ""]
+    out = _table(head, rows)
+    if "mib_per_1000_grasps" in rk["memory"]:
+        out += ["", f"Peak RSS grows by {rk['memory']['mib_per_1000_grasps']:.3g} MiB per 1,000 grasps."]
+    return out
+
+
 def _shares(r: dict[str, Any]) -> list[float]:
     """Every ``core_share`` the report records (CPU time over wall time of a solving process)."""
     out = [s["core_share"] for s in r.get("floor", {}).get("states", {}).values() if "core_share" in s]
@@ -304,6 +363,7 @@ def render(report: dict[str, Any]) -> str:
         ("dataset", "Dataset scale", _dataset),
         ("peers", "Velocity and force polytopes against pycapacity", _peers),
         ("floor", "Problem 2 against its solver's floor", _floor),
+        ("rank", "Ranking a dataset (`mjtvm rank`)", _rank),
     )
     for key, title, fn in sections:
         if report.get(key):

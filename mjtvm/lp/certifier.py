@@ -16,6 +16,7 @@ from typing import Any, TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from mjtvm.lp.nonzero import NonzeroProducts
 from mjtvm.lp.roundoff import drop_cancellation
 from mjtvm.lp.tolerances import DUAL_TOL, GAP_TOL, Certificate, finite_part
 
@@ -80,6 +81,7 @@ class Certifier:
         row_cap: NDArray[np.float64] | None = None,
     ) -> None:
         self.a = a
+        self._nonzero: NonzeroProducts | None = None  # built by the first large check_many
         self.dual_ref = col_ref if dual_ref is None else dual_ref
         self.abs_a = abs(a) if abs_a is None else abs_a
         self.col_lower = np.asarray(col_lower, dtype=float)
@@ -216,8 +218,9 @@ class Certifier:
             ``(P,)`` each answer's ``floor`` ([`certify()`][mjtvm.lp.certificate.certify]).
         """
         m, n = self.a.shape
+        sparse = m * n > BATCH_ENTRIES and isinstance(self.a, np.ndarray)
         step = max(1, BATCH_ENTRIES // max(m * n, 1))
-        if len(x) > step:  # in products that BLAS runs on one thread (BATCH_ENTRIES)
+        if not sparse and len(x) > step:  # in products that BLAS runs on one thread (BATCH_ENTRIES)
             return [
                 cert
                 for i in range(0, len(x), step)
@@ -234,6 +237,30 @@ class Certifier:
             ]
         a0, abs0, terms0 = self.a[:, :-1], self.abs_a[:, :-1], self.abs_terms[:, :-1]
         abs_last = np.abs(last)
+        if sparse:
+            # Above BATCH_ENTRIES even one answer's product ran on several OpenBLAS threads:
+            # the same sums over the nonzeros only (the shared columns' pattern is fixed).
+            if self._nonzero is None:
+                self._nonzero = NonzeroProducts(abs0)
+            nz = self._nonzero
+
+            def nz_products(
+                xc: NDArray[np.float64], size: NDArray[np.float64]
+            ) -> tuple[NDArray[np.float64], ...]:
+                return (
+                    nz.right(a0, xc[:, :-1]) + xc[:, -1:] * last,
+                    nz.right(terms0, size[:, :-1]) + size[:, -1:] * abs_last,
+                )
+
+            def nz_transposed(
+                yy: NDArray[np.float64], abs_y: NDArray[np.float64]
+            ) -> tuple[NDArray[np.float64], ...]:
+                ya, abs_ya = np.empty((len(yy), n)), np.empty((len(yy), n))
+                ya[:, :-1], ya[:, -1] = nz.left(a0, yy), np.sum(yy * last, axis=1)
+                abs_ya[:, :-1], abs_ya[:, -1] = nz.left(abs0, abs_y), np.sum(abs_y * abs_last, axis=1)
+                return ya, abs_ya
+
+            return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, nz_products, nz_transposed)
 
         def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
             # The shared columns, then each LP's last one.

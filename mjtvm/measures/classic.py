@@ -179,7 +179,7 @@ def classic_measures(
     allw = np.hstack([np.zeros((big_d, 0)), *groups])  # no contact: no wrench
     margin = closure_margin(allw)
     closure = scaled_rank(allw) == big_d and margin > CLOSURE_TOL
-    eps_inf, gap = epsilon_linf(groups) if closure else (0.0, 0.0)
+    eps_inf, gap = epsilon_linf(groups, margin=margin) if closure else (0.0, 0.0)
     g = grasp_matrix(state, rho)
     sv = np.linalg.svd(g, compute_uv=False) if g.size else np.zeros(0)
     sigma_min = float(sv[big_d - 1]) if sv.size >= big_d else 0.0

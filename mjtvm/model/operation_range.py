@@ -11,6 +11,7 @@ operation range (see [`mirrored_halfplanes()`][mjtvm.model.polygon.mirrored_half
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 from dataclasses import dataclass, field
@@ -27,6 +28,27 @@ from mjtvm.model.polygon import halfplanes, mirrored_halfplanes, validated_verti
 __all__ = ["OperationRange", "default_operation_range", "load_motor_data"]
 
 _RPM = 2.0 * np.pi / 60.0  # rad/s per rpm
+
+#: Distinct vertex arrays whose validation `OperationRange` keeps (least recently used out).
+VALIDATED_CACHE_SIZE = 4096
+
+
+def _validate(raw: object) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The checked vertices and the off-axis half-planes, both read only (shared by every
+    range of the same vertices: what is derived from them is cached)."""
+    v, u, scale = validated_vertices(raw)
+    v = v.copy()
+    v.setflags(write=False)
+    hp = halfplanes(u, scale)
+    hp.setflags(write=False)
+    return v, hp
+
+
+@functools.lru_cache(maxsize=VALIDATED_CACHE_SIZE)
+def _validated(data: bytes, shape: tuple[int, ...]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """`_validate()` of the float64 array of these bytes and shape (a failure is not kept:
+    it raises again on every call)."""
+    return _validate(np.frombuffer(data, dtype=np.float64).reshape(shape))
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,11 +73,15 @@ class OperationRange:
     _halfplanes: NDArray[np.float64] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        v, u, scale = validated_vertices(self.vertices)
-        v = v.copy()  # the range's own, read only: what is derived from it is cached
-        v.setflags(write=False)
+        raw = self.vertices
+        if isinstance(raw, np.ndarray) and raw.dtype == np.float64 and raw.ndim == 2:
+            # A batch builds the same few ranges for every grasp and every diagnosis
+            # relaxation: validated once per exact vertex array (its bytes and shape).
+            v, hp = _validated(raw.tobytes(), raw.shape)
+        else:
+            v, hp = _validate(raw)
         object.__setattr__(self, "vertices", v)
-        object.__setattr__(self, "_halfplanes", halfplanes(u, scale))
+        object.__setattr__(self, "_halfplanes", hp)
 
     # ------------------------------------------------------------------ views
     @cached_property

@@ -52,53 +52,13 @@ from mjtvm.problem2.assembly import BoxForm
 from mjtvm.problem2.holding import unheld_motions
 from mjtvm.problem2.kinematic import kinematic_alpha, locking_contacts
 from mjtvm.problem2.lps import StateLPs
+from mjtvm.problem2.relaxed import RELAX, binding_balance, binding_joints, solve_pair, with_relaxed
 from mjtvm.problem2.result import Diagnosis, PairStatus
 
 __all__ = ["RELAX", "diagnose", "escape_direction", "kinematic_alpha", "relieving_contacts"]
 
-RELAX = 100.0  # an enlarged operation range: the range scaled by this in torque and speed
 _MU_STEPS = 12  # bisection steps on log(mu) between a contact's mu and RELAX times it: 0.15 % on tan(60 deg)
 _PURE = 1e-6  # a direction's force (moment x length) part below this fraction of the other is left out
-
-
-# ------------------------------------------------------------------ Problem 2 with ranges changed
-def _solve(
-    state: GraspState, w: NDArray[np.float64], r: NDArray[np.float64], box: BoxForm, solver: str
-) -> tuple[str, float, NDArray[np.float64] | None]:
-    """Status, alpha (0 within the solver's tolerance, as tvmmp reports it) and joint torques
-    of Problem 2's pair (w, r); ``r = 0`` asks only whether ``w`` is balanced (alpha held at 0)."""
-    problem = StateLPs(state, box, solver)
-    zero_twist = not np.any(r)
-    verdict = problem.certified(w, r, alpha_max=0.0 if zero_twist else np.inf)
-    if problem.session is not None:
-        problem.session.release()
-        problem.session = None
-    sol = verdict.settled.solution
-    if sol.status != "optimal" or sol.x is None:
-        return sol.status, float("nan"), None
-    alpha = float(sol.x[problem.alpha_col])
-    alpha = 0.0 if zero_twist or alpha <= problem.zero_alpha(r) else alpha
-    return "optimal", alpha, np.array(sol.x[problem.asm.blocks["tau[0]"]])
-
-
-def _with_relaxed(state: GraspState, relaxed: set[int]) -> GraspState:
-    ranges = tuple(
-        op.scaled(torque=RELAX, speed=RELAX) if j in relaxed else op
-        for j, op in enumerate(state.operation_ranges)
-    )
-    return state.with_(operation_ranges=ranges)
-
-
-def _binding_joints(state: GraspState, works: Callable[[GraspState], bool]) -> list[int] | None:
-    """A minimal set of joints whose enlarged ranges make ``works(state)`` true (deletion
-    filter), or ``None`` when enlarging every range does not."""
-    relaxed = set(range(len(state.operation_ranges)))  # the joints, or a transmission's actuators
-    if not works(_with_relaxed(state, relaxed)):
-        return None
-    for j in range(len(state.operation_ranges)):
-        if works(_with_relaxed(state, relaxed - {j})):
-            relaxed.discard(j)
-    return sorted(relaxed)
 
 
 # ------------------------------------------------------------------ which way, and what relieves it
@@ -165,7 +125,7 @@ def escape_direction(
 
 
 def _feasible(state: GraspState, w: NDArray[np.float64], box: BoxForm, solver: str) -> bool:
-    return _solve(state, w, np.zeros(state.twist_dim), box, solver)[0] == "optimal"
+    return solve_pair(state, w, np.zeros(state.twist_dim), box, solver)[0] == "optimal"
 
 
 def relieving_contacts(
@@ -318,8 +278,8 @@ def _zero_alpha(
             f"(J qd = G^T rdot, eq. 11-13) admit no joint speed for it{_lock_hint(locks[l])}",
         )
     lim = state.joint_limits
-    if lim is not None and _solve(state.with_(joint_limits=None), w, r, box, solver)[1] > 0.0:
-        held = _binding_limits(state, lambda s: _solve(s, w, r, box, solver)[1] > 0.0)
+    if lim is not None and solve_pair(state.with_(joint_limits=None), w, r, box, solver)[1] > 0.0:
+        held = _binding_limits(state, lambda s: solve_pair(s, w, r, box, solver)[1] > 0.0)
         names = tuple(state.joint_names[j] for j in held)
         return Diagnosis(
             (k, l),
@@ -330,7 +290,7 @@ def _zero_alpha(
             f"on a limit, or reaching it within {lim.horizon:g} m of object travel along RVDS vertex {l} "
             "(docs/joint-limits.md)",
         )
-    joints = _binding_joints(state, lambda s: _solve(s, w, r, box, solver)[1] > 0.0)
+    joints = binding_joints(state, lambda s: solve_pair(s, w, r, box, solver)[1] > 0.0)
     if not joints:
         why = (
             "an alpha at the solver's tolerance"
@@ -359,9 +319,9 @@ def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnos
         moved = tuple(dict.fromkeys(j for group in unheld.joints for j in group))
         return Diagnosis((k, -1), "unheld", (), moved, unheld.describe(state.joint_names))
     w, r = state.refs[k], np.zeros(state.twist_dim)
-    joints = _binding_joints(state, lambda s: _solve(s, w, r, box, solver)[0] == "optimal")
+    joints = binding_balance(state, w, box, solver)
     if joints is None:
-        relaxed = _with_relaxed(state, set(range(len(state.operation_ranges))))
+        relaxed = with_relaxed(state, set(range(len(state.operation_ranges))))
         t = escape_direction(relaxed, w, box=box, solver=solver)
         relief = relieving_contacts(relaxed, w, box=box, solver=solver)
         which = "" if t is None else f": {_direction_words(state, w, t)}"
@@ -375,7 +335,7 @@ def _infeasible(state: GraspState, k: int, box: BoxForm, solver: str) -> Diagnos
             () if t is None else tuple(float(x) for x in t),
             relief,
         )
-    _, _, tau = _solve(_with_relaxed(state, set(joints)), w, r, box, solver)
+    _, _, tau = solve_pair(with_relaxed(state, set(joints)), w, r, box, solver)
     unit = "N m" if state.transmission is None else "N or N m"  # a tendon's force is in N
     needs = ", ".join(
         f"{state.actuator_names[j]!r} (needs {abs(tau[j]):.4g} {unit}, has {state.operation_ranges[j].max_torque:.4g})"

@@ -51,6 +51,7 @@ def report() -> dict[str, Any]:
         scaling_fingers=(2, 4),
         hands=("gripper3-box",),
         dataset=False,
+        rank=False,
         progress=False,
     )
     doc["dataset"] = bench_dataset.bench_dataset(num_states=4, repeats=1, cli_repeats=1)

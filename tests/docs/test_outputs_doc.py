@@ -118,6 +118,7 @@ def test_every_table_is_parsed() -> None:
         "bench.json:peers.agreement",
         "bench.json:floor",
         "bench.json:floor.state",
+        "bench.json:rank",
         "show",  # tested in tests/cli/test_show.py
         "show-contacts",
     }
@@ -320,7 +321,7 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
 
     real_floor = floor.bench_floor
     monkeypatch.setattr(floor, "bench_floor", lambda **_: real_floor(repeats=1, warmup=0))
-    report = suite.run_suite(scale=False, progress=False)
+    report = suite.run_suite(scale=False, progress=False, rank_sizes=(8,))
     report["notes"] = []  # added by the command (benchmarks.__main__) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
     assert_documented("bench.json", report)
@@ -348,6 +349,7 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     ):
         assert_documented("bench.json:peers.pair", pair)
     assert_documented("bench.json:peers.agreement", finger["vs_lp"])
+    assert_documented("bench.json:rank", report["rank"])
     assert_documented("bench.json:floor", report["floor"])
     for entry in report["floor"]["states"].values():
         assert_documented("bench.json:floor.state", entry)

@@ -10,7 +10,6 @@ deepest). World frame, SI units.
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -19,10 +18,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from mjtvm.grasp.contacts.memo import contacts_once
 from mjtvm.grasp.contacts.pairs import near_pairs
 from mjtvm.grasp.contacts.touch import (
     DetectedContact,
-    detected_contacts,
     geom_id,
     geom_label,
     precise_collision,
@@ -167,9 +166,9 @@ class ContactRow:
 
 def kept_contacts(grasp: LoadedGrasp) -> list[DetectedContact]:
     """The contacts the grasp state is built from (before the ignored are dropped)."""
-    return detected_contacts(
+    return contacts_once(
         grasp.model,
-        copy.copy(grasp.data),
+        grasp.data,
         object_body=grasp.object_body,
         one_per_body=True,
         tolerance=grasp.contact_tolerance,

@@ -1,6 +1,7 @@
 r"""The grasps of a dataset on one grasp file (``mjtvm rank``; ``docs/datasets.md``).
 
-[`BatchModels`][mjtvm.grasp.resolve.batch.BatchModels] compiles the grasp file's model once per (object file, scale) and
+[`BatchModels`][mjtvm.grasp.resolve.batch.BatchModels] compiles the grasp file's model per (object file, scale), keeps the
+`MODEL_CACHE_SIZE` most recently used, and
 [`BatchModels.grasp()`][mjtvm.grasp.resolve.batch.BatchModels.grasp] builds one [`Grasp`][mjtvm.grasp.resolve.loaded.Grasp] per
 [`DatasetGrasp`][mjtvm.grasp.document.dataset.DatasetGrasp] by
 [`grasp_from_model()`][mjtvm.grasp.resolve.file.grasp_from_model]: the file's document (contacts, rules, ranges,
@@ -22,6 +23,7 @@ World frame, SI units.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -129,23 +131,37 @@ def _replace_object(spec: mujoco.MjSpec, name: str, obj_path: str, file: str) ->
         attached.name = name
 
 
+#: Compiled models a `BatchModels` keeps, least recently used out: a dataset of many object
+#: files or scales (a scale per grasp is common) recompiles instead of growing without
+#: bound (about 0.3 MiB per Shadow-hand model), and a dataset grouped by object reuses each.
+MODEL_CACHE_SIZE = 16
+
+
 class BatchModels:
-    """The grasp file's model, compiled once per (object file, scale, posed root), and the
-    grasps of the dataset built on it.
+    """The grasp file's model, compiled per (object file, scale, posed root) and kept for the
+    `MODEL_CACHE_SIZE` most recently used of them, and the grasps of the dataset built on it.
 
     Parameters
     ----------
     doc, path
         The normalised grasp document and its file
         (`read_grasp_document()`).
+    cache_size
+        Compiled models kept (>= 1).
     """
 
-    def __init__(self, doc: Mapping[str, Any], path: Path | None) -> None:
+    def __init__(
+        self, doc: Mapping[str, Any], path: Path | None, *, cache_size: int = MODEL_CACHE_SIZE
+    ) -> None:
         self.doc, self.path = doc, path
         self.file = str(path) if path is not None else "grasp"
         self.model_path = model_path_of(doc, path, self.file)
-        self._models: dict[tuple[str | None, float, bool], mujoco.MjModel] = {}
-        self._roots: dict[tuple[str | None, float, bool], str | None] = {}
+        self.cache_size = max(1, int(cache_size))
+        self._spec: mujoco.MjSpec | None = None  # the grasp file's model, as parsed
+        # key -> (compiled model, its posable root body's name or None), oldest first
+        self._models: OrderedDict[tuple[str | None, float, bool], tuple[mujoco.MjModel, str | None]] = (
+            OrderedDict()
+        )
 
     @classmethod
     def from_file(cls, source: str | Path) -> BatchModels:
@@ -167,9 +183,17 @@ class BatchModels:
         GraspError
             The model, the object file or the root body.
         """
+        return self._compiled(obj_path, scale, root)[0]
+
+    def _compiled(self, obj_path: str | None, scale: float, root: bool) -> tuple[mujoco.MjModel, str | None]:
+        """The cache's entry of a key (compiled on a miss; the oldest entry dropped when full)."""
         key = (obj_path, float(scale), root)
-        if key not in self._models:
-            spec = build_spec(self.doc, self.model_path, self.file)
+        if key in self._models:
+            self._models.move_to_end(key)
+        else:
+            if self._spec is None:  # parsed once: every compile edits its own copy
+                self._spec = build_spec(self.doc, self.model_path, self.file)
+            spec = self._spec.copy()
             name = self.doc["object"]["body"]
             if obj_path is not None:
                 _replace_object(spec, name, obj_path, self.file)
@@ -188,12 +212,14 @@ class BatchModels:
                 ):
                     found.mocap = True
             try:
-                self._models[key] = spec.compile()
+                compiled = spec.compile()
             except ValueError as e:
                 raise GraspError(
                     self.file, "model", f"MuJoCo cannot compile: {' '.join(str(e).split())}"
                 ) from e
-            self._roots[key] = body
+            self._models[key] = (compiled, body)
+            while len(self._models) > self.cache_size:
+                self._models.popitem(last=False)
         return self._models[key]
 
     def grasp(self, entry: DatasetGrasp) -> Grasp:
@@ -205,9 +231,7 @@ class BatchModels:
             As [`grasp_from_model()`][mjtvm.grasp.resolve.file.grasp_from_model], or a ``qpos`` whose joints
             cannot be named (an unnamed or ball joint).
         """
-        root = entry.root is not None
-        key = (entry.obj_path, float(entry.obj_scale), root)
-        model = self.model(entry.obj_path, entry.obj_scale, root=root)
+        model, root_body = self._compiled(entry.obj_path, entry.obj_scale, entry.root is not None)
         obj = dict(self.doc["object"])
         config: dict[str, Any]
         if entry.qpos is not None:
@@ -224,7 +248,7 @@ class BatchModels:
             config = {
                 "qpos": {n: float(v) for n, v in zip(names, entry.joints, strict=True)},
                 "base": {
-                    "body": self._roots[key],
+                    "body": root_body,
                     "position": [float(x) for x in entry.root[:3]],
                     "quaternion": [float(x) for x in entry.root[3:ROOT_SIZE]],
                 },

@@ -28,7 +28,6 @@ Decisions (documented in ``docs/grasp-format.md``):
 
 from __future__ import annotations
 
-import copy
 import fnmatch
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
@@ -37,7 +36,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from mjtvm.grasp.contacts.touch import detected_contacts, geom_label, subtree
+from mjtvm.grasp.contacts.memo import contacts_once
+from mjtvm.grasp.contacts.touch import geom_label, subtree
 from mjtvm.grasp.document.checks import GraspError
 from mjtvm.grasp.document.sections import RULE_TYPES, check_contact_rules
 from mjtvm.grasp.resolve.model import suggest
@@ -104,9 +104,7 @@ def touching_geoms(
 ) -> dict[str, float]:
     """Label -> distance (m) of every geom touching the object within ``tolerance``: the
     deepest contact of each body, as the grasp state sees them (``data`` is not modified)."""
-    found = detected_contacts(
-        model, copy.copy(data), object_body=object_body, one_per_body=True, tolerance=tolerance
-    )
+    found = contacts_once(model, data, object_body=object_body, one_per_body=True, tolerance=tolerance)
     out: dict[str, float] = {}
     for c in found:
         out[c.geom] = min(out.get(c.geom, np.inf), c.distance)

@@ -1,0 +1,307 @@
+r"""Speed and memory of ``mjtvm rank`` (issue 34, points 4 and 5), in CPU time beside wall time.
+
+Measured on the shipped Shadow example ([`RANK_GRASP`][benchmarks.rank.RANK_GRASP] on
+``mjtvm/data/examples/shadow-sphere-dataset.npz``: 36 grasps, 4 of them broken on purpose):
+
+* **throughput** ([`bench_throughput()`][benchmarks.rank.bench_throughput]): ``rank_row`` over every grasp in
+  this process, with the classic measures and without them (TVMMP and its diagnosis alone),
+  in grasps per CPU-second (``time.process_time``) beside the wall time;
+* **Problem 2 over HiGHS** (`bench_p2_floor()`): ``tvmmp(state, witnesses=False)`` over the
+  batch of the dataset's grasp states against the time inside HiGHS ``run()`` in the same
+  calls, both summed over the batch;
+* **16 against 32 fingers** (`bench_fingers()`): Problem 2 per LP on the scaling hands of
+  [`benchmarks.scaling`][benchmarks.scaling] with 16 and 32 fingers;
+* **two processes** (`bench_jobs()`): ``rank_rows`` of the dataset repeated
+  [`JOBS_COPIES`][benchmarks.rank.JOBS_COPIES] times (ids made unique) on 1 and 2 local processes, wall
+  speed-up, the workers' CPU time (``RUSAGE_CHILDREN``) counted in the core share;
+* **peak memory** (`bench_memory()`): ``mjtvm rank`` as a process on generated datasets of
+  [`RSS_GRASPS`][benchmarks.rank.RSS_GRASPS] grasps (the example's grasps repeated, each with its own
+  object scale, the case that compiled one model per grasp), its ``ru_maxrss``.
+
+Every row carries its ``core_share`` (CPU time over wall time, per process used); a row
+below [`CORE_SHARE_MIN`][benchmarks.rank.CORE_SHARE_MIN] is ``loaded``: its ``met`` is ``None``, never ``True``.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "CORE_SHARE_MIN",
+    "JOBS_COPIES",
+    "RANK_GRASP",
+    "RSS_GRASPS",
+    "TARGETS",
+    "bench_rank",
+    "bench_throughput",
+]
+
+RANK_GRASP = "shadow_hand_coupled-sphere"
+"""The shipped grasp file of the example dataset."""
+TARGETS = {
+    "rank_classic": 40.0,
+    "rank_none": 100.0,
+    "p2_over_highs": 1.5,
+    "fingers_32_over_16": 2.5,
+    "rank_speedup_2": 1.8,
+}
+"""Grasps per CPU-second with and without the classic measures (at least), Problem 2 over its
+HiGHS ``run()`` time (at most), the per-LP time of 32 fingers over 16 (at most), the wall
+speed-up of 2 processes (at least)."""
+CORE_SHARE_MIN = 0.8
+"""A row whose processes got less of a core than this is ``loaded`` (never reported as met)."""
+JOBS_COPIES = 4
+"""How many times the 36-grasp dataset is repeated for the 2-process row."""
+RSS_GRASPS = (400, 4000, 40000)
+"""Dataset sizes of the peak-memory rows."""
+
+
+def _dataset() -> Path:
+    import mjtvm
+
+    return Path(mjtvm.__file__).parent / "data" / "examples" / "shadow-sphere-dataset.npz"
+
+
+def _verdict(value: float, target: float, share: float, *, at_least: bool) -> dict[str, Any]:
+    loaded = share < CORE_SHARE_MIN
+    ok = value >= target if at_least else value <= target
+    return {"target": target, "core_share": share, "loaded": loaded, "met": None if loaded else ok}
+
+
+@contextmanager
+def _without_classic() -> Iterator[None]:
+    """``rank_row`` without the classic measures (TVMMP and its diagnosis only)."""
+    import mjtvm.jobs.rank as rank
+
+    saved = rank._classic_columns
+    rank._classic_columns = lambda state: {}
+    try:
+        yield
+    finally:
+        rank._classic_columns = saved
+
+
+def _cpu_wall(fn: Callable[[], object]) -> tuple[float, float]:
+    c, w = time.process_time(), time.perf_counter()
+    fn()
+    return time.process_time() - c, time.perf_counter() - w
+
+
+def bench_throughput(*, repeats: int = 3) -> dict[str, Any]:
+    """Grasps per CPU-second of ``rank_row`` over the example dataset, with (``classic``) and
+    without (``none``) the classic measures: medians over ``repeats`` passes after a warm one."""
+    from mjtvm.jobs.rank import batch_models, rank_row
+    from mjtvm.jobs.rank_files import read_datasets
+
+    entries = read_datasets(RANK_GRASP, [str(_dataset())])
+    batch = batch_models(RANK_GRASP)
+    out: dict[str, Any] = {"grasps": len(entries)}
+    for key, target in (("classic", TARGETS["rank_classic"]), ("none", TARGETS["rank_none"])):
+        with _without_classic() if key == "none" else _nothing():
+            for e in entries:  # warm: models compiled, ranges validated, imports done
+                rank_row(batch, e)
+            runs = [_cpu_wall(lambda: [rank_row(batch, e) for e in entries]) for _ in range(max(1, repeats))]
+        cpu = statistics.median(r[0] for r in runs)
+        wall = statistics.median(r[1] for r in runs)
+        gps = len(entries) / cpu
+        out[key] = {
+            "cpu_s": cpu,
+            "wall_s": wall,
+            "cpu_ms_per_grasp": 1e3 * cpu / len(entries),
+            "grasps_per_cpu_s": gps,
+            "grasps_per_s": len(entries) / wall,
+            **_verdict(gps, target, cpu / wall, at_least=True),
+        }
+    return out
+
+
+@contextmanager
+def _nothing() -> Iterator[None]:
+    yield
+
+
+def _states() -> list[Any]:
+    from mjtvm.errors import MjtvmError
+    from mjtvm.jobs.rank import batch_models
+    from mjtvm.jobs.rank_files import read_datasets
+
+    batch = batch_models(RANK_GRASP)
+    states = []
+    for e in read_datasets(RANK_GRASP, [str(_dataset())]):
+        try:
+            states.append(batch.grasp(e).state())
+        except MjtvmError:
+            continue  # the broken grasps
+    return states
+
+
+def bench_p2_floor(*, repeats: int = 5) -> dict[str, Any]:
+    """Problem 2 over the batch of the example's states against HiGHS ``run()`` in the same
+    calls, both summed over the batch (medians over ``repeats`` passes)."""
+    from mjtvm.lp.highs import observe_runs
+    from mjtvm.problem2.tvmmp import tvmmp
+
+    states = _states()
+    for s in states:
+        tvmmp(s, witnesses=False)
+    totals, runs, cpus = [], [], []
+    for _ in range(max(1, repeats)):
+        inside: list[float] = []
+        with observe_runs(inside.append):
+            cpu, wall = _cpu_wall(lambda: [tvmmp(s, witnesses=False) for s in states])
+        totals.append(wall)
+        runs.append(sum(inside))
+        cpus.append(cpu)
+    total, run = statistics.median(totals), statistics.median(runs)
+    ratio = statistics.median(t / r for t, r in zip(totals, runs, strict=True))
+    lps = sum(tvmmp(s, witnesses=False).timings.num_lps for s in states)
+    return {
+        "states": len(states),
+        "lps": lps,
+        "wall_s": total,
+        "cpu_s": statistics.median(cpus),
+        "highs_run_s": run,
+        "ratio": ratio,
+        **_verdict(ratio, TARGETS["p2_over_highs"], statistics.median(cpus) / total, at_least=False),
+    }
+
+
+def bench_fingers(*, repeats: int = 5, fingers: Sequence[int] = (16, 32)) -> dict[str, Any]:
+    """Problem 2 per LP on the scaling hands of 16 and 32 fingers (median over ``repeats``)."""
+    from benchmarks.scaling import scaling_hand
+    from mjtvm.problem2.tvmmp import tvmmp
+
+    out: dict[str, Any] = {}
+    for n in fingers:
+        state = scaling_hand(n)
+        tvmmp(state, witnesses=False)
+        runs = [_cpu_wall(lambda s=state: tvmmp(s, witnesses=False)) for _ in range(max(1, repeats))]
+        lps = tvmmp(state, witnesses=False).timings.num_lps
+        cpu, wall = statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs)
+        out[str(n)] = {
+            "lps": lps,
+            "cpu_s": cpu,
+            "wall_s": wall,
+            "cpu_s_per_lp": cpu / lps,
+            "core_share": cpu / wall,
+        }
+    a, b = out[str(fingers[0])], out[str(fingers[1])]
+    ratio = b["cpu_s_per_lp"] / a["cpu_s_per_lp"]
+    share = min(a["core_share"], b["core_share"])
+    return {
+        "per_fingers": out,
+        "ratio": ratio,
+        **_verdict(ratio, TARGETS["fingers_32_over_16"], share, at_least=False),
+    }
+
+
+def bench_jobs(*, jobs: int = 2, copies: int = JOBS_COPIES) -> dict[str, Any]:
+    """``rank_rows`` of the example repeated ``copies`` times on 1 and ``jobs`` processes: wall
+    times, speed-up, rows identical; the core share counts the workers' CPU time."""
+    from mjtvm.jobs.rank import rank_rows
+    from mjtvm.jobs.rank_files import read_datasets
+
+    base = read_datasets(RANK_GRASP, [str(_dataset())])
+    entries = [replace(e, id=f"{e.id}#{k}") for k in range(copies) for e in base]
+    out: dict[str, Any] = {"grasps": len(entries)}
+    rows: dict[int, list[dict[str, Any]]] = {}
+    for n in (1, jobs):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        c, w = time.process_time(), time.perf_counter()
+        rows[n] = rank_rows(RANK_GRASP, entries, jobs=n, progress=False)
+        wall = time.perf_counter() - w
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        child = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+        cpu = time.process_time() - c + child
+        out[str(n)] = {"wall_s": wall, "cpu_s": cpu, "core_share": cpu / (wall * n)}
+    speedup = out["1"]["wall_s"] / out[str(jobs)]["wall_s"]
+    same = json.dumps(rows[1], default=str) == json.dumps(rows[jobs], default=str)
+    share = min(out["1"]["core_share"], out[str(jobs)]["core_share"])
+    return {"jobs": jobs, "speedup": speedup, "rows_identical": same, **out,
+            **_verdict(speedup, TARGETS["rank_speedup_2"], share, at_least=True)}  # fmt: skip
+
+
+_RSS_CHILD = """
+import resource, sys, time
+from mjtvm.cli.parser import main
+c, w = time.process_time(), time.perf_counter()
+rc = main(["rank", sys.argv[1], sys.argv[2], "--out", sys.argv[3], "--no-plots", "--quiet"])
+print(rc, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.process_time() - c, time.perf_counter() - w)
+"""
+
+
+def write_dataset(path: Path, grasps: int) -> Path:
+    """The example's grasps repeated to ``grasps`` rows, ids unique, each with its own object
+    scale (1 + 1e-6 x its index times the example's: distinct models, the same grasps)."""
+    with np.load(_dataset()) as z:
+        arrays = {k: z[k] for k in z.files}
+    n = len(arrays["id"])
+    take = np.arange(grasps) % n
+    out = {k: v[take] for k, v in arrays.items()}
+    out["id"] = np.array([f"{arrays['id'][i]}#{k}" for k, i in enumerate(take)])
+    out["obj_scale"] = arrays["obj_scale"][take] * (1.0 + 1e-6 * np.arange(grasps))
+    np.savez(path, **out)
+    return path
+
+
+def bench_memory(
+    *, sizes: Sequence[int] = RSS_GRASPS, say: Callable[[str], None] = lambda _: None
+) -> dict[str, Any]:
+    """Peak RSS (MiB) of ``mjtvm rank`` as a process per dataset size, its CPU and wall time,
+    and the growth per 1,000 grasps between the smallest and the largest size."""
+    out: dict[str, Any] = {"sizes": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            say(f"rank memory: {n} grasps")
+            ds = write_dataset(Path(tmp) / f"gen{n}.npz", n)
+            done = subprocess.run(
+                [sys.executable, "-c", _RSS_CHILD, RANK_GRASP, str(ds), str(Path(tmp) / f"out{n}")],
+                capture_output=True, text=True, check=False,
+            )  # fmt: skip
+            fields = done.stdout.split()[-4:] if done.stdout.split() else []
+            if done.returncode != 0 or len(fields) != 4:
+                out["sizes"][str(n)] = {"error": (done.stderr.strip().splitlines() or ["?"])[-1][:200]}
+                continue
+            rc, rss_kib, cpu, wall = int(fields[0]), float(fields[1]), float(fields[2]), float(fields[3])
+            out["sizes"][str(n)] = {
+                "exit": rc, "peak_rss_mib": rss_kib / 1024.0, "cpu_s": cpu, "wall_s": wall,
+                "core_share": cpu / wall, "loaded": cpu / wall < CORE_SHARE_MIN,
+            }  # fmt: skip
+    ok = [int(k) for k, v in out["sizes"].items() if "peak_rss_mib" in v]
+    if len(ok) >= 2:
+        lo, hi = out["sizes"][str(min(ok))], out["sizes"][str(max(ok))]
+        out["mib_per_1000_grasps"] = 1e3 * (hi["peak_rss_mib"] - lo["peak_rss_mib"]) / (max(ok) - min(ok))
+    return out
+
+
+def bench_rank(
+    *, repeats: int = 3, sizes: Sequence[int] = RSS_GRASPS, say: Callable[[str], None] = lambda _: None
+) -> dict[str, Any]:
+    """Every row of this module (module docstring), as ``report["rank"]``."""
+    say("rank: throughput with and without the classic measures")
+    out: dict[str, Any] = {
+        "grasp": RANK_GRASP,
+        "dataset": _dataset().name,
+        "throughput": bench_throughput(repeats=repeats),
+    }
+    say("rank: Problem 2 over HiGHS run() on the batch")
+    out["p2_floor"] = bench_p2_floor(repeats=max(3, repeats))
+    say("rank: 16 against 32 fingers per LP")
+    out["fingers"] = bench_fingers(repeats=max(3, repeats))
+    say("rank: 2 processes")
+    out["jobs"] = bench_jobs()
+    out["memory"] = bench_memory(sizes=sizes, say=say)
+    return out

@@ -1,0 +1,78 @@
+"""`benchmarks.rank`: the rows of ``mjtvm rank``'s speed and memory, and their rendering."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from benchmarks import rank as bench_rank
+from benchmarks.report import rank_rows
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def rank_report() -> dict[str, Any]:
+    return bench_rank.bench_rank(repeats=1, sizes=(8, 16))
+
+
+def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) -> None:
+    th = rank_report["throughput"]
+    assert th["grasps"] == 36
+    for key in ("classic", "none"):
+        r = th[key]
+        assert r["cpu_s"] > 0 and r["wall_s"] > 0
+        assert r["grasps_per_cpu_s"] == pytest.approx(36 / r["cpu_s"])
+        assert r["core_share"] == pytest.approx(r["cpu_s"] / r["wall_s"])
+        assert r["loaded"] == (r["core_share"] < bench_rank.CORE_SHARE_MIN)
+        assert (r["met"] is None) if r["loaded"] else isinstance(r["met"], bool)
+    assert th["classic"]["cpu_s"] > th["none"]["cpu_s"]  # the classic measures cost something
+    f = rank_report["p2_floor"]
+    assert f["states"] == 32 and f["lps"] >= f["states"] and f["highs_run_s"] < f["wall_s"]
+    assert (
+        rank_report["fingers"]["per_fingers"]["32"]["lps"]
+        == rank_report["fingers"]["per_fingers"]["16"]["lps"]
+    )
+    assert (
+        rank_report["jobs"]["rows_identical"] and rank_report["jobs"]["grasps"] == 36 * bench_rank.JOBS_COPIES
+    )
+    sizes = rank_report["memory"]["sizes"]
+    assert set(sizes) == {"8", "16"} and all(
+        s["exit"] == 0 and s["peak_rss_mib"] > 50 for s in sizes.values()
+    )
+    assert "mib_per_1000_grasps" in rank_report["memory"]
+
+
+def test_a_loaded_row_is_never_met() -> None:
+    assert bench_rank._verdict(200.0, 40.0, 0.5, at_least=True) == {
+        "target": 40.0, "core_share": 0.5, "loaded": True, "met": None,
+    }  # fmt: skip
+    assert bench_rank._verdict(200.0, 40.0, 0.95, at_least=True)["met"] is True
+    assert bench_rank._verdict(2.0, 1.5, 1.0, at_least=False)["met"] is False
+
+
+def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> None:
+    lines = rank_rows({"rank": rank_report})
+    assert sum("grasps/CPU-s" in line for line in lines) == 2
+    assert sum("rank memory, " in line for line in lines) == 2
+    spec = importlib.util.spec_from_file_location("bench_page", ROOT / "tools" / "bench_page.py")
+    assert spec is not None and spec.loader is not None
+    bench_page = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench_page)
+    table = bench_page._rank({"rank": rank_report})
+    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 2  # head, rows
+    loaded = {**rank_report, "throughput": {**rank_report["throughput"]}}
+    loaded["throughput"]["classic"] = {**loaded["throughput"]["classic"], "loaded": True, "met": None}
+    assert "| loaded |" in "\n".join(bench_page._rank({"rank": loaded}))
+
+
+def test_generated_dataset_repeats_the_example_with_distinct_scales(tmp_path: Path) -> None:
+    path = bench_rank.write_dataset(tmp_path / "g.npz", 40)
+    with np.load(path) as z, np.load(bench_rank._dataset()) as ex:
+        assert len(set(z["id"].tolist())) == 40 and len(set(z["obj_scale"].tolist())) == 40
+        np.testing.assert_array_equal(z["grasp_qpos"][36:], ex["grasp_qpos"][:4])
+        np.testing.assert_allclose(z["obj_scale"][:36], ex["obj_scale"], rtol=1e-4)
