@@ -16,6 +16,7 @@ from mjtvm.cli.output import EXIT_OK, emit, warn
 from mjtvm.cli.values import number, output_file, source
 from mjtvm.cli.vocabulary import GRASP_HELP, grasp_option, hand_option, indent_option, one_grasp, rrd_option
 from mjtvm.errors import ModelError
+from mjtvm.formats import atomic_write
 
 if TYPE_CHECKING:
     from mjtvm.grasp.contacts.report import ContactRow
@@ -186,9 +187,13 @@ def _record(grasp: Grasp, rows: list[ContactRow], path: str) -> None:
 
 
 def _picture(grasp: Grasp, path: str) -> None:
-    from matplotlib.image import imsave
-
     from mjtvm.grasp.contacts.picture import render_grasp
+    from mjtvm.jobs.figures import grasp_png
 
-    imsave(path, render_grasp(grasp.model, grasp.data, grasp.object_body, grasp.contact_tolerance))
+    picture = render_grasp(grasp.model, grasp.data, grasp.object_body, grasp.contact_tolerance, mu=grasp.mu)
+    atomic_write(
+        path,
+        grasp_png(picture, f"{grasp.name}: contacts within {1e3 * grasp.contact_tolerance:g} mm"),
+        option="--png",
+    )
     print(f"wrote {path}", file=sys.stderr)

@@ -106,7 +106,7 @@ def test_show_writes_a_rerun_recording(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_show_writes_a_picture_headless(tmp_path: Path) -> None:
-    """MuJoCo's renderer with EGL (set by --png when MUJOCO_GL is unset): three 480 x 480 views."""
+    """MuJoCo's renderer with EGL (set by --png when MUJOCO_GL is unset): three views, labelled."""
     from matplotlib.image import imread
 
     png = tmp_path / "grasp.png"
@@ -116,7 +116,7 @@ def test_show_writes_a_picture_headless(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == f"wrote {png}\n"
     image = imread(png)
-    assert image.shape[:2] == (480, 3 * 480)
+    assert image.shape[:2] == (540, 1296)  # 10.8 x 4.5 in at 120 dpi
     for panel in np.split(image[..., :3], 3, axis=1):
         assert float(panel.std()) > 0.05  # a scene, not a blank frame
 
