@@ -291,7 +291,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         wall = time.perf_counter() - t0
         files: dict[Path, bytes | str] = {outdir / f"{args.name}.csv": verify.rows_csv(rows)}
         if not args.no_plots:
-            title = f"{args.grasp}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N"
+            title = verify.plot_title(args.grasp, mu, mg)
             files[outdir / f"{args.name}.png"] = verify.plot_alpha(rows, title)
         srows: list[dict[str, Any]] = []
         if args.slide_check:

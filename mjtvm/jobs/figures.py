@@ -18,7 +18,11 @@ m/s, angular velocity in rad/s), so alpha = 1 is the vertex itself; the scenario
 linear components of +-1 m/s, so alpha reads as m/s per unit of the vertex."""
 
 
-X_LABELS = {"z": "object height $z$ (m)", "s": "travel along the lift $s$ (m)"}
+X_LABELS = {
+    "z": "object height $z$ (m)",
+    "s": "travel along the lift $s$ (m)",
+    "l": r"RVDS vertex $l$ (index, -)",
+}
 
 
 def lift_x(lift: Any) -> str:
@@ -49,7 +53,8 @@ def lift_png(fig: Any, ax: Any, *, ylabel: str, title: str, legend_fontsize: flo
     ax.set_title(title, fontsize=9)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=legend_fontsize)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=legend_fontsize, loc="best")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=120)
     return buf.getvalue()

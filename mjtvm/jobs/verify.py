@@ -49,6 +49,7 @@ __all__ = [
     "motor_model",
     "pair_reason",
     "plot_alpha",
+    "plot_title",
     "present_runs",
     "rows_csv",
     "runs_of",
@@ -87,6 +88,12 @@ def present_runs(lift: Lift, runs: Sequence[str]) -> list[str]:
     if "N" not in lift.roles or getattr(lift.scenario, "lift", ...) is None:
         return ["L"]
     return list(runs)
+
+
+def plot_title(grasp: str | Path, mu: float, mg: float) -> str:
+    """The title of ``verify.png``: the grasp's ``name`` (not its file's path), mu and the weight."""
+    name = getattr(_scenario(grasp), "name", None) or Path(str(grasp)).stem
+    return f"{name}, $\\mu$ = {mu:g}, $mg$ = {mg:g} N"
 
 
 def _scenario(grasp: str | Path) -> Any:
@@ -294,7 +301,7 @@ def verify_lift(
         outdir = check_output_dir(out, option="out")
         files: dict[Path, bytes | str] = {outdir / f"{name}.csv": rows_csv(rows)}
         if plot:
-            files[outdir / f"{name}.png"] = plot_alpha(rows, f"{grasp}: $\\mu$ = {mu:g}, $mg$ = {mg:g} N")
+            files[outdir / f"{name}.png"] = plot_alpha(rows, plot_title(grasp, mu, mg))
         write_files(files, option="out")
     return rows
 

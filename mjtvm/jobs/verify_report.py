@@ -27,23 +27,58 @@ def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
 
 
 def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """Per lift position of ``run``: the minimum of ``key`` over the RVDS vertices (NaN where a
+    vertex has no value: not optimal, or a state that does not hold at rest for alpha_sim)."""
     by: dict[float, list[float]] = {}
     for r in rows:
         if r["run"] == run:
-            by.setdefault(r.get("x", r["z"]), []).append(
-                r.get(key, math.nan) if r["status"] == "optimal" else math.nan
-            )
+            loose = key == "alpha_sim" and r.get("held") is False
+            ok = r["status"] == "optimal" and not loose
+            by.setdefault(r.get("x", r["z"]), []).append(r.get(key, math.nan) if ok else math.nan)
     z = np.array(sorted(by))
     return z, np.array([min(by[k]) if not any(math.isnan(v) for v in by[k]) else math.nan for k in z])
 
 
+def _one_state(ax: Any, rows: Sequence[dict[str, Any]]) -> None:
+    """One state: alpha_kl, alpha_dyn and alpha_sim per RVDS vertex l, as grouped bars."""
+    runs = [
+        run
+        for run in dict.fromkeys(r["run"] for r in rows)
+        if any(r["run"] == run and r["status"] == "optimal" for r in rows)
+    ]
+    missing = [run for run in dict.fromkeys(r["run"] for r in rows) if run not in runs]
+    if missing:
+        note = f"no solution: {', '.join(missing)}"
+        ax.text(0.98, 0.97, note, transform=ax.transAxes, fontsize=7, va="top", ha="right", color="0.3")
+    keys = [("alpha_lp", "TVMMP (LP)"), ("alpha_dyn", "dynamic"), ("alpha_sim", r"$\alpha_{\mathrm{sim}}$")]
+    keys = [k for k in keys if any(k[0] in r for r in rows)]
+    width = 0.8 / max(1, len(keys) * len(runs))
+    for i, run in enumerate(runs):
+        mine = sorted((r for r in rows if r["run"] == run), key=lambda r: r["l"])
+        for j, (key, label) in enumerate(keys):
+            x = (
+                np.array([r["l"] for r in mine])
+                + (i * len(keys) + j - 0.5 * (len(keys) * len(runs) - 1)) * width
+            )
+            y = [r.get(key, math.nan) if r["status"] == "optimal" else math.nan for r in mine]
+            ax.bar(x, y, width=width, label=f"{label}, {run}")
+    ax.set_xticks(sorted({int(r["l"]) for r in rows}))
+
+
 def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     """PNG of the TVMMP (LP), the dynamic TVMMP (rows with ``alpha_dyn``) and the minimum alpha_sim
-    over the RVDS vertices along z, per run."""
+    over the RVDS vertices along the lift, per run; for a single state, the three per RVDS vertex
+    l. States that do not hold at rest have no alpha_sim: they are marked on the axis and named
+    in a note, never drawn at 0."""
     fig, ax = lift_axes(6.5, 4.2)
+    loose = sorted({(r.get("x", r["z"]), r["state"]) for r in rows if r.get("held") is False})
+    if len({r["state"] for r in rows}) == 1:
+        _one_state(ax, rows)
+        state = rows[0]["state"] if rows else "-"
+        return _finish(fig, ax, f"{title}, state {state}", loose, x=None)
     for run in dict.fromkeys(r["run"] for r in rows):
         z, lp = _minima(rows, run, "alpha_lp")
-        (line,) = ax.plot(z, lp, "-", label=f"TVMMP (LP, quasi-static), {run}")
+        (line,) = ax.plot(z, lp, ".-", label=f"TVMMP (LP, quasi-static), {run}")
         if any("alpha_dyn" in r for r in rows if r["run"] == run):
             z, dyn = _minima(rows, run, "alpha_dyn")
             label = rf"dynamic TVMMP (LP + $M\ddot q + c$), {run}"
@@ -53,7 +88,24 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
             z, sim, "o--", color=line.get_color(), ms=4, label=f"min $\\alpha_{{\\mathrm{{sim}}}}$, {run}"
         )
     x = "z" if all(r.get("x", r["z"]) == r["z"] for r in rows) else "s"  # the rows' lift_x axis
-    return lift_png(fig, ax, ylabel=rf"$\alpha$ {ALPHA_UNIT}", title=title, legend_fontsize=7, x=x)
+    if loose:
+        xs = [p[0] for p in loose]
+        ax.plot(
+            xs, [0.0] * len(xs), "x", color="0.4", clip_on=False, label="not held at rest (no speed tested)"
+        )
+    return _finish(fig, ax, title, loose, x=x)
+
+
+def _finish(fig: Any, ax: Any, title: str, loose: list[tuple[float, int]], *, x: str | None) -> bytes:
+    """The note on states that do not hold, the axes' labels, the PNG."""
+    if loose:
+        states = ", ".join(str(s) for _, s in loose[:8]) + (", ..." if len(loose) > 8 else "")
+        note = f"not held at rest: state{'s' if len(loose) > 1 else ''} {states}"
+        ax.text(0.02, 0.97, note, transform=ax.transAxes, fontsize=7, va="top", color="0.3")
+    if not ax.has_data():
+        ax.text(0.5, 0.5, "no optimal pair to draw", transform=ax.transAxes, ha="center", color="0.3")
+    label = rf"$\alpha$ {ALPHA_UNIT}"
+    return lift_png(fig, ax, ylabel=label, title=title, legend_fontsize=7, x=x or "l")
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
