@@ -333,3 +333,22 @@ def quiet_option(p: argparse.ArgumentParser) -> None:
         "warnings either; `solve`: no warnings (contacts, zero alphas, certificates), standard "
         "output unchanged)",
     )
+
+
+def dataset_options(p: argparse.ArgumentParser) -> None:
+    """``--pose grasp|pregrasp|squeeze`` and ``--dataset-key grasp_qpos|qpos``: how a dataset's
+    arrays are read (docs/datasets.md)."""
+    p.add_argument(
+        "--pose",
+        choices=("grasp", "pregrasp", "squeeze"),
+        default="grasp",
+        help="the pipeline pose ranked where a grasp carries several (DexGraspBench's `<pose>_qpos`)",
+    )
+    action = p.add_argument(
+        "--dataset-key",
+        choices=("grasp_qpos", "qpos"),
+        default=None,
+        help="what a 2-D `.npy` array holds: `grasp_qpos` (root pose + hand joints) or `qpos` (the "
+        "model's qpos); without it such a file is refused, never guessed from its width",
+    )
+    computed_default(action, "none: a 2-D `.npy` is refused")

@@ -35,6 +35,7 @@ from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.file import grasp_from_model, shipped_grasps
 from mjtvm.grasp.resolve.loaded import Grasp
 from mjtvm.grasp.resolve.model import build_spec, model_path_of
+from mjtvm.grasp.resolve.objects import folder_object, subtree_mass
 
 __all__ = ["BatchModels", "hand_joints"]
 
@@ -103,10 +104,13 @@ def _scale_object(spec: mujoco.MjSpec, name: str, scale: float) -> None:
         todo.extend(body.bodies)
 
 
-def _replace_object(spec: mujoco.MjSpec, name: str, obj_path: str, file: str) -> None:
-    """Put the first body of ``obj_path``'s world, named ``name``, in place of the file's object."""
+def _replace_object(
+    spec: mujoco.MjSpec, name: str, obj_path: str, file: str, other: mujoco.MjSpec | None = None
+) -> None:
+    """Put the first body of ``obj_path``'s world (or of ``other``, built from it), named
+    ``name``, in place of the file's object."""
     try:
-        other = mujoco.MjSpec.from_file(obj_path)
+        other = other or mujoco.MjSpec.from_file(obj_path)
     except ValueError as e:
         raise GraspError(
             file, "obj_path", f"MuJoCo cannot load {obj_path!r}: {' '.join(str(e).split())}"
@@ -171,9 +175,14 @@ class BatchModels:
         if key not in self._models:
             spec = build_spec(self.doc, self.model_path, self.file)
             name = self.doc["object"]["body"]
+            folder = obj_path is not None and Path(obj_path).is_dir()
             if obj_path is not None:
-                _replace_object(spec, name, obj_path, self.file)
-            if scale != 1.0:
+                other = None
+                if folder:  # scaled as it is built, at the grasp file's object mass
+                    mass = subtree_mass(self.model(), name)
+                    other = folder_object(obj_path, mass=mass, scale=scale, file=self.file)
+                _replace_object(spec, name, obj_path, self.file, other)
+            if scale != 1.0 and not folder:
                 _scale_object(spec, name, scale)
             body = None
             if root:
