@@ -70,7 +70,8 @@ def _halves(axes: np.ndarray) -> list[np.ndarray]:
 def _scene(pieces: list[Path], scale: float, path: Path) -> None:
     """An IK scene: the hand and the object at this scale (body ``ball``)."""
     meshes = "".join(
-        f'<mesh name="p{k}" file="{p}" scale="{scale} {scale} {scale}"/>' for k, p in enumerate(pieces)
+        f'<mesh name="p{k}" file="{p.resolve()}" scale="{scale} {scale} {scale}"/>'
+        for k, p in enumerate(pieces)
     )
     geoms = "".join(f'<geom type="mesh" mesh="p{k}" mass="0.04"/>' for k in range(len(pieces)))
     hand = GRASP.parent / "shadow_right_3f_coupled.xml"

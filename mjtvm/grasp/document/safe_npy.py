@@ -101,8 +101,9 @@ def load_npz(path: Path) -> dict[str, np.ndarray]:
     with path.open("rb") as f:
         if f.read(2) != b"PK":
             raise ValueError("not an .npz (zip) archive")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    except (zipfile.BadZipFile, EOFError, OSError, KeyError) as e:
-        raise ValueError(f"not a readable .npz (zip) archive: {e}") from e
+        f.seek(0)
+        try:  # numpy leaves its own file open when the archive is damaged: give it ours
+            with np.load(f, allow_pickle=False) as z:
+                return {k: z[k] for k in z.files}
+        except (zipfile.BadZipFile, EOFError, OSError, KeyError) as e:
+            raise ValueError(f"not a readable .npz (zip) archive: {e}") from e
