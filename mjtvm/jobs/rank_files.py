@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import hashlib
 import io
-import os
 import json
+import os
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass

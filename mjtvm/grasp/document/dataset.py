@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.grasp.document.checks import GraspError
+from mjtvm.grasp.document.dataset_csv import csv_rows
 from mjtvm.grasp.document.pipelines import POSES, PipelineKeyError, pipeline_row
 from mjtvm.grasp.document.safe_npy import load_npy, load_npz
 
@@ -268,72 +269,6 @@ def _rows_npy(path: Path, key: str | None) -> tuple[list[dict[str, Any]], bool]:
     return [{key: row} for row in value], False
 
 
-_NUMBERED = re.compile(r"(grasp_qpos|qpos|obj_pose)_(\d+)")
-
-
-def _csv_columns(path: Path, header: list[str]) -> list[tuple[str, str, int]]:
-    """``(column, key, position)`` per column, the numbered ones complete and in order."""
-    columns: list[tuple[str, str, int]] = []
-    seen: dict[str, int] = {}
-    for column in header:
-        m = _NUMBERED.fullmatch(column)
-        if column in ("obj_scale", "obj_path", "id"):
-            key, position = column, -1
-        elif m:
-            key, position = m.group(1), int(m.group(2))
-            expected = seen.get(key, 0)
-            if position != expected or m.group(2) != str(position):
-                raise _fail(
-                    path,
-                    0,
-                    column,
-                    f"expected the column {key}_{expected} here (numbered columns complete and in order)",
-                )
-            seen[key] = expected + 1
-        else:
-            raise _fail(
-                path,
-                0,
-                column,
-                "unknown column (expected grasp_qpos_<i>, qpos_<i>, obj_pose_<i>, obj_scale, obj_path, id)",
-            )
-        if any(c == column for c, _, _ in columns):
-            raise _fail(path, 0, column, "a column given twice")
-        columns.append((column, key, position))
-    return columns
-
-
-def _rows_csv(path: Path) -> list[dict[str, Any]]:
-    with path.open(newline="", encoding="utf-8") as f:
-        table = list(csv.reader(f))
-    if not table:
-        raise GraspError(str(path), "", "empty: expected a header, then one line per grasp")
-    columns = _csv_columns(path, table[0])
-    rows = []
-    for i, line in enumerate(table[1:]):
-        if len(line) != len(columns):
-            raise _fail(path, i, "columns", f"expected {len(columns)} values as the header, got {len(line)}")
-        row: dict[str, Any] = {}
-        for (column, key, position), text in zip(columns, line, strict=True):
-            if position < 0 and column != "obj_scale":
-                row[column] = text or None
-                continue
-            if column == "obj_scale" and text.strip() == "":
-                continue  # the default scale
-            if text.strip() == "":
-                raise _fail(path, i, column, "empty: expected a number")
-            try:
-                number = float(text)
-            except ValueError as e:
-                raise _fail(path, i, column, f"expected a number, got {text!r}") from e
-            if column == "obj_scale":
-                row[column] = number
-            else:
-                row.setdefault(key, []).append(number)
-        rows.append(row)
-    return rows
-
-
 def _natural(p: Path) -> list[Any]:
     return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", p.as_posix())]
 
@@ -415,7 +350,7 @@ def read_dataset(
             elif suffix == ".npy":
                 rows, single = _rows_npy(p, key)
             elif suffix == ".csv":
-                rows = _rows_csv(p)
+                rows = csv_rows(p)
             else:
                 raise GraspError(
                     str(p), "", f"expected a .npz, .npy or .csv dataset, got {suffix or 'no suffix'!r}"
