@@ -38,7 +38,9 @@ def test_npz_layout(tmp_path: Path) -> None:
 
 def test_npy_array_and_dict_layouts(tmp_path: Path) -> None:
     np.save(tmp_path / "q.npy", np.zeros((2, NQ)))
-    with pytest.raises(GraspError, match=r"q\.npy: a 2 x 27 array's meaning is not stated: give --dataset-key"):
+    with pytest.raises(
+        GraspError, match=r"q\.npy: a 2 x 27 array's meaning is not stated: give --dataset-key"
+    ):
         read_dataset(tmp_path / "q.npy", nq=NQ, num_joints=J)
     got = read_dataset(tmp_path / "q.npy", nq=NQ, num_joints=J, key="qpos")
     assert got[0].qpos is not None and got[0].root is None and got[1].id == "q:1"
