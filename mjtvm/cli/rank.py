@@ -74,6 +74,7 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         limit_horizon=args.limit_horizon,
         pose=args.pose,
         dataset_key=args.dataset_key,
+        com_frame=args.com_frame,
     )
     for path in run_rank_files(run, emit=emit):
         emit(f"wrote {path}")

@@ -336,8 +336,8 @@ def quiet_option(p: argparse.ArgumentParser) -> None:
 
 
 def dataset_options(p: argparse.ArgumentParser) -> None:
-    """``--pose grasp|pregrasp|squeeze`` and ``--dataset-key grasp_qpos|qpos``: how a dataset's
-    arrays are read (docs/datasets.md)."""
+    """``--pose grasp|pregrasp|squeeze``, ``--dataset-key grasp_qpos|qpos``: how a dataset's
+    arrays are read; ``--com-frame``: the object's frame at its centre of mass (docs/datasets.md)."""
     p.add_argument(
         "--pose",
         choices=("grasp", "pregrasp", "squeeze"),
@@ -352,3 +352,9 @@ def dataset_options(p: argparse.ArgumentParser) -> None:
         "model's qpos); without it such a file is refused, never guessed from its width",
     )
     computed_default(action, "none: a 2-D `.npy` is refused")
+    p.add_argument(
+        "--com-frame",
+        action="store_true",
+        help="the object's frame at its centre of mass: the REFS's moments (the weight's is then 0) "
+        "and the RVDS's twists about it; the object stays where the dataset poses it (`grasp_qpos` rows only)",
+    )

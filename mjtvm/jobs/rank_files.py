@@ -16,7 +16,7 @@ import json
 import os
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +66,8 @@ class RankFiles:
         The pipeline pose ranked: ``grasp``, ``pregrasp`` or ``squeeze`` (``<pose>_qpos``).
     dataset_key
         What a 2-D ``.npy`` array holds: ``grasp_qpos`` or ``qpos`` (``None``: refused).
+    com_frame
+        The object's frame (REFS moments, RVDS twists) at its centre of mass.
     """
 
     grasp: str
@@ -80,6 +82,7 @@ class RankFiles:
     limit_horizon: float | None = None
     pose: str = "grasp"
     dataset_key: str | None = None
+    com_frame: bool = False
 
     def __post_init__(self) -> None:
         if not self.datasets:
@@ -98,7 +101,12 @@ def dataset_labels(files: Sequence[Path]) -> list[str]:
 
 
 def read_datasets(
-    grasp: str, datasets: Sequence[str], *, pose: str = "grasp", key: str | None = None
+    grasp: str,
+    datasets: Sequence[str],
+    *,
+    pose: str = "grasp",
+    key: str | None = None,
+    com_frame: bool = False,
 ) -> list[DatasetGrasp]:
     """Every grasp of the datasets (files, or folders of them: `dataset_files()`), checked
     against the grasp file's model: shapes, dtypes, poses, joint ranges.
@@ -135,6 +143,8 @@ def read_datasets(
         )
         for e in read:
             check_joint_ranges(model, joints, e)
+            if com_frame:
+                e = replace(e, com_frame=True)
             if e.id in seen:
                 first = seen[e.id]
                 raise GraspError(
@@ -157,6 +167,7 @@ def inputs_digest(
     *,
     pose: str = "grasp",
     key: str | None = None,
+    com_frame: bool = False,
 ) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
     the dataset files, the object files they name and a ``limit_horizon`` other than the grasp
@@ -169,6 +180,8 @@ def inputs_digest(
         h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
     if (pose, key) != ("grasp", None):  # the defaults: the digest of earlier versions
         h.update(f"pose {pose} key {key}\n".encode())
+    if com_frame:
+        h.update(b"com_frame\n")
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
     files = model_files(batch.model_path) + dataset_files(datasets)
@@ -310,9 +323,17 @@ def run_rank_files(
     """
     from mjtvm.formats.files import check_output_dir, output_lock, write_files
 
-    entries = read_datasets(run.grasp, run.datasets, pose=run.pose, key=run.dataset_key)
+    entries = read_datasets(
+        run.grasp, run.datasets, pose=run.pose, key=run.dataset_key, com_frame=run.com_frame
+    )
     digest = inputs_digest(
-        run.grasp, run.datasets, entries, run.limit_horizon, pose=run.pose, key=run.dataset_key
+        run.grasp,
+        run.datasets,
+        entries,
+        run.limit_horizon,
+        pose=run.pose,
+        key=run.dataset_key,
+        com_frame=run.com_frame,
     )
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"

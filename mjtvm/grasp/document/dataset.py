@@ -79,7 +79,10 @@ class DatasetGrasp:
     obj_scale
         The object's scale factor (> 0).
     obj_path
-        The object's MJCF file (absolute), or ``None``: the grasp file's object.
+        The object's MJCF file or object folder (absolute), or ``None``: the grasp file's object.
+    com_frame
+        The object's frame (the REFS's moments, the RVDS's twists) moved to its centre of mass,
+        the object left where ``obj_pose`` puts it (``grasp_qpos`` entries only).
     """
 
     id: str
@@ -91,10 +94,15 @@ class DatasetGrasp:
     obj_pose: NDArray[np.float64] | None = None
     obj_scale: float = 1.0
     obj_path: str | None = None
+    com_frame: bool = False
 
     def __post_init__(self) -> None:
         if (self.qpos is None) == (self.root is None):
             raise GraspError(self.source, self._field("grasp_qpos"), "expected grasp_qpos or qpos, not both")
+        if self.com_frame and self.qpos is not None:
+            raise GraspError(
+                self.source, self._field("qpos"), "the object's frame at its centre of mass needs grasp_qpos"
+            )
 
     def _field(self, key: str) -> str:
         return f"grasp {self.index}: {key}"

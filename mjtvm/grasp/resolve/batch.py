@@ -35,7 +35,7 @@ from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.file import grasp_from_model, shipped_grasps
 from mjtvm.grasp.resolve.loaded import Grasp
 from mjtvm.grasp.resolve.model import build_spec, model_path_of
-from mjtvm.grasp.resolve.objects import folder_object, subtree_mass
+from mjtvm.grasp.resolve.objects import com_position, folder_object, shift_frame, subtree_mass
 
 __all__ = ["BatchModels", "hand_joints"]
 
@@ -150,6 +150,8 @@ class BatchModels:
         self.model_path = model_path_of(doc, path, self.file)
         self._models: dict[tuple[str | None, float, bool], mujoco.MjModel] = {}
         self._roots: dict[tuple[str | None, float, bool], str | None] = {}
+        self._com: dict[tuple[str | None, float], np.ndarray] = {}
+        self._com_models: dict[tuple[str | None, float], mujoco.MjModel] = {}
 
     @classmethod
     def from_file(cls, source: str | Path) -> BatchModels:
@@ -217,6 +219,8 @@ class BatchModels:
         root = entry.root is not None
         key = (entry.obj_path, float(entry.obj_scale), root)
         model = self.model(entry.obj_path, entry.obj_scale, root=root)
+        if entry.com_frame:
+            model = self._com_model(entry, model)
         obj = dict(self.doc["object"])
         config: dict[str, Any]
         if entry.qpos is not None:
@@ -241,8 +245,41 @@ class BatchModels:
         if entry.obj_pose is not None:
             obj["position"] = [float(x) for x in entry.obj_pose[:3]]
             obj["quaternion"] = [float(x) for x in entry.obj_pose[3:]]
+        if entry.com_frame:  # the same object, posed by its old frame: the new origin is at p + R c
+            if obj.get("position") is None:
+                raise GraspError(
+                    entry.source,
+                    f"grasp {entry.index}: obj_pose",
+                    "the centre-of-mass frame needs the object's pose",
+                )
+            obj["position"] = com_position(obj, self._com[key[:2]])
         doc = {**self.doc, "configuration": config, "object": obj}
         return grasp_from_model(doc, self.path, model, self.model_path)
+
+    def _com_model(self, entry: DatasetGrasp, model: mujoco.MjModel) -> mujoco.MjModel:
+        """The entry's model with the object's frame at its centre of mass (compiled once)."""
+        name = self.doc["object"]["body"]
+        key = (entry.obj_path, float(entry.obj_scale))
+        if key not in self._com_models:
+            offset = np.array(model.body_ipos[int(model.body(name).id)])
+            spec = build_spec(self.doc, self.model_path, self.file)
+            if entry.obj_path is not None:
+                other = None
+                if Path(entry.obj_path).is_dir():
+                    mass = subtree_mass(self.model(), name)
+                    other = folder_object(entry.obj_path, mass=mass, scale=entry.obj_scale, file=self.file)
+                _replace_object(spec, name, entry.obj_path, self.file, other)
+            if entry.obj_scale != 1.0 and not (entry.obj_path is not None and Path(entry.obj_path).is_dir()):
+                _scale_object(spec, name, entry.obj_scale)
+            shift_frame(spec, name, offset)
+            found = spec.body(_root_body(spec, self.doc, self.file))
+            if found.parent.name == spec.worldbody.name and not any(
+                j.type == _JNT.mjJNT_FREE for j in found.joints
+            ):
+                found.mocap = True
+            self._com_models[key] = spec.compile()
+            self._com[key] = offset
+        return self._com_models[key]
 
 
 def _named_qpos(model: mujoco.MjModel, entry: DatasetGrasp, file: str) -> dict[str, Any]:

@@ -25,7 +25,14 @@ import numpy as np
 from mjtvm.grasp.document.checks import GraspError
 from mjtvm.grasp.document.dataset import DatasetGrasp
 
-__all__ = ["JOINT_TOLERANCE", "check_joint_ranges", "folder_object", "subtree_mass"]
+__all__ = [
+    "JOINT_TOLERANCE",
+    "check_joint_ranges",
+    "com_position",
+    "folder_object",
+    "shift_frame",
+    "subtree_mass",
+]
 
 JOINT_TOLERANCE = {"hinge": 0.02, "slide": 0.002}
 """How far (rad for a hinge, m for a slide) a dataset's joint may lie outside its range."""
@@ -129,3 +136,26 @@ def check_joint_ranges(model: mujoco.MjModel, joints: Sequence[str], entry: Data
 def subtree_mass(model: mujoco.MjModel, body: str) -> float:
     """The mass (kg) of a body and its subtree."""
     return float(np.asarray(model.body_subtreemass)[int(model.body(body).id)])
+
+
+def shift_frame(spec: mujoco.MjSpec, name: str, offset: np.ndarray) -> None:
+    """Move body ``name``'s frame by ``offset`` (its own frame, m), its content staying put:
+    its geoms, child bodies and explicit inertia move by ``-offset``."""
+    body = spec.body(name)
+    for g in body.geoms:
+        g.pos = np.asarray(g.pos) - offset
+    for child in body.bodies:
+        child.pos = np.asarray(child.pos) - offset
+    for site in body.sites:
+        site.pos = np.asarray(site.pos) - offset
+    if body.explicitinertial:
+        body.ipos = np.asarray(body.ipos) - offset
+
+
+def com_position(obj: dict, offset: np.ndarray) -> list[float]:
+    """The object's position (m, world) once its frame is moved by ``offset`` (its frame):
+    ``p + R(q) offset``."""
+    q = np.asarray(obj.get("quaternion", [1.0, 0.0, 0.0, 0.0]), dtype=float)
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, q / np.linalg.norm(q))
+    return [float(x) for x in np.asarray(obj["position"], dtype=float) + rot.reshape(3, 3) @ offset]
