@@ -7,8 +7,9 @@ from pathlib import Path
 
 from mjtvm.cli.options import Subparsers, command
 from mjtvm.cli.output import EXIT_OK, emit
-from mjtvm.cli.values import input_file, source
+from mjtvm.cli.values import input_path, source
 from mjtvm.cli.vocabulary import (
+    dataset_options,
     grasp_option,
     limit_horizon_option,
     no_plots_option,
@@ -24,7 +25,7 @@ __all__ = ["add_rank"]
 
 _HELP = "rank a dataset of grasp configurations by TVMMP: one row per grasp, CSV, JSON, plots"
 _DESCRIPTION = (
-    "Evaluate every grasp of the datasets (.npz, .npy, per-grasp .npy dicts, .csv: docs/datasets.md) "
+    "Evaluate every grasp of the datasets (.npz, .npy, DexGraspBench per-grasp and DexGraspNet per-object .npy dicts, .csv, or folders of them: docs/datasets.md) "
     "with the grasp file's model, contact rules, ranges, REFS and RVDS; write NAME.json, NAME.csv, "
     "NAME.parquet (with pyarrow), NAME-objects.png, NAME-tvmmp.png and NAME-epsilon.png, and a summary on stderr. "
     "A grasp that fails is a row with its reason."
@@ -42,8 +43,11 @@ def add_rank(sub: Subparsers) -> None:
         metavar="GRASP",
         help="a mjtvm.grasp/1 file or a shipped grasp's name (or --grasp)",
     )
-    p.add_argument("datasets", type=input_file, nargs="+", metavar="DATASET", help="dataset files")
+    p.add_argument(
+        "datasets", type=input_path, nargs="+", metavar="DATASET", help="dataset files, or folders of them"
+    )
     grasp_option(p, default=None)
+    dataset_options(p)
     limit_horizon_option(p)
     parallel_options(p)
     out_options(p, name="rank")
@@ -68,6 +72,9 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         quiet=args.quiet,
         plots=not args.no_plots,
         limit_horizon=args.limit_horizon,
+        pose=args.pose,
+        dataset_key=args.dataset_key,
+        com_frame=args.com_frame,
     )
     for path in run_rank_files(run, emit=emit):
         emit(f"wrote {path}")
@@ -84,7 +91,7 @@ def _grasp_and_datasets(
 
     if option is not None and positional is not None and not is_grasp_source(positional):
         try:
-            datasets = [input_file(positional), *datasets]
+            datasets = [input_path(positional), *datasets]
         except argparse.ArgumentTypeError as e:
             raise OptionError("DATASET", str(e)) from e
         positional = None

@@ -44,6 +44,7 @@ __all__ = [
     "fraction",
     "grasps",
     "input_file",
+    "input_path",
     "integer",
     "integers",
     "memory_size",
@@ -353,6 +354,14 @@ def input_file(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"expected a file, got the folder {shown(text)}")
     if not os.path.lexists(path):
         raise argparse.ArgumentTypeError(f"expected an existing file, got {shown(text)}")
+    return path
+
+
+def input_path(text: str) -> Path:
+    """An argparse type: an existing file or folder to read."""
+    path = _path(text, "a file or folder")
+    if not os.path.lexists(path):
+        raise argparse.ArgumentTypeError(f"expected an existing file or folder, got {shown(text)}")
     return path
 
 

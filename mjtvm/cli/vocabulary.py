@@ -333,3 +333,28 @@ def quiet_option(p: argparse.ArgumentParser) -> None:
         "warnings either; `solve`: no warnings (contacts, zero alphas, certificates), standard "
         "output unchanged)",
     )
+
+
+def dataset_options(p: argparse.ArgumentParser) -> None:
+    """``--pose grasp|pregrasp|squeeze``, ``--dataset-key grasp_qpos|qpos``: how a dataset's
+    arrays are read; ``--com-frame``: the object's frame at its centre of mass (docs/datasets.md)."""
+    p.add_argument(
+        "--pose",
+        choices=("grasp", "pregrasp", "squeeze"),
+        default="grasp",
+        help="the pipeline pose ranked where a grasp carries several (DexGraspBench's `<pose>_qpos`)",
+    )
+    action = p.add_argument(
+        "--dataset-key",
+        choices=("grasp_qpos", "qpos"),
+        default=None,
+        help="what a 2-D `.npy` array holds: `grasp_qpos` (root pose + hand joints) or `qpos` (the "
+        "model's qpos); without it such a file is refused, never guessed from its width",
+    )
+    computed_default(action, "none: a 2-D `.npy` is refused")
+    p.add_argument(
+        "--com-frame",
+        action="store_true",
+        help="the object's frame at its centre of mass: the REFS's moments (the weight's is then 0) "
+        "and the RVDS's twists about it; the object stays where the dataset poses it (`grasp_qpos` rows only)",
+    )

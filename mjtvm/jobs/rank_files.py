@@ -13,9 +13,10 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -23,8 +24,9 @@ import numpy as np
 
 from mjtvm.errors import ParamError
 from mjtvm.grasp import GraspError
-from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
+from mjtvm.grasp.document.dataset import DatasetGrasp, dataset_files, read_dataset
 from mjtvm.grasp.resolve.batch import hand_joints
+from mjtvm.grasp.resolve.objects import check_joint_ranges
 from mjtvm.jobs.checkpoint import RowCheckpoint
 from mjtvm.jobs.files import csv_text, model_files, stderr
 from mjtvm.jobs.rank import batch_models, rank_rows
@@ -60,6 +62,12 @@ class RankFiles:
     limit_horizon
         Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's
         ``joint_limits.horizon``.
+    pose
+        The pipeline pose ranked: ``grasp``, ``pregrasp`` or ``squeeze`` (``<pose>_qpos``).
+    dataset_key
+        What a 2-D ``.npy`` array holds: ``grasp_qpos`` or ``qpos`` (``None``: refused).
+    com_frame
+        The object's frame (REFS moments, RVDS twists) at its centre of mass.
     """
 
     grasp: str
@@ -72,14 +80,36 @@ class RankFiles:
     quiet: bool = False
     plots: bool = True
     limit_horizon: float | None = None
+    pose: str = "grasp"
+    dataset_key: str | None = None
+    com_frame: bool = False
 
     def __post_init__(self) -> None:
         if not self.datasets:
             raise ParamError("datasets", "expected at least one dataset file")
 
 
-def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
-    """Every grasp of the datasets, checked against the grasp file's model.
+def dataset_labels(files: Sequence[Path]) -> list[str]:
+    """Each file's name in default ids: its stem, or, when stems repeat (``0.npy`` in every
+    folder of a pipeline's tree), its path relative to the files' common folder, suffix dropped."""
+    stems = [f.stem for f in files]
+    if len(set(stems)) == len(stems):
+        return stems
+    resolved = [f.resolve() for f in files]
+    common = Path(os.path.commonpath([r.parent for r in resolved]))
+    return [r.relative_to(common).with_suffix("").as_posix() for r in resolved]
+
+
+def read_datasets(
+    grasp: str,
+    datasets: Sequence[str],
+    *,
+    pose: str = "grasp",
+    key: str | None = None,
+    com_frame: bool = False,
+) -> list[DatasetGrasp]:
+    """Every grasp of the datasets (files, or folders of them: `dataset_files()`), checked
+    against the grasp file's model: shapes, dtypes, poses, joint ranges.
 
     Raises
     ------
@@ -92,11 +122,29 @@ def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
     if batch.doc["rvds"] is None:
         raise GraspError(batch.file, "rvds", "mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices")
     model = batch.model()
-    num_joints = len(hand_joints(model, batch.doc["object"]["body"]))
+    try:
+        joints = hand_joints(model, batch.doc["object"]["body"])
+    except KeyError as missing:
+        raise GraspError(
+            batch.file, "object.body", f"{batch.doc['object']['body']!r} is not a body of the model"
+        ) from missing
     entries: list[DatasetGrasp] = []
     seen: dict[str, DatasetGrasp] = {}
-    for path in datasets:
-        for e in read_dataset(path, nq=int(model.nq), num_joints=num_joints):
+    files = dataset_files(datasets)
+    for path, label in zip(files, dataset_labels(files), strict=True):
+        read = read_dataset(
+            path,
+            nq=int(model.nq),
+            num_joints=len(joints),
+            pose=pose,
+            key=key,
+            joint_names=joints,
+            label=label,
+        )
+        for e in read:
+            check_joint_ranges(model, joints, e)
+            if com_frame:
+                e = replace(e, com_frame=True)
             if e.id in seen:
                 first = seen[e.id]
                 raise GraspError(
@@ -116,6 +164,10 @@ def inputs_digest(
     datasets: Sequence[str],
     entries: Sequence[DatasetGrasp] = (),
     limit_horizon: float | None = None,
+    *,
+    pose: str = "grasp",
+    key: str | None = None,
+    com_frame: bool = False,
 ) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
     the dataset files, the object files they name and a ``limit_horizon`` other than the grasp
@@ -126,10 +178,16 @@ def inputs_digest(
     h = hashlib.sha256(f"mjtvm {__version__}\n".encode())
     if limit_horizon is not None:  # None: the digest of earlier versions, whose rows had the file's
         h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
+    if (pose, key) != ("grasp", None):  # the defaults: the digest of earlier versions
+        h.update(f"pose {pose} key {key}\n".encode())
+    if com_frame:
+        h.update(b"com_frame\n")
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
-    files = model_files(batch.model_path) + [Path(p) for p in datasets]
-    files += [f for p in objects for f in model_files(Path(p))]
+    files = model_files(batch.model_path) + dataset_files(datasets)
+    for p in objects:  # an object folder: its convex pieces
+        where = Path(p)
+        files += sorted((where / "urdf" / "meshes").glob("*.obj")) if where.is_dir() else model_files(where)
     for path in files:
         h.update(f"{path.name}\n".encode())
         h.update(hashlib.sha256(path.read_bytes()).digest())
@@ -265,8 +323,18 @@ def run_rank_files(
     """
     from mjtvm.formats.files import check_output_dir, output_lock, write_files
 
-    entries = read_datasets(run.grasp, run.datasets)
-    digest = inputs_digest(run.grasp, run.datasets, entries, run.limit_horizon)
+    entries = read_datasets(
+        run.grasp, run.datasets, pose=run.pose, key=run.dataset_key, com_frame=run.com_frame
+    )
+    digest = inputs_digest(
+        run.grasp,
+        run.datasets,
+        entries,
+        run.limit_horizon,
+        pose=run.pose,
+        key=run.dataset_key,
+        com_frame=run.com_frame,
+    )
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
     checkpoint = outdir / f"{run.name}.partial.json"

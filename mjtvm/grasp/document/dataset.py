@@ -3,17 +3,19 @@ r"""Grasp datasets: many configurations of one grasp file's hand (``docs/dataset
 A dataset file holds, per grasp, either ``grasp_qpos`` (the hand's root pose
 ``[x, y, z, qw, qx, qy, qz]``, m and a unit quaternion, then the hand's joints in model order:
 `hand_joints()`) or ``qpos`` (the model's whole ``qpos``, ``nq`` numbers), and optionally
-``obj_pose`` (the object's pose, 7 numbers as the root's), ``obj_scale`` (> 0, default 1) and
-``obj_path`` (an MJCF file of the object, relative to the dataset file). Layouts:
+``obj_pose`` (the object's pose, 7 numbers as the root's), ``obj_scale`` (default 1) and
+``obj_path`` (an MJCF file of the object, or an object folder of DexGraspBench's layout: its
+convex pieces in ``urdf/meshes/*.obj``). Layouts:
 
 * ``.npz``: arrays ``grasp_qpos`` ``(N, 7 + J)`` or ``qpos`` ``(N, nq)``; ``obj_pose``
   ``(N, 7)``, ``obj_scale`` ``(N,)``, ``obj_path`` ``(N,)`` strings; optional ``id`` ``(N,)``;
-* ``.npy`` holding a 2-D number array: ``qpos`` when its width is ``nq``, else ``grasp_qpos``;
-* ``.npy`` holding one pickled dict (one grasp per file, the layout of grasp-synthesis
-  pipelines) with the keys above as 1-D arrays or numbers: loaded with ``allow_pickle=True``,
-  which runs the pickle's code, *only* after a plain load found an object array;
+* ``.npy`` holding a 2-D number array: its meaning stated by ``key`` (``qpos`` or
+  ``grasp_qpos``), never guessed from its width;
+* ``.npy`` holding one dict (DexGraspBench's per-grasp files) or a list of dicts (DexGraspNet's
+  per-object files): their keys are mapped by `pipeline_row()`; the pickle is read by
+  `DataUnpickler`, which builds numpy arrays, numbers, strings and dicts and runs nothing;
 * ``.csv`` with a header: ``grasp_qpos_0`` ... or ``qpos_0`` ..., ``obj_pose_0`` ...
-  ``obj_pose_6``, ``obj_scale``, ``obj_path``, ``id``.
+  ``obj_pose_6``, ``obj_scale``, ``obj_path``, ``id`` (numbered columns complete and in order).
 
 Every value is checked here: a malformed grasp raises one line naming the file, the grasp's
 index and the field.
@@ -23,6 +25,9 @@ from __future__ import annotations
 
 import csv
 import pickle
+import re
+import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,13 +36,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.grasp.document.checks import GraspError
+from mjtvm.grasp.document.dataset_csv import csv_rows
+from mjtvm.grasp.document.pipelines import POSES, PipelineKeyError, pipeline_row
+from mjtvm.grasp.document.safe_npy import load_npy, load_npz
 
-__all__ = ["ROOT_SIZE", "DatasetGrasp", "read_dataset"]
+__all__ = ["ROOT_SIZE", "DatasetGrasp", "dataset_files", "read_dataset"]
 
 ROOT_SIZE = 7
 """Numbers of a pose: position (3, m) then a unit quaternion (4, w-x-y-z)."""
 
+QUATERNION_TOLERANCE = 1e-6
+"""A stored quaternion's norm must be 1 within this (then it is made exactly unit)."""
+
+SCALE_RANGE = (1e-4, 1e4)
+"""``obj_scale`` must lie in this range."""
+
+POSITION_BOUND = 1e3
+"""Positions (m) must lie within this of the world's origin."""
+
 _KEYS = ("grasp_qpos", "qpos", "obj_pose", "obj_scale", "obj_path", "id")
+_SUFFIXES = (".npz", ".npy", ".csv")
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +79,10 @@ class DatasetGrasp:
     obj_scale
         The object's scale factor (> 0).
     obj_path
-        The object's MJCF file (absolute), or ``None``: the grasp file's object.
+        The object's MJCF file or object folder (absolute), or ``None``: the grasp file's object.
+    com_frame
+        The object's frame (the REFS's moments, the RVDS's twists) moved to its centre of mass,
+        the object left where ``obj_pose`` puts it (``grasp_qpos`` entries only).
     """
 
     id: str
@@ -73,10 +94,15 @@ class DatasetGrasp:
     obj_pose: NDArray[np.float64] | None = None
     obj_scale: float = 1.0
     obj_path: str | None = None
+    com_frame: bool = False
 
     def __post_init__(self) -> None:
         if (self.qpos is None) == (self.root is None):
             raise GraspError(self.source, self._field("grasp_qpos"), "expected grasp_qpos or qpos, not both")
+        if self.com_frame and self.qpos is not None:
+            raise GraspError(
+                self.source, self._field("qpos"), "the object's frame at its centre of mass needs grasp_qpos"
+            )
 
     def _field(self, key: str) -> str:
         return f"grasp {self.index}: {key}"
@@ -87,10 +113,20 @@ def _fail(path: Path, index: int, key: str, problem: str) -> GraspError:
 
 
 def _vector(path: Path, index: int, key: str, value: Any, size: int) -> NDArray[np.float64]:
+    """``value`` as ``size`` finite real numbers: booleans, complex numbers, dates, strings and
+    objects are refused, not converted (``"12"`` is not 12)."""
     try:
-        v = np.asarray(value, dtype=float).reshape(-1)
+        raw = np.asarray(value)
     except (TypeError, ValueError) as e:
         raise _fail(path, index, key, f"expected {size} numbers, got {type(value).__name__}") from e
+    if raw.dtype.kind not in "iuf":
+        raise _fail(path, index, key, f"expected real numbers, got {raw.dtype} data")
+    try:
+        with warnings.catch_warnings(), np.errstate(all="raise"):
+            warnings.simplefilter("error")
+            v = raw.astype(np.float64).reshape(-1)
+    except (FloatingPointError, RuntimeWarning, OverflowError) as e:
+        raise _fail(path, index, key, f"a number beyond float64's range ({raw.dtype})") from e
     if v.size != size:
         raise _fail(path, index, key, f"expected {size} numbers, got {v.size}")
     bad = np.flatnonzero(~np.isfinite(v))
@@ -101,17 +137,57 @@ def _vector(path: Path, index: int, key: str, value: Any, size: int) -> NDArray[
 
 def _pose(path: Path, index: int, key: str, value: Any) -> NDArray[np.float64]:
     v = _vector(path, index, key, value, ROOT_SIZE)
+    far = np.flatnonzero(np.abs(v[:3]) > POSITION_BOUND)
+    if far.size:
+        raise _fail(path, index, key, f"position {v[far[0]]} m beyond {POSITION_BOUND:g} m")
     norm = float(np.linalg.norm(v[3:]))
-    if norm < 1e-9:
+    if abs(norm - 1.0) > QUATERNION_TOLERANCE:
         raise _fail(
-            path, index, key, "expected a unit quaternion [qw, qx, qy, qz] after the position, got zeros"
+            path,
+            index,
+            key,
+            f"expected a unit quaternion [qw, qx, qy, qz] after the position (norm 1 to "
+            f"{QUATERNION_TOLERANCE:g}), got norm {norm:.9g}",
         )
-    v[3:] /= norm  # a stored quaternion's round-off; MuJoCo wants it unit
+    v[3:] /= norm  # a stored quaternion's round-off (float32 data); MuJoCo wants it unit
     return v
 
 
+def _object_path(path: Path, index: int, text: str) -> str:
+    """An object file or folder: absolute, or relative to the dataset's folder or one above it
+    (nearest first: DexGraspBench's ``obj_path`` is relative to the benchmark's root, which
+    holds its ``output/`` tree of grasps), or to the working directory."""
+    given = Path(text)
+    tries = (
+        [given] if given.is_absolute() else [d / given for d in path.resolve().parents] + [Path.cwd() / given]
+    )
+    for where in tries:
+        if where.is_file() or where.is_dir():
+            where = where.resolve()
+            if where.is_dir() and not sorted((where / "urdf" / "meshes").glob("*.obj")):
+                raise _fail(
+                    path, index, "obj_path", f"folder {str(where)!r} has no convex pieces urdf/meshes/*.obj"
+                )
+            return str(where)
+    raise _fail(path, index, "obj_path", f"no such file or folder: {text!r} (from the dataset's folder up)")
+
+
+def _text(path: Path, index: int, key: str, value: Any) -> str:
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind == "U":
+        value = str(value)
+    if isinstance(value, np.str_ | str):
+        return str(value)
+    raise _fail(path, index, key, f"expected a string, got {type(value).__name__}")
+
+
 def _grasp(
-    path: Path, index: int, values: dict[str, Any], *, nq: int, num_joints: int, default_id: str
+    path: Path,
+    index: int,
+    values: dict[str, Any],
+    *,
+    nq: int,
+    num_joints: int,
+    default_id: str,
 ) -> DatasetGrasp:
     """One grasp from its ``values`` (key -> this grasp's value), checked."""
     unknown = sorted(set(values) - set(_KEYS))
@@ -137,18 +213,20 @@ def _grasp(
     scale = 1.0
     if values.get("obj_scale") is not None:
         scale = float(_vector(path, index, "obj_scale", values["obj_scale"], 1)[0])
-        if scale <= 0:
-            raise _fail(path, index, "obj_scale", f"expected a scale factor > 0, got {scale}")
+        if not SCALE_RANGE[0] <= scale <= SCALE_RANGE[1]:
+            raise _fail(
+                path,
+                index,
+                "obj_scale",
+                f"expected a scale factor in [{SCALE_RANGE[0]:g}, {SCALE_RANGE[1]:g}], got {scale:g}",
+            )
     obj_path = None
-    if values.get("obj_path") not in (None, ""):
-        text = str(values["obj_path"])
-        where = (path.parent / text).resolve()
-        if not where.is_file():
-            raise _fail(path, index, "obj_path", f"no such file: {str(where)!r}")
-        obj_path = str(where)
+    if values.get("obj_path") is not None:
+        text = _text(path, index, "obj_path", values["obj_path"])
+        obj_path = _object_path(path, index, text) if text else None
     given = values.get("id")
     return DatasetGrasp(
-        id=default_id if given in (None, "") else str(given),
+        id=default_id if given is None or given == "" else _text(path, index, "id", given),
         source=str(path),
         index=index,
         qpos=qpos,
@@ -161,12 +239,11 @@ def _grasp(
 
 
 def _rows_npz(path: Path) -> list[dict[str, Any]]:
-    with np.load(path, allow_pickle=False) as z:
-        arrays = {k: z[k] for k in z.files}
+    arrays = load_npz(path)
     if not arrays:
         raise GraspError(str(path), "", "no arrays in the file: expected grasp_qpos or qpos")
     counts = {k: len(a) if a.ndim else 1 for k, a in arrays.items()}
-    n = counts.get("grasp_qpos", counts.get("qpos"))
+    n = counts.get("grasp_qpos", counts.get("qpos", counts.get("pregrasp_qpos", counts.get("squeeze_qpos"))))
     if n is None:
         raise _fail(path, 0, "grasp_qpos", "missing: expected an array grasp_qpos (N, 7 + J) or qpos (N, nq)")
     for k, c in counts.items():
@@ -175,58 +252,69 @@ def _rows_npz(path: Path) -> list[dict[str, Any]]:
     return [{k: a[i] for k, a in arrays.items()} for i in range(n)]
 
 
-def _rows_npy(path: Path, nq: int) -> tuple[list[dict[str, Any]], bool]:
+def _rows_npy(path: Path, key: str | None) -> tuple[list[dict[str, Any]], bool]:
     """The rows and whether the file is one per-grasp dict."""
-    try:
-        array = np.load(path, allow_pickle=False)
-    except ValueError:  # an object array: the per-grasp dict layout (a pickle)
-        value = np.load(path, allow_pickle=True)
-        item = value.item() if isinstance(value, np.ndarray) and value.shape == () else value
-        if not isinstance(item, dict):
-            raise GraspError(
-                str(path), "", "expected a number array or one pickled dict of a grasp"
-            ) from None
-        return [dict(item)], True
-    if array.ndim != 2:
-        raise GraspError(str(path), "", f"expected a 2-D array (grasps x numbers), got shape {array.shape}")
-    key = "qpos" if array.shape[1] == nq else "grasp_qpos"
-    return [{key: row} for row in array], False
+    value = load_npy(path)
+    if isinstance(value, dict):
+        return [value], True
+    if isinstance(value, list):
+        for i, item in enumerate(value):
+            if not isinstance(item, dict):
+                raise _fail(path, i, "", f"expected a list of per-grasp dicts, got a {type(item).__name__}")
+        return list(value), False
+    if not isinstance(value, np.ndarray) or value.ndim != 2:
+        shape = getattr(value, "shape", None)
+        raise GraspError(
+            str(path), "", f"expected a 2-D array (grasps x numbers) or pickled dicts, got shape {shape}"
+        )
+    if key is None:
+        raise GraspError(
+            str(path),
+            "",
+            f"a {value.shape[0]} x {value.shape[1]} array's meaning is not stated: "
+            "give --dataset-key grasp_qpos (root pose + hand joints) or qpos (the model's qpos)",
+        )
+    return [{key: row} for row in value], False
 
 
-def _rows_csv(path: Path) -> list[dict[str, Any]]:
-    with path.open(newline="", encoding="utf-8") as f:
-        table = list(csv.DictReader(f))
-    rows = []
-    for i, line in enumerate(table):
-        row: dict[str, Any] = {}
-        for column, text in line.items():
-            if column is None or text is None:
-                raise _fail(path, i, "columns", "expected as many values as the header has columns")
-            key, _, position = column.rpartition("_")
-            if column in ("obj_scale", "obj_path", "id"):
-                row[column] = text or None
-            elif key in ("grasp_qpos", "qpos", "obj_pose") and position.isdigit():
-                if text == "":
-                    raise _fail(path, i, column, "empty: expected a number")
-                try:
-                    row.setdefault(key, []).append((int(position), float(text)))
-                except ValueError as e:
-                    raise _fail(path, i, column, f"expected a number, got {text!r}") from e
-            else:
-                raise _fail(
-                    path,
-                    i,
-                    column,
-                    "unknown column (expected grasp_qpos_<i>, qpos_<i>, obj_pose_<i>, obj_scale, obj_path, id)",
-                )
-        for key in ("grasp_qpos", "qpos", "obj_pose"):
-            if key in row:
-                row[key] = [x for _, x in sorted(row[key])]
-        rows.append(row)
-    return rows
+def _natural(p: Path) -> list[Any]:
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", p.as_posix())]
 
 
-def read_dataset(path: str | Path, *, nq: int, num_joints: int) -> list[DatasetGrasp]:
+def dataset_files(paths: Sequence[str | Path]) -> list[Path]:
+    """The dataset files of ``paths``: a file as given, a folder as its ``.npz``, ``.npy`` and
+    ``.csv`` files at any depth, in natural order (``2.npy`` before ``10.npy``).
+
+    Raises
+    ------
+    GraspError
+        A folder without dataset files.
+    """
+    out: list[Path] = []
+    for given in paths:
+        p = Path(given)
+        if p.is_dir():
+            found = sorted(
+                (f for f in p.rglob("*") if f.suffix.lower() in _SUFFIXES and f.is_file()), key=_natural
+            )
+            if not found:
+                raise GraspError(str(p), "", "a folder without .npz, .npy or .csv dataset files")
+            out.extend(found)
+        else:
+            out.append(p)
+    return out
+
+
+def read_dataset(
+    path: str | Path,
+    *,
+    nq: int,
+    num_joints: int,
+    pose: str = "grasp",
+    key: str | None = None,
+    joint_names: Sequence[str] = (),
+    label: str | None = None,
+) -> list[DatasetGrasp]:
     r"""The grasps of one dataset file (``.npz``, ``.npy`` or ``.csv``; layouts in the module's doc).
 
     Parameters
@@ -237,32 +325,47 @@ def read_dataset(path: str | Path, *, nq: int, num_joints: int) -> list[DatasetG
         The model's ``nq`` (the width of ``qpos``).
     num_joints
         ``J``: the hand's joints (`hand_joints()`): ``grasp_qpos`` has ``7 + J`` numbers.
+    pose
+        ``grasp``, ``pregrasp`` or ``squeeze``: the pipeline pose ranked (``<pose>_qpos``).
+    key
+        What a 2-D ``.npy`` array holds: ``grasp_qpos`` or ``qpos`` (required for that layout).
+    joint_names
+        The hand's joints by name (``J`` of them), for DexGraspNet's ``qpos`` dicts.
+    label
+        The file's name in default ids (``<label>:<index>``, ``<label>`` for a per-grasp
+        dict); default: the file's stem.
 
     Raises
     ------
     GraspError
-        An unreadable file, or a grasp with a missing, misshapen or non-finite field: ``FILE:
-        grasp I: FIELD: problem``.
+        An unreadable or unsafe file, or a grasp with a missing, misshapen, non-real or
+        non-finite field: ``FILE: grasp I: FIELD: problem``.
     """
     p = Path(path)
     suffix = p.suffix.lower()
+    if pose not in POSES:
+        raise GraspError(str(p), "pose", f"expected one of {', '.join(POSES)}, got {pose!r}")
+    if key not in (None, "grasp_qpos", "qpos"):
+        raise GraspError(str(p), "key", f"expected grasp_qpos or qpos, got {key!r}")
     if not p.is_file():
         raise GraspError(str(p), "", "no such dataset file")
     single = False
     try:
-        if suffix == ".npz":
-            rows = _rows_npz(p)
-        elif suffix == ".npy":
-            rows, single = _rows_npy(p, nq)
-        elif suffix == ".csv":
-            rows = _rows_csv(p)
-        else:
-            raise GraspError(
-                str(p), "", f"expected a .npz, .npy or .csv dataset, got {suffix or 'no suffix'!r}"
-            )
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # a library's warning is the file's problem, not stderr's
+            if suffix == ".npz":
+                rows = _rows_npz(p)
+            elif suffix == ".npy":
+                rows, single = _rows_npy(p, key)
+            elif suffix == ".csv":
+                rows = csv_rows(p)
+            else:
+                raise GraspError(
+                    str(p), "", f"expected a .npz, .npy or .csv dataset, got {suffix or 'no suffix'!r}"
+                )
     except GraspError:
         raise
-    # A damaged pickle or zip, an over-long CSV field, a pickle naming a missing class:
+    # A damaged pickle or zip, an over-long CSV field, an unsafe pickle, a stray warning:
     except (
         OSError,
         ValueError,
@@ -271,11 +374,22 @@ def read_dataset(path: str | Path, *, nq: int, num_joints: int) -> list[DatasetG
         csv.Error,
         AttributeError,
         ImportError,
+        TypeError,
+        IndexError,
+        MemoryError,
+        Warning,
     ) as e:
         raise GraspError(str(p), "", f"cannot read the dataset ({' '.join(str(e).split())[:200]})") from e
     if not rows:
         raise GraspError(str(p), "", "no grasps in the file")
-    return [
-        _grasp(p, i, row, nq=nq, num_joints=num_joints, default_id=p.stem if single else f"{p.stem}:{i}")
-        for i, row in enumerate(rows)
-    ]
+    name = p.stem if label is None else label
+    out = []
+    for i, row in enumerate(rows):
+        try:
+            values = pipeline_row(row, pose=pose, joint_names=joint_names)
+        except PipelineKeyError as e:
+            raise _fail(p, i, e.key, e.problem) from None
+        out.append(
+            _grasp(p, i, values, nq=nq, num_joints=num_joints, default_id=name if single else f"{name}:{i}")
+        )
+    return out

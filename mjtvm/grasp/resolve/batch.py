@@ -37,6 +37,7 @@ from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.file import grasp_from_model, shipped_grasps
 from mjtvm.grasp.resolve.loaded import Grasp
 from mjtvm.grasp.resolve.model import build_spec, model_path_of
+from mjtvm.grasp.resolve.objects import com_position, folder_object, shift_frame, subtree_mass
 
 __all__ = ["BatchModels", "hand_joints"]
 
@@ -105,10 +106,13 @@ def _scale_object(spec: mujoco.MjSpec, name: str, scale: float) -> None:
         todo.extend(body.bodies)
 
 
-def _replace_object(spec: mujoco.MjSpec, name: str, obj_path: str, file: str) -> None:
-    """Put the first body of ``obj_path``'s world, named ``name``, in place of the file's object."""
+def _replace_object(
+    spec: mujoco.MjSpec, name: str, obj_path: str, file: str, other: mujoco.MjSpec | None = None
+) -> None:
+    """Put the first body of ``obj_path``'s world (or of ``other``, built from it), named
+    ``name``, in place of the file's object."""
     try:
-        other = mujoco.MjSpec.from_file(obj_path)
+        other = other or mujoco.MjSpec.from_file(obj_path)
     except ValueError as e:
         raise GraspError(
             file, "obj_path", f"MuJoCo cannot load {obj_path!r}: {' '.join(str(e).split())}"
@@ -162,6 +166,9 @@ class BatchModels:
         self._models: OrderedDict[tuple[str | None, float, bool], tuple[mujoco.MjModel, str | None]] = (
             OrderedDict()
         )
+        # (object file, scale) -> the centre of mass offset and its model (--com-frame), oldest first
+        self._com: dict[tuple[str | None, float], np.ndarray] = {}
+        self._com_models: OrderedDict[tuple[str | None, float], mujoco.MjModel] = OrderedDict()
 
     @classmethod
     def from_file(cls, source: str | Path) -> BatchModels:
@@ -195,9 +202,14 @@ class BatchModels:
                 self._spec = build_spec(self.doc, self.model_path, self.file)
             spec = self._spec.copy()
             name = self.doc["object"]["body"]
+            folder = obj_path is not None and Path(obj_path).is_dir()
             if obj_path is not None:
-                _replace_object(spec, name, obj_path, self.file)
-            if scale != 1.0:
+                other = None
+                if folder:  # scaled as it is built, at the grasp file's object mass
+                    mass = subtree_mass(self.model(), name)
+                    other = folder_object(obj_path, mass=mass, scale=scale, file=self.file)
+                _replace_object(spec, name, obj_path, self.file, other)
+            if scale != 1.0 and not folder:
                 _scale_object(spec, name, scale)
             body = None
             if root:
@@ -231,7 +243,11 @@ class BatchModels:
             As [`grasp_from_model()`][mjtvm.grasp.resolve.file.grasp_from_model], or a ``qpos`` whose joints
             cannot be named (an unnamed or ball joint).
         """
-        model, root_body = self._compiled(entry.obj_path, entry.obj_scale, entry.root is not None)
+        root = entry.root is not None
+        key = (entry.obj_path, float(entry.obj_scale), root)
+        model, root_body = self._compiled(entry.obj_path, entry.obj_scale, root)
+        if entry.com_frame:
+            model = self._com_model(entry, model)
         obj = dict(self.doc["object"])
         config: dict[str, Any]
         if entry.qpos is not None:
@@ -256,8 +272,45 @@ class BatchModels:
         if entry.obj_pose is not None:
             obj["position"] = [float(x) for x in entry.obj_pose[:3]]
             obj["quaternion"] = [float(x) for x in entry.obj_pose[3:]]
+        if entry.com_frame:  # the same object, posed by its old frame: the new origin is at p + R c
+            if obj.get("position") is None:
+                raise GraspError(
+                    entry.source,
+                    f"grasp {entry.index}: obj_pose",
+                    "the centre-of-mass frame needs the object's pose",
+                )
+            obj["position"] = com_position(obj, self._com[key[:2]])
         doc = {**self.doc, "configuration": config, "object": obj}
         return grasp_from_model(doc, self.path, model, self.model_path)
+
+    def _com_model(self, entry: DatasetGrasp, model: mujoco.MjModel) -> mujoco.MjModel:
+        """The entry's model with the object's frame at its centre of mass (compiled once)."""
+        name = self.doc["object"]["body"]
+        key = (entry.obj_path, float(entry.obj_scale))
+        if key not in self._com_models:
+            offset = np.array(model.body_ipos[int(model.body(name).id)])
+            spec = build_spec(self.doc, self.model_path, self.file)
+            if entry.obj_path is not None:
+                other = None
+                if Path(entry.obj_path).is_dir():
+                    mass = subtree_mass(self.model(), name)
+                    other = folder_object(entry.obj_path, mass=mass, scale=entry.obj_scale, file=self.file)
+                _replace_object(spec, name, entry.obj_path, self.file, other)
+            if entry.obj_scale != 1.0 and not (entry.obj_path is not None and Path(entry.obj_path).is_dir()):
+                _scale_object(spec, name, entry.obj_scale)
+            shift_frame(spec, name, offset)
+            found = spec.body(_root_body(spec, self.doc, self.file))
+            if found.parent.name == spec.worldbody.name and not any(
+                j.type == _JNT.mjJNT_FREE for j in found.joints
+            ):
+                found.mocap = True
+            self._com_models[key] = spec.compile()
+            self._com[key] = offset
+            while len(self._com_models) > self.cache_size:  # bounded as the plain models
+                dropped, _ = self._com_models.popitem(last=False)
+                self._com.pop(dropped, None)
+        self._com_models.move_to_end(key)
+        return self._com_models[key]
 
 
 def _named_qpos(model: mujoco.MjModel, entry: DatasetGrasp, file: str) -> dict[str, Any]:

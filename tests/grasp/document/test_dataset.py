@@ -26,22 +26,26 @@ def _rows(n: int = 3) -> np.ndarray:
 
 def test_npz_layout(tmp_path: Path) -> None:
     path = tmp_path / "d.npz"
-    pose = np.tile([0.1, 0.2, 0.3, 2.0, 0.0, 0.0, 0.0], (3, 1))  # a quaternion of norm 2
+    pose = np.tile([0.1, 0.2, 0.3, 1.0 + 5e-7, 0.0, 0.0, 0.0], (3, 1))  # float32-like round-off
     np.savez(path, grasp_qpos=_rows(), obj_pose=pose, obj_scale=np.array([1.0, 0.5, 2.0]))
     got = read_dataset(path, nq=NQ, num_joints=J)
     assert [e.id for e in got] == ["d:0", "d:1", "d:2"]
     assert got[1].obj_scale == 0.5
-    assert np.allclose(got[2].obj_pose, [0.1, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0])  # made unit
+    assert got[2].obj_pose is not None and got[2].obj_pose[3] == 1.0  # made exactly unit
     assert np.allclose(got[0].joints, np.arange(J) * 0.01)
     assert got[0].qpos is None
 
 
 def test_npy_array_and_dict_layouts(tmp_path: Path) -> None:
     np.save(tmp_path / "q.npy", np.zeros((2, NQ)))
-    got = read_dataset(tmp_path / "q.npy", nq=NQ, num_joints=J)
+    with pytest.raises(
+        GraspError, match=r"q\.npy: a 2 x 27 array's meaning is not stated: give --dataset-key"
+    ):
+        read_dataset(tmp_path / "q.npy", nq=NQ, num_joints=J)
+    got = read_dataset(tmp_path / "q.npy", nq=NQ, num_joints=J, key="qpos")
     assert got[0].qpos is not None and got[0].root is None and got[1].id == "q:1"
     np.save(tmp_path / "g.npy", _rows(2))
-    assert read_dataset(tmp_path / "g.npy", nq=NQ, num_joints=J)[0].root is not None
+    assert read_dataset(tmp_path / "g.npy", nq=NQ, num_joints=J, key="grasp_qpos")[0].root is not None
     np.save(tmp_path / "one.npy", {"grasp_qpos": _rows(1)[0], "obj_scale": 1.5}, allow_pickle=True)
     (one,) = read_dataset(tmp_path / "one.npy", nq=NQ, num_joints=J)
     assert one.id == "one" and one.obj_scale == 1.5
@@ -67,7 +71,7 @@ def test_csv_layout(tmp_path: Path) -> None:
         ({"obj_scale": np.ones(2)}, r"grasp 0: grasp_qpos: missing"),
         (
             {"grasp_qpos": _rows(2), "obj_scale": np.array([1.0, -1.0])},
-            r"grasp 1: obj_scale: expected a scale factor > 0",
+            r"grasp 1: obj_scale: expected a scale factor in \[0.0001, 10000\], got -1",
         ),
         (
             {"grasp_qpos": _rows(2), "obj_pose": np.zeros((2, 7))},
