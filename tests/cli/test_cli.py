@@ -501,13 +501,13 @@ def test_full_stdout_is_one_line():
 
 def test_ctrl_c_during_a_sweep_is_one_line_and_leaves_no_partial_file(tmp_path):
     """SIGINT once the sweep's progress bar has moved (event-driven: inside the LPs, whatever the
-    machine's load), on a grid long enough (36 x 30 points) not to finish first."""
+    machine's load), on a grid long enough (144 x 30 points) not to finish first."""
     import re
     import signal
     import threading
 
-    mus = ",".join(f"{0.05 * k:.2f}" for k in range(1, 13))
-    words = ["sweep", "--mu", mus, "--mg", "1,2,3", "--out", str(tmp_path)]
+    mus = ",".join(f"{0.02 * k:.2f}" for k in range(1, 25))
+    words = ["sweep", "--mu", mus, "--mg", "0.5,1,1.5,2,2.5,3", "--out", str(tmp_path)]
     proc = subprocess.Popen(
         [*_console_script(), *words], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
