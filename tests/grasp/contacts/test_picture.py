@@ -4,9 +4,6 @@ nothing outside the canvas (MuJoCo's EGL renderer, as the CLI sets it)."""
 from __future__ import annotations
 
 import copy
-import os
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 import pytest
