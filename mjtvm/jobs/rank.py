@@ -23,8 +23,8 @@ from typing import Any
 from tqdm import tqdm
 
 from mjtvm.errors import ModelError, ParamError, SolverError, StateError
+from mjtvm.grasp import NoContactError
 from mjtvm.grasp.contacts.report import kept_contacts
-from mjtvm.grasp.document.checks import NoContactError
 from mjtvm.grasp.document.dataset import DatasetGrasp
 from mjtvm.grasp.resolve.batch import BatchModels
 from mjtvm.jobs.pool import forks, run_calls

@@ -26,8 +26,10 @@ from mjtvm.grasp import GraspError
 from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
 from mjtvm.grasp.resolve.batch import hand_joints
 from mjtvm.jobs.checkpoint import RowCheckpoint
+from mjtvm.jobs.figures import ALPHA_UNIT
 from mjtvm.jobs.files import csv_text, model_files, stderr
-from mjtvm.jobs.rank import batch_models, rank_rows
+from mjtvm.jobs.rank import MEASURES, batch_models, rank_rows
+from mjtvm.jobs.rank_order import OBJECT_COLUMNS, check_sort, object_rows, objects_summary, ranked_rows
 from mjtvm.jobs.rank_row import flat_row, table_columns
 
 __all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
@@ -60,6 +62,13 @@ class RankFiles:
     limit_horizon
         Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's
         ``joint_limits.horizon``.
+    refuse_penetration
+        A grasp deeper than ``max_penetration`` fails (``penetration``) instead of being
+        evaluated and flagged.
+    measures
+        ``classic`` or ``none`` ([`MEASURES`][mjtvm.jobs.rank.MEASURES]).
+    sort
+        The sort column of the files ([`SORT_COLUMNS`][mjtvm.jobs.rank_order.SORT_COLUMNS]).
     """
 
     grasp: str
@@ -72,10 +81,16 @@ class RankFiles:
     quiet: bool = False
     plots: bool = True
     limit_horizon: float | None = None
+    refuse_penetration: bool = False
+    measures: str = "classic"
+    sort: str = "tvmmp"
 
     def __post_init__(self) -> None:
         if not self.datasets:
             raise ParamError("datasets", "expected at least one dataset file")
+        if self.measures not in MEASURES:
+            raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {self.measures!r}")
+        check_sort(self.sort)
 
 
 def read_datasets(grasp: str, datasets: Sequence[str]) -> list[DatasetGrasp]:
@@ -116,16 +131,20 @@ def inputs_digest(
     datasets: Sequence[str],
     entries: Sequence[DatasetGrasp] = (),
     limit_horizon: float | None = None,
+    refuse_penetration: bool = False,
+    measures: str = "classic",
 ) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
-    the dataset files, the object files they name and a ``limit_horizon`` other than the grasp
-    file's. ``--resume`` keeps a row only if its ``inputs`` equals this."""
+    the dataset files, the object files they name, a ``limit_horizon`` other than the grasp
+    file's, ``refuse_penetration`` and ``measures``. ``--resume`` keeps a row only if its
+    ``inputs`` equals this (``--sort`` orders the files, not the rows: not in it)."""
     from mjtvm import __version__
 
     batch = batch_models(grasp)
     h = hashlib.sha256(f"mjtvm {__version__}\n".encode())
     if limit_horizon is not None:  # None: the digest of earlier versions, whose rows had the file's
         h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
+    h.update(f"refuse_penetration {bool(refuse_penetration)}\nmeasures {measures}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
     files = model_files(batch.model_path) + [Path(p) for p in datasets]
@@ -195,39 +214,74 @@ def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
     doubtful = sum(r["certified"] is False for r in rows)
     if doubtful:
         lines.append(f"warning: {doubtful} rows have an alpha that is not certified (column certified)")
+    deep = sum(r.get("penetration_exceeded") is True for r in solved)
+    if deep:
+        lines.append(f"{deep} evaluated rows are deeper than max_penetration (column penetration_exceeded)")
+    per_object = objects_summary(rows)
+    if per_object:
+        lines.append(per_object)
     return "\n".join(lines)
 
 
+TVMMP_AXIS = "TVMMP alpha " + ALPHA_UNIT
+"""The label of a TVMMP axis (the unit of [`ALPHA_UNIT`][mjtvm.jobs.figures.ALPHA_UNIT])."""
+
+
+def _apart(rows: Sequence[dict[str, Any]]) -> str:
+    """The count of the rows drawn apart: infeasible (evaluated, no TVMMP) and failed."""
+    infeasible = sum(r["failure"] is None and r["tvmmp"] is None for r in rows)
+    failed = sum(r["failure"] is not None for r in rows)
+    return f"not drawn: {infeasible} infeasible, {failed} failed"
+
+
 def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
-    """``objects``: TVMMP per object (every evaluated grasp a point, failed grasps left out);
-    ``tvmmp``: the histogram of TVMMP; ``epsilon``: TVMMP against the L1 epsilon. PNG bytes."""
+    """``objects``: TVMMP per object (every feasible grasp a point; per object, its infeasible
+    and failed grasps counted in a strip below the axis); ``tvmmp``: the histogram of TVMMP;
+    ``epsilon``: TVMMP against the L1 epsilon. Infeasible and failed grasps are never drawn at
+    0: counted in each figure's title or strip. PNG bytes."""
     from mjtvm.jobs.figures import lift_axes
 
     solved = [r for r in rows if r["failure"] is None]
-    objects = sorted({r["object"] for r in solved}) or ["(none)"]
-    fig, ax = lift_axes(max(4.0, 0.8 * len(objects) + 2.0), 3.2)
+    feasible = [r for r in solved if r["tvmmp"] is not None]
+    objects = sorted({r["object"] for r in rows}) or ["(none)"]
+    fig, ax = lift_axes(max(4.0, 0.8 * len(objects) + 2.0), 3.4)
     for i, name in enumerate(objects):
-        values = [r["tvmmp"] or 0.0 for r in solved if r["object"] == name]
+        values = [r["tvmmp"] for r in feasible if r["object"] == name]
         jitter = np.linspace(-0.2, 0.2, len(values)) if len(values) > 1 else np.zeros(len(values))
         ax.plot(i + jitter, values, "o", ms=3, alpha=0.7)
+        mine = [r for r in rows if r["object"] == name]
+        inf = sum(r["failure"] is None and r["tvmmp"] is None for r in mine)
+        bad = sum(r["failure"] is not None for r in mine)
+        ax.annotate(
+            f"inf {inf}\nfail {bad}",
+            (i, 0.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(0, -28),
+            textcoords="offset points",
+            ha="center",
+            va="top",
+            fontsize=6,
+            color="tab:red",
+        )
     ax.set_xticks(range(len(objects)), objects, rotation=30, fontsize=7)
-    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
-    ax.set_title(f"TVMMP per object ({len(solved)} grasps evaluated)", fontsize=9)
+    ax.set_xlabel("object (below: infeasible and failed grasps, not drawn)", fontsize=7)
+    ax.set_ylabel(TVMMP_AXIS, fontsize=7)
+    ax.set_title(f"TVMMP per object ({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     out = {"objects": _png(fig)}
     fig, ax = lift_axes(4.5, 3.2)
-    ax.hist([r["tvmmp"] or 0.0 for r in solved], bins=20)
-    ax.set_xlabel("TVMMP (0 where infeasible)", fontsize=8)
-    ax.set_ylabel("grasps", fontsize=8)
-    ax.set_title("TVMMP histogram", fontsize=9)
+    ax.hist([r["tvmmp"] for r in feasible], bins=20)
+    ax.set_xlabel(TVMMP_AXIS, fontsize=7)
+    ax.set_ylabel("grasps (count)", fontsize=8)
+    ax.set_title(f"TVMMP histogram ({_apart(rows)})", fontsize=8)
     out["tvmmp"] = _png(fig)
     fig, ax = lift_axes(4.5, 3.2)
-    pairs = [(r["epsilon_l1"], r["tvmmp"] or 0.0) for r in solved if r.get("epsilon_l1") is not None]
+    pairs = [(r["epsilon_l1"], r["tvmmp"]) for r in feasible if r.get("epsilon_l1") is not None]
     ax.plot([e for e, _ in pairs], [v for _, v in pairs], "o", ms=3, alpha=0.7)
     ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
-    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
-    ax.set_title(f"TVMMP against the epsilon ({len(pairs)} grasps)", fontsize=9)
+    ax.set_ylabel(TVMMP_AXIS, fontsize=7)
+    ax.set_title(f"TVMMP against the epsilon ({len(pairs)} grasps; {_apart(rows)})", fontsize=8)
     ax.grid(alpha=0.3)
     out["epsilon"] = _png(fig)
     return out
@@ -266,7 +320,9 @@ def run_rank_files(
     from mjtvm.formats.files import check_output_dir, output_lock, write_files
 
     entries = read_datasets(run.grasp, run.datasets)
-    digest = inputs_digest(run.grasp, run.datasets, entries, run.limit_horizon)
+    digest = inputs_digest(
+        run.grasp, run.datasets, entries, run.limit_horizon, run.refuse_penetration, run.measures
+    )
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
     checkpoint = outdir / f"{run.name}.partial.json"
@@ -290,6 +346,8 @@ def run_rank_files(
                 done=done,
                 on_rows=on_rows,
                 limit_horizon=run.limit_horizon,
+                refuse_penetration=run.refuse_penetration,
+                measures=run.measures,
             ),
             resume=run.resume,
             earlier=out_json,
@@ -298,9 +356,14 @@ def run_rank_files(
             emit=emit,
             notice=notice,
         )
+        rows = ranked_rows(rows, run.sort)
+        objects = object_rows(rows)
         files: dict[Path, bytes | str] = {
             out_json: json.dumps(rows, indent=1) + "\n",
             out_csv: rows_csv(rows),
+            outdir / f"{run.name}-objects.csv": csv_text(
+                objects, list(OBJECT_COLUMNS), cell=lambda v: "" if v is None else v
+            ),
         }
         parquet = rows_parquet(rows)
         if parquet is not None:
