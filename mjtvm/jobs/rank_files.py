@@ -244,7 +244,7 @@ def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
     solved = [r for r in rows if r["failure"] is None]
     feasible = [r for r in solved if r["tvmmp"] is not None]
     objects = sorted({r["object"] for r in rows}) or ["(none)"]
-    fig, ax = lift_axes(max(4.0, 0.8 * len(objects) + 2.0), 3.4)
+    fig, ax = lift_axes(max(4.5, 0.8 * len(objects) + 2.0), 4.0)
     for i, name in enumerate(objects):
         values = [r["tvmmp"] for r in feasible if r["object"] == name]
         jitter = np.linspace(-0.2, 0.2, len(values)) if len(values) > 1 else np.zeros(len(values))
@@ -264,9 +264,9 @@ def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
             color="tab:red",
         )
     ax.set_xticks(range(len(objects)), objects, rotation=30, fontsize=7)
-    ax.set_xlabel("object (below: infeasible and failed grasps, not drawn)", fontsize=7)
+    ax.set_xlabel("object (below it: its infeasible and failed grasps, not drawn)", fontsize=7, labelpad=34)
     ax.set_ylabel(TVMMP_AXIS, fontsize=7)
-    ax.set_title(f"TVMMP per object ({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
+    ax.set_title(f"TVMMP per object\n({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     out = {"objects": _png(fig)}
@@ -274,14 +274,14 @@ def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
     ax.hist([r["tvmmp"] for r in feasible], bins=20)
     ax.set_xlabel(TVMMP_AXIS, fontsize=7)
     ax.set_ylabel("grasps (count)", fontsize=8)
-    ax.set_title(f"TVMMP histogram ({_apart(rows)})", fontsize=8)
+    ax.set_title(f"TVMMP histogram\n({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
     out["tvmmp"] = _png(fig)
     fig, ax = lift_axes(4.5, 3.2)
     pairs = [(r["epsilon_l1"], r["tvmmp"]) for r in feasible if r.get("epsilon_l1") is not None]
     ax.plot([e for e, _ in pairs], [v for _, v in pairs], "o", ms=3, alpha=0.7)
     ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
     ax.set_ylabel(TVMMP_AXIS, fontsize=7)
-    ax.set_title(f"TVMMP against the epsilon ({len(pairs)} grasps; {_apart(rows)})", fontsize=8)
+    ax.set_title(f"TVMMP against the epsilon\n({len(pairs)} feasible grasps; {_apart(rows)})", fontsize=8)
     ax.grid(alpha=0.3)
     out["epsilon"] = _png(fig)
     return out
