@@ -14,7 +14,7 @@ import hashlib
 import io
 import json
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -164,8 +164,36 @@ def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
-    flat = rows_table(rows)
-    return csv_text(flat, table_columns(flat), cell=lambda v: "" if v is None else v)
+    return "".join(rows_csv_chunks(rows))
+
+
+def rows_csv_chunks(rows: Sequence[dict[str, Any]]) -> Iterator[str]:
+    """[`rows_csv()`][mjtvm.jobs.rank_files.rows_csv] line by line: the header, then each row
+    flattened as it is written (one flattened row held at a time, not the table)."""
+    columns = _columns(rows)
+    yield csv_text([], columns)
+    for row in rows:
+        yield csv_text([flat_row(row)], columns, cell=lambda v: "" if v is None else v).split("\r\n", 1)[1]
+
+
+def _columns(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """[`table_columns()`][mjtvm.jobs.rank_row.table_columns] of the rows, flattening one at a time."""
+    keys: dict[str, None] = {}
+    for row in rows:
+        keys.update(dict.fromkeys(flat_row(row)))
+    return table_columns([keys])
+
+
+def rows_json_chunks(rows: Sequence[dict[str, Any]]) -> Iterator[str]:
+    """The text of ``json.dumps(rows, indent=1) + "\\n"``, one row at a time."""
+    if not rows:
+        yield "[]\n"
+        return
+    yield "["
+    for i, row in enumerate(rows):
+        text = json.dumps(row, indent=1).replace("\n", "\n ")
+        yield ("\n " if i == 0 else ",\n ") + text
+    yield "\n]\n"
 
 
 def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
@@ -358,9 +386,9 @@ def run_rank_files(
         )
         rows = ranked_rows(rows, run.sort)
         objects = object_rows(rows)
-        files: dict[Path, bytes | str] = {
-            out_json: json.dumps(rows, indent=1) + "\n",
-            out_csv: rows_csv(rows),
+        files: dict[Path, bytes | str | Iterator[str]] = {
+            out_json: rows_json_chunks(rows),  # written row by row
+            out_csv: rows_csv_chunks(rows),
             outdir / f"{run.name}-objects.csv": csv_text(
                 objects, list(OBJECT_COLUMNS), cell=lambda v: "" if v is None else v
             ),

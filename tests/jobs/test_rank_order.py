@@ -149,3 +149,23 @@ def test_measures_none_leaves_the_measure_columns_empty(tmp_path: Path) -> None:
     (full,) = _rows(path)
     assert row["tvmmp"] == full["tvmmp"] and full["epsilon_l1"] is not None
     assert all(row[c] is None for c in CLASSIC_COLUMNS)
+
+
+def test_the_files_written_row_by_row_are_the_whole_texts(tmp_path: Path) -> None:
+    from mjtvm.formats.files import write_files
+    from mjtvm.jobs.files import csv_text
+    from mjtvm.jobs.rank_files import rows_csv_chunks, rows_json_chunks, rows_table
+    from mjtvm.jobs.rank_row import table_columns
+
+    rows = ranked_rows(
+        _rows(_subset(tmp_path, ["shadow-sphere-000", "shadow-sphere-003", "shadow-sphere-032-open"]))
+    )
+    flat = rows_table(rows)
+    whole_csv = csv_text(flat, table_columns(flat), cell=lambda v: "" if v is None else v)
+    for chunks, whole in (
+        (rows_json_chunks(rows), json.dumps(rows, indent=1) + "\n"),
+        (rows_json_chunks([]), "[]\n"),
+        (rows_csv_chunks(rows), whole_csv),
+    ):
+        (path,) = write_files({tmp_path / "out.txt": chunks})
+        assert path.read_bytes().decode("utf-8") == whole
