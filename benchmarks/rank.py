@@ -3,7 +3,7 @@ r"""Speed and memory of ``mjtvm rank`` (issue 34, points 4 and 5), in CPU time b
 Measured on the shipped Shadow example ([`RANK_GRASP`][benchmarks.rank.RANK_GRASP] on
 ``mjtvm/data/examples/shadow-sphere-dataset.npz``: 36 grasps, 4 of them broken on purpose):
 
-* **throughput** ([`bench_throughput()`][benchmarks.rank.bench_throughput]): ``rank_row`` over every grasp in
+* **throughput** ([`bench_throughput()`][benchmarks.rank.bench_throughput]): ``rank_row`` (``measures="classic"`` and ``"none"``) over every grasp in
   this process, with the classic measures and without them (TVMMP and its diagnosis alone),
   in grasps per CPU-second (``time.process_time``) beside the wall time;
 * **Problem 2 over HiGHS** (`bench_p2_floor()`): ``tvmmp(state, witnesses=False)`` over the
@@ -31,8 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -81,19 +80,6 @@ def _verdict(value: float, target: float, share: float, *, at_least: bool) -> di
     return {"target": target, "core_share": share, "loaded": loaded, "met": None if loaded else ok}
 
 
-@contextmanager
-def _without_classic() -> Iterator[None]:
-    """``rank_row`` without the classic measures (TVMMP and its diagnosis only)."""
-    import mjtvm.jobs.rank as rank
-
-    saved = rank._classic_columns
-    rank._classic_columns = lambda state: {}
-    try:
-        yield
-    finally:
-        rank._classic_columns = saved
-
-
 def _cpu_wall(fn: Callable[[], object]) -> tuple[float, float]:
     c, w = time.process_time(), time.perf_counter()
     fn()
@@ -104,16 +90,18 @@ def bench_throughput(*, repeats: int = 3) -> dict[str, Any]:
     """Grasps per CPU-second of ``rank_row`` over the example dataset, with (``classic``) and
     without (``none``) the classic measures: medians over ``repeats`` passes after a warm one."""
     from mjtvm.jobs.rank import batch_models, rank_row
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     entries = read_datasets(RANK_GRASP, [str(_dataset())])
     batch = batch_models(RANK_GRASP)
     out: dict[str, Any] = {"grasps": len(entries)}
     for key, target in (("classic", TARGETS["rank_classic"]), ("none", TARGETS["rank_none"])):
-        with _without_classic() if key == "none" else _nothing():
-            for e in entries:  # warm: models compiled, ranges validated, imports done
-                rank_row(batch, e)
-            runs = [_cpu_wall(lambda: [rank_row(batch, e) for e in entries]) for _ in range(max(1, repeats))]
+        for e in entries:  # warm: models compiled, ranges validated, imports done
+            rank_row(batch, e, measures=key)
+        runs = [
+            _cpu_wall(lambda: [rank_row(batch, e, measures=key) for e in entries])  # noqa: B023
+            for _ in range(max(1, repeats))
+        ]
         cpu = statistics.median(r[0] for r in runs)
         wall = statistics.median(r[1] for r in runs)
         gps = len(entries) / cpu
@@ -128,15 +116,10 @@ def bench_throughput(*, repeats: int = 3) -> dict[str, Any]:
     return out
 
 
-@contextmanager
-def _nothing() -> Iterator[None]:
-    yield
-
-
 def _states() -> list[Any]:
     from mjtvm.errors import MjtvmError
     from mjtvm.jobs.rank import batch_models
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     batch = batch_models(RANK_GRASP)
     states = []
@@ -212,7 +195,7 @@ def bench_jobs(*, jobs: int = 2, copies: int = JOBS_COPIES) -> dict[str, Any]:
     """``rank_rows`` of the example repeated ``copies`` times on 1 and ``jobs`` processes: wall
     times, speed-up, rows identical; the core share counts the workers' CPU time."""
     from mjtvm.jobs.rank import rank_rows
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     base = read_datasets(RANK_GRASP, [str(_dataset())])
     entries = [replace(e, id=f"{e.id}#{k}") for k in range(copies) for e in base]

@@ -17,6 +17,7 @@ from mjtvm.cli.vocabulary import (
     out_options,
     parallel_options,
     quiet_option,
+    rank_order_options,
     resume_option,
 )
 from mjtvm.errors import OptionError
@@ -27,8 +28,9 @@ _HELP = "rank a dataset of grasp configurations by TVMMP: one row per grasp, CSV
 _DESCRIPTION = (
     "Evaluate every grasp of the datasets (.npz, .npy, DexGraspBench per-grasp and DexGraspNet per-object .npy dicts, .csv, or folders of them: docs/datasets.md) "
     "with the grasp file's model, contact rules, ranges, REFS and RVDS; write NAME.json, NAME.csv, "
-    "NAME.parquet (with pyarrow), NAME-objects.png, NAME-tvmmp.png and NAME-epsilon.png, and a summary on stderr. "
-    "A grasp that fails is a row with its reason."
+    "NAME.parquet (with pyarrow), NAME-objects.csv, NAME-objects.png, NAME-tvmmp.png and NAME-epsilon.png, and a summary on stderr. "
+    "Rows are sorted and ranked by TVMMP (or --sort), infeasible then failed after. "
+    "A grasp that fails is a row with its reason; one deeper than max_penetration is evaluated and flagged."
 )
 
 
@@ -53,6 +55,7 @@ def add_rank(sub: Subparsers) -> None:
     out_options(p, name="rank")
     resume_option(p)
     no_plots_option(p)
+    rank_order_options(p)
     quiet_option(p)
     p.set_defaults(func=_cmd_rank)
 
@@ -75,6 +78,9 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         pose=args.pose,
         dataset_key=args.dataset_key,
         com_frame=args.com_frame,
+        refuse_penetration=args.refuse_penetration,
+        measures=args.measures,
+        sort=args.sort,
     )
     for path in run_rank_files(run, emit=emit):
         emit(f"wrote {path}")

@@ -358,3 +358,30 @@ def dataset_options(p: argparse.ArgumentParser) -> None:
         help="the object's frame at its centre of mass: the REFS's moments (the weight's is then 0) "
         "and the RVDS's twists about it; the object stays where the dataset poses it (`grasp_qpos` rows only)",
     )
+
+
+def rank_order_options(p: argparse.ArgumentParser) -> None:
+    """``--refuse-penetration``, ``--measures classic|none``, ``--sort COLUMN`` of ``mjtvm rank``."""
+    from mjtvm.jobs.rank_order import SORT_COLUMNS
+
+    p.add_argument(
+        "--refuse-penetration",
+        action="store_true",
+        help="a grasp deeper than the grasp file's max_penetration fails (failure penetration) "
+        "instead of being evaluated and flagged (column penetration_exceeded)",
+    )
+    p.add_argument(
+        "--measures",
+        choices=("classic", "none"),
+        default="classic",
+        help="classic: the classic measures beside the TVMMP (default); none: TVMMP alone, "
+        "the measure columns empty",
+    )
+    p.add_argument(
+        "--sort",
+        choices=SORT_COLUMNS,
+        default="tvmmp",
+        metavar="COLUMN",
+        help="the column the rows are sorted and ranked by, descending (higher is better for "
+        f"every measure): {', '.join(SORT_COLUMNS)} (default tvmmp)",
+    )

@@ -37,7 +37,7 @@ import os
 import re
 import sys
 import tempfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 
 from mjtvm.errors import OutputError
@@ -302,14 +302,18 @@ def output_lock(
             os.close(fd)  # closing releases the flock
 
 
-def _write_temp(target: Path, data: bytes, option: str) -> Path:
+def _write_temp(target: Path, data: bytes | Iterable[str], option: str) -> Path:
     try:
         fd, tmp = _temporary(target.parent, target.name)
     except OSError as e:
         raise OutputError(option, str(target), f"cannot write ({_problem(e)})") from e
     try:
         with os.fdopen(fd, "wb") as f:
-            f.write(data)
+            if isinstance(data, bytes):
+                f.write(data)
+            else:  # chunks, written as they come: the whole text is never held
+                for chunk in data:
+                    f.write(chunk.encode("utf-8"))
             f.flush()
             os.fsync(f.fileno())
         # mkstemp's 0600 is meant for secrets, not results: give the mode open() would give.
@@ -325,10 +329,11 @@ def _write_temp(target: Path, data: bytes, option: str) -> Path:
     return Path(tmp)
 
 
-def write_files(files: Mapping[Path, bytes | str], *, option: str = "--out") -> list[Path]:
+def write_files(files: Mapping[Path, bytes | str | Iterable[str]], *, option: str = "--out") -> list[Path]:
     """Write every file of a set atomically (module docstring); returns the targets in order.
 
-    ``str`` contents are encoded as UTF-8. Nothing is renamed until every temporary file is
+    ``str`` contents are encoded as UTF-8; an iterable of ``str`` chunks (a generator) is
+    written chunk by chunk, as UTF-8. Nothing is renamed until every temporary file is
     complete; on any failure the temporary files are removed and the targets are untouched.
 
     Raises

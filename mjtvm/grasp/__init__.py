@@ -13,7 +13,7 @@ importable from its module.
 
 from mjtvm.grasp.actuation.dcmotor import DCMotor
 from mjtvm.grasp.actuation.servo import ServoDatasheet
-from mjtvm.grasp.document.checks import GraspError
+from mjtvm.grasp.document.checks import GraspError, NoContactError
 from mjtvm.grasp.document.dataset import DatasetGrasp, read_dataset
 from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.batch import BatchModels, hand_joints
@@ -28,6 +28,7 @@ __all__ = [
     "DatasetGrasp",
     "Grasp",
     "GraspError",
+    "NoContactError",
     "ServoDatasheet",
     "export_state",
     "grasp_state",

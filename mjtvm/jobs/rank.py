@@ -23,6 +23,7 @@ from typing import Any
 from tqdm import tqdm
 
 from mjtvm.errors import ModelError, ParamError, SolverError, StateError
+from mjtvm.grasp import NoContactError
 from mjtvm.grasp.contacts.report import kept_contacts
 from mjtvm.grasp.document.dataset import DatasetGrasp
 from mjtvm.grasp.resolve.batch import BatchModels
@@ -33,11 +34,12 @@ from mjtvm.model.limits import with_limit_horizon
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.tvmmp import tvmmp
 
-__all__ = ["CLASSIC_COLUMNS", "FAILURES", "RankRow", "batch_models", "rank_row", "rank_rows"]
+__all__ = ["CLASSIC_COLUMNS", "FAILURES", "MEASURES", "RankRow", "batch_models", "rank_row", "rank_rows"]
 
 FAILURES = ("no contact", "penetration", "grasp", "state", "solver")
-"""The values of a failed row's ``failure``: a selection that does not touch the object, a
-finger deeper than ``max_penetration``, another grasp-file or configuration error (an untyped
+"""The values of a failed row's ``failure``: no contact within ``contact_tolerance`` (the
+nearest distance in the reason and ``nearest_distance``), a finger deeper than
+``max_penetration`` (only with ``refuse_penetration``: else evaluated and flagged), another grasp-file or configuration error (an untyped
 touching geom, an equality the configuration breaks, an unusable root), a state the core refuses, a
 solver that fails."""
 
@@ -88,11 +90,25 @@ def _object_name(entry: DatasetGrasp, batch: BatchModels) -> str:
     return str(batch.doc["object"]["body"])
 
 
+MEASURES = ("classic", "none")
+"""``--measures``: ``classic`` (the classic measures beside the TVMMP) or ``none`` (TVMMP alone:
+the measure columns empty)."""
+
+
 def rank_row(
-    batch: BatchModels, entry: DatasetGrasp, *, limit_horizon: float | None = None
+    batch: BatchModels,
+    entry: DatasetGrasp,
+    *,
+    limit_horizon: float | None = None,
+    refuse_penetration: bool = False,
+    measures: str = "classic",
 ) -> dict[str, Any]:
     r"""The row of one grasp: evaluated, or failed with its reason (Problem 2 with the travel
     horizon ``limit_horizon`` of the joint limits, m; ``None``: the grasp file's).
+
+    A contact deeper than the grasp file's ``max_penetration`` is evaluated and flagged
+    (``penetration_exceeded``), or with ``refuse_penetration`` a failure ``penetration``.
+    ``measures``: one of [`MEASURES`][mjtvm.jobs.rank.MEASURES].
 
     Returns
     -------
@@ -102,14 +118,35 @@ def rank_row(
         their types and units there); ``docs/outputs.md`` documents each.
     """
     row = RankRow(entry.id, Path(entry.source).name, entry.index, _object_name(entry, batch), entry.obj_scale)
+    limit = float(batch.doc["max_penetration"])
     try:
-        grasp = batch.grasp(entry)
+        grasp = batch.grasp(entry, max_penetration=math.inf)
         ignored = set(grasp.ignored_geoms)
         found = [c for c in kept_contacts(grasp) if c.geom not in ignored]
-        row = replace(row, contacts=len(found), penetration=max([0.0, *(-float(c.distance) for c in found)]))
+        depth = max([0.0, *(-float(c.distance) for c in found)])
+        row = replace(
+            row,
+            contacts=len(found),
+            penetration=depth,
+            nearest_distance=min((float(c.distance) for c in found), default=None),
+            penetration_exceeded=depth > limit,
+        )
+        if refuse_penetration and depth > limit:
+            raise ModelError(
+                "penetration",
+                f"a contact is {1e3 * depth:.3g} mm inside the object > max_penetration "
+                f"{1e3 * limit:.3g} mm (--refuse-penetration)",
+            )
         state = with_limit_horizon(grasp.state(), limit_horizon)
         row = replace(row, contacts=len(state.contacts))
         result = tvmmp(state, witnesses=False, diagnose=True)
+    except NoContactError as e:
+        return replace(
+            row,
+            failure="no contact",
+            reason=" ".join(str(e).split()),
+            nearest_distance=e.nearest if row.nearest_distance is None else row.nearest_distance,
+        ).to_dict()
     except (ModelError, StateError, SolverError) as e:
         return replace(row, failure=_classify(e), reason=" ".join(str(e).split())).to_dict()
     doc = result.to_dict(witnesses=False)
@@ -126,20 +163,30 @@ def rank_row(
         )
         chosen = first or result.diagnosis[0]
         reason = f"pair {list(chosen.pair)}: {chosen.cause}: {' '.join(chosen.message.split())}"
-    try:
-        row = replace(row, **_classic_columns(state))
-    except Exception as e:  # Qhull, a solver: the TVMMP stands, the measures are flagged as missing
-        why = f"classic measures not computed: {type(e).__name__}: {' '.join(str(e).split())[:200]}"
-        reason = why if reason is None else f"{reason}; {why}"
+    if measures == "classic":
+        try:
+            row = replace(row, **_classic_columns(state))
+        except Exception as e:  # Qhull, a solver: the TVMMP stands, the measures are flagged as missing
+            why = f"classic measures not computed: {type(e).__name__}: {' '.join(str(e).split())[:200]}"
+            reason = why if reason is None else f"{reason}; {why}"
     return replace(row, reason=reason).to_dict()
 
 
 def _solve_chunk(
-    grasp: str, entries: Sequence[DatasetGrasp], limit_horizon: float | None = None
+    grasp: str,
+    entries: Sequence[DatasetGrasp],
+    limit_horizon: float | None = None,
+    refuse_penetration: bool = False,
+    measures: str = "classic",
 ) -> list[dict[str, Any]]:
     """The rows of some grasps of one grasp file (runs in a worker)."""
     batch = batch_models(grasp)
-    return [rank_row(batch, e, limit_horizon=limit_horizon) for e in entries]
+    return [
+        rank_row(
+            batch, e, limit_horizon=limit_horizon, refuse_penetration=refuse_penetration, measures=measures
+        )
+        for e in entries
+    ]
 
 
 def _chunks(entries: Sequence[DatasetGrasp], parts: int) -> list[list[DatasetGrasp]]:
@@ -157,6 +204,8 @@ def rank_rows(
     done: Mapping[str, dict[str, Any]] | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
     limit_horizon: float | None = None,
+    refuse_penetration: bool = False,
+    measures: str = "classic",
 ) -> list[dict[str, Any]]:
     r"""The row of every grasp ([`rank_row()`][mjtvm.jobs.rank.rank_row]), in the order of ``entries``.
 
@@ -178,6 +227,8 @@ def rank_rows(
         Called in this process with the rows of every finished task (checkpointing).
     limit_horizon
         Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's.
+    refuse_penetration, measures
+        As [`rank_row()`][mjtvm.jobs.rank.rank_row].
 
     Raises
     ------
@@ -188,6 +239,9 @@ def rank_rows(
     """
     if jobs < 1:
         raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
+    if measures not in MEASURES:
+        raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {measures!r}")
+    opts = (limit_horizon, refuse_penetration, measures)
     items = list(entries)
     table: dict[str, dict[str, Any]] = dict(done or {})
     todo = [e for e in items if e.id not in table]
@@ -204,14 +258,14 @@ def rank_rows(
         if not todo:
             pass
         elif cluster is not None:
-            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished, limit_horizon)
+            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished, opts)
         elif jobs == 1:
             for e in todo:
-                finished(_solve_chunk(grasp, [e], limit_horizon))
+                finished(_solve_chunk(grasp, [e], *opts))
         else:
             # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
             tasks = _chunks(todo, max(8 * jobs, math.ceil(len(todo) / TASK_GRASPS)))
-            _run_pool(grasp, tasks, jobs, finished, limit_horizon)
+            _run_pool(grasp, tasks, jobs, finished, opts)
     finally:
         bar.close()
     return [table[e.id] for e in items]
@@ -222,12 +276,12 @@ def _run_pool(
     tasks: list[list[DatasetGrasp]],
     jobs: int,
     finished: Callable[[list[dict[str, Any]]], None],
-    limit_horizon: float | None = None,
+    opts: tuple[Any, ...] = (),
 ) -> None:
     """The tasks on ``jobs`` local processes, read as they finish: forked on Linux (the
     compiled model inherited), else started from a forkserver (each worker compiles it)."""
     run_calls(
-        [(_solve_chunk, (grasp, task, limit_horizon)) for task in tasks],
+        [(_solve_chunk, (grasp, task, *opts)) for task in tasks],
         jobs,
         finished,
         fork=forks(),
@@ -240,7 +294,7 @@ def _run_dask(
     tasks: list[list[DatasetGrasp]],
     cluster: Any,
     finished: Callable[[list[dict[str, Any]]], None],
-    limit_horizon: float | None = None,
+    opts: tuple[Any, ...] = (),
 ) -> None:
     """The tasks on a Dask cluster (the grasp file and the dataset's object files must be
     readable by the workers at the same paths)."""
@@ -248,7 +302,7 @@ def _run_dask(
         from distributed import as_completed
 
         futures = client.map(
-            _solve_chunk, [grasp] * len(tasks), tasks, [limit_horizon] * len(tasks), pure=False
+            _solve_chunk, [grasp] * len(tasks), tasks, *([o] * len(tasks) for o in opts), pure=False
         )
         for fut in as_completed(futures):
             finished(fut.result())

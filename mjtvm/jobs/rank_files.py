@@ -10,26 +10,23 @@ ranks them ([`rank_rows()`][mjtvm.jobs.rank.rank_rows]) into ``NAME.json``, ``NA
 
 from __future__ import annotations
 
-import hashlib
 import io
 import json
-import os
 from collections import Counter
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from mjtvm.errors import ParamError
-from mjtvm.grasp import GraspError
-from mjtvm.grasp.document.dataset import DatasetGrasp, dataset_files, read_dataset
-from mjtvm.grasp.resolve.batch import hand_joints
-from mjtvm.grasp.resolve.objects import check_joint_ranges
 from mjtvm.jobs.checkpoint import RowCheckpoint
-from mjtvm.jobs.files import csv_text, model_files, stderr
-from mjtvm.jobs.rank import batch_models, rank_rows
+from mjtvm.jobs.figures import ALPHA_UNIT
+from mjtvm.jobs.files import csv_text, stderr
+from mjtvm.jobs.rank import MEASURES, rank_rows
+from mjtvm.jobs.rank_inputs import inputs_digest, read_datasets
+from mjtvm.jobs.rank_order import OBJECT_COLUMNS, check_sort, object_rows, objects_summary, ranked_rows
 from mjtvm.jobs.rank_row import flat_row, table_columns
 
 __all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
@@ -68,6 +65,13 @@ class RankFiles:
         What a 2-D ``.npy`` array holds: ``grasp_qpos`` or ``qpos`` (``None``: refused).
     com_frame
         The object's frame (REFS moments, RVDS twists) at its centre of mass.
+    refuse_penetration
+        A grasp deeper than ``max_penetration`` fails (``penetration``) instead of being
+        evaluated and flagged.
+    measures
+        ``classic`` or ``none`` ([`MEASURES`][mjtvm.jobs.rank.MEASURES]).
+    sort
+        The sort column of the files ([`SORT_COLUMNS`][mjtvm.jobs.rank_order.SORT_COLUMNS]).
     """
 
     grasp: str
@@ -83,115 +87,16 @@ class RankFiles:
     pose: str = "grasp"
     dataset_key: str | None = None
     com_frame: bool = False
+    refuse_penetration: bool = False
+    measures: str = "classic"
+    sort: str = "tvmmp"
 
     def __post_init__(self) -> None:
         if not self.datasets:
             raise ParamError("datasets", "expected at least one dataset file")
-
-
-def dataset_labels(files: Sequence[Path]) -> list[str]:
-    """Each file's name in default ids: its stem, or, when stems repeat (``0.npy`` in every
-    folder of a pipeline's tree), its path relative to the files' common folder, suffix dropped."""
-    stems = [f.stem for f in files]
-    if len(set(stems)) == len(stems):
-        return stems
-    resolved = [f.resolve() for f in files]
-    common = Path(os.path.commonpath([r.parent for r in resolved]))
-    return [r.relative_to(common).with_suffix("").as_posix() for r in resolved]
-
-
-def read_datasets(
-    grasp: str,
-    datasets: Sequence[str],
-    *,
-    pose: str = "grasp",
-    key: str | None = None,
-    com_frame: bool = False,
-) -> list[DatasetGrasp]:
-    """Every grasp of the datasets (files, or folders of them: `dataset_files()`), checked
-    against the grasp file's model: shapes, dtypes, poses, joint ranges.
-
-    Raises
-    ------
-    GraspError
-        A malformed grasp (naming its file, index and field), an id used twice, a grasp file
-        without RVDS, or a root pose (``grasp_qpos``) for a model whose hand root cannot be
-        found or posed.
-    """
-    batch = batch_models(grasp)
-    if batch.doc["rvds"] is None:
-        raise GraspError(batch.file, "rvds", "mjtvm rank solves Problem 2 (TVMMP): give the RVDS vertices")
-    model = batch.model()
-    try:
-        joints = hand_joints(model, batch.doc["object"]["body"])
-    except KeyError as missing:
-        raise GraspError(
-            batch.file, "object.body", f"{batch.doc['object']['body']!r} is not a body of the model"
-        ) from missing
-    entries: list[DatasetGrasp] = []
-    seen: dict[str, DatasetGrasp] = {}
-    files = dataset_files(datasets)
-    for path, label in zip(files, dataset_labels(files), strict=True):
-        read = read_dataset(
-            path,
-            nq=int(model.nq),
-            num_joints=len(joints),
-            pose=pose,
-            key=key,
-            joint_names=joints,
-            label=label,
-        )
-        for e in read:
-            check_joint_ranges(model, joints, e)
-            if com_frame:
-                e = replace(e, com_frame=True)
-            if e.id in seen:
-                first = seen[e.id]
-                raise GraspError(
-                    e.source,
-                    f"grasp {e.index}: id",
-                    f"{e.id!r} is also grasp {first.index} of {first.source}",
-                )
-            seen[e.id] = e
-            entries.append(e)
-    if any(e.root is not None for e in entries):
-        batch.model(root=True)  # a hand root that cannot be posed is the command's error, not every row's
-    return entries
-
-
-def inputs_digest(
-    grasp: str,
-    datasets: Sequence[str],
-    entries: Sequence[DatasetGrasp] = (),
-    limit_horizon: float | None = None,
-    *,
-    pose: str = "grasp",
-    key: str | None = None,
-    com_frame: bool = False,
-) -> str:
-    """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
-    the dataset files, the object files they name and a ``limit_horizon`` other than the grasp
-    file's. ``--resume`` keeps a row only if its ``inputs`` equals this."""
-    from mjtvm import __version__
-
-    batch = batch_models(grasp)
-    h = hashlib.sha256(f"mjtvm {__version__}\n".encode())
-    if limit_horizon is not None:  # None: the digest of earlier versions, whose rows had the file's
-        h.update(f"limit_horizon {float(limit_horizon)!r}\n".encode())
-    if (pose, key) != ("grasp", None):  # the defaults: the digest of earlier versions
-        h.update(f"pose {pose} key {key}\n".encode())
-    if com_frame:
-        h.update(b"com_frame\n")
-    h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
-    objects = sorted({str(e.obj_path) for e in entries if e.obj_path is not None})
-    files = model_files(batch.model_path) + dataset_files(datasets)
-    for p in objects:  # an object folder: its convex pieces
-        where = Path(p)
-        files += sorted((where / "urdf" / "meshes").glob("*.obj")) if where.is_dir() else model_files(where)
-    for path in files:
-        h.update(f"{path.name}\n".encode())
-        h.update(hashlib.sha256(path.read_bytes()).digest())
-    return h.hexdigest()[:32]
+        if self.measures not in MEASURES:
+            raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {self.measures!r}")
+        check_sort(self.sort)
 
 
 def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -203,8 +108,36 @@ def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
-    flat = rows_table(rows)
-    return csv_text(flat, table_columns(flat), cell=lambda v: "" if v is None else v)
+    return "".join(rows_csv_chunks(rows))
+
+
+def rows_csv_chunks(rows: Sequence[dict[str, Any]]) -> Iterator[str]:
+    """[`rows_csv()`][mjtvm.jobs.rank_files.rows_csv] line by line: the header, then each row
+    flattened as it is written (one flattened row held at a time, not the table)."""
+    columns = _columns(rows)
+    yield csv_text([], columns)
+    for row in rows:
+        yield csv_text([flat_row(row)], columns, cell=lambda v: "" if v is None else v).split("\r\n", 1)[1]
+
+
+def _columns(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """[`table_columns()`][mjtvm.jobs.rank_row.table_columns] of the rows, flattening one at a time."""
+    keys: dict[str, None] = {}
+    for row in rows:
+        keys.update(dict.fromkeys(flat_row(row)))
+    return table_columns([keys])
+
+
+def rows_json_chunks(rows: Sequence[dict[str, Any]]) -> Iterator[str]:
+    """The text of ``json.dumps(rows, indent=1) + "\\n"``, one row at a time."""
+    if not rows:
+        yield "[]\n"
+        return
+    yield "["
+    for i, row in enumerate(rows):
+        text = json.dumps(row, indent=1).replace("\n", "\n ")
+        yield ("\n " if i == 0 else ",\n ") + text
+    yield "\n]\n"
 
 
 def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
@@ -253,39 +186,74 @@ def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
     doubtful = sum(r["certified"] is False for r in rows)
     if doubtful:
         lines.append(f"warning: {doubtful} rows have an alpha that is not certified (column certified)")
+    deep = sum(r.get("penetration_exceeded") is True for r in solved)
+    if deep:
+        lines.append(f"{deep} evaluated rows are deeper than max_penetration (column penetration_exceeded)")
+    per_object = objects_summary(rows)
+    if per_object:
+        lines.append(per_object)
     return "\n".join(lines)
 
 
+TVMMP_AXIS = "TVMMP alpha " + ALPHA_UNIT
+"""The label of a TVMMP axis (the unit of [`ALPHA_UNIT`][mjtvm.jobs.figures.ALPHA_UNIT])."""
+
+
+def _apart(rows: Sequence[dict[str, Any]]) -> str:
+    """The count of the rows drawn apart: infeasible (evaluated, no TVMMP) and failed."""
+    infeasible = sum(r["failure"] is None and r["tvmmp"] is None for r in rows)
+    failed = sum(r["failure"] is not None for r in rows)
+    return f"not drawn: {infeasible} infeasible, {failed} failed"
+
+
 def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
-    """``objects``: TVMMP per object (every evaluated grasp a point, failed grasps left out);
-    ``tvmmp``: the histogram of TVMMP; ``epsilon``: TVMMP against the L1 epsilon. PNG bytes."""
+    """``objects``: TVMMP per object (every feasible grasp a point; per object, its infeasible
+    and failed grasps counted in a strip below the axis); ``tvmmp``: the histogram of TVMMP;
+    ``epsilon``: TVMMP against the L1 epsilon. Infeasible and failed grasps are never drawn at
+    0: counted in each figure's title or strip. PNG bytes."""
     from mjtvm.jobs.figures import lift_axes
 
     solved = [r for r in rows if r["failure"] is None]
-    objects = sorted({r["object"] for r in solved}) or ["(none)"]
-    fig, ax = lift_axes(max(4.0, 0.8 * len(objects) + 2.0), 3.2)
+    feasible = [r for r in solved if r["tvmmp"] is not None]
+    objects = sorted({r["object"] for r in rows}) or ["(none)"]
+    fig, ax = lift_axes(max(4.5, 0.8 * len(objects) + 2.0), 4.0)
     for i, name in enumerate(objects):
-        values = [r["tvmmp"] or 0.0 for r in solved if r["object"] == name]
+        values = [r["tvmmp"] for r in feasible if r["object"] == name]
         jitter = np.linspace(-0.2, 0.2, len(values)) if len(values) > 1 else np.zeros(len(values))
         ax.plot(i + jitter, values, "o", ms=3, alpha=0.7)
+        mine = [r for r in rows if r["object"] == name]
+        inf = sum(r["failure"] is None and r["tvmmp"] is None for r in mine)
+        bad = sum(r["failure"] is not None for r in mine)
+        ax.annotate(
+            f"inf {inf}\nfail {bad}",
+            (i, 0.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(0, -28),
+            textcoords="offset points",
+            ha="center",
+            va="top",
+            fontsize=6,
+            color="tab:red",
+        )
     ax.set_xticks(range(len(objects)), objects, rotation=30, fontsize=7)
-    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
-    ax.set_title(f"TVMMP per object ({len(solved)} grasps evaluated)", fontsize=9)
+    ax.set_xlabel("object (below it: its infeasible and failed grasps, not drawn)", fontsize=7, labelpad=34)
+    ax.set_ylabel(TVMMP_AXIS, fontsize=7)
+    ax.set_title(f"TVMMP per object\n({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     out = {"objects": _png(fig)}
     fig, ax = lift_axes(4.5, 3.2)
-    ax.hist([r["tvmmp"] or 0.0 for r in solved], bins=20)
-    ax.set_xlabel("TVMMP (0 where infeasible)", fontsize=8)
-    ax.set_ylabel("grasps", fontsize=8)
-    ax.set_title("TVMMP histogram", fontsize=9)
+    ax.hist([r["tvmmp"] for r in feasible], bins=20)
+    ax.set_xlabel(TVMMP_AXIS, fontsize=7)
+    ax.set_ylabel("grasps (count)", fontsize=8)
+    ax.set_title(f"TVMMP histogram\n({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
     out["tvmmp"] = _png(fig)
     fig, ax = lift_axes(4.5, 3.2)
-    pairs = [(r["epsilon_l1"], r["tvmmp"] or 0.0) for r in solved if r.get("epsilon_l1") is not None]
+    pairs = [(r["epsilon_l1"], r["tvmmp"]) for r in feasible if r.get("epsilon_l1") is not None]
     ax.plot([e for e, _ in pairs], [v for _, v in pairs], "o", ms=3, alpha=0.7)
     ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
-    ax.set_ylabel("TVMMP (0 where infeasible)", fontsize=8)
-    ax.set_title(f"TVMMP against the epsilon ({len(pairs)} grasps)", fontsize=9)
+    ax.set_ylabel(TVMMP_AXIS, fontsize=7)
+    ax.set_title(f"TVMMP against the epsilon\n({len(pairs)} feasible grasps; {_apart(rows)})", fontsize=8)
     ax.grid(alpha=0.3)
     out["epsilon"] = _png(fig)
     return out
@@ -306,7 +274,7 @@ def run_rank_files(
     While it runs, ``NAME.partial.json`` (schema ``mjtvm.rank-checkpoint/1``) holds every
     finished row, rewritten atomically at most every [`CHECKPOINT_EVERY_S`][mjtvm.jobs.rank_files.CHECKPOINT_EVERY_S] s and on an
     interrupt or failure, removed once the outputs are written. Every row carries ``inputs``
-    ([`inputs_digest()`][mjtvm.jobs.rank_files.inputs_digest]); with ``run.resume`` the rows of the checkpoint and of an earlier
+    ([`inputs_digest()`][mjtvm.jobs.rank_inputs.inputs_digest]); with ``run.resume`` the rows of the checkpoint and of an earlier
     ``NAME.json`` whose id is in the datasets and whose ``inputs`` are unchanged are kept. The
     result equals an uninterrupted run (tested).
 
@@ -334,6 +302,8 @@ def run_rank_files(
         pose=run.pose,
         key=run.dataset_key,
         com_frame=run.com_frame,
+        refuse_penetration=run.refuse_penetration,
+        measures=run.measures,
     )
     outdir = check_output_dir(run.out)
     out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
@@ -358,6 +328,8 @@ def run_rank_files(
                 done=done,
                 on_rows=on_rows,
                 limit_horizon=run.limit_horizon,
+                refuse_penetration=run.refuse_penetration,
+                measures=run.measures,
             ),
             resume=run.resume,
             earlier=out_json,
@@ -366,9 +338,14 @@ def run_rank_files(
             emit=emit,
             notice=notice,
         )
-        files: dict[Path, bytes | str] = {
-            out_json: json.dumps(rows, indent=1) + "\n",
-            out_csv: rows_csv(rows),
+        rows = ranked_rows(rows, run.sort)
+        objects = object_rows(rows)
+        files: dict[Path, bytes | str | Iterator[str]] = {
+            out_json: rows_json_chunks(rows),  # written row by row
+            out_csv: rows_csv_chunks(rows),
+            outdir / f"{run.name}-objects.csv": csv_text(
+                objects, list(OBJECT_COLUMNS), cell=lambda v: "" if v is None else v
+            ),
         }
         parquet = rows_parquet(rows)
         if parquet is not None:

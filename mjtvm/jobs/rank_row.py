@@ -36,7 +36,7 @@ class RankRow:
     The fields, in order, are ``NAME.json``'s keys; ``NAME.csv`` has them flattened
     ([`csv_columns()`][mjtvm.jobs.rank_row.csv_columns]). A grasp that cannot be evaluated has
     ``failure`` and ``reason`` and ``None`` results. The files add ``inputs``, the digest of what
-    the row depends on ([`inputs_digest()`][mjtvm.jobs.rank_files.inputs_digest]).
+    the row depends on ([`inputs_digest()`][mjtvm.jobs.rank_inputs.inputs_digest]).
 
     Attributes
     ----------
@@ -50,12 +50,23 @@ class RankRow:
         The object: the stem of the grasp's ``obj_path``, else the grasp file's object body.
     scale : float
         The object's scale factor (``obj_scale``, default 1).
+    rank : int or None
+        1 = best by the sort key (TVMMP, or ``--sort``), in the written files; ``None`` for
+        an infeasible or failed grasp, one without the sort key, and in the checkpoint.
     contacts : int or None
         Contacts of the grasp state; for a failed grasp, those found before it failed;
         ``None`` if none were looked for.
     penetration : float or None
         m: depth of the deepest contact inside the object, 0 when none penetrates; ``None`` if
         not measured.
+    nearest_distance : float or None
+        m: the smallest signed distance between a contact the state keeps and the object,
+        negative when penetrating; for a ``no contact`` row where nothing touches, the nearest
+        distance of the geoms outside the object (the reason gives the selection's own);
+        ``None`` when nothing is within 0.1 m or not measured.
+    penetration_exceeded : bool or None
+        Whether ``penetration`` is deeper than the grasp file's ``max_penetration`` (such a row
+        is evaluated unless ``--refuse-penetration``); ``None`` if not measured.
     feasible : bool
         Whether every REFS vertex can be balanced (``False`` for a failed grasp).
     tvmmp : float or None
@@ -90,7 +101,8 @@ class RankRow:
         m: rho, the object's bounding radius from the contacts.
 
     The last seven are the classic measures ([`CLASSIC_COLUMNS`][mjtvm.jobs.rank_row.CLASSIC_COLUMNS];
-    ``None`` for a failed grasp).
+    ``None`` for a failed grasp and with ``--measures none``). Every measure is better higher
+    (``--sort`` ranks by any of them, descending).
     """
 
     id: str
@@ -98,8 +110,11 @@ class RankRow:
     index: int
     object: str
     scale: float
+    rank: int | None = None
     contacts: int | None = None
     penetration: float | None = None
+    nearest_distance: float | None = None
+    penetration_exceeded: bool | None = None
     feasible: bool = False
     tvmmp: float | None = None
     limiting: list[int] | None = field(default=None, metadata={"csv": _SPLIT})

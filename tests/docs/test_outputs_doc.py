@@ -94,6 +94,7 @@ def test_every_table_is_parsed() -> None:
         "sweep.partial.json",
         "rank.json:row",
         "rank.csv",
+        "rank-objects.csv",
         "rank.partial.json",
         "verify.csv",
         "slide-check.csv",
@@ -213,7 +214,12 @@ def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     np.savez(tmp_path / "d.npz", **{k: v[rows] for k, v in z.items()})
     grasp = str(root / "models" / "shadow_hand" / "shadow_hand-sphere.toml")
     run = rank_files.RankFiles(
-        grasp=grasp, datasets=(str(tmp_path / "d.npz"),), out=tmp_path, plots=False, quiet=True
+        grasp=grasp,
+        datasets=(str(tmp_path / "d.npz"),),
+        out=tmp_path,
+        plots=False,
+        quiet=True,
+        refuse_penetration=True,
     )
     rank_files.run_rank_files(run, emit=lambda _: None, notice=lambda _: None)
     written = json.loads((tmp_path / "rank.json").read_text(encoding="utf-8"))
@@ -221,6 +227,7 @@ def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     for row in written:
         assert_documented("rank.json:row", row)
     assert_documented("rank.csv", _header(tmp_path / "rank.csv"))
+    assert_documented("rank-objects.csv", _header(tmp_path / "rank-objects.csv"))
     import pyarrow.parquet as pq
 
     assert pq.read_table(tmp_path / "rank.parquet").column_names == _header(tmp_path / "rank.csv")

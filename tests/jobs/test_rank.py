@@ -45,12 +45,16 @@ def test_rank_command_on_the_example_dataset(tmp_path: Path) -> None:
     positive = [r for r in solved if r["tvmmp"] is not None and r["tvmmp"] > 0]
     assert f"rank: {n} grasps: {len(positive)} with TVMMP > 0" in proc.stderr
     assert "failed: " in proc.stderr and len(positive) >= 10
-    # The generator's broken grasps (the last four) fail with their reason; the others evaluate.
+    # The generator's broken grasps (the last four): the open ones fail with their reason, the
+    # closed ones (6.5 mm inside) are evaluated and flagged.
     broken = {r["id"]: r for r in rows if r["id"].endswith(("-open", "-closed"))}
     assert len(broken) == 4
     for r in broken.values():
-        expected = "no contact" if r["id"].endswith("-open") else "penetration"
-        assert r["failure"] == expected and r["reason"] and r["tvmmp"] is None
+        if r["id"].endswith("-open"):
+            assert r["failure"] == "no contact" and r["reason"] and r["tvmmp"] is None
+        else:
+            assert r["failure"] is None and r["penetration_exceeded"] is True
+            assert r["penetration"] == pytest.approx(6.5e-3, abs=1e-4)
     assert all(r["contacts"] == 3 for r in solved)
     # An infeasible grasp says why: the diagnosis of its pair.
     for r in solved:
@@ -103,7 +107,7 @@ def test_a_row_is_the_grasp_files_tvmmp_at_that_configuration(tmp_path: Path) ->
 
 
 def _entries() -> list[Any]:
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     return read_datasets(GRASP, [str(DATASET)])
 
@@ -168,7 +172,7 @@ def test_object_file_per_grasp_and_two_processes(tmp_path: Path) -> None:
     z = {k: v[:6] for k, v in np.load(DATASET).items()}
     np.savez(tmp_path / "a.npz", **z)
     np.savez(tmp_path / "b.npz", **z, obj_path=np.array(["orb.xml"] * 6))
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     a = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "a.npz")]), progress=False)
     b = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "b.npz")]), progress=False)
@@ -195,7 +199,7 @@ def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
     spec.loader.exec_module(module)
     arrays = module.make(8, 2, 5, mesh=2, folder=tmp_path / "d-objects")
     np.savez(tmp_path / "d.npz", **arrays)
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     rows = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "d.npz")]), progress=False)
     assert {r["object"] for r in rows} == {"ellipsoid0", "ellipsoid1"}
@@ -211,7 +215,7 @@ def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
 def test_qpos_layout_gives_the_rows_of_grasp_qpos(tmp_path: Path) -> None:
     # The same grasps as the model's whole qpos (N x nq: the hand's joints and the object's
     # free joint; the palm is fixed, so its pose is the model's, as in the example): the same rows.
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     z = {k: v[:5] for k, v in np.load(DATASET).items()}
     batch = mjtvm.jobs.rank.batch_models(GRASP)
@@ -283,7 +287,7 @@ def test_contact_rules_type_each_grasps_own_contacts(tmp_path: Path) -> None:
     z = np.load(DATASET)
     keep = [1, 2, 3, len(z["id"]) - 4]  # three evaluated, one "-open"
     np.savez(tmp_path / "d.npz", **{k: v[keep] for k, v in z.items()})
-    from mjtvm.jobs.rank_files import read_datasets
+    from mjtvm.jobs.rank_inputs import read_datasets
 
     named = mjtvm.jobs.rank.rank_rows(GRASP, read_datasets(GRASP, [str(tmp_path / "d.npz")]), progress=False)
     ruled = mjtvm.jobs.rank.rank_rows(

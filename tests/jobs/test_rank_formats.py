@@ -30,7 +30,7 @@ def test_dexgraspbench_tree_ranks_as_it_is(tmp_path: Path, monkeypatch: pytest.M
     # obj_path is relative to the benchmark's root ("assets/object/..."), found from the
     # dataset's folder up, whatever the working directory; stems repeat: ids from the paths.
     monkeypatch.chdir(tmp_path)
-    rows = _rank(tmp_path, str(DATA / "dexgraspbench" / "output"))
+    rows = sorted(_rank(tmp_path, str(DATA / "dexgraspbench" / "output")), key=lambda r: r["id"])
     assert [r["id"] for r in rows] == [
         "ellipsoid_00/scale009_pose000/0",
         "ellipsoid_00/scale009_pose000/1",
@@ -39,6 +39,7 @@ def test_dexgraspbench_tree_ranks_as_it_is(tmp_path: Path, monkeypatch: pytest.M
     ]
     assert all(r["failure"] is None and r["tvmmp"] > 0.03 for r in rows)
     assert rows[0]["tvmmp"] == pytest.approx(0.038428513389991766, rel=1e-6)
+    assert sorted(r["rank"] for r in rows) == [1, 2, 3, 4]
 
 
 def test_pose_option_ranks_the_pregrasp(tmp_path: Path) -> None:
@@ -50,9 +51,12 @@ def test_pose_option_ranks_the_pregrasp(tmp_path: Path) -> None:
 
 
 def test_dexgraspnet_npz_and_csv_give_the_same_rows(tmp_path: Path) -> None:
-    npz = _rank(tmp_path / "a", str(DATA / "shadow-sphere.npz"))
-    csv = _rank(tmp_path / "b", str(DATA / "shadow-sphere.csv"))
-    net = _rank(tmp_path / "c", str(DATA / "dexgraspnet" / "shadow-sphere.npy"))
+    def by_id(rows: list[dict]) -> list[dict]:  # the files are sorted by TVMMP
+        return sorted(rows, key=lambda r: r["id"])
+
+    npz = by_id(_rank(tmp_path / "a", str(DATA / "shadow-sphere.npz")))
+    csv = by_id(_rank(tmp_path / "b", str(DATA / "shadow-sphere.csv")))
+    net = by_id(_rank(tmp_path / "c", str(DATA / "dexgraspnet" / "shadow-sphere.npy")))
     assert (
         [r["id"] for r in npz]
         == [r["id"] for r in csv]

@@ -16,7 +16,8 @@ def test_the_row_keys_and_the_csv_columns_come_from_the_fields() -> None:
     row = RankRow("a:0", "a.npz", 0, "ball", 1.0).to_dict()
     assert list(row) == [f.name for f in fields(RankRow)]
     assert csv_columns() == (
-        "id", "source", "index", "object", "scale", "contacts", "penetration", "feasible", "tvmmp",
+        "id", "source", "index", "object", "scale", "rank", "contacts", "penetration",
+        "nearest_distance", "penetration_exceeded", "feasible", "tvmmp",
         "limiting_k", "limiting_l", "certified", "failure", "reason",
     )  # fmt: skip
     assert CLASSIC_COLUMNS == tuple(list(row)[-len(CLASSIC_COLUMNS) :])
@@ -26,7 +27,7 @@ def test_the_row_keys_and_the_csv_columns_come_from_the_fields() -> None:
 
 def test_a_flat_row_has_a_column_per_pair_after_the_leading_ones() -> None:
     row = RankRow(
-        "a:0", "a.npz", 0, "ball", 1.0, 3, 0.0, True, 0.5, [0, 1],
+        "a:0", "a.npz", 0, "ball", 1.0, None, 3, 0.0, 1e-3, False, True, 0.5, [0, 1],
         [[0.7, 0.5], [None, 0.9]], [["optimal"] * 2, ["infeasible", "optimal"]], True,
     ).to_dict()  # fmt: skip
     flat = flat_row({**row, "inputs": "x"})

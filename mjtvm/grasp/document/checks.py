@@ -25,6 +25,7 @@ __all__ = [
     "TOP_KEYS",
     "Checker",
     "GraspError",
+    "NoContactError",
     "check_text",
     "key_of",
     "kind_of",
@@ -88,6 +89,21 @@ class GraspError(ModelError):
     def __init__(self, file: str, field: str, problem: str, *, beyond_schema: bool = False) -> None:
         self.file, self.field, self.beyond_schema = file, field, beyond_schema
         super().__init__(f"{file}: {field}" if field else file, problem)
+
+
+class NoContactError(GraspError):
+    """No contact the grasp needs touches the object within ``contact_tolerance``.
+
+    Attributes
+    ----------
+    nearest
+        m: the smallest signed distance between a geom outside the object and the object
+        (up to 0.1 m), ``None`` when nothing is that close.
+    """
+
+    def __init__(self, file: str, field: str, problem: str, *, nearest: float | None) -> None:
+        self.nearest = nearest
+        super().__init__(file, field, problem)
 
 
 class Checker:

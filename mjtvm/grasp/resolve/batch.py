@@ -234,8 +234,10 @@ class BatchModels:
                 self._models.popitem(last=False)
         return self._models[key]
 
-    def grasp(self, entry: DatasetGrasp) -> Grasp:
-        """The grasp of one dataset entry (the file's document at the entry's configuration).
+    def grasp(self, entry: DatasetGrasp, *, max_penetration: float | None = None) -> Grasp:
+        """The grasp of one dataset entry (the file's document at the entry's configuration;
+        ``max_penetration``, m, in place of the file's when given: ``math.inf`` refuses no
+        penetration).
 
         Raises
         ------
@@ -281,6 +283,8 @@ class BatchModels:
                 )
             obj["position"] = com_position(obj, self._com[key[:2]])
         doc = {**self.doc, "configuration": config, "object": obj}
+        if max_penetration is not None:
+            doc["max_penetration"] = float(max_penetration)
         return grasp_from_model(doc, self.path, model, self.model_path)
 
     def _com_model(self, entry: DatasetGrasp, model: mujoco.MjModel) -> mujoco.MjModel:

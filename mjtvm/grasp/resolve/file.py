@@ -43,7 +43,7 @@ from mjtvm.grasp.actuation.transmission import (
     is_independent,
     model_transmission,
 )
-from mjtvm.grasp.document.checks import GraspError, key_of
+from mjtvm.grasp.document.checks import GraspError, NoContactError, key_of
 from mjtvm.grasp.document.document import read_grasp_document
 from mjtvm.grasp.resolve.base import hold_mocap_poses, set_base_pose, set_joint_values
 from mjtvm.grasp.resolve.configure import solve_configuration
@@ -58,7 +58,7 @@ from mjtvm.grasp.resolve.model import (
     set_object_pose,
     suggest,
 )
-from mjtvm.grasp.resolve.rules import RuleMatch, expand_rules, touching_geoms
+from mjtvm.grasp.resolve.rules import RuleMatch, expand_rules, nearest_distance, touching_geoms
 from mjtvm.grasp.resolve.state import (
     geom_id,
     geom_label,
@@ -369,6 +369,16 @@ def grasp_from_model(
         joints = tuple(doc["joints"])
     else:
         joints = _default_joints(model, [g for g in geoms if int(model.geom_bodyid[g]) > 0])
+        if not geoms:  # no rule matched a touching geom: the grasp does not touch the object
+            d = nearest_distance(model, data, doc["object"]["body"])
+            far = "more than 100 mm" if d is None else f"{1e3 * d:.3g} mm"
+            raise NoContactError(
+                file,
+                "contact_rules",
+                f"no contact: no geom touches the object: nearest distance {far} > "
+                f"contact_tolerance {1e3 * doc['contact_tolerance']:.3g} mm",
+                nearest=d,
+            )
         if not joints:
             raise GraspError(file, "contacts", "no hinge or slide joint moves any contact geom")
         joints = tuple(

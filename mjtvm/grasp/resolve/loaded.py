@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from mjtvm.grasp.actuation.dcmotor import DCMotor
 from mjtvm.grasp.actuation.transmission import ModelTransmission
 from mjtvm.grasp.contacts.report import check_penetration
-from mjtvm.grasp.document.checks import GraspError
+from mjtvm.grasp.document.checks import GraspError, NoContactError
 from mjtvm.grasp.resolve.model import (
     build_spec,
 )
@@ -259,11 +259,12 @@ class Grasp:
             if not any(g in touching for g in labels):
                 d = self._nearest(labels)
                 far = "more than 100 mm" if d is None else f"{1e3 * d:.3g} mm"
-                raise GraspError(
+                raise NoContactError(
                     self.file,
                     f"contacts[{i}]",
                     f"{what} does not touch the object: nearest distance {far} > "
                     f"contact_tolerance {1e3 * tol:.3g} mm",
+                    nearest=d,
                 )
         known = set(self.contact_types) | set(self.ignored_geoms)  # selections and rules
         for g, dist in touching.items():

@@ -37,6 +37,7 @@ import mujoco
 import numpy as np
 
 from mjtvm.grasp.contacts.memo import contacts_once
+from mjtvm.grasp.contacts.pairs import near_pairs
 from mjtvm.grasp.contacts.touch import geom_label, subtree
 from mjtvm.grasp.document.checks import GraspError
 from mjtvm.grasp.document.sections import RULE_TYPES, check_contact_rules
@@ -50,6 +51,7 @@ __all__ = [
     "RuleMatch",
     "check_contact_rules",
     "expand_rules",
+    "nearest_distance",
     "touching_geoms",
 ]
 
@@ -109,6 +111,15 @@ def touching_geoms(
     for c in found:
         out[c.geom] = min(out.get(c.geom, np.inf), c.distance)
     return out
+
+
+def nearest_distance(
+    model: mujoco.MjModel, data: mujoco.MjData, object_body: str, within: float = 0.1
+) -> float | None:
+    """m: the smallest signed distance (``mj_geomDistance``) between a geom outside the object
+    and the object's geoms, ``None`` when none is within ``within`` (m); negative: penetration."""
+    pairs = near_pairs(model, data, subtree(model, model.body(object_body).id), within)
+    return min((p.distance for p in pairs), default=None)
 
 
 def _names(model: mujoco.MjModel, g: int) -> dict[str, str]:
