@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from mjtvm.cli.options import Subparsers, command
-from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.output import EXIT_OK, emit, wrote
 from mjtvm.cli.values import input_file, source
 from mjtvm.cli.vocabulary import (
     grasp_option,
@@ -70,7 +70,7 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         limit_horizon=args.limit_horizon,
     )
     for path in run_rank_files(run, emit=emit):
-        emit(f"wrote {path}")
+        wrote(path)
     return EXIT_OK
 
 

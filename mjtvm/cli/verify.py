@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.cli.options import Parser, computed_default
-from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.output import EXIT_OK, emit, wrote
 from mjtvm.cli.values import (
     MAX_FORCE,
     MAX_GEAR,
@@ -233,7 +233,8 @@ def _cmd_gears(args: argparse.Namespace) -> int:
             f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
             f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)"
         )
-    emit(f"rows in {outdir / 'gears.csv'}")
+    for path in files:
+        wrote(path)
     return EXIT_OK
 
 
@@ -301,14 +302,16 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             files[outdir / "slide-check.csv"] = verify.rows_csv(srows)
         write_files(files)
     _print_holds(rows, args.grasp)
-    _print_summary(verify.summarize(rows), wall, args.jobs, outdir / (args.name + ".csv"))
+    _print_summary(verify.summarize(rows), wall, args.jobs)
     if args.slide_check:
         _print_slide_check(srows)
+    for path in files:
+        wrote(path)
     if args.rrd is not None:
         from mjtvm.viewer.viz import record_verify  # rerun is imported only here
 
         record_verify(rows, args.rrd)
-        emit(f"wrote {args.rrd}")
+        wrote(args.rrd)
     return EXIT_OK
 
 
@@ -322,7 +325,7 @@ def _print_holds(rows: Sequence[dict[str, Any]], grasp: str) -> None:
             print(f"mjtvm verify: {grasp} state {r['state']} ({r['run']}) {r['verdict']}", file=sys.stderr)
 
 
-def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, csv_path: Path) -> None:
+def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int) -> None:
     for run_name, s in summary.items():
         verdicts = s.pop("verdicts", {})
         emit(
@@ -331,7 +334,7 @@ def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, c
         )
         if verdicts:
             emit(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
-    emit(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
+    emit(f"wall time {wall:.1f} s ({jobs} job(s))")
 
 
 def _print_slide_check(srows: Sequence[dict[str, Any]]) -> None:

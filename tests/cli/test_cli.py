@@ -258,7 +258,7 @@ MUS = ",".join(["0.5"] * 1000)
         (["sweep", "--grasp", f"case2,{LONG}"], "error: --grasp: expected a file or a shipped grasp's name whose"),
         (["verify", "--grasp", "/" * 5000], "error: --grasp: expected a file or a shipped grasp's name of at most 4095 bytes"),
         (["bench", "--notes", "missing.txt"], "error: --notes: expected an existing file, got 'missing.txt'"),
-        (["solve", "--bo\nx"], "error: unrecognized arguments: --bo\\nx (try 'mjtvm --help')"),
+        (["solve", "--bo\nx"], "error: unrecognized arguments: --bo\\nx (try 'mjtvm solve --help')"),
     ],
 )  # fmt: skip  # a table: one command line and its error per row
 def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, monkeypatch, capsys):
