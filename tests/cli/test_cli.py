@@ -328,7 +328,7 @@ def test_a_grid_too_large_is_refused_before_any_work(tmp_path, monkeypatch, caps
     assert main(["sweep", "--mu", MUS, "--mg", mgs, "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err == (
         "error: --grasp x --hand x --contacts x --reading x --mu x --mg x --states: expected a grid of at "
-        "most 100000 points, got 300000\n"
+        "most 100000 points, got 300000 (try 'mjtvm sweep --help')\n"
     )
     assert not (tmp_path / "o").exists()
 
@@ -614,15 +614,23 @@ def test_stdout_closed_after_the_first_byte_exits_141(unbuffered):
 @pytest.mark.parametrize(
     ("words", "message"),
     [
-        (["show", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
-        (["export-state", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
+        (
+            ["show", "case2", "--grasp", "case1"],
+            "error: --grasp: give GRASP or --grasp, not both (try 'mjtvm show --help')\n",
+        ),
+        (
+            ["export-state", "case2", "--grasp", "case1"],
+            "error: --grasp: give GRASP or --grasp, not both (try 'mjtvm export-state --help')\n",
+        ),
         (
             ["verify", "--launch", "0.01", "--gears", "10,20"],
-            "error: --gears: replaces the rollouts, which --launch is an option of: give one of them, not both\n",
+            "error: --gears: replaces the rollouts, which --launch is an option of: give one of them, not both "
+            "(try 'mjtvm verify --help')\n",
         ),
         (
             ["verify", "--gears", "10", "--dynamics"],
-            "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both\n",
+            "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both "
+            "(try 'mjtvm verify --help')\n",
         ),
         (["--version", "x"], "error: --version: takes no other arguments, got 'x' (try 'mjtvm --help')\n"),
     ],
