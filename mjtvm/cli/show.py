@@ -39,7 +39,7 @@ _MAX_WITHIN_MM = 100.0
 
 
 def add_show(sub: Subparsers) -> None:
-    """``mjtvm show GRASP [--json] [--within MM] [--rrd FILE]``."""
+    """``mjtvm show GRASP [--json] [--within MILLIMETRES] [--rrd FILE]``."""
     p = command(
         sub,
         "show",
@@ -57,7 +57,7 @@ def add_show(sub: Subparsers) -> None:
         "--within",
         type=number(0.0, _MAX_WITHIN_MM, unit="mm"),
         default=None,
-        metavar="MM",
+        metavar="MILLIMETRES",
         help="list the geoms within this distance of the object (mm)",
     )
     computed_default(within, "10 contact tolerances, at least 1 mm")

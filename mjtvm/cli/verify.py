@@ -103,14 +103,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--preload",
         type=number(0.0, MAX_FORCE, unit="N"),
         default=0.0,
-        metavar="N",
+        metavar="NEWTONS",
         help="minimum normal force (N) of every L contact (the state's contact preload)",
     )
     hold = p.add_argument(
         "--hold",
         type=number(0.0, MAX_SIM_SECONDS, strict=True, unit="seconds"),
         default=None,
-        metavar="S",
+        metavar="SECONDS",
         help="length of the hold test at rest that comes first (a state that does not hold is not "
         "checked further; docs/physics-check.md#the-hold-test)",
     )
@@ -119,8 +119,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--launch",
         type=number(0.0, MAX_LAUNCH, strict=True, unit="metres"),
         default=None,
-        metavar="M",
-        help="also launch every pair from rest and report the speed reached within M metres "
+        metavar="METRES",
+        help="also launch every pair from rest and report the speed reached within that many metres "
         "(e.g. `0.01`; docs/physics-check.md#from-rest)",
     )
     computed_default(launch, "none")
@@ -156,14 +156,14 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
         "--window",
         type=number(0.0, MAX_SIM_SECONDS, strict=True, unit="seconds"),
         default=SimSettings.window,
-        metavar="S",
+        metavar="SECONDS",
         help="measurement window of a rollout (s)",
     )
     p.add_argument(
         "--startup",
         type=number(0.0, MAX_SIM_SECONDS, unit="seconds"),
         default=SimSettings.startup,
-        metavar="S",
+        metavar="SECONDS",
         help="settling time before the window (s)",
     )
     p.add_argument(

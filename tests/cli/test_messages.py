@@ -3,13 +3,18 @@ usage errors' ``(try 'mjtvm CMD --help')`` hint, and the bracket's progress line
 
 from __future__ import annotations
 
+import argparse
 import re
 from pathlib import Path
 
 import pytest
 
 from mjtvm.cli import main
+from mjtvm.cli.options import Formatter
 from mjtvm.cli.output import bracket_progress, help_hint, wrote
+from mjtvm.cli.parser import build_parser
+from mjtvm.cli.values import accepted
+from mjtvm.cli.verify import verify_parser
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -59,3 +64,51 @@ def test_the_bracket_line_has_no_stray_comma(capsys: pytest.CaptureFixture[str])
     err = capsys.readouterr().err
     assert "bracket: [1, 2] gap 50 %" in err
     assert ": ," not in err
+
+
+def _options() -> list[tuple[str, argparse.Action]]:
+    """``(command, action)`` of every documented option and argument of every command."""
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    parsers = {**commands.choices, "verify": verify_parser()}
+    return [
+        (name, a)
+        for name, p in parsers.items()
+        for a in p._actions
+        if a.help not in (None, argparse.SUPPRESS) and not isinstance(a, argparse._HelpAction)
+    ]
+
+
+def test_every_option_s_help_states_its_default_once() -> None:
+    """The formatter adds ``default: ...``; no help text says it again (`default` in backticks is
+    a value, ``--hand default``), and ``--help`` shows one ``default:`` per option."""
+    for name, action in _options():
+        shown = Formatter("mjtvm")._get_help_string(action)
+        assert shown.count("default:") <= 1, (name, shown)
+        assert "default" not in re.sub(r"`[^`]*`", "", action.help or "").lower(), (name, action.help)
+    assert "(default: the shipped example pinch.json)" in " ".join(
+        Formatter("mjtvm")._get_help_string(a) for n, a in _options() if n == "solve" and not a.option_strings
+    )
+
+
+UNITS = {
+    "N": "NEWTONS",
+    "weights (N)": "NEWTONS",
+    "metres": "METRES",
+    "mm": "MILLIMETRES",
+    "seconds": "SECONDS",
+}
+
+
+def test_an_option_with_a_unit_names_it_as_its_metavar() -> None:
+    """docs/cli.md, "One vocabulary": ``--preload NEWTONS``, ``--limit-horizon METRES``, ..."""
+    found = set()
+    for name, action in _options():
+        text = accepted(action.type) or ""
+        unit = next((u for u in UNITS if re.match(rf"(comma-separated )?{re.escape(u)} in ", text)), None)
+        if unit is not None:
+            assert action.metavar == UNITS[unit], (name, action.option_strings, text)
+            found.add(action.option_strings[0])
+        else:
+            assert action.metavar not in UNITS.values(), (name, action.option_strings)
+    assert {"--mg", "--preload", "--limit-horizon", "--launch", "--within", "--time-limit", "--hold"} <= found
