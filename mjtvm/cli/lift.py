@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from mjtvm.cli.options import Subparsers, command, computed_default
-from mjtvm.cli.output import EXIT_OK, emit, warn
+from mjtvm.cli.output import EXIT_OK, emit, warn, wrote
 from mjtvm.cli.values import (
     MAX_GRID,
     MAX_STATES,
@@ -148,11 +148,11 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             f"{len(doubtful)} of {len(out.records)} states have an alpha that is not certified "
             f"(lift.csv: certified; lift.json: notes), the first: state {doubtful[0].index}"
         )
-    for name, path in out.files.items():
-        emit(f"wrote {name}: {path}")
+    for path in out.files.values():
+        wrote(path)
     for info in infos:
         if args.rrd is not None:
-            emit(f"wrote {Path(args.rrd).name}: {args.rrd} ({info['seconds']:.2f} s)")
+            wrote(args.rrd, f"{info['seconds']:.2f} s")
     return EXIT_OK
 
 
@@ -243,5 +243,5 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         problem = e.problem.replace("give the coefficients and the weights", "give --mu and --mg")
         raise OptionError(_SWEEP_OPTIONS[e.name], problem) from e
     for path in files:
-        emit(f"wrote {path}")
+        wrote(path)
     return EXIT_OK

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from mjtvm.cli.output import EXIT_INPUT, one_line
+from mjtvm.cli.output import EXIT_INPUT, help_hint, one_line
 from mjtvm.cli.values import (
     accepted,
 )
@@ -33,7 +33,7 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         message = message.removeprefix("argument ")  # "argument --states: ..." names the option
-        self.exit(EXIT_INPUT, f"error: {one_line(message)} (try '{self.prog} --help')\n")
+        self.exit(EXIT_INPUT, f"error: {one_line(message)} {help_hint(self.prog)}\n")
 
 
 if TYPE_CHECKING:

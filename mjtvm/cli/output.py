@@ -21,11 +21,13 @@ __all__ = [
     "bracket_progress",
     "emit",
     "grouped",
+    "help_hint",
     "lp_progress",
     "one_line",
     "stdout_to_devnull",
     "warn",
     "warn_uncertified",
+    "wrote",
 ]
 
 EXIT_OK, EXIT_FAILURE, EXIT_INPUT, EXIT_SOLVER, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 130, 141
@@ -87,6 +89,21 @@ def emit(text: str) -> None:
         raise OutputError(
             "standard output", getattr(sys.stdout, "name", "<stdout>"), f"cannot write ({e.strerror or e})"
         ) from e
+
+
+def wrote(path: object, note: str | None = None, *, stderr: bool = False) -> None:
+    """The line of every command that wrote a file: ``wrote PATH`` or ``wrote PATH (NOTE)``
+    (``(0.52 s)``), on stdout, or on stderr where stdout carries a report (``show``)."""
+    text = f"wrote {path}" + (f" ({note})" if note else "")
+    if stderr:
+        print(one_line(text), file=sys.stderr, flush=True)
+    else:
+        emit(text)
+
+
+def help_hint(prog: str) -> str:
+    """The hint of every usage error, after its message: ``(try 'mjtvm sweep --help')``."""
+    return f"(try '{prog} --help')"
 
 
 def warn(text: str) -> None:
@@ -152,17 +169,18 @@ def bracket_progress(enabled: bool) -> Iterator[Callable[[dict[str, Any]], None]
         return
     from tqdm import tqdm
 
-    bar = tqdm(desc="bracket", bar_format="{desc}: {postfix}", file=sys.stderr, leave=False)
+    # the line is the description: tqdm's {postfix} starts with ", " ("bracket: , [...")
+    bar = tqdm(desc="bracket", bar_format="{desc}", file=sys.stderr, leave=False)
 
     def show(d: dict[str, Any]) -> None:
         if d.get("phase") == "estimate":
-            bar.set_postfix_str(
-                f"estimate in [{d['lower']:.6g}, {d['upper']:.6g}] width {100 * d['width']:.3g} %, "
+            bar.set_description_str(
+                f"bracket: estimate in [{d['lower']:.6g}, {d['upper']:.6g}] width {100 * d['width']:.3g} %, "
                 f"{d['samples']} points, {d['lps']} LPs, {d['seconds']:.1f} s"
             )
             return
-        bar.set_postfix_str(
-            f"[{d['inner']:.6g}, {d['outer']:.6g}] gap {100 * d['gap']:.3g} %, Hausdorff "
+        bar.set_description_str(
+            f"bracket: [{d['inner']:.6g}, {d['outer']:.6g}] gap {100 * d['gap']:.3g} %, Hausdorff "
             f"{d['hausdorff']:.3g}, round {d['round']}, {d['lps']} LPs, {d['seconds']:.1f} s"
         )
 

@@ -15,6 +15,7 @@ from mjtvm.cli.output import (
     EXIT_INTERRUPTED,
     EXIT_PIPE,
     EXIT_SOLVER,
+    help_hint,
     one_line,
     stdout_to_devnull,
 )
@@ -76,16 +77,27 @@ def _parse(words: list[str]) -> argparse.Namespace:
         build_parser().error(f"--version: takes no other arguments, got {words[1]!r}")
     if words[:1] == ["verify"]:
         return verify_parser().parse_args(words[1:])
-    return build_parser().parse_args(words)
+    parser = build_parser()
+    args, extra = parser.parse_known_args(words)
+    if extra:  # argparse's top level would name itself: the hint is the command's
+        commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        commands.choices[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mjtvm`` console script; returns the exit code ([`mjtvm.cli`][mjtvm.cli])."""
     words = list(sys.argv[1:] if argv is None else argv)
-    return guarded(lambda: _parse(words), lambda args: int(args.func(args)))
+    prog = f"mjtvm {words[0]}" if words[:1] and not words[0].startswith("-") else "mjtvm"
+    return guarded(lambda: _parse(words), lambda args: int(args.func(args)), prog=prog)
 
 
-def guarded(parse: Callable[[], argparse.Namespace], run: Callable[[argparse.Namespace], int]) -> int:
+def guarded(
+    parse: Callable[[], argparse.Namespace],
+    run: Callable[[argparse.Namespace], int],
+    *,
+    prog: str | None = None,
+) -> int:
     """Parse and run a command, mapping the error family to exit codes (``docs/cli.md``).
 
     Parameters
@@ -94,6 +106,10 @@ def guarded(parse: Callable[[], argparse.Namespace], run: Callable[[argparse.Nam
         Returns the parsed options (argparse's ``SystemExit`` is its exit code).
     run
         Runs the command on them; returns its exit code.
+    prog
+        The command (``mjtvm sweep``): an option refused while it runs
+        ([`OptionError`][mjtvm.errors.OptionError]) ends with the hint argparse's errors end
+        with, ``(try 'mjtvm sweep --help')``; None: no hint.
 
     Returns
     -------
@@ -115,7 +131,11 @@ def guarded(parse: Callable[[], argparse.Namespace], run: Callable[[argparse.Nam
     except BrokenPipeError:
         stdout_to_devnull()
         return EXIT_PIPE
-    except (StateError, ModelError, OptionError, OutputError, ParamError) as e:
+    except OptionError as e:
+        hint = "" if prog is None else f" {help_hint(prog)}"
+        print(f"error: {one_line(str(e))}{hint}", file=sys.stderr)
+        return EXIT_INPUT
+    except (StateError, ModelError, OutputError, ParamError) as e:
         print(f"error: {one_line(str(e))}", file=sys.stderr)
         return EXIT_INPUT
     except SolverError as e:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from mjtvm.cli.options import Subparsers, command
-from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.output import EXIT_OK, emit, wrote
 from mjtvm.cli.values import input_path, source
 from mjtvm.cli.vocabulary import (
     dataset_options,
@@ -83,7 +83,7 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         sort=args.sort,
     )
     for path in run_rank_files(run, emit=emit):
-        emit(f"wrote {path}")
+        wrote(path)
     return EXIT_OK
 
 

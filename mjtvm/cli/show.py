@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from mjtvm.cli.lift import check_file_folder
 from mjtvm.cli.options import Subparsers, command, computed_default
-from mjtvm.cli.output import EXIT_OK, emit, warn
+from mjtvm.cli.output import EXIT_OK, emit, warn, wrote
 from mjtvm.cli.values import number, output_file, source
 from mjtvm.cli.vocabulary import GRASP_HELP, grasp_option, hand_option, indent_option, one_grasp, rrd_option
 from mjtvm.errors import ModelError
@@ -39,7 +39,7 @@ _MAX_WITHIN_MM = 100.0
 
 
 def add_show(sub: Subparsers) -> None:
-    """``mjtvm show GRASP [--json] [--within MM] [--rrd FILE]``."""
+    """``mjtvm show GRASP [--json] [--within MILLIMETRES] [--rrd FILE]``."""
     p = command(
         sub,
         "show",
@@ -57,7 +57,7 @@ def add_show(sub: Subparsers) -> None:
         "--within",
         type=number(0.0, _MAX_WITHIN_MM, unit="mm"),
         default=None,
-        metavar="MM",
+        metavar="MILLIMETRES",
         help="list the geoms within this distance of the object (mm)",
     )
     computed_default(within, "10 contact tolerances, at least 1 mm")
@@ -183,7 +183,7 @@ def _record(grasp: Grasp, rows: list[ContactRow], path: str) -> None:
     record_grasp(
         path, geom_shapes(grasp.model, grasp.data, grasp.object_body), rows, grasp.mu, name=grasp.name
     )
-    print(f"wrote {path}", file=sys.stderr)
+    wrote(path, stderr=True)  # stdout: the report
 
 
 def _picture(grasp: Grasp, path: str) -> None:
@@ -196,4 +196,4 @@ def _picture(grasp: Grasp, path: str) -> None:
         grasp_png(picture, f"{grasp.name}: contacts within {1e3 * grasp.contact_tolerance:g} mm"),
         option="--png",
     )
-    print(f"wrote {path}", file=sys.stderr)
+    wrote(path, stderr=True)  # stdout: the report

@@ -80,14 +80,10 @@ _SOURCE_HELP = (
 def add_solve(sub: Subparsers) -> None:
     """``mjtvm solve [STATE|GRASP|-]``: prints mjtvm.result/1."""
     p = command(sub, "solve", *_TEXTS["solve"])
-    p.add_argument(
-        "state",
-        nargs="?",
-        default=None,
-        type=source,
-        metavar="STATE|GRASP",
-        help=_SOURCE_HELP + " (default: the shipped example pinch.json)",
+    state = p.add_argument(
+        "state", nargs="?", default=None, type=source, metavar="STATE|GRASP", help=_SOURCE_HELP
     )
+    computed_default(state, "the shipped example `pinch.json`")
     hand_option(p)
     mu_option(p)
     mg_option(p)

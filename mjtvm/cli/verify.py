@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.cli.options import Parser, computed_default
-from mjtvm.cli.output import EXIT_OK, emit
+from mjtvm.cli.output import EXIT_OK, emit, wrote
 from mjtvm.cli.values import (
     MAX_FORCE,
     MAX_GEAR,
@@ -103,14 +103,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--preload",
         type=number(0.0, MAX_FORCE, unit="N"),
         default=0.0,
-        metavar="N",
+        metavar="NEWTONS",
         help="minimum normal force (N) of every L contact (the state's contact preload)",
     )
     hold = p.add_argument(
         "--hold",
         type=number(0.0, MAX_SIM_SECONDS, strict=True, unit="seconds"),
         default=None,
-        metavar="S",
+        metavar="SECONDS",
         help="length of the hold test at rest that comes first (a state that does not hold is not "
         "checked further; docs/physics-check.md#the-hold-test)",
     )
@@ -119,8 +119,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--launch",
         type=number(0.0, MAX_LAUNCH, strict=True, unit="metres"),
         default=None,
-        metavar="M",
-        help="also launch every pair from rest and report the speed reached within M metres "
+        metavar="METRES",
+        help="also launch every pair from rest and report the speed reached within that many metres "
         "(e.g. `0.01`; docs/physics-check.md#from-rest)",
     )
     computed_default(launch, "none")
@@ -156,14 +156,14 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
         "--window",
         type=number(0.0, MAX_SIM_SECONDS, strict=True, unit="seconds"),
         default=SimSettings.window,
-        metavar="S",
+        metavar="SECONDS",
         help="measurement window of a rollout (s)",
     )
     p.add_argument(
         "--startup",
         type=number(0.0, MAX_SIM_SECONDS, unit="seconds"),
         default=SimSettings.startup,
-        metavar="S",
+        metavar="SECONDS",
         help="settling time before the window (s)",
     )
     p.add_argument(
@@ -233,7 +233,8 @@ def _cmd_gears(args: argparse.Namespace) -> int:
             f"gear {n:g}: TVMMP mean {statistics.fmean(qs) if qs else math.nan:.3f}, dynamic "
             f"{statistics.fmean(dy) if dy else math.nan:.3f} ({len(qs)}/{len(sel)} states feasible)"
         )
-    emit(f"rows in {outdir / 'gears.csv'}")
+    for path in files:
+        wrote(path)
     return EXIT_OK
 
 
@@ -301,14 +302,16 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             files[outdir / "slide-check.csv"] = verify.rows_csv(srows)
         write_files(files)
     _print_holds(rows, args.grasp)
-    _print_summary(verify.summarize(rows), wall, args.jobs, outdir / (args.name + ".csv"))
+    _print_summary(verify.summarize(rows), wall, args.jobs)
     if args.slide_check:
         _print_slide_check(srows)
+    for path in files:
+        wrote(path)
     if args.rrd is not None:
         from mjtvm.viewer.viz import record_verify  # rerun is imported only here
 
         record_verify(rows, args.rrd)
-        emit(f"wrote {args.rrd}")
+        wrote(args.rrd)
     return EXIT_OK
 
 
@@ -322,7 +325,7 @@ def _print_holds(rows: Sequence[dict[str, Any]], grasp: str) -> None:
             print(f"mjtvm verify: {grasp} state {r['state']} ({r['run']}) {r['verdict']}", file=sys.stderr)
 
 
-def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, csv_path: Path) -> None:
+def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int) -> None:
     for run_name, s in summary.items():
         verdicts = s.pop("verdicts", {})
         emit(
@@ -331,7 +334,7 @@ def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int, c
         )
         if verdicts:
             emit(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
-    emit(f"wall time {wall:.1f} s ({jobs} job(s)); rows in {csv_path}")
+    emit(f"wall time {wall:.1f} s ({jobs} job(s))")
 
 
 def _print_slide_check(srows: Sequence[dict[str, Any]]) -> None:

@@ -107,8 +107,8 @@ def hand_option(p: argparse.ArgumentParser, *, many: bool = False) -> None:
         default="default",
         type=names if many else str,
         metavar="NAME",
-        help="the paper's hand variant of a shipped case: `default` or `humanlike` (`case2` + "
-        "`humanlike` is `case2-humanlike`; any other grasp: refused in one line); `sweep`: a comma list",
+        help="the paper's hand variant of a shipped case: `humanlike`, or `default`, the paper's own hand "
+        "(`case2` + `humanlike` is `case2-humanlike`; any other grasp: refused in one line); `sweep`: a comma list",
     )
 
 
@@ -155,7 +155,7 @@ def mu_option(p: argparse.ArgumentParser, *, many: bool = False) -> None:
 
 
 def mg_option(p: argparse.ArgumentParser, *, many: bool = False, positive: bool = False) -> None:
-    """``--mg X``: the object's weight (N) instead of the grasp's (its REFS scaled to it;
+    """``--mg NEWTONS``: the object's weight (N) instead of the grasp's (its REFS scaled to it;
     [`with_options()`][mjtvm.grasp.resolve.loaded.Grasp.with_options]; ``many``: a comma list;
     ``positive``: not 0, ``verify``)."""
     action = p.add_argument(
@@ -164,7 +164,7 @@ def mg_option(p: argparse.ArgumentParser, *, many: bool = False, positive: bool 
         if many
         else number(0.0, MAX_FORCE, strict=positive, unit="N"),
         default=None,
-        metavar="X",
+        metavar="NEWTONS",
         help="object weight in N (the grasp's REFS scaled to it); `sweep`: a comma list; "
         f"{_STATE_FILE}; `verify`: not 0 (its rollouts need a weight)",
     )
@@ -188,13 +188,13 @@ def friction_margin_option(p: argparse.ArgumentParser) -> None:
 
 
 def limit_horizon_option(p: argparse.ArgumentParser) -> None:
-    """``--limit-horizon M``: Problem 2's travel horizon of the joint limits (m of object travel;
+    """``--limit-horizon METRES``: Problem 2's travel horizon of the joint limits (m of object travel;
     ``docs/joint-limits.md``), replacing the state's."""
     action = p.add_argument(
         "--limit-horizon",
         type=number(0.0, 1e3, unit="metres"),
         default=None,
-        metavar="M",
+        metavar="METRES",
         help="metres of object travel within which no joint may reach its position limit (Problem 2, "
         "docs/joint-limits.md); `0`: only the joints on a limit are held; replaces the state's or "
         "the grasp file's `joint_limits.horizon` at every state the command solves (`sweep`, `rank`: "
@@ -292,12 +292,12 @@ def indent_option(p: argparse.ArgumentParser) -> None:
 
 
 def time_limit_option(p: argparse.ArgumentParser) -> None:
-    """``--time-limit S``: wall-clock seconds of a projection (``tvms``) or a cdd run (``python -m benchmarks``)."""
+    """``--time-limit SECONDS``: wall-clock seconds of a projection (``tvms``) or a cdd run (``python -m benchmarks``)."""
     p.add_argument(
         "--time-limit",
         type=number(0.0, MAX_SECONDS, strict=True, unit="seconds"),
         default=120.0,
-        metavar="S",
+        metavar="SECONDS",
         help="wall-clock seconds: `tvms`: the projection's limit for both methods: `lp` then stops with "
         '`status: "approximate"` and the volume bracket, `cdd` with `status: "timeout"`; the benchmarks: '
         "the cap of each cdd run",
@@ -374,7 +374,7 @@ def rank_order_options(p: argparse.ArgumentParser) -> None:
         "--measures",
         choices=("classic", "none"),
         default="classic",
-        help="classic: the classic measures beside the TVMMP (default); none: TVMMP alone, "
+        help="classic: the classic measures beside the TVMMP; none: TVMMP alone, "
         "the measure columns empty",
     )
     p.add_argument(
@@ -383,5 +383,5 @@ def rank_order_options(p: argparse.ArgumentParser) -> None:
         default="tvmmp",
         metavar="COLUMN",
         help="the column the rows are sorted and ranked by, descending (higher is better for "
-        f"every measure): {', '.join(SORT_COLUMNS)} (default tvmmp)",
+        f"every measure): {', '.join(SORT_COLUMNS)}",
     )

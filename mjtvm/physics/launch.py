@@ -22,7 +22,7 @@ about $\alpha_{kl}$ (the command's), less when the hand cannot accelerate the ob
 that fast, or loses it on the way.
 
 D is stated, not physical: [`LAUNCH_DISTANCE`][mjtvm.physics.launch.LAUNCH_DISTANCE] (10 mm) by default, ``mjtvm verify
---launch M`` (``docs/physics-check.md``, "From rest"); the ramp's acceleration
+--launch METRES`` (``docs/physics-check.md``, "From rest"); the ramp's acceleration
 $\alpha_{kl}^2 / 2D$ grows as D shrinks.
 """
 

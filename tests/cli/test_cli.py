@@ -258,7 +258,7 @@ MUS = ",".join(["0.5"] * 1000)
         (["sweep", "--grasp", f"case2,{LONG}"], "error: --grasp: expected a file or a shipped grasp's name whose"),
         (["verify", "--grasp", "/" * 5000], "error: --grasp: expected a file or a shipped grasp's name of at most 4095 bytes"),
         (["bench", "--notes", "missing.txt"], "error: --notes: expected an existing file, got 'missing.txt'"),
-        (["solve", "--bo\nx"], "error: unrecognized arguments: --bo\\nx (try 'mjtvm --help')"),
+        (["solve", "--bo\nx"], "error: unrecognized arguments: --bo\\nx (try 'mjtvm solve --help')"),
     ],
 )  # fmt: skip  # a table: one command line and its error per row
 def test_out_of_range_numbers_and_unusable_paths_exit_2(words, line, tmp_path, monkeypatch, capsys):
@@ -328,7 +328,7 @@ def test_a_grid_too_large_is_refused_before_any_work(tmp_path, monkeypatch, caps
     assert main(["sweep", "--mu", MUS, "--mg", mgs, "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err == (
         "error: --grasp x --hand x --contacts x --reading x --mu x --mg x --states: expected a grid of at "
-        "most 100000 points, got 300000\n"
+        "most 100000 points, got 300000 (try 'mjtvm sweep --help')\n"
     )
     assert not (tmp_path / "o").exists()
 
@@ -614,15 +614,23 @@ def test_stdout_closed_after_the_first_byte_exits_141(unbuffered):
 @pytest.mark.parametrize(
     ("words", "message"),
     [
-        (["show", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
-        (["export-state", "case2", "--grasp", "case1"], "error: --grasp: give GRASP or --grasp, not both\n"),
+        (
+            ["show", "case2", "--grasp", "case1"],
+            "error: --grasp: give GRASP or --grasp, not both (try 'mjtvm show --help')\n",
+        ),
+        (
+            ["export-state", "case2", "--grasp", "case1"],
+            "error: --grasp: give GRASP or --grasp, not both (try 'mjtvm export-state --help')\n",
+        ),
         (
             ["verify", "--launch", "0.01", "--gears", "10,20"],
-            "error: --gears: replaces the rollouts, which --launch is an option of: give one of them, not both\n",
+            "error: --gears: replaces the rollouts, which --launch is an option of: give one of them, not both "
+            "(try 'mjtvm verify --help')\n",
         ),
         (
             ["verify", "--gears", "10", "--dynamics"],
-            "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both\n",
+            "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both "
+            "(try 'mjtvm verify --help')\n",
         ),
         (["--version", "x"], "error: --version: takes no other arguments, got 'x' (try 'mjtvm --help')\n"),
     ],

@@ -76,7 +76,7 @@ def test_rank_takes_grasp_as_option_or_argument_not_both(
     assert [(r.grasp, r.datasets) for r in seen] == [("case2", (str(a), str(b)))] * 2 + [("case2", (str(a),))]
     assert main(["rank", "case1", str(a), "--grasp", "case2", "--out", str(tmp_path)]) == 2
     (line,) = capsys.readouterr().err.splitlines()
-    assert line == "error: --grasp: give GRASP or --grasp, not both"
+    assert line == "error: --grasp: give GRASP or --grasp, not both (try 'mjtvm rank --help')"
 
 
 def test_verify_hand_is_replays(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

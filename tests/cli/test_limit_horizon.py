@@ -1,4 +1,4 @@
-"""``--limit-horizon M`` on every command that solves Problem 2 from a grasp (issue 32).
+"""``--limit-horizon METRES`` on every command that solves Problem 2 from a grasp (issue 32).
 
 The Robotiq 2F-85 grasp is the case where the horizon decides the number: both couplers
 reach their stop after 0.99999 mm of lift, inside the default 1 mm horizon, so its TVMMP is

@@ -104,7 +104,7 @@ def test_sweeps_cover_fig9(output: ReplayOutput) -> None:
 def test_cli_replay_writes_results(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     args = ["replay", "--out", str(tmp_path / "res"), "--states", "3", "--no-sweeps", "--quiet"]
     assert main([*args, "--contacts", "S", "--reading", "literal", "--mu", "0.4", "--mg", "2"]) == 0
-    assert "wrote lift.csv" in capsys.readouterr().out
+    assert f"wrote {tmp_path / 'res' / 'lift.csv'}\n" in capsys.readouterr().out
     assert sorted(p.name for p in (tmp_path / "res").iterdir()) == [
         ".mjtvm.lock",
         "fig8.png",

@@ -124,7 +124,7 @@ def test_the_cli_hands_the_sweep_typed_options_and_names_its_options_in_errors(t
     ]
     assert main([*words, "--out", str(tmp_path), "--quiet"]) == 2
     assert capsys.readouterr().err == (
-        "error: --mu: the grasps have different friction or weight: give --mu and --mg\n"
+        "error: --mu: the grasps have different friction or weight: give --mu and --mg (try 'mjtvm sweep --help')\n"
     )
     assert seen == [
         SweepFiles(

@@ -35,7 +35,7 @@ import numpy as np
 from mjtvm.errors import MjtvmError
 from mjtvm.grasp.actuation.actuator import operation_range_from_actuator
 from mjtvm.grasp.actuation.dcmotor import DCMotor
-from mjtvm.grasp.actuation.servo import ServoDatasheet, is_servo_form
+from mjtvm.grasp.actuation.servo import SERVO_KEYS, SERVO_OPTIONAL, ServoDatasheet, is_servo_form
 from mjtvm.grasp.document.checks import GraspError, key_of
 from mjtvm.model.bounds import MAX_FILE_BYTES
 from mjtvm.model.operation_range import OperationRange
@@ -47,6 +47,12 @@ _DATASHEET_KEYS = (
     "nominal_speed_rpm",
     "nominal_torque_mNm",
     "max_permissible_speed_rpm",
+)
+_DC_FORM = f"read as the DC-motor (maxon) form: {', '.join(_DATASHEET_KEYS)}"
+_SERVO_FORM = f"the servo form has {', '.join(SERVO_KEYS)}"
+# keys of the servo form only: a sheet with one and no stall_torque_Nm is a servo's missing it
+_SERVO_ONLY = tuple(
+    k for k in (*SERVO_KEYS, *SERVO_OPTIONAL) if k not in (*_DATASHEET_KEYS, "gear_ratio", "gear_efficiency")
 )
 _HINT = (
     'add [ranges."{j}"] (or a glob pattern, or "*") with one of: dcmotor = true, '
@@ -146,8 +152,14 @@ def _from_datasheet(
             servo_motor = f"its datasheet gives no <dcmotor> ({e})"
         return servo.operation_range(), servo_motor
     missing = [k for k in _DATASHEET_KEYS if k not in figures]
+    servo_keys = [k for k in _SERVO_ONLY if k in figures]
+    if servo_keys and all(k in missing for k in _DATASHEET_KEYS[1:]):  # no maxon-only figure
+        raise fail(
+            f"datasheet looks like a servo's (it has {', '.join(servo_keys)}) but lacks stall_torque_Nm "
+            f"({_SERVO_FORM})"
+        )
     if missing:
-        raise fail(f"datasheet lacks {', '.join(missing)}")
+        raise fail(f"datasheet lacks {', '.join(missing)} ({_DC_FORM}; {_SERVO_FORM})")
     try:
         kwargs = {k: float(figures[k]) for k in _DATASHEET_KEYS}
         rng = OperationRange.from_datasheet(
@@ -156,7 +168,7 @@ def _from_datasheet(
             gear_efficiency=float(figures.get("gear_efficiency", 1.0)),
         )
     except (MjtvmError, TypeError, ValueError) as e:
-        raise fail(f"datasheet: {e}") from e
+        raise fail(f"datasheet: {e} ({_DC_FORM}; {_SERVO_FORM})") from e
     try:
         motor: DCMotor | str = DCMotor.from_datasheet(figures)
     except (MjtvmError, KeyError, TypeError, ValueError) as e:  # e.g. a gear efficiency below 1

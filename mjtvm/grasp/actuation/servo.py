@@ -36,12 +36,13 @@ from mjtvm.errors import ModelError
 from mjtvm.grasp.actuation.dcmotor import DCMotor
 from mjtvm.model.operation_range import OperationRange
 
-__all__ = ["SERVO_KEYS", "ServoDatasheet", "is_servo_form"]
+__all__ = ["SERVO_KEYS", "SERVO_OPTIONAL", "ServoDatasheet", "is_servo_form"]
 
 _RPM = 2.0 * math.pi / 60.0
 SERVO_KEYS = ("voltage_V", "stall_torque_Nm", "no_load_speed_rpm")
 """The required keys of the servo form; ``stall_torque_Nm`` marks a sheet as one."""
-_OPTIONAL = ("gear_ratio", "gear_efficiency", "continuous_torque_Nm", "rotor_inertia_kgm2")
+SERVO_OPTIONAL = ("gear_ratio", "gear_efficiency", "continuous_torque_Nm", "rotor_inertia_kgm2")
+"""The optional keys of the servo form."""
 # the maxon form's line figures: in a servo sheet they would give a second speed-torque line
 _MAXON_ONLY = ("nominal_speed_rpm", "nominal_torque_mNm", "stall_torque_mNm")
 
@@ -130,7 +131,7 @@ class ServoDatasheet:
                 "give the speed-torque line): give one form",
             )
         numbers: dict[str, float] = {}
-        for key in (*SERVO_KEYS, *_OPTIONAL):
+        for key in (*SERVO_KEYS, *SERVO_OPTIONAL):
             if key in figures:
                 value = figures[key]
                 if isinstance(value, bool) or not isinstance(value, (int, float)):
