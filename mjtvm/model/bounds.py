@@ -175,7 +175,7 @@ def float_array(
         if value.ndim != ndim:
             raise StateError(field, f"expected {what}, got an array of shape {value.shape}", None)
         if _plain_floats(value, ndim, max_len, max_width):  # what the checks below pass, at once
-            out = np.array(value, dtype=float)
+            out = np.array(value, dtype=float, order="C")  # row-major as the lists give it
             out.setflags(write=False)
             return out
         value = value.tolist()  # exact for int and float arrays; the leaves are checked below

@@ -42,3 +42,10 @@ def test_float_arrays_keep_the_size_limits() -> None:
         float_array(np.zeros(3), "x", ndim=1, max_len=2)
     with pytest.raises(StateError, match="rows of at most 2"):
         float_array(np.zeros((1, 3)), "x", ndim=2, max_width=2)
+
+
+def test_float_arrays_come_row_major() -> None:
+    """A transposed (column-major) array comes back row-major, as from its lists: products
+    over it round the same."""
+    out = float_array(np.arange(6.0).reshape(3, 2).T, "x", ndim=2)
+    assert out.flags.c_contiguous
