@@ -195,7 +195,7 @@ def classic_measures(
         num_wrenches=int(allw.shape[1]),
         force_closure=bool(closure),
         closure_margin=max(0.0, margin),
-        epsilon_l1=epsilon_l1(allw) if closure else 0.0,
+        epsilon_l1=epsilon_l1(allw, margin=margin) if closure else 0.0,
         epsilon_linf=eps_inf,
         epsilon_linf_gap=gap,
         grasp_sigma_min=sigma_min,

@@ -174,6 +174,10 @@ def float_array(
             raise StateError(field, f"expected {what}, got an array of {value.dtype}", None)
         if value.ndim != ndim:
             raise StateError(field, f"expected {what}, got an array of shape {value.shape}", None)
+        if _plain_floats(value, ndim, max_len, max_width):  # what the checks below pass, at once
+            out = np.array(value, dtype=float, order="C")  # row-major as the lists give it
+            out.setflags(write=False)
+            return out
         value = value.tolist()  # exact for int and float arrays; the leaves are checked below
     if not isinstance(value, (list, tuple)):
         raise StateError(field, f"expected {what}, got {describe(value)}", value)
@@ -203,6 +207,19 @@ def float_array(
         out = np.array(rows, dtype=float).reshape(len(rows), width or 0)
     out.setflags(write=False)
     return out
+
+
+def _plain_floats(value: NDArray[Any], ndim: int, max_len: int | None, max_width: int | None) -> bool:
+    """A float array of ``ndim`` dimensions that `float_array()`'s checks pass: finite, every
+    ``|x| <= MAX_ABS``, within ``max_len`` and ``max_width``, and not an empty list of rows
+    (which the checks give the shape ``(0, 0)``)."""
+    if value.dtype.kind != "f" or value.ndim != ndim or (ndim == 2 and value.shape[0] == 0):
+        return False
+    if max_len is not None and value.shape[0] > max_len:
+        return False
+    if ndim == 2 and max_width is not None and value.shape[1] > max_width:
+        return False
+    return bool(np.all(np.isfinite(value)) and np.all(np.abs(value) <= MAX_ABS))
 
 
 def check_json_tree(data: Any, field: str = "") -> None:

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import ModelError
-from mjtvm.grasp.contacts.touch import without_round_off
+from mjtvm.grasp.contacts.touch import ROUND_OFF_REL, without_round_off
 
 __all__ = [
     "CONSTRAINT_TOLERANCE",
@@ -166,18 +166,28 @@ def actuator_moments(
         would move a joint the state holds still): the message names both.
     """
     # Round-off (a shared ancestor's ~1e-17 arm) is no moment: it must not pull joints in.
-    dense = np.array([without_round_off(row) for row in dense_moment(model, data)]).reshape(
-        model.nactuator, model.nv
-    )
+    dense = _rows_without_round_off(dense_moment(model, data))
     cols = np.asarray(dofs, dtype=int)
-    ids = [a for a in range(model.nactuator) if np.any(dense[a, cols] != 0.0)]
+    ids = [int(a) for a in np.flatnonzero(np.any(dense[:, cols] != 0.0, axis=1))]
+    outside = np.ones(model.nv, dtype=bool)
+    outside[cols] = False
     for a in ids:
-        if extra := _outside(dense[a], cols):
+        if np.any(outside[np.abs(dense[a]) > 1e-12 * float(np.max(np.abs(dense[a]), initial=0.0))]):
+            extra = _outside(dense[a], cols)
             raise ModelError(
                 f"actuator {_name(model, _OBJ.mjOBJ_ACTUATOR, a, 'actuator')!r}",
                 f"drives state joints and also {_dof_names(model, extra)}: add them to the state's joints",
             )
-    return ids, np.array([without_round_off(dense[a, cols]) for a in ids]).reshape(len(ids), len(cols))
+    return ids, _rows_without_round_off(
+        dense[np.asarray(ids, dtype=int)][:, cols].reshape(len(ids), len(cols))
+    )
+
+
+def _rows_without_round_off(m: NDArray[np.float64]) -> NDArray[np.float64]:
+    """[`without_round_off()`][mjtvm.grasp.contacts.touch.without_round_off] of each row of ``m`` (a copy)."""
+    out = np.array(m, dtype=float)
+    out[np.abs(out) <= ROUND_OFF_REL * np.max(np.abs(out), axis=1, initial=0.0, keepdims=True)] = 0.0
+    return out
 
 
 def equality_rows(
