@@ -374,8 +374,7 @@ def rank_order_options(p: argparse.ArgumentParser) -> None:
         "--measures",
         choices=("classic", "none"),
         default="classic",
-        help="classic: the classic measures beside the TVMMP; none: TVMMP alone, "
-        "the measure columns empty",
+        help="classic: the classic measures beside the TVMMP; none: TVMMP alone, the measure columns empty",
     )
     p.add_argument(
         "--sort",

@@ -188,7 +188,8 @@ def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
         lines.append(f"warning: {doubtful} rows have an alpha that is not certified (column certified)")
     deep = sum(r.get("penetration_exceeded") is True for r in solved)
     if deep:
-        lines.append(f"{deep} evaluated rows are deeper than max_penetration (column penetration_exceeded)")
+        rows_are = "row is" if deep == 1 else "rows are"
+        lines.append(f"{deep} evaluated {rows_are} deeper than max_penetration (column penetration_exceeded)")
     per_object = objects_summary(rows)
     if per_object:
         lines.append(per_object)
