@@ -198,41 +198,48 @@ class BatchModels:
         if key in self._models:
             self._models.move_to_end(key)
         else:
-            if self._spec is None:  # parsed once: every compile edits its own copy
-                self._spec = build_spec(self.doc, self.model_path, self.file)
-            spec = self._spec.copy()
-            name = self.doc["object"]["body"]
-            folder = obj_path is not None and Path(obj_path).is_dir()
-            if obj_path is not None:
-                other = None
-                if folder:  # scaled as it is built, at the grasp file's object mass
-                    mass = subtree_mass(self.model(), name)
-                    other = folder_object(obj_path, mass=mass, scale=scale, file=self.file)
-                _replace_object(spec, name, obj_path, self.file, other)
-            if scale != 1.0 and not folder:
-                _scale_object(spec, name, scale)
-            body = None
-            if root:
-                body = _root_body(spec, self.doc, self.file)
-                found = spec.body(body)
-                if found is None:
-                    raise GraspError(
-                        self.file, "configuration.base.body", f"{body!r} is not a body of the model"
-                    )
-                if found.parent.name == spec.worldbody.name and not any(
-                    j.type == _JNT.mjJNT_FREE for j in found.joints
-                ):
-                    found.mocap = True
-            try:
-                compiled = spec.compile()
-            except ValueError as e:
-                raise GraspError(
-                    self.file, "model", f"MuJoCo cannot compile: {' '.join(str(e).split())}"
-                ) from e
-            self._models[key] = (compiled, body)
+            spec, body = self._edited_spec(obj_path, scale, root)
+            self._models[key] = (self._compile(spec), body)
             while len(self._models) > self.cache_size:
                 self._models.popitem(last=False)
         return self._models[key]
+
+    def _edited_spec(
+        self, obj_path: str | None, scale: float, root: bool
+    ) -> tuple[mujoco.MjSpec, str | None]:
+        """A copy of the grasp file's model (parsed once) with the object file in place of the
+        object and scaled; ``root``: with its root body posable (a mocap body unless it has a
+        free joint). Returns the spec and the root body's name (None without ``root``)."""
+        if self._spec is None:  # parsed once: every compile edits its own copy
+            self._spec = build_spec(self.doc, self.model_path, self.file)
+        spec = self._spec.copy()
+        name = self.doc["object"]["body"]
+        folder = obj_path is not None and Path(obj_path).is_dir()
+        if obj_path is not None:
+            other = None
+            if folder:  # scaled as it is built, at the grasp file's object mass
+                mass = subtree_mass(self.model(), name)
+                other = folder_object(obj_path, mass=mass, scale=scale, file=self.file)
+            _replace_object(spec, name, obj_path, self.file, other)
+        if scale != 1.0 and not folder:
+            _scale_object(spec, name, scale)
+        if not root:
+            return spec, None
+        body = _root_body(spec, self.doc, self.file)
+        found = spec.body(body)
+        if found is None:
+            raise GraspError(self.file, "configuration.base.body", f"{body!r} is not a body of the model")
+        if found.parent.name == spec.worldbody.name and not any(
+            j.type == _JNT.mjJNT_FREE for j in found.joints
+        ):
+            found.mocap = True
+        return spec, body
+
+    def _compile(self, spec: mujoco.MjSpec) -> mujoco.MjModel:
+        try:
+            return spec.compile()
+        except ValueError as e:
+            raise GraspError(self.file, "model", f"MuJoCo cannot compile: {' '.join(str(e).split())}") from e
 
     def grasp(self, entry: DatasetGrasp, *, max_penetration: float | None = None) -> Grasp:
         """The grasp of one dataset entry (the file's document at the entry's configuration;
@@ -293,22 +300,9 @@ class BatchModels:
         key = (entry.obj_path, float(entry.obj_scale))
         if key not in self._com_models:
             offset = np.array(model.body_ipos[int(model.body(name).id)])
-            spec = build_spec(self.doc, self.model_path, self.file)
-            if entry.obj_path is not None:
-                other = None
-                if Path(entry.obj_path).is_dir():
-                    mass = subtree_mass(self.model(), name)
-                    other = folder_object(entry.obj_path, mass=mass, scale=entry.obj_scale, file=self.file)
-                _replace_object(spec, name, entry.obj_path, self.file, other)
-            if entry.obj_scale != 1.0 and not (entry.obj_path is not None and Path(entry.obj_path).is_dir()):
-                _scale_object(spec, name, entry.obj_scale)
+            spec, _ = self._edited_spec(entry.obj_path, entry.obj_scale, entry.root is not None)
             shift_frame(spec, name, offset)
-            found = spec.body(_root_body(spec, self.doc, self.file))
-            if found.parent.name == spec.worldbody.name and not any(
-                j.type == _JNT.mjJNT_FREE for j in found.joints
-            ):
-                found.mocap = True
-            self._com_models[key] = spec.compile()
+            self._com_models[key] = self._compile(spec)
             self._com[key] = offset
             while len(self._com_models) > self.cache_size:  # bounded as the plain models
                 dropped, _ = self._com_models.popitem(last=False)
