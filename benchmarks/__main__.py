@@ -19,6 +19,7 @@ from mjtvm.cli.values import (
     MAX_REPEATS,
     input_file,
     integer,
+    integers,
     shown,
 )
 from mjtvm.cli.vocabulary import out_options, quiet_option, time_limit_option
@@ -59,6 +60,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="timed cvxpy calls per state",
     )
+    sizes = parser.add_argument(
+        "--rank-sizes",
+        type=integers(1, 10_000_000),
+        default=None,
+        metavar="N,N,...",
+        help="grasps of the generated datasets of the `mjtvm rank` memory rows; the largest also "
+        "runs on a local Dask cluster of 2 worker processes",
+    )
+    computed_default(sizes, "400,4000 with --quick, else 400,4000,40000")
     time_limit_option(parser)
     out_options(parser, name="bench")
     removed_option(parser, "--md", "the table is NAME.md beside NAME.json in --out")
@@ -74,10 +84,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     quiet_option(parser)
 
 
-def _steps(quick: bool) -> int:
+def _steps(quick: bool, sizes: int) -> int:
     """How many ``say`` steps [`run_suite()`][benchmarks.suite.run_suite] announces (the progress bar's total)."""
     cases = 3 if quick else 4
-    rank = 4 + (2 if quick else 3)  # throughput, P2 floor, fingers, jobs, one per memory size
+    rank = 4 + sizes + 1  # throughput, P2 floor, fingers, jobs, one per memory size, the Dask run
     return cases + 5 + rank  # the lift, the sweeps, the scaling, the peers, the dataset scale
 
 
@@ -142,9 +152,11 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     outdir = check_output_dir(args.out)
     extra = _read_notes(args.notes)
     with output_lock(outdir):
-        with _step_bar(_steps(args.quick), args.quiet) as step:
+        n_sizes = len(args.rank_sizes) if args.rank_sizes else 2 if args.quick else 3
+        with _step_bar(_steps(args.quick, n_sizes), args.quiet) as step:
             report: dict[str, Any] = suite.run_suite(
                 quick=args.quick,
+                rank_sizes=args.rank_sizes,
                 repeats=args.repeats,
                 baseline_repeats=args.baseline_repeats,
                 time_limit=args.time_limit,

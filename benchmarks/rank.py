@@ -16,7 +16,10 @@ Measured on the shipped Shadow example ([`RANK_GRASP`][benchmarks.rank.RANK_GRAS
   speed-up, the workers' CPU time (``RUSAGE_CHILDREN``) counted in the core share;
 * **peak memory** (`bench_memory()`): ``mjtvm rank`` as a process on generated datasets of
   [`RSS_GRASPS`][benchmarks.rank.RSS_GRASPS] grasps (the example's grasps repeated, each with its own
-  object scale, the case that compiled one model per grasp), its ``ru_maxrss``.
+  object scale, the case that compiled one model per grasp), its ``ru_maxrss``;
+* **a Dask cluster** (`bench_dask()`): the largest of those datasets again with ``--cluster`` on a
+  local cluster of [`DASK_WORKERS`][benchmarks.rank.DASK_WORKERS] worker processes, every file
+  compared byte for byte with the one-process run's.
 
 Every row carries its ``core_share`` (CPU time over wall time, per process used); a row
 below [`CORE_SHARE_MIN`][benchmarks.rank.CORE_SHARE_MIN] is ``loaded``: its ``met`` is ``None``, never ``True``.
@@ -221,9 +224,48 @@ _RSS_CHILD = """
 import resource, sys, time
 from mjtvm.cli.parser import main
 c, w = time.process_time(), time.perf_counter()
-rc = main(["rank", sys.argv[1], sys.argv[2], "--out", sys.argv[3], "--no-plots", "--quiet"])
+rc = main(["rank", sys.argv[1], sys.argv[2], "--out", sys.argv[3], "--no-plots", "--quiet", *sys.argv[4:]])
 print(rc, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.process_time() - c, time.perf_counter() - w)
 """
+DASK_WORKERS = 2
+"""Worker processes (one thread each) of the local Dask cluster of the largest memory size."""
+_COMPARED = ("rank.json", "rank.csv", "rank.parquet", "rank-objects.csv")
+
+
+def _rank_child(ds: Path, out: Path, *extra: str) -> tuple[int, list[str], str]:
+    done = subprocess.run(
+        [sys.executable, "-c", _RSS_CHILD, RANK_GRASP, str(ds), str(out), *extra],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    fields = done.stdout.split()[-4:] if done.stdout.split() else []
+    return done.returncode, fields, (done.stderr.strip().splitlines() or ["?"])[-1][:200]
+
+
+def bench_dask(ds: Path, one: Path, out: Path, *, workers: int = DASK_WORKERS) -> dict[str, Any]:
+    """``mjtvm rank --cluster`` on a local Dask cluster of ``workers`` processes over the
+    dataset ``ds`` whose one-process files are in ``one``: whether every file is identical
+    (bytes), the wall time, the core share (the client's and the workers' CPU time over
+    ``workers`` cores)."""
+    import distributed
+    import psutil
+
+    with distributed.LocalCluster(
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        procs = [psutil.Process(w.process.pid) for w in cluster.workers.values()]
+        before = sum(sum(p.cpu_times()[:2]) for p in procs)
+        w = time.perf_counter()
+        rc, fields, err = _rank_child(ds, out, "--cluster", cluster.scheduler_address)
+        wall = time.perf_counter() - w
+        workers_cpu = sum(sum(p.cpu_times()[:2]) for p in procs) - before
+    if rc != 0 or len(fields) != 4:
+        return {"error": err}
+    identical = all((one / f).read_bytes() == (out / f).read_bytes() for f in _COMPARED)
+    cpu = workers_cpu + float(fields[2])
+    return {
+        "grasps": int(np.load(ds)["id"].shape[0]), "workers": workers, "wall_s": wall, "cpu_s": cpu,
+        "core_share": cpu / (wall * workers), "files_identical": identical, "files": list(_COMPARED),
+    }  # fmt: skip
 
 
 def write_dataset(path: Path, grasps: int) -> Path:
@@ -241,28 +283,30 @@ def write_dataset(path: Path, grasps: int) -> Path:
 
 
 def bench_memory(
-    *, sizes: Sequence[int] = RSS_GRASPS, say: Callable[[str], None] = lambda _: None
+    *, sizes: Sequence[int] = RSS_GRASPS, dask: bool = True, say: Callable[[str], None] = lambda _: None
 ) -> dict[str, Any]:
     """Peak RSS (MiB) of ``mjtvm rank`` as a process per dataset size, its CPU and wall time,
-    and the growth per 1,000 grasps between the smallest and the largest size."""
+    the growth per 1,000 grasps between the smallest and the largest size, and (``dask``)
+    the largest dataset again on a local Dask cluster, its files compared with these
+    (`bench_dask()`)."""
     out: dict[str, Any] = {"sizes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for n in sizes:
             say(f"rank memory: {n} grasps")
             ds = write_dataset(Path(tmp) / f"gen{n}.npz", n)
-            done = subprocess.run(
-                [sys.executable, "-c", _RSS_CHILD, RANK_GRASP, str(ds), str(Path(tmp) / f"out{n}")],
-                capture_output=True, text=True, check=False,
-            )  # fmt: skip
-            fields = done.stdout.split()[-4:] if done.stdout.split() else []
-            if done.returncode != 0 or len(fields) != 4:
-                out["sizes"][str(n)] = {"error": (done.stderr.strip().splitlines() or ["?"])[-1][:200]}
+            rc, fields, err = _rank_child(ds, Path(tmp) / f"out{n}")
+            if rc != 0 or len(fields) != 4:
+                out["sizes"][str(n)] = {"error": err}
                 continue
             rc, rss_kib, cpu, wall = int(fields[0]), float(fields[1]), float(fields[2]), float(fields[3])
             out["sizes"][str(n)] = {
                 "exit": rc, "peak_rss_mib": rss_kib / 1024.0, "cpu_s": cpu, "wall_s": wall,
                 "core_share": cpu / wall, "loaded": cpu / wall < CORE_SHARE_MIN,
             }  # fmt: skip
+        if dask and sizes and "peak_rss_mib" in out["sizes"][str(max(sizes))]:
+            n = max(sizes)
+            say(f"rank on a local Dask cluster: {n} grasps")
+            out["dask"] = bench_dask(Path(tmp) / f"gen{n}.npz", Path(tmp) / f"out{n}", Path(tmp) / f"dask{n}")
     ok = [int(k) for k, v in out["sizes"].items() if "peak_rss_mib" in v]
     if len(ok) >= 2:
         lo, hi = out["sizes"][str(min(ok))], out["sizes"][str(max(ok))]

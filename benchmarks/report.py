@@ -298,6 +298,15 @@ def rank_rows(report: dict[str, Any]) -> list[str]:
         lines.append(f"{'rank memory, ' + n + ' grasps':<44} {text:>24} {cpu:>34}")
     if "mib_per_1000_grasps" in mem:
         lines.append(f"rank memory: {mem['mib_per_1000_grasps']:.2f} MiB more per 1,000 grasps")
+    d = mem.get("dask")
+    if d is not None:
+        text = (
+            "error: " + d["error"]
+            if "error" in d
+            else f"files identical: {'yes' if d['files_identical'] else 'NO'}"
+        )
+        share = f"wall {d['wall_s']:.0f} s, share {d['core_share']:.2f}" if "wall_s" in d else "-"
+        lines.append(f"{'rank on Dask, ' + str(d.get('grasps', '?')) + ' grasps':<44} {text:>24} {share:>34}")
     lines.append(
         f"rank: {rk['grasp']} on {rk['dataset']} ({th['grasps']} grasps) in this process; CPU time per grasp, "
         "ratio column = core share (CPU over wall); a row below a core share of 0.8 is 'loaded', never met"

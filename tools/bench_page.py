@@ -300,6 +300,20 @@ def _rank(r: dict[str, Any]) -> list[str]:
             f"{m['peak_rss_mib']:.0f} MiB ({m['cpu_s']:.3g} s CPU)",
             _t(m["wall_s"]), f"{m['core_share']:.2f}", "flat", "loaded" if m["loaded"] else "-",
         ])  # fmt: skip
+    d = rk["memory"].get("dask")
+    if d is not None:
+        if "error" in d:
+            rows.append(
+                ["`mjtvm rank --cluster`, local Dask cluster", f"failed: {d['error']}", "-", "-", "-", "-"]
+            )
+        else:
+            same = "yes" if d["files_identical"] else "**no**"
+            rows.append([
+                f"`mjtvm rank --cluster`, local Dask cluster of {d['workers']} worker processes, "
+                f"{d['grasps']:,} generated grasps: files identical to one process",
+                same, _t(d["wall_s"]), f"{d['core_share']:.2f}", "identical",
+                "met" if d["files_identical"] else "**not met**",
+            ])  # fmt: skip
     head = ["measurement", "mjtvm", "wall", "core share", "target", ""]
     out = _table(head, rows)
     if "mib_per_1000_grasps" in rk["memory"]:

@@ -275,8 +275,8 @@ def resume_option(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--resume",
         action="store_true",
-        help="keep the finished rows of `NAME.partial.json` / `NAME.json` that belong to this run "
-        "(`sweep`: to its grid) and whose inputs are unchanged",
+        help="keep the finished rows of the checkpoint (`NAME.partial.json`; `rank`: `NAME.partial.jsonl`) "
+        "and of `NAME.json` that belong to this run (`sweep`: to its grid) and whose inputs are unchanged",
     )
 
 

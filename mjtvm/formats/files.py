@@ -302,7 +302,7 @@ def output_lock(
             os.close(fd)  # closing releases the flock
 
 
-def _write_temp(target: Path, data: bytes | Iterable[str], option: str) -> Path:
+def _write_temp(target: Path, data: bytes | Iterable[str | bytes], option: str) -> Path:
     try:
         fd, tmp = _temporary(target.parent, target.name)
     except OSError as e:
@@ -313,7 +313,7 @@ def _write_temp(target: Path, data: bytes | Iterable[str], option: str) -> Path:
                 f.write(data)
             else:  # chunks, written as they come: the whole text is never held
                 for chunk in data:
-                    f.write(chunk.encode("utf-8"))
+                    f.write(chunk.encode("utf-8") if isinstance(chunk, str) else chunk)
             f.flush()
             os.fsync(f.fileno())
         # mkstemp's 0600 is meant for secrets, not results: give the mode open() would give.
@@ -329,11 +329,13 @@ def _write_temp(target: Path, data: bytes | Iterable[str], option: str) -> Path:
     return Path(tmp)
 
 
-def write_files(files: Mapping[Path, bytes | str | Iterable[str]], *, option: str = "--out") -> list[Path]:
+def write_files(
+    files: Mapping[Path, bytes | str | Iterable[str | bytes]], *, option: str = "--out"
+) -> list[Path]:
     """Write every file of a set atomically (module docstring); returns the targets in order.
 
-    ``str`` contents are encoded as UTF-8; an iterable of ``str`` chunks (a generator) is
-    written chunk by chunk, as UTF-8. Nothing is renamed until every temporary file is
+    ``str`` contents are encoded as UTF-8; an iterable of chunks (a generator) is written
+    chunk by chunk, ``str`` chunks as UTF-8, ``bytes`` as they are. Nothing is renamed until every temporary file is
     complete; on any failure the temporary files are removed and the targets are untouched.
 
     Raises

@@ -17,8 +17,9 @@ import signal
 import sys
 import time
 import warnings
-from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from itertools import islice
 from typing import Any
 
 __all__ = ["STOP_WAIT_S", "die_with_parent", "forks", "init_worker", "run_calls", "stop"]
@@ -102,16 +103,19 @@ def forks() -> bool:
 
 
 def run_calls(
-    calls: Sequence[tuple[Callable[..., list[dict[str, Any]]], tuple[Any, ...]]],
+    calls: Iterable[tuple[Callable[..., list[dict[str, Any]]], tuple[Any, ...]]],
     jobs: int,
     finished: Callable[[list[dict[str, Any]]], None],
     *,
     fork: bool,
     in_order: bool = True,
+    window: int | None = None,
 ) -> None:
     """Each ``fn(*args)`` of ``calls`` on ``jobs`` local processes (forked, or started from a
     forkserver), its rows passed to ``finished`` in the order of ``calls`` or, without
-    ``in_order``, as they finish. On an interrupt or a failure the pending calls are cancelled
+    ``in_order``, as they finish. Without ``in_order`` at most ``window`` calls (default
+    ``4 * jobs``) are pending at a time and ``calls`` is read as they go: a lazy iterable's
+    tasks are never all held. On an interrupt or a failure the pending calls are cancelled
     and the workers ended ([`stop()`][mjtvm.jobs.pool.stop])."""
     context = multiprocessing.get_context("fork" if fork else "forkserver")
     pool = ProcessPoolExecutor(
@@ -122,9 +126,22 @@ def run_calls(
             # Python >= 3.12 warns about fork() beside other threads: OpenBLAS' (see
             # mjtvm.jobs.sweep's pool).
             warnings.filterwarnings("ignore", "This process .* is multi-threaded", DeprecationWarning)
-            futures = [pool.submit(fn, *args) for fn, args in calls]
-        for f in futures if in_order else as_completed(futures):
-            finished(f.result())
+            if in_order:
+                futures = [pool.submit(fn, *args) for fn, args in calls]
+                for f in futures:
+                    finished(f.result())
+            else:
+                todo = iter(calls)
+                pending: set[Future[list[dict[str, Any]]]] = set()
+                limit = max(1, window or 4 * jobs)
+                while True:
+                    for fn, args in islice(todo, limit - len(pending)):
+                        pending.add(pool.submit(fn, *args))
+                    if not pending:
+                        break
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for f in done:
+                        finished(f.result())
     except BaseException:
         stop(pool)
         raise

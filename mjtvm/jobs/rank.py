@@ -15,8 +15,9 @@ dataset's order whichever way ran them. The files of ``mjtvm rank`` are
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import replace
+from itertools import islice
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,16 @@ from mjtvm.model.limits import with_limit_horizon
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.tvmmp import tvmmp
 
-__all__ = ["CLASSIC_COLUMNS", "FAILURES", "MEASURES", "RankRow", "batch_models", "rank_row", "rank_rows"]
+__all__ = [
+    "CLASSIC_COLUMNS",
+    "FAILURES",
+    "MEASURES",
+    "RankRow",
+    "batch_models",
+    "rank_row",
+    "rank_rows",
+    "stream_rows",
+]
 
 FAILURES = ("no contact", "penetration", "grasp", "state", "solver")
 """The values of a failed row's ``failure``: no contact within ``contact_tolerance`` (the
@@ -73,6 +83,8 @@ def _classify(error: Exception) -> str:
 
 #: Grasps per task of a process pool, at most: what an interruption can lose per worker.
 TASK_GRASPS = 20
+#: Tasks in flight per Dask worker thread: enough to keep it busy, few enough to hold.
+DASK_WINDOW = 4
 
 
 def _classic_columns(state: GraspState) -> dict[str, Any]:
@@ -189,9 +201,75 @@ def _solve_chunk(
     ]
 
 
-def _chunks(entries: Sequence[DatasetGrasp], parts: int) -> list[list[DatasetGrasp]]:
-    n = max(1, min(len(entries), parts))
-    return [list(entries[i::n]) for i in range(n)]
+def _batches(entries: Iterable[DatasetGrasp], size: int) -> Iterator[list[DatasetGrasp]]:
+    """Consecutive tasks of ``size`` grasps, read from ``entries`` as they are needed."""
+    it = iter(entries)
+    while task := list(islice(it, size)):
+        yield task
+
+
+def stream_rows(
+    grasp: str,
+    entries: Iterable[DatasetGrasp],
+    on_rows: Callable[[list[dict[str, Any]]], None],
+    *,
+    total: int | None = None,
+    jobs: int = 1,
+    cluster: Any = None,
+    progress: bool = True,
+    limit_horizon: float | None = None,
+    refuse_penetration: bool = False,
+    measures: str = "classic",
+) -> None:
+    r"""Evaluate every grasp of ``entries`` ([`rank_row()`][mjtvm.jobs.rank.rank_row]) and hand
+    the rows to ``on_rows`` as tasks finish (in no set order), keeping none of them: with a
+    lazy ``entries`` the memory does not grow with the dataset (at most a few tasks per
+    worker are in flight).
+
+    Parameters
+    ----------
+    grasp
+        The grasp file.
+    entries
+        The grasps to evaluate (ids unique), read as they are needed.
+    on_rows
+        Called in this process with the rows of every finished task.
+    total
+        How many ``entries`` holds, for the progress bar (``None``: unknown).
+    jobs, cluster, progress, limit_horizon, refuse_penetration, measures
+        As [`rank_rows()`][mjtvm.jobs.rank.rank_rows].
+
+    Raises
+    ------
+    ParamError
+        ``jobs`` below 1, an unknown ``measures`` or an unreachable ``cluster``.
+    GraspError
+        The grasp file does not read, or its model does not compile.
+    """
+    if jobs < 1:
+        raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
+    if measures not in MEASURES:
+        raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {measures!r}")
+    opts = (limit_horizon, refuse_penetration, measures)
+    batch_models(grasp).model()  # compiled before any fork, and its errors are the command's
+    bar = tqdm(total=total, desc="rank", unit="grasp", disable=not progress)
+
+    def finished(rows: list[dict[str, Any]]) -> None:
+        on_rows(rows)
+        bar.update(len(rows))
+
+    try:
+        if cluster is not None:
+            _run_dask(grasp, _batches(entries, TASK_GRASPS), cluster, finished, opts)
+        elif jobs == 1:
+            for e in entries:
+                finished(_solve_chunk(grasp, [e], *opts))
+        else:
+            # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
+            size = TASK_GRASPS if total is None else max(1, min(TASK_GRASPS, math.ceil(total / (8 * jobs))))
+            _run_pool(grasp, _batches(entries, size), jobs, finished, opts)
+    finally:
+        bar.close()
 
 
 def rank_rows(
@@ -207,7 +285,9 @@ def rank_rows(
     refuse_penetration: bool = False,
     measures: str = "classic",
 ) -> list[dict[str, Any]]:
-    r"""The row of every grasp ([`rank_row()`][mjtvm.jobs.rank.rank_row]), in the order of ``entries``.
+    r"""The row of every grasp ([`rank_row()`][mjtvm.jobs.rank.rank_row]), in the order of
+    ``entries``, held in memory ([`stream_rows()`][mjtvm.jobs.rank.stream_rows] keeps none:
+    ``mjtvm rank`` streams them to disk).
 
     Parameters
     ----------
@@ -237,43 +317,33 @@ def rank_rows(
     GraspError
         The grasp file does not read, or its model does not compile.
     """
-    if jobs < 1:
-        raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
-    if measures not in MEASURES:
-        raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {measures!r}")
-    opts = (limit_horizon, refuse_penetration, measures)
     items = list(entries)
     table: dict[str, dict[str, Any]] = dict(done or {})
     todo = [e for e in items if e.id not in table]
-    batch_models(grasp).model()  # compiled before any fork, and its errors are the command's
-    bar = tqdm(total=len(todo), desc="rank", unit="grasp", disable=not progress)
 
     def finished(rows: list[dict[str, Any]]) -> None:
         table.update((r["id"], r) for r in rows)
         if on_rows is not None:
             on_rows(rows)
-        bar.update(len(rows))
 
-    try:
-        if not todo:
-            pass
-        elif cluster is not None:
-            _run_dask(grasp, _chunks(todo, max(1, len(todo) // 20)), cluster, finished, opts)
-        elif jobs == 1:
-            for e in todo:
-                finished(_solve_chunk(grasp, [e], *opts))
-        else:
-            # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
-            tasks = _chunks(todo, max(8 * jobs, math.ceil(len(todo) / TASK_GRASPS)))
-            _run_pool(grasp, tasks, jobs, finished, opts)
-    finally:
-        bar.close()
+    stream_rows(
+        grasp,
+        todo,
+        finished,
+        total=len(todo),
+        jobs=jobs,
+        cluster=cluster,
+        progress=progress,
+        limit_horizon=limit_horizon,
+        refuse_penetration=refuse_penetration,
+        measures=measures,
+    )
     return [table[e.id] for e in items]
 
 
 def _run_pool(
     grasp: str,
-    tasks: list[list[DatasetGrasp]],
+    tasks: Iterable[list[DatasetGrasp]],
     jobs: int,
     finished: Callable[[list[dict[str, Any]]], None],
     opts: tuple[Any, ...] = (),
@@ -281,28 +351,29 @@ def _run_pool(
     """The tasks on ``jobs`` local processes, read as they finish: forked on Linux (the
     compiled model inherited), else started from a forkserver (each worker compiles it)."""
     run_calls(
-        [(_solve_chunk, (grasp, task, *opts)) for task in tasks],
-        jobs,
-        finished,
-        fork=forks(),
-        in_order=False,
+        ((_solve_chunk, (grasp, task, *opts)) for task in tasks), jobs, finished, fork=forks(), in_order=False
     )
 
 
 def _run_dask(
     grasp: str,
-    tasks: list[list[DatasetGrasp]],
+    tasks: Iterable[list[DatasetGrasp]],
     cluster: Any,
     finished: Callable[[list[dict[str, Any]]], None],
     opts: tuple[Any, ...] = (),
 ) -> None:
     """The tasks on a Dask cluster (the grasp file and the dataset's object files must be
-    readable by the workers at the same paths)."""
+    readable by the workers at the same paths), at most `DASK_WINDOW` per worker thread in
+    flight, submitted as others finish."""
     with dask_client(cluster) as client:
         from distributed import as_completed
 
-        futures = client.map(
-            _solve_chunk, [grasp] * len(tasks), tasks, *([o] * len(tasks) for o in opts), pure=False
+        todo = iter(tasks)
+        limit = DASK_WINDOW * max(1, sum(client.nthreads().values()))
+        running = as_completed(
+            [client.submit(_solve_chunk, grasp, t, *opts, pure=False) for t in islice(todo, limit)]
         )
-        for fut in as_completed(futures):
+        for fut in running:
             finished(fut.result())
+            for t in islice(todo, 1):
+                running.add(client.submit(_solve_chunk, grasp, t, *opts, pure=False))

@@ -1,39 +1,60 @@
 r"""The files of ``mjtvm rank``: the rows as JSON, CSV (and Parquet), the plots, the summary,
 the checkpoint and ``--resume``.
 
-[`run_rank_files()`][mjtvm.jobs.rank_files.run_rank_files] reads the datasets ([`read_dataset()`][mjtvm.grasp.document.dataset.read_dataset]),
-ranks them ([`rank_rows()`][mjtvm.jobs.rank.rank_rows]) into ``NAME.json``, ``NAME.csv``,
-``NAME.parquet`` (when ``pyarrow`` imports), ``NAME-objects.png`` (TVMMP per object) and
-``NAME-tvmmp.png`` (the TVMMP histogram), ``NAME-epsilon.png`` (TVMMP against the epsilon), keeping every finished row in
-``NAME.partial.json`` while it runs, as ``mjtvm sweep`` does ([`mjtvm.jobs.sweep_files`][mjtvm.jobs.sweep_files]).
+[`run_rank_files()`][mjtvm.jobs.rank_files.run_rank_files] checks the datasets ([`scan_datasets()`][mjtvm.jobs.rank_inputs.scan_datasets]),
+evaluates them ([`stream_rows()`][mjtvm.jobs.rank.stream_rows]) into the log ``NAME.partial.jsonl``
+([`mjtvm.jobs.rank_log`][mjtvm.jobs.rank_log], the checkpoint), then writes from it ``NAME.json``, ``NAME.csv``,
+``NAME.parquet`` (when ``pyarrow`` imports), ``NAME-objects.csv``, ``NAME-objects.png`` (TVMMP per object),
+``NAME-tvmmp.png`` (the TVMMP histogram) and ``NAME-epsilon.png`` (TVMMP against the epsilon),
+one row at a time, in rank order ([`mjtvm.jobs.rank_index`][mjtvm.jobs.rank_index]).
 """
 
 from __future__ import annotations
 
 import io
 import json
-from collections import Counter
-from collections.abc import Callable, Iterator, Sequence
+from array import array
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from mjtvm.errors import ParamError
-from mjtvm.jobs.checkpoint import RowCheckpoint
+from mjtvm.errors import ParamError, StateError
 from mjtvm.jobs.figures import ALPHA_UNIT
 from mjtvm.jobs.files import csv_text, stderr
-from mjtvm.jobs.rank import MEASURES, rank_rows
-from mjtvm.jobs.rank_inputs import inputs_digest, read_datasets
-from mjtvm.jobs.rank_order import OBJECT_COLUMNS, check_sort, object_rows, objects_summary, ranked_rows
-from mjtvm.jobs.rank_row import flat_row, table_columns
+from mjtvm.jobs.rank import MEASURES, stream_rows
+from mjtvm.jobs.rank_index import RankIndex, RankIndexBuilder, most_common
+from mjtvm.jobs.rank_inputs import DatasetScan, inputs_digest, iter_datasets, scan_datasets
+from mjtvm.jobs.rank_log import LOG_SCHEMA, RankLog
+from mjtvm.jobs.rank_order import OBJECT_COLUMNS, check_sort, index_objects, objects_summary, with_rank
+from mjtvm.jobs.rank_row import table_columns
+from mjtvm.jobs.rank_tables import (
+    AGAIN,
+    has_pyarrow,
+    json_list_rows,
+    rows_csv_chunks,
+    rows_json_chunks,
+    rows_parquet_chunks,
+)
 
-__all__ = ["CHECKPOINT_SCHEMA", "RankFiles", "rank_summary", "rows_table", "run_rank_files"]
+__all__ = [
+    "CHECKPOINT_SCHEMA",
+    "RankFiles",
+    "index_plots",
+    "index_summary",
+    "rank_plots",
+    "rank_summary",
+    "run_rank_files",
+]
 
-CHECKPOINT_SCHEMA = "mjtvm.rank-checkpoint/1"
+CHECKPOINT_SCHEMA = LOG_SCHEMA
+LEGACY_SCHEMA = "mjtvm.rank-checkpoint/1"
+"""The schema of an older version's ``NAME.partial.json``, which ``--resume`` still reads."""
 CHECKPOINT_EVERY_S = 5.0
-"""At most this often (s) the checkpoint is rewritten (and always on an interrupt or failure)."""
+"""At most this often (s) the checkpoint is synced to disk (every finished task is flushed)."""
 
 
 @dataclass(frozen=True)
@@ -99,72 +120,23 @@ class RankFiles:
         check_sort(self.sort)
 
 
-def rows_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rows flattened for CSV and Parquet ([`flat_row()`][mjtvm.jobs.rank_row.flat_row]):
-    ``limiting`` -> ``limiting_k``, ``limiting_l``; ``alpha`` and ``status`` ->
-    ``alpha_k<k>_l<l>``, ``status_k<k>_l<l>``; ``None`` -> ``""`` in the caller's CSV."""
-    return [flat_row(r) for r in rows]
-
-
-def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
-    """The rows as CSV ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]; empty cells where a value is ``None``)."""
-    return "".join(rows_csv_chunks(rows))
-
-
-def rows_csv_chunks(rows: Sequence[dict[str, Any]]) -> Iterator[str]:
-    """[`rows_csv()`][mjtvm.jobs.rank_files.rows_csv] line by line: the header, then each row
-    flattened as it is written (one flattened row held at a time, not the table)."""
-    columns = _columns(rows)
-    yield csv_text([], columns)
-    for row in rows:
-        yield csv_text([flat_row(row)], columns, cell=lambda v: "" if v is None else v).split("\r\n", 1)[1]
-
-
-def _columns(rows: Sequence[dict[str, Any]]) -> list[str]:
-    """[`table_columns()`][mjtvm.jobs.rank_row.table_columns] of the rows, flattening one at a time."""
-    keys: dict[str, None] = {}
-    for row in rows:
-        keys.update(dict.fromkeys(flat_row(row)))
-    return table_columns([keys])
-
-
-def rows_json_chunks(rows: Sequence[dict[str, Any]]) -> Iterator[str]:
-    """The text of ``json.dumps(rows, indent=1) + "\\n"``, one row at a time."""
-    if not rows:
-        yield "[]\n"
-        return
-    yield "["
-    for i, row in enumerate(rows):
-        text = json.dumps(row, indent=1).replace("\n", "\n ")
-        yield ("\n " if i == 0 else ",\n ") + text
-    yield "\n]\n"
-
-
-def rows_parquet(rows: Sequence[dict[str, Any]]) -> bytes | None:
-    """The rows as Parquet ([`rows_table()`][mjtvm.jobs.rank_files.rows_table]), or ``None`` when ``pyarrow`` is not installed."""
-    try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-    except ImportError:
-        return None
-    flat = rows_table(rows)
-    columns = table_columns(flat)
-    table = pa.Table.from_pylist([{c: r.get(c) for c in columns} for r in flat])
-    buf = io.BytesIO()
-    pq.write_table(table, buf)
-    return buf.getvalue()
-
-
 def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
     """The summary ``mjtvm rank`` prints on stderr: counts, TVMMP quantiles, failures by reason."""
-    failed = [r for r in rows if r["failure"] is not None]
-    solved = [r for r in rows if r["failure"] is None]
-    positive = np.array([r["tvmmp"] for r in solved if r["tvmmp"] is not None and r["tvmmp"] > 0.0])
-    zero = sum(r["tvmmp"] is not None and r["tvmmp"] <= 0.0 for r in solved)
-    infeasible = sum(r["tvmmp"] is None for r in solved)
+    return index_summary(RankIndex.from_rows(rows))
+
+
+def index_summary(index: RankIndex) -> str:
+    """[`rank_summary()`][mjtvm.jobs.rank_files.rank_summary] from a [`RankIndex`][mjtvm.jobs.rank_index.RankIndex]
+    (counts by name where equal)."""
+    ev, t = index.evaluated, index.tvmmp
+    with np.errstate(invalid="ignore"):
+        positive = np.sort(t[ev & (t > 0.0)])
+        zero = int((ev & (t <= 0.0)).sum())
+    infeasible = int((ev & np.isnan(t)).sum())
+    failed = int((~ev).sum())
     lines = [
-        f"rank: {len(rows)} grasps: {len(positive)} with TVMMP > 0, {zero} with TVMMP 0, "
-        f"{infeasible} infeasible, {len(failed)} failed"
+        f"rank: {len(index)} grasps: {len(positive)} with TVMMP > 0, {zero} with TVMMP 0, "
+        f"{infeasible} infeasible, {failed} failed"
     ]
     if len(positive):
         q = np.quantile(positive, [0.0, 0.25, 0.5, 0.75, 1.0])
@@ -174,23 +146,21 @@ def rank_summary(rows: Sequence[dict[str, Any]]) -> str:
             )
         )
     if failed:
-        counts = Counter(r["failure"] for r in failed)
-        lines.append("failed: " + ", ".join(f"{k} {n}" for k, n in counts.most_common()))
-    causes = Counter(
-        r["reason"].split(": ")[1] for r in solved if r["reason"] and (r["tvmmp"] is None or r["tvmmp"] <= 0)
-    )
-    if causes:
+        lines.append("failed: " + ", ".join(f"{k} {n}" for k, n in most_common(index.failures)))
+    if index.causes:
         lines.append(
-            "TVMMP 0 or infeasible, by cause: " + ", ".join(f"{k} {n}" for k, n in causes.most_common())
+            "TVMMP 0 or infeasible, by cause: " + ", ".join(f"{k} {n}" for k, n in most_common(index.causes))
         )
-    doubtful = sum(r["certified"] is False for r in rows)
-    if doubtful:
-        lines.append(f"warning: {doubtful} rows have an alpha that is not certified (column certified)")
-    deep = sum(r.get("penetration_exceeded") is True for r in solved)
-    if deep:
-        rows_are = "row is" if deep == 1 else "rows are"
-        lines.append(f"{deep} evaluated {rows_are} deeper than max_penetration (column penetration_exceeded)")
-    per_object = objects_summary(rows)
+    if index.uncertified:
+        lines.append(
+            f"warning: {index.uncertified} rows have an alpha that is not certified (column certified)"
+        )
+    if index.deep:
+        rows_are = "row is" if index.deep == 1 else "rows are"
+        lines.append(
+            f"{index.deep} evaluated {rows_are} deeper than max_penetration (column penetration_exceeded)"
+        )
+    per_object = objects_summary(index_objects(index))
     if per_object:
         lines.append(per_object)
     return "\n".join(lines)
@@ -200,31 +170,36 @@ TVMMP_AXIS = "TVMMP alpha " + ALPHA_UNIT
 """The label of a TVMMP axis (the unit of [`ALPHA_UNIT`][mjtvm.jobs.figures.ALPHA_UNIT])."""
 
 
-def _apart(rows: Sequence[dict[str, Any]]) -> str:
+def _apart(index: RankIndex) -> str:
     """The count of the rows drawn apart: infeasible (evaluated, no TVMMP) and failed."""
-    infeasible = sum(r["failure"] is None and r["tvmmp"] is None for r in rows)
-    failed = sum(r["failure"] is not None for r in rows)
-    return f"not drawn: {infeasible} infeasible, {failed} failed"
+    infeasible = int((index.evaluated & np.isnan(index.tvmmp)).sum())
+    return f"not drawn: {infeasible} infeasible, {int((~index.evaluated).sum())} failed"
 
 
 def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
     """``objects``: TVMMP per object (every feasible grasp a point; per object, its infeasible
     and failed grasps counted in a strip below the axis); ``tvmmp``: the histogram of TVMMP;
     ``epsilon``: TVMMP against the L1 epsilon. Infeasible and failed grasps are never drawn at
-    0: counted in each figure's title or strip. PNG bytes."""
+    0: counted in each figure's title or strip. The points in the order of ``rows``. PNG bytes."""
+    index = RankIndex.from_rows(rows)
+    return index_plots(index, np.arange(len(index)))
+
+
+def index_plots(index: RankIndex, order: NDArray[np.int64]) -> dict[str, bytes]:
+    """[`rank_plots()`][mjtvm.jobs.rank_files.rank_plots] from a [`RankIndex`][mjtvm.jobs.rank_index.RankIndex],
+    the points in the order ``order`` (its positions)."""
     from mjtvm.jobs.figures import lift_axes
 
-    solved = [r for r in rows if r["failure"] is None]
-    feasible = [r for r in solved if r["tvmmp"] is not None]
-    objects = sorted({r["object"] for r in rows}) or ["(none)"]
+    drawn = order[index.evaluated[order] & ~np.isnan(index.tvmmp[order])]
+    objects = list(index.objects) or ["(none)"]
     fig, ax = lift_axes(max(4.5, 0.8 * len(objects) + 2.0), 4.0)
-    for i, name in enumerate(objects):
-        values = [r["tvmmp"] for r in feasible if r["object"] == name]
+    for i in range(len(objects)):
+        values = index.tvmmp[drawn[index.obj[drawn] == i]]
         jitter = np.linspace(-0.2, 0.2, len(values)) if len(values) > 1 else np.zeros(len(values))
         ax.plot(i + jitter, values, "o", ms=3, alpha=0.7)
-        mine = [r for r in rows if r["object"] == name]
-        inf = sum(r["failure"] is None and r["tvmmp"] is None for r in mine)
-        bad = sum(r["failure"] is not None for r in mine)
+        mine = index.obj == i
+        inf = int((mine & index.evaluated & np.isnan(index.tvmmp)).sum())
+        bad = int((mine & ~index.evaluated).sum())
         ax.annotate(
             f"inf {inf}\nfail {bad}",
             (i, 0.0),
@@ -239,22 +214,22 @@ def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
     ax.set_xticks(range(len(objects)), objects, rotation=30, fontsize=7)
     ax.set_xlabel("object (below it: its infeasible and failed grasps, not drawn)", fontsize=7, labelpad=34)
     ax.set_ylabel(TVMMP_AXIS, fontsize=7)
-    ax.set_title(f"TVMMP per object\n({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
+    ax.set_title(f"TVMMP per object\n({len(drawn)} feasible grasps; {_apart(index)})", fontsize=8)
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     out = {"objects": _png(fig)}
     fig, ax = lift_axes(4.5, 3.2)
-    ax.hist([r["tvmmp"] for r in feasible], bins=20)
+    ax.hist(index.tvmmp[drawn], bins=20)
     ax.set_xlabel(TVMMP_AXIS, fontsize=7)
     ax.set_ylabel("grasps (count)", fontsize=8)
-    ax.set_title(f"TVMMP histogram\n({len(feasible)} feasible grasps; {_apart(rows)})", fontsize=8)
+    ax.set_title(f"TVMMP histogram\n({len(drawn)} feasible grasps; {_apart(index)})", fontsize=8)
     out["tvmmp"] = _png(fig)
     fig, ax = lift_axes(4.5, 3.2)
-    pairs = [(r["epsilon_l1"], r["tvmmp"]) for r in feasible if r.get("epsilon_l1") is not None]
-    ax.plot([e for e, _ in pairs], [v for _, v in pairs], "o", ms=3, alpha=0.7)
+    pairs = drawn[~np.isnan(index.epsilon[drawn])]
+    ax.plot(index.epsilon[pairs], index.tvmmp[pairs], "o", ms=3, alpha=0.7)
     ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
     ax.set_ylabel(TVMMP_AXIS, fontsize=7)
-    ax.set_title(f"TVMMP against the epsilon\n({len(pairs)} feasible grasps; {_apart(rows)})", fontsize=8)
+    ax.set_title(f"TVMMP against the epsilon\n({len(pairs)} feasible grasps; {_apart(index)})", fontsize=8)
     ax.grid(alpha=0.3)
     out["epsilon"] = _png(fig)
     return out
@@ -269,15 +244,20 @@ def _png(fig: Any) -> bytes:
 def run_rank_files(
     run: RankFiles, *, emit: Callable[[str], None] = print, notice: Callable[[str], None] = stderr
 ) -> list[Path]:
-    r"""``mjtvm rank``: read the datasets, lock ``run.out``, resume, rank, write the files; the
+    r"""``mjtvm rank``: check the datasets, lock ``run.out``, resume, rank, write the files; the
     summary ([`rank_summary()`][mjtvm.jobs.rank_files.rank_summary]) goes to ``notice``.
 
-    While it runs, ``NAME.partial.json`` (schema ``mjtvm.rank-checkpoint/1``) holds every
-    finished row, rewritten atomically at most every [`CHECKPOINT_EVERY_S`][mjtvm.jobs.rank_files.CHECKPOINT_EVERY_S] s and on an
-    interrupt or failure, removed once the outputs are written. Every row carries ``inputs``
-    ([`inputs_digest()`][mjtvm.jobs.rank_inputs.inputs_digest]); with ``run.resume`` the rows of the checkpoint and of an earlier
-    ``NAME.json`` whose id is in the datasets and whose ``inputs`` are unchanged are kept. The
-    result equals an uninterrupted run (tested).
+    The memory does not grow with the dataset (``docs/datasets.md``, "Memory"): the datasets
+    are checked in a first pass ([`scan_datasets()`][mjtvm.jobs.rank_inputs.scan_datasets]) and read
+    again one file at a time while the grasps are evaluated; every finished row is appended
+    to ``NAME.partial.jsonl`` ([`RankLog`][mjtvm.jobs.rank_log.RankLog], the checkpoint) and
+    dropped; the files are written from the log, in rank order, from a
+    [`RankIndex`][mjtvm.jobs.rank_index.RankIndex] of a few numbers per row; the log is removed
+    once they are written. Every row carries ``inputs``
+    ([`inputs_digest()`][mjtvm.jobs.rank_inputs.inputs_digest]); with ``run.resume`` the rows of the
+    log, of an older version's ``NAME.partial.json`` and of an earlier ``NAME.json`` whose id is
+    in the datasets and whose ``inputs`` are unchanged are kept. The result equals an
+    uninterrupted run (tested).
 
     Raises
     ------
@@ -290,15 +270,13 @@ def run_rank_files(
     ParamError
         An unreachable ``cluster``.
     """
-    from mjtvm.formats.files import check_output_dir, output_lock, write_files
+    from mjtvm.formats.files import check_output_dir, output_lock
 
-    entries = read_datasets(
-        run.grasp, run.datasets, pose=run.pose, key=run.dataset_key, com_frame=run.com_frame
-    )
+    scan = scan_datasets(run.grasp, run.datasets, pose=run.pose, key=run.dataset_key, com_frame=run.com_frame)
     digest = inputs_digest(
         run.grasp,
         run.datasets,
-        entries,
+        scan.objects,
         run.limit_horizon,
         pose=run.pose,
         key=run.dataset_key,
@@ -307,54 +285,124 @@ def run_rank_files(
         measures=run.measures,
     )
     outdir = check_output_dir(run.out)
-    out_json, out_csv = outdir / f"{run.name}.json", outdir / f"{run.name}.csv"
-    checkpoint = outdir / f"{run.name}.partial.json"
-    ck: RowCheckpoint[str] = RowCheckpoint(
-        checkpoint,
-        CHECKPOINT_SCHEMA,
-        key=lambda r: str(r["id"]),
-        digest=lambda _: digest,
-        every_s=CHECKPOINT_EVERY_S,
-        again="run again without --resume",
-    )
+    log = RankLog(outdir / f"{run.name}.partial.jsonl", every_s=CHECKPOINT_EVERY_S)
     with output_lock(outdir):
-        wanted = {e.id for e in entries}
-        rows = ck.run(
-            lambda done, on_rows: rank_rows(
+        done = np.zeros(len(scan), dtype=bool)
+        if run.resume:
+            changed = np.zeros(len(scan), dtype=bool)
+            kept = _kept_rows(log, outdir, run.name, scan, digest, done, changed)
+            n = log.start(kept)
+            if (changed & ~done).any():
+                notice(f"resume: {int((changed & ~done).sum())} rows recomputed: inputs changed")
+            if not run.quiet:
+                emit(f"resume: {n} of {len(scan)} rows already finished")
+        else:
+            n = log.start()
+        todo = (e for i, e in enumerate(iter_datasets(scan)) if not done[i])
+        try:
+            stream_rows(
                 run.grasp,
-                entries,
+                todo,
+                lambda rows: log.append({**r, "inputs": digest} for r in rows),
+                total=len(scan) - n,
                 jobs=run.jobs,
                 cluster=run.cluster,
                 progress=not run.quiet,
-                done=done,
-                on_rows=on_rows,
                 limit_horizon=run.limit_horizon,
                 refuse_penetration=run.refuse_penetration,
                 measures=run.measures,
-            ),
-            resume=run.resume,
-            earlier=out_json,
-            wanted=wanted,
-            quiet=run.quiet,
-            emit=emit,
-            notice=notice,
-        )
-        rows = ranked_rows(rows, run.sort)
-        objects = object_rows(rows)
-        files: dict[Path, bytes | str | Iterator[str]] = {
-            out_json: rows_json_chunks(rows),  # written row by row
-            out_csv: rows_csv_chunks(rows),
+            )
+        except BaseException:
+            log.close()  # every finished row is in it; an empty one would only be in the way
+            if log.count == 0:
+                log.remove()
+            raise
+        log.close()
+        written, index = _write_from_log(run, log, scan, outdir)
+        log.remove()
+        (outdir / f"{run.name}.partial.json").unlink(missing_ok=True)  # an older version's checkpoint
+    notice(index_summary(index))
+    return written
+
+
+def _kept_rows(
+    log: RankLog,
+    outdir: Path,
+    name: str,
+    scan: DatasetScan,
+    digest: str,
+    done: NDArray[np.bool_],
+    changed: NDArray[np.bool_],
+) -> Iterator[dict[str, Any]]:
+    """The finished rows ``--resume`` keeps, read one at a time: from the log, an older
+    version's checkpoint, the earlier ``NAME.json`` (the first whole copy of a row wins);
+    ``done`` and ``changed`` mark the rows kept and those whose inputs changed."""
+    legacy = outdir / f"{name}.partial.json"
+    sources: list[Iterable[dict[str, Any]]] = []
+    if log.path.exists():
+        sources.append(row for _, row in log.entries())
+    if legacy.exists():
+        sources.append(_legacy_checkpoint(legacy))
+    if (outdir / f"{name}.json").exists():
+        sources.append(json_list_rows(outdir / f"{name}.json"))
+    for rows in sources:
+        for row in rows:
+            i = scan.ids.lookup(str(row["id"]))
+            if i is None or done[i]:
+                continue
+            if row.get("inputs") == digest:
+                done[i] = True
+                yield row
+            else:
+                changed[i] = True
+
+
+def _legacy_checkpoint(path: Path) -> list[dict[str, Any]]:
+    """The rows of ``NAME.partial.json`` (schema ``mjtvm.rank-checkpoint/1``, mjtvm <= 0.x)."""
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        if doc.get("schema") != LEGACY_SCHEMA:
+            raise ValueError(f"schema {doc.get('schema')!r}, expected {LEGACY_SCHEMA!r}")
+        rows = list(doc["rows"])
+        [str(r["id"]) for r in rows]
+    except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
+        raise StateError(str(path), f"cannot read the finished rows ({e}); {AGAIN}") from e
+    return rows
+
+
+def _write_from_log(
+    run: RankFiles, log: RankLog, scan: DatasetScan, outdir: Path
+) -> tuple[list[Path], RankIndex]:
+    """Every file of the run from its log, one row at a time, in rank order."""
+    from mjtvm.formats.files import write_files
+
+    builder = RankIndexBuilder(run.sort)
+    offsets = array("q")
+    for offset, row in log.entries():
+        builder.add(row, scan.ids.lookup(str(row["id"])) or 0)
+        offsets.append(offset)
+    index = builder.build()
+    with log.reader() as read:
+        order = index.order(lambda j: str(read(offsets[j])["id"]))
+        ranked = index.ranked
+
+        def rows() -> Iterator[dict[str, Any]]:
+            for n, j in enumerate(order, start=1):
+                yield with_rank(read(offsets[int(j)]), n, ranked)
+
+        columns = table_columns([index.columns])
+        files: dict[Path, bytes | str | Iterable[str | bytes]] = {
+            outdir / f"{run.name}.json": rows_json_chunks(rows()),
+            outdir / f"{run.name}.csv": rows_csv_chunks(rows(), columns),
             outdir / f"{run.name}-objects.csv": csv_text(
-                objects, list(OBJECT_COLUMNS), cell=lambda v: "" if v is None else v
+                index_objects(index), list(OBJECT_COLUMNS), cell=lambda v: "" if v is None else v
             ),
         }
-        parquet = rows_parquet(rows)
-        if parquet is not None:
-            files[outdir / f"{run.name}.parquet"] = parquet
+        if has_pyarrow():
+            rank_kind: set[type] = {int} if ranked else set()  # the log's rows have no rank yet
+            kinds = {**index.columns, "rank": rank_kind}
+            files[outdir / f"{run.name}.parquet"] = rows_parquet_chunks(rows(), columns, kinds)
         if run.plots:
-            for key, png in rank_plots(rows).items():
+            for key, png in index_plots(index, order).items():
                 files[outdir / f"{run.name}-{key}.png"] = png
-        written = write_files(files)
-        checkpoint.unlink(missing_ok=True)
-    notice(rank_summary(rows))
-    return written
+        return write_files(files), index

@@ -9,15 +9,25 @@ median and maximum.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from mjtvm.errors import ParamError
+from mjtvm.jobs.rank_index import RankIndex
 from mjtvm.jobs.rank_row import CLASSIC_COLUMNS
 
-__all__ = ["OBJECT_COLUMNS", "SORT_COLUMNS", "check_sort", "object_rows", "objects_summary", "ranked_rows"]
+__all__ = [
+    "OBJECT_COLUMNS",
+    "SORT_COLUMNS",
+    "check_sort",
+    "index_objects",
+    "object_rows",
+    "objects_summary",
+    "ranked_rows",
+    "with_rank",
+]
 
 SORT_COLUMNS = ("tvmmp", *(c for c in CLASSIC_COLUMNS if c != "force_closure"))
 """The numeric measures ``--sort`` accepts (higher is better for each; ``epsilon_linf_gap`` is
@@ -41,13 +51,6 @@ def check_sort(column: str) -> str:
     return column
 
 
-def _group(row: dict[str, Any], key: str) -> int:
-    """0: ranked (evaluated, feasible, with the key); 1: evaluated, infeasible or without it; 2: failed."""
-    if row["failure"] is not None:
-        return 2
-    return 0 if row["feasible"] and row.get(key) is not None else 1
-
-
 def ranked_rows(rows: Sequence[dict[str, Any]], key: str = "tvmmp") -> list[dict[str, Any]]:
     """The rows best first, each with its ``rank``.
 
@@ -66,47 +69,48 @@ def ranked_rows(rows: Sequence[dict[str, Any]], key: str = "tvmmp") -> list[dict
         rows (these two in the dataset's order, ``rank`` ``None``).
     """
     check_sort(key)
-    order = sorted(
-        range(len(rows)),
-        key=lambda i: (
-            _group(rows[i], key),
-            -float(rows[i][key]) if _group(rows[i], key) == 0 else 0.0,
-            str(rows[i]["id"]) if _group(rows[i], key) == 0 else "",
-            i,
-        ),
-    )
+    index = RankIndex.from_rows(rows, key)
+    ranked = index.ranked
+    return [with_rank(rows[i], n, ranked) for n, i in enumerate(index.order(lambda i: str(rows[i]["id"])), 1)]
+
+
+def with_rank(row: Mapping[str, Any], n: int, ranked: int) -> dict[str, Any]:
+    """A copy of the ``n``-th row of [`RankIndex.order()`][mjtvm.jobs.rank_index.RankIndex.order]
+    with its ``rank``: ``n`` among the first ``ranked`` rows (the ranked ones), else ``None``."""
+    out = dict(row)
+    out["rank"] = n if n <= ranked else None
+    return out
+
+
+def index_objects(index: RankIndex) -> list[dict[str, Any]]:
+    """[`object_rows()`][mjtvm.jobs.rank_order.object_rows] from a [`RankIndex`][mjtvm.jobs.rank_index.RankIndex]."""
     out = []
-    for n, i in enumerate(order, start=1):
-        row = dict(rows[i])
-        row["rank"] = n if _group(row, key) == 0 else None
-        out.append(row)
+    for code, name in enumerate(index.objects):
+        mine = index.obj == code
+        values = index.tvmmp[mine & index.evaluated & ~np.isnan(index.tvmmp)]
+        out.append(
+            {
+                "object": name,
+                "count": int(mine.sum()),
+                "evaluated": int((mine & index.evaluated).sum()),
+                "feasible": int((mine & index.feasible).sum()),
+                "tvmmp_median": float(np.median(values)) if len(values) else None,
+                "tvmmp_max": float(values.max()) if len(values) else None,
+            }
+        )
     return out
 
 
 def object_rows(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per object (sorted by name): ``count`` grasps, ``evaluated`` (not failed), ``feasible``,
     ``tvmmp_median`` and ``tvmmp_max`` over the feasible ones (``None`` without one)."""
-    out = []
-    for name in sorted({str(r["object"]) for r in rows}):
-        mine = [r for r in rows if str(r["object"]) == name]
-        values = [float(r["tvmmp"]) for r in mine if r["failure"] is None and r["tvmmp"] is not None]
-        out.append(
-            {
-                "object": name,
-                "count": len(mine),
-                "evaluated": sum(r["failure"] is None for r in mine),
-                "feasible": sum(r["failure"] is None and bool(r["feasible"]) for r in mine),
-                "tvmmp_median": float(np.median(values)) if values else None,
-                "tvmmp_max": max(values) if values else None,
-            }
-        )
-    return out
+    return index_objects(RankIndex.from_rows(rows))
 
 
-def objects_summary(rows: Sequence[dict[str, Any]]) -> str:
+def objects_summary(objects: Sequence[Mapping[str, Any]]) -> str:
     """One line per object of [`object_rows()`][mjtvm.jobs.rank_order.object_rows], for the stderr summary."""
     lines = []
-    for o in object_rows(rows):
+    for o in objects:
         tail = (
             f", TVMMP median {o['tvmmp_median']:.4g}, max {o['tvmmp_max']:.4g}"
             if o["tvmmp_max"] is not None

@@ -45,6 +45,8 @@ def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) ->
         s["exit"] == 0 and s["peak_rss_mib"] > 50 for s in sizes.values()
     )
     assert "mib_per_1000_grasps" in rank_report["memory"]
+    dask = rank_report["memory"]["dask"]  # the largest size again on 2 Dask worker processes
+    assert dask["grasps"] == 16 and dask["workers"] == 2 and dask["files_identical"] is True
 
 
 def test_a_loaded_row_is_never_met() -> None:
@@ -64,7 +66,7 @@ def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> 
     bench_page = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_page)
     table = bench_page._rank({"rank": rank_report})
-    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 2  # head, rows
+    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 2 + 1  # head, rows, Dask
     loaded = {**rank_report, "throughput": {**rank_report["throughput"]}}
     loaded["throughput"]["classic"] = {**loaded["throughput"]["classic"], "loaded": True, "met": None}
     assert "| loaded |" in "\n".join(bench_page._rank({"rank": loaded}))

@@ -95,7 +95,7 @@ def test_every_table_is_parsed() -> None:
         "rank.json:row",
         "rank.csv",
         "rank-objects.csv",
-        "rank.partial.json",
+        "rank.partial.jsonl",
         "verify.csv",
         "slide-check.csv",
         "gears.csv",
@@ -233,17 +233,17 @@ def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     assert pq.read_table(tmp_path / "rank.parquet").column_names == _header(tmp_path / "rank.csv")
 
     def failing(*args: Any, **kwargs: Any) -> Any:
-        kwargs["on_rows"](rank.rank_rows(*args, **{**kwargs, "on_rows": None}))
+        rank.stream_rows(*args, **kwargs)
         raise RuntimeError("stop after the rows")
 
-    monkeypatch.setattr(rank_files, "CHECKPOINT_EVERY_S", 1e9)
-    monkeypatch.setattr(rank_files, "rank_rows", failing)
+    monkeypatch.setattr(rank_files, "stream_rows", failing)
     with pytest.raises(RuntimeError, match="stop after the rows"):
         rank_files.run_rank_files(run, emit=lambda _: None, notice=lambda _: None)
-    doc = json.loads((tmp_path / "rank.partial.json").read_text(encoding="utf-8"))
-    assert_documented("rank.partial.json", doc)
-    for row in doc["rows"]:
-        assert_documented("rank.json:row", row)
+    head, *lines = (tmp_path / "rank.partial.jsonl").read_text(encoding="utf-8").splitlines()
+    assert_documented("rank.partial.jsonl", json.loads(head))
+    assert len(lines) == len(rows)
+    for line in lines:
+        assert_documented("rank.json:row", json.loads(line))
 
 
 # ------------------------------------------------------------------ mjtvm verify

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import mjtvm.jobs.rank
+from mjtvm.errors import StateError
 from mjtvm.grasp.resolve.file import load_grasp
 from mjtvm.jobs.rank_files import RankFiles, run_rank_files
 from mjtvm.problem2.tvmmp import tvmmp
@@ -128,15 +129,63 @@ def test_interrupted_and_resumed_is_identical(tmp_path: Path, monkeypatch: pytes
     part = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True)
     with pytest.raises(KeyboardInterrupt):
         run_rank_files(part, notice=lambda _: None)
-    saved = json.loads((tmp_path / "part" / "rank.partial.json").read_text())["rows"]
-    assert len(saved) == 15
+    log = tmp_path / "part" / "rank.partial.jsonl"
+    head, *saved = [json.loads(line) for line in log.read_text().splitlines()]
+    assert head == {"schema": "mjtvm.rank-checkpoint/2"} and len(saved) == 15
+    # A kill in the middle of a line: the torn row is dropped and evaluated again.
+    log.write_bytes(log.read_bytes() + b'{"id": "shadow-sphere-0')
     monkeypatch.setattr(mjtvm.jobs.rank, "rank_row", real)
     calls["n"] = 0
     resumed = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path / "part", quiet=True, resume=True)
     run_rank_files(resumed, notice=lambda _: None)
-    for name in ("rank.json", "rank.csv", "rank.parquet"):
+    for name in ("rank.json", "rank.csv", "rank.parquet", "rank-objects.csv"):
         assert (tmp_path / "part" / name).read_bytes() == (tmp_path / "whole" / name).read_bytes(), name
-    assert not (tmp_path / "part" / "rank.partial.json").exists()
+    assert not log.exists()
+
+
+def test_resume_reads_an_older_checkpoint_and_the_earlier_json(tmp_path: Path) -> None:
+    # The rows of an older version's NAME.partial.json (schema 1) and of an earlier NAME.json
+    # are kept when their inputs are unchanged: nothing is evaluated again.
+    whole = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path, quiet=True)
+    run_rank_files(whole, notice=lambda _: None)
+    first = {p: p.read_bytes() for p in tmp_path.iterdir()}
+    rows = json.loads((tmp_path / "rank.json").read_text())
+    (tmp_path / "rank.partial.json").write_text(
+        json.dumps({"schema": "mjtvm.rank-checkpoint/1", "rows": rows[:10]})
+    )
+    (tmp_path / "rank.json").write_text(json.dumps(rows[10:], indent=1))
+    said: list[str] = []
+    again = RankFiles(grasp=GRASP, datasets=(str(DATASET),), out=tmp_path, quiet=False, resume=True)
+    import mjtvm.jobs.rank as rank
+
+    real, rank.rank_row = rank.rank_row, None  # type: ignore[assignment]
+    try:
+        run_rank_files(again, emit=said.append, notice=lambda _: None)
+    finally:
+        rank.rank_row = real
+    assert "resume: 36 of 36 rows already finished" in said
+    assert {p: p.read_bytes() for p in tmp_path.iterdir()} == first
+
+
+def test_json_list_rows_reads_a_list_in_small_blocks(tmp_path: Path) -> None:
+    from mjtvm.jobs.rank_tables import json_list_rows, rows_json_chunks
+
+    rows = [{"id": f"g{i}", "x": [i, {"y": "]},["}], "z": None} for i in range(7)]
+    path = tmp_path / "r.json"
+    path.write_text("".join(rows_json_chunks(rows)))
+    for block in (1, 3, 64, 1 << 20):
+        assert list(json_list_rows(path, block=block)) == rows
+    path.write_text("[]\n")
+    assert list(json_list_rows(path)) == []
+    for bad, why in (
+        ("{}", "not a JSON list"),
+        ('[{"id": 1}', "ends early"),
+        ('[{"id": 1} {"id": 2}]', "','"),
+        ("[1]", "not a row"),
+    ):
+        path.write_text(bad)
+        with pytest.raises(StateError, match=why):
+            list(json_list_rows(path, block=2))
 
 
 def test_malformed_dataset_is_one_line_and_exit_2(tmp_path: Path) -> None:
@@ -237,15 +286,34 @@ def test_qpos_layout_gives_the_rows_of_grasp_qpos(tmp_path: Path) -> None:
     assert sum(r["tvmmp"] is not None for r in a) >= 3
 
 
-def test_dask_gives_the_same_rows() -> None:
-    import distributed  # the "cluster" extra, part of the "test" extra: never skipped
+def test_dask_gives_the_same_rows(tmp_path: Path) -> None:
+    # A local cluster of two worker processes (the "cluster" extra, part of the "test"
+    # extra: never skipped): the rows of one process, and the same files.
+    import distributed
 
-    entries = _entries()[:8]
+    entries = _entries()[:12]
     serial = mjtvm.jobs.rank.rank_rows(GRASP, entries, progress=False)
-    with distributed.Client(
-        processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-    ) as client:
+    z = {k: v[:12] for k, v in np.load(DATASET).items()}
+    np.savez(tmp_path / "d.npz", **z)
+    one = RankFiles(grasp=GRASP, datasets=(str(tmp_path / "d.npz"),), out=tmp_path / "one", quiet=True)
+    run_rank_files(one, notice=lambda _: None)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         assert mjtvm.jobs.rank.rank_rows(GRASP, entries, cluster=client, progress=False) == serial
+        many = RankFiles(
+            grasp=GRASP,
+            datasets=(str(tmp_path / "d.npz"),),
+            out=tmp_path / "many",
+            quiet=True,
+            cluster=cluster.scheduler_address,
+        )
+        run_rank_files(many, notice=lambda _: None)
+    for name in ("rank.json", "rank.csv", "rank.parquet", "rank-objects.csv"):
+        assert (tmp_path / "many" / name).read_bytes() == (tmp_path / "one" / name).read_bytes(), name
 
 
 def test_grasp_file_without_rvds_is_refused_up_front(tmp_path: Path) -> None:

@@ -154,8 +154,8 @@ def test_measures_none_leaves_the_measure_columns_empty(tmp_path: Path) -> None:
 def test_the_files_written_row_by_row_are_the_whole_texts(tmp_path: Path) -> None:
     from mjtvm.formats.files import write_files
     from mjtvm.jobs.files import csv_text
-    from mjtvm.jobs.rank_files import rows_csv_chunks, rows_json_chunks, rows_table
     from mjtvm.jobs.rank_row import table_columns
+    from mjtvm.jobs.rank_tables import rows_csv_chunks, rows_json_chunks, rows_table
 
     rows = ranked_rows(
         _rows(_subset(tmp_path, ["shadow-sphere-000", "shadow-sphere-003", "shadow-sphere-032-open"]))
@@ -165,7 +165,35 @@ def test_the_files_written_row_by_row_are_the_whole_texts(tmp_path: Path) -> Non
     for chunks, whole in (
         (rows_json_chunks(rows), json.dumps(rows, indent=1) + "\n"),
         (rows_json_chunks([]), "[]\n"),
-        (rows_csv_chunks(rows), whole_csv),
+        (rows_csv_chunks(rows, table_columns(flat)), whole_csv),
     ):
         (path,) = write_files({tmp_path / "out.txt": chunks})
         assert path.read_bytes().decode("utf-8") == whole
+
+
+def test_parquet_written_in_row_groups_is_the_table_pyarrow_infers(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The streamed Parquet (a schema from the rows' Python types, one row group per batch)
+    # reads back as pyarrow's own inference of the whole table: the same columns, types, values.
+    import io
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    import mjtvm.jobs.rank_tables as rank_tables
+    from mjtvm.jobs.rank_row import table_columns
+
+    rows = ranked_rows(
+        _rows(_subset(tmp_path, ["shadow-sphere-000", "shadow-sphere-003", "shadow-sphere-032-open"]))
+    )
+    flat = rank_tables.rows_table(rows)
+    columns = table_columns(flat)
+    expected = pa.Table.from_pylist([{c: r.get(c) for c in columns} for r in flat])
+    monkeypatch.setattr(rank_tables, "PARQUET_BATCH", 2)
+    data = rank_tables.rows_parquet(rows)
+    assert data is not None
+    got = pq.read_table(io.BytesIO(data))
+    assert pq.ParquetFile(io.BytesIO(data)).num_row_groups == 2
+    assert got.schema == expected.schema
+    assert got.to_pylist() == expected.to_pylist()
