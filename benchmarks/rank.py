@@ -332,3 +332,39 @@ def bench_rank(
     out["jobs"] = bench_jobs()
     out["memory"] = bench_memory(sizes=sizes, say=say)
     return out
+
+
+MEMORY_FILE = "rank-memory.json"
+"""The file of a memory run of its own (`main()`), beside ``bench.json``: the page's memory
+rows come from it when it is there (the 40,000-grasp size takes ~30 min, too long for the suite)."""
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m benchmarks.rank --memory 400,4000,40000 --out DIR``: `bench_memory()` alone,
+    written to ``DIR/rank-memory.json`` with the machine and the date."""
+    import argparse
+    import datetime
+
+    from benchmarks.timing import machine_info
+    from mjtvm.formats.files import atomic_write
+
+    p = argparse.ArgumentParser(prog="python -m benchmarks.rank")
+    p.add_argument("--memory", required=True, metavar="N,N,...", help="dataset sizes (grasps)")
+    p.add_argument("--out", required=True, metavar="DIR")
+    args = p.parse_args(argv)
+    sizes = tuple(int(v) for v in args.memory.split(","))
+    started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    memory = bench_memory(sizes=sizes, say=lambda s: print(s, flush=True))
+    doc = {
+        "command": "python -m benchmarks.rank --memory " + args.memory,
+        "started": started,
+        "machine": machine_info(),
+        "memory": memory,
+    }
+    path = atomic_write(Path(args.out) / MEMORY_FILE, json.dumps(doc, indent=1) + "\n")
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
