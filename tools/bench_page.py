@@ -10,10 +10,13 @@ The report is a ``NAME.json`` of schema ``benchmarks/2`` (default
 ``python -m benchmarks --quick --out benchmarks/results --name bench``). The tables go between
 the page's two marker comments (:data:`BEGIN`, :data:`END`); the rest of the page is written by
 hand. ``tests/docs/test_bench_page.py`` checks that the committed page equals this output.
+When ``rank-memory.json`` (``python -m benchmarks.rank --memory 400,4000,40000 --out
+benchmarks/results``) is beside the report, the peak-RSS and Dask rows come from it.
 """
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -25,6 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 REPORT = Path("benchmarks/results/bench.json")  #: the default report, relative to the root
 PAGE = Path("docs/performance.md")  #: the default page, relative to the root
 SCHEMA = "benchmarks/2"
+MEMORY_FILE = "rank-memory.json"  #: beside the report: the memory rows of a run of their own
 BEGIN, END = markers("tools/bench_page.py", REPORT)  #: the lines above and below the generated tables
 QUIET_SHARE = 0.9  #: below this share of a core the page says the machine was shared
 
@@ -289,7 +293,11 @@ def _rank(r: dict[str, Any]) -> list[str]:
         f"{_t(j[k]['wall_s'])} ({_t(j['1']['wall_s'])} on 1)",
         f"{j['core_share']:.2f}", f">= x{j['target']:g}", _verdict(j),
     ])  # fmt: skip
-    for size, m in rk["memory"]["sizes"].items():
+    memory = rk["memory"]
+    separate = r.get("rank_memory")
+    if separate is not None:  # the memory rows of a run of their own (benchmarks.rank.main)
+        memory = separate["memory"]
+    for size, m in memory["sizes"].items():
         if "error" in m:
             rows.append(
                 [f"peak RSS, {int(size):,} generated grasps", f"failed: {m['error']}", "-", "-", "-", "-"]
@@ -300,7 +308,7 @@ def _rank(r: dict[str, Any]) -> list[str]:
             f"{m['peak_rss_mib']:.0f} MiB ({m['cpu_s']:.3g} s CPU)",
             _t(m["wall_s"]), f"{m['core_share']:.2f}", "flat", "loaded" if m["loaded"] else "-",
         ])  # fmt: skip
-    d = rk["memory"].get("dask")
+    d = memory.get("dask")
     if d is not None:
         if "error" in d:
             rows.append(
@@ -316,8 +324,15 @@ def _rank(r: dict[str, Any]) -> list[str]:
             ])  # fmt: skip
     head = ["measurement", "mjtvm", "wall", "core share", "target", ""]
     out = _table(head, rows)
-    if "mib_per_1000_grasps" in rk["memory"]:
-        out += ["", f"Peak RSS grows by {rk['memory']['mib_per_1000_grasps']:.3g} MiB per 1,000 grasps."]
+    if "mib_per_1000_grasps" in memory:
+        out += ["", f"Peak RSS grows by {memory['mib_per_1000_grasps']:.3g} MiB per 1,000 grasps."]
+    if separate is not None:
+        out += [
+            "",
+            f"The peak-RSS and Dask rows are a run of their own (`{separate['command']}`, started "
+            f"{separate['started']}, `benchmarks/results/rank-memory.json`): the 40,000-grasp size "
+            "takes half an hour, too long for the suite.",
+        ]
     return out
 
 
@@ -385,12 +400,20 @@ def render(report: dict[str, Any]) -> str:
     return "\n".join([*lines, "", END])
 
 
+def render_with_memory(report: dict[str, Any]) -> str:
+    """`render()`, with the memory rows of ``rank-memory.json`` beside the report when it is there."""
+    extra = ROOT / REPORT.parent / MEMORY_FILE
+    if extra.is_file():
+        report = {**report, "rank_memory": json.loads(extra.read_text(encoding="utf-8"))}
+    return render(report)
+
+
 def main(argv: list[str] | None = None) -> int:
     """``--write`` the page, or ``--check`` it; return the process exit code (1: stale)."""
     return page_main(
         argv,
         tool="tools/bench_page.py",
-        render=render,
+        render=render_with_memory,
         report=ROOT / REPORT,
         page=ROOT / PAGE,
         begin=BEGIN,

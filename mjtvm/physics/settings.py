@@ -27,6 +27,10 @@ __all__ = ["SimSettings", "sim_model"]
 class SimSettings:
     r"""Simulation and pass/fail settings ([`mjtvm.physics.simulate`][mjtvm.physics.simulate]; SI units, angles in degrees).
 
+    ``edge_tol``: a rollout fails when an actuator runs more than this fraction faster than
+    its operation range's largest speed (the speed edge: a box's speed limit, a motor's
+    no-load speed after the joint's losses; ``Drive.speed_limits``).
+
     ``armature_scale`` scales the actuators' rotor inertia and ``inertial_ff`` adds the
     computed inertial and Coriolis torques of the tracked setpoints to the feedforward:
     both are ablations of the quasi-static assumption, off by default.
@@ -48,6 +52,7 @@ class SimSettings:
     slip_tol: float = 0.05
     slip_floor: float = 1e-5
     lost_gap: float = 5e-4
+    edge_tol: float = 0.01
 
     def __post_init__(self) -> None:
         for name in (
@@ -60,6 +65,7 @@ class SimSettings:
             "slip_tol",
             "slip_floor",
             "lost_gap",
+            "edge_tol",
             "impratio",
             "armature_scale",
         ):

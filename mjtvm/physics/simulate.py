@@ -112,8 +112,9 @@ class RolloutResult:
         limited.
     failure
         The first violation's kind (``"twist magnitude"``, ``"twist direction"``, ``"moves at
-        rest"``, ``"slip"``, ``"contact lost"``, ``"torque limit"``; ``""`` when passed) and
-        where (the geom, or the saturated joints or actuators; ``""`` for the twist).
+        rest"``, ``"slip"``, ``"contact lost"``, ``"speed edge"``, ``"torque limit"``; ``""``
+        when passed) and where (the geom, the actuator or joint past its speed edge, or the
+        saturated joints or actuators; ``""`` for the twist).
     trace
         Per-step arrays when requested ([`rerun_data()`][mjtvm.physics.simulate.rerun_data]), else empty.
     """
@@ -226,6 +227,7 @@ def rollout(
     ssum = {f[0]: np.zeros(3) for f in rig.fingers if f[4] != "F"}
     worst = {"speed": 0.0, "angle": 0.0, "gap": -np.inf}
     saturated: set[str] = set()
+    edge = {"ratio": 0.0, "where": ""}  # the largest speed over the speed edge (Drive.speed_limits)
     clamped, reason, gap_geom, failure = 0, "", "", ["", ""]
     trace: dict[str, list[Any]] = {k: [] for k in ("time", "object_pos", "twist", "qvel", "torque", "gap")}
     f6, pred = np.zeros(6), mujoco.MjData(m) if st.inertial_ff else None
@@ -254,6 +256,12 @@ def rollout(
         force = d.actuator_force[rig.acts]
         for j in np.nonzero(np.abs(force) >= rig.fmax * (1 - 1e-9))[0]:
             saturated.add(names[j])
+        if drive.speed_limits is not None:
+            # Range units: the motor's speed over its gear (joint side, or P qd with a transmission).
+            over = np.abs(lvel / rig.gear) / np.maximum(drive.speed_limits, 1e-300)
+            fastest = int(np.argmax(over))
+            if over[fastest] > edge["ratio"]:
+                edge["ratio"], edge["where"] = float(over[fastest]), names[fastest]
         v = d.qvel[fa : fa + 3]
         om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
         now = np.r_[v, rig.radius * om]
@@ -272,7 +280,7 @@ def rollout(
             ):
                 trace[key].append(val)
         if not reason:
-            reason, *failure = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom)
+            reason, *failure = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom, edge)
             if reason:
                 reason = f"{reason} at t = {1e3 * (step + 1 - n0) * st.timestep:.2f} ms"
     nwin = max(1, n1 - n0)
@@ -304,6 +312,7 @@ def _violation(
     saturated: set[str],
     tnorm: float,
     gap_geom: str,
+    edge: dict[str, Any] | None = None,
 ) -> tuple[str, str, str]:
     """The first violated criterion as (text, kind, where) (`RolloutResult.failure`)."""
     if tnorm > 0 and worst["speed"] > st.speed_tol:
@@ -317,6 +326,9 @@ def _violation(
             return f"{geom} slips {1e3 * dist:.3f} mm", "slip", geom
     if worst["gap"] > st.lost_gap:
         return f"contact lost ({gap_geom} {1e3 * worst['gap']:.2f} mm)", "contact lost", gap_geom
+    if edge is not None and edge["ratio"] > 1.0 + st.edge_tol:
+        where = edge["where"]
+        return f"{where} {100 * (edge['ratio'] - 1):.1f} % past its range's speed", "speed edge", where
     if saturated:
         names = ", ".join(sorted(saturated))
         return f"torque saturated ({names})", "torque limit", names

@@ -6,7 +6,9 @@ s* and a failing one just above it; the failing rollout's first violation
 
 * ``slip at contact C`` (an F-point's slip beyond its tolerance), ``contact lost at C`` (a
   finger more than 0.5 mm from the object), ``torque limit at joint J`` (``at actuator A`` for
-  a hand with a transmission; several names when several saturate at once), ``twist error:
+  a hand with a transmission; several names when several saturate at once), ``speed edge at
+  joint J`` (``at actuator A``: it ran more than 1 % faster than its operation range's largest
+  speed, ``SimSettings.edge_tol``), ``twist error:
   speed`` / ``twist error: direction`` (the object's twist off by more than 10 % / 10 deg, the
   motors' speed-torque line or a lag), ``moves at rest``;
 * prefixed ``fails at rest:`` when even s = 0 fails (alpha_sim = 0), and
@@ -37,6 +39,8 @@ def failure_words(result: RolloutResult, *, actuators: bool = False) -> str:
         return f"contact lost at {where}"
     if kind == "torque limit":
         return f"torque limit at {'actuator' if actuators else 'joint'} {where}"
+    if kind == "speed edge":
+        return f"speed edge at {'actuator' if actuators else 'joint'} {where}"
     if kind in ("twist magnitude", "twist direction"):
         return f"twist error: {'speed' if kind == 'twist magnitude' else 'direction'}"
     return kind

@@ -119,6 +119,10 @@ class Drive:
         for the paper's independent joints.
     moment
         ``(A, M)`` the state's moment matrix ``P`` (actuator speeds ``P qd``), or ``None``.
+    speed_limits
+        ``(A,)`` (``(M,)`` without a transmission) each actuator's (joint's) largest speed in
+        its operation range (rad/s or m/s: `OperationRange.max_speed`), the speed edge the
+        rollout holds it to (``SimSettings.edge_tol``); ``None``: not checked.
     """
 
     joints: tuple[str, ...]
@@ -129,9 +133,12 @@ class Drive:
     slips: Mapping[str, tuple[float, _F64]] = field(default_factory=dict)
     actuators: tuple[str, ...] = ()
     moment: _F64 | None = None
+    speed_limits: _F64 | None = None
 
     def __post_init__(self) -> None:
         na = len(self.actuators) if self.actuators else len(self.joints)
+        if self.speed_limits is not None and np.shape(self.speed_limits) != (na,):
+            raise ParamError("drive.speed_limits", f"expected {na} speeds (one per actuator)")
         if np.shape(self.speeds) != (len(self.joints),) or np.shape(self.torques) != (na,):
             raise ParamError(
                 "drive", f"expected {len(self.joints)} joint speeds and {na} torques (one per actuator)"
@@ -192,6 +199,7 @@ def witness_drive(
         slips,
         actuators=() if t is None else t.actuator_names,
         moment=None if t is None else t.moment,
+        speed_limits=np.array([r.max_speed for r in state.operation_ranges], dtype=float),
     )
 
 

@@ -44,7 +44,10 @@ def test_one_state_of_a_coupled_hand(tmp_path: Path) -> None:
     assert {r["run"] for r in rows} == {"L"} and len(rows) == 2  # its two RVDS vertices
     _checked(rows)
     assert all(
-        r["verdict"].startswith(("torque limit at actuator", "twist error", "passes", "slip")) for r in rows
+        r["verdict"].startswith(
+            ("torque limit at actuator", "speed edge at actuator", "twist error", "passes", "slip")
+        )
+        for r in rows
     )
 
 

@@ -214,3 +214,32 @@ def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
     got = pair_alpha(state, 0, 0, dyn.demand)[0]
     assert got is not None and 0 <= got - dyn.alpha <= 2e-3 * alpha
     assert dyn.joint == 0  # the one actuator (fingers_actuator), not joint 0
+
+
+def test_a_motor_driven_past_its_speed_edge_fails() -> None:
+    """The 2F-85's box motor runs up to 10 % past the box's 1.25 rad/s (its no-load speed,
+    BOX_SPEED_MARGIN): at 1.08 alpha the actuator passes its range's speed by more than 1 %,
+    which fails the rollout ("speed edge"), though the twist, contacts and torques hold (the
+    same drive passes with the edge check off); at 0.95 alpha it passes."""
+    from mjtvm.physics.simulate import SimSettings, rollout
+    from mjtvm.physics.verdict import failure_words
+
+    lift = cached_lift(F85, 2)
+    grasp = lift.scenario
+    state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
+    assert state.joint_limits is not None
+    state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
+    model = sim_model(
+        motor_model(grasp), contact_types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body
+    )
+    alpha = float(tvmmp(state).alpha[0, 0])
+    slow = witness_drive(state, 0, 0, alpha, 0.95)
+    fast = witness_drive(state, 0, 0, alpha, 1.08)
+    np.testing.assert_allclose(fast.speed_limits, [1.25])
+    assert rollout(model, lift.qpos[0], slow, object_body=grasp.object_body).passed
+    failed = rollout(model, lift.qpos[0], fast, object_body=grasp.object_body)
+    assert not failed.passed and failed.failure == ("speed edge", "fingers_actuator")
+    assert "fingers_actuator" in failed.reason and "% past its range's speed" in failed.reason
+    assert failure_words(failed, actuators=True) == "speed edge at actuator fingers_actuator"
+    lenient = SimSettings(edge_tol=10.0)
+    assert rollout(model, lift.qpos[0], fast, object_body=grasp.object_body, settings=lenient).passed
