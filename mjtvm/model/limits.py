@@ -251,11 +251,11 @@ def travel_speed(state: _Travel, r: NDArray[np.float64]) -> float:
     r = np.asarray(r, dtype=float)
     v, w = r[:d], r[d:]
     best = math.sqrt(float(v @ v))
-    for c in state.contacts:
-        arm = c.position - state.object_position
-        if d == 2:
-            u = v + w[0] * np.array([-arm[1], arm[0]])
-        else:
-            u = v + np.cross(w, arm)
-        best = max(best, math.sqrt(float(u @ u)))
-    return best
+    if not state.contacts:
+        return best
+    arms = np.array([c.position for c in state.contacts], dtype=float) - state.object_position
+    if d == 2:
+        u = v + w[0] * np.column_stack([-arms[:, 1], arms[:, 0]])
+    else:
+        u = v + np.cross(w, arms)
+    return max(best, math.sqrt(float(np.max(np.einsum("ij,ij->i", u, u)))))

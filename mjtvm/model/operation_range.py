@@ -51,6 +51,33 @@ def _validated(data: bytes, shape: tuple[int, ...]) -> tuple[NDArray[np.float64]
     return _validate(np.frombuffer(data, dtype=np.float64).reshape(shape))
 
 
+@functools.lru_cache(maxsize=VALIDATED_CACHE_SIZE)
+def _net_vertices(
+    data: bytes, shape: tuple[int, ...], damping: float, friction: float
+) -> NDArray[np.float64]:
+    """`OperationRange.with_losses()`'s vertices for the vertices of these bytes and shape
+    (cached: a batch folds the same few ranges' losses for every grasp)."""
+    vertices = np.frombuffer(data, dtype=np.float64).reshape(shape)
+    chain = vertices[np.any(vertices != 0.0, axis=1)]
+    chain = chain[np.lexsort((-chain[:, 0], chain[:, 1]))]  # (T, 0) first, (0, w0) last
+    net = chain - np.column_stack([damping * chain[:, 1] + friction, np.zeros(len(chain))])
+    if net[0, 0] <= 0.0:
+        raise StateError(
+            "friction", f"friction loss {friction:g} N m leaves no torque of {net[0, 0] + friction:g}"
+        )
+    kept = [net[0]]
+    for a, b in itertools.pairwise(net):
+        if b[0] > 0.0:
+            kept.append(b)
+            continue
+        w = a[1] + (b[1] - a[1]) * a[0] / (a[0] - b[0])  # where the net torque reaches 0
+        kept.append(np.array([0.0, w]))
+        break  # the last vertex, (-d w0 - f, w0), always has a negative net torque: reached
+    out = np.vstack([[0.0, 0.0], *kept])
+    out.setflags(write=False)
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class OperationRange:
     r"""A validated operation range $P$ of one joint (paper, eq. 1).
@@ -179,22 +206,8 @@ class OperationRange:
                 raise StateError(name, f"expected a finite number >= 0, got {value!r}")
         if damping == 0.0 and friction == 0.0:
             return self
-        chain = self.vertices[np.any(self.vertices != 0.0, axis=1)]
-        chain = chain[np.lexsort((-chain[:, 0], chain[:, 1]))]  # (T, 0) first, (0, w0) last
-        net = chain - np.column_stack([damping * chain[:, 1] + friction, np.zeros(len(chain))])
-        if net[0, 0] <= 0.0:
-            raise StateError(
-                "friction", f"friction loss {friction:g} N m leaves no torque of {net[0, 0] + friction:g}"
-            )
-        kept = [net[0]]
-        for a, b in itertools.pairwise(net):
-            if b[0] > 0.0:
-                kept.append(b)
-                continue
-            w = a[1] + (b[1] - a[1]) * a[0] / (a[0] - b[0])  # where the net torque reaches 0
-            kept.append(np.array([0.0, w]))
-            break  # the last vertex, (-d w0 - f, w0), always has a negative net torque: reached
-        return OperationRange(np.vstack([[0.0, 0.0], *kept]))
+        v = self.vertices
+        return OperationRange(_net_vertices(v.tobytes(), v.shape, float(damping), float(friction)))
 
     def to_list(self) -> list[list[float]]:
         """The vertices as a JSON-ready list."""
