@@ -241,8 +241,31 @@ def _cli(*words: str) -> Callable[[Path], None]:
     return run
 
 
+def _gallery(command: str) -> Callable[[Path], Any]:
+    """The picture ``tools/gallery.py`` draws from the JSON of ``mjtvm solve`` / ``mjtvm tvms``."""
+
+    def run(_: Path) -> Any:
+        import contextlib
+        import importlib.util
+        import io
+        import json
+
+        spec = importlib.util.spec_from_file_location("gallery", ROOT / "tools" / "gallery.py")
+        assert spec is not None and spec.loader is not None
+        gallery = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(gallery)
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert main([command, "case2", "--quiet"]) == 0
+        return getattr(gallery, f"{command}_png")(json.loads(buf.getvalue()), "case2")
+
+    return run
+
+
 FIGURES: dict[str, tuple[int, Callable[[Path], Any]]] = {
     "show --png": (1, _cli("show", "case2", "--png", "{tmp}/show.png")),
+    "solve's witness (tools/gallery.py)": (1, _gallery("solve")),
+    "tvms's polytope (tools/gallery.py)": (1, _gallery("tvms")),
     "replay: fig8, fig9a, fig9b": (
         3,
         _cli("replay", "--states", "4", "--sweeps", "--out", "{tmp}", "--quiet"),
