@@ -208,7 +208,8 @@ def _cmd_gears(args: argparse.Namespace) -> int:
 
     outdir = check_output_dir(args.out)
     with output_lock(outdir):
-        mu, mg = grasp_defaults(verify.cached_lift(args.grasp, args.states).scenario, args.mu, args.mg)
+        scenario = verify.cached_lift(args.grasp, args.states).scenario
+        mu, mg = grasp_defaults(scenario, args.mu, args.mg)
         states = verify.state_indices(args.states, args.stride)
         rows = gear_sweep(
             args.grasp,
@@ -222,7 +223,7 @@ def _cmd_gears(args: argparse.Namespace) -> int:
         files: dict[Path, bytes | str] = {outdir / "gears.csv": verify.rows_csv(rows)}
         if not args.no_plots:
             files[outdir / "gears.png"] = plot_gears(
-                rows, f"{args.grasp}, L: $\\mu$ = {mu:g}, $mg$ = {mg:g} N"
+                rows, f"{scenario.name}, L-points: $\\mu$ = {mu:g}, $mg$ = {mg:g} N"
             )
         write_files(files)
     for n in args.gears:

@@ -7,7 +7,7 @@ all draw in one style and the same units. matplotlib is imported only when a fig
 
 from __future__ import annotations
 
-import io
+from collections.abc import Sequence
 from typing import Any
 
 __all__ = ["ALPHA_UNIT", "grasp_figure", "grasp_png", "lift_axes", "lift_png", "lift_x"]
@@ -37,27 +37,20 @@ def lift_x(lift: Any) -> str:
 
 
 def lift_axes(width: float, height: float) -> tuple[Any, Any]:
-    """A new off-screen figure (inches) and its axes."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    """A new off-screen figure (inches) and its axes, in the one style ([`mjtvm.jobs.style`][mjtvm.jobs.style])."""
+    from mjtvm.jobs.style import figure
 
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig, fig.add_subplot()
+    return figure(width, height)  # type: ignore[no-any-return]
 
 
-def lift_png(fig: Any, ax: Any, *, ylabel: str, title: str, legend_fontsize: float, x: str = "z") -> bytes:
-    """Label ``ax`` (x: [`X_LABELS`][mjtvm.jobs.figures.X_LABELS] of ``x``, y: ``ylabel`` from 0) and render ``fig``."""
-    ax.set_xlabel(X_LABELS[x])
-    ax.set_ylabel(ylabel, fontsize=8)
-    ax.set_title(title, fontsize=9)
+def lift_png(fig: Any, ax: Any, *, ylabel: str, title: str, x: str = "z", notes: Sequence[str] = ()) -> bytes:
+    """Label ``ax`` (x: [`X_LABELS`][mjtvm.jobs.figures.X_LABELS] of ``x``, y: ``ylabel`` from 0),
+    the key and the ``notes`` below the axes ([`finish()`][mjtvm.jobs.style.finish]), and render ``fig``."""
+    from mjtvm.jobs.style import finish, png
+
     ax.set_ylim(bottom=0.0)
-    ax.grid(alpha=0.3)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=legend_fontsize, loc="best")
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120)
-    return buf.getvalue()
+    finish(fig, ax, xlabel=X_LABELS[x], ylabel=ylabel, title=title, notes=notes)
+    return png(fig)  # type: ignore[no-any-return]
 
 
 _OBJECT, _CONE, _SELF = "#d91a1a", "#1a992e", "#2659e6"  # object contacts, cones, self-contacts
@@ -76,24 +69,23 @@ def _nice_length(target: float) -> float:
 
 def grasp_png(picture: Any, title: str) -> bytes:
     """[`grasp_figure()`][mjtvm.jobs.figures.grasp_figure] as PNG bytes (120 dpi: 1296 x 540 pixels for three views)."""
-    buf = io.BytesIO()
-    grasp_figure(picture, title).savefig(buf, format="png", dpi=120)
-    return buf.getvalue()
+    from mjtvm.jobs.style import png
+
+    return png(grasp_figure(picture, title))  # type: ignore[no-any-return]
 
 
 def grasp_figure(picture: Any, title: str) -> Any:
     """The panels of a [`Picture`][mjtvm.grasp.contacts.picture.Picture] side by side, each with its view's name and a scale
     bar (mm, at the object's centre), the grasp's ``title`` above, the contact key below: a
     matplotlib ``Figure``."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
+
+    from mjtvm.jobs.style import FONT, figure
 
     n = len(picture.panels)
     height, width = picture.panels[0].shape[:2]
-    fig = Figure(figsize=(3.6 * n, 3.6 * height / width + 0.9), layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(1, n, squeeze=False)[0]
+    fig, axes = figure(3.6 * n, 3.6 * height / width + 0.9, (1, n))
+    axes = axes[0]
     panels = zip(picture.panels, picture.labels, picture.metres_per_pixel, picture.marks, strict=True)
     for ax, (img, label, mpp, marks) in zip(axes, panels, strict=True):
         ax.imshow(img)
@@ -107,7 +99,7 @@ def grasp_figure(picture: Any, title: str) -> Any:
             ax.plot(marks.self_points[:, 0], marks.self_points[:, 1], "s", color=_SELF, markersize=5)
         ax.set_xlim(0, width)
         ax.set_ylim(height, 0)
-        ax.set_title(label, fontsize=9)
+        ax.set_title(label, fontsize=FONT["title"])
         ax.set_xticks([])
         ax.set_yticks([])
         bar = _nice_length(0.25 * width * mpp)
@@ -122,7 +114,7 @@ def grasp_figure(picture: Any, title: str) -> Any:
             fontsize=8,
             bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.5},
         )
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(title, fontsize=FONT["suptitle"])
     n_obj, n_self = picture.object_contacts, picture.self_contacts
     key = [
         Line2D(
@@ -131,5 +123,5 @@ def grasp_figure(picture: Any, title: str) -> Any:
         Line2D([], [], color=_CONE, label="friction cone (mu)"),
         Line2D([], [], marker="s", linestyle="", color=_SELF, label=f"hand self-contact ({n_self})"),
     ]
-    fig.legend(handles=key, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+    fig.legend(handles=key, loc="outside lower center", ncol=3, fontsize=FONT["legend"], frameon=False)
     return fig

@@ -16,7 +16,6 @@ where the two balance.
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -100,24 +99,28 @@ def gear_sweep(
 
 
 def plot_gears(rows: Sequence[dict[str, Any]], title: str = "") -> bytes:
-    """PNG: TVMMP and dynamic TVMMP against the gear ratio, per state and their mean."""
-    import matplotlib
+    """PNG: TVMMP and dynamic TVMMP against the gear ratio (log scale when the ratios span more
+    than a decade), per state (thin) and their mean (thick, its maximum named in the key); the
+    ratios with infeasible states counted in a note below the axes, never drawn at 0."""
+    from mjtvm.jobs.figures import ALPHA_UNIT
+    from mjtvm.jobs.style import figure, finish, no_value, png
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    fig, ax = figure(6.5, 4.6)
     ratios = sorted({r["ratio"] for r in rows})
     for key, style, label in (("tvmmp", "-", "TVMMP (quasi-static)"), ("tvmmp_dyn", "--", "dynamic TVMMP")):
         per = {
             s: [next((r.get(key) for r in rows if r["state"] == s and r["ratio"] == n), None) for n in ratios]
             for s in dict.fromkeys(r["state"] for r in rows)
         }
-        mean = [
-            np.mean([v[k] for v in per.values() if v[k] is not None] or [np.nan]) for k in range(len(ratios))
-        ]
+        mean = np.array(
+            [
+                np.mean([v[k] for v in per.values() if v[k] is not None] or [np.nan])
+                for k in range(len(ratios))
+            ]
+        )
+        best = f", max at {ratios[int(np.nanargmax(mean))]:g}:1" if np.isfinite(mean).any() else ""
         (line,) = ax.plot(
-            ratios, mean, style, lw=2.2, marker="o", ms=4, label=f"{label}, mean of the feasible states"
+            ratios, mean, style, lw=2.2, marker="o", ms=4, label=f"{label}, mean of the feasible states{best}"
         )
         for vals in per.values():
             ax.plot(
@@ -128,34 +131,27 @@ def plot_gears(rows: Sequence[dict[str, Any]], title: str = "") -> bytes:
                 alpha=0.4,
                 color=line.get_color(),
             )
-        k = int(np.nanargmax(mean))
-        ax.annotate(
-            f"max at {ratios[k]:g}:1",
-            (ratios[k], mean[k]),
-            textcoords="offset points",
-            xytext=(4, 6),
-            fontsize=8,
-            color=line.get_color(),
-        )
+        if key == "tvmmp":
+            no_value(ax, [n for n, m in zip(ratios, mean, strict=True) if np.isnan(m)], color="0.3",
+                     label="no feasible state")  # fmt: skip
+    infeasible = []
     for n in ratios:
         total = sum(1 for r in rows if r["ratio"] == n)
         bad = sum(1 for r in rows if r["ratio"] == n and r.get("tvmmp") is None)
         if bad:
-            ax.annotate(
-                f"{bad}/{total} states\ninfeasible",
-                (n, 0),
-                textcoords="offset points",
-                xytext=(2, 4),
-                fontsize=7,
-                color="0.3",
-            )
-    ax.set_xlabel("gear ratio N (motor turns per joint turn)")
-    ax.set_ylabel(r"$\alpha$ (m/s, unit RVDS vertices)")
-    ax.set_title(title or "Gear-ratio sweep (thin: each lift state)", fontsize=9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=130)
-    plt.close(fig)
-    return buf.getvalue()
+            infeasible.append(f"{n:g}:1 {bad}/{total}")
+    notes = [f"infeasible states: {', '.join(infeasible)}"] if infeasible else []
+    if ratios and max(ratios) > 10.0 * min(ratios):
+        ax.set_xscale("log")
+        ax.set_xticks(ratios, [f"{n:g}" for n in ratios])
+        ax.minorticks_off()
+    ax.set_ylim(bottom=0.0)
+    finish(
+        fig,
+        ax,
+        xlabel="gear ratio N (motor turns per joint turn)",
+        ylabel=rf"TVMMP $\alpha$ {ALPHA_UNIT}",
+        title=title or "Gear-ratio sweep",
+        notes=["thin lines: each lift state", *notes],
+    )
+    return png(fig)  # type: ignore[no-any-return]

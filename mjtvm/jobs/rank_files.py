@@ -11,7 +11,6 @@ one row at a time, in rank order ([`mjtvm.jobs.rank_index`][mjtvm.jobs.rank_inde
 
 from __future__ import annotations
 
-import io
 import json
 from array import array
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -177,8 +176,8 @@ def _apart(index: RankIndex) -> str:
 
 
 def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
-    """``objects``: TVMMP per object (every feasible grasp a point; per object, its infeasible
-    and failed grasps counted in a strip below the axis); ``tvmmp``: the histogram of TVMMP;
+    """``objects``: TVMMP per object (one row per object, every feasible grasp a point; its
+    infeasible and failed grasps counted in brackets after its name); ``tvmmp``: the histogram of TVMMP;
     ``epsilon``: TVMMP against the L1 epsilon. Infeasible and failed grasps are never drawn at
     0: counted in each figure's title or strip. The points in the order of ``rows``. PNG bytes."""
     index = RankIndex.from_rows(rows)
@@ -187,58 +186,47 @@ def rank_plots(rows: Sequence[dict[str, Any]]) -> dict[str, bytes]:
 
 def index_plots(index: RankIndex, order: NDArray[np.int64]) -> dict[str, bytes]:
     """[`rank_plots()`][mjtvm.jobs.rank_files.rank_plots] from a [`RankIndex`][mjtvm.jobs.rank_index.RankIndex],
-    the points in the order ``order`` (its positions)."""
-    from mjtvm.jobs.figures import lift_axes
+    the points in the order ``order`` (its positions). ``objects`` draws one row per object
+    (its name and its infeasible and failed grasps on the left), so that long names stay legible."""
+    from mjtvm.jobs.style import COUNT, FONT, figure, finish, png
 
     drawn = order[index.evaluated[order] & ~np.isnan(index.tvmmp[order])]
     objects = list(index.objects) or ["(none)"]
-    fig, ax = lift_axes(max(4.5, 0.8 * len(objects) + 2.0), 4.0)
-    for i in range(len(objects)):
+    names, points = [], []
+    for i, name in enumerate(objects):
         values = index.tvmmp[drawn[index.obj[drawn] == i]]
         jitter = np.linspace(-0.2, 0.2, len(values)) if len(values) > 1 else np.zeros(len(values))
-        ax.plot(i + jitter, values, "o", ms=3, alpha=0.7)
+        points.append((values, i + jitter))
         mine = index.obj == i
         inf = int((mine & index.evaluated & np.isnan(index.tvmmp)).sum())
         bad = int((mine & ~index.evaluated).sum())
-        ax.annotate(
-            f"inf {inf}\nfail {bad}",
-            (i, 0.0),
-            xycoords=("data", "axes fraction"),
-            xytext=(0, -28),
-            textcoords="offset points",
-            ha="center",
-            va="top",
-            fontsize=6,
-            color="tab:red",
-        )
-    ax.set_xticks(range(len(objects)), objects, rotation=30, fontsize=7)
-    ax.set_xlabel("object (below it: its infeasible and failed grasps, not drawn)", fontsize=7, labelpad=34)
-    ax.set_ylabel(TVMMP_AXIS, fontsize=7)
-    ax.set_title(f"TVMMP per object\n({len(drawn)} feasible grasps; {_apart(index)})", fontsize=8)
-    ax.set_ylim(bottom=0.0)
-    ax.grid(alpha=0.3)
-    out = {"objects": _png(fig)}
-    fig, ax = lift_axes(4.5, 3.2)
+        names.append(f"{name}  [{inf} inf., {bad} failed]")
+    labels = max(len(n) for n in names) * 0.55 * FONT["tick"] / 72.0  # inches
+    fig, ax = figure(4.2 + labels, max(2.6, 0.32 * len(objects) + 1.9))
+    for x, y in points:
+        ax.plot(x, y, "o", ms=3, alpha=0.7, clip_on=False)  # TVMMP 0 on the frame
+    ax.set_yticks(range(len(objects)), names, fontsize=FONT["tick"])
+    ax.set_ylim(len(objects) - 0.5, -0.5)
+    ax.set_xlim(left=0.0)
+    title = f"TVMMP per object\n({len(drawn)} feasible grasps; {_apart(index)})"
+    finish(
+        fig, ax, xlabel=TVMMP_AXIS, ylabel="object [infeasible, failed grasps: not drawn] (-)", title=title
+    )
+    out = {"objects": png(fig)}
+    fig, ax = figure(4.8, 3.4)
     ax.hist(index.tvmmp[drawn], bins=20)
-    ax.set_xlabel(TVMMP_AXIS, fontsize=7)
-    ax.set_ylabel("grasps (count)", fontsize=8)
-    ax.set_title(f"TVMMP histogram\n({len(drawn)} feasible grasps; {_apart(index)})", fontsize=8)
-    out["tvmmp"] = _png(fig)
-    fig, ax = lift_axes(4.5, 3.2)
+    title = f"TVMMP histogram\n({len(drawn)} feasible grasps; {_apart(index)})"
+    finish(fig, ax, xlabel=TVMMP_AXIS, ylabel=f"grasps {COUNT}", title=title)
+    out["tvmmp"] = png(fig)
+    fig, ax = figure(4.8, 3.4)
     pairs = drawn[~np.isnan(index.epsilon[drawn])]
     ax.plot(index.epsilon[pairs], index.tvmmp[pairs], "o", ms=3, alpha=0.7)
-    ax.set_xlabel("Ferrari-Canny epsilon L1 (N per N of normal force)", fontsize=8)
-    ax.set_ylabel(TVMMP_AXIS, fontsize=7)
-    ax.set_title(f"TVMMP against the epsilon\n({len(pairs)} feasible grasps; {_apart(index)})", fontsize=8)
-    ax.grid(alpha=0.3)
-    out["epsilon"] = _png(fig)
+    title = f"TVMMP against the epsilon\n({len(pairs)} feasible grasps; {_apart(index)})"
+    finish(
+        fig, ax, xlabel="Ferrari-Canny epsilon L1 (N per N of normal force)", ylabel=TVMMP_AXIS, title=title
+    )
+    out["epsilon"] = png(fig)
     return out
-
-
-def _png(fig: Any) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return buf.getvalue()
 
 
 def run_rank_files(

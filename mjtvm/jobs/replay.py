@@ -33,6 +33,7 @@ from tqdm import tqdm
 from mjtvm.errors import ParamError
 from mjtvm.jobs.figures import ALPHA_UNIT, lift_axes, lift_png, lift_x
 from mjtvm.jobs.replay_records import Record, lift_dict, record_state, records_csv
+from mjtvm.jobs.style import no_value
 from mjtvm.lift.states import READINGS, VARIANTS, lift_state
 from mjtvm.lift.trajectory import Lift, scripted_lift
 from mjtvm.model.limits import with_limit_horizon
@@ -224,12 +225,8 @@ def _plot(curves: Sequence[tuple[str, str, Sequence[Record]]], title: str, x: st
         z = np.array([getattr(r, x) for r in recs])
         a = np.array([np.nan if r.result.tvmmp is None else r.result.tvmmp for r in recs])
         (line,) = ax.plot(z, a, style, label=label)
-        bad = np.isnan(a)
-        if bad.any():
-            ax.plot(
-                z[bad], np.zeros(int(bad.sum())), "x", color=line.get_color(), label=f"{label}: no solution"
-            )
-    return lift_png(fig, ax, ylabel=ALPHA_LABEL, title=title, legend_fontsize=8, x=x)
+        no_value(ax, z[np.isnan(a)], color=line.get_color(), label=f"{label}: no solution")
+    return lift_png(fig, ax, ylabel=ALPHA_LABEL, title=title, x=x)
 
 
 def _figures(

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from mjtvm.jobs.figures import ALPHA_UNIT, lift_axes, lift_png
 from mjtvm.jobs.files import csv_text
+from mjtvm.jobs.style import no_value
 
 _F64 = NDArray[np.float64]
 
@@ -39,17 +40,16 @@ def _minima(rows: Sequence[dict[str, Any]], run: str, key: str) -> tuple[np.ndar
     return z, np.array([min(by[k]) if not any(math.isnan(v) for v in by[k]) else math.nan for k in z])
 
 
-def _one_state(ax: Any, rows: Sequence[dict[str, Any]]) -> None:
-    """One state: alpha_kl, alpha_dyn and alpha_sim per RVDS vertex l, as grouped bars."""
+def _one_state(ax: Any, rows: Sequence[dict[str, Any]]) -> list[str]:
+    """One state: alpha_kl, alpha_dyn and alpha_sim per RVDS vertex l, as grouped bars; the
+    note on the runs with no solution (none: empty)."""
     runs = [
         run
         for run in dict.fromkeys(r["run"] for r in rows)
         if any(r["run"] == run and r["status"] == "optimal" for r in rows)
     ]
     missing = [run for run in dict.fromkeys(r["run"] for r in rows) if run not in runs]
-    if missing:
-        note = f"no solution: {', '.join(missing)}"
-        ax.text(0.98, 0.97, note, transform=ax.transAxes, fontsize=7, va="top", ha="right", color="0.3")
+    notes = [f"no solution: {', '.join(missing)}"] if missing else []
     keys = [("alpha_lp", "TVMMP (LP)"), ("alpha_dyn", "dynamic"), ("alpha_sim", r"$\alpha_{\mathrm{sim}}$")]
     keys = [k for k in keys if any(k[0] in r for r in rows)]
     width = 0.8 / max(1, len(keys) * len(runs))
@@ -63,6 +63,7 @@ def _one_state(ax: Any, rows: Sequence[dict[str, Any]]) -> None:
             y = [r.get(key, math.nan) if r["status"] == "optimal" else math.nan for r in mine]
             ax.bar(x, y, width=width, label=f"{label}, {run}")
     ax.set_xticks(sorted({int(r["l"]) for r in rows}))
+    return notes
 
 
 def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
@@ -73,9 +74,9 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     fig, ax = lift_axes(6.5, 4.2)
     loose = sorted({(r.get("x", r["z"]), r["state"]) for r in rows if r.get("held") is False})
     if len({r["state"] for r in rows}) == 1:
-        _one_state(ax, rows)
+        notes = _one_state(ax, rows)
         state = rows[0]["state"] if rows else "-"
-        return _finish(fig, ax, f"{title}, state {state}", loose, x=None)
+        return _finish(fig, ax, f"{title}, state {state}", loose, x=None, notes=notes)
     for run in dict.fromkeys(r["run"] for r in rows):
         z, lp = _minima(rows, run, "alpha_lp")
         (line,) = ax.plot(z, lp, ".-", label=f"TVMMP (LP, quasi-static), {run}")
@@ -90,22 +91,22 @@ def plot_alpha(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     x = "z" if all(r.get("x", r["z"]) == r["z"] for r in rows) else "s"  # the rows' lift_x axis
     if loose:
         xs = [p[0] for p in loose]
-        ax.plot(
-            xs, [0.0] * len(xs), "x", color="0.4", clip_on=False, label="not held at rest (no speed tested)"
-        )
+        no_value(ax, xs, color="0.4", label="not held at rest (no speed tested)")
     return _finish(fig, ax, title, loose, x=x)
 
 
-def _finish(fig: Any, ax: Any, title: str, loose: list[tuple[float, int]], *, x: str | None) -> bytes:
-    """The note on states that do not hold, the axes' labels, the PNG."""
+def _finish(
+    fig: Any, ax: Any, title: str, loose: list[tuple[float, int]], *, x: str | None, notes: Sequence[str] = ()
+) -> bytes:
+    """The notes (runs with no solution, states that do not hold), the axes' labels, the PNG."""
+    notes = list(notes)
     if loose:
         states = ", ".join(str(s) for _, s in loose[:8]) + (", ..." if len(loose) > 8 else "")
-        note = f"not held at rest: state{'s' if len(loose) > 1 else ''} {states}"
-        ax.text(0.02, 0.97, note, transform=ax.transAxes, fontsize=7, va="top", color="0.3")
+        notes.append(f"not held at rest: state{'s' if len(loose) > 1 else ''} {states}")
     if not ax.has_data():
         ax.text(0.5, 0.5, "no optimal pair to draw", transform=ax.transAxes, ha="center", color="0.3")
     label = rf"$\alpha$ {ALPHA_UNIT}"
-    return lift_png(fig, ax, ylabel=label, title=title, legend_fontsize=7, x=x or "l")
+    return lift_png(fig, ax, ylabel=label, title=title, x=x or "l", notes=notes)
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
