@@ -255,11 +255,11 @@ def rank_rows(report: dict[str, Any]) -> list[str]:
             )
         )
     t22 = rk.get("throughput_22")
-    for key, label in (("classic", "classic measures"), ("none", "TVMMP alone")) if t22 else ():
+    for key, label in (("classic", "classic"), ("none", "TVMMP alone")) if t22 else ():
         r = t22[key]
         lines.append(
             _row(
-                f"rank 22 joints/{t22['lps']} LPs, {label}: {r['grasps_per_cpu_s']:.1f} grasps/CPU-s",
+                f"rank 22 joints, {label}: {r['grasps_per_cpu_s']:.1f} grasps/CPU-s",
                 r["cpu_s"] / t22["grasps"],
                 f"wall {_ms(r['wall_s'] / t22['grasps'])}",
                 f"{r['core_share']:.2f}",
