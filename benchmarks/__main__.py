@@ -87,7 +87,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _steps(quick: bool, sizes: int) -> int:
     """How many ``say`` steps [`run_suite()`][benchmarks.suite.run_suite] announces (the progress bar's total)."""
     cases = 3 if quick else 4
-    rank = 4 + sizes + 1  # throughput, P2 floor, fingers, jobs, one per memory size, the Dask run
+    rank = 5 + sizes + 1  # throughput (2 hands), P2 floor, fingers, jobs, one per memory size, the Dask run
     return cases + 5 + rank  # the lift, the sweeps, the scaling, the peers, the dataset scale
 
 

@@ -6,6 +6,11 @@ Measured on the shipped Shadow example ([`RANK_GRASP`][benchmarks.rank.RANK_GRAS
 * **throughput** ([`bench_throughput()`][benchmarks.rank.bench_throughput]): ``rank_row`` (``measures="classic"`` and ``"none"``) over every grasp in
   this process, with the classic measures and without them (TVMMP and its diagnosis alone),
   in grasps per CPU-second (``time.process_time``) beside the wall time;
+* **throughput, 22 joints and 36 LPs** ([`bench_throughput_22()`][benchmarks.rank.bench_throughput_22]): the same on the
+  hand of issue 34's target, the five-finger Shadow hand ([`RANK_GRASP_22`][benchmarks.rank.RANK_GRASP_22]: 22 joints, five
+  fingertip F contacts, 6 REFS x 6 RVDS vertices), over [`GRASPS_22`][benchmarks.rank.GRASPS_22] grasps that
+  ``tools/make_rank_dataset.py --grasp`` writes into a temporary folder (seeded, none broken:
+  every grasp is a full 36-LP solve; the generation is not timed);
 * **Problem 2 over HiGHS** (`bench_p2_floor()`): ``tvmmp(state, witnesses=False)`` over the
   batch of the dataset's grasp states against the time inside HiGHS ``run()`` in the same
   calls, both summed over the batch;
@@ -43,16 +48,25 @@ import numpy as np
 
 __all__ = [
     "CORE_SHARE_MIN",
+    "GRASPS_22",
     "JOBS_COPIES",
     "RANK_GRASP",
+    "RANK_GRASP_22",
     "RSS_GRASPS",
     "TARGETS",
     "bench_rank",
     "bench_throughput",
+    "bench_throughput_22",
 ]
 
 RANK_GRASP = "shadow_hand_coupled-sphere"
 """The shipped grasp file of the example dataset."""
+ROOT = Path(__file__).resolve().parents[1]
+RANK_GRASP_22 = ROOT / "models" / "shadow_hand" / "shadow_hand_5f_coupled-sphere.toml"
+"""The five-finger Shadow hand's grasp file of the 22-joint, 36-LP rows (a path in the checkout:
+the generator that perturbs it is ``tools/make_rank_dataset.py``, beside it)."""
+GRASPS_22 = 36
+"""Grasps of the 22-joint rows' generated dataset (seed 24, none broken)."""
 TARGETS = {
     "rank_classic": 40.0,
     "rank_none": 100.0,
@@ -89,14 +103,17 @@ def _cpu_wall(fn: Callable[[], object]) -> tuple[float, float]:
     return time.process_time() - c, time.perf_counter() - w
 
 
-def bench_throughput(*, repeats: int = 3) -> dict[str, Any]:
-    """Grasps per CPU-second of ``rank_row`` over the example dataset, with (``classic``) and
-    without (``none``) the classic measures: medians over ``repeats`` passes after a warm one."""
+def bench_throughput(
+    *, repeats: int = 3, grasp: str | Path = RANK_GRASP, dataset: Path | None = None
+) -> dict[str, Any]:
+    """Grasps per CPU-second of ``rank_row`` over ``dataset`` (default: the example dataset) of
+    ``grasp``, with (``classic``) and without (``none``) the classic measures: medians over
+    ``repeats`` passes after a warm one."""
     from mjtvm.jobs.rank import batch_models, rank_row
     from mjtvm.jobs.rank_inputs import read_datasets
 
-    entries = read_datasets(RANK_GRASP, [str(_dataset())])
-    batch = batch_models(RANK_GRASP)
+    entries = read_datasets(str(grasp), [str(dataset or _dataset())])
+    batch = batch_models(str(grasp))
     out: dict[str, Any] = {"grasps": len(entries)}
     for key, target in (("classic", TARGETS["rank_classic"]), ("none", TARGETS["rank_none"])):
         for e in entries:  # warm: models compiled, ranges validated, imports done
@@ -117,6 +134,38 @@ def bench_throughput(*, repeats: int = 3) -> dict[str, Any]:
             **_verdict(gps, target, cpu / wall, at_least=True),
         }
     return out
+
+
+def _generator() -> Any:
+    """``tools/make_rank_dataset.py`` as a module (the tools folder is not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "make_rank_dataset", ROOT / "tools" / "make_rank_dataset.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def bench_throughput_22(*, repeats: int = 3, grasps: int = GRASPS_22) -> dict[str, Any]:
+    """`bench_throughput()` on the five-finger Shadow hand (22 joints, 36 LPs a grasp) over
+    ``grasps`` grasps generated from [`RANK_GRASP_22`][benchmarks.rank.RANK_GRASP_22] (seed 24, none broken), with
+    the hand's size: ``joints``, ``contacts`` and ``lps`` (REFS x RVDS vertices) of its grasp file."""
+    from mjtvm.grasp.resolve.file import load_grasp
+
+    state = load_grasp(RANK_GRASP_22).state()
+    size = {
+        "grasp": RANK_GRASP_22.stem,
+        "joints": len(state.joint_names),
+        "contacts": len(state.contacts),
+        "lps": len(state.refs) * (0 if state.rvds is None else len(state.rvds)),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = Path(tmp) / "shadow-5f.npz"
+        np.savez(ds, **_generator().make(grasps, 0, 24, grasp_file=RANK_GRASP_22))
+        return {**size, **bench_throughput(repeats=repeats, grasp=RANK_GRASP_22, dataset=ds)}
 
 
 def _states() -> list[Any]:
@@ -315,15 +364,22 @@ def bench_memory(
 
 
 def bench_rank(
-    *, repeats: int = 3, sizes: Sequence[int] = RSS_GRASPS, say: Callable[[str], None] = lambda _: None
+    *,
+    repeats: int = 3,
+    sizes: Sequence[int] = RSS_GRASPS,
+    grasps_22: int = GRASPS_22,
+    say: Callable[[str], None] = lambda _: None,
 ) -> dict[str, Any]:
-    """Every row of this module (module docstring), as ``report["rank"]``."""
+    """Every row of this module (module docstring), as ``report["rank"]``; ``grasps_22`` grasps
+    in the 22-joint rows."""
     say("rank: throughput with and without the classic measures")
     out: dict[str, Any] = {
         "grasp": RANK_GRASP,
         "dataset": _dataset().name,
         "throughput": bench_throughput(repeats=repeats),
     }
+    say("rank: throughput on the 22-joint, 36-LP Shadow hand")
+    out["throughput_22"] = bench_throughput_22(repeats=repeats, grasps=grasps_22)
     say("rank: Problem 2 over HiGHS run() on the batch")
     out["p2_floor"] = bench_p2_floor(repeats=max(3, repeats))
     say("rank: 16 against 32 fingers per LP")

@@ -254,6 +254,20 @@ def rank_rows(report: dict[str, Any]) -> list[str]:
                 _verdict(r),
             )
         )
+    t22 = rk.get("throughput_22")
+    for key, label in (("classic", "classic"), ("none", "TVMMP alone")) if t22 else ():
+        r = t22[key]
+        lines.append(
+            _row(
+                f"rank 22 joints, {label}: {r['grasps_per_cpu_s']:.1f} grasps/CPU-s",
+                r["cpu_s"] / t22["grasps"],
+                f"wall {_ms(r['wall_s'] / t22['grasps'])}",
+                f"{r['core_share']:.2f}",
+                None,
+                f">= {r['target']:.0f}/s",
+                _verdict(r),
+            )
+        )
     f = rk["p2_floor"]
     lines.append(
         _row(

@@ -1,16 +1,19 @@
 """The example grasp dataset of ``mjtvm rank`` (docs/datasets.md): perturbed Shadow hand grasps.
 
 Each grasp starts from models/shadow_hand/shadow_hand_coupled-sphere.toml (the Shadow hand
-with J1 = J2 coupled beside its sum tendon, three fingertips on a sphere): the sphere's radius is scaled by a random factor in
+with J1 = J2 coupled beside its sum tendon, three fingertips on a sphere), or from the grasp
+file ``--grasp FILE`` (a Shadow hand grasp of a sphere, e.g. the five-finger
+shadow_hand_5f_coupled-sphere.toml): the sphere's radius is scaled by a random factor in
 [0.9, 1.1] (its mass by the cube, as ``mjtvm rank`` scales it), its centre moved by up to 4 mm
-along each axis, the IK's start joint values perturbed by up to 0.15 rad, and the grasp file's
-own IK closes the three fingertips onto the sphere. A grasp whose IK fails is drawn again. The
+along each axis, the IK's start joint values perturbed by up to 0.15 rad (the joints of a
+J1 = J2 equality of the file's model kept equal), and the grasp file's own IK closes the
+fingertips onto the sphere. A grasp whose IK fails is drawn again. The
 last ``--broken`` grasps are made to fail on purpose, half with one finger joint opened by
 0.1 rad (a fingertip off the sphere: ``no contact``) and half closed by 0.1 rad (a fingertip
 inside it: ``penetration``), so that the dataset shows failure rows.
 
-Stored per grasp (``.npz``): ``grasp_qpos`` (the palm's world pose, then the 13 hand joints in
-model order), ``obj_pose`` (the sphere's centre and orientation), ``obj_scale``, ``id``. The
+Stored per grasp (``.npz``): ``grasp_qpos`` (the palm's world pose, then the hand's joints in
+model order: 13 for the default file, 22 for the five-finger one), ``obj_pose`` (the sphere's centre and orientation), ``obj_scale``, ``id``. The
 random generator is seeded: the same command writes the same file.
 
 With ``--mesh K`` the objects are K procedurally made mesh objects instead (written beside
@@ -23,6 +26,8 @@ Usage::
 
     python tools/make_rank_dataset.py                      # 36 grasps (4 broken)
     python tools/make_rank_dataset.py -n 240 --mesh 6 --out /tmp/mesh/big.npz  # mesh objects
+    python tools/make_rank_dataset.py --grasp models/shadow_hand/shadow_hand_5f_coupled-sphere.toml \
+        --out /tmp/5f.npz                                  # the five-finger hand, 36 LPs a grasp
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ import time
 import tomllib
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from mjtvm.errors import ModelError
@@ -44,9 +50,28 @@ OUT = ROOT / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz"
 ROOT_BODY = "rh_palm"
 
 
-def _document(rng: np.random.Generator) -> tuple[dict, float]:
-    doc = tomllib.loads(GRASP.read_text(encoding="utf-8"))
-    doc["model"] = str(GRASP.parent / doc["model"])
+def coupled_joints(model_file: str) -> list[tuple[str, str]]:
+    """The (joint1, joint2) of each joint equality joint1 = joint2 (polycoef 0 1 0 0 0) of the
+    model: the coupled J1 = J2 of a Shadow hand's fingers."""
+    model = mujoco.MjModel.from_xml_path(model_file)
+    pairs = []
+    for e in range(model.neq):
+        if int(model.eq_type[e]) != int(mujoco.mjtEq.mjEQ_JOINT) or not model.eq_active0[e]:
+            continue
+        if not np.array_equal(model.eq_data[e][:5], [0.0, 1.0, 0.0, 0.0, 0.0]):
+            continue
+        pairs.append((model.joint(model.eq_obj1id[e]).name, model.joint(model.eq_obj2id[e]).name))
+    return pairs
+
+
+_COUPLED: dict[str, list[tuple[str, str]]] = {}
+
+
+def _document(rng: np.random.Generator, grasp: Path = GRASP) -> tuple[dict, float]:
+    doc = tomllib.loads(grasp.read_text(encoding="utf-8"))
+    doc["model"] = str(grasp.parent / doc["model"])
+    if doc["model"] not in _COUPLED:
+        _COUPLED[doc["model"]] = coupled_joints(doc["model"])
     scale = float(rng.uniform(0.9, 1.1))
     obj = dict(doc["object"])
     obj["size"] = [obj["size"][0] * scale]
@@ -55,8 +80,9 @@ def _document(rng: np.random.Generator) -> tuple[dict, float]:
     config = dict(doc["configuration"])
     ik = dict(config["ik"])
     ik["start"] = {k: v + float(rng.uniform(-0.15, 0.15)) for k, v in ik["start"].items()}
-    for finger in ("FF", "MF"):  # the coupled hand's J1 = J2: the start keeps them equal
-        ik["start"][f"rh_{finger}J1"] = ik["start"][f"rh_{finger}J2"]
+    for j1, j2 in _COUPLED[doc["model"]]:  # the coupled hand's J1 = J2: the start keeps them equal
+        if j1 in ik["start"] and j2 in ik["start"]:
+            ik["start"][j1] = ik["start"][j2]
     config["ik"] = ik
     doc["object"], doc["configuration"] = obj, config
     return doc, scale
@@ -100,8 +126,12 @@ def _object_xml(meshes: list[str], include: str = "") -> str:
     )
 
 
-def make(n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = None) -> dict[str, np.ndarray]:
+def make(
+    n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = None, grasp_file: Path = GRASP
+) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
+    hand = str(grasp_file.parent / tomllib.loads(grasp_file.read_text(encoding="utf-8"))["model"])
+    prefix = "shadow" if grasp_file == GRASP else grasp_file.stem.split("-")[0]
     scenes: list[tuple[str, str]] = []  # (scene file for the IK, object file relative to the dataset)
     if mesh:
         assert folder is not None
@@ -110,7 +140,7 @@ def make(n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = No
             meshes = _ellipsoid_pieces(rng)
             (folder / f"ellipsoid{k}.xml").write_text(_object_xml(meshes))
             scene = folder / f"ellipsoid{k}-scene.xml"
-            scene.write_text(_object_xml(meshes, str(GRASP.parent / "shadow_right_3f_coupled.xml")))
+            scene.write_text(_object_xml(meshes, hand))
             scenes.append((str(scene), f"{folder.name}/ellipsoid{k}.xml"))
     rows_path: list[str] = []
     rows: dict[str, list] = {"grasp_qpos": [], "obj_pose": [], "obj_scale": [], "id": []}
@@ -119,7 +149,7 @@ def make(n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = No
         tries += 1
         if tries > 5 * n:
             raise SystemExit(f"only {len(rows['id'])} of {tries} IK runs closed the grasp")
-        doc, scale = _document(rng)
+        doc, scale = _document(rng, grasp_file)
         if scenes:  # the mesh object in place of the sphere, at the sphere's place
             scene, relative = scenes[len(rows["id"]) % len(scenes)]
             doc["model"], scale = scene, 1.0
@@ -145,7 +175,7 @@ def make(n: int, broken: int, seed: int, mesh: int = 0, folder: Path | None = No
         if scenes:
             rows_path.append(relative)
         rows["id"].append(
-            f"shadow-{'mesh' if scenes else 'sphere'}-{i:03d}" + ("" if kind == "ok" else f"-{kind}")
+            f"{prefix}-{'mesh' if scenes else 'sphere'}-{i:03d}" + ("" if kind == "ok" else f"-{kind}")
         )
     extra = {"obj_path": np.array(rows_path)} if scenes else {}
     return {
@@ -163,11 +193,17 @@ def main() -> None:
     parser.add_argument("--broken", type=int, default=4, help="grasps made to fail (the last ones)")
     parser.add_argument("--seed", type=int, default=24)
     parser.add_argument("--mesh", type=int, default=0, help="mesh objects (0: the sphere, scaled)")
-    parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--grasp", type=Path, default=GRASP, help="the grasp file (default: %(default)s)")
+    parser.add_argument("--out", type=Path, help=f"the dataset file (default with the default grasp: {OUT})")
     args = parser.parse_args()
+    args.grasp = args.grasp.resolve()
+    if args.out is None:
+        if args.grasp != GRASP:
+            parser.error("--out is required with --grasp (the default output is the shipped example's)")
+        args.out = OUT
     t0 = time.perf_counter()
     folder = args.out.parent / f"{args.out.stem}-objects"
-    arrays = make(args.n, args.broken, args.seed, args.mesh, folder)
+    arrays = make(args.n, args.broken, args.seed, args.mesh, folder, args.grasp)
     np.savez_compressed(args.out, **arrays)
     print(
         f"wrote {args.out}: {args.n} grasps in {time.perf_counter() - t0:.1f} s, {args.out.stat().st_size} bytes"

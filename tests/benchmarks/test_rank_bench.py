@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def rank_report() -> dict[str, Any]:
-    return bench_rank.bench_rank(repeats=1, sizes=(8, 16))
+    return bench_rank.bench_rank(repeats=1, sizes=(8, 16), grasps_22=4)  # 22 joints: ~0.3 s a grasp
 
 
 def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) -> None:
@@ -31,6 +31,14 @@ def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) ->
         assert r["loaded"] == (r["core_share"] < bench_rank.CORE_SHARE_MIN)
         assert (r["met"] is None) if r["loaded"] else isinstance(r["met"], bool)
     assert th["classic"]["cpu_s"] > th["none"]["cpu_s"]  # the classic measures cost something
+    t22 = rank_report["throughput_22"]  # issue 34's hand: 22 joints, 36 LPs a grasp
+    assert (t22["joints"], t22["contacts"], t22["lps"], t22["grasps"]) == (22, 5, 36, 4)
+    for key in ("classic", "none"):
+        r = t22[key]
+        assert r["grasps_per_cpu_s"] == pytest.approx(t22["grasps"] / r["cpu_s"])
+        assert r["target"] == th[key]["target"] and r["loaded"] == (
+            r["core_share"] < bench_rank.CORE_SHARE_MIN
+        )
     f = rank_report["p2_floor"]
     assert f["states"] == 32 and f["lps"] >= f["states"] and f["highs_run_s"] < f["wall_s"]
     assert (
@@ -59,14 +67,17 @@ def test_a_loaded_row_is_never_met() -> None:
 
 def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> None:
     lines = rank_rows({"rank": rank_report})
-    assert sum("grasps/CPU-s" in line for line in lines) == 2
+    assert sum("grasps/CPU-s" in line for line in lines) == 4
     assert sum("rank memory, " in line for line in lines) == 2
     spec = importlib.util.spec_from_file_location("bench_page", ROOT / "tools" / "bench_page.py")
     assert spec is not None and spec.loader is not None
     bench_page = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_page)
     table = bench_page._rank({"rank": rank_report})
-    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 2 + 1  # head, rows, Dask
+    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 2 + 3 + 2 + 1  # head, rows, Dask
+    assert sum("22-joint Shadow hand, 36 LPs" in row for row in table) == 2
+    old = {k: v for k, v in rank_report.items() if k != "throughput_22"}  # a report from before
+    assert len([row for row in bench_page._rank({"rank": old}) if row.startswith("| ")]) == 1 + 2 + 3 + 2 + 1
     loaded = {**rank_report, "throughput": {**rank_report["throughput"]}}
     loaded["throughput"]["classic"] = {**loaded["throughput"]["classic"], "loaded": True, "met": None}
     assert "| loaded |" in "\n".join(bench_page._rank({"rank": loaded}))

@@ -261,6 +261,37 @@ def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
     assert any(r["tvmmp"] for r in good)
 
 
+def _generator() -> Any:
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "make_rank_dataset", ROOT / "tools" / "make_rank_dataset.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_generator_follows_the_five_finger_grasp_file(tmp_path: Path) -> None:
+    # --grasp: the five-finger hand's 22 joints, its four J1 = J2 equalities kept by the IK,
+    # every grasp ranked feasible with its five fingertip contacts and 36 LPs.
+    grasp = ROOT / "models" / "shadow_hand" / "shadow_hand_5f_coupled-sphere.toml"
+    module = _generator()
+    assert len(module.coupled_joints(str(grasp.with_name("shadow_right_coupled.xml")))) == 4
+    arrays = module.make(3, 0, 7, grasp_file=grasp)
+    assert arrays["grasp_qpos"].shape == (3, 7 + 22)
+    assert list(arrays["id"]) == [f"shadow_hand_5f_coupled-sphere-{i:03d}" for i in range(3)]
+    np.savez(tmp_path / "d.npz", **arrays)
+    from mjtvm.jobs.rank_inputs import read_datasets
+
+    rows = mjtvm.jobs.rank.rank_rows(
+        str(grasp), read_datasets(str(grasp), [str(tmp_path / "d.npz")]), measures="none", progress=False
+    )
+    assert all(r["failure"] is None and r["contacts"] == 5 and r["feasible"] for r in rows)
+    assert all(np.shape(r["alpha"]) == (6, 6) for r in rows)
+
+
 def test_qpos_layout_gives_the_rows_of_grasp_qpos(tmp_path: Path) -> None:
     # The same grasps as the model's whole qpos (N x nq: the hand's joints and the object's
     # free joint; the palm is fixed, so its pose is the model's, as in the example): the same rows.

@@ -403,3 +403,51 @@ def test_a_range_keyed_by_the_wrong_kind_of_name_is_refused() -> None:
     ranges = {**grasp.operation_ranges, joint: OperationRange([[0, 0], [1, 0], [1, 1], [0, 1]])}
     with pytest.raises(ModelError, match=rf"^operation_ranges\['{joint}'\]: names no actuator driving"):
         replace(grasp, operation_ranges=ranges).state()
+
+
+SHADOW_5F = MODELS / "shadow_hand" / "shadow_right.xml"
+SHADOW_5F_GRASP = MODELS / "shadow_hand" / "shadow_hand_5f_coupled-sphere.toml"
+
+
+def test_five_finger_shadow_hand_keeps_the_three_finger_transcription() -> None:
+    """22 hinge joints (FF, MF, RF 4 each; LF and TH 5), 18 actuators, the four sum tendons;
+    every joint, body and actuator the three-finger file has is the same in the full hand."""
+    full = mujoco.MjModel.from_xml_path(str(SHADOW_5F))
+    three = mujoco.MjModel.from_xml_path(str(MODELS / "shadow_hand" / "shadow_right_3f.xml"))
+    hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
+    assert full.njnt == 22 and all(int(t) == hinge for t in full.jnt_type)
+    assert (full.nu, full.ntendon, full.neq) == (18, 4, 0)
+    for j in range(three.njnt):
+        k = full.joint(three.joint(j).name).id
+        for field in ("jnt_axis", "jnt_pos", "jnt_range", "dof_damping", "dof_armature", "dof_frictionloss"):
+            a, b = getattr(three, field), getattr(full, field)
+            np.testing.assert_array_equal(b[k], a[j], err_msg=f"{field} {three.joint(j).name}")
+    for b in range(1, three.nbody):
+        k = full.body(three.body(b).name).id
+        for field in ("body_pos", "body_quat", "body_mass", "body_inertia", "body_ipos"):
+            np.testing.assert_array_equal(getattr(full, field)[k], getattr(three, field)[b])
+    for a in range(three.nu):
+        k = full.actuator(three.actuator(a).name).id
+        for field in ("actuator_gainprm", "actuator_ctrlrange", "actuator_forcerange"):
+            np.testing.assert_array_equal(getattr(full, field)[k], getattr(three, field)[a])
+    coupled = mujoco.MjModel.from_xml_path(str(SHADOW_5F.with_name("shadow_right_coupled.xml")))
+    assert coupled.njnt == 22 and coupled.neq == 4
+
+
+def test_five_finger_shadow_grasp_solves_its_36_lps() -> None:
+    """Five fingertip F contacts, 6 REFS x 6 RVDS: every LP optimal, the grasp held, and no
+    contact of the hand with itself at the IK's posture."""
+    from mjtvm.grasp.contacts.report import contact_warnings
+
+    grasp = load_grasp(SHADOW_5F_GRASP)
+    t = grasp.transmission
+    assert t is not None
+    assert len(grasp.joints) == 22 and len(t.actuator_names) == 18 and len(t.constraint_names) == 4
+    assert [c.split("#")[0] for c in grasp.contact_types] == [
+        "ff_distal", "mf_distal", "rf_distal", "lf_distal", "th_distal",
+    ]  # fmt: skip
+    assert contact_warnings(grasp) == []
+    res = tvmmp(grasp.state(), witnesses=False)
+    assert res.timings.num_lps == 36 and res.feasible
+    assert np.asarray(res.status).shape == (6, 6) and {str(s) for s in np.ravel(res.status)} == {"optimal"}
+    assert res.tvmmp is not None and 0.05 < res.tvmmp < 0.07 and all(res.held)  # 0.0596 m/s
