@@ -349,7 +349,10 @@ def test_cli_replay_and_verify(tmp_path: Path, grasp: Path) -> None:
     assert len(found) == 2 * nrvds
     assert all(r["status"] == "optimal" and float(r["alpha_lp"]) > 0 for r in found)
     if f85:
-        assert all(1.0 <= float(r["ratio"]) <= 1.3 and r["pass_check"] == "True" for r in found)
+        # The box's speed edge binds; a rollout fails 1 % past it (docs/physics-check.md), and
+        # the speed loop's overshoot leaves alpha_sim a few per cent below alpha_kl.
+        assert all(0.9 <= float(r["ratio"]) <= 1.05 and r["pass_check"] == "True" for r in found)
+        assert all(r["verdict"] == "speed edge at actuator fingers_actuator" for r in found)
     held = [r for r in found if r["held"] == "True"]
     if f85:
         assert held == found
