@@ -252,6 +252,8 @@ def stream_rows(
         raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {measures!r}")
     opts = (limit_horizon, refuse_penetration, measures)
     batch_models(grasp).model()  # compiled before any fork, and its errors are the command's
+    if total == 0:
+        return  # nothing to evaluate (all resumed): no pool, no cluster, no bar
     bar = tqdm(total=total, desc="rank", unit="grasp", disable=not progress)
 
     def finished(rows: list[dict[str, Any]]) -> None:
