@@ -72,9 +72,12 @@ def hand_summary(rows: Sequence[dict[str, Any]], run: str) -> dict[str, Any]:
 
     A pair whose alpha_kl is 0 (a joint on its limit, or reaching it within the travel
     horizon: docs/joint-limits.md) has no ratio: it is counted in ``zero_alpha``, kept out of
-    every median and fraction."""
+    every median and fraction; so is a censored pair (s* at the bracket's end: a bound, not a
+    ratio; ``censored``). ``non_monotone``: the pairs whose pass/fail is not monotone about s*
+    (verify.csv's ``monotone``)."""
     mine = [r for r in rows if r["run"] == run and r["status"] == "optimal" and "alpha_dyn" in r]
-    ok = [r for r in mine if r["alpha_lp"] > 0]
+    positive = [r for r in mine if r["alpha_lp"] > 0]
+    ok = [r for r in positive if not r.get("censored")]
     ratios = sorted(r["ratio_dyn"] for r in ok if math.isfinite(r["ratio_dyn"]))
     fails = [r for r in ok if r.get("pass_check_dyn") is False]
     q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [math.nan] * 3
@@ -84,7 +87,9 @@ def hand_summary(rows: Sequence[dict[str, Any]], run: str) -> dict[str, Any]:
     states = sorted({int(r["state"]) for r in fails})
     return {
         "pairs": len(ok),
-        "zero_alpha": len(mine) - len(ok),
+        "zero_alpha": len(mine) - len(positive),
+        "censored": len(positive) - len(ok),
+        "non_monotone": sum(r.get("monotone") is False for r in ok),
         "no_alpha_dyn": len(ok) - len(ratios),
         "median": med,
         "q1": q[0],

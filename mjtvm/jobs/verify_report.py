@@ -112,8 +112,11 @@ def _finish(
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs and their
     verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), with a launch
-    the median of launch_speed / alpha_kl and the launches that reached their distance; pairs with alpha_kl = 0 (no ratio) are counted apart (``zero_alpha``), and so are
-    the states that do not hold at rest (``not_held``: no speed tested)."""
+    the median of launch_speed / alpha_kl and the launches that reached their distance, the
+    pairs whose pass/fail is not monotone about s* (``non_monotone``). Counted apart, out of
+    every statistic: pairs with alpha_kl = 0 (no ratio, ``zero_alpha``), the states that do
+    not hold at rest (``not_held``: no speed tested) and the censored pairs (s* at a bracket
+    end, ``censored``: a bound, not a ratio)."""
     out: dict[str, dict[str, Any]] = {}
     for run in dict.fromkeys(r["run"] for r in rows):
         ok = [r for r in rows if r["run"] == run and r["status"] == "optimal"]
@@ -123,8 +126,12 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
         # alpha_kl = 0 (the hand cannot move the object along r_l at all) has no ratio
         zero = sum(1 for r in ok if not math.isfinite(r["ratio"]))
         ok = [r for r in ok if math.isfinite(r["ratio"])]
+        # s* at a bracket end (fails at rest, passes at s = 2) is a bound, not a ratio
+        censored = sum(1 for r in ok if r.get("censored"))
+        ok = [r for r in ok if not r.get("censored")]
+        apart = {"zero_alpha": zero, "not_held": len(loose), "censored": censored}
         if not ok:
-            out[run] = {"pairs": 0, "zero_alpha": zero, "not_held": len(loose)}
+            out[run] = {"pairs": 0, **apart}
             continue
         ratios = sorted(r["ratio"] for r in ok)
         q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [ratios[0]] * 3
@@ -156,8 +163,8 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["verdict"]) for r in worst],
             "fail_at_check": sum(not r["pass_check"] for r in ok),
             "verdicts": dict(Counter(r["verdict"] for r in ok).most_common()),
-            "zero_alpha": zero,
-            "not_held": len(loose),
+            "non_monotone": sum(r.get("monotone") is False for r in ok),
+            **apart,
             **dyn,
         }
     return out

@@ -21,7 +21,11 @@ from mjtvm.problem2.tvmmp import tvmmp
 
 _F64 = NDArray[np.float64]
 
-__all__ = ["Bisection", "alpha_sim", "bisect"]
+__all__ = ["MONOTONE_GRID", "Bisection", "alpha_sim", "bisect", "monotone_flips"]
+
+MONOTONE_GRID = (0.8, 0.9, 0.95, 1.05, 1.1, 1.2)
+"""The speeds about a bisection's threshold that [`monotone_flips()`][mjtvm.physics.bisection.monotone_flips]
+tries: below 1, fractions of s* (each should pass); above 1, multiples of s* + tol (each should fail)."""
 
 
 @dataclass(frozen=True)
@@ -55,6 +59,33 @@ def bisect(
         count += 1
         lo, hi = (mid, hi) if passes(mid) else (lo, mid)
     return Bisection(lo, False, False, count)
+
+
+def monotone_flips(
+    b: Bisection,
+    passes: Callable[[float], bool],
+    *,
+    grid: tuple[float, ...] = MONOTONE_GRID,
+    tol: float = 0.01,
+    hi: float = 2.0,
+) -> list[str] | None:
+    """The speeds of ``grid`` about the threshold s* of ``b`` at which pass/fail is not what a
+    threshold says: ``"fails at s = X"`` below s*, ``"passes at s = X"`` above s* + ``tol``
+    (empty: monotone there); ``None`` when ``b`` is censored (s* at a bracket end: no threshold
+    inside it). Speeds beyond ``hi`` or at 0 are not tried."""
+    if b.below_bracket or b.above_bracket:
+        return None
+    flips = []
+    for f in grid:
+        s = f * b.value if f < 1.0 else f * (b.value + tol)
+        if not 0.0 < s <= hi:
+            continue
+        ok = passes(s)
+        if f < 1.0 and not ok:
+            flips.append(f"fails at s = {s:.3g}")
+        elif f > 1.0 and ok:
+            flips.append(f"passes at s = {s:.3g}")
+    return flips
 
 
 def alpha_sim(

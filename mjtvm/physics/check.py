@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ModelError
 from mjtvm.model.state import GraspState
-from mjtvm.physics.bisection import alpha_sim
+from mjtvm.physics.bisection import alpha_sim, monotone_flips
 from mjtvm.physics.dynamic import dynamic_pair
 from mjtvm.physics.launch import launch_row
 from mjtvm.physics.motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
@@ -153,7 +153,9 @@ def pair_check(
     Returns
     -------
     dict
-        ``alpha_lp``, ``alpha_sim``, ``ratio``, ``verdict``, ``evaluations``, the failing
+        ``alpha_lp``, ``alpha_sim``, ``ratio``, ``verdict``, ``censored`` (s* at the
+        bracket's end: ``below``, ``above``, else empty), ``monotone`` and ``flips``
+        ([`monotone_flips()`][mjtvm.physics.bisection.monotone_flips]), ``evaluations``, the failing
         rollout's ``fail_reason`` and ``fail_clamp``, the check's ``pass_check``,
         ``check_reason``, the inertial demand's ``inertia_max`` and ``inertia_joint``, the
         check's ``settle_drift`` and limits, then the launch's and the dynamic columns.
@@ -176,6 +178,9 @@ def pair_check(
     drive = partial(witness_drive, state, 0, l, alpha, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
     fail = rollout(model, qpos, drive(top), settings=settings, object_body=ob)
     chk = rollout(model, qpos, drive(check_s), settings=settings, object_body=ob)
+    flips = monotone_flips(
+        b, lambda s: rollout(model, qpos, drive(s), settings=settings, object_body=ob).passed
+    )
     one = drive(1.0)
     demand = inertial_demand(model, qpos, one, object_body=ob)
     j = int(np.argmax(demand))
@@ -184,6 +189,9 @@ def pair_check(
         "alpha_sim": a_sim,
         "ratio": a_sim / alpha if alpha > 0 else math.nan,
         "verdict": verdict(b, fail, actuators=state.transmission is not None),
+        "censored": "below" if b.below_bracket else "above" if b.above_bracket else "",
+        "monotone": None if flips is None else not flips,
+        "flips": "; ".join(flips or ()),
         "evaluations": b.evaluations,
         "fail_reason": fail.reason,
         "fail_clamp": fail.clamp_fraction,

@@ -170,3 +170,36 @@ def test_verify_lift_serial_and_parallel_agree(tmp_path) -> None:  # type: ignor
     assert len(rows) == 8 and all(math.isfinite(float(r["ratio"])) for r in rows)
     summary = summarize(serial)["L"]
     assert summary["pairs"] == 8 and 0.0 < summary["median"] <= 2.0
+
+
+def test_monotone_flips_on_known_pass_fail_functions() -> None:
+    """A step at 0.737 is monotone about its threshold; a pass window above it (about the
+    grid's 1.2 (s* + 0.01)) and a failing dip below it (0.58 to 0.62, about 0.8 s*) are named
+    at the grid's speeds; a censored bisection has no threshold to check."""
+    from mjtvm.physics.bisection import MONOTONE_GRID, bisect, monotone_flips
+
+    def step(s: float) -> bool:
+        return s <= 0.737
+
+    b = bisect(step)
+    assert 0.727 <= b.value <= 0.737 and monotone_flips(b, step) == []
+    above = 1.2 * (b.value + 0.01)
+    tried: list[float] = []
+
+    def window(s: float) -> bool:
+        tried.append(s)
+        return s <= 0.737 or abs(s - above) < 0.005
+
+    b2 = bisect(window)  # the bisection's midpoints miss the window
+    assert b2 == b
+    tried.clear()
+    assert monotone_flips(b2, window) == [f"passes at s = {above:.3g}"]
+    assert len(tried) == len(MONOTONE_GRID)
+
+    def dip(s: float) -> bool:
+        return s <= 0.737 and not 0.58 <= s <= 0.62
+
+    b = bisect(dip)
+    assert monotone_flips(b, dip) == [f"fails at s = {0.8 * b.value:.3g}"]
+    assert monotone_flips(bisect(lambda s: True), step) is None
+    assert monotone_flips(bisect(lambda s: False), step) is None
