@@ -1,5 +1,6 @@
 r"""The one plotting style of every figure mjtvm draws (``show --png``, the replay's Fig. 8 / 9,
-``verify.png``, ``gears.png``, the rank plots, ``solve --png``, ``tvms --png``).
+``verify.png``, ``gears.png``, the rank plots) and of the gallery's pictures of ``solve`` and
+``tvms`` results (``tools/gallery.py``).
 
 The rules, checked for every figure by ``tests/jobs/test_figures.py``:
 
