@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
+
+from tests.support.tools import tool_module
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_gallery_is_complete() -> None:
-    spec = importlib.util.spec_from_file_location("gallery", ROOT / "tools" / "gallery.py")
-    assert spec is not None and spec.loader is not None
-    gallery = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(gallery)
+    gallery = tool_module("gallery")
     assert gallery.check() == [], "run python tools/gallery.py --write"

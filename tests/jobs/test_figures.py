@@ -246,14 +246,12 @@ def _gallery(command: str) -> Callable[[Path], Any]:
 
     def run(_: Path) -> Any:
         import contextlib
-        import importlib.util
         import io
         import json
 
-        spec = importlib.util.spec_from_file_location("gallery", ROOT / "tools" / "gallery.py")
-        assert spec is not None and spec.loader is not None
-        gallery = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(gallery)
+        from tests.support.tools import tool_module
+
+        gallery = tool_module("gallery")
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             assert main([command, "case2", "--quiet"]) == 0

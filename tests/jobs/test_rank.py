@@ -262,15 +262,9 @@ def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
 
 
 def _generator() -> Any:
-    import importlib.util
+    from tests.support.tools import tool_module
 
-    spec = importlib.util.spec_from_file_location(
-        "make_rank_dataset", ROOT / "tools" / "make_rank_dataset.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return tool_module("make_rank_dataset")
 
 
 def test_generator_follows_the_five_finger_grasp_file(tmp_path: Path) -> None:

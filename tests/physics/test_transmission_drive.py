@@ -9,6 +9,7 @@ box's corner, and the witness's joint speeds keep the linkage's ``J_eq qd = 0``.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -179,6 +180,22 @@ def test_gear_sweep_refuses_a_transmission() -> None:
         gear_sweep(str(F85), (10.0,), num_states=2, states=(0,))
 
 
+def _f85_state() -> tuple[Any, Any, Any, mujoco.MjModel]:
+    """The 2F-85's lift, grasp, state 0 (L, mu 0.6, mg 0.4905 N) and its simulated model.
+
+    Its coupler joints reach their limit after 0.99999 mm of lift (docs/joint-limits.md): at
+    the default 1 mm horizon alpha_00 is 0; the linkage's witness is checked without it."""
+    lift = cached_lift(F85, 2)
+    grasp = lift.scenario
+    state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
+    assert state.joint_limits is not None
+    state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
+    model = sim_model(
+        motor_model(grasp), contact_types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body
+    )
+    return lift, grasp, state, model
+
+
 def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
     """The dynamic alpha of the 2F-85 (tendon actuator, linkage): the motion whose demand it takes
     keeps MuJoCo's equality rows J_eq qd = 0 at the state; alpha_dyn is a fixed point of
@@ -187,16 +204,7 @@ def test_f85_dynamic_alpha_keeps_the_linkage_and_is_a_fixed_point() -> None:
     from mjtvm.physics.dynamic import dynamic_pair, joint_demand
     from mjtvm.problem2.dynamic import pair_alpha
 
-    lift = cached_lift(F85, 2)
-    grasp = lift.scenario
-    state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
-    # Its coupler joints reach their limit after 0.99999 mm of lift (docs/joint-limits.md): at
-    # the default 1 mm horizon alpha_00 is 0; the linkage's witness is checked without it.
-    assert state.joint_limits is not None
-    state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
-    model = sim_model(
-        motor_model(grasp), contact_types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body
-    )
+    lift, grasp, state, model = _f85_state()
     res = tvmmp(state)
     alpha = float(res.alpha[0, 0])
     drive = witness_drive(state, 0, 0, alpha, 1.0)
@@ -224,14 +232,7 @@ def test_a_motor_driven_past_its_speed_edge_fails() -> None:
     from mjtvm.physics.simulate import SimSettings, rollout
     from mjtvm.physics.verdict import failure_words
 
-    lift = cached_lift(F85, 2)
-    grasp = lift.scenario
-    state = lift_state(lift, 0, variant="L", mu=0.6, mg=0.4905)
-    assert state.joint_limits is not None
-    state = state.with_(joint_limits=state.joint_limits.with_options(horizon=0.0))
-    model = sim_model(
-        motor_model(grasp), contact_types(state), mu=0.6, mg=0.4905, object_body=grasp.object_body
-    )
+    lift, grasp, state, model = _f85_state()
     alpha = float(tvmmp(state).alpha[0, 0])
     slow = witness_drive(state, 0, 0, alpha, 0.95)
     fast = witness_drive(state, 0, 0, alpha, 1.08)
