@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from mjtvm.grasp import GraspError
-from mjtvm.grasp.document.dataset import DatasetGrasp, dataset_files, read_dataset
+from mjtvm.grasp.document.dataset import DatasetGrasp, dataset_files, iter_dataset
 from mjtvm.grasp.resolve.batch import hand_joints
 from mjtvm.grasp.resolve.objects import check_joint_ranges
 from mjtvm.jobs.files import model_files
@@ -81,13 +81,13 @@ class DatasetScan:
 
 def _file_grasps(
     model: Any, joints: Sequence[str], path: Path, label: str, pose: str, key: str | None, com_frame: bool
-) -> list[DatasetGrasp]:
-    read = read_dataset(
+) -> Iterator[DatasetGrasp]:
+    """The grasps of one dataset file, each checked against the model as it is read."""
+    for e in iter_dataset(
         path, nq=int(model.nq), num_joints=len(joints), pose=pose, key=key, joint_names=joints, label=label
-    )
-    for e in read:
+    ):
         check_joint_ranges(model, joints, e)
-    return [replace(e, com_frame=True) for e in read] if com_frame else read
+        yield replace(e, com_frame=True) if com_frame else e
 
 
 def _hand(grasp: str) -> tuple[Any, Sequence[str]]:
@@ -113,7 +113,7 @@ def scan_datasets(
 ) -> DatasetScan:
     """Check every grasp of the datasets (files, or folders of them: `dataset_files()`)
     against the grasp file's model: shapes, dtypes, poses, joint ranges, unique ids. One
-    file's grasps are held at a time.
+    file's numbers are held at a time, and one grasp object.
 
     Raises
     ------

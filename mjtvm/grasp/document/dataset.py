@@ -27,7 +27,7 @@ import csv
 import pickle
 import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -40,7 +40,7 @@ from mjtvm.grasp.document.dataset_csv import csv_rows
 from mjtvm.grasp.document.pipelines import POSES, PipelineKeyError, pipeline_row
 from mjtvm.grasp.document.safe_npy import load_npy, load_npz
 
-__all__ = ["ROOT_SIZE", "DatasetGrasp", "dataset_files", "read_dataset"]
+__all__ = ["ROOT_SIZE", "DatasetGrasp", "dataset_files", "iter_dataset", "read_dataset"]
 
 ROOT_SIZE = 7
 """Numbers of a pose: position (3, m) then a unit quaternion (4, w-x-y-z)."""
@@ -238,7 +238,7 @@ def _grasp(
     )
 
 
-def _rows_npz(path: Path) -> list[dict[str, Any]]:
+def _rows_npz(path: Path) -> Sequence[dict[str, Any]]:
     arrays = load_npz(path)
     if not arrays:
         raise GraspError(str(path), "", "no arrays in the file: expected grasp_qpos or qpos")
@@ -249,7 +249,23 @@ def _rows_npz(path: Path) -> list[dict[str, Any]]:
     for k, c in counts.items():
         if c != n or arrays[k].ndim == 0:
             raise GraspError(str(path), k, f"expected {n} rows (one per grasp), got {c}")
-    return [{k: a[i] for k, a in arrays.items()} for i in range(n)]
+    return _NpzRows(arrays, n)
+
+
+class _NpzRows(Sequence[dict[str, Any]]):
+    """The per-grasp rows of an ``.npz``'s arrays, each made when it is read (a row is a dict
+    of views into the arrays: the file's numbers are held once, not a dict per grasp)."""
+
+    def __init__(self, arrays: dict[str, NDArray[Any]], n: int) -> None:
+        self.arrays, self.n = arrays, n
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(self.n))]
+        return {k: a[i] for k, a in self.arrays.items()}
 
 
 def _rows_npy(path: Path, key: str | None) -> tuple[list[dict[str, Any]], bool]:
@@ -341,6 +357,32 @@ def read_dataset(
         An unreadable or unsafe file, or a grasp with a missing, misshapen, non-real or
         non-finite field: ``FILE: grasp I: FIELD: problem``.
     """
+    return list(
+        iter_dataset(
+            path, nq=nq, num_joints=num_joints, pose=pose, key=key, joint_names=joint_names, label=label
+        )
+    )
+
+
+def iter_dataset(
+    path: str | Path,
+    *,
+    nq: int,
+    num_joints: int,
+    pose: str = "grasp",
+    key: str | None = None,
+    joint_names: Sequence[str] = (),
+    label: str | None = None,
+) -> Iterator[DatasetGrasp]:
+    """[`read_dataset()`][mjtvm.grasp.document.dataset.read_dataset] one grasp at a time: the
+    file is read (and refused) at the first ``next()``, each grasp made and checked when it is
+    reached (a file's numbers are held once, not a grasp object each).
+
+    Raises
+    ------
+    GraspError
+        As [`read_dataset()`][mjtvm.grasp.document.dataset.read_dataset], from ``next()``.
+    """
     p = Path(path)
     suffix = p.suffix.lower()
     if pose not in POSES:
@@ -383,13 +425,9 @@ def read_dataset(
     if not rows:
         raise GraspError(str(p), "", "no grasps in the file")
     name = p.stem if label is None else label
-    out = []
     for i, row in enumerate(rows):
         try:
             values = pipeline_row(row, pose=pose, joint_names=joint_names)
         except PipelineKeyError as e:
             raise _fail(p, i, e.key, e.problem) from None
-        out.append(
-            _grasp(p, i, values, nq=nq, num_joints=num_joints, default_id=name if single else f"{name}:{i}")
-        )
-    return out
+        yield _grasp(p, i, values, nq=nq, num_joints=num_joints, default_id=name if single else f"{name}:{i}")
