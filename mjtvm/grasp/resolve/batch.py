@@ -140,6 +140,30 @@ def _replace_object(
 #: bound (about 0.3 MiB per Shadow-hand model), and a dataset grouped by object reuses each.
 MODEL_CACHE_SIZE = 16
 
+#: Every this many models dropped from a cache, the C heap's freed pages go back to the
+#: system (glibc's ``malloc_trim``): a compile per grasp otherwise leaves the freed models'
+#: memory fragmented, and the resident set of a 1,600-grasp ranking grew by 6.6 MiB past its
+#: first 400 grasps with it kept (1.8 MiB with it returned; the Python heap flat either way).
+TRIM_EVERY = 32
+
+
+def _release_freed_memory() -> None:
+    """Return the C heap's free pages to the system where glibc is the allocator (else nothing)."""
+    global _TRIM
+    if _TRIM is None:
+        try:
+            import ctypes
+            import ctypes.util
+
+            _TRIM = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim
+        except (OSError, AttributeError):  # not glibc (macOS, Windows, musl): nothing to trim
+            _TRIM = False
+    if _TRIM:
+        _TRIM(0)
+
+
+_TRIM: Any = None
+
 
 class BatchModels:
     """The grasp file's model, compiled per (object file, scale, posed root) and kept for the
@@ -169,6 +193,7 @@ class BatchModels:
         # (object file, scale) -> the centre of mass offset and its model (--com-frame), oldest first
         self._com: dict[tuple[str | None, float], np.ndarray] = {}
         self._com_models: OrderedDict[tuple[str | None, float], mujoco.MjModel] = OrderedDict()
+        self._dropped = 0  # models dropped from the caches (TRIM_EVERY)
 
     @classmethod
     def from_file(cls, source: str | Path) -> BatchModels:
@@ -202,6 +227,9 @@ class BatchModels:
             self._models[key] = (self._compile(spec), body)
             while len(self._models) > self.cache_size:
                 self._models.popitem(last=False)
+                self._dropped += 1
+                if self._dropped % TRIM_EVERY == 0:
+                    _release_freed_memory()
         return self._models[key]
 
     def _edited_spec(
@@ -307,6 +335,9 @@ class BatchModels:
             while len(self._com_models) > self.cache_size:  # bounded as the plain models
                 dropped, _ = self._com_models.popitem(last=False)
                 self._com.pop(dropped, None)
+                self._dropped += 1
+                if self._dropped % TRIM_EVERY == 0:
+                    _release_freed_memory()
         self._com_models.move_to_end(key)
         return self._com_models[key]
 
