@@ -345,7 +345,7 @@ def _rank(r: dict[str, Any]) -> list[str]:
             "",
             f"The peak-RSS and Dask rows are a run of their own (`{separate['command']}`, started "
             f"{separate['started']}, `benchmarks/results/rank-memory.json`): the 40,000-grasp size "
-            "takes half an hour, too long for the suite.",
+            "takes about 40 minutes with its Dask run, too long for the suite.",
         ]
     return out
 
