@@ -15,11 +15,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.spatial import ConvexHull, QhullError
 
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.lp.lp import LinearProgram
 from mjtvm.lp.solvers import solve_lp
+from mjtvm.measures.hull import GrowingHull
 from mjtvm.model.contacts import force_generators
 from mjtvm.model.friction import margin_contacts
 from mjtvm.model.state import GraspState
@@ -40,11 +40,11 @@ __all__ = [
 
 RANK_REL_TOL = 1e-9  # singular values below this x the largest count as 0
 LINF_REL_TOL = 1e-9  # the L-infinity epsilon's bracket, relative to the largest wrench
-_LINF_MAX_ROUNDS = 400
-# The nearest facets refined per hull rebuild: 3 keeps each rebuilt hull small (1.5x faster
-# than 4 and 2.3x faster than 8 on the Shadow example dataset, the same epsilons within
-# 2e-13 relative, every bracket below 4e-15).
-_LINF_FACETS_PER_ROUND = 3
+_LINF_MAX_ROUNDS = 1200
+# The nearest facets refined per round: one, since a round inserts its points into the hull
+# (mjtvm.measures.hull) instead of rebuilding it: on the five-finger Shadow grasps 38 ms a
+# grasp against 55 ms with 3 and 80 ms with 8, the same epsilons within 3e-15 relative.
+_LINF_FACETS_PER_ROUND = 1
 
 
 def default_torque_scale(state: GraspState) -> float:
@@ -155,59 +155,6 @@ def closure_margin(wrenches: NDArray[np.float64]) -> float:
     return float(n * sol.x[n])
 
 
-# Qhull's round-off allowance for the unmerged hull's check (`_hull()`), relative to the
-# largest point: the facets of a hull built without merging must hold every point within it.
-_UNMERGED_REL_TOL = 1e-10
-
-
-def _unmerged_hull(points: NDArray[np.float64]) -> ConvexHull | None:
-    """Qhull's hull without facet merging ("Q0"), or ``None`` when Qhull refuses it or its
-    facets fail the check.
-
-    Merging (Qhull's default "Qx" in 6-D) is what costs on the friction pyramids' wrenches:
-    each contact's edges lie on one ellipse, so many facets are nearly coplanar; without it
-    the 48 wrenches of a three-finger grasp take 4 ms instead of 13 ms. Without merging
-    Qhull may keep a facet that is not convex within round-off, so the result is accepted
-    only if every facet's hyperplane holds all the points (within `_UNMERGED_REL_TOL` x the
-    largest point: a supporting hyperplane through D input points is a facet of the hull)
-    and every facet has its D neighbours (the facets close up around the origin: none is
-    missing)."""
-    try:
-        hull = ConvexHull(points, qhull_options="Q0")
-    except QhullError:
-        return None
-    eq = hull.equations
-    size = float(np.max(np.abs(points))) if points.size else 0.0
-    slack = eq[:, :-1] @ points.T + eq[:, -1:]
-    if not (
-        np.all(np.isfinite(eq)) and float(slack.max(initial=0.0)) <= _UNMERGED_REL_TOL * max(size, 1e-300)
-    ):
-        return None
-    if np.any(hull.neighbors < 0):
-        return None
-    return hull
-
-
-def _hull(points: NDArray[np.float64]) -> ConvexHull:
-    """Qhull's hull: unmerged and checked (`_unmerged_hull()`) where that holds, else Qhull's
-    default; where that gives up on nearly degenerate input (many wrenches of the
-    pyramids' edges lie on common facets), joggled by Qhull's "QJ" (about 1e-11 relative,
-    more on its retries). The facets' smallest distance from the origin, all that the
-    epsilons read, agrees between the unmerged and the merged hull to round-off (1e-15
-    relative on the example dataset)."""
-    fast = _unmerged_hull(points)
-    if fast is not None:
-        return fast
-    try:
-        return ConvexHull(points)
-    except QhullError:
-        pass
-    try:
-        return ConvexHull(points, qhull_options="QJ")
-    except QhullError as e:
-        raise SolverError("qhull", " ".join(str(e).split())[:200] or "QhullError") from e
-
-
 def epsilon_l1(wrenches: NDArray[np.float64], *, margin: float | None = None) -> float:
     r"""Ferrari-Canny's L1 epsilon of ``(D, n)`` primitive wrenches: the radius of the largest
     ball about the origin inside their convex hull (the wrenches of unit total normal force;
@@ -225,25 +172,6 @@ def epsilon_l1(wrenches: NDArray[np.float64], *, margin: float | None = None) ->
     if n <= big_d:
         return 0.0
     return _expanding([wrenches], margin)[0]
-
-
-class _Hull:
-    """A growing point set's hull, rebuilt from all the points (`_hull()`) when asked.
-
-    Not Qhull's incremental mode: on nearly degenerate input (facets wider than its
-    precision allows, ``qh_ERRwide``) ``add_points`` ends the process with exit code 7
-    instead of raising, which a batch over thousands of grasps meets (a Shadow grasp of
-    ``mjtvm rank``'s mesh dataset did)."""
-
-    def __init__(self, points: NDArray[np.float64]) -> None:
-        self.points = points
-
-    def add(self, new: NDArray[np.float64]) -> None:
-        self.points = np.vstack([self.points, new])
-
-    def equations(self) -> NDArray[np.float64]:
-        """``(f, D + 1)`` the facets ``[a, b]``, ``a.x + b <= 0`` inside, ``|a| = 1``."""
-        return np.asarray(_hull(self.points).equations)
 
 
 def _supports(
@@ -307,28 +235,27 @@ def _expanding(groups: list[NDArray[np.float64]], margin: float | None) -> tuple
     tol = LINF_REL_TOL * size
     # Seeded by the 2D axis directions only: with force closure each has a support point
     # strictly on its side, so their hull is full-dimensional, and the refinement adds points
-    # only where the nearest facets are. Extra (random) seeds grow every hull Qhull rebuilds
-    # (6445 facets for 140 points in 6-D, ~50 ms each): 64 of them made the example
-    # dataset's 32 grasps take 7.6 s instead of 0.8 s, for the same epsilons (within 3e-14).
+    # only where the nearest facets are. Extra (random) seeds grow the hull everywhere
+    # (6445 facets for 140 points in 6-D): 64 of them made the example dataset's 32 grasps
+    # take 7.6 s instead of 0.8 s, for the same epsilons (within 3e-14).
     seeds = np.vstack([np.eye(big_d), -np.eye(big_d)])
     h0, p0 = _supports(groups, seeds / np.linalg.norm(seeds, axis=1, keepdims=True))
     upper = float(h0.min())
-    points = list(p0)
-    hull = _Hull(np.array(points))
-    lower = 0.0
+    hull = GrowingHull(p0)
     for _ in range(_LINF_MAX_ROUNDS):
-        eq = hull.equations()
-        dist = -eq[:, -1]
+        dist = hull.distances()
         lower = float(max(0.0, dist.min()))
-        if upper - lower <= tol:
-            break
         near = np.argsort(dist)[:_LINF_FACETS_PER_ROUND]  # the nearest facets per hull update
-        h, p = _supports(groups, eq[near, :-1])
+        h, p = _supports(groups, hull.equations[near, :-1])
         upper = min(upper, float(h.min()))
         added = p[h > dist[near] + tol]
-        if not len(added):
-            break
+        if upper - lower <= tol or not len(added):
+            if hull.verified:  # the bounds read off a checked hull of every point
+                break
+            hull.verify()
+            continue
         hull.add(added)
     else:
-        lower = float(max(0.0, (-hull.equations()[:, -1]).min()))
+        hull.verify()
+    lower = float(max(0.0, hull.distances().min()))
     return lower, max(0.0, float(upper - lower))
