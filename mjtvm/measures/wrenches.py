@@ -177,15 +177,18 @@ def epsilon_l1(wrenches: NDArray[np.float64], *, margin: float | None = None) ->
 def _supports(
     groups: list[NDArray[np.float64]], u: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """`_support()` of ``(n, D)`` directions at once: ``(n,)`` values, ``(n, D)`` points."""
+    r"""The support function $h(u) = \sum_i \max(0, \max_k u^T w_{ik})$ of ``(n, D)``
+    directions at once and a point attaining it: ``(n,)`` values, ``(n, D)`` points (the sum
+    of each contact's best wrench, or of nothing where no wrench of it is positive)."""
     values, points = np.zeros(u.shape[0]), np.zeros_like(u)
+    rows = np.arange(u.shape[0])
     for w in groups:
         s = u @ w
         k = np.argmax(s, axis=1)
-        best = s[np.arange(u.shape[0]), k]
+        best = s[rows, k]
         on = best > 0.0
         values += np.where(on, best, 0.0)
-        points += np.where(on[:, None], w[:, k].T, 0.0)
+        points += w[:, k].T * on[:, None]
     return values, points
 
 
