@@ -288,6 +288,13 @@ def _rank(r: dict[str, Any]) -> list[str]:
             ]
             for key, label in (("classic", "classic measures"), ("none", "TVMMP alone"))
         ]
+        ceiling = t22["none"].get("highs_ceiling_grasps_per_s")  # absent before 2026-12-03
+        if ceiling is not None:
+            rows.append([
+                f"HiGHS `run` alone in the {t22['joints']}-joint TVMMP-alone pass: the ceiling of any code around it",
+                f"{ceiling:.3g} grasps/s ({_t(t22['none']['highs_run_ms_per_grasp'] / 1e3)} per grasp)",
+                "-", "-", "-", "-",
+            ])  # fmt: skip
     rows.append([
         f"Problem 2 over HiGHS `run`, summed over the batch ({f['states']} states, {f['lps']} LPs)",
         f"x{f['ratio']:.3g} ({_t(f['wall_s'])} / {_t(f['highs_run_s'])})",

@@ -74,8 +74,13 @@ def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> 
     bench_page = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_page)
     table = bench_page._rank({"rank": rank_report})
-    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 2 + 3 + 2 + 1  # head, rows, Dask
+    # head, the rows (13 joints, 22 joints with HiGHS's ceiling, the rest), memory, Dask
+    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 3 + 2 + 1
     assert sum("22-joint Shadow hand, 36 LPs" in row for row in table) == 2
+    (ceiling,) = [row for row in table if "the ceiling of any code around it" in row]
+    none = rank_report["throughput_22"]["none"]
+    assert f"{none['highs_ceiling_grasps_per_s']:.3g} grasps/s" in ceiling
+    assert none["highs_ceiling_grasps_per_s"] == pytest.approx(1e3 / none["highs_run_ms_per_grasp"])
     old = {k: v for k, v in rank_report.items() if k != "throughput_22"}  # a report from before
     assert len([row for row in bench_page._rank({"rank": old}) if row.startswith("| ")]) == 1 + 2 + 3 + 2 + 1
     loaded = {**rank_report, "throughput": {**rank_report["throughput"]}}
