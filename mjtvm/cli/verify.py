@@ -329,12 +329,18 @@ def _print_holds(rows: Sequence[dict[str, Any]], grasp: str) -> None:
 def _print_summary(summary: dict[str, dict[str, Any]], wall: float, jobs: int) -> None:
     for run_name, s in summary.items():
         verdicts = s.pop("verdicts", {})
+        causes = s.pop("causes", {})
         emit(
             f"{run_name}: "
             + ", ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in s.items())
         )
         if verdicts:
             emit(f"{run_name} verdicts: " + "; ".join(f"{v} x{n}" for v, n in verdicts.items()))
+        if causes:
+            emit(
+                f"{run_name} causes of ratios outside [0.9, 1.05]: "
+                + "; ".join(f"{c} x{n}" for c, n in causes.items())
+            )
     emit(f"wall time {wall:.1f} s ({jobs} job(s))")
 
 

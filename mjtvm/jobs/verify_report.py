@@ -19,7 +19,7 @@ from mjtvm.jobs.style import no_value
 
 _F64 = NDArray[np.float64]
 
-__all__ = ["plot_alpha", "rows_csv", "summarize"]
+__all__ = ["cause_kind", "plot_alpha", "rows_csv", "summarize"]
 
 
 def rows_csv(rows: Sequence[dict[str, Any]]) -> str:
@@ -109,9 +109,16 @@ def _finish(
     return lift_png(fig, ax, ylabel=label, title=title, x=x or "l", notes=notes)
 
 
+def cause_kind(cause: str) -> str:
+    """The kind of a ``cause`` ([`ratio_cause()`][mjtvm.physics.verdict.ratio_cause]): its
+    words before the first colon or semicolon (``margin``, ``rotor inertia``, ``slip``, ...)."""
+    return cause.split(";")[0].split(":")[0].strip()
+
+
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs and their
-    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), with a launch
+    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), how many of
+    those outside [0.9, 1.05] have each kind of cause (``causes``: `cause_kind()`), with a launch
     the median of launch_speed / alpha_kl and the launches that reached their distance, the
     pairs whose pass/fail is not monotone about s* (``non_monotone``). Counted apart, out of
     every statistic: pairs with alpha_kl = 0 (no ratio, ``zero_alpha``), the states that do
@@ -163,6 +170,10 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "worst": [(r["state"], r["l"], round(r["ratio"], 3), r["verdict"]) for r in worst],
             "fail_at_check": sum(not r["pass_check"] for r in ok),
             "verdicts": dict(Counter(r["verdict"] for r in ok).most_common()),
+            # the pairs outside [CAUSE_LOW, CAUSE_HIGH] by the kind of their cause
+            "causes": dict(
+                Counter(cause_kind(r.get("cause", "")) for r in ok if r.get("cause")).most_common()
+            ),
             "non_monotone": sum(r.get("monotone") is False for r in ok),
             **apart,
             **dyn,

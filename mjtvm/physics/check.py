@@ -28,7 +28,7 @@ from mjtvm.physics.dynamic import dynamic_pair
 from mjtvm.physics.launch import launch_row
 from mjtvm.physics.motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from mjtvm.physics.simulate import SimSettings, inertial_demand, rollout
-from mjtvm.physics.verdict import verdict
+from mjtvm.physics.verdict import ratio_cause, verdict
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import TvmmpResult
 
@@ -158,7 +158,8 @@ def pair_check(
         ([`monotone_flips()`][mjtvm.physics.bisection.monotone_flips]), ``evaluations``, the failing
         rollout's ``fail_reason`` and ``fail_clamp``, the check's ``pass_check``,
         ``check_reason``, the inertial demand's ``inertia_max`` and ``inertia_joint``, the
-        check's ``settle_drift`` and limits, then the launch's and the dynamic columns.
+        check's ``settle_drift`` and limits, then the launch's and the dynamic columns, and
+        the ratio's ``cause`` ([`ratio_cause()`][mjtvm.physics.verdict.ratio_cause]).
     """
     ob = object_body
     a_sim, alpha, b = alpha_sim(
@@ -208,6 +209,15 @@ def pair_check(
         row.update(launch_row(model, qpos, one, launch_distance, settings, ob))
     if dynamics:
         row.update(dynamic_row(model, qpos, state, l, res, alpha, a_sim, witness, settings, ob, check_s))
+    row["cause"] = ratio_cause(
+        row["ratio"],
+        row["verdict"],
+        censored=row["censored"],
+        limit_reached=bool(chk.limit_reached),
+        inertia_max=row["inertia_max"],
+        inertia_joint=row["inertia_joint"],
+        ratio_dyn=row.get("ratio_dyn"),
+    )
     return row
 
 

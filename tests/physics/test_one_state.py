@@ -28,6 +28,9 @@ def _checked(rows: list[dict[str, str]]) -> None:
         assert r["status"] == "optimal" and r["held"] == "True" and r["verdict"], r
         assert float(r["hold_reach"]) <= 5e-4
         assert 0.0 <= float(r["alpha_sim"]) <= 2.0 * float(r["alpha_lp"]) + 1e-12
+        # a ratio outside [0.9, 1.05] carries its cause; one inside, or none (alpha_kl = 0), none
+        ratio = float(r["ratio"])
+        assert bool(r["cause"]) == (ratio == ratio and not 0.9 <= ratio <= 1.05), r
 
 
 def test_one_state_of_the_mesh_object_grasp(tmp_path: Path) -> None:
