@@ -137,6 +137,36 @@ def test_linf_epsilon_equals_the_exact_minkowski_sum() -> None:
     assert l1 <= eps <= 3 * l1
 
 
+def _random_contacts(rng: np.random.Generator, n: int, edges: int) -> list[np.ndarray]:
+    """``n`` fingertip pyramids of ``edges`` edges at random points of the unit sphere, normals
+    inwards, random friction, as primitive wrenches (force; position x force)."""
+    out = []
+    for _ in range(n):
+        p = rng.normal(size=3)
+        p /= np.linalg.norm(p)
+        a = np.cross(-p, [1.0, 0.0, 0.0] if abs(p[0]) < 0.9 else [0.0, 1.0, 0.0])
+        a /= np.linalg.norm(a)
+        b = np.cross(-p, a)
+        th = 2.0 * np.pi * np.arange(edges) / edges
+        f = -p[:, None] + rng.uniform(0.2, 1.5) * (np.outer(a, np.cos(th)) + np.outer(b, np.sin(th)))
+        out.append(np.vstack([f, np.cross(p, f.T).T]))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_linf_epsilon_of_random_grasps_equals_the_exact_minkowski_sum(seed: int) -> None:
+    """Three or four random contacts with 4-edge pyramids (up to 5^4 vertex sums, hulled
+    directly): the growing hull's epsilon is the exact one, or 0 exactly without closure."""
+    rng = np.random.default_rng(seed)
+    groups = _random_contacts(rng, 3 + seed % 2, 4)
+    eps, gap = epsilon_linf(groups)
+    exact = max(0.0, _minkowski_epsilon(groups))
+    if closure_margin(np.hstack(groups)) > 1e-9:
+        assert eps == pytest.approx(exact, rel=1e-9, abs=1e-12) and gap <= 1e-9
+    else:
+        assert eps == 0.0 and exact <= 1e-9
+
+
 def test_l1_epsilon_by_lp_membership_and_sampled_support() -> None:
     """The ball of radius eps_L1 lies in the hull (an LP finds weights for eps u, u random),
     a slightly larger ball does not in some direction, and the support function sampled on
