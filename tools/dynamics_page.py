@@ -34,30 +34,34 @@ def _f(x: float) -> str:
 
 
 def table(results: list[dict[str, Any]]) -> str:
-    """The validation table (markdown), one row per hand and run of the report's ``results``."""
+    """The validation table (markdown), one row per hand and run of the report's ``results``;
+    the second drive's column ("-" in a report from before it, or on a hand without it)."""
     head = (
         "| hand | run | pairs (alpha_kl = 0; censored) | alpha_sim / alpha_kl median | alpha_dyn / alpha_kl median "
-        "| **alpha_sim / alpha_dyn** median (IQR) | within +-10 % | failing at 0.9 alpha_dyn | causes "
-        "| not monotone |\n"
-        "|---|---|---|---|---|---|---|---|---|---|\n"
+        "| **alpha_sim / alpha_dyn** median (IQR) | second drive: alpha_sim / alpha_dyn median (IQR); spread "
+        "| within +-10 % | failing at 0.9 alpha_dyn | causes | not monotone |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     lines = []
     for s in results:
         if not s["pairs"]:
             lines.append(
-                f"| {s['hand']} | {s['run']} | 0 ({s['zero_alpha']}; {s.get('censored', 0)}) | - | - | - | - | - | - | - |"
+                f"| {s['hand']} | {s['run']} | 0 ({s['zero_alpha']}; {s.get('censored', 0)}) | - | - | - | - | - | - | - | - |"
             )
             continue
         med = f"**{_f(s['median'])}** ({_f(s['q1'])}-{_f(s['q3'])})" + (
             "" if s["median_met"] else " (outside [0.9, 1.1])"
         )
+        ff = "-"
+        if math.isfinite(s.get("median_ff", math.nan)):
+            ff = f"{_f(s['median_ff'])} ({_f(s['q1_ff'])}-{_f(s['q3_ff'])}); {_f(s['spread'])}"
         fail = f"{s['failing']} / {s['pairs']} ({100 * s['failing_fraction']:.0f} %)" + (
             "" if s["failing_met"] else " (over 10 %)"
         )
         causes = ", ".join(f"{k}: {v}" for k, v in s["causes"].items()) or "-"
         lines.append(
             f"| {s['hand']} | {s['run']} | {s['pairs']} ({s['zero_alpha']}; {s.get('censored', '-')}) "
-            f"| {_f(s['sim_kl'])} | {_f(s['dyn_kl'])} | {med} "
+            f"| {_f(s['sim_kl'])} | {_f(s['dyn_kl'])} | {med} | {ff} "
             f"| {s['within_10pct']} | {fail} | {causes} | {s.get('non_monotone', '-')} |"
         )
     return head + "\n".join(lines) + "\n"

@@ -74,7 +74,9 @@ def hand_summary(rows: Sequence[dict[str, Any]], run: str) -> dict[str, Any]:
     horizon: docs/joint-limits.md) has no ratio: it is counted in ``zero_alpha``, kept out of
     every median and fraction; so is a censored pair (s* at the bracket's end: a bound, not a
     ratio; ``censored``). ``non_monotone``: the pairs whose pass/fail is not monotone about s*
-    (verify.csv's ``monotone``)."""
+    (verify.csv's ``monotone``). ``median_ff`` (``q1_ff``, ``q3_ff``, over ``ff_pairs``): alpha_sim
+    / alpha_dyn under the second drive (``ratio_dyn_ff``, mjtvm.physics.feedforward), and
+    ``spread`` the distance between the two drives' medians, alpha_dyn's uncertainty."""
     mine = [r for r in rows if r["run"] == run and r["status"] == "optimal" and "alpha_dyn" in r]
     positive = [r for r in mine if r["alpha_lp"] > 0]
     ok = [r for r in positive if not r.get("censored")]
@@ -84,6 +86,10 @@ def hand_summary(rows: Sequence[dict[str, Any]], run: str) -> dict[str, Any]:
     med = statistics.median(ratios) if ratios else math.nan
     frac = len(fails) / len(ok) if ok else math.nan
     causes = Counter(cause(r.get("check_dyn_reason", "")) for r in fails)
+    # the second drive (mjtvm.physics.feedforward): alpha_sim under it over alpha_dyn
+    ff = sorted(r["ratio_dyn_ff"] for r in ok if math.isfinite(r.get("ratio_dyn_ff", math.nan)))
+    ff_med = statistics.median(ff) if ff else math.nan
+    ffq = statistics.quantiles(ff, n=4) if len(ff) > 1 else [math.nan] * 3
     states = sorted({int(r["state"]) for r in fails})
     return {
         "pairs": len(ok),
@@ -96,6 +102,11 @@ def hand_summary(rows: Sequence[dict[str, Any]], run: str) -> dict[str, Any]:
         "q3": q[2],
         "sim_kl": statistics.median(r["ratio"] for r in ok) if ok else math.nan,
         "dyn_kl": statistics.median(r["alpha_dyn"] / r["alpha_lp"] for r in ok) if ok else math.nan,
+        "median_ff": ff_med,
+        "q1_ff": ffq[0],
+        "q3_ff": ffq[2],
+        "ff_pairs": len(ff),
+        "spread": abs(ff_med - med) if ff and ratios else math.nan,
         "within_10pct": sum(1 for x in ratios if 0.9 <= x <= 1.1),
         "above_1.1": sum(1 for x in ratios if x > 1.1),
         "failing": len(fails),

@@ -117,7 +117,9 @@ def cause_kind(cause: str) -> str:
 
 def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     r"""Per run: count, median and quartiles of alpha_sim / alpha_kl, the 3 worst pairs and their
-    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), how many of
+    verdicts, s = 0.9 failures, how many pairs end in each verdict (``verdicts``), with
+    ``--dynamics`` the medians of alpha_sim / alpha_dyn under both drives (``median_dyn``,
+    ``median_dyn_ff``) and their spread (``spread_dyn``), how many of
     those outside [0.9, 1.05] have each kind of cause (``causes``: `cause_kind()`), with a launch
     the median of launch_speed / alpha_kl and the launches that reached their distance, the
     pairs whose pass/fail is not monotone about s* (``non_monotone``). Counted apart, out of
@@ -148,8 +150,13 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             dr = sorted(r["ratio_dyn"] for r in ok if math.isfinite(r.get("ratio_dyn", math.nan)))
             dq = statistics.quantiles(dr, n=4) if len(dr) > 1 else [dr[0]] * 3 if dr else [math.nan] * 3
             feas = [r for r in ok if "pass_check_dyn" in r]
+            ff = sorted(r["ratio_dyn_ff"] for r in ok if math.isfinite(r.get("ratio_dyn_ff", math.nan)))
             dyn = {
                 "median_dyn": statistics.median(dr) if dr else math.nan,
+                # the second drive (mjtvm.physics.feedforward): its median, and the spread
+                # between the drives' medians, alpha_dyn's uncertainty
+                "median_dyn_ff": statistics.median(ff) if ff else math.nan,
+                "spread_dyn": abs(statistics.median(ff) - statistics.median(dr)) if ff and dr else math.nan,
                 "q1_dyn": dq[0],
                 "q3_dyn": dq[2],
                 "fail_at_check_dyn": sum(not r["pass_check_dyn"] for r in feas),

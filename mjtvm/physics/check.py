@@ -25,6 +25,7 @@ from mjtvm.errors import ModelError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.bisection import alpha_sim, monotone_flips
 from mjtvm.physics.dynamic import dynamic_pair
+from mjtvm.physics.feedforward import alpha_sim_ff
 from mjtvm.physics.launch import launch_row
 from mjtvm.physics.motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from mjtvm.physics.simulate import SimSettings, inertial_demand, rollout
@@ -249,8 +250,9 @@ def dynamic_row(
     Returns
     -------
     dict
-        ``alpha_dyn``, ``ratio_dyn``, ``dyn_joint``, ``dyn_term``, ``dyn_demand``, ``dyn_lps``
-        and, when alpha_dyn > 0, ``pass_check_dyn`` and ``check_dyn_reason``.
+        ``alpha_dyn``, ``ratio_dyn``, ``dyn_joint``, ``dyn_term``, ``dyn_demand``, ``dyn_lps``,
+        when alpha_dyn > 0 ``pass_check_dyn`` and ``check_dyn_reason``, and the second drive's
+        ``alpha_sim_ff``, ``ratio_dyn_ff`` and ``ff_verdict`` (`_feedforward_columns()`).
     """
     st = settings or SimSettings()  # the demand along the span the rollout checks
     dyn = dynamic_pair(
@@ -291,7 +293,28 @@ def dynamic_row(
             object_body=ob,
         )
         out.update(pass_check_dyn=chk.passed, check_dyn_reason=chk.reason)
+    out.update(_feedforward_columns(model, qpos, state, l, alpha, a, settings, ob))
     return out
+
+
+def _feedforward_columns(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    state: GraspState,
+    l: int,
+    alpha: float,
+    a_dyn: float,
+    settings: SimSettings | None,
+    ob: str,
+) -> dict[str, Any]:
+    """``alpha_sim_ff``, ``ratio_dyn_ff`` and ``ff_verdict``: alpha_sim under the second drive
+    ([`alpha_sim_ff()`][mjtvm.physics.feedforward.alpha_sim_ff]), nan with the reason where it
+    has none (alpha_dyn = 0, or a transmission)."""
+    if a_dyn <= 0.0 or state.transmission is not None:
+        why = "alpha_dyn = 0" if a_dyn <= 0.0 else "not available with a transmission (actuator forces)"
+        return {"alpha_sim_ff": math.nan, "ratio_dyn_ff": math.nan, "ff_verdict": why}
+    a_ff, b, fail = alpha_sim_ff(model, qpos, state, 0, l, alpha, a_dyn, settings=settings, object_body=ob)
+    return {"alpha_sim_ff": a_ff, "ratio_dyn_ff": a_ff / a_dyn, "ff_verdict": verdict(b, fail)}
 
 
 def _limit_names(state: GraspState) -> tuple[str, ...]:
