@@ -13,7 +13,7 @@ or rebuilds the hull of every point with Qhull (`hull_of()`).
 Qhull's own incremental mode is not used: on nearly degenerate input (facets wider than its
 precision allows, ``qh_ERRwide``) ``add_points`` ends the process with exit code 7 instead of
 raising, which a batch over thousands of grasps meets (a Shadow grasp of ``mjtvm rank``'s mesh
-dataset did). Here a degenerate insertion raises `Degenerate` and the caller rebuilds with Qhull.
+dataset did). Here a degenerate insertion raises `_Degenerate` and the caller rebuilds with Qhull.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from mjtvm.errors import SolverError
 
-__all__ = ["Degenerate", "GrowingHull", "hull_of"]
+__all__ = ["GrowingHull", "hull_of"]
 
 # Qhull's round-off allowance for the unmerged hull's check (`hull_of()`), relative to the
 # largest point: the facets of a hull built without merging must hold every point within it.
@@ -33,7 +33,7 @@ _UNMERGED_REL_TOL = 1e-10
 # to the largest point; a point within it of a hyperplane leaves the facet in place.
 _VISIBLE_REL_TOL = 1e-12
 # A new facet's normal, found with unit length along a nearby normal, longer than 1 / this:
-# the facet is nearly flat (or turned away from that normal) and the insertion `Degenerate`.
+# the facet is nearly flat (or turned away from that normal) and the insertion `_Degenerate`.
 _FLAT_REL_TOL = 1e-6
 
 
@@ -44,7 +44,7 @@ def _dropping_one(n: int) -> NDArray[np.int64]:
 
 def _keys(rows: NDArray[np.int64], base: int) -> NDArray[np.int64]:
     """``(r,)`` one integer per row of point indices below ``base``, equal exactly when the rows
-    are: the rows as digits in ``base`` (one argsort instead of a lexsort, 5x faster), or the
+    are: the rows as digits in ``base`` (one argsort instead of a lexsort, 2x faster), or the
     rows' lexicographic rank where the digits would not fit in 63 bits."""
     if rows.shape[1] * np.log2(max(base, 2)) >= 62:
         _, rank = np.unique(rows, axis=0, return_inverse=True)
@@ -55,7 +55,7 @@ def _keys(rows: NDArray[np.int64], base: int) -> NDArray[np.int64]:
     return key
 
 
-class Degenerate(Exception):
+class _Degenerate(Exception):
     """An insertion met a nearly flat facet or an unmatched ridge: rebuild with Qhull."""
 
 
@@ -207,13 +207,13 @@ class GrowingHull:
 
     def add(self, new: NDArray[np.float64]) -> None:
         """Insert the rows of ``new`` one by one; rebuild with Qhull when an insertion is
-        `Degenerate`."""
+        `_Degenerate`."""
         for p in np.asarray(new, dtype=float):
             self.points = np.vstack([self.points, p])
             self._size = max(self._size, float(np.max(np.abs(p))))
             try:
                 self._insert(len(self.points) - 1)
-            except Degenerate:
+            except _Degenerate:
                 self._rebuild()
 
     def _insert(self, idx: int) -> None:
@@ -221,7 +221,7 @@ class GrowingHull:
         their horizon ridges."""
         d = self.points.shape[1]
         if d < 3:
-            raise Degenerate("insertion needs D >= 3")
+            raise _Degenerate("insertion needs D >= 3")
         if 2 * int(self._alive[: self._n].sum()) < self._n:
             self._compact()
         p, n = self.points[idx], self._n
@@ -233,7 +233,7 @@ class GrowingHull:
         across = nbr[seen]  # (v, D)
         fv, slot = np.nonzero(~visible[across])  # horizon: a visible facet's ridge to a hidden one
         if not len(fv):
-            raise Degenerate("every facet visible")
+            raise _Degenerate("every facet visible")
         f, g = seen[fv], across[fv, slot]
         keep_cols = np.arange(d)[None, :] != slot[:, None]
         ridge = simp[f][keep_cols].reshape(len(f), d - 1)  # (h, D - 1)
@@ -245,7 +245,7 @@ class GrowingHull:
         # The hidden facet's slot that pointed at the visible one now points at the new facet.
         g_slot = np.argmax(nbr[g] == f[:, None], axis=1)
         if not np.all(nbr[g, g_slot] == f):
-            raise Degenerate("a horizon ridge without its facet")
+            raise _Degenerate("a horizon ridge without its facet")
         # New facets meet across the ridges through the new point: the D - 2 ridge vertices
         # left after dropping one, shared by exactly two horizon ridges.
         sub = np.sort(ridge, axis=1)
@@ -256,7 +256,7 @@ class GrowingHull:
         order = np.argsort(_keys(faces, len(self.points)), kind="stable")
         paired = faces[order]
         if len(paired) % 2 or not np.all(paired[0::2] == paired[1::2]):
-            raise Degenerate("a ridge through the new point not shared by two facets")
+            raise _Degenerate("a ridge through the new point not shared by two facets")
         a, b = order[0::2], order[1::2]
         new_nbr[owner[a], own_slot[a]] = new_ids[owner[b]]
         new_nbr[owner[b], own_slot[b]] = new_ids[owner[a]]
@@ -276,7 +276,7 @@ class GrowingHull:
         Each normal ``n`` solves ``E n = 0`` (``E`` the simplex's D - 1 edge vectors) with
         ``near . n = 1``, ``near`` a unit vector close to it (the normal of the visible facet
         it replaces): one LU per facet, a third of an SVD's time. A simplex that is nearly
-        flat, or whose normal is nearly orthogonal to ``near``, is `Degenerate`."""
+        flat, or whose normal is nearly orthogonal to ``near``, is `_Degenerate`."""
         pts = self.points[simp]  # (h, D, D)
         h, d = len(simp), pts.shape[2]
         m = np.empty((h, d, d))
@@ -287,11 +287,11 @@ class GrowingHull:
         try:
             normal = np.linalg.solve(m, rhs)[:, :, 0]
         except np.linalg.LinAlgError as e:
-            raise Degenerate("a flat new facet") from e
+            raise _Degenerate("a flat new facet") from e
         length = np.sqrt(np.einsum("hd,hd->h", normal, normal))
         # |n| >= 1 from near . n = 1; past 1e6 the facet is nearly flat or turned away.
         if not np.all(np.isfinite(length)) or float(length.max()) > 1.0 / _FLAT_REL_TOL:
-            raise Degenerate("a nearly flat new facet")
+            raise _Degenerate("a nearly flat new facet")
         normal /= length[:, None]
         offset = -np.einsum("hd,hd->h", normal, pts[:, -1, :])
         sign = np.where(normal @ self._inside + offset > 0.0, -1.0, 1.0)
