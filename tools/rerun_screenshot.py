@@ -8,8 +8,11 @@ Needs a display and a graphics adapter; without a GPU, Debian's ``xvfb`` and Mes
     xvfb-run -a -s "-screen 0 1920x1200x24" python tools/rerun_screenshot.py \
         results/lift.rrd 25 docs/rerun_viewer.png
     mjtvm show case2 --rrd results/grasp.rrd
-    xvfb-run -a -s "-screen 0 1920x1200x24" python tools/rerun_screenshot.py \
+    xvfb-run -a -s "-screen 0 3400x1300x24" python tools/rerun_screenshot.py \
         results/grasp.rrd - docs/rerun_grasp.png
+
+(a screen wider than twice the window keeps Xvfb's pointer, at the screen's centre, off the
+viewer: no hover tooltip in the picture).
 
 The viewer (``rerun.experimental.ViewerClient``, rerun 0.41) opens the file with its
 blueprint, the time cursor is set to ``state`` = STATE (paused; ``-``: a static recording, no
