@@ -13,8 +13,16 @@ from typing import TYPE_CHECKING, Any
 from mjtvm.cli.lift import check_file_folder
 from mjtvm.cli.options import Subparsers, command, computed_default
 from mjtvm.cli.output import EXIT_OK, emit, warn, wrote
-from mjtvm.cli.values import number, output_file, source
-from mjtvm.cli.vocabulary import GRASP_HELP, grasp_option, hand_option, indent_option, one_grasp, rrd_option
+from mjtvm.cli.values import number, source
+from mjtvm.cli.vocabulary import (
+    GRASP_HELP,
+    grasp_option,
+    hand_option,
+    indent_option,
+    one_grasp,
+    png_option,
+    rrd_option,
+)
 from mjtvm.errors import ModelError
 from mjtvm.formats import atomic_write
 
@@ -64,15 +72,7 @@ def add_show(sub: Subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print the report as JSON instead of a table")
     indent_option(p)
     rrd_option(p)
-    png = p.add_argument(
-        "--png",
-        type=output_file,
-        default=None,
-        metavar="FILE",
-        help="write a picture by MuJoCo's renderer: three views around the object with the contact "
-        "points (headless: `MUJOCO_GL=egl`, set when unset)",
-    )
-    computed_default(png, "none")
+    png_option(p)
     p.set_defaults(func=_cmd_show)
 
 

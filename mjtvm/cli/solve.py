@@ -18,6 +18,7 @@ from mjtvm.cli.output import (
     one_line,
     warn,
     warn_uncertified,
+    wrote,
 )
 from mjtvm.cli.show import warn_contacts
 from mjtvm.cli.values import fraction, memory_size, source
@@ -31,6 +32,7 @@ from mjtvm.cli.vocabulary import (
     mg_option,
     mu_option,
     one_grasp,
+    png_option,
     quiet_option,
     time_limit_option,
     with_limit_horizon,
@@ -99,6 +101,7 @@ def add_solve(sub: Subparsers) -> None:
     limit_horizon_option(p)
     indent_option(p)
     quiet_option(p)
+    png_option(p)
     p.set_defaults(func=_cmd_solve)
 
 
@@ -193,7 +196,29 @@ def _with_margin(state: GraspState, friction_margin: float | None) -> GraspState
     return state if friction_margin is None else state.with_(friction_margin=friction_margin)
 
 
+def _check_png(path: str | None) -> None:
+    """Check, before any work, that ``--png``'s folder can be written."""
+    if path is not None:
+        from mjtvm.formats.files import check_output_dir
+
+        check_output_dir(Path(path).parent, option="--png")
+
+
+def _write_png(path: str, data: bytes) -> None:
+    """Write ``--png``'s picture; the ``wrote`` line on stderr (stdout: the JSON document)."""
+    from mjtvm.formats import atomic_write
+
+    atomic_write(path, data, option="--png")
+    wrote(path, stderr=True)
+
+
+def _source_name(source: str | None, default: str) -> str:
+    """The name of a state or grasp in a picture's title: a file's stem or a shipped name."""
+    return "standard input" if source == "-" else Path(source or default).stem
+
+
 def _cmd_solve(args: argparse.Namespace) -> int:
+    _check_png(args.png)
     state = with_limit_horizon(
         load_source(
             args.state,
@@ -207,7 +232,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         args.limit_horizon,
     )
     result = tvmmp(state, solver=args.solver, box=args.box, witnesses=not args.no_witnesses, diagnose=True)
-    emit(json.dumps(result.to_dict(witnesses=not args.no_witnesses), indent=args.indent))
+    document = result.to_dict(witnesses=not args.no_witnesses)
+    emit(json.dumps(document, indent=args.indent))
+    if args.png is not None:
+        from mjtvm.jobs.result_figures import solve_png  # matplotlib: only with --png
+
+        title = f"{_source_name(args.state, example_path())}: Problem 2"
+        figure = solve_png(document, state.operation_ranges, title, actuators=state.transmission is not None)
+        _write_png(args.png, figure)
     if args.quiet:
         return EXIT_OK
     warn_uncertified(result)
@@ -305,6 +337,7 @@ def add_tvms(sub: Subparsers) -> None:
     )
     indent_option(p)
     quiet_option(p)
+    png_option(p)
     refused_option(
         p,
         "--limit-horizon",
@@ -318,6 +351,7 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
 
     if args.grasp is not None and args.state is not None:
         raise OptionError("--grasp", "give STATE or --grasp, not both")
+    _check_png(args.png)
     state = load_source(args.grasp or args.state, hand=args.hand, warnings=not args.quiet)
     if args.no_rvds:
         state = state.with_(rvds=None)
@@ -332,5 +366,11 @@ def _cmd_tvms(args: argparse.Namespace) -> int:
             progress=progress,
             confidence=args.confidence,
         )
-    emit(json.dumps(result.to_dict(), indent=args.indent))
+    document = result.to_dict()
+    emit(json.dumps(document, indent=args.indent))
+    if args.png is not None:
+        from mjtvm.jobs.result_figures import tvms_png  # matplotlib: only with --png
+
+        title = _source_name(args.grasp or args.state, "STATE")
+        _write_png(args.png, tvms_png(document, title))
     return EXIT_OK

@@ -344,6 +344,8 @@ def output_file(text: str) -> str:
     path = _path(text, "a file name")
     if _is_dir(path, "a file name"):
         raise argparse.ArgumentTypeError(f"expected a file name, got the folder {shown(text)}")
+    if text.endswith(("/", os.sep)):  # a folder's name, existing or not (Path() drops the slash)
+        raise argparse.ArgumentTypeError(f"expected a file name, got the folder name {shown(text)}")
     return text
 
 

@@ -48,6 +48,7 @@ __all__ = [
     "one_grasp",
     "out_options",
     "parallel_options",
+    "png_option",
     "quiet_option",
     "reading_option",
     "resume_option",
@@ -320,6 +321,22 @@ def rrd_option(p: argparse.ArgumentParser) -> None:
         "command computes: `replay`: the lift (scene, contacts, velocity polytopes, TVMMP, joint "
         "operation points); `show`: the grasp (geoms, contact points, normals, friction cones); "
         "`verify`: the results",
+    )
+    computed_default(action, "none")
+
+
+def png_option(p: argparse.ArgumentParser) -> None:
+    """``--png FILE``: a picture of what the command computes (``show``, ``solve``, ``tvms``)."""
+    action = p.add_argument(
+        "--png",
+        type=output_file,
+        default=None,
+        metavar="FILE",
+        help="also write a PNG picture of what the command computes (docs/gallery.md): `show`: three "
+        "views around the object with the contact points, by MuJoCo's renderer (headless: "
+        "`MUJOCO_GL=egl`, set when unset); `solve`: every alpha_kl (m/s per unit of RVDS vertex) and "
+        "the limiting pair's witness, each joint's (|tau| in N m, |qd| in rad/s) in its operation "
+        "range; `tvms`: the TVMS's vertices projected on three planes (m/s; rad/s), with their hulls",
     )
     computed_default(action, "none")
 

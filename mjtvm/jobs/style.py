@@ -1,6 +1,5 @@
 r"""The one plotting style of every figure mjtvm draws (``show --png``, the replay's Fig. 8 / 9,
-``verify.png``, ``gears.png``, the rank plots) and of the gallery's pictures of ``solve`` and
-``tvms`` results (``tools/gallery.py``).
+``verify.png``, ``gears.png``, the rank plots, ``solve --png`` and ``tvms --png``).
 
 The rules, checked for every figure by ``tests/jobs/test_figures.py``:
 
@@ -64,10 +63,13 @@ def finish(
     title: str,
     notes: Sequence[str] = (),
     grid: bool = True,
+    key: bool = True,
+    also: Sequence[Any] = (),
 ) -> None:
     """Label ``ax`` (``xlabel``, ``ylabel`` with their units, ``title``: the grasp's name first)
     and put its legend and the ``notes`` in one key below the axes, outside the data (a note
-    is a line of the key without a symbol)."""
+    is a line of the key without a symbol). A figure of several axes has one key: ``also``,
+    the other axes whose legend entries it holds; ``key`` false: none (only the labels)."""
     from matplotlib.lines import Line2D
 
     ax.set_xlabel(xlabel, fontsize=FONT["label"])
@@ -75,7 +77,13 @@ def finish(
     ax.set_title(title, fontsize=FONT["title"])
     if grid:
         ax.grid(alpha=0.3)
-    handles, labels = ax.get_legend_handles_labels()
+    if not key:
+        return
+    handles, labels = [], []
+    for each in (ax, *also):
+        h, lab = each.get_legend_handles_labels()
+        handles += h
+        labels += lab
     handles += [Line2D([], [], linestyle="none") for _ in notes]
     labels += list(notes)
     if handles:

@@ -127,6 +127,8 @@ def test_show_writes_a_picture_headless(tmp_path: Path) -> None:
         (["show", "x.toml"], "error: x.toml: cannot read the grasp file: No such file or directory"),
         (["show"], "error: GRASP: give a grasp file or a shipped grasp name (e.g. case2)"),
         (["show", "case2", "--within", "-1"], "error: --within: expected"),
+        (["show", "case2", "--png", "missing/"], "error: --png: expected a file name, got the folder name"),
+        (["show", "case2", "--rrd", "missing/"], "error: --rrd: expected a file name, got the folder name"),
     ],
 )
 def test_show_bad_input_is_one_line_exit_2(words: list[str], message: str) -> None:

@@ -241,29 +241,23 @@ def _cli(*words: str) -> Callable[[Path], None]:
     return run
 
 
-def _gallery(command: str) -> Callable[[Path], Any]:
-    """The picture ``tools/gallery.py`` draws from the JSON of ``mjtvm solve`` / ``mjtvm tvms``."""
+def _empty_tvms(_: Path) -> Any:
+    from mjtvm.jobs.result_figures import tvms_png
+    from tests.jobs.test_result_figures import EMPTY_TVMS
 
-    def run(_: Path) -> Any:
-        import contextlib
-        import io
-        import json
-
-        from tests.support.tools import tool_module
-
-        gallery = tool_module("gallery")
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
-            assert main([command, "case2", "--quiet"]) == 0
-        return getattr(gallery, f"{command}_png")(json.loads(buf.getvalue()), "case2")
-
-    return run
+    return tvms_png(EMPTY_TVMS, "case2, empty")
 
 
 FIGURES: dict[str, tuple[int, Callable[[Path], Any]]] = {
     "show --png": (1, _cli("show", "case2", "--png", "{tmp}/show.png")),
-    "solve's witness (tools/gallery.py)": (1, _gallery("solve")),
-    "tvms's polytope (tools/gallery.py)": (1, _gallery("tvms")),
+    "solve --png": (1, _cli("solve", "case2", "--quiet", "--png", "{tmp}/solve.png")),
+    "solve --png, no solution": (1, _cli("solve", "case2", "--mg", "100", "--quiet", "--png", "{tmp}/s.png")),
+    "solve --png, a coupled hand": (
+        1,
+        _cli("solve", "shadow_hand_coupled-sphere", "--quiet", "--png", "{tmp}/solve.png"),
+    ),
+    "tvms --png": (1, _cli("tvms", "case2", "--quiet", "--png", "{tmp}/tvms.png")),
+    "tvms --png, an empty TVMS": (1, _empty_tvms),
     "replay: fig8, fig9a, fig9b": (
         3,
         _cli("replay", "--states", "4", "--sweeps", "--out", "{tmp}", "--quiet"),
