@@ -22,7 +22,6 @@ back in, and the rollouts' settings ([`sim_model()`][mjtvm.physics.settings.sim_
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import mujoco
@@ -206,6 +205,4 @@ def grasp_sim(
     if not moving:
         why.append("no direction with alpha > 0: no speed to test")
     out["sim_failure"] = "; ".join(" ".join(w.split()) for w in why)
-    if out["sim_hold_translation"] is not None and math.isnan(out["sim_hold_translation"]):
-        out["sim_hold_translation"] = None
     return out

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -116,3 +117,30 @@ def test_push_time_without_verify_is_refused(
     assert len(err) == 1 and "--push-time" in err[0] and "--verify" in err[0]
     assert main(["rank", GRASP, str(dataset), "--verify", "--push-time", "0", "--out", str(tmp_path)]) == 2
     assert not (tmp_path / "rank.json").exists()
+
+
+def test_the_simulated_rows_are_the_same_serially_in_a_pool_and_on_dask(
+    dataset: Path, verified: Path
+) -> None:
+    import distributed
+
+    from mjtvm.jobs.rank import rank_rows
+    from mjtvm.jobs.rank_inputs import read_datasets
+
+    entries = read_datasets(GRASP, [str(dataset)])
+    opts = {"progress": False, "refuse_penetration": True, "verify": True}
+    serial = rank_rows(GRASP, entries, **opts)
+
+    def bare(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+        return {r["id"]: {k: v for k, v in r.items() if k not in ("rank", "inputs")} for r in rows}
+
+    # --jobs 2 (the fixture's run) and one process
+    assert bare(serial) == bare(json.loads((verified / "rank.json").read_text()))
+    short = rank_rows(GRASP, entries[:2], **opts, hold_time=0.2)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        assert rank_rows(GRASP, entries[:2], **opts, hold_time=0.2, cluster=client) == short
