@@ -73,6 +73,12 @@ def test_the_rows_gain_the_simulated_columns(verified: Path) -> None:
     with (verified / "rank.csv").open(newline="") as f:
         header = next(csv.reader(f))
     assert header[-len(SIM_FIELDS) - 1 : -1] == list(SIM_FIELDS)
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(verified / "rank.parquet")
+    assert table.column_names == header
+    assert str(table.schema.field("sim_hold").type) == "bool"
+    assert str(table.schema.field("sim_speed_pass_08").type) == "double"
 
 
 def test_the_auc_files(verified: Path) -> None:
