@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mjtvm.cli.options import Subparsers, command
+from mjtvm.cli.options import Subparsers, command, computed_default
 from mjtvm.cli.output import EXIT_OK, emit, wrote
-from mjtvm.cli.values import input_path, source
+from mjtvm.cli.values import input_path, number, source
 from mjtvm.cli.vocabulary import (
     dataset_options,
     grasp_option,
@@ -30,8 +30,14 @@ _DESCRIPTION = (
     "with the grasp file's model, contact rules, ranges, REFS and RVDS; write NAME.json, NAME.csv, "
     "NAME.parquet (with pyarrow), NAME-objects.csv, NAME-objects.png, NAME-tvmmp.png and NAME-epsilon.png, and a summary on stderr. "
     "Rows are sorted and ranked by TVMMP (or --sort), infeasible then failed after. "
-    "A grasp that fails is a row with its reason; one deeper than max_penetration is evaluated and flagged."
+    "A grasp that fails is a row with its reason; one deeper than max_penetration is evaluated and flagged. "
+    "--verify also simulates every grasp in MuJoCo (DexGraspBench's hold test, the speed test at "
+    "0.8, 1.0, 1.2 alpha per direction: docs/physics-check.md#whole-datasets) and writes NAME-auc.csv, "
+    "NAME-auc.json and NAME-auc.png."
 )
+
+MAX_HOLD_SECONDS = 10.0
+"""``--push-time``: the longest push of the hold test (40,000 MuJoCo steps per direction)."""
 
 
 def add_rank(sub: Subparsers) -> None:
@@ -56,6 +62,20 @@ def add_rank(sub: Subparsers) -> None:
     resume_option(p)
     no_plots_option(p)
     rank_order_options(p)
+    p.add_argument(
+        "--verify",
+        action="store_true",
+        help="also simulate every grasp: the hold test and the speed test (the sim_* columns), and the "
+        "ROC AUC of each measure against them (NAME-auc.csv, .json, .png)",
+    )
+    push = p.add_argument(
+        "--push-time",
+        type=number(0.0, MAX_HOLD_SECONDS, strict=True, unit="seconds"),
+        default=None,
+        metavar="SECONDS",
+        help="with --verify: how long each of the hold test's six pushes lasts",
+    )
+    computed_default(push, "DexGraspBench's 2 s")
     quiet_option(p)
     p.set_defaults(func=_cmd_rank)
 
@@ -64,6 +84,8 @@ def _cmd_rank(args: argparse.Namespace) -> int:
     from mjtvm.jobs.rank_files import RankFiles, run_rank_files
 
     grasp, datasets = _grasp_and_datasets(args.grasp_file, args.grasp, args.datasets)
+    if args.push_time is not None and not args.verify:
+        raise OptionError("--push-time", "is the length of --verify's hold test: give --verify too")
     run = RankFiles(
         grasp=grasp,
         datasets=datasets,
@@ -81,6 +103,8 @@ def _cmd_rank(args: argparse.Namespace) -> int:
         refuse_penetration=args.refuse_penetration,
         measures=args.measures,
         sort=args.sort,
+        verify=args.verify,
+        hold_time=args.push_time,
     )
     for path in run_rank_files(run, emit=emit):
         wrote(path)

@@ -114,13 +114,18 @@ def rank_row(
     limit_horizon: float | None = None,
     refuse_penetration: bool = False,
     measures: str = "classic",
+    verify: bool = False,
+    hold_time: float | None = None,
 ) -> dict[str, Any]:
     r"""The row of one grasp: evaluated, or failed with its reason (Problem 2 with the travel
     horizon ``limit_horizon`` of the joint limits, m; ``None``: the grasp file's).
 
     A contact deeper than the grasp file's ``max_penetration`` is evaluated and flagged
     (``penetration_exceeded``), or with ``refuse_penetration`` a failure ``penetration``.
-    ``measures``: one of [`MEASURES`][mjtvm.jobs.rank.MEASURES].
+    ``measures``: one of [`MEASURES`][mjtvm.jobs.rank.MEASURES]. ``verify``: also the
+    simulated ``sim_*`` columns ([`sim_columns()`][mjtvm.jobs.rank_sim.sim_columns]; a failed
+    grasp's empty, ``sim_failure`` naming its failure), each push of the hold test lasting
+    ``hold_time`` s (``None``: the protocol's 2 s).
 
     Returns
     -------
@@ -151,16 +156,19 @@ def rank_row(
             )
         state = with_limit_horizon(grasp.state(), limit_horizon)
         row = replace(row, contacts=len(state.contacts))
-        result = tvmmp(state, witnesses=False, diagnose=True)
+        result = tvmmp(state, witnesses=verify, diagnose=True)
     except NoContactError as e:
-        return replace(
-            row,
-            failure="no contact",
-            reason=" ".join(str(e).split()),
-            nearest_distance=e.nearest if row.nearest_distance is None else row.nearest_distance,
-        ).to_dict()
+        return _failed(
+            replace(
+                row,
+                failure="no contact",
+                reason=" ".join(str(e).split()),
+                nearest_distance=e.nearest if row.nearest_distance is None else row.nearest_distance,
+            ),
+            verify,
+        )
     except (ModelError, StateError, SolverError) as e:
-        return replace(row, failure=_classify(e), reason=" ".join(str(e).split())).to_dict()
+        return _failed(replace(row, failure=_classify(e), reason=" ".join(str(e).split())), verify)
     doc = result.to_dict(witnesses=False)
     row = replace(
         row,
@@ -181,7 +189,20 @@ def rank_row(
         except Exception as e:  # Qhull, a solver: the TVMMP stands, the measures are flagged as missing
             why = f"classic measures not computed: {type(e).__name__}: {' '.join(str(e).split())[:200]}"
             reason = why if reason is None else f"{reason}; {why}"
-    return replace(row, reason=reason).to_dict()
+    if verify:
+        from mjtvm.jobs.rank_sim import sim_columns
+
+        row = replace(row, **sim_columns(grasp, state, result, hold_time=hold_time))
+    return replace(row, reason=reason).to_dict(sim=verify)
+
+
+def _failed(row: RankRow, verify: bool) -> dict[str, Any]:
+    """A failed grasp's row; with ``verify``, its empty ``sim_*`` columns and why."""
+    if not verify:
+        return row.to_dict()
+    from mjtvm.jobs.rank_sim import not_simulated
+
+    return replace(row, **not_simulated(f"not evaluated: {row.failure}")).to_dict(sim=True)
 
 
 def _solve_chunk(
@@ -190,12 +211,20 @@ def _solve_chunk(
     limit_horizon: float | None = None,
     refuse_penetration: bool = False,
     measures: str = "classic",
+    verify: bool = False,
+    hold_time: float | None = None,
 ) -> list[dict[str, Any]]:
     """The rows of some grasps of one grasp file (runs in a worker)."""
     batch = batch_models(grasp)
     return [
         rank_row(
-            batch, e, limit_horizon=limit_horizon, refuse_penetration=refuse_penetration, measures=measures
+            batch,
+            e,
+            limit_horizon=limit_horizon,
+            refuse_penetration=refuse_penetration,
+            measures=measures,
+            verify=verify,
+            hold_time=hold_time,
         )
         for e in entries
     ]
@@ -220,6 +249,8 @@ def stream_rows(
     limit_horizon: float | None = None,
     refuse_penetration: bool = False,
     measures: str = "classic",
+    verify: bool = False,
+    hold_time: float | None = None,
 ) -> None:
     r"""Evaluate every grasp of ``entries`` ([`rank_row()`][mjtvm.jobs.rank.rank_row]) and hand
     the rows to ``on_rows`` as tasks finish (in no set order), keeping none of them: with a
@@ -236,7 +267,7 @@ def stream_rows(
         Called in this process with the rows of every finished task.
     total
         How many ``entries`` holds, for the progress bar (``None``: unknown).
-    jobs, cluster, progress, limit_horizon, refuse_penetration, measures
+    jobs, cluster, progress, limit_horizon, refuse_penetration, measures, verify, hold_time
         As [`rank_rows()`][mjtvm.jobs.rank.rank_rows].
 
     Raises
@@ -250,7 +281,7 @@ def stream_rows(
         raise ParamError("jobs", f"expected a positive number of processes, got {jobs}")
     if measures not in MEASURES:
         raise ParamError("measures", f"expected one of {', '.join(MEASURES)}, got {measures!r}")
-    opts = (limit_horizon, refuse_penetration, measures)
+    opts = (limit_horizon, refuse_penetration, measures, verify, hold_time)
     batch_models(grasp).model()  # compiled before any fork, and its errors are the command's
     if total == 0:
         return  # nothing to evaluate (all resumed): no pool, no cluster, no bar
@@ -286,6 +317,8 @@ def rank_rows(
     limit_horizon: float | None = None,
     refuse_penetration: bool = False,
     measures: str = "classic",
+    verify: bool = False,
+    hold_time: float | None = None,
 ) -> list[dict[str, Any]]:
     r"""The row of every grasp ([`rank_row()`][mjtvm.jobs.rank.rank_row]), in the order of
     ``entries``, held in memory ([`stream_rows()`][mjtvm.jobs.rank.stream_rows] keeps none:
@@ -309,7 +342,7 @@ def rank_rows(
         Called in this process with the rows of every finished task (checkpointing).
     limit_horizon
         Problem 2's travel horizon of the joint limits (m); ``None``: the grasp file's.
-    refuse_penetration, measures
+    refuse_penetration, measures, verify, hold_time
         As [`rank_row()`][mjtvm.jobs.rank.rank_row].
 
     Raises
@@ -339,6 +372,8 @@ def rank_rows(
         limit_horizon=limit_horizon,
         refuse_penetration=refuse_penetration,
         measures=measures,
+        verify=verify,
+        hold_time=hold_time,
     )
     return [table[e.id] for e in items]
 

@@ -21,10 +21,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.errors import ParamError, StateError
+from mjtvm.errors import OptionError, ParamError, StateError
 from mjtvm.jobs.figures import ALPHA_UNIT
 from mjtvm.jobs.files import csv_text, stderr
 from mjtvm.jobs.rank import MEASURES, stream_rows
+from mjtvm.jobs.rank_auc import auc_files, auc_summary
 from mjtvm.jobs.rank_index import RankIndex, RankIndexBuilder, most_common
 from mjtvm.jobs.rank_inputs import DatasetScan, inputs_digest, iter_datasets, scan_datasets
 from mjtvm.jobs.rank_log import LOG_SCHEMA, RankLog
@@ -92,6 +93,12 @@ class RankFiles:
         ``classic`` or ``none`` ([`MEASURES`][mjtvm.jobs.rank.MEASURES]).
     sort
         The sort column of the files ([`SORT_COLUMNS`][mjtvm.jobs.rank_order.SORT_COLUMNS]).
+    verify
+        Also simulate every grasp (the ``sim_*`` columns, [`mjtvm.jobs.rank_sim`][mjtvm.jobs.rank_sim])
+        and write ``NAME-auc.csv``, ``NAME-auc.json``, ``NAME-auc.png``
+        ([`mjtvm.jobs.rank_auc`][mjtvm.jobs.rank_auc]).
+    hold_time
+        s each push of the hold test lasts (``None``: the protocol's 2 s); only with ``verify``.
     """
 
     grasp: str
@@ -110,8 +117,12 @@ class RankFiles:
     refuse_penetration: bool = False
     measures: str = "classic"
     sort: str = "tvmmp"
+    verify: bool = False
+    hold_time: float | None = None
 
     def __post_init__(self) -> None:
+        if self.hold_time is not None and not self.verify:
+            raise ParamError("hold_time", "the hold test's length is an option of the simulation (verify)")
         if not self.datasets:
             raise ParamError("datasets", "expected at least one dataset file")
         if self.measures not in MEASURES:
@@ -271,6 +282,8 @@ def run_rank_files(
         com_frame=run.com_frame,
         refuse_penetration=run.refuse_penetration,
         measures=run.measures,
+        verify=run.verify,
+        hold_time=run.hold_time,
     )
     outdir = check_output_dir(run.out)
     log = RankLog(outdir / f"{run.name}.partial.jsonl", every_s=CHECKPOINT_EVERY_S)
@@ -278,7 +291,7 @@ def run_rank_files(
         done = np.zeros(len(scan), dtype=bool)
         if run.resume:
             changed = np.zeros(len(scan), dtype=bool)
-            kept = _kept_rows(log, outdir, run.name, scan, digest, done, changed)
+            kept = _kept_rows(log, outdir, run.name, scan, digest, done, changed, run.verify)
             n = log.start(kept)
             if (changed & ~done).any():
                 notice(f"resume: {int((changed & ~done).sum())} rows recomputed: inputs changed")
@@ -299,6 +312,8 @@ def run_rank_files(
                 limit_horizon=run.limit_horizon,
                 refuse_penetration=run.refuse_penetration,
                 measures=run.measures,
+                verify=run.verify,
+                hold_time=run.hold_time,
             )
         except BaseException:
             log.close()  # every finished row is in it; an empty one would only be in the way
@@ -306,10 +321,10 @@ def run_rank_files(
                 log.remove()
             raise
         log.close()
-        written, index = _write_from_log(run, log, scan, outdir)
+        written, index, auc = _write_from_log(run, log, scan, outdir)
         log.remove()
         (outdir / f"{run.name}.partial.json").unlink(missing_ok=True)  # an older version's checkpoint
-    notice(index_summary(index))
+    notice("\n".join([index_summary(index), *([auc_summary(auc)] if run.verify else [])]))
     return written
 
 
@@ -321,10 +336,13 @@ def _kept_rows(
     digest: str,
     done: NDArray[np.bool_],
     changed: NDArray[np.bool_],
+    verify: bool = False,
 ) -> Iterator[dict[str, Any]]:
     """The finished rows ``--resume`` keeps, read one at a time: from the log, an older
     version's checkpoint, the earlier ``NAME.json`` (the first whole copy of a row wins);
-    ``done`` and ``changed`` mark the rows kept and those whose inputs changed."""
+    ``done`` and ``changed`` mark the rows kept and those whose inputs changed. A row of a run
+    with ``--verify`` when this one has none, or the reverse, is refused: the rows of one set
+    have the same columns."""
     legacy = outdir / f"{name}.partial.json"
     sources: list[Iterable[dict[str, Any]]] = []
     if log.path.exists():
@@ -335,6 +353,13 @@ def _kept_rows(
         sources.append(json_list_rows(outdir / f"{name}.json"))
     for rows in sources:
         for row in rows:
+            if ("sim_hold" in row) != verify:
+                had = "with" if verify is False else "without"
+                raise OptionError(
+                    "--resume",
+                    f"the finished rows in {outdir} are of a run {had} --verify: resume with the same "
+                    "--verify, or write to another --out or --name",
+                )
             i = scan.ids.lookup(str(row["id"]))
             if i is None or done[i]:
                 continue
@@ -360,7 +385,7 @@ def _legacy_checkpoint(path: Path) -> list[dict[str, Any]]:
 
 def _write_from_log(
     run: RankFiles, log: RankLog, scan: DatasetScan, outdir: Path
-) -> tuple[list[Path], RankIndex]:
+) -> tuple[list[Path], RankIndex, list[dict[str, Any]]]:
     """Every file of the run from its log, one row at a time, in rank order."""
     from mjtvm.formats.files import write_files
 
@@ -393,4 +418,8 @@ def _write_from_log(
         if run.plots:
             for key, png in index_plots(index, order).items():
                 files[outdir / f"{run.name}-{key}.png"] = png
-        return write_files(files), index
+        auc: list[dict[str, Any]] = []
+        if run.verify:
+            more, auc = auc_files((row for _, row in log.entries()), outdir, run.name, plots=run.plots)
+            files.update(more)
+        return write_files(files), index, auc

@@ -206,10 +206,12 @@ def inputs_digest(
     com_frame: bool = False,
     refuse_penetration: bool = False,
     measures: str = "classic",
+    verify: bool = False,
+    hold_time: float | None = None,
 ) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
     the dataset files, the object files they name (``objects``: `DatasetScan.objects`), a ``limit_horizon`` other than the grasp
-    file's, ``refuse_penetration`` and ``measures``. ``--resume`` keeps a row only if its
+    file's, ``refuse_penetration``, ``measures``, and ``verify`` with its ``hold_time``. ``--resume`` keeps a row only if its
     ``inputs`` equals this (``--sort`` orders the files, not the rows: not in it)."""
     from mjtvm import __version__
 
@@ -222,6 +224,8 @@ def inputs_digest(
     if com_frame:
         h.update(b"com_frame\n")
     h.update(f"refuse_penetration {bool(refuse_penetration)}\nmeasures {measures}\n".encode())
+    if verify:  # not verified: the digest of earlier versions
+        h.update(f"verify hold_time {hold_time!r}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted(set(objects))
     files = model_files(batch.model_path) + dataset_files(datasets)

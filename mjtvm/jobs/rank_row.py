@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any
 
-__all__ = ["CLASSIC_COLUMNS", "RankRow", "csv_columns", "flat_row", "table_columns"]
+__all__ = ["CLASSIC_COLUMNS", "SIM_FIELDS", "RankRow", "csv_columns", "flat_row", "table_columns"]
 
 _PAIRS = "pairs"
 """``csv`` metadata: a K x R list, one column ``<name>_k<k>_l<l>`` per pair, after the leading columns."""
@@ -23,10 +23,16 @@ _SPLIT = "k, l"
 """``csv`` metadata: a pair ``[k, l]``, two columns ``<name>_k`` and ``<name>_l``."""
 _MEASURE = "measure"
 """``csv`` metadata: a classic measure, after the pairs' columns."""
+_SIM = "sim"
+"""``csv`` metadata: a simulated column (``--verify`` only), after the classic measures."""
 
 
 def _measure() -> Any:
     return field(default=None, metadata={"csv": _MEASURE})
+
+
+def _sim() -> Any:
+    return field(default=None, metadata={"csv": _SIM})
 
 
 @dataclass(frozen=True)
@@ -100,9 +106,31 @@ class RankRow:
     torque_scale : float or None
         m: rho, the object's bounding radius from the contacts.
 
-    The last seven are the classic measures ([`CLASSIC_COLUMNS`][mjtvm.jobs.rank_row.CLASSIC_COLUMNS];
+    sim_hold : bool or None
+        The hold test of DexGraspBench: the object stays within 5 cm and 15 deg under a push of
+        10 m/s^2 x its mass for 2 s along each of +-x, +-y, +-z
+        ([`mjtvm.physics.disturb`][mjtvm.physics.disturb]).
+    sim_hold_dirs : int or None
+        Directions held, of 6.
+    sim_hold_translation : float or None
+        m: the object's largest displacement in the hold test.
+    sim_hold_rotation : float or None
+        deg: the object's largest rotation in the hold test.
+    sim_speed_pass_08, sim_speed_pass_10, sim_speed_pass_12 : float or None
+        Fraction of the directions with alpha_l > 0 whose witness rollout at s x alpha_l passes
+        ``mjtvm verify``'s criteria, s = 0.8, 1.0, 1.2.
+    sim_speed_dirs : int or None
+        Directions with alpha_l > 0 (those tested).
+    sim_speed_success : bool or None
+        The prediction holds: every tested direction passes at 0.8 alpha_l.
+    sim_failure : str or None
+        What failed first, in words (``""`` when everything passed).
+
+    The last seven before them are the classic measures ([`CLASSIC_COLUMNS`][mjtvm.jobs.rank_row.CLASSIC_COLUMNS];
     ``None`` for a failed grasp and with ``--measures none``). Every measure is better higher
-    (``--sort`` ranks by any of them, descending).
+    (``--sort`` ranks by any of them, descending). The ``sim_*`` fields
+    ([`SIM_FIELDS`][mjtvm.jobs.rank_row.SIM_FIELDS]) are the simulation of ``--verify``
+    ([`mjtvm.physics.grasp_sim`][mjtvm.physics.grasp_sim]): in the rows of such a run only.
     """
 
     id: str
@@ -130,22 +158,40 @@ class RankRow:
     grasp_sigma_min: float | None = _measure()
     manipulability: float | None = _measure()
     torque_scale: float | None = _measure()
+    sim_hold: bool | None = _sim()
+    sim_hold_dirs: int | None = _sim()
+    sim_hold_translation: float | None = _sim()
+    sim_hold_rotation: float | None = _sim()
+    sim_speed_pass_08: float | None = _sim()
+    sim_speed_pass_10: float | None = _sim()
+    sim_speed_pass_12: float | None = _sim()
+    sim_speed_dirs: int | None = _sim()
+    sim_speed_success: bool | None = _sim()
+    sim_failure: str | None = _sim()
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, *, sim: bool = False) -> dict[str, Any]:
         """The row as ``NAME.json`` holds it.
+
+        Parameters
+        ----------
+        sim
+            With the ``sim_*`` fields (a ``--verify`` run).
 
         Returns
         -------
         dict
-            Every field, in order (the lists as they are).
+            Every field, in order (the lists as they are); the ``sim_*`` ones only with ``sim``.
         """
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        return {f.name: getattr(self, f.name) for f in fields(self) if sim or f.metadata.get("csv") != _SIM}
 
 
 CLASSIC_COLUMNS = tuple(f.name for f in fields(RankRow) if f.metadata.get("csv") == _MEASURE)
 """The classic measures a row carries ([`GraspMeasures`][mjtvm.measures.GraspMeasures]'s fields): all
 but the kinematic velocity polytope, whose support LPs cost 1-3.5 s a grasp on a 16-joint
 hand (``mjtvm.classic_measures(state)`` computes it)."""
+
+SIM_FIELDS = tuple(f.name for f in fields(RankRow) if f.metadata.get("csv") == _SIM)
+"""The simulated columns of ``--verify`` ([`grasp_sim()`][mjtvm.physics.grasp_sim.grasp_sim]'s ``SIM_COLUMNS``)."""
 
 _PAIR_FIELDS = tuple(f.name for f in fields(RankRow) if f.metadata.get("csv") == _PAIRS)
 _SPLIT_FIELDS = tuple(f.name for f in fields(RankRow) if f.metadata.get("csv") == _SPLIT)
@@ -167,7 +213,7 @@ def csv_columns() -> tuple[str, ...]:
         kind = f.metadata.get("csv")
         if kind == _SPLIT:
             out += [f"{f.name}_k", f"{f.name}_l"]
-        elif kind not in (_PAIRS, _MEASURE):
+        elif kind not in (_PAIRS, _MEASURE, _SIM):
             out.append(f.name)
     return tuple(out)
 

@@ -8,6 +8,9 @@ What the room holds:
   the inertial torques the quasi-static LP leaves out ([`mjtvm.physics.inertia`][mjtvm.physics.inertia]), and
   alpha_sim by bisection on rollouts ([`alpha_sim()`][mjtvm.physics.bisection.alpha_sim]).
 * Witnesses: the motion and forces a rollout drives ([`witness_drive()`][mjtvm.physics.witness.witness_drive]).
+* A dataset grasp's simulation (``mjtvm rank --verify``): DexGraspBench's hold test under six
+  pushes ([`disturb_test()`][mjtvm.physics.disturb.disturb_test]) and the speed test at 0.8,
+  1.0, 1.2 alpha ([`grasp_sim()`][mjtvm.physics.grasp_sim.grasp_sim]).
 * The hold test at rest ([`hold_test()`][mjtvm.physics.hold.hold_test]), the launch from rest
   ([`mjtvm.physics.launch`][mjtvm.physics.launch]) and a verdict in words per pair
   ([`mjtvm.physics.verdict`][mjtvm.physics.verdict]).

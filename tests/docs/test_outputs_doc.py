@@ -93,6 +93,8 @@ def test_every_table_is_parsed() -> None:
         "sweep.csv",
         "sweep.partial.json",
         "rank.json:row",
+        "rank.json:sim",
+        "rank-auc.csv",
         "rank.csv",
         "rank-objects.csv",
         "rank.partial.jsonl",
@@ -244,6 +246,37 @@ def test_rank_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     assert len(lines) == len(rows)
     for line in lines:
         assert_documented("rank.json:row", json.loads(line))
+
+
+def test_rank_verify_files(tmp_path: Path) -> None:
+    """``--verify``: the simulated columns after the others in every row, and the AUC table."""
+    import numpy as np
+
+    from mjtvm.jobs import rank_files
+
+    root = Path(__file__).resolve().parents[2]
+    z = np.load(root / "mjtvm" / "data" / "examples" / "shadow-sphere-dataset.npz")
+    np.savez(tmp_path / "d.npz", **{k: v[[0, 1]] for k, v in z.items()})  # infeasible, evaluated
+    run = rank_files.RankFiles(
+        grasp=str(root / "models" / "shadow_hand" / "shadow_hand_coupled-sphere.toml"),
+        datasets=(str(tmp_path / "d.npz"),),
+        out=tmp_path,
+        plots=False,
+        quiet=True,
+        verify=True,
+        hold_time=0.2,
+    )
+    rank_files.run_rank_files(run, emit=lambda _: None, notice=lambda _: None)
+    plain = set(TABLES["rank.json:row"])
+    for row in json.loads((tmp_path / "rank.json").read_text(encoding="utf-8")):
+        assert_documented("rank.json:row", [k for k in row if k in plain])
+        assert_documented("rank.json:sim", [k for k in row if k not in plain])
+    header = _header(tmp_path / "rank.csv")
+    assert_documented("rank.json:sim", [k for k in header if k in TABLES["rank.json:sim"]])
+    assert_documented("rank-auc.csv", _header(tmp_path / "rank-auc.csv"))
+    doc = json.loads((tmp_path / "rank-auc.json").read_text(encoding="utf-8"))
+    for row in doc["rows"]:
+        assert_documented("rank-auc.csv", row)
 
 
 # ------------------------------------------------------------------ mjtvm verify

@@ -21,6 +21,7 @@ from matplotlib.transforms import Bbox
 from mjtvm.cli import main
 from mjtvm.jobs import verify_report
 from mjtvm.jobs.gears import plot_gears
+from mjtvm.jobs.rank_auc import auc_plot, auc_table
 from mjtvm.jobs.rank_files import rank_plots
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -284,7 +285,27 @@ FIGURES: dict[str, tuple[int, Callable[[Path], Any]]] = {
         ),
     ),
     "rank, five objects named as DexGraspNet names them": (3, lambda _: rank_plots(_rank_rows())),
+    "rank --verify: AUC, one target without an AUC": (
+        1,
+        lambda _: auc_plot(auc_table(_sim_rows(), resamples=50)),
+    ),
 }
+
+
+def _sim_rows() -> list[dict[str, Any]]:
+    """Rows of ``rank --verify``: no grasp holds (no AUC), the speed succeeds for half."""
+    rng = np.random.default_rng(0)
+    return [
+        {
+            "tvmmp": float(t),
+            "alpha": [[float(t), float(t) + 0.01]],
+            "epsilon_l1": float(rng.random()),
+            "force_closure": bool(i % 3),
+            "sim_hold": False,
+            "sim_speed_success": bool(t > 0.5),
+        }
+        for i, t in enumerate(rng.random(12))
+    ]
 
 
 @pytest.mark.parametrize("name", list(FIGURES))

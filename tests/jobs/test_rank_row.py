@@ -9,12 +9,14 @@ from dataclasses import FrozenInstanceError, fields
 import pytest
 
 from mjtvm.jobs.files import csv_text
-from mjtvm.jobs.rank_row import CLASSIC_COLUMNS, RankRow, csv_columns, flat_row, table_columns
+from mjtvm.jobs.rank_row import CLASSIC_COLUMNS, SIM_FIELDS, RankRow, csv_columns, flat_row, table_columns
 
 
 def test_the_row_keys_and_the_csv_columns_come_from_the_fields() -> None:
     row = RankRow("a:0", "a.npz", 0, "ball", 1.0).to_dict()
-    assert list(row) == [f.name for f in fields(RankRow)]
+    assert list(row) == [f.name for f in fields(RankRow) if f.name not in SIM_FIELDS]
+    verified = RankRow("a:0", "a.npz", 0, "ball", 1.0).to_dict(sim=True)  # --verify: the sim_* last
+    assert list(verified) == [f.name for f in fields(RankRow)] == [*row, *SIM_FIELDS]
     assert csv_columns() == (
         "id", "source", "index", "object", "scale", "rank", "contacts", "penetration",
         "nearest_distance", "penetration_exceeded", "feasible", "tvmmp",

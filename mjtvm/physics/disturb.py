@@ -1,0 +1,186 @@
+r"""The hold test of DexGraspBench: the held object pushed along +-x, +-y, +-z.
+
+Protocol followed: DexGraspBench (J. Chen et al., ``github.com/JYChen18/DexGraspBench``),
+its ``fc`` setting, ``src/task/eval_func/fc_mocap.py`` (``fcMocapEval``) with the constants of
+``config/task/eval.yaml`` (``simulation_metrics``) and ``src/util/rot_util.py``
+(``np_get_delta_qpos``). For each of six directions, from a fresh reset: the hand closes on the
+object, then an external force of **10 m/s^2 x the object's mass** (``10 * direction *
+obj_mass``, 1 N on the benchmark's fixed 0.1 kg objects) is applied at the object's centre of
+mass (``xfrc_applied``) for **2 s**, checked every **0.2 s** (10 checks of 50 steps of 4 ms);
+the grasp fails at the first check where the object's origin has moved **0.05 m**
+(``trans_thre``) or turned **15 deg** (``angle_thre``) from its pose before the test, and
+succeeds when every direction holds.
+
+What differs here, and why:
+
+* **The drive**: DexGraspBench's hand is position-servoed to its ``squeeze_qpos``; here the
+  hand holds the grasp with the physics check's drive, the hand's ``<dcmotor>`` actuators at
+  speed setpoint 0 with the witness torques at alpha = 0 fed forward (the hold test at rest,
+  [`mjtvm.physics.hold`][mjtvm.physics.hold]): the forces that balance the object's weight,
+  squeezing as the LP's witness does.
+* **Gravity stays on**: the benchmark's ``fc`` setting disables gravity
+  (``mjDSBL_GRAVITY``, ``src/util/hand_util.py``); the witness torques here balance the weight
+  (the grasp's REFS), so without gravity they would push the object away. The disturbance is
+  added to the weight.
+* **The simulation**: the rollouts' model and 0.25 ms step (``SimSettings``, elliptic cones,
+  ``impratio`` 10, as the benchmark's ``_set_friction``), friction mu of the grasp file, and
+  the object's mass is the grasp's (``mg / g``), not the benchmark's fixed 0.1 kg.
+* **The start**: the rollouts' settle (30 ms at the grasp's configuration, no force) stands in
+  for the benchmark's pregrasp -> grasp -> squeeze closing; the reference pose is the object's
+  at the start, as the benchmark's ``pre_obj_qpos``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from mjtvm.errors import ParamError
+from mjtvm.physics.rig import Rig
+from mjtvm.physics.settings import SimSettings
+from mjtvm.physics.simulate import held
+from mjtvm.physics.witness import Drive
+
+__all__ = [
+    "DIRECTIONS",
+    "DISTURB_ACCEL",
+    "DISTURB_ANGLE",
+    "DISTURB_CHECK_EVERY",
+    "DISTURB_DURATION",
+    "DISTURB_TRANSLATION",
+    "DisturbResult",
+    "disturb_test",
+]
+
+_F64 = NDArray[np.float64]
+
+DISTURB_ACCEL = 10.0
+"""m/s^2: the disturbing force per kg of object (DexGraspBench ``10 * direction * obj_mass``)."""
+DISTURB_DURATION = 2.0
+"""s: how long each direction's force acts (DexGraspBench: 10 x 50 steps of 4 ms)."""
+DISTURB_CHECK_EVERY = 0.2
+"""s: the interval of the pose checks (the benchmark's early stop, every 50 steps of 4 ms)."""
+DISTURB_TRANSLATION = 0.05
+"""m: the object's origin may move less than this (``simulation_metrics.trans_thre``)."""
+DISTURB_ANGLE = 15.0
+"""deg: the object may turn less than this (``simulation_metrics.angle_thre``)."""
+DIRECTIONS = ("-x", "+x", "-y", "+y", "-z", "+z")
+"""The force directions, in the benchmark's order (world frame)."""
+
+
+@dataclass(frozen=True)
+class DisturbResult:
+    """Outcome of [`disturb_test()`][mjtvm.physics.disturb.disturb_test].
+
+    Attributes
+    ----------
+    held
+        Every direction held (the benchmark's ``succ_flag``).
+    directions
+        Per direction of `DIRECTIONS`: whether it held.
+    translation, rotation
+        Per direction, the object's largest displacement (m) and rotation (deg) at the checks.
+    force
+        N: the disturbing force's magnitude.
+    first_failure
+        The first direction that did not hold (``""`` when held).
+    """
+
+    held: bool
+    directions: tuple[bool, ...]
+    translation: tuple[float, ...]
+    rotation: tuple[float, ...]
+    force: float
+
+    @property
+    def held_count(self) -> int:
+        """How many of the six directions held."""
+        return sum(self.directions)
+
+    @property
+    def first_failure(self) -> str:
+        return next((d for d, ok in zip(DIRECTIONS, self.directions, strict=True) if not ok), "")
+
+
+def disturb_test(
+    model: mujoco.MjModel,
+    qpos: _F64,
+    drive: Drive,
+    *,
+    settings: SimSettings | None = None,
+    object_body: str = "object",
+    duration: float = DISTURB_DURATION,
+    stop_early: bool = False,
+) -> DisturbResult:
+    """The six pushes of the module's protocol on the state ``qpos`` held by ``drive``.
+
+    Parameters
+    ----------
+    model
+        From [`sim_model()`][mjtvm.physics.settings.sim_model].
+    drive
+        The witness drive at speed factor 0 (its torques hold the object; its speeds are 0).
+    duration
+        s that each force acts (default the benchmark's 2 s).
+    stop_early
+        Stop at the first direction that fails (the benchmark's early stop; the others are
+        then counted as not held).
+
+    Raises
+    ------
+    ParamError
+        ``duration`` not a positive time.
+    """
+    if not (math.isfinite(duration) and duration > 0):
+        raise ParamError("duration", f"expected a positive time (s), got {duration!r}", duration)
+    st = settings or SimSettings()
+    rig = Rig(model, drive, object_body)
+    mass = float(model.body_subtreemass[rig.ob])
+    force = DISTURB_ACCEL * mass
+    every = max(1, st.steps(DISTURB_CHECK_EVERY))
+    checks = max(1, math.ceil(st.steps(duration) / every))
+    n_settle = max(1, st.steps(st.settle))
+    ok: list[bool] = []
+    moved: list[float] = []
+    turned: list[float] = []
+    for i in range(len(DIRECTIONS)):
+        if stop_early and ok and not ok[-1]:
+            ok.append(False)
+            moved.append(math.nan)
+            turned.append(math.nan)
+            continue
+        d = held(model, qpos, rig, drive)
+        p0, r0 = d.xpos[rig.ob].copy(), d.xmat[rig.ob].reshape(3, 3).copy()
+        mujoco.mj_step(model, d, nstep=n_settle)
+        d.xfrc_applied[rig.ob, :3] = 0.0
+        d.xfrc_applied[rig.ob, i // 2] = force * (1.0 if i % 2 else -1.0)
+        worst_t = worst_r = 0.0
+        passed = True
+        for _ in range(checks):
+            mujoco.mj_step(model, d, nstep=every)
+            t, r = _pose_change(d, rig.ob, p0, r0)
+            worst_t, worst_r = max(worst_t, t), max(worst_r, r)
+            if not (t < DISTURB_TRANSLATION and r < DISTURB_ANGLE) or not np.all(np.isfinite(d.qpos)):
+                passed = False
+                break
+        ok.append(passed)
+        moved.append(worst_t)
+        turned.append(worst_r)
+    return DisturbResult(
+        held=all(ok),
+        directions=tuple(ok),
+        translation=tuple(moved),
+        rotation=tuple(turned),
+        force=force,
+    )
+
+
+def _pose_change(d: mujoco.MjData, ob: int, p0: _F64, r0: _F64) -> tuple[float, float]:
+    """The object origin's displacement (m) and rotation angle (deg) since (p0, r0)."""
+    rot = d.xmat[ob].reshape(3, 3) @ r0.T
+    cos = max(-1.0, min(1.0, 0.5 * (float(np.trace(rot)) - 1.0)))
+    return float(np.linalg.norm(d.xpos[ob] - p0)), math.degrees(math.acos(cos))
