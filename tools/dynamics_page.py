@@ -91,14 +91,18 @@ def render(report: dict[str, Any]) -> str:
     if report.get("schema") != SCHEMA:
         raise ValueError(f"not a {SCHEMA} report: schema {report.get('schema')!r}")
     share = report["core_share"]
+    if report.get("cpu_s") is None:  # several processes: their CPU time was not measured
+        cpu = f"{report['wall_s'] / 60:.1f} min wall (the workers' CPU time not measured)."
+    else:
+        cpu = (
+            f"{report['cpu_s'] / 60:.1f} min of CPU in {report['wall_s'] / 60:.1f} min wall (core share "
+            f"{share:.2f}" + ("" if share >= 0.8 else ": other jobs shared the machine") + ")."
+        )
     run = (
         f"`{report['command']}` ({report['date']}): {report['states']} states per lift, "
         + ("every state" if report["stride"] == 1 else f"every {report['stride']}-th state and the last")
         + f" checked, {report['jobs']} process{'es' if report['jobs'] > 1 else ''}; "
-        f"{report['cpu_s'] / 60:.1f} min of CPU "
-        f"in {report['wall_s'] / 60:.1f} min wall (core share {share:.2f}"
-        + ("" if share >= 0.8 else ": other jobs shared the machine")
-        + ")."
+        + cpu
     )
     lines = [BEGIN, "", run, "", table(report["results"]).rstrip("\n"), "", *_details(report["results"])]
     return "\n".join([*lines, "", END])

@@ -192,7 +192,10 @@ def validate(
                 flush=True,
             )
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
-    _clock.update(wall_s=wall, cpu_s=cpu, core_share=cpu / wall if wall > 0 else math.nan)
+    if jobs > 1:  # the workers' CPU time is not this process's: not measured, rather than low
+        _clock.update(wall_s=wall, cpu_s=None, core_share=None)
+    else:
+        _clock.update(wall_s=wall, cpu_s=cpu, core_share=cpu / wall if wall > 0 else math.nan)
     return results
 
 
