@@ -54,3 +54,24 @@ def test_a_missed_target_is_written_as_such() -> None:
 def test_render_refuses_another_schema() -> None:
     with pytest.raises(ValueError, match="validate-dynamics/1"):
         _dynamics_page().render({**_report(), "schema": "validate-dynamics/0"})
+
+
+def test_several_processes_state_that_their_cpu_was_not_measured() -> None:
+    report = {**_report(), "jobs": 2, "cpu_s": None, "core_share": None, "wall_s": 600.0}
+    text = _dynamics_page().render(report)
+    assert "2 processes; 10.0 min wall (the workers' CPU time not measured)." in text
+
+
+def test_the_second_drive_column_and_a_report_from_before_it() -> None:
+    report = _report()
+    case2 = report["results"][0]
+    text = _dynamics_page().render(report)
+    assert (
+        f"| {case2['median_ff']:.3f} ({case2['q1_ff']:.3f}-{case2['q3_ff']:.3f}); {case2['spread']:.3f} |"
+        in text
+    )
+    before = {
+        k: v for k, v in case2.items() if k not in ("median_ff", "q1_ff", "q3_ff", "spread", "ff_pairs")
+    }
+    old = _dynamics_page().render({**report, "results": [before]})
+    assert "| **1.006** (0.973-1.065) | - |" in old
