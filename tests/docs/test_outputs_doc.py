@@ -361,6 +361,15 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
 
     real_floor = floor.bench_floor
     monkeypatch.setattr(floor, "bench_floor", lambda **_: real_floor(repeats=1, warmup=0))
+    from benchmarks import rank as rank_bench
+
+    real_rank, real_jobs = rank_bench.bench_rank, rank_bench.bench_jobs
+    monkeypatch.setattr(rank_bench, "bench_jobs", lambda **_: real_jobs(copies=1))
+    monkeypatch.setattr(
+        rank_bench,
+        "bench_rank",
+        lambda **kw: real_rank(repeats=1, sizes=kw["sizes"], grasps_22=4, say=kw.get("say", print)),
+    )
     report = suite.run_suite(scale=False, progress=False, rank_sizes=(8,))
     report["notes"] = []  # added by the command (benchmarks.__main__) before writing
     report["problem1_scale"] = {}  # not run here (minutes, fresh processes); documented in prose
