@@ -22,7 +22,8 @@ A ratio alpha_sim / alpha_kl outside [`CAUSE_LOW`][mjtvm.physics.verdict.CAUSE_L
 [`CAUSE_HIGH`][mjtvm.physics.verdict.CAUSE_HIGH] carries its cause (`ratio_cause()`, the
 ``cause`` column): below, what the simulation met that the quasi-static LP does not count
 (``rotor inertia``, ``slip``, ``contact lost``, ``limit reached``, ``speed edge``,
-``twist error``, or ``not monotone`` where the rollout just above s* passes); above, ``margin``: the rollout's failure tests allow what the LP's exact
+``twist error``, or ``not monotone`` where the rollout just above s* passes; ``fails at
+rest`` when s* = 0); above, ``margin``: the rollout's failure tests allow what the LP's exact
 limits do not (a motor up to 1 % past its range's speed, the twist within 10 % and 10 deg, a
 slip within its tolerance, the friction cone outside the LP's pyramid), with the failure
 that ends it.
@@ -103,6 +104,8 @@ def ratio_cause(
         return ""
     if censored == "above":
         return "margin: nothing fails up to s = 2, the bracket's top"
+    if censored == "below":  # s* = 0: no speed to explain, the rollout fails at rest
+        return words if words.startswith("fails at rest") else f"fails at rest: {words}"
     if ratio > CAUSE_HIGH:
         return f"margin: the rollout's tolerances pass what the LP's exact limits bound; then {words}"
     if limit_reached:

@@ -56,3 +56,8 @@ def test_above_is_the_margin_of_the_rollout_tests() -> None:
 def test_a_non_monotone_pair_says_so() -> None:
     cause = ratio_cause(0.88, "passes at s* + 0.01 (pass/fail not monotone in s there)")
     assert cause_kind(cause) == "not monotone"
+
+
+def test_a_pair_failing_at_rest_is_not_blamed_on_its_speed() -> None:
+    cause = ratio_cause(0.0, "fails at rest: torque limit at joint j1", censored="below", inertia_joint="j1")
+    assert cause == "fails at rest: torque limit at joint j1" and cause_kind(cause) == "fails at rest"
