@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.errors import ModelError
+from mjtvm.errors import ModelError, SolverError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.bisection import alpha_sim, monotone_flips
 from mjtvm.physics.dynamic import dynamic_pair
@@ -309,11 +309,16 @@ def _feedforward_columns(
 ) -> dict[str, Any]:
     """``alpha_sim_ff``, ``ratio_dyn_ff`` and ``ff_verdict``: alpha_sim under the second drive
     ([`alpha_sim_ff()`][mjtvm.physics.feedforward.alpha_sim_ff]), nan with the reason where it
-    has none (alpha_dyn = 0, or a transmission)."""
+    has none (alpha_dyn = 0, a transmission, or a loaded witness the solvers did not solve)."""
     if a_dyn <= 0.0 or state.transmission is not None:
         why = "alpha_dyn = 0" if a_dyn <= 0.0 else "not available with a transmission (actuator forces)"
         return {"alpha_sim_ff": math.nan, "ratio_dyn_ff": math.nan, "ff_verdict": why}
-    a_ff, b, fail = alpha_sim_ff(model, qpos, state, 0, l, alpha, a_dyn, settings=settings, object_body=ob)
+    try:
+        a_ff, b, fail = alpha_sim_ff(
+            model, qpos, state, 0, l, alpha, a_dyn, settings=settings, object_body=ob
+        )
+    except SolverError as e:  # the loaded state's witness not solved: the row says so, the check goes on
+        return {"alpha_sim_ff": math.nan, "ratio_dyn_ff": math.nan, "ff_verdict": f"no witness: {e}"}
     return {"alpha_sim_ff": a_ff, "ratio_dyn_ff": a_ff / a_dyn, "ff_verdict": verdict(b, fail)}
 
 

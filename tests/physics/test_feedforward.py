@@ -75,3 +75,19 @@ def test_no_second_drive_without_joint_torques_or_a_dynamic_alpha() -> None:
     coupled = state.with_(transmission=Transmission(("a",), np.array([[1.0]])))
     with pytest.raises(ParamError, match=r"dynamics.*needs joint torques"):
         alpha_sim_ff(model, qpos, coupled, 0, 0, a_kl, 1.0, object_body="object")
+
+
+def test_a_witness_the_solvers_miss_is_a_row_note_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
+    import mjtvm.physics.check as check
+    from mjtvm.errors import SolverError
+
+    model, qpos, state, a_kl, _a_dyn = _pair()
+    res = tvmmp(state)
+
+    def fails(*_: object, **__: object) -> None:
+        raise SolverError("clarabel", "MaxIterations")
+
+    monkeypatch.setattr(check, "alpha_sim_ff", fails)
+    row = check.dynamic_row(model, qpos, state, 0, res, a_kl, a_kl, "central", None, "object", 0.9)
+    assert math.isnan(row["alpha_sim_ff"]) and row["ff_verdict"].startswith("no witness: ")
+    assert row["alpha_dyn"] > 0  # the rest of the dynamic columns stand
