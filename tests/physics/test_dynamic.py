@@ -26,12 +26,15 @@ L, R_TIP, HALF = 0.1, 0.005, 0.02
 I_ROTOR = 1.08e-6 * 40**2
 
 
-def model(q: float, armature: float = 1.08e-6) -> tuple[mujoco.MjModel, np.ndarray]:
+def model(
+    q: float, armature: float = 1.08e-6, *, gravity: str = "0 0 0", block_mass: float = 0.1
+) -> tuple[mujoco.MjModel, np.ndarray]:
+    """The pusher at ``q`` (module docstring); ``gravity`` and the block's mass (kg) as given."""
     tip = np.array([L * math.sin(q), 0.0, L * math.cos(q)])
     centre = tip + np.array([R_TIP + HALF, 0.0, 0.0])
     xml = f"""
 <mujoco>
-  <option timestep="0.00025" gravity="0 0 0"/>
+  <option timestep="0.00025" gravity="{gravity}"/>
   <worldbody>
     <body name="link">
       <joint name="q" type="hinge" axis="0 1 0"/>
@@ -40,7 +43,7 @@ def model(q: float, armature: float = 1.08e-6) -> tuple[mujoco.MjModel, np.ndarr
     </body>
     <body name="object" pos="{centre[0]} 0 {centre[2]}">
       <freejoint/>
-      <geom name="block" type="box" size="{HALF} {HALF} {HALF}" mass="0.1"/>
+      <geom name="block" type="box" size="{HALF} {HALF} {HALF}" mass="{block_mass}"/>
     </body>
   </worldbody>
   <actuator>

@@ -29,8 +29,10 @@ from mjtvm.physics.settings import sim_model
 from mjtvm.physics.simulate import rollout
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
+from tests.physics.test_dynamic import HALF, R_TIP, L
+from tests.physics.test_dynamic import model as pusher_model
 
-L, R_TIP, HALF, F0 = 0.1, 0.005, 0.02, 2.0
+F0 = 2.0  # N: the block's weight
 W0, TAU_S, TAU_C = 1001.120859 / 40, 0.2044130081 * 40, 0.0263 * 40  # rad/s, N m, N m (joint side)
 
 
@@ -38,28 +40,8 @@ def pusher(q: float) -> tuple[mujoco.MjModel, np.ndarray, GraspState]:
     """The simulated model (frictionless tip), its configuration and the grasp state at ``q``."""
     tip = np.array([L * math.sin(q), 0.0, L * math.cos(q)])
     centre = tip + np.array([R_TIP + HALF, 0.0, 0.0])
-    xml = f"""
-<mujoco>
-  <option timestep="0.00025" gravity="-9.81 0 0"/>
-  <worldbody>
-    <body name="link">
-      <joint name="q" type="hinge" axis="0 1 0"/>
-      <geom name="bar" type="capsule" fromto="0 0 0 0 0 {L}" size="0.002" mass="1e-6" contype="0" conaffinity="0"/>
-      <geom name="tip" type="sphere" pos="0 0 {L}" size="{R_TIP}" mass="1e-6"/>
-    </body>
-    <body name="object" pos="{centre[0]} 0 {centre[2]}">
-      <freejoint/>
-      <geom name="block" type="box" size="{HALF} {HALF} {HALF}" mass="{F0 / 9.81}"/>
-    </body>
-  </worldbody>
-  <actuator>
-    <dcmotor name="q" joint="q" gear="40" nominal="24 0.2044130081 1001.120859" saturation="0.0263 0 0"
-             armature="1.08e-6" input="vel ff" controller="0 0 0.0005 0 0 24"/>
-  </actuator>
-</mujoco>"""
-    model = sim_model(mujoco.MjModel.from_xml_string(xml), {"tip": "L"}, mu=0.0, object_body="object")
-    qpos = model.qpos0.copy()
-    qpos[0] = q
+    raw, qpos = pusher_model(q, gravity="-9.81 0 0", block_mass=F0 / 9.81)
+    model = sim_model(raw, {"tip": "L"}, mu=0.0, object_body="object")
     contact = Contact(
         "tip",
         "L",
