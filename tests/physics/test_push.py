@@ -20,7 +20,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtvm.model.contacts import Contact
 from mjtvm.model.operation_range import OperationRange
 from mjtvm.model.state import GraspState
 from mjtvm.physics.bisection import alpha_sim
@@ -29,8 +28,9 @@ from mjtvm.physics.settings import sim_model
 from mjtvm.physics.simulate import rollout
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
-from tests.physics.test_dynamic import HALF, R_TIP, L
+from tests.physics.test_dynamic import L
 from tests.physics.test_dynamic import model as pusher_model
+from tests.physics.test_dynamic import state as pusher_state
 
 F0 = 2.0  # N: the block's weight
 W0, TAU_S, TAU_C = 1001.120859 / 40, 0.2044130081 * 40, 0.0263 * 40  # rad/s, N m, N m (joint side)
@@ -38,28 +38,10 @@ W0, TAU_S, TAU_C = 1001.120859 / 40, 0.2044130081 * 40, 0.0263 * 40  # rad/s, N 
 
 def pusher(q: float) -> tuple[mujoco.MjModel, np.ndarray, GraspState]:
     """The simulated model (frictionless tip), its configuration and the grasp state at ``q``."""
-    tip = np.array([L * math.sin(q), 0.0, L * math.cos(q)])
-    centre = tip + np.array([R_TIP + HALF, 0.0, 0.0])
     raw, qpos = pusher_model(q, gravity="-9.81 0 0", block_mass=F0 / 9.81)
     model = sim_model(raw, {"tip": "L"}, mu=0.0, object_body="object")
-    contact = Contact(
-        "tip",
-        "L",
-        tip + np.array([R_TIP, 0, 0]),
-        [1.0, 0.0, 0.0],
-        [[L * math.cos(q)], [0.0], [-L * math.sin(q)]],
-    )
     motor = OperationRange([[0, 0], [TAU_C, 0], [TAU_C, W0 * (1 - TAU_C / TAU_S)], [0, W0]])
-    state = GraspState(
-        space=3,
-        object_position=centre,
-        joint_names=("q",),
-        operation_ranges=(motor,),
-        gravity_torque=[0.0],
-        contacts=(contact,),
-        refs=[[-F0, 0, 0, 0, 0, 0]],
-        rvds=[[1.0, 0, 0, 0, 0, 0]],
-    )
+    state = pusher_state(q, F0).with_(operation_ranges=(motor,))
     return model, qpos, state
 
 
