@@ -46,6 +46,12 @@ HANDS = {
         16,
         ("ff_tip", "mf_tip", "rf_tip", "th_tip"),
     ),
+    "leap": Hand(
+        MODELS / "leap_hand" / "leap_right.xml",
+        MODELS / "leap_hand" / "leap_hand-sphere.toml",
+        16,
+        ("if_tip", "mf_tip", "rf_tip", "th_tip"),
+    ),
     "gripper3": Hand(
         MODELS / "gripper3" / "gripper3.xml",
         MODELS / "gripper3" / "gripper3-box.toml",
