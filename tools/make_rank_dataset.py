@@ -132,7 +132,8 @@ def model_sphere(doc: dict, file: Path) -> ModelSphere:
         else:
             raise SystemExit(f"{file}: contacts[{i}]: select the IK target by geom or body")
     start = {j: float(data.qpos[model.joint(j).qposadr[0]]) for j in hand_joints(model, body)}
-    return ModelSphere(start, tuple(float(x) for x in data.xpos[ob]), tuple(targets))
+    x, y, z = (float(v) for v in data.xpos[ob])
+    return ModelSphere(start, (x, y, z), tuple(targets))
 
 
 def _document(rng: np.random.Generator, grasp: Path = GRASP) -> tuple[dict, float]:
