@@ -309,6 +309,25 @@ HANDS = {
         },
         extra=_allegro_extra,
     ),
+    "leap": HandSpec(
+        xml=MODELS / "leap_hand" / "leap_right.xml",
+        tips=("if_tip", "mf_tip", "rf_tip", "th_tip"),
+        object_free=(True, True, True),
+        object_start=(0.03, 0.035, 0.19),
+        posture={
+            **{
+                f"{f}_{j}": v
+                for f in ("if", "mf", "rf")
+                for j, v in (("mcp", 0.9), ("rot", 0.0), ("pip", 0.6), ("dip", 0.4))
+            },
+            "th_cmc": 1.2,
+            "th_axl": 0.5,
+            "th_mcp": 0.8,
+            "th_ipl": 0.4,
+        },
+        extra=_allegro_extra,  # the same soft terms: balanced normals, spread fingertips
+        starts=4,
+    ),
     "gripper3": HandSpec(
         xml=MODELS / "gripper3" / "gripper3.xml",
         tips=("f1_distal", "f2_distal", "fm_distal"),

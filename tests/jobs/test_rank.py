@@ -286,6 +286,53 @@ def test_generator_follows_the_five_finger_grasp_file(tmp_path: Path) -> None:
     assert all(np.shape(r["alpha"]) == (6, 6) for r in rows)
 
 
+@pytest.mark.parametrize(
+    ("grasp", "radius", "tips", "tip_radius"),
+    [  # the sphere's radius in the model; the fingertips and their radius (m)
+        ("allegro/allegro-sphere.toml", 0.035, ("ff_tip", "mf_tip", "rf_tip", "th_tip"), 0.012),
+        ("leap_hand/leap_hand-sphere.toml", 0.04, ("if_tip", "mf_tip", "rf_tip", "th_tip"), 0.011),
+    ],
+)
+def test_generator_closes_a_model_sphere_by_ik(
+    grasp: str, radius: float, tips: tuple[str, ...], tip_radius: float
+) -> None:
+    # A file whose sphere is a body of its model (keyframe configuration): each grasp's sphere
+    # is the model's scaled by obj_scale, and the IK puts every fingertip on it: the distance
+    # from the sphere's centre to the tip geom's centre segment (a point for the Allegro's
+    # spheres) is r s + the tip's radius, within the file's contact tolerance (0.1 mm).
+    import mujoco
+
+    from mjtvm.grasp.resolve.batch import BatchModels, hand_joints
+
+    path = ROOT / "models" / grasp
+    arrays = _generator().make(3, 0, 11, grasp_file=path)
+    assert arrays["grasp_qpos"].shape == (3, 7 + 16)
+    assert list(arrays["id"]) == [f"{path.stem.split('-')[0]}-sphere-{i:03d}" for i in range(3)]
+    batch = BatchModels.from_file(path)
+    for qpos, pose, scale in zip(arrays["grasp_qpos"], arrays["obj_pose"], arrays["obj_scale"], strict=True):
+        assert 0.9 <= scale <= 1.1
+        model = batch.model(None, float(scale))
+        data = mujoco.MjData(model)
+        for name, value in zip(hand_joints(model, "object"), qpos[7:], strict=True):
+            data.qpos[model.joint(name).qposadr[0]] = value
+        adr = model.joint("object").qposadr[0]
+        data.qpos[adr : adr + 7] = pose
+        mujoco.mj_kinematics(model, data)
+        assert model.geom_size[model.geom("object").id][0] == pytest.approx(radius * scale, rel=1e-12)
+        for tip in tips:
+            body = model.body(tip).id
+            geom = next(
+                g for g in range(model.ngeom) if model.geom_bodyid[g] == body and model.geom_contype[g]
+            )
+            capsule = model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CAPSULE
+            half = float(model.geom_size[geom][1]) if capsule else 0.0
+            centre, axis = data.geom_xpos[geom], data.geom_xmat[geom].reshape(3, 3)[:, 2]
+            d = pose[:3] - centre
+            t = float(np.clip(d @ axis, -half, half))  # the segment's point nearest the centre
+            gap = float(np.linalg.norm(d - t * axis)) - radius * scale - tip_radius
+            assert abs(gap) < 1e-4, (tip, gap)
+
+
 def test_qpos_layout_gives_the_rows_of_grasp_qpos(tmp_path: Path) -> None:
     # The same grasps as the model's whole qpos (N x nq: the hand's joints and the object's
     # free joint; the palm is fixed, so its pose is the model's, as in the example): the same rows.

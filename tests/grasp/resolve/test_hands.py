@@ -46,6 +46,12 @@ HANDS = {
         16,
         ("ff_tip", "mf_tip", "rf_tip", "th_tip"),
     ),
+    "leap": Hand(
+        MODELS / "leap_hand" / "leap_right.xml",
+        MODELS / "leap_hand" / "leap_hand-sphere.toml",
+        16,
+        ("if_tip", "mf_tip", "rf_tip", "th_tip"),
+    ),
     "gripper3": Hand(
         MODELS / "gripper3" / "gripper3.xml",
         MODELS / "gripper3" / "gripper3-box.toml",
@@ -230,7 +236,9 @@ def test_grasp_alphas_match_the_cvxpy_reference(hand: tuple[Hand, mujoco.MjModel
     result = mjtvm.tvmmp(state)
     alpha, _status = reference_tvmmp(state)
     np.testing.assert_allclose(np.asarray(result.alpha, dtype=float), alpha, rtol=1e-6, atol=1e-8)
-    assert result.tvmmp is not None and result.tvmmp > 0  # both grasps hold and move their object
+    assert result.tvmmp is not None and result.tvmmp > 0  # every grasp holds and moves its object
+    # Every alpha certified (the check of `mjtvm solve`'s `certified`), none flagged.
+    assert all(c for row in result.certified for c in row)
 
 
 # ---------------------------------------------------------------------- lifts of the test hands
