@@ -44,6 +44,8 @@ RUNS: dict[str, tuple[str, tuple[str, ...]]] = {
         "models/shadow_hand/shadow_hand_coupled-sphere.toml",
         ("--broken", "0", "--seed", "36", "--mesh", "6"),
     ),
+    "allegro-sphere": ("models/allegro/allegro-sphere.toml", ("--broken", "0", "--seed", "35")),
+    "leap-sphere": ("models/leap_hand/leap_hand-sphere.toml", ("--broken", "0", "--seed", "35")),
 }
 DEFAULT_RUNS = tuple(RUNS)
 
