@@ -4,11 +4,11 @@ beneath-beyond on a simplicial hull, checked against Qhull before an answer is r
 
 Rebuilding the hull with Qhull after every round is what cost: the support points of five
 fingertip pyramids in 6-D reach ~3,000 facets by 60 points, 8 ms a rebuild, 25 rebuilds a
-grasp. Inserting a point touches only the facets it sees, so a round costs a few numpy calls.
-Before an answer is read, [`GrowingHull.verify()`][mjtvm.measures.hull.GrowingHull.verify]
+grasp. Inserting a point touches only the facets it sees: a few numpy calls, or in a batch a
+compiled kernel's (`mjtvm.measures.hull_jit`). Before an answer is read, `GrowingHull.verify()`
 checks the inserted facets by the test Qhull's own unmerged hull must pass here (every point
-inside every facet's hyperplane within round-off, every facet closed up by its neighbours),
-or rebuilds the hull of every point with Qhull (`hull_of()`).
+inside every facet's hyperplane and each facet through its vertices within round-off, every
+facet closed up by its neighbours), or rebuilds the hull of every point with Qhull (`hull_of()`).
 
 Qhull's own incremental mode is not used: on nearly degenerate input (facets wider than its
 precision allows, ``qh_ERRwide``) ``add_points`` ends the process with exit code 7 instead of
