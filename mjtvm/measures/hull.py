@@ -4,11 +4,11 @@ beneath-beyond on a simplicial hull, checked against Qhull before an answer is r
 
 Rebuilding the hull with Qhull after every round is what cost: the support points of five
 fingertip pyramids in 6-D reach ~3,000 facets by 60 points, 8 ms a rebuild, 25 rebuilds a
-grasp. Inserting a point touches only the facets it sees, so a round costs a few numpy calls.
-Before an answer is read, [`GrowingHull.verify()`][mjtvm.measures.hull.GrowingHull.verify]
+grasp. Inserting a point touches only the facets it sees: a few numpy calls, or in a batch a
+compiled kernel's (`mjtvm.measures.hull_jit`). Before an answer is read, `GrowingHull.verify()`
 checks the inserted facets by the test Qhull's own unmerged hull must pass here (every point
-inside every facet's hyperplane within round-off, every facet closed up by its neighbours),
-or rebuilds the hull of every point with Qhull (`hull_of()`).
+inside every facet's hyperplane and each facet through its vertices within round-off, every
+facet closed up by its neighbours), or rebuilds the hull of every point with Qhull (`hull_of()`).
 
 Qhull's own incremental mode is not used: on nearly degenerate input (facets wider than its
 precision allows, ``qh_ERRwide``) ``add_points`` ends the process with exit code 7 instead of
@@ -18,6 +18,9 @@ dataset did). Here a degenerate insertion raises `_Degenerate` and the caller re
 
 from __future__ import annotations
 
+import sys
+from types import ModuleType
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
@@ -25,6 +28,32 @@ from scipy.spatial import ConvexHull, QhullError
 from mjtvm.errors import SolverError
 
 __all__ = ["GrowingHull", "hull_of"]
+
+
+# Hulls a process builds with the numpy insertion before it imports the compiled kernels:
+# numba's import and the cached kernels' load cost ~0.5 s, what the numpy insertion spends on
+# ~10 five-finger grasps, so a single grasp (``mjtvm measures``) never pays it and a batch
+# (``mjtvm rank``) pays it once.
+_NUMPY_HULLS = 16
+_hulls_built = [0]
+
+
+def _kernels(compiled: bool | None) -> ModuleType | None:
+    """`mjtvm.measures.hull_jit` (imported on first use), or ``None`` for the numpy insertion:
+    ``compiled`` ``None`` picks the kernels once `_NUMPY_HULLS` hulls are built (or they
+    are imported already); ``None`` too where numba does not import."""
+    if compiled is False:
+        return None
+    if compiled is None:
+        _hulls_built[0] += 1
+        if _hulls_built[0] <= _NUMPY_HULLS and "mjtvm.measures.hull_jit" not in sys.modules:
+            return None
+    try:
+        from mjtvm.measures import hull_jit
+    except ImportError:
+        return None
+    return hull_jit
+
 
 # Qhull's round-off allowance for the unmerged hull's check (`hull_of()`), relative to the
 # largest point: the facets of a hull built without merging must hold every point within it.
@@ -35,6 +64,8 @@ _VISIBLE_REL_TOL = 1e-12
 # A new facet's normal, found with unit length along a nearby normal, longer than 1 / this:
 # the facet is nearly flat (or turned away from that normal) and the insertion `_Degenerate`.
 _FLAT_REL_TOL = 1e-6
+# Facet rows held at least: the five-finger Shadow grasps' L-infinity hulls reach 2,000-8,000.
+_MIN_ROWS = 4096
 
 
 def _dropping_one(n: int) -> NDArray[np.int64]:
@@ -121,13 +152,34 @@ class GrowingHull:
     points
         ``(n, D)`` the first points, full-dimensional, ``D >= 3``; their hull is Qhull's
         (`hull_of()`).
+    compiled
+        Insert in the compiled kernels (`mjtvm.measures.hull_jit`, ``True``; a
+        [`SolverError`][mjtvm.errors.SolverError] without numba) or with numpy (``False``);
+        ``None``: numpy for a process's first `_NUMPY_HULLS` hulls, then compiled. Both give
+        the same facets to round-off, checked alike by `verify()`.
     """
 
-    def __init__(self, points: NDArray[np.float64]) -> None:
-        self.points = np.array(points, dtype=float)
-        self._size = max(float(np.max(np.abs(self.points))), 1e-300)
+    def __init__(self, points: NDArray[np.float64], *, compiled: bool | None = None) -> None:
+        first = np.array(points, dtype=float)
+        self._pts = np.zeros((2 * len(first) + 64, first.shape[1]))
+        self._pts[: len(first)] = first
+        self._npts = len(first)
+        self._size = max(float(np.max(np.abs(first))), 1e-300)
+        self._kernels = _kernels(compiled)
+        if compiled and self._kernels is None:
+            raise SolverError("numba", "the compiled hull kernels need numba, which does not import")
         self._rebuild()
-        self._inside = self.points.mean(axis=0)  # interior of the first hull: inside every later one
+        self._inside = first.mean(axis=0)  # interior of the first hull: inside every later one
+
+    @property
+    def points(self) -> NDArray[np.float64]:
+        """``(n, D)`` every point so far (a view)."""
+        return self._pts[: self._npts]
+
+    @property
+    def compiled(self) -> bool:
+        """Whether insertions run in the compiled kernels (`mjtvm.measures.hull_jit`)."""
+        return self._kernels is not None
 
     def _rebuild(self) -> None:
         hull = hull_of(self.points)
@@ -138,10 +190,10 @@ class GrowingHull:
         """Hold these facets, in arrays with room to grow: a facet keeps its row (its id)
         until `_compact()`; a removed one is marked dead (distance inf)."""
         n, d = simp.shape
-        cap = 2 * n + 64
-        self._simp = np.zeros((cap, d), dtype=np.int64)
-        self._nbr = np.zeros((cap, d), dtype=np.int64)
-        self._eq = np.zeros((cap, d + 1))
+        cap = max(2 * n + 64, _MIN_ROWS)
+        self._simp = np.empty((cap, d), dtype=np.int64)  # rows past _n are never read
+        self._nbr = np.empty((cap, d), dtype=np.int64)
+        self._eq = np.empty((cap, d + 1))
         self._alive = np.zeros(cap, dtype=bool)
         self._simp[:n], self._nbr[:n], self._eq[:n], self._alive[:n] = simp, nbr, eq, True
         self._n = n  # rows in use, dead ones included
@@ -181,23 +233,44 @@ class GrowingHull:
         """Make the facets the checked hull of every point so far.
 
         The inserted facets pass when they pass the test Qhull's unmerged hull passes
-        (`_unmerged_hull()`): every facet's hyperplane holds every point within
-        `_UNMERGED_REL_TOL` x the largest point, and every facet has its D neighbours, each
-        naming it back. Then each facet lies in a supporting hyperplane through D affinely
-        independent points, a facet hyperplane of the hull, and the closed surface they form
-        covers the hull's boundary, so every facet hyperplane of the hull is among them.
-        Otherwise the hull is Qhull's (`hull_of()`), rebuilt from every point."""
+        (`_unmerged_hull()`) and hold their own vertices: every facet's hyperplane holds
+        every point and passes through its D vertices within `_UNMERGED_REL_TOL` x the
+        largest point, and every facet has its D neighbours, each naming it back. Then each
+        facet lies in a supporting hyperplane of the hull (its distance is at least the
+        hull's inradius about the origin) and the closed surface the simplices form lies on
+        the hull's boundary, so the ray from the origin along the nearest hull facet's
+        normal meets a simplex at most the inradius away, whose hyperplane is at most that
+        far (the smallest distance is the inradius, within the tolerance). Otherwise the
+        hull is Qhull's (`hull_of()`), rebuilt from every point. Both the numpy and the
+        compiled insertion (`mjtvm.measures.hull_jit`) are checked so."""
         if self._qhull:
+            return
+        if self._kernels is not None:
+            if self._kernels.closed_and_holding(
+                self._pts,
+                self._npts,
+                self._simp,
+                self._nbr,
+                self._eq,
+                self._alive,
+                self._n,
+                _UNMERGED_REL_TOL * self._size,
+            ):
+                self._qhull = True
+            else:
+                self._rebuild()
             return
         n = self._n
         alive = self._alive[:n]
         eq, nbr = self._eq[:n][alive], self._nbr[:n][alive]
         ids = np.flatnonzero(alive)
         slack = np.einsum("fd,nd->fn", eq[:, :-1], self.points) + eq[:, -1:]
+        on = np.einsum("fd,fkd->fk", eq[:, :-1], self.points[self._simp[:n][alive]]) + eq[:, -1:]
         named_back = np.any(self._nbr[nbr] == ids[:, None, None], axis=2)
         if (
             np.all(np.isfinite(eq))
             and float(slack.max(initial=0.0)) <= _UNMERGED_REL_TOL * self._size
+            and float(np.abs(on).max(initial=0.0)) <= _UNMERGED_REL_TOL * self._size
             and np.all(self._alive[nbr])
             and np.all(named_back)
         ):
@@ -208,13 +281,91 @@ class GrowingHull:
     def add(self, new: NDArray[np.float64]) -> None:
         """Insert the rows of ``new`` one by one; rebuild with Qhull when an insertion is
         `_Degenerate`."""
-        for p in np.asarray(new, dtype=float):
-            self.points = np.vstack([self.points, p])
+        for p in np.asarray(new, dtype=float).reshape(-1, self._pts.shape[1]):
             self._size = max(self._size, float(np.max(np.abs(p))))
+            if self._kernels is not None:
+                self._insert_compiled(p)
+                continue
+            self._append(p)
             try:
-                self._insert(len(self.points) - 1)
+                self._insert(self._npts - 1)
             except _Degenerate:
                 self._rebuild()
+
+    def _append(self, p: NDArray[np.float64]) -> None:
+        if self._npts == len(self._pts):
+            self._pts = np.vstack([self._pts, np.zeros_like(self._pts)])
+        self._pts[self._npts] = p
+        self._npts += 1
+
+    def _make_room(self) -> None:
+        """After a kernel's ``FULL``: room for another point, or else for more facets (the
+        dead rows dropped when they are the most, else the arrays doubled)."""
+        if self._npts == len(self._pts):
+            self._pts = np.vstack([self._pts, np.zeros_like(self._pts)])
+        elif 2 * int(self._alive[: self._n].sum()) < self._n:
+            self._compact()
+        else:
+            self._grow(self._n + 64)
+
+    def _insert_compiled(self, p: NDArray[np.float64]) -> None:
+        k = self._kernels
+        assert k is not None
+        while True:
+            status, npts, nf = k.insert(
+                self._pts, self._npts, p, self._simp, self._nbr, self._eq, self._alive, self._n,
+                self._inside, self._size, _VISIBLE_REL_TOL, _FLAT_REL_TOL,
+            )  # fmt: skip
+            if status != k.FULL:
+                break
+            self._make_room()
+        changed = nf != self._n
+        self._npts, self._n = npts, nf
+        if status == k.DEGENERATE:
+            self._rebuild()
+        elif changed:
+            self._qhull = False
+
+    def expand(
+        self, wrenches: NDArray[np.float64], starts: NDArray[np.int64], tol: float, rounds: int
+    ) -> tuple[float, int]:
+        r"""The expanding polytope's rounds on the Minkowski sum of the sets conv(0, W_i),
+        ``W_i`` the columns ``starts[i]:starts[i + 1]`` of ``(D, n)`` ``wrenches``: insert the
+        support point along the nearest facet's normal ``u`` while it lies beyond that facet
+        by more than ``tol`` and the facet's distance is more than ``tol`` below the smallest
+        support value $h(u)$ seen, for at most ``rounds`` rounds, and leave the facets checked
+        (`verify()`).
+
+        Returns
+        -------
+        (upper, rounds)
+            The smallest ``h(u)`` seen (``inf`` when none) and the rounds run (a
+            `verify()` counts as one)."""
+        k = self._kernels
+        if k is None:
+            raise SolverError("numba", "expand() needs the compiled hull kernels")
+        w = np.ascontiguousarray(wrenches, dtype=float)
+        upper, done = np.inf, 0
+        while done < rounds:
+            status, npts, nf, size, up, ran, inserted = k.expand(
+                self._pts, self._npts, self._simp, self._nbr, self._eq, self._alive, self._n,
+                w, starts, self._inside, self._size, tol, rounds - done, _VISIBLE_REL_TOL, _FLAT_REL_TOL,
+            )  # fmt: skip
+            self._npts, self._n, self._size = npts, nf, size
+            upper, done = min(upper, up), done + ran
+            if inserted:
+                self._qhull = False
+            if status == k.FULL:
+                self._make_room()
+            elif status == k.DEGENERATE:
+                self._rebuild()
+            elif status == k.CONVERGED:
+                if self._qhull:
+                    return upper, done
+                self.verify()  # then one more look: a rebuilt hull may need more rounds
+                done += 1
+        self.verify()
+        return upper, done
 
     def _insert(self, idx: int) -> None:
         """Beneath-beyond: replace the facets point ``idx`` sees by the cone from it over

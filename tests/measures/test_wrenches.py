@@ -1,9 +1,12 @@
 """Force closure, the Ferrari-Canny epsilons and the grasp matrix against closed forms and
-independent computations (exact Minkowski sums, LP membership, sampled support functions)."""
+independent computations (exact Minkowski sums, LP membership, sampled support functions);
+the epsilons' checks with the numpy and the compiled hull insertion alike (`_both_paths()`)."""
 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 import pytest
@@ -11,7 +14,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 from mjtvm import Contact, GraspState, OperationRange, ParamError
-from mjtvm.measures import classic_measures
+from mjtvm.measures import classic_measures, hull, hull_jit
 from mjtvm.measures.wrenches import (
     closure_margin,
     default_torque_scale,
@@ -20,6 +23,19 @@ from mjtvm.measures.wrenches import (
     grasp_matrix,
     primitive_wrenches,
 )
+
+T = TypeVar("T")
+
+
+def _both_paths(fn: Callable[[], T]) -> list[T]:
+    """``fn()`` with the hull's numpy insertion, then with the compiled one (mjtvm.measures.hull_jit)."""
+    out = []
+    for kernels in (None, hull_jit):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(hull, "_kernels", lambda compiled, k=kernels: None if compiled is False else k)
+            out.append(fn())
+    return out
+
 
 BOX = OperationRange(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 10.0], [0.0, 10.0]]))
 
@@ -66,13 +82,13 @@ def test_antipodal_disk_epsilons_in_closed_form(mu: float) -> None:
     (y, z) -> (-y, -z), the face through the last three at distance m / sqrt(m^2 + 2) (L1).
     The L-infinity sum conv(0, w1, w2) + conv(0, w3, w4) is nearest the origin along
     (a, p/2, p/2) with a = m p (h = a, a^2 + p^2/2 = 1): sqrt(2) m / sqrt(1 + 2 m^2)."""
-    m = classic_measures(antipodal_disk(mu), polytope=False)
-    assert m.torque_scale == pytest.approx(0.05)
-    assert m.force_closure
-    assert m.closure_margin == pytest.approx(1.0)  # the four wrenches sum to 0
-    assert m.epsilon_l1 == pytest.approx(mu / np.sqrt(mu**2 + 2.0), rel=1e-9)
-    assert m.epsilon_linf == pytest.approx(np.sqrt(2.0) * mu / np.sqrt(1.0 + 2.0 * mu**2), rel=1e-9)
-    assert m.epsilon_linf_gap <= 1e-9
+    for m in _both_paths(lambda: classic_measures(antipodal_disk(mu), polytope=False)):
+        assert m.torque_scale == pytest.approx(0.05)
+        assert m.force_closure
+        assert m.closure_margin == pytest.approx(1.0)  # the four wrenches sum to 0
+        assert m.epsilon_l1 == pytest.approx(mu / np.sqrt(mu**2 + 2.0), rel=1e-9)
+        assert m.epsilon_linf == pytest.approx(np.sqrt(2.0) * mu / np.sqrt(1.0 + 2.0 * mu**2), rel=1e-9)
+        assert m.epsilon_linf_gap <= 1e-9
 
 
 def test_antipodal_disk_is_force_closure_iff_mu_is_positive() -> None:
@@ -129,9 +145,10 @@ def test_linf_epsilon_equals_the_exact_minkowski_sum() -> None:
     """Three frictional contacts, 4-edge pyramids: 5^3 vertex sums, hulled directly."""
     state = equator_sphere(0.4, friction_edges=4)
     groups = primitive_wrenches(state, 1.0)
-    eps, gap = epsilon_linf(groups)
-    assert eps == pytest.approx(_minkowski_epsilon(groups), rel=1e-9)
-    assert gap <= 1e-9
+    exact = _minkowski_epsilon(groups)
+    for eps, gap in _both_paths(lambda: epsilon_linf(groups)):
+        assert eps == pytest.approx(exact, rel=1e-9)
+        assert gap <= 1e-9
     # Ferrari & Canny: W_L1 inside W_Linf inside L W_L1, so eps_L1 <= eps_Linf <= L eps_L1.
     l1 = epsilon_l1(np.hstack(groups))
     assert l1 <= eps <= 3 * l1
@@ -159,12 +176,12 @@ def test_linf_epsilon_of_random_grasps_equals_the_exact_minkowski_sum(seed: int)
     directly): the growing hull's epsilon is the exact one, or 0 exactly without closure."""
     rng = np.random.default_rng(seed)
     groups = _random_contacts(rng, 3 + seed % 2, 4)
-    eps, gap = epsilon_linf(groups)
     exact = max(0.0, _minkowski_epsilon(groups))
-    if closure_margin(np.hstack(groups)) > 1e-9:
-        assert eps == pytest.approx(exact, rel=1e-9, abs=1e-12) and gap <= 1e-9
-    else:
-        assert eps == 0.0 and exact <= 1e-9
+    for eps, gap in _both_paths(lambda: epsilon_linf(groups)):
+        if closure_margin(np.hstack(groups)) > 1e-9:
+            assert eps == pytest.approx(exact, rel=1e-9, abs=1e-12) and gap <= 1e-9
+        else:
+            assert eps == 0.0 and exact <= 1e-9
 
 
 def test_l1_epsilon_by_lp_membership_and_sampled_support() -> None:
@@ -242,9 +259,12 @@ def test_a_nearly_degenerate_wrench_set_does_not_end_the_process() -> None:
     from mjtvm.measures import classic_measures
 
     state = load_state(Path(__file__).parent / "data" / "qhull-wide-shadow.json")
-    m = classic_measures(state, polytope=False)
-    assert m.force_closure and m.epsilon_linf > m.epsilon_l1 > 0.0
-    assert m.epsilon_linf_gap < 1e-12 * m.epsilon_linf + 1e-15
+    numpy_path, compiled = _both_paths(lambda: classic_measures(state, polytope=False))
+    for m in (numpy_path, compiled):
+        assert m.force_closure and m.epsilon_linf > m.epsilon_l1 > 0.0
+        assert m.epsilon_linf_gap < 1e-12 * m.epsilon_linf + 1e-15
+    assert compiled.epsilon_linf == pytest.approx(numpy_path.epsilon_linf, rel=1e-12)
+    assert compiled.epsilon_l1 == pytest.approx(numpy_path.epsilon_l1, rel=1e-12)
 
 
 def test_a_state_without_contacts_has_no_closure_and_no_crash() -> None:
