@@ -32,12 +32,27 @@ from mjtvm.errors import ModelError, ParamError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.check import contact_types
 from mjtvm.physics.disturb import DISTURB_DURATION, DisturbResult, disturb_test
-from mjtvm.physics.motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
+from mjtvm.physics.motors import (
+    actuator_motors,
+    attach_actuator_dcmotors,
+    attach_dcmotors,
+    grasp_source,
+    require_motors,
+    same_model,
+)
 from mjtvm.physics.settings import SimSettings, sim_model
 from mjtvm.physics.simulate import SettleCache, rollout
 from mjtvm.physics.witness import Drive, witness_drive
 
-__all__ = ["SIM_COLUMNS", "SPEED_FACTORS", "dataset_sim_model", "faster_drive", "grasp_sim", "speed_key"]
+__all__ = [
+    "SIM_COLUMNS",
+    "SPEED_FACTORS",
+    "dataset_sim_model",
+    "faster_drive",
+    "grasp_sim",
+    "motorized_model",
+    "speed_key",
+]
 
 SPEED_FACTORS = (0.8, 1.0, 1.2)
 """The speed factors s of the speed test: the witness driven at s x alpha_l."""
@@ -94,28 +109,54 @@ def _refuse_free_base(model: mujoco.MjModel, joints: tuple[str, ...]) -> None:
             body = int(model.body_parentid[body])
 
 
+def motorized_model(grasp: Any, source: mujoco.MjSpec | None = None) -> mujoco.MjModel:
+    """The grasp's model with the hand's DC motors attached (the first part of
+    [`dataset_sim_model()`][mjtvm.physics.grasp_sim.dataset_sim_model]), compiled.
+
+    ``source``: the ``MjSpec`` the grasp's model was compiled from (a dataset grasp's, with its
+    object file: [`BatchModels.spec()`][mjtvm.grasp.resolve.batch.BatchModels.spec]); default
+    the grasp file's (``grasp.spec()``). It depends only on the hand, the object file and the
+    posed root, not on the grasp's joint values: one per (grasp file, object) serves every grasp.
+
+    Raises
+    ------
+    ModelError
+        A joint or actuator without motor data, a hand on a free joint, or a ``source`` that
+        compiles to other bodies or geoms than ``grasp.model``'s.
+    """
+    gm = grasp.model
+    _refuse_free_base(gm, tuple(grasp.joints))
+    src = grasp_source(grasp) if source is None else source
+    if getattr(grasp, "transmission", None) is not None:
+        found = actuator_motors(grasp)
+        return same_model(grasp, attach_actuator_dcmotors(src, found)) if found else gm
+    motors = require_motors(gm, grasp.joints, getattr(grasp, "motors", {}))
+    return same_model(grasp, attach_dcmotors(src, motors)) if motors else gm
+
+
 def dataset_sim_model(
-    grasp: Any, state: GraspState, *, mu: float, mg: float, settings: SimSettings | None = None
+    grasp: Any,
+    state: GraspState,
+    *,
+    mu: float,
+    mg: float,
+    settings: SimSettings | None = None,
+    motorized: mujoco.MjModel | None = None,
 ) -> mujoco.MjModel:
     """The model a dataset grasp's rollouts run on (module docstring).
 
-    The motors are attached to the grasp file's ``MjSpec``, compiled, and the grasp's own
+    The motors are attached ([`motorized_model()`][mjtvm.physics.grasp_sim.motorized_model], or
+    ``motorized`` when already built for the grasp's hand and object), and the grasp's own
     object (its bodies' and geoms' poses, sizes and inertia: the dataset's ``obj_scale``) and
     its mocap bodies' poses (the posed base) are copied from ``grasp.model`` and ``grasp.data``.
 
     Raises
     ------
     ModelError
-        A joint or actuator without motor data, a hand on a free joint, or an object whose
-        mesh differs from the grasp file's (a dataset ``obj_path``: not simulated).
+        As `motorized_model()`, or an object whose meshes differ from the motorized model's
+        (a dataset ``obj_path`` with the grasp file's spec as the source).
     """
-    gm = grasp.model
-    _refuse_free_base(gm, tuple(grasp.joints))
-    if getattr(grasp, "transmission", None) is not None:
-        model = actuator_model(grasp)
-    else:
-        motors = require_motors(gm, grasp.joints, getattr(grasp, "motors", {}))
-        model = same_model(grasp, attach_dcmotors(grasp_source(grasp), motors)) if motors else gm
+    model = motorized_model(grasp) if motorized is None else motorized
     model = _with_grasp_geometry(model, grasp)
     return sim_model(
         model, contact_types(state), mu=mu, mg=mg, settings=settings, object_body=grasp.object_body
@@ -130,8 +171,8 @@ def _with_grasp_geometry(model: mujoco.MjModel, grasp: Any) -> mujoco.MjModel:
     if (gm.nmesh, gm.nmeshvert) != (m.nmesh, m.nmeshvert) or not np.array_equal(gm.mesh_vert, m.mesh_vert):
         raise ModelError(
             "obj_path",
-            "the grasp's object mesh differs from the grasp file's: the physics check simulates "
-            "primitive objects and the file's own meshes",
+            "the grasp's object mesh differs from the motorized model's: attach the motors to the "
+            "grasp's own MjSpec (motorized_model(source=))",
         )
     ob = int(gm.body(grasp.object_body).id)
     bodies = [b for b in range(gm.nbody) if b == ob or _inside(gm, b, ob)]
