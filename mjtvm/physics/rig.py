@@ -71,6 +71,8 @@ class Rig:
             p = np.abs(np.asarray(drive.moment))
             fl = m.dof_frictionloss[self.dofs]
             self.friction = np.array([float(np.max(fl[row > 0] / row[row > 0], initial=0.0)) for row in p])
+            # damping_share's least squares: P^T is constant, its pseudo-inverse solved once
+            self.damping_solve = np.linalg.pinv(self.moment.T)
         else:
             self.acts = np.array([_motor(m, j) for j in drive.joints], dtype=int)
             self.gear = m.actuator_gear[self.acts, 0].copy()
@@ -134,7 +136,7 @@ class Rig:
         tau = self.m.dof_damping[self.dofs] * qd
         if not np.any(tau):
             return np.zeros(len(self.acts))
-        return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
+        return np.asarray(self.damping_solve @ tau, dtype=float)  # the least-norm least squares
 
     def hold_torques(self, drive: Drive) -> _F64:
         """The feedforward that holds the state at rest (settle, hold test): the drive's torques,
@@ -236,10 +238,10 @@ class Rig:
             rhs.append(want)
         jeq = self.equality_rows(d)
         null = np.eye(len(q))
-        if len(jeq):
-            q -= np.linalg.pinv(jeq) @ (jeq @ q)
+        if len(jeq):  # q onto the null space of J_eq (pinv(J) J = V_r V_r^T), and its basis
             _u, sv, vt = np.linalg.svd(jeq)
             rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)))
+            q -= vt[:rank].T @ (vt[:rank] @ q)
             null = vt[rank:].T
         if rows and null.shape[1]:
             a = np.vstack(rows)
