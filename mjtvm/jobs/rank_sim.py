@@ -7,7 +7,7 @@ simulated (no motor data, a REFS other than the weight, a hand on a free joint) 
 evaluated gets empty columns and the reason in ``sim_failure``. With the grasp's batch and entry,
 the motors are attached to the grasp's own model (its object file, scale and posed root:
 [`BatchModels.spec()`][mjtvm.grasp.resolve.batch.BatchModels.spec]), compiled once per
-(grasp file, object file, scale, root, frame) in this process and kept for the
+(grasp file, object file, root, frame, and scale for a mesh object) in this process and kept for the
 `MOTORIZED_CACHE_SIZE` most recently used. The protocol, its constants
 and the columns: ``docs/physics-check.md``, "Whole datasets".
 """
@@ -37,11 +37,14 @@ def not_simulated(why: str) -> dict[str, Any]:
 
 def _motorized(grasp: Any, batch: Any, entry: Any) -> Any:
     """The grasp's motorized model, from the cache (compiled on a miss)."""
-    from mjtvm.physics.grasp_sim import motorized_model
+    from mjtvm.physics.grasp_sim import motorized_model, scale_free
 
     if batch is None or entry is None:
         return motorized_model(grasp)
-    key = (batch.file, entry.obj_path, float(entry.obj_scale), entry.root is not None, bool(entry.com_frame))
+    # A primitive object's scale is copied onto the model per grasp (dataset_sim_model): one
+    # model serves every scale of it; a mesh's scale is compiled into its vertices.
+    scale = None if entry.obj_path is None and scale_free(grasp) else float(entry.obj_scale)
+    key = (batch.file, entry.obj_path, scale, entry.root is not None, bool(entry.com_frame))
     if key in _MOTORIZED:
         _MOTORIZED.move_to_end(key)
     else:

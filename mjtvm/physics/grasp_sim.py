@@ -43,6 +43,7 @@ from mjtvm.physics.motors import (
 from mjtvm.physics.settings import SimSettings, sim_model
 from mjtvm.physics.simulate import SettleCache, rollout
 from mjtvm.physics.witness import Drive, witness_drive
+from mjtvm.problem2.assembly import assemble
 
 __all__ = [
     "SIM_COLUMNS",
@@ -132,6 +133,17 @@ def motorized_model(grasp: Any, source: mujoco.MjSpec | None = None) -> mujoco.M
         return same_model(grasp, attach_actuator_dcmotors(src, found)) if found else gm
     motors = require_motors(gm, grasp.joints, getattr(grasp, "motors", {}))
     return same_model(grasp, attach_dcmotors(src, motors)) if motors else gm
+
+
+def scale_free(grasp: Any) -> bool:
+    """Whether the grasp's object has no mesh: its scale is all in its bodies' and geoms' poses,
+    sizes and inertia, which [`dataset_sim_model()`][mjtvm.physics.grasp_sim.dataset_sim_model]
+    copies from the grasp, so a motorized model of the object at another scale serves it."""
+    gm = grasp.model
+    ob = int(gm.body(grasp.object_body).id)
+    inside = [b for b in range(gm.nbody) if b == ob or _inside(gm, b, ob)]
+    mesh = int(mujoco.mjtGeom.mjGEOM_MESH)
+    return not any(int(gm.geom_type[g]) == mesh for g in range(gm.ngeom) if int(gm.geom_bodyid[g]) in inside)
 
 
 def dataset_sim_model(
@@ -237,8 +249,8 @@ def grasp_sim(
     if not optimal:
         out["sim_failure"] = "no optimal pair: no witness to drive"
         return out
-    l0 = optimal[0]
-    rest = witness_drive(state, 0, l0, float(result.alpha[0, l0]), 0.0, witness="central")
+    l0, asm = optimal[0], assemble(state, horizon=True)  # one assembly for every witness
+    rest = witness_drive(state, 0, l0, float(result.alpha[0, l0]), 0.0, witness="central", assembly=asm)
     duration = DISTURB_DURATION if hold_duration is None else hold_duration
     hold: DisturbResult = disturb_test(
         model, qpos, rest, settings=st, object_body=object_body, duration=duration
@@ -260,7 +272,7 @@ def grasp_sim(
             if s > 1.0 and at_one is not None:
                 drive = faster_drive(at_one, state, l, alpha, s)
             else:
-                drive = witness_drive(state, 0, l, alpha, s, witness="central")
+                drive = witness_drive(state, 0, l, alpha, s, witness="central", assembly=asm)
             if s == 1.0:
                 at_one = drive
             # Only passed and reason are kept: the first violation decides both (exact stop).
