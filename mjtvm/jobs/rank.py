@@ -192,7 +192,7 @@ def rank_row(
     if verify:
         from mjtvm.jobs.rank_sim import sim_columns
 
-        row = replace(row, **sim_columns(grasp, state, result, hold_time=hold_time))
+        row = replace(row, **sim_columns(grasp, state, result, hold_time=hold_time, batch=batch, entry=entry))
     return replace(row, reason=reason).to_dict(sim=verify)
 
 

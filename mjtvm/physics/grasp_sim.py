@@ -22,21 +22,38 @@ back in, and the rollouts' settings ([`sim_model()`][mjtvm.physics.settings.sim_
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from mjtvm.errors import ModelError
+from mjtvm.errors import ModelError, ParamError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.check import contact_types
 from mjtvm.physics.disturb import DISTURB_DURATION, DisturbResult, disturb_test
-from mjtvm.physics.motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
+from mjtvm.physics.motors import (
+    actuator_motors,
+    attach_actuator_dcmotors,
+    attach_dcmotors,
+    grasp_source,
+    require_motors,
+    same_model,
+)
 from mjtvm.physics.settings import SimSettings, sim_model
-from mjtvm.physics.simulate import rollout
-from mjtvm.physics.witness import witness_drive
+from mjtvm.physics.simulate import SettleCache, rollout
+from mjtvm.physics.witness import Drive, witness_drive
+from mjtvm.problem2.assembly import assemble
 
-__all__ = ["SIM_COLUMNS", "SPEED_FACTORS", "dataset_sim_model", "grasp_sim", "speed_key"]
+__all__ = [
+    "SIM_COLUMNS",
+    "SPEED_FACTORS",
+    "dataset_sim_model",
+    "faster_drive",
+    "grasp_sim",
+    "motorized_model",
+    "speed_key",
+]
 
 SPEED_FACTORS = (0.8, 1.0, 1.2)
 """The speed factors s of the speed test: the witness driven at s x alpha_l."""
@@ -60,6 +77,26 @@ SIM_COLUMNS = (
 """The columns [`grasp_sim()`][mjtvm.physics.grasp_sim.grasp_sim] fills, in order."""
 
 
+def faster_drive(at_one: Drive, state: GraspState, l: int, alpha: float, s: float) -> Drive:
+    r"""The central witness drive of direction ``l`` at ``s > 1`` from the one at ``s = 1``.
+
+    Above 1, [`witness_drive()`][mjtvm.physics.witness.witness_drive] solves the same QP as at
+    1 (at $\min(s, 1)\alpha$) and scales its joint and slip speeds by ``s``: the same numbers,
+    without solving the QP again (``at_one`` is ``witness_drive(state, 0, l, alpha, 1.0)``).
+    """
+    if s <= 1.0:
+        raise ParamError("s", f"expected a speed factor above 1, got {s!r}", s)
+    if state.rvds is None:
+        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
+    slips = {g: (rate * s, hat) for g, (rate, hat) in at_one.slips.items()}
+    return replace(
+        at_one,
+        speeds=at_one.speeds * s,
+        twist=s * alpha * np.asarray(state.rvds[l], float),
+        slips=slips,
+    )
+
+
 def _refuse_free_base(model: mujoco.MjModel, joints: tuple[str, ...]) -> None:
     """A hand on a free joint falls in a rollout: refused. A mocap base is fixed (kept)."""
     for name in joints:
@@ -73,28 +110,65 @@ def _refuse_free_base(model: mujoco.MjModel, joints: tuple[str, ...]) -> None:
             body = int(model.body_parentid[body])
 
 
+def motorized_model(grasp: Any, source: mujoco.MjSpec | None = None) -> mujoco.MjModel:
+    """The grasp's model with the hand's DC motors attached (the first part of
+    [`dataset_sim_model()`][mjtvm.physics.grasp_sim.dataset_sim_model]), compiled.
+
+    ``source``: the ``MjSpec`` the grasp's model was compiled from (a dataset grasp's, with its
+    object file: [`BatchModels.spec()`][mjtvm.grasp.resolve.batch.BatchModels.spec]); default
+    the grasp file's (``grasp.spec()``). It depends only on the hand, the object file and the
+    posed root, not on the grasp's joint values: one per (grasp file, object) serves every grasp.
+
+    Raises
+    ------
+    ModelError
+        A joint or actuator without motor data, a hand on a free joint, or a ``source`` that
+        compiles to other bodies or geoms than ``grasp.model``'s.
+    """
+    gm = grasp.model
+    _refuse_free_base(gm, tuple(grasp.joints))
+    src = grasp_source(grasp) if source is None else source
+    if getattr(grasp, "transmission", None) is not None:
+        found = actuator_motors(grasp)
+        return same_model(grasp, attach_actuator_dcmotors(src, found)) if found else gm
+    motors = require_motors(gm, grasp.joints, getattr(grasp, "motors", {}))
+    return same_model(grasp, attach_dcmotors(src, motors)) if motors else gm
+
+
+def scale_free(grasp: Any) -> bool:
+    """Whether the grasp's object has no mesh: its scale is all in its bodies' and geoms' poses,
+    sizes and inertia, which [`dataset_sim_model()`][mjtvm.physics.grasp_sim.dataset_sim_model]
+    copies from the grasp, so a motorized model of the object at another scale serves it."""
+    gm = grasp.model
+    ob = int(gm.body(grasp.object_body).id)
+    inside = [b for b in range(gm.nbody) if b == ob or _inside(gm, b, ob)]
+    mesh = int(mujoco.mjtGeom.mjGEOM_MESH)
+    return not any(int(gm.geom_type[g]) == mesh for g in range(gm.ngeom) if int(gm.geom_bodyid[g]) in inside)
+
+
 def dataset_sim_model(
-    grasp: Any, state: GraspState, *, mu: float, mg: float, settings: SimSettings | None = None
+    grasp: Any,
+    state: GraspState,
+    *,
+    mu: float,
+    mg: float,
+    settings: SimSettings | None = None,
+    motorized: mujoco.MjModel | None = None,
 ) -> mujoco.MjModel:
     """The model a dataset grasp's rollouts run on (module docstring).
 
-    The motors are attached to the grasp file's ``MjSpec``, compiled, and the grasp's own
+    The motors are attached ([`motorized_model()`][mjtvm.physics.grasp_sim.motorized_model], or
+    ``motorized`` when already built for the grasp's hand and object), and the grasp's own
     object (its bodies' and geoms' poses, sizes and inertia: the dataset's ``obj_scale``) and
     its mocap bodies' poses (the posed base) are copied from ``grasp.model`` and ``grasp.data``.
 
     Raises
     ------
     ModelError
-        A joint or actuator without motor data, a hand on a free joint, or an object whose
-        mesh differs from the grasp file's (a dataset ``obj_path``: not simulated).
+        As `motorized_model()`, or an object whose meshes differ from the motorized model's
+        (a dataset ``obj_path`` with the grasp file's spec as the source).
     """
-    gm = grasp.model
-    _refuse_free_base(gm, tuple(grasp.joints))
-    if getattr(grasp, "transmission", None) is not None:
-        model = actuator_model(grasp)
-    else:
-        motors = require_motors(gm, grasp.joints, getattr(grasp, "motors", {}))
-        model = same_model(grasp, attach_dcmotors(grasp_source(grasp), motors)) if motors else gm
+    model = motorized_model(grasp) if motorized is None else motorized
     model = _with_grasp_geometry(model, grasp)
     return sim_model(
         model, contact_types(state), mu=mu, mg=mg, settings=settings, object_body=grasp.object_body
@@ -109,8 +183,8 @@ def _with_grasp_geometry(model: mujoco.MjModel, grasp: Any) -> mujoco.MjModel:
     if (gm.nmesh, gm.nmeshvert) != (m.nmesh, m.nmeshvert) or not np.array_equal(gm.mesh_vert, m.mesh_vert):
         raise ModelError(
             "obj_path",
-            "the grasp's object mesh differs from the grasp file's: the physics check simulates "
-            "primitive objects and the file's own meshes",
+            "the grasp's object mesh differs from the motorized model's: attach the motors to the "
+            "grasp's own MjSpec (motorized_model(source=))",
         )
     ob = int(gm.body(grasp.object_body).id)
     bodies = [b for b in range(gm.nbody) if b == ob or _inside(gm, b, ob)]
@@ -175,8 +249,8 @@ def grasp_sim(
     if not optimal:
         out["sim_failure"] = "no optimal pair: no witness to drive"
         return out
-    l0 = optimal[0]
-    rest = witness_drive(state, 0, l0, float(result.alpha[0, l0]), 0.0, witness="central")
+    l0, asm = optimal[0], assemble(state, horizon=True)  # one assembly for every witness
+    rest = witness_drive(state, 0, l0, float(result.alpha[0, l0]), 0.0, witness="central", assembly=asm)
     duration = DISTURB_DURATION if hold_duration is None else hold_duration
     hold: DisturbResult = disturb_test(
         model, qpos, rest, settings=st, object_body=object_body, duration=duration
@@ -192,10 +266,19 @@ def grasp_sim(
     out["sim_speed_dirs"] = len(moving)
     passes = {s: 0 for s in SPEED_FACTORS}
     for l in moving:
-        alpha = float(result.alpha[0, l])
+        alpha, settled = float(result.alpha[0, l]), SettleCache()
+        at_one: Drive | None = None  # the central witness solved at alpha_l (s = 1)
         for s in SPEED_FACTORS:
-            drive = witness_drive(state, 0, l, alpha, s, witness="central", vertex=result.witnesses[0][l])
-            r = rollout(model, qpos, drive, settings=st, object_body=object_body)
+            if s > 1.0 and at_one is not None:
+                drive = faster_drive(at_one, state, l, alpha, s)
+            else:
+                drive = witness_drive(state, 0, l, alpha, s, witness="central", assembly=asm)
+            if s == 1.0:
+                at_one = drive
+            # Only passed and reason are kept: the first violation decides both (exact stop).
+            r = rollout(
+                model, qpos, drive, settings=st, object_body=object_body, stop_early=True, settled=settled
+            )
             passes[s] += bool(r.passed)
             if not r.passed and s == SPEED_FACTORS[0]:
                 why.append(f"speed at {s:g} alpha, l = {l}: {r.reason}")

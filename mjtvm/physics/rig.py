@@ -18,9 +18,11 @@ from mjtvm.grasp.resolve.state import geom_id, model_id
 from mjtvm.physics.motors import dcmotor_of_actuator, dcmotor_of_joint
 from mjtvm.physics.witness import Drive
 
-__all__ = ["Rig", "finger_contacts", "geom_force", "twist_errors", "unit"]
+__all__ = ["Nearest", "Rig", "cross", "finger_contacts", "geom_force", "twist_errors", "unit"]
 
 _F64 = NDArray[np.float64]
+Nearest = tuple[float, int, _F64, _F64, _F64]
+"""[`Rig.nearest()`][mjtvm.physics.rig.Rig.nearest]: distance, object geom, finger point, object point, normal."""
 
 
 class Rig:
@@ -69,6 +71,8 @@ class Rig:
             p = np.abs(np.asarray(drive.moment))
             fl = m.dof_frictionloss[self.dofs]
             self.friction = np.array([float(np.max(fl[row > 0] / row[row > 0], initial=0.0)) for row in p])
+            # damping_share's least squares: P^T is constant, its pseudo-inverse solved once
+            self.damping_solve = np.linalg.pinv(self.moment.T)
         else:
             self.acts = np.array([_motor(m, j) for j in drive.joints], dtype=int)
             self.gear = m.actuator_gear[self.acts, 0].copy()
@@ -90,7 +94,7 @@ class Rig:
         self.jac2 = np.zeros((3, m.nv))
         self.fromto = np.zeros(6)
 
-    def nearest(self, d: mujoco.MjData, g: int) -> tuple[float, int, _F64, _F64, _F64]:
+    def nearest(self, d: mujoco.MjData, g: int) -> Nearest:
         """Signed distance (m) from finger geom ``g`` to the nearest object geom, that geom, the
         nearest point on the finger and on the object (world, m), and the unit normal from the
         finger into the object (``mj_geomDistance``; its segment reverses under penetration)."""
@@ -132,7 +136,7 @@ class Rig:
         tau = self.m.dof_damping[self.dofs] * qd
         if not np.any(tau):
             return np.zeros(len(self.acts))
-        return np.asarray(np.linalg.lstsq(self.moment.T, tau, rcond=None)[0], dtype=float)
+        return np.asarray(self.damping_solve @ tau, dtype=float)  # the least-norm least squares
 
     def hold_torques(self, drive: Drive) -> _F64:
         """The feedforward that holds the state at rest (settle, hold test): the drive's torques,
@@ -185,21 +189,24 @@ class Rig:
             return np.zeros((0, len(self.dofs)))
         return dense_efc_jacobian(self.m, d)[rows][:, self.dofs]
 
-    def setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
+    def setpoints(self, d: mujoco.MjData, drive: Drive, near: Sequence[Nearest] | None = None) -> _F64:
         """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5).
 
         With a transmission the correction is one least-squares solve over every finger's rows
         in the null space of the equality rows (`equality_rows()`), so the speeds keep
         ``J_eq qd = 0``; without, finger by finger (the fingers' joints are disjoint).
+        ``near``: each finger's [`nearest()`][mjtvm.physics.rig.Rig.nearest] at ``d`` when
+        already computed (by [`finger_contacts()`][mjtvm.physics.rig.finger_contacts] at the
+        same positions), else computed here.
         """
+        near = near if near is not None else [self.nearest(d, f[1]) for f in self.fingers]
         if self.coupled:
-            return self._coupled_setpoints(d, drive)
+            return self._coupled_setpoints(d, drive, near)
         q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
-        for label, g, body, cols, kind in self.fingers:
-            _dist, _og, p, _po, n = self.nearest(d, g)
+        for (label, _g, body, cols, kind), (_dist, _og, p, _po, n) in zip(self.fingers, near, strict=True):
             mujoco.mj_jac(self.m, d, self.jac, None, p, body)
             jm = self.jac[:, self.dofs[cols]]
-            want = v + np.cross(w, p - c)
+            want = v + cross(w, p - c)
             if kind == "L":
                 jn = n @ jm
                 q[cols] += jn * (n @ want - jn @ q[cols]) / max(float(jn @ jn), 1e-12)
@@ -211,15 +218,14 @@ class Rig:
                 q[cols] += np.linalg.lstsq(jm, want - jm @ q[cols], rcond=None)[0]
         return q
 
-    def _coupled_setpoints(self, d: mujoco.MjData, drive: Drive) -> _F64:
+    def _coupled_setpoints(self, d: mujoco.MjData, drive: Drive, near: Sequence[Nearest]) -> _F64:
         q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
         rows, rhs = [], []
-        for label, g, body, cols, kind in self.fingers:
-            _dist, _og, p, _po, n = self.nearest(d, g)
+        for (label, _g, body, cols, kind), (_dist, _og, p, _po, n) in zip(self.fingers, near, strict=True):
             mujoco.mj_jac(self.m, d, self.jac, None, p, body)
             jm = np.zeros((3, len(q)))
             jm[:, cols] = self.jac[:, self.dofs[cols]]
-            want = v + np.cross(w, p - c)
+            want = v + cross(w, p - c)
             if kind == "L":
                 rows.append((n @ jm)[None, :])
                 rhs.append(np.array([n @ want]))
@@ -232,10 +238,10 @@ class Rig:
             rhs.append(want)
         jeq = self.equality_rows(d)
         null = np.eye(len(q))
-        if len(jeq):
-            q -= np.linalg.pinv(jeq) @ (jeq @ q)
+        if len(jeq):  # q onto the null space of J_eq (pinv(J) J = V_r V_r^T), and its basis
             _u, sv, vt = np.linalg.svd(jeq)
             rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)))
+            q -= vt[:rank].T @ (vt[:rank] @ q)
             null = vt[rank:].T
         if rows and null.shape[1]:
             a = np.vstack(rows)
@@ -273,6 +279,13 @@ def _motor(m: mujoco.MjModel, joint: str) -> int:
     return a
 
 
+def cross(a: _F64, b: _F64) -> _F64:
+    """``a x b`` of two 3-vectors (``np.cross``'s value, without its general-axis overhead)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]], dtype=float
+    )
+
+
 def unit(x: _F64) -> _F64:
     nrm = float(np.linalg.norm(x))
     return x / nrm if nrm > 1e-12 else np.zeros_like(x)
@@ -297,14 +310,22 @@ def finger_contacts(
     ssum: dict[str, _F64],
     fsum: dict[str, _F64],
     f6: _F64,
+    near: list[Nearest] | None = None,
 ) -> list[float]:
     """Each finger's gap to the object (m, returned; [`Rig.nearest()`][mjtvm.physics.rig.Rig.nearest]), and midway between
     the nearest points the object's velocity relative to the finger's, tangential to the
     normal: integrated into ``slip`` for F-contacts, summed with the contact force into
-    ``ssum`` and ``fsum`` for the others (keys: the fingers' geom labels)."""
+    ``ssum`` and ``fsum`` for the others (keys: the fingers' geom labels). ``near``, when
+    given, is filled with each finger's [`Rig.nearest()`][mjtvm.physics.rig.Rig.nearest] (for
+    [`Rig.setpoints()`][mjtvm.physics.rig.Rig.setpoints] at the same positions)."""
     gaps = []
+    if near is not None:
+        near.clear()
     for label, g, body, _cols, kind in rig.fingers:
-        dist, _og, on_f, on_o, n = rig.nearest(d, g)
+        found = rig.nearest(d, g)
+        dist, _og, on_f, on_o, n = found
+        if near is not None:
+            near.append(found)
         gaps.append(dist)
         p = 0.5 * (on_f + on_o)  # MuJoCo's contact point: midway between the surfaces
         mujoco.mj_jac(m, d, rig.jac, None, p, rig.ob)

@@ -49,6 +49,7 @@ label (`geom_label()`), and contact points come from
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -60,12 +61,13 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError
 from mjtvm.physics.inertia import inertial_demand, inertial_feedforward
-from mjtvm.physics.rig import Rig, finger_contacts, twist_errors
+from mjtvm.physics.rig import Nearest, Rig, finger_contacts, twist_errors
 from mjtvm.physics.settings import SimSettings, sim_model
 from mjtvm.physics.witness import Drive
 
 __all__ = [
     "RolloutResult",
+    "SettleCache",
     "SimSettings",
     "held",
     "inertial_demand",
@@ -167,6 +169,44 @@ def settle(
     return d, float(np.linalg.norm(d.xpos[rig.ob] - p0))
 
 
+class SettleCache:
+    """Settled states of the rollouts of one model and ``qpos``, by drive (``rollout(settled=)``).
+
+    Step 3 depends on the model, ``qpos``, the drive's feedforward (``Rig.hold_torques``) and
+    the rig (its joints, actuators, moment rows and contacts), not on the speeds or the twist:
+    the central witness at s >= 1 has the torques of s = 1 (``witness_drive``), so those
+    rollouts share one settle. Each use gets its own copy of the settled data.
+    """
+
+    def __init__(self) -> None:
+        self._done: dict[tuple[Any, ...], tuple[Rig, mujoco.MjData, float]] = {}
+
+    @staticmethod
+    def _key(m: mujoco.MjModel, qpos: _F64, drive: Drive, object_body: str) -> tuple[Any, ...]:
+        moment = None if drive.moment is None else np.asarray(drive.moment, dtype=float).tobytes()
+        return (
+            id(m),
+            np.asarray(qpos, dtype=float).tobytes(),
+            np.asarray(drive.torques, dtype=float).tobytes(),
+            drive.joints,
+            drive.actuators,
+            moment,
+            drive.contacts,
+            object_body,
+        )
+
+    def get(
+        self, m: mujoco.MjModel, qpos: _F64, drive: Drive, st: SimSettings, object_body: str
+    ) -> tuple[Rig, mujoco.MjData, float]:
+        """The rig, a copy of the settled data and the settle drift of ``drive`` (settled on a miss)."""
+        key = (*self._key(m, qpos, drive, object_body), st)
+        if key not in self._done:
+            rig = Rig(m, drive, object_body)
+            self._done[key] = (rig, *settle(m, qpos, rig, drive, st))
+        rig, d, drift = self._done[key]
+        return rig, copy.copy(d), drift
+
+
 def _joint_ranges(m: mujoco.MjModel, joints: tuple[str, ...]) -> tuple[_F64, _F64, _F64, _F64]:
     """Of the limited ``joints`` (hinge or slide): their indices in ``joints``, ``qpos``
     addresses, and their ranges narrowed by ``jnt_margin``, where MuJoCo's limit engages."""
@@ -203,18 +243,29 @@ def rollout(
     settings: SimSettings | None = None,
     object_body: str = "object",
     record: bool = False,
+    stop_early: bool = False,
+    settled: SettleCache | None = None,
 ) -> RolloutResult:
     r"""Settle, start and run one drive from ``qpos`` (module docstring, steps 3-5).
 
     ``model`` comes from [`sim_model()`][mjtvm.physics.settings.sim_model]. ``record`` keeps per-step arrays (``trace``).
+    ``stop_early``: end the run at the first violation (``passed`` and ``reason`` are the
+    full run's, since the first violation decides both; the maxima are then those up to it).
+    ``settled``: a [`SettleCache`][mjtvm.physics.simulate.SettleCache] shared by rollouts of
+    one model and ``qpos``: a drive with the same feedforward and contacts as an earlier one
+    starts from a copy of that one's settled state (the settle depends on nothing else).
     """
     st = settings or SimSettings()
-    rig, m = Rig(model, drive, object_body), model
+    m = model
+    if settled is not None:
+        rig, d, drift = settled.get(m, qpos, drive, st, object_body)
+    else:
+        rig = Rig(model, drive, object_body)
+        d, drift = settle(m, qpos, rig, drive, st)
     if rig.coupled and st.inertial_ff:
         raise ParamError(
             "inertial_ff", "not available for a hand with a transmission (joint torques, not actuator forces)"
         )
-    d, drift = settle(m, qpos, rig, drive, st)
     _start(d, rig, drive, st)
     fa, tw = rig.fadr, drive.twist
     target = np.r_[tw[:3], rig.radius * tw[3:]]
@@ -234,8 +285,9 @@ def rollout(
     names = drive.actuators or drive.joints
     lim_idx, lim_adr, lim_lo, lim_hi = _joint_ranges(m, drive.joints)
     lim_margin, lim_joint = math.inf, ""
+    points: list[Nearest] = []  # the fingers' nearest points at d, from finger_contacts
     for step in range(n1):
-        qset = rig.setpoints(d, drive) if st.track else drive.speeds
+        qset = rig.setpoints(d, drive, points if step > n0 else None) if st.track else drive.speeds
         sp, ff = rig.controls(d, drive, qset)
         if st.inertial_ff and pred is not None:
             ff += inertial_feedforward(m, d, pred, rig, drive, qset)
@@ -266,7 +318,7 @@ def rollout(
         om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[fa + 3 : fa + 6]
         now = np.r_[v, rig.radius * om]
         twist_errors(worst, now, target, tnorm)
-        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, f6)
+        gaps = finger_contacts(m, d, rig, st.timestep, slip, ssum, fsum, f6, points)
         if max(gaps) > worst["gap"]:
             worst["gap"], gap_geom = max(gaps), rig.fingers[int(np.argmax(gaps))][0]
         if record:
@@ -283,6 +335,8 @@ def rollout(
             reason, *failure = _violation(st, worst, slip, slip_tol, saturated, tnorm, gap_geom, edge)
             if reason:
                 reason = f"{reason} at t = {1e3 * (step + 1 - n0) * st.timestep:.2f} ms"
+                if stop_early:
+                    break
     nwin = max(1, n1 - n0)
     friction = {g: (fsum[g] / nwin, ssum[g] / nwin) for g in fsum}
     return RolloutResult(

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.model.state import GraspState
 from mjtvm.model.transmission import joint_speed_limits
-from mjtvm.problem2.assembly import assemble
+from mjtvm.problem2.assembly import Assembly, assemble
 
 __all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
 
@@ -28,7 +28,9 @@ WitnessKind = Literal["central", "vertex"]
 _F64 = NDArray[np.float64]
 
 
-def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str, _F64]:
+def central_witness(
+    state: GraspState, k: int, l: int, alpha: float, *, assembly: Assembly | None = None
+) -> dict[str, _F64]:
     r"""The least-motion, force-centred solution of eq. (31) at a fixed ``alpha`` (Clarabel QP).
 
     Minimises $\sum_j (\dot q_j/\omega_{0j})^2 + \sum_e (\lambda_e/|w_k|)^2$ over the
@@ -39,7 +41,8 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     ``P qd`` with a transmission). With a transmission the ranges bound actuators and
     $\omega_{0j}$ is joint j's fastest speed through them
     ([`joint_speed_limits()`][mjtvm.model.transmission.joint_speed_limits]): the weight stays per joint speed;
-    ``torques`` are then the actuator forces ``u``.
+    ``torques`` are then the actuator forces ``u``. ``assembly``: ``assemble(state,
+    horizon=True)`` when already built (it depends on the state alone; read, not changed).
 
     Raises
     ------
@@ -48,7 +51,7 @@ def central_witness(state: GraspState, k: int, l: int, alpha: float) -> dict[str
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
-    asm = assemble(state, horizon=True)
+    asm = assemble(state, horizon=True) if assembly is None else assembly
     w, r = state.refs[k], state.rvds[l]
     n = asm.num_variables
     # alpha's column: A_twist r, and -rate_j s(r) on the travel-horizon rows, as in Problem 2:
@@ -161,16 +164,18 @@ def witness_drive(
     *,
     witness: WitnessKind = "central",
     vertex: Any = None,
+    assembly: Assembly | None = None,
 ) -> Drive:
     r"""The drive of pair (k, l) at speed factor ``s`` (module docstring, step 2).
 
     ``vertex``: the [`Witness`][mjtvm.problem2.tvmmp.Witness] of the pair, required for ``"vertex"``.
+    ``assembly``: the state's, for [`central_witness()`][mjtvm.physics.witness.central_witness].
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     if witness == "central":
         frac = min(s, 1.0)
-        sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7))
+        sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7), assembly=assembly)
         gain = s / frac if frac > 0 else 0.0
         speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
     elif witness == "vertex":

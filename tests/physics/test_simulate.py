@@ -203,3 +203,39 @@ def test_monotone_flips_on_known_pass_fail_functions() -> None:
     assert monotone_flips(b, dip) == [f"fails at s = {0.8 * b.value:.3g}"]
     assert monotone_flips(bisect(lambda s: True), step) is None
     assert monotone_flips(bisect(lambda s: False), step) is None
+
+
+def test_shared_settle_and_early_stop_give_the_full_rollouts_verdicts(lift: Lift) -> None:
+    """Differential: the speed test's shortcuts (mjtvm.physics.grasp_sim) against the plain calls."""
+    from mjtvm.physics.grasp_sim import faster_drive
+    from mjtvm.physics.simulate import SettleCache
+
+    state = lift_state(lift, 0, variant="L")
+    types = {c.name.split("#")[0]: c.type for c in state.contacts}
+    model = sim_model(lift.scenario.model, types, mu=0.3)
+    alpha = float(tvmmp(state, witnesses=False).alpha[0, 0])
+    at_one = witness_drive(state, 0, 0, alpha, 1.0)
+    fast, plain = faster_drive(at_one, state, 0, alpha, 2.0), witness_drive(state, 0, 0, alpha, 2.0)
+    for name in ("speeds", "torques", "twist"):  # the same numbers, bit for bit, without the QP
+        assert np.array_equal(getattr(fast, name), getattr(plain, name))
+    assert fast.slips.keys() == plain.slips.keys() and fast.contacts == plain.contacts
+    cache = SettleCache()
+    slow = witness_drive(state, 0, 0, alpha, 0.5)
+    for drive in (slow, at_one, fast):
+        full = rollout(model, lift.qpos[0], drive)
+        short = rollout(model, lift.qpos[0], drive, stop_early=True, settled=cache)
+        assert (short.passed, short.reason, short.settle_drift) == (
+            full.passed,
+            full.reason,
+            full.settle_drift,
+        )
+        if full.passed:  # nothing stopped early: every maximum is the full run's
+            assert (short.speed_error, short.angle_error, short.gap) == (
+                full.speed_error,
+                full.angle_error,
+                full.gap,
+            )
+    assert rollout(model, lift.qpos[0], slow, settled=cache).passed
+    assert not short.passed  # twice alpha fails (test_rollout_fails_far_above_the_lp)
+    with pytest.raises(ParamError, match=r"^s: "):
+        faster_drive(at_one, state, 0, alpha, 1.0)

@@ -217,6 +217,24 @@ class BatchModels:
         """
         return self._compiled(obj_path, scale, root)[0]
 
+    def spec(self, entry: DatasetGrasp) -> mujoco.MjSpec:
+        """A fresh ``MjSpec`` of the model the entry's grasp is built on (its object file and
+        scale, its posed root, its centre-of-mass frame): compiled, it has the grasp's model's
+        bodies, geoms and meshes, e.g. to attach motors (``mjtvm.physics``) before compiling.
+
+        Raises
+        ------
+        GraspError
+            As [`model()`][mjtvm.grasp.resolve.batch.BatchModels.model].
+        """
+        root = entry.root is not None
+        spec, _ = self._edited_spec(entry.obj_path, entry.obj_scale, root)
+        if entry.com_frame:  # as _com_model: the frame moved to the centre of mass
+            name = self.doc["object"]["body"]
+            model = self.model(entry.obj_path, entry.obj_scale, root=root)
+            shift_frame(spec, name, np.array(model.body_ipos[int(model.body(name).id)]))
+        return spec
+
     def _compiled(self, obj_path: str | None, scale: float, root: bool) -> tuple[mujoco.MjModel, str | None]:
         """The cache's entry of a key (compiled on a miss; the oldest entry dropped when full)."""
         key = (obj_path, float(scale), root)
