@@ -39,7 +39,7 @@ from mjtvm.model.state import GraspState
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.settings import SimSettings
 from mjtvm.physics.simulate import held
-from mjtvm.physics.squeeze import Servo, with_torsion
+from mjtvm.physics.squeeze import SERVO_GAIN, TORSIONAL_FRICTION, Servo, squeeze_drive, with_torsion
 from mjtvm.physics.witness import Drive, witness_drive
 
 __all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test", "state_hold"]
@@ -242,13 +242,25 @@ def state_hold(
     settings: SimSettings | None = None,
     object_body: str = "object",
     duration: float | None = None,
+    squeeze: bool = False,
 ) -> HoldResult | None:
     """The hold test of a grasp state with the central witness at alpha = 0 (the same for every
     RVDS vertex: no twist to produce); ``None`` when no pair of ``result`` (the state's
-    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness."""
+    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness. ``squeeze``: held as the
+    pushes of ``rank --verify`` hold it instead, by
+    [`squeeze_drive()`][mjtvm.physics.squeeze.squeeze_drive] with its position loop
+    (`SERVO_GAIN`) and torsional friction (`TORSIONAL_FRICTION`)."""
     optimal = [l for l, status in enumerate(result.status[0]) if status == "optimal"]
     if not optimal:
         return None
+    if squeeze:
+        drive = squeeze_drive(state, result)
+        if drive is None:
+            return None
+        return hold_test(
+            model, qpos, drive, settings=settings, object_body=object_body, duration=duration,
+            servo=SERVO_GAIN, torsional=TORSIONAL_FRICTION,
+        )  # fmt: skip
     l = optimal[0]
     drive = witness_drive(state, 0, l, float(result.alpha[0, l]), 0.0, witness="central")
     return hold_test(model, qpos, drive, settings=settings, object_body=object_body, duration=duration)

@@ -30,7 +30,7 @@ from mjtvm.model.contacts import Contact
 from mjtvm.model.operation_range import OperationRange
 from mjtvm.model.state import GraspState
 from mjtvm.physics.disturb import DIRECTIONS, disturb_test
-from mjtvm.physics.hold import hold_test
+from mjtvm.physics.hold import hold_test, state_hold
 from mjtvm.physics.settings import sim_model
 from mjtvm.physics.squeeze import SERVO_GAIN, squeeze_drive, squeeze_witness
 from mjtvm.problem2.tvmmp import tvmmp
@@ -140,3 +140,12 @@ def test_too_little_friction_cannot_hold_at_rest(case: tuple) -> None:
     with pytest.raises(ParamError, match="servo"):
         disturb_test(slippery, qpos, sq, servo=-1.0, duration=0.2)
     assert math.isfinite(out.drift)
+
+
+def test_state_hold_with_the_squeeze_holds_the_pinch(case: tuple) -> None:
+    model, qpos, state, res = case
+    out = state_hold(model, qpos, state, res, squeeze=True, duration=0.3)
+    assert out is not None and out.held and out.translation < 5e-4, out  # MuJoCo's soft friction creeps
+    forces = [c.force_end for c in out.contacts]  # each finger presses with the squeeze's force
+    tau = np.abs(squeeze_drive(state, res).torques)  # type: ignore[union-attr]
+    assert forces == pytest.approx(tau, rel=0.02)
