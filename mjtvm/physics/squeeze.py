@@ -27,7 +27,7 @@ with the stiffness K. The same two parts, in this project's physics (``docs/phys
   through the motor's voltage clamp and torque saturation (MuJoCo's ``<dcmotor>``).
   ``kp = 10 1/s`` (a 100 ms time constant, 400 steps of the rollouts' 0.25 ms) gives the
   Shadow's finger motors (``k_v gear^2 = 0.5 N m s``) the stiffness of the benchmark's
-  servos, ``kp = 5 N m/rad``. Measured on the shipped Shadow example (34 grasps with a witness,
+  servos, ``kp = 5 N m/rad``. Measured on the shipped Shadow example (the 29 grasps with a witness,
   2026-12-03): with the squeeze, kp = 10, 30, 100 hold 14, 15, 8; kp = 0 (a damper) 1; the
   loop at kp = 10 without the squeeze (share 0) 0; share 1 at kp = 10 8.
 * **Torsional friction** (`TORSIONAL_FRICTION`, [`with_torsion()`][mjtvm.physics.squeeze.with_torsion]):
