@@ -13,17 +13,26 @@ succeeds when every direction holds.
 
 What differs here, and why:
 
-* **The drive**: DexGraspBench's hand is position-servoed to its ``squeeze_qpos``; here the
-  hand holds the grasp with the physics check's drive, the hand's ``<dcmotor>`` actuators at
-  speed setpoint 0 with the witness torques at alpha = 0 fed forward (the hold test at rest,
-  [`mjtvm.physics.hold`][mjtvm.physics.hold]): the forces that balance the object's weight,
-  squeezing as the LP's witness does.
+* **The drive**: DexGraspBench position-servos the hand to its ``squeeze_qpos`` (BODex makes it
+  ``2 grasp_qpos - pregrasp_qpos``; the menagerie Shadow hand's servos: ``kp = 5`` N m/rad,
+  ``forcerange`` 3 N m). Here the hand's ``<dcmotor>`` actuators hold it with the squeeze of
+  [`mjtvm.physics.squeeze`][mjtvm.physics.squeeze]: the central witness at alpha = 0 plus half
+  of the internal forces that the motors' ranges at zero speed allow, inside the friction
+  pyramids with a margin, fed forward, and a position loop on the held configuration (speed
+  setpoint ``kp (l_0 - l)``, ``kp = 10 1/s``: 5 N m/rad on the Shadow's finger motors, the
+  benchmark's ``kp``) saturating at the motors' torque. The benchmark's servo is the same two
+  parts with a squeeze set by a joint offset instead of by the friction pyramids and ranges.
+* **Torsional friction**: as the benchmark's ``_set_friction`` (``condim = 4``, ``miu_coef``
+  0.02 m), the frictional point contacts get torsional friction 0.02 m in this test
+  (``TORSIONAL_FRICTION``); the rollouts' contacts have none (``condim`` 3). Without it a sphere
+  pinched at point contacts spins about the fingers' axis unresisted.
 * **Gravity stays on**: the benchmark's ``fc`` setting disables gravity
-  (``mjDSBL_GRAVITY``, ``src/util/hand_util.py``); the witness torques here balance the weight
+  (``mjDSBL_GRAVITY``, ``src/util/hand_util.py``); the squeeze's torques here balance the weight
   (the grasp's REFS), so without gravity they would push the object away. The disturbance is
   added to the weight.
 * **The simulation**: the rollouts' model and 0.25 ms step (``SimSettings``, elliptic cones,
-  ``impratio`` 10, as the benchmark's ``_set_friction``), friction mu of the grasp file, and
+  ``impratio`` 10, as the benchmark's ``_set_friction``; the benchmark steps 4 ms), friction mu
+  of the grasp file, and
   the object's mass is the grasp's (``mg / g``), not the benchmark's fixed 0.1 kg.
 * **The start**: the rollouts' settle (30 ms at the grasp's configuration, no force) stands in
   for the benchmark's pregrasp -> grasp -> squeeze closing; the reference pose is the object's
@@ -43,6 +52,7 @@ from mjtvm.errors import ParamError
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.settings import SimSettings
 from mjtvm.physics.simulate import held
+from mjtvm.physics.squeeze import SERVO_GAIN, TORSIONAL_FRICTION, Servo, with_torsion
 from mjtvm.physics.witness import Drive
 
 __all__ = [
@@ -115,6 +125,8 @@ def disturb_test(
     object_body: str = "object",
     duration: float = DISTURB_DURATION,
     stop_early: bool = False,
+    servo: float = SERVO_GAIN,
+    torsional: float = TORSIONAL_FRICTION,
 ) -> DisturbResult:
     """The six pushes of the module's protocol on the state ``qpos`` held by ``drive``.
 
@@ -123,21 +135,29 @@ def disturb_test(
     model
         From [`sim_model()`][mjtvm.physics.settings.sim_model].
     drive
-        The witness drive at speed factor 0 (its torques hold the object; its speeds are 0).
+        The drive that holds the grasp: its torques fed forward, its speeds not used (the
+        protocol's: [`squeeze_drive()`][mjtvm.physics.squeeze.squeeze_drive]).
     duration
         s that each force acts (default the benchmark's 2 s).
     stop_early
         Stop at the first direction that fails (the benchmark's early stop; the others are
         then counted as not held).
+    servo
+        The position loop's speed gain kp (1/s) on the held configuration
+        ([`Servo`][mjtvm.physics.squeeze.Servo]); 0: speed setpoint 0 (a damper).
+    torsional
+        The frictional contacts' torsional friction (m,
+        [`with_torsion()`][mjtvm.physics.squeeze.with_torsion]); 0: the rollouts' contacts.
 
     Raises
     ------
     ParamError
-        ``duration`` not a positive time.
+        ``duration`` not a positive time, ``servo`` or ``torsional`` negative.
     """
     if not (math.isfinite(duration) and duration > 0):
         raise ParamError("duration", f"expected a positive time (s), got {duration!r}", duration)
     st = settings or SimSettings()
+    model = with_torsion(model, torsional)
     rig = Rig(model, drive, object_body)
     mass = float(model.body_subtreemass[rig.ob])
     force = DISTURB_ACCEL * mass
@@ -154,14 +174,15 @@ def disturb_test(
             turned.append(math.nan)
             continue
         d = held(model, qpos, rig, drive)
+        loop = Servo(model, d, rig.acts, rig.cadr, servo)
         p0, r0 = d.xpos[rig.ob].copy(), d.xmat[rig.ob].reshape(3, 3).copy()
-        mujoco.mj_step(model, d, nstep=n_settle)
+        loop.step(n_settle)
         d.xfrc_applied[rig.ob, :3] = 0.0
         d.xfrc_applied[rig.ob, i // 2] = force * (1.0 if i % 2 else -1.0)
         worst_t = worst_r = 0.0
         passed = True
         for _ in range(checks):
-            mujoco.mj_step(model, d, nstep=every)
+            loop.step(every)
             t, r = _pose_change(d, rig.ob, p0, r0)
             worst_t, worst_r = max(worst_t, t), max(worst_r, r)
             if not (t < DISTURB_TRANSLATION and r < DISTURB_ANGLE) or not np.all(np.isfinite(d.qpos)):

@@ -4,8 +4,9 @@ Per grasp ([`grasp_sim()`][mjtvm.physics.grasp_sim.grasp_sim]):
 
 * **The hold test** ([`disturb_test()`][mjtvm.physics.disturb.disturb_test]): DexGraspBench's
   six pushes of 10 m/s^2 x the object's mass for 2 s, held when the object moves less than
-  5 cm and turns less than 15 deg along every direction (the protocol, its source and what
-  differs: [`mjtvm.physics.disturb`][mjtvm.physics.disturb]).
+  5 cm and turns less than 15 deg along every direction, the hand held by the squeeze
+  ([`squeeze_drive()`][mjtvm.physics.squeeze.squeeze_drive]) and its position loop (the
+  protocol, its source and what differs: [`mjtvm.physics.disturb`][mjtvm.physics.disturb]).
 * **The speed test**: for every RVDS direction l whose alpha_l = alpha_0l > 0, the witness
   rollout of ``mjtvm verify`` ([`rollout()`][mjtvm.physics.simulate.rollout], the central
   witness, its pass/fail criteria: twist within 10 % and 10 deg, no F-point slip, no contact
@@ -42,6 +43,7 @@ from mjtvm.physics.motors import (
 )
 from mjtvm.physics.settings import SimSettings, sim_model
 from mjtvm.physics.simulate import SettleCache, rollout
+from mjtvm.physics.squeeze import squeeze_drive
 from mjtvm.physics.witness import Drive, witness_drive
 from mjtvm.problem2.assembly import assemble
 
@@ -249,8 +251,9 @@ def grasp_sim(
     if not optimal:
         out["sim_failure"] = "no optimal pair: no witness to drive"
         return out
-    l0, asm = optimal[0], assemble(state, horizon=True)  # one assembly for every witness
-    rest = witness_drive(state, 0, l0, float(result.alpha[0, l0]), 0.0, witness="central", assembly=asm)
+    asm = assemble(state, horizon=True)  # one assembly for every witness of the speed test
+    rest = squeeze_drive(state, result)  # not None: a pair is optimal
+    assert rest is not None
     duration = DISTURB_DURATION if hold_duration is None else hold_duration
     hold: DisturbResult = disturb_test(
         model, qpos, rest, settings=st, object_body=object_body, duration=duration

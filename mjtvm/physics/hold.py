@@ -39,6 +39,7 @@ from mjtvm.model.state import GraspState
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.settings import SimSettings
 from mjtvm.physics.simulate import held
+from mjtvm.physics.squeeze import SERVO_GAIN, TORSIONAL_FRICTION, Servo, squeeze_drive, with_torsion
 from mjtvm.physics.witness import Drive, witness_drive
 
 __all__ = ["ContactHold", "HoldResult", "hold_row", "hold_test", "state_hold"]
@@ -145,6 +146,8 @@ def hold_test(
     settings: SimSettings | None = None,
     object_body: str = "object",
     duration: float | None = None,
+    servo: float = 0.0,
+    torsional: float = 0.0,
 ) -> HoldResult:
     r"""Hold the state ``qpos`` at rest with the drive's torques (module docstring).
 
@@ -159,27 +162,34 @@ def hold_test(
         drift bound).
     duration
         Length of the hold (s); default: a rollout's, ``settle + startup + window``.
+    servo, torsional
+        The position loop's speed gain (1/s, [`Servo`][mjtvm.physics.squeeze.Servo]; 0: speed
+        setpoints 0) and the contacts' torsional friction (m,
+        [`with_torsion()`][mjtvm.physics.squeeze.with_torsion]; 0: the rollouts' contacts),
+        as the pushes of [`disturb_test()`][mjtvm.physics.disturb.disturb_test] hold the grasp.
 
     Raises
     ------
     ParamError
-        ``duration`` not a positive time.
+        ``duration`` not a positive time, ``servo`` or ``torsional`` negative.
     """
     st = settings or SimSettings()
     total = st.settle + st.startup + st.window if duration is None else duration
     if not (math.isfinite(total) and total > 0):
         raise ParamError("duration", f"expected a positive time (s), got {duration!r}", duration)
     n_all, n_win = max(1, st.steps(total)), max(1, min(st.steps(st.window), st.steps(total)))
-    rig, m = Rig(model, drive, object_body), model
+    m = with_torsion(model, torsional)
+    rig = Rig(m, drive, object_body)
     d = held(m, qpos, rig, drive)
+    loop = Servo(m, d, rig.acts, rig.cadr, servo)
     starts = [_anchor(d, rig, g, body) for _label, g, body, _c, _k in rig.fingers]
     p0, r0 = d.xpos[rig.ob].copy(), d.xmat[rig.ob].reshape(3, 3).copy()
     n_settle = min(max(1, st.steps(st.settle)), n_all)
-    mujoco.mj_step(m, d, nstep=n_settle)
+    loop.step(n_settle)
     f_start = [_normal_force(m, d, g, rig) for _label, g, _b, _c, _k in rig.fingers]
     speed = 0.0
     for step in range(n_settle, n_all):
-        mujoco.mj_step(m, d)
+        loop.step(1)
         if step >= n_all - n_win:
             om = d.xmat[rig.ob].reshape(3, 3) @ d.qvel[rig.fadr + 3 : rig.fadr + 6]
             speed = max(speed, float(np.linalg.norm(np.r_[d.qvel[rig.fadr : rig.fadr + 3], rig.radius * om])))
@@ -232,13 +242,25 @@ def state_hold(
     settings: SimSettings | None = None,
     object_body: str = "object",
     duration: float | None = None,
+    squeeze: bool = False,
 ) -> HoldResult | None:
     """The hold test of a grasp state with the central witness at alpha = 0 (the same for every
     RVDS vertex: no twist to produce); ``None`` when no pair of ``result`` (the state's
-    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness."""
+    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness. ``squeeze``: held as the
+    pushes of ``rank --verify`` hold it instead, by
+    [`squeeze_drive()`][mjtvm.physics.squeeze.squeeze_drive] with its position loop
+    (`SERVO_GAIN`) and torsional friction (`TORSIONAL_FRICTION`)."""
     optimal = [l for l, status in enumerate(result.status[0]) if status == "optimal"]
     if not optimal:
         return None
+    if squeeze:
+        drive = squeeze_drive(state, result)
+        if drive is None:
+            return None
+        return hold_test(
+            model, qpos, drive, settings=settings, object_body=object_body, duration=duration,
+            servo=SERVO_GAIN, torsional=TORSIONAL_FRICTION,
+        )  # fmt: skip
     l = optimal[0]
     drive = witness_drive(state, 0, l, float(result.alpha[0, l]), 0.0, witness="central")
     return hold_test(model, qpos, drive, settings=settings, object_body=object_body, duration=duration)

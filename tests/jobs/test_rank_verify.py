@@ -57,10 +57,11 @@ def test_the_rows_gain_the_simulated_columns(verified: Path) -> None:
     )
     assert deep["failure"] == "penetration" and deep["sim_failure"] == "not evaluated: penetration"
     assert deep["sim_hold"] is None and deep["sim_speed_success"] is None
-    for row in (good, bad):  # the witness's least forces hold the weight, not a push of 10 m/s^2 x m
-        assert row["sim_hold"] is False and 0 <= row["sim_hold_dirs"] < 6
-        assert row["sim_failure"].startswith("hold: the object leaves the thresholds pushed along -x")
-        assert row["sim_speed_dirs"] == 4
+    # the squeeze holds grasp 1 under every push; grasp 3's sphere leaves pushed along -x
+    assert good["sim_hold"] is True and good["sim_hold_dirs"] == 6 and good["sim_hold_translation"] < 0.05
+    assert bad["sim_hold"] is False and bad["sim_hold_dirs"] == 0
+    assert bad["sim_failure"].startswith("hold: the object leaves the thresholds pushed along -x")
+    assert good["sim_speed_dirs"] == bad["sim_speed_dirs"] == 4
     # the prediction holds for grasp 1 (every direction at 0.8 alpha, 3 of 4 at alpha, none at 1.2)
     assert good["sim_speed_success"] is True
     assert (good["sim_speed_pass_08"], good["sim_speed_pass_10"], good["sim_speed_pass_12"]) == (
@@ -87,7 +88,9 @@ def test_the_auc_files(verified: Path) -> None:
     table = {(r["measure"], r["target"]): r for r in doc["rows"]}
     measures = ["tvmmp", "alpha_l0", "alpha_l1", "alpha_l2", "alpha_l3", "epsilon_l1", "epsilon_linf"]
     assert [m for m, t in table if t == "sim_hold"] == [*measures, "grasp_sigma_min", "force_closure"]
-    assert table["tvmmp", "sim_hold"]["auc"] is None  # no grasp holds: one class
+    hold = table["tvmmp", "sim_hold"]
+    assert (hold["positives"], hold["negatives"], hold["excluded"]) == (1, 1, 2)
+    assert hold["auc"] == 0.0  # grasp 1 holds with TVMMP 0.0486, grasp 3 does not with 0.0508
     speed = table["tvmmp", "sim_speed_success"]
     assert (speed["positives"], speed["negatives"], speed["excluded"]) == (1, 1, 2)
     assert speed["auc"] == 0.0  # grasp 1 passes with TVMMP 0.0486, grasp 3 fails with 0.0508

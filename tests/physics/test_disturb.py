@@ -14,6 +14,7 @@ from mjtvm.grasp.resolve.batch import BatchModels, hand_joints
 from mjtvm.jobs.replay import grasp_defaults
 from mjtvm.physics.disturb import DIRECTIONS, DISTURB_ACCEL, disturb_test
 from mjtvm.physics.grasp_sim import dataset_sim_model
+from mjtvm.physics.squeeze import squeeze_drive
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
 
@@ -40,14 +41,24 @@ def test_pushes_along_six_directions_with_the_benchmark_force() -> None:
     assert entry.obj_scale != 1.0
     rest = witness_drive(state, 0, 0, float(res.alpha[0, 0]), 0.0, witness="central")
     qpos = grasp.data.qpos.copy()
-    r = disturb_test(sim, qpos, rest, object_body="ball", duration=0.4)
+    # the least forces on speed-0 dampers and torsionless contacts (the drive before the squeeze)
+    r = disturb_test(sim, qpos, rest, object_body="ball", duration=0.4, servo=0.0, torsional=0.0)
     assert r.force == pytest.approx(DISTURB_ACCEL * mg / 9.81, rel=1e-3)
     held = dict(zip(DIRECTIONS, r.directions, strict=True))
     # pushed up, the fingers carry less than the weight they hold; pushed along -x, the
     # witness's least forces let go and the ball leaves the 5 cm bound
     assert held["+z"] and not held["-x"] and not r.held
     assert r.first_failure == "-x" and r.translation[0] >= 0.05 and r.translation[5] < 0.05
-    early = disturb_test(sim, qpos, rest, object_body="ball", duration=0.4, stop_early=True)
+    early = disturb_test(
+        sim, qpos, rest, object_body="ball", duration=0.4, stop_early=True, servo=0.0, torsional=0.0
+    )
     assert early.directions == (False,) * 6 and math.isnan(early.translation[1])
+    # the protocol's drive: the squeeze and its position loop hold every push
+    sq = squeeze_drive(state, res)
+    assert sq is not None
+    r = disturb_test(sim, qpos, sq, object_body="ball", duration=0.4)
+    assert r.held and max(r.translation) < 5e-3 and max(r.rotation) < 5.0, r
     with pytest.raises(ParamError, match="duration"):
         disturb_test(sim, qpos, rest, object_body="ball", duration=0.0)
+    with pytest.raises(ParamError, match="torsional"):
+        disturb_test(sim, qpos, rest, object_body="ball", duration=0.2, torsional=-1.0)
