@@ -18,7 +18,6 @@ dataset did). Here a degenerate insertion raises `_Degenerate` and the caller re
 
 from __future__ import annotations
 
-import sys
 from types import ModuleType
 
 import numpy as np
@@ -30,24 +29,14 @@ from mjtvm.errors import SolverError
 __all__ = ["GrowingHull", "hull_of"]
 
 
-# Hulls a process builds with the numpy insertion before it imports the compiled kernels:
-# numba's import and the cached kernels' load cost ~0.5 s, what the numpy insertion spends on
-# ~10 five-finger grasps, so a single grasp (``mjtvm measures``) never pays it and a batch
-# (``mjtvm rank``) pays it once.
-_NUMPY_HULLS = 16
-_hulls_built = [0]
-
-
 def _kernels(compiled: bool | None) -> ModuleType | None:
-    """`mjtvm.measures.hull_jit` (imported on first use), or ``None`` for the numpy insertion:
-    ``compiled`` ``None`` picks the kernels once `_NUMPY_HULLS` hulls are built (or they
-    are imported already); ``None`` too where numba does not import."""
+    """`mjtvm.measures.hull_jit` (imported on first use: numba's import and the cached kernels'
+    load, ~0.5 s, on the batch paths only), or ``None`` for the numpy insertion: ``compiled``
+    ``False``, or ``None`` where numba does not import. ``None`` never depends on what the
+    process did before, so that a grasp's epsilons are the same bits in any process (serial,
+    pool, Dask worker): the two insertions agree only to round-off."""
     if compiled is False:
         return None
-    if compiled is None:
-        _hulls_built[0] += 1
-        if _hulls_built[0] <= _NUMPY_HULLS and "mjtvm.measures.hull_jit" not in sys.modules:
-            return None
     try:
         from mjtvm.measures import hull_jit
     except ImportError:
@@ -155,8 +144,8 @@ class GrowingHull:
     compiled
         Insert in the compiled kernels (`mjtvm.measures.hull_jit`, ``True``; a
         [`SolverError`][mjtvm.errors.SolverError] without numba) or with numpy (``False``);
-        ``None``: numpy for a process's first `_NUMPY_HULLS` hulls, then compiled. Both give
-        the same facets to round-off, checked alike by `verify()`.
+        ``None``: compiled where numba imports, else numpy. Both give the same facets to
+        round-off, checked alike by `verify()`.
     """
 
     def __init__(self, points: NDArray[np.float64], *, compiled: bool | None = None) -> None:
