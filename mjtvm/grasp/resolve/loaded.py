@@ -314,6 +314,10 @@ class Grasp:
             "joint_limits": limit_options(self.document["joint_limits"]),
             **options,
         }
+        # The transmission read when the grasp was loaded, at this same configuration; with
+        # its damping zeroed ("ignore") only where the state's balance takes no damping either.
+        if self.document["joint_losses"] == "fold" or not options["joint_damping"]:
+            options.setdefault("transmission", self.transmission)
         state = grasp_state(
             self.model,
             self.data,

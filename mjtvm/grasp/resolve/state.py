@@ -12,7 +12,6 @@ state's joint velocities (rad/s) to the velocity (m/s) of the finger-side contac
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Mapping, Sequence
 from typing import Any, cast
 
@@ -22,7 +21,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from mjtvm.errors import ModelError
 from mjtvm.grasp.actuation.actuator import operation_range_from_actuator
-from mjtvm.grasp.actuation.transmission import check_closed, is_independent, model_transmission
+from mjtvm.grasp.actuation.transmission import (
+    ModelTransmission,
+    check_closed,
+    is_independent,
+    model_transmission,
+)
+from mjtvm.grasp.contacts.memo import contacts_once, scratch_copy
 from mjtvm.grasp.contacts.touch import (
     DetectedContact,
     ancestors,
@@ -158,6 +163,7 @@ def grasp_state(
     contact_tolerance: float | None = None,
     joint_damping: bool = True,
     joint_limits: JointLimitOptions | None = JointLimitOptions(),  # noqa: B008 - frozen, so shared safely
+    transmission: ModelTransmission | None = None,
 ) -> GraspState:
     r"""The grasp state (space = 3) at the configuration ``data.qpos``.
 
@@ -213,6 +219,11 @@ def grasp_state(
         ([`JointLimitOptions`][mjtvm.grasp.resolve.state.JointLimitOptions]): each joint with ``jnt_limited`` carries its
         ``jnt_range`` and its ``qpos`` ([`joint_limits_of()`][mjtvm.grasp.resolve.state.joint_limits_of]); ``None``: no limits (the
         paper's LPs).
+    transmission
+        [`model_transmission()`][mjtvm.grasp.actuation.transmission.model_transmission] of ``joints`` at
+        ``data``'s configuration, when the caller has it already (a grasp file's, read at the
+        same configuration: [`Grasp.state()`][mjtvm.grasp.resolve.loaded.Grasp.state]); ``None``:
+        read here.
 
     Returns
     -------
@@ -243,12 +254,13 @@ def grasp_state(
     dofs = np.array([int(model.jnt_dofadr[j]) for j in joint_ids])
     overrides = dict(operation_ranges or {})
     _check_mappings(model, contact_types, mu, slide_directions, overrides)
-    work = copy.copy(data)
+    work = scratch_copy(model, data, "state")  # nothing of it is kept: the state copies what it reads
     work.qvel[:] = 0.0
     mujoco.mj_forward(model, work)
     detected = _detect_contacts(model, work, object_body, joint_ids, one_contact_per_body, contact_tolerance)
     contacts = _contacts(model, work, detected, dofs, contact_types, mu, slide_directions)
-    transmission, ranges = _drive(model, work, joint_ids, names, overrides, joint_damping)
+    found = model_transmission(model, work, joint_ids) if transmission is None else transmission
+    drive, ranges = _drive(model, joint_ids, names, overrides, joint_damping, found)
     gravity_torque = (work.qfrc_bias - work.qfrc_passive)[dofs]
     limits = None if joint_limits is None else joint_limits_of(model, work, joint_ids, joint_limits)
     if refs is None:
@@ -264,7 +276,7 @@ def grasp_state(
         rvds=cast(NDArray[np.float64] | None, rvds),
         friction_edges=friction_edges,
         slip=slip,
-        transmission=transmission,
+        transmission=drive,
         joint_limits=limits,
     )
 
@@ -286,14 +298,14 @@ def joint_limits_of(
 
 def _drive(
     model: mujoco.MjModel,
-    work: mujoco.MjData,
     joint_ids: Sequence[int],
     names: Sequence[str],
     overrides: Mapping[str, OperationRange | ArrayLike],
     damping: bool,
+    found: ModelTransmission,
 ) -> tuple[Transmission | None, tuple[OperationRange, ...]]:
-    """The state's transmission (``None`` for independent joints) and its operation ranges."""
-    found = model_transmission(model, work, joint_ids)
+    """The state's transmission (``None`` for independent joints) and its operation ranges,
+    from the model's transmission ``found`` at the configuration."""
     independent = is_independent(model, found, joint_ids)
     keys = set(names) if independent else set(found.actuator_names)
     for key in sorted(set(overrides) - keys):  # a range under a name this path never reads
@@ -362,9 +374,12 @@ def _detect_contacts(
 ) -> list[DetectedContact]:
     """The object's contacts ([`detected_contacts()`][mjtvm.grasp.contacts.touch.detected_contacts]); at least one must be on a finger
     (a body moved by one of ``joint_ids``)."""
-    detected = detected_contacts(
-        model, work, object_body=object_body, one_per_body=one_per_body, tolerance=tolerance
-    )
+    if tolerance is None:  # MuJoCo's own contacts at the configuration
+        detected = detected_contacts(model, work, object_body=object_body, one_per_body=one_per_body)
+    else:  # detected anew within the tolerance: once per configuration (a grasp's checks asked already)
+        detected = contacts_once(
+            model, work, object_body=object_body, one_per_body=one_per_body, tolerance=tolerance
+        )
     moving = {int(model.jnt_bodyid[j]) for j in joint_ids}
     if not any(ancestors(model, c.body) & moving for c in detected):
         touching = sorted({c.geom for c in detected})
