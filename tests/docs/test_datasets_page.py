@@ -109,3 +109,7 @@ def test_the_counts_come_from_the_rows() -> None:
     ]
     counts = _tool("validate_datasets").run_summary(rows)
     assert counts == {"grasps": 4, "evaluated": 3, "simulated": 2, "held": 1, "speed_success": 1}
+
+
+def test_the_page_is_the_generator_output() -> None:
+    assert _tool("datasets_page").main(["--check"]) == 0, "run python tools/datasets_page.py --write"
