@@ -252,7 +252,7 @@ def grasp_sim(
         out["sim_failure"] = "no optimal pair: no witness to drive"
         return out
     asm = assemble(state, horizon=True)  # one assembly for every witness of the speed test
-    rest = squeeze_drive(state, result)  # not None: a pair is optimal
+    rest = squeeze_drive(state, result, assembly=asm)  # not None: a pair is optimal
     assert rest is not None
     duration = DISTURB_DURATION if hold_duration is None else hold_duration
     hold: DisturbResult = disturb_test(

@@ -44,6 +44,7 @@ than by a joint offset.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from typing import Any
 
@@ -56,7 +57,7 @@ from scipy.optimize import linprog
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.witness import Drive, witness_drive
-from mjtvm.problem2.assembly import assemble
+from mjtvm.problem2.assembly import Assembly, assemble
 
 __all__ = [
     "FRICTION_MARGINS",
@@ -84,19 +85,26 @@ SERVO_GAIN = 10.0
 """1/s: the position loop's speed gain kp (speed setpoint ``kp (l_0 - l)``, module docstring)."""
 
 
-def squeeze_witness(state: GraspState, k: int = 0, *, margin: float = FRICTION_MARGINS[0]) -> dict[str, Any]:
+def squeeze_witness(
+    state: GraspState,
+    k: int = 0,
+    *,
+    margin: float = FRICTION_MARGINS[0],
+    assembly: Assembly | None = None,
+) -> dict[str, Any]:
     r"""The squeeze at rest of REFS ``k`` (module docstring): two LPs over eq. (31) at alpha = 0.
 
     Returns ``torques`` (``(A,)`` actuator forces, or ``(M,)`` joint torques), ``forces``
     (``(L, d)`` on the object), ``least`` (N: the first LP's least normal force over the
-    finger contacts) and ``total`` (N: the second's sum of their normal forces).
+    finger contacts) and ``total`` (N: the second's sum of their normal forces). ``assembly``:
+    ``assemble(state, horizon=True)`` when the caller has it already.
 
     Raises
     ------
     SolverError
         An LP has no solution (the weight cannot be held at rest) or is unbounded.
     """
-    asm = assemble(state, horizon=True)
+    asm = assemble(state, horizon=True) if assembly is None else assembly
     n = asm.num_variables
     lo, hi = asm.statics_bounds(state.refs[k])
     cl, cu = asm.col_lower.copy(), asm.col_upper.copy()
@@ -166,21 +174,24 @@ def squeeze_witness(state: GraspState, k: int = 0, *, margin: float = FRICTION_M
     }
 
 
-def squeeze_at_rest(state: GraspState, k: int = 0) -> dict[str, Any]:
+def squeeze_at_rest(state: GraspState, k: int = 0, *, assembly: Assembly | None = None) -> dict[str, Any]:
     """[`squeeze_witness()`][mjtvm.physics.squeeze.squeeze_witness] at the first margin of
-    `FRICTION_MARGINS` the state allows, with ``margin`` in the result.
+    `FRICTION_MARGINS` the state allows, with ``margin`` in the result (one ``assembly`` for
+    every margin tried).
 
     Raises
     ------
     SolverError
         Not even margin 0 is feasible.
     """
+    asm = assemble(state, horizon=True) if assembly is None else assembly
     for m in FRICTION_MARGINS[:-1]:
         try:
-            return {**squeeze_witness(state, k, margin=m), "margin": m}
+            return {**squeeze_witness(state, k, margin=m, assembly=asm), "margin": m}
         except SolverError:
             continue
-    return {**squeeze_witness(state, k, margin=FRICTION_MARGINS[-1]), "margin": FRICTION_MARGINS[-1]}
+    last = FRICTION_MARGINS[-1]
+    return {**squeeze_witness(state, k, margin=last, assembly=asm), "margin": last}
 
 
 def _lp(c: _F64, a_ub: Any, b_ub: _F64, a_eq: Any, b_eq: _F64, bounds: list[Any], k: int) -> _F64:
@@ -191,10 +202,14 @@ def _lp(c: _F64, a_ub: Any, b_ub: _F64, a_eq: Any, b_eq: _F64, bounds: list[Any]
     return np.asarray(res.x, dtype=float)
 
 
-def squeeze_drive(state: GraspState, result: Any, *, share: float = SQUEEZE_SHARE) -> Drive | None:
+def squeeze_drive(
+    state: GraspState, result: Any, *, share: float = SQUEEZE_SHARE, assembly: Assembly | None = None
+) -> Drive | None:
     """The hold test's drive of a grasp state: speeds 0, the central witness at alpha = 0 with
     ``share`` of the squeeze (module docstring) added to its torques; ``None`` when no pair of
     ``result`` (the state's [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness.
+    ``assembly``: ``assemble(state, horizon=True)``, shared by the witness and the squeeze's
+    LPs (built here when not given).
 
     Raises
     ------
@@ -207,22 +222,13 @@ def squeeze_drive(state: GraspState, result: Any, *, share: float = SQUEEZE_SHAR
     if not optimal:
         return None
     l = optimal[0]
-    rest = witness_drive(state, 0, l, float(result.alpha[0, l]), 0.0, witness="central")
+    asm = assemble(state, horizon=True) if assembly is None else assembly
+    rest = witness_drive(state, 0, l, float(result.alpha[0, l]), 0.0, witness="central", assembly=asm)
     if share == 0.0:
         return rest
     tau_w = rest.torques  # the central witness at alpha = 0
-    tau = tau_w + share * (squeeze_at_rest(state, 0)["torques"] - tau_w)
-    return Drive(
-        rest.joints,
-        rest.speeds,
-        np.asarray(tau, dtype=float),
-        rest.twist,
-        rest.contacts,
-        rest.slips,
-        actuators=rest.actuators,
-        moment=rest.moment,
-        speed_limits=rest.speed_limits,
-    )
+    tau = tau_w + share * (squeeze_at_rest(state, 0, assembly=asm)["torques"] - tau_w)
+    return dataclasses.replace(rest, torques=np.asarray(tau, dtype=float))
 
 
 class Servo:
