@@ -166,7 +166,17 @@ class ServoDatasheet:
 
     def motor(self) -> DCMotor:
         """The ``<dcmotor>`` of the physics check: the same speed-torque line at ``voltage``,
-        saturated at the continuous torque (at the stall torque without one).
+        saturated at the continuous torque (at the stall torque without one), its speed loop's
+        gain ``stall_torque / no_load_speed`` (N m s/rad, on the figures' side of the gear).
+
+        A servo publishes no loop gain, so it gets the rule of a box range's motor
+        ([`box_motor()`][mjtvm.physics.motors.box_motor]): a speed error of the whole no-load
+        speed asks the whole stall torque. At the joint that is ``T_s g / (w_0 / g) / g^2 =
+        T_s / w_0`` whichever side of the gear the figures are on (3.4 / pi = 1.082 N m s/rad
+        for the XH430-W350), where `DCMotor`'s default gain (5e-4 N m s/rad, the paper's
+        motor-side figure behind its 40:1 gear) would give 5e-4 at an output-side servo's
+        joint and 62.5 behind its 353.5:1 gear (``docs/physics-check.md``, "The dataset
+        benchmark").
 
         Raises
         ------
@@ -184,4 +194,5 @@ class ServoDatasheet:
             else self.continuous_torque,
             gear=self.gear_ratio,
             rotor_inertia=self.rotor_inertia,
+            velocity_gain=self.stall_torque / self.no_load_speed,
         )

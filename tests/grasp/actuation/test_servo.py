@@ -123,6 +123,52 @@ def test_a_maxon_sheet_and_its_servo_form_give_the_same_range_and_motor() -> Non
         assert getattr(a, field) == pytest.approx(getattr(b, field), rel=1e-14), field
 
 
+_HINGE = """<mujoco><option timestep="0.00025" integrator="implicitfast" gravity="0 0 0"/>
+<worldbody><body name="link"><joint name="j" type="hinge" axis="0 0 1"/>
+<geom type="capsule" fromto="0 0 0 0.05 0 0" size="0.01" mass="0.02"/></body></worldbody></mujoco>"""
+
+
+def _xh430_on_either_side() -> list[dict[str, Any]]:
+    """The XH430-W350's figures at its output, and the same servo's motor behind its 353.5 gear."""
+    g = 353.5
+    motor_side = {**XH430, "stall_torque_Nm": 3.4 / g, "no_load_speed_rpm": 30.0 * g, "gear_ratio": g}
+    return [XH430, motor_side]
+
+
+@pytest.mark.parametrize("side", [0, 1], ids=["output", "motor-side"])
+def test_a_servo_s_speed_loop_gain_at_the_joint_is_its_stall_torque_over_its_no_load_speed(side: int) -> None:
+    """A free hinge on the servo, speed setpoint 0, pushed by 0.5 N m, turns at the speed where
+    the loop's torque kd (0 - qdot) balances the push: qdot = 0.5 / (3.4 / pi) = 0.4620 rad/s,
+    the same with the figures on either side of the gear (kd x gear^2 at the joint). The
+    default gain (5e-4 N m s/rad) gave 3.60 rad/s (past the no-load speed: only the voltage
+    clamp braked) at the output and 0.0080 rad/s behind the gear."""
+    servo = ServoDatasheet.from_figures(_xh430_on_either_side()[side])
+    motor = servo.motor()
+    assert motor.velocity_gain * motor.gear**2 == pytest.approx(3.4 / math.pi, rel=1e-12)
+    model = attach_dcmotors(_HINGE, {"j": motor})
+    data = mujoco.MjData(model)
+    data.qfrc_applied[0] = 0.5
+    data.ctrl[:] = 0.0  # the speed setpoint and the feedforward
+    mujoco.mj_step(model, data, nstep=8000)  # 2 s: the link's time constant is 0.02 ms
+    assert data.qvel[0] == pytest.approx(0.5 * math.pi / 3.4, rel=1e-6)
+    assert data.actuator_force[0] * motor.gear == pytest.approx(-0.5, rel=1e-9)
+
+
+def test_the_hold_test_s_position_loop_on_a_servo_is_kd_kp_stiff() -> None:
+    """The hold test's position loop (speed setpoint kp (l_0 - l), kp = 10 1/s) on the output-side
+    XH430-W350 holds a 0.5 N m push at the deflection 0.5 / (kd kp) = 0.5 pi / 34 = 0.04620 rad
+    (kd = 3.4 / pi N m s/rad): a stiffness of 10.82 N m/rad. The default gain gave 0.005 N m/rad."""
+    from mjtvm.physics.squeeze import SERVO_GAIN, Servo
+
+    model = attach_dcmotors(_HINGE, {"j": ServoDatasheet.from_figures(XH430).motor()})
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    loop = Servo(model, data, np.array([0]), np.array([0]), SERVO_GAIN)
+    data.qfrc_applied[0] = 0.5
+    loop.step(8000)  # 2 s = 20 time constants of the loop (1 / kp)
+    assert data.qpos[0] == pytest.approx(0.5 * math.pi / (3.4 * SERVO_GAIN), rel=1e-6)
+
+
 def _gripper_doc(entry: dict[str, Any]) -> dict[str, Any]:
     doc = tomllib.loads((GRIPPER / "gripper3-box.toml").read_text(encoding="utf-8"))
     doc["model"] = str(GRIPPER / "gripper3.xml")
