@@ -41,6 +41,7 @@ What differs here, and why:
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -167,16 +168,21 @@ def disturb_test(
     ok: list[bool] = []
     moved: list[float] = []
     turned: list[float] = []
+    # The settle is the same for every direction (no force yet): run once, each push starts
+    # from a copy of its MjData (every field, the solver's warm start too: the same steps as
+    # a fresh reset and settle, bit for bit).
+    start = held(model, qpos, rig, drive)
+    p0, r0 = start.xpos[rig.ob].copy(), start.xmat[rig.ob].reshape(3, 3).copy()
+    settling = Servo(model, start, rig.acts, rig.cadr, servo)
+    settling.step(n_settle)
     for i in range(len(DIRECTIONS)):
         if stop_early and ok and not ok[-1]:
             ok.append(False)
             moved.append(math.nan)
             turned.append(math.nan)
             continue
-        d = held(model, qpos, rig, drive)
-        loop = Servo(model, d, rig.acts, rig.cadr, servo)
-        p0, r0 = d.xpos[rig.ob].copy(), d.xmat[rig.ob].reshape(3, 3).copy()
-        loop.step(n_settle)
+        d = copy.copy(start)
+        loop = Servo(model, d, rig.acts, rig.cadr, servo, l0=settling.l0)
         d.xfrc_applied[rig.ob, :3] = 0.0
         d.xfrc_applied[rig.ob, i // 2] = force * (1.0 if i % 2 else -1.0)
         worst_t = worst_r = 0.0

@@ -238,12 +238,15 @@ class Servo:
     ----------
     model, data
         The simulation, at the held configuration (after ``mj_forward``): its actuator lengths
-        are the loop's ``l_0``.
+        are the loop's ``l_0`` unless ``l0`` is given.
     actuators, ctrl
         The driven ``<dcmotor>`` ids and their speed-setpoint control addresses
         ([`Rig`][mjtvm.physics.rig.Rig]'s ``acts`` and ``cadr``).
     gain
         kp (1/s); 0: no loop (speed setpoint 0, a damper).
+    l0
+        ``(A,)`` the lengths to hold (actuator-length units): a loop that continues another
+        one's from a copy of its data (the other's ``l0``).
 
     Raises
     ------
@@ -253,12 +256,12 @@ class Servo:
 
     def __init__(
         self, model: mujoco.MjModel, data: mujoco.MjData, actuators: NDArray[np.int64],
-        ctrl: NDArray[np.int64], gain: float,
+        ctrl: NDArray[np.int64], gain: float, l0: NDArray[np.float64] | None = None,
     ) -> None:  # fmt: skip
         if not (np.isfinite(gain) and gain >= 0):
             raise ParamError("servo", f"expected a speed gain >= 0 (1/s), got {gain!r}", gain)
         self.m, self.d, self.acts, self.cadr, self.gain = model, data, actuators, ctrl, float(gain)
-        self.l0 = data.actuator_length[actuators].copy()
+        self.l0 = (data.actuator_length[actuators] if l0 is None else np.asarray(l0, dtype=float)).copy()
 
     def step(self, n: int) -> None:
         """``n`` steps, the speed setpoints set before each from the last step's lengths."""
