@@ -14,17 +14,19 @@ import os
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError, SolverError
+from mjtvm.lp.csc import Csc, as_csc
 from mjtvm.lp.highspy_start import highspy_module, new_highs
 from mjtvm.lp.lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from mjtvm.lp.scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
-__all__ = ["HighsSession", "new_highs", "observe_runs"]
+__all__ = ["HeldLP", "HighsSession", "new_highs", "observe_runs"]
 
 #: Callbacks told the wall time (s) of every HiGHS ``run`` of every session (observe_runs).
 _RUN_OBSERVERS: list[Callable[[float], None]] = []
@@ -79,6 +81,38 @@ def _acquire_highs():  # type: ignore[no-untyped-def]
         return _IDLE.pop()
     except IndexError:
         return new_highs()
+
+
+@dataclass(frozen=True, eq=False)
+class HeldLP:
+    """The equilibrated LP a [`HighsSession`][mjtvm.lp.highs.HighsSession] holds and its last basis ([`HighsSession.held()`][mjtvm.lp.highs.HighsSession.held]).
+
+    Attributes
+    ----------
+    a
+        ``(m, n)`` the matrix.
+    cost
+        ``(n,)`` the costs.
+    col_lower, col_upper
+        ``(n,)`` the column bounds (``+-inf`` where none).
+    basic
+        ``(m,)`` the basic variables: ``j < n`` column ``j``, ``n + i`` row ``i``'s activity.
+    value
+        ``(n + m,)`` the columns' values, then the row activities, of the last solve.
+    col_scale, row_scale, cost_scale
+        The factors: ``x = col_scale * x_s``, row bounds ``row_scale * bounds``, row duals
+        ``y = row_scale * y_s / cost_scale`` (as [`HighsSession.solve()`][mjtvm.lp.highs.HighsSession.solve] unscales).
+    """
+
+    a: Csc
+    cost: NDArray[np.float64]
+    col_lower: NDArray[np.float64]
+    col_upper: NDArray[np.float64]
+    basic: NDArray[np.int64]
+    value: NDArray[np.float64]
+    col_scale: NDArray[np.float64]
+    row_scale: NDArray[np.float64]
+    cost_scale: float
 
 
 class HighsSession:
@@ -186,6 +220,8 @@ class HighsSession:
             np.zeros(n, dtype=np.int32),  # every column continuous (HiGHS reads n entries: never empty)
         )
         self._check(status, "passModel")
+        self._held = slp.A  # the matrix HiGHS holds (held()), with set_column's writes:
+        self._written: dict[int, tuple[list[int], NDArray[np.float64]]] = {}
         self._sent_cost = np.array(slp.c, dtype=float)  # the scaled costs HiGHS holds
         # Largest scaled magnitude per row: the reference of set_column's round-off drop.
         self._row_max = np.zeros(a.shape[0])
@@ -280,10 +316,40 @@ class HighsSession:
         kept_mag = mag[kept]
         if kept_mag.size:  # _check_magnitudes, from what is known here: the largest is big
             self._check_range(float(kept_mag.min()), big, "changeCoeff")
+        self._written[col] = (row_list, v)
         change, error = self.highs.changeCoeff, self._error
         for r, x in zip(row_list, v.tolist()):
             if change(r, col, x) == error:
                 raise SolverError("highs", "changeCoeff: kError")
+
+    def held(self) -> HeldLP:
+        """The equilibrated LP HiGHS holds now (every change sent included), with the basis
+        and the primal values of its last solve: a warm start for another solver of the
+        same LP ([`WarmRows`][mjtvm.lp.warm.WarmRows]). Call after an optimal `solve()`."""
+        a = as_csc(self._held).toarray()
+        for col, (rows, v) in self._written.items():
+            a[rows, col] = v
+        cols, rows = np.nonzero(a.T)  # column-major order: CSC
+        indptr = np.zeros(a.shape[1] + 1, dtype=np.int32)
+        np.cumsum(np.bincount(cols, minlength=a.shape[1]), out=indptr[1:])
+        status, basic = self.highs.getBasicVariables()
+        self._check(status, "getBasicVariables")
+        basic = np.asarray(basic, dtype=np.int64)
+        basic = np.where(basic >= 0, basic, a.shape[1] - 1 - basic)  # HiGHS: row i is -(1 + i)
+        sol = self.highs.getSolution()
+        with np.errstate(invalid="ignore"):  # inf / positive stays inf
+            lower, upper = self._col_lower / self._col, self._col_upper / self._col
+        return HeldLP(
+            Csc(a[rows, cols], rows.astype(np.int32), indptr, a.shape),
+            self._sent_cost.copy(),
+            lower,
+            upper,
+            basic,
+            np.concatenate([np.asarray(sol.col_value), np.asarray(sol.row_value)]),
+            self._col.copy(),
+            self.scaling.row,
+            self.scaling.cost,
+        )
 
     def start_basis(self, basic_cols: NDArray[np.int64], nonbasic_rows: NDArray[np.int64]) -> None:
         """Start the next solve from the basis of the slacks with ``basic_cols`` swapped in

@@ -13,18 +13,19 @@ state alone ([`physical_sizes()`][mjtvm.problem2.sizes.physical_sizes]).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import SolverError
 from mjtvm.lp.certificate import Certificate, Certifier
+from mjtvm.lp.lp import LPSolution
 from mjtvm.lp.roundoff import drop_cancellation, drop_data_roundoff
 from mjtvm.lp.scaling import ScaledMatrix
 from mjtvm.lp.solvers import (
     HighsSession,
     LinearProgram,
-    LPSolution,
     Scaling,
     Settled,
     clarabel_checked,
@@ -37,6 +38,9 @@ from mjtvm.lp.solvers import (
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.assembly import BoxForm, assemble
 from mjtvm.problem2.sizes import physical_sizes
+
+if TYPE_CHECKING:
+    from mjtvm.lp.warm import WarmRows
 
 __all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs", "Verdict"]
 
@@ -63,8 +67,17 @@ class StateLPs:
     vertex (its largest entry ``A_twist r_l`` brought to 1, `column_factor()`).
     """
 
-    def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
+    def __init__(self, state: GraspState, box: BoxForm, solver: str, *, compiled: bool = False) -> None:
         self.state, self.solver, self.box = state, solver, box
+        # The compiled re-solves of the LPs that differ from HiGHS' last only in the balance
+        # rows' bounds (mjtvm.lp.warm; numba, imported here on the batch paths only).
+        self._jit = None
+        if compiled and solver == "highs":
+            from mjtvm.lp.warm import kernels
+
+            self._jit = kernels()
+        self._warm: WarmRows | None = None  # the re-solver of HiGHS' last (r, alpha_max)
+        self._last_optimal = False  # whether HiGHS' last solve was optimal (its basis serves)
         self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
         n = asm.num_variables
         self.alpha_col = n
@@ -205,6 +218,10 @@ class StateLPs:
         if self.solver != "highs":
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return clarabel_checked(lp, scaling=s)
+        if self._jit is not None and self.session is not None:
+            sol = self._warm_solve(w, r, alpha_max)
+            if sol is not None:
+                return Settled(sol, "highs")
         try:
             if self.session is None:
                 self.session = self._session(w, r, alpha_max)
@@ -219,11 +236,37 @@ class StateLPs:
                 if alpha_max != self._last[2]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
             self._last = (w.tobytes(), r.tobytes(), alpha_max)
-            return Settled(self.session.solve(duals=True), "highs")
+            self._warm = None  # HiGHS' basis moved: a re-solver starts from it
+            sol = self.session.solve(duals=True)
+            self._last_optimal = sol.status == "optimal"
+            return Settled(sol, "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
+            self._warm = None
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return fallback(lp, e, scaling=s)
+
+    def _warm_solve(self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float) -> LPSolution | None:
+        """The LP of (w, r) re-solved by the compiled dual simplex ([`WarmRows`][mjtvm.lp.warm.WarmRows]) when it
+        differs from the session's last only in the balance rows' bounds, from the basis of
+        the last re-solve (else HiGHS' last); ``None`` when it does not or the kernel gave up
+        (then HiGHS solves it, from its own basis). The answer is certified as HiGHS' are."""
+        if r.tobytes() != self._last[1] or alpha_max != self._last[2] or w.tobytes() == self._last[0]:
+            return None
+        if self._warm is None:
+            if not self._last_optimal:  # no optimal basis to start from
+                return None
+            from mjtvm.lp.warm import WarmRows
+
+            try:
+                self._warm = WarmRows(self.session, self._jit)
+            except ValueError:  # a basis the kernel calls singular: HiGHS solves this LP
+                return None
+        lower, upper, _ = self._bounds(w, alpha_max)
+        sol = self._warm.solve(lower, upper)
+        if sol is None:  # the kernel gave up: HiGHS solves this LP, its basis serves the next
+            self._warm = None
+        return sol
 
     def pair_matrix(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(m, n + 1)`` the unscaled ``[A | A_twist r]`` of the pair (nothing dropped but the

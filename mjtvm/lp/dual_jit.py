@@ -1,0 +1,412 @@
+r"""A warm bounded dual simplex in numba, for an LP re-solved after its row bounds changed
+(the same matrix, the same costs): [`resolve()`][mjtvm.lp.dual_jit.resolve].
+
+Problem 2's LPs of one RVDS vertex differ only in the right-hand side of the balance rows
+(``-w_k``, [`StateLPs`][mjtvm.problem2.lps.StateLPs]); from the basis HiGHS left for the
+previous one they take 0-12 dual simplex iterations, while a HiGHS ``run()`` costs ~160 us
+of per-call set-up (its model checks, its solver initialisation, its KKT check) whatever
+the iterations. Here the basis matrix is inverted once (Gauss-Jordan with partial pivoting,
+dense, a few hundred rows) and kept with its basis across the re-solves, each a few
+textbook dual simplex iterations (Koberstein 2005, Algorithm 2, with Harris' two-pass ratio
+test and exact dual steepest-edge pricing, which the dense inverse gives for free).
+
+The LP is the one HiGHS holds (equilibrated), in HiGHS' form: ``min c^T x`` subject to
+``row_lower <= A x <= row_upper`` and ``col_lower <= x <= col_upper``. The variables are the
+``n`` columns then the ``m`` row activities ``r = A x`` (the columns of ``[A | -I]``,
+``[A | -I] (x, r) = 0``); the row duals ``y = B^{-T} c_B`` have HiGHS' sign (the reduced
+costs are ``c - A^T y``). Nothing is returned unless it is verified here: after the last
+iteration ``x_B`` and ``y`` are computed afresh from the inverse and must be primal and dual
+feasible within the tolerance; any trouble (iteration cap, a tiny pivot, a singular basis,
+primal infeasibility: no entering candidate) returns a status other than `OPTIMAL`, and the
+caller solves with HiGHS instead. The caller certifies every answer on the unscaled LP as
+it certifies HiGHS' ([`Certifier`][mjtvm.lp.certifier.Certifier]).
+
+Imported lazily (numba's import and the kernels' load ~0.5 s; compiled code cached on disk,
+``cache=True``), on the batch paths only.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+__all__ = ["CAP", "INFEASIBLE", "ITERATIONS", "NUMERICS", "OPTIMAL", "SINGULAR", "invert", "resolve"]
+
+OPTIMAL = 0
+"""Status: optimal, verified primal and dual feasible from a fresh solve with the inverse."""
+INFEASIBLE = 1
+"""Status: a row is infeasible and no nonbasic variable can enter (the LP is infeasible: the
+caller asks HiGHS, which gives the Farkas multipliers)."""
+ITERATIONS = 2
+"""Status: the iteration cap was reached."""
+SINGULAR = 3
+"""Status: the basis matrix is singular (or a pivot below the pivot tolerance)."""
+NUMERICS = 4
+"""Status: the basis did not start dual feasible, or the final check failed."""
+
+CAP = 50  #: dual simplex iterations per re-solve at most
+_PIVOT_TOL = 1e-9  # a pivot row entry smaller than this (relative to the row's largest) cannot enter
+_SINGULAR_TOL = 1e-11  # Gauss-Jordan pivot below this times the column's largest: singular
+
+
+@numba.njit(cache=True)
+def invert(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, basic: np.ndarray, binv: np.ndarray
+) -> bool:
+    """Write ``B^{-1}`` into ``binv`` (``(m, m)``), ``B`` the columns ``basic`` of
+    ``[A | -I]`` (``A`` in CSC arrays ``indptr, indices, data``; ``basic[p] >= n`` is row
+    ``basic[p] - n``'s activity). Row ``p`` of the inverse belongs to ``basic[p]``.
+    Returns ``False`` where ``B`` is singular (a pivot at most ``_SINGULAR_TOL`` times its
+    column's largest entry).
+
+    Only the block ``M = A[R, C]`` needs eliminating (``C`` the basic columns, ``R`` the rows
+    whose activity is nonbasic, as many): with ``z_C = M^{-1} v_R``, the basic activity of
+    row ``i`` is ``A[i, C] z_C - v_i``. Gauss-Jordan with partial pivoting on ``M`` (most
+    of a basis is row activities: 123 of 175 on the 22-joint hand's LPs)."""
+    m = binv.shape[0]
+    n = indptr.shape[0] - 1
+    row_basic = np.zeros(m, dtype=np.bool_)
+    k = 0
+    for p in range(m):
+        if basic[p] >= n:
+            row_basic[basic[p] - n] = True
+        else:
+            k += 1
+    rpos = np.full(m, -1, dtype=np.int64)  # row i in R: its index in M
+    rows = np.empty(k, dtype=np.int64)
+    c = 0
+    for i in range(m):
+        if not row_basic[i]:
+            if c >= k:
+                return False
+            rpos[i] = c
+            rows[c] = i
+            c += 1
+    if c != k:
+        return False
+    mm = np.zeros((k, k))
+    cols = np.empty(k, dtype=np.int64)  # M's column c: the basic column at position cols[c]
+    c = 0
+    for p in range(m):
+        j = basic[p]
+        if j < n:
+            cols[c] = p
+            for t in range(indptr[j], indptr[j + 1]):
+                q = rpos[indices[t]]
+                if q >= 0:
+                    mm[q, c] = data[t]
+            c += 1
+    inv = np.zeros((k, k))
+    for i in range(k):
+        inv[i, i] = 1.0
+    pivot_row = np.empty(k, dtype=np.int64)
+    used = np.zeros(k, dtype=np.bool_)
+    for p in range(k):
+        best, arg, big = 0.0, -1, 0.0
+        for i in range(k):
+            v = abs(mm[i, p])
+            if v > big:
+                big = v
+            if not used[i] and v > best:
+                best, arg = v, i
+        if arg < 0 or best <= _SINGULAR_TOL * big:
+            return False
+        used[arg] = True
+        pivot_row[p] = arg
+        f = 1.0 / mm[arg, p]
+        for q in range(p, k):
+            mm[arg, q] *= f
+        for q in range(k):
+            inv[arg, q] *= f
+        for i in range(k):
+            g = mm[i, p]
+            if i != arg and g != 0.0:
+                for q in range(p, k):
+                    if mm[arg, q] != 0.0:
+                        mm[i, q] -= g * mm[arg, q]
+                for q in range(k):
+                    if inv[arg, q] != 0.0:
+                        inv[i, q] -= g * inv[arg, q]
+    # M's column c was reduced to e_{pivot_row[c]}: M^{-1}'s row c is inv's row pivot_row[c].
+    binv[:, :] = 0.0
+    slack_pos = np.full(m, -1, dtype=np.int64)
+    for p in range(m):
+        if basic[p] >= n:
+            slack_pos[basic[p] - n] = p
+            binv[p, basic[p] - n] = -1.0
+    for c in range(k):
+        p = cols[c]
+        minv_row = inv[pivot_row[c]]
+        for q in range(k):
+            binv[p, rows[q]] = minv_row[q]
+        j = basic[p]
+        for t in range(indptr[j], indptr[j + 1]):
+            sp = slack_pos[indices[t]]
+            a = data[t]
+            if sp >= 0 and a != 0.0:
+                for q in range(k):
+                    binv[sp, rows[q]] += a * minv_row[q]
+    return True
+
+
+@numba.njit(cache=True)
+def _column(indptr, indices, data, n, j, v, out):  # type: ignore[no-untyped-def]
+    """``out += v * (column j of [A | -I])``."""
+    if j >= n:
+        out[j - n] -= v
+    else:
+        for t in range(indptr[j], indptr[j + 1]):
+            out[indices[t]] += v * data[t]
+
+
+@numba.njit(cache=True)
+def _dot(indptr, indices, data, n, j, y):  # type: ignore[no-untyped-def]
+    """``(column j of [A | -I]) . y``."""
+    if j >= n:
+        return -y[j - n]
+    s = 0.0
+    for t in range(indptr[j], indptr[j + 1]):
+        s += data[t] * y[indices[t]]
+    return s
+
+
+@numba.njit(cache=True)
+def _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y):  # type: ignore[no-untyped-def]
+    """``x_B = -B^{-1} N x_N`` (``value`` holds the nonbasic values; its basic entries are
+    ignored) and ``y = B^{-T} c_B``, from the inverse."""
+    m = binv.shape[0]
+    n = indptr.shape[0] - 1
+    isbasic = np.zeros(n + m, dtype=np.bool_)
+    for p in range(m):
+        isbasic[basic[p]] = True
+    rhs = np.zeros(m)
+    for j in range(n + m):
+        if not isbasic[j] and value[j] != 0.0:
+            _column(indptr, indices, data, n, j, -value[j], rhs)
+    for p in range(m):
+        s = 0.0
+        for i in range(m):
+            s += binv[p, i] * rhs[i]
+        x_b[p] = s
+    y[:] = 0.0
+    for p in range(m):
+        j = basic[p]
+        cb = cost[j] if j < n else 0.0
+        if cb != 0.0:
+            for i in range(m):
+                y[i] += cb * binv[p, i]
+
+
+@numba.njit(cache=True)
+def resolve(
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    cost: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    basic: np.ndarray,
+    at_upper: np.ndarray,
+    binv: np.ndarray,
+    value: np.ndarray,
+    y: np.ndarray,
+    tol: float,
+    cap: int,
+) -> tuple[int, int]:
+    """Re-solve from the basis ``basic`` (its inverse ``binv``) after bounds changed.
+
+    Parameters
+    ----------
+    indptr, indices, data
+        ``A`` (``(m, n)``), CSC.
+    cost
+        ``(n,)`` costs (the row activities cost 0).
+    lower, upper
+        ``(n + m,)`` bounds of the columns, then of the row activities (``+-inf`` where none).
+    basic
+        ``(m,)`` the basic variables (``>= n``: a row activity); updated in place.
+    at_upper
+        ``(n + m,)`` bool: a nonbasic variable is at its upper bound (else at its lower bound,
+        at 0 where it has none; ignored for basic ones); updated in place.
+    binv
+        ``(m, m)`` the inverse of the basis matrix (`invert()`); updated in place.
+    value, y
+        ``(n + m,)`` and ``(m,)``, written: the variables' values and the row duals.
+    tol
+        The primal and dual feasibility tolerance (HiGHS': 1e-9).
+    cap
+        Iterations at most.
+
+    Returns
+    -------
+    (status, iterations)
+        `OPTIMAL` or why not (module docstring). Where not optimal, ``basic``, ``at_upper``
+        and ``binv`` may have moved and must be rebuilt by the caller.
+    """
+    m = binv.shape[0]
+    n = indptr.shape[0] - 1
+    nv = n + m
+    isbasic = np.zeros(nv, dtype=np.bool_)
+    for p in range(m):
+        isbasic[basic[p]] = True
+    for j in range(nv):  # nonbasic values at their (new) bounds
+        if not isbasic[j]:
+            if at_upper[j] and upper[j] < np.inf:
+                value[j] = upper[j]
+            elif lower[j] > -np.inf:
+                value[j] = lower[j]
+                at_upper[j] = False
+            elif upper[j] < np.inf:
+                value[j] = upper[j]
+                at_upper[j] = True
+            else:
+                value[j] = 0.0
+    x_b = np.empty(m)
+    _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+    d = np.zeros(nv)  # reduced costs of the nonbasic variables
+    for j in range(nv):
+        if not isbasic[j]:
+            c = cost[j] if j < n else 0.0
+            d[j] = c - _dot(indptr, indices, data, n, j, y)
+            if not _dual_ok(d[j], lower[j], upper[j], at_upper[j], tol):
+                return NUMERICS, 0
+    alpha_r = np.zeros(nv)
+    col = np.zeros(m)
+    it = 0
+    while True:
+        # Pricing: the most infeasible basic variable in dual steepest-edge measure.
+        r, score = -1, 0.0
+        for p in range(m):
+            j = basic[p]
+            v = x_b[p]
+            inf = 0.0
+            if v < lower[j] - tol:
+                inf = lower[j] - v
+            elif v > upper[j] + tol:
+                inf = v - upper[j]
+            if inf > 0.0:
+                w = 0.0
+                for i in range(m):
+                    w += binv[p, i] * binv[p, i]
+                s = inf * inf / w
+                if s > score:
+                    r, score = p, s
+        if r < 0:
+            break
+        if it >= cap:
+            return ITERATIONS, it
+        leave = basic[r]
+        to_lower = x_b[r] < lower[leave]
+        delta = x_b[r] - (lower[leave] if to_lower else upper[leave])
+        # The pivot row alpha_r = e_r^T B^{-1} [A | -I] over the nonbasic variables.
+        big = 0.0
+        for j in range(nv):
+            if isbasic[j] or lower[j] == upper[j]:
+                alpha_r[j] = 0.0
+            else:
+                a = _dot(indptr, indices, data, n, j, binv[r])
+                alpha_r[j] = a
+                if abs(a) > big:
+                    big = abs(a)
+        # Harris' ratio test: the largest step keeping every reduced cost within tol of
+        # feasible, then among the candidates within it the largest pivot.
+        piv_tol = _PIVOT_TOL * max(big, 1.0)
+        bound = np.inf
+        for j in range(nv):
+            a = -alpha_r[j] if to_lower else alpha_r[j]
+            if _eligible(a, lower[j], upper[j], at_upper[j], piv_tol):
+                t = (d[j] + (tol if a > 0.0 else -tol)) / a
+                if t < bound:
+                    bound = t
+        if bound == np.inf:
+            return INFEASIBLE, it
+        q, best = -1, 0.0
+        for j in range(nv):
+            a = -alpha_r[j] if to_lower else alpha_r[j]
+            if _eligible(a, lower[j], upper[j], at_upper[j], piv_tol) and d[j] / a <= bound:
+                if abs(a) > best:
+                    q, best = j, abs(a)
+        if q < 0:
+            return NUMERICS, it
+        a_q = -alpha_r[q] if to_lower else alpha_r[q]
+        if d[q] / a_q < 0.0:  # within tol of infeasible: step 0 (the reduced cost taken as 0)
+            d[q] = 0.0
+        theta_d = d[q] / alpha_r[q]
+        # FTRAN: B^{-1} a_q.
+        col[:] = 0.0
+        if q >= n:
+            for i in range(m):
+                col[i] = -binv[i, q - n]
+        else:
+            for t in range(indptr[q], indptr[q + 1]):
+                v = data[t]
+                k = indices[t]
+                for i in range(m):
+                    col[i] += v * binv[i, k]
+        pivot = col[r]
+        if abs(pivot) <= piv_tol or abs(pivot - alpha_r[q]) > 1e-7 * max(1.0, abs(pivot)):
+            return NUMERICS, it
+        theta_p = delta / pivot
+        for p in range(m):
+            x_b[p] -= theta_p * col[p]
+        entering_value = value[q] + theta_p
+        for j in range(nv):
+            if not isbasic[j] and alpha_r[j] != 0.0:
+                d[j] -= theta_d * alpha_r[j]
+        d[q] = 0.0
+        d[leave] = -theta_d
+        value[leave] = lower[leave] if to_lower else upper[leave]
+        at_upper[leave] = not to_lower
+        isbasic[leave], isbasic[q] = False, True
+        basic[r] = q
+        x_b[r] = entering_value
+        # The inverse's update (one Gauss-Jordan step on the pivot column).
+        f = 1.0 / pivot
+        for c in range(m):
+            binv[r, c] *= f
+        for p in range(m):
+            g = col[p]
+            if p != r and g != 0.0:
+                for c in range(m):
+                    binv[p, c] -= g * binv[r, c]
+        it += 1
+    # Verified afresh from the inverse: primal and dual feasible within tol.
+    _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+    for p in range(m):
+        j = basic[p]
+        if x_b[p] < lower[j] - tol or x_b[p] > upper[j] + tol:
+            return NUMERICS, it
+        value[j] = x_b[p]
+    for j in range(nv):
+        if not isbasic[j]:
+            c = cost[j] if j < n else 0.0
+            if not _dual_ok(c - _dot(indptr, indices, data, n, j, y), lower[j], upper[j], at_upper[j], tol):
+                return NUMERICS, it
+    return OPTIMAL, it
+
+
+@numba.njit(cache=True)
+def _dual_ok(d, lower, upper, at_upper, tol):  # type: ignore[no-untyped-def]
+    """Whether a nonbasic variable's reduced cost ``d`` is feasible within ``tol``."""
+    if lower == upper:
+        return True
+    if at_upper and upper < np.inf:
+        return d <= tol
+    if lower > -np.inf:
+        return d >= -tol
+    if upper < np.inf:
+        return d <= tol
+    return abs(d) <= tol
+
+
+@numba.njit(cache=True)
+def _eligible(a, lower, upper, at_upper, piv_tol):  # type: ignore[no-untyped-def]
+    """Whether a nonbasic variable with (signed) pivot row entry ``a`` may enter."""
+    if lower == upper:
+        return False
+    free = lower == -np.inf and upper == np.inf
+    if free:
+        return abs(a) > piv_tol
+    if at_upper and upper < np.inf or lower == -np.inf:
+        return a < -piv_tol
+    return a > piv_tol
