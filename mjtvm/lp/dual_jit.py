@@ -407,6 +407,6 @@ def _eligible(a, lower, upper, at_upper, piv_tol):  # type: ignore[no-untyped-de
     free = lower == -np.inf and upper == np.inf
     if free:
         return abs(a) > piv_tol
-    if at_upper and upper < np.inf or lower == -np.inf:
+    if (at_upper and upper < np.inf) or lower == -np.inf:
         return a < -piv_tol
     return a > piv_tol

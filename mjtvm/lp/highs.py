@@ -326,12 +326,22 @@ class HighsSession:
         """The equilibrated LP HiGHS holds now (every change sent included), with the basis
         and the primal values of its last solve: a warm start for another solver of the
         same LP ([`WarmRows`][mjtvm.lp.warm.WarmRows]). Call after an optimal `solve()`."""
-        a = as_csc(self._held).toarray()
-        for col, (rows, v) in self._written.items():
-            a[rows, col] = v
-        cols, rows = np.nonzero(a.T)  # column-major order: CSC
-        indptr = np.zeros(a.shape[1] + 1, dtype=np.int32)
-        np.cumsum(np.bincount(cols, minlength=a.shape[1]), out=indptr[1:])
+        a = as_csc(self._held)
+        indptr, indices, data = a.indptr, a.indices, a.data
+        for col, (rows, v) in sorted(self._written.items()):  # merge the writes, column by column
+            lo, hi = int(indptr[col]), int(indptr[col + 1])
+            r_all = np.concatenate([indices[lo:hi], np.asarray(rows, dtype=indices.dtype)])
+            v_all = np.concatenate([data[lo:hi], v])
+            # the last occurrence of a row wins (the write); zeros are not stored
+            order = np.lexsort((np.arange(len(r_all)), r_all))
+            r_s, v_s = r_all[order], v_all[order]
+            last = np.append(r_s[1:] != r_s[:-1], True)
+            keep = last & (v_s != 0.0)
+            r_new, v_new = r_s[keep], v_s[keep]
+            indices = np.concatenate([indices[:lo], r_new, indices[hi:]])
+            data = np.concatenate([data[:lo], v_new, data[hi:]])
+            indptr = indptr.copy()
+            indptr[col + 1 :] += len(r_new) - (hi - lo)
         status, basic = self.highs.getBasicVariables()
         self._check(status, "getBasicVariables")
         basic = np.asarray(basic, dtype=np.int64)
@@ -340,7 +350,7 @@ class HighsSession:
         with np.errstate(invalid="ignore"):  # inf / positive stays inf
             lower, upper = self._col_lower / self._col, self._col_upper / self._col
         return HeldLP(
-            Csc(a[rows, cols], rows.astype(np.int32), indptr, a.shape),
+            Csc(data, indices.astype(np.int32), indptr.astype(np.int32), a.shape),
             self._sent_cost.copy(),
             lower,
             upper,
@@ -378,7 +388,9 @@ class HighsSession:
         """Change the bounds of some rows."""
         f = self.scaling.row[rows]
         lo, up = f * np.asarray(lower, dtype=float), f * np.asarray(upper, dtype=float)
-        if not math.isfinite(float(lo.sum() + up.sum())):  # rare: a free row's side (or a huge sum)
+        with np.errstate(invalid="ignore"):  # -inf + inf: nan, not finite either
+            finite = math.isfinite(float(lo.sum() + up.sum()))
+        if not finite:  # rare: a free row's side (or a huge sum)
             inf = self._hs.kHighsInf
             lo = np.where(np.isfinite(lo), lo, -inf)
             up = np.where(np.isfinite(up), up, inf)

@@ -43,6 +43,9 @@ class WarmRows:
         A session whose last `solve()` was optimal; it is not changed.
     jit
         `kernels()`'s module.
+    row_lower, row_upper
+        ``(m,)`` the (unscaled) row bounds of the session's last solve: a nonbasic row
+        activity is at the nearer one.
 
     Raises
     ------
@@ -50,7 +53,13 @@ class WarmRows:
         Where the session's basis matrix is singular to the kernel's pivot tolerance.
     """
 
-    def __init__(self, session: HighsSession, jit: ModuleType) -> None:
+    def __init__(
+        self,
+        session: HighsSession,
+        jit: ModuleType,
+        row_lower: NDArray[np.float64],
+        row_upper: NDArray[np.float64],
+    ) -> None:
         held = session.held()
         self._jit = jit
         a = held.a
@@ -60,13 +69,13 @@ class WarmRows:
         self._col_lower, self._col_upper = held.col_lower, held.col_upper
         self._basic = held.basic.copy()
         self._row, self._col, self._g = held.row_scale, held.col_scale, held.cost_scale
-        upper_of = np.concatenate([held.col_upper, np.full(m, np.inf)])
-        lower_of = np.concatenate([held.col_lower, np.full(m, -np.inf)])
+        upper_of = np.concatenate([held.col_upper, self._row * row_upper])
+        lower_of = np.concatenate([held.col_lower, self._row * row_lower])
         # A nonbasic variable sits at one bound; the nearer one (HiGHS puts it exactly there).
         self._at_upper = np.isfinite(upper_of) & (
             ~np.isfinite(lower_of) | (np.abs(held.value - upper_of) < np.abs(held.value - lower_of))
         )
-        self._binv = np.empty((m, m))
+        self._binv: NDArray[np.float64] | None = np.empty((m, m))
         if not jit.invert(*self._a, self._basic, self._binv):
             raise ValueError("singular basis")
         self._value = np.empty(n + m)

@@ -78,6 +78,7 @@ class StateLPs:
             self._jit = kernels()
         self._warm: WarmRows | None = None  # the re-solver of HiGHS' last (r, alpha_max)
         self._last_optimal = False  # whether HiGHS' last solve was optimal (its basis serves)
+        self._last_w = np.zeros(0)  # the w of HiGHS' last solve
         self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
         n = asm.num_variables
         self.alpha_col = n
@@ -236,6 +237,7 @@ class StateLPs:
                 if alpha_max != self._last[2]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
             self._last = (w.tobytes(), r.tobytes(), alpha_max)
+            self._last_w = w
             self._warm = None  # HiGHS' basis moved: a re-solver starts from it
             sol = self.session.solve(duals=True)
             self._last_optimal = sol.status == "optimal"
@@ -246,20 +248,24 @@ class StateLPs:
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return fallback(lp, e, scaling=s)
 
-    def _warm_solve(self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float) -> LPSolution | None:
+    def _warm_solve(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float
+    ) -> LPSolution | None:
         """The LP of (w, r) re-solved by the compiled dual simplex ([`WarmRows`][mjtvm.lp.warm.WarmRows]) when it
         differs from the session's last only in the balance rows' bounds, from the basis of
         the last re-solve (else HiGHS' last); ``None`` when it does not or the kernel gave up
         (then HiGHS solves it, from its own basis). The answer is certified as HiGHS' are."""
         if r.tobytes() != self._last[1] or alpha_max != self._last[2] or w.tobytes() == self._last[0]:
             return None
+        assert self.session is not None and self._jit is not None  # solve() asks only then
         if self._warm is None:
             if not self._last_optimal:  # no optimal basis to start from
                 return None
             from mjtvm.lp.warm import WarmRows
 
+            lower, upper, _ = self._bounds(self._last_w, alpha_max)
             try:
-                self._warm = WarmRows(self.session, self._jit)
+                self._warm = WarmRows(self.session, self._jit, lower, upper)
             except ValueError:  # a basis the kernel calls singular: HiGHS solves this LP
                 return None
         lower, upper, _ = self._bounds(w, alpha_max)
