@@ -210,6 +210,9 @@ def resolve(
     binv: np.ndarray,
     value: np.ndarray,
     y: np.ndarray,
+    x_b: np.ndarray,
+    d: np.ndarray,
+    fresh: bool,
     tol: float,
     cap: int,
 ) -> tuple[int, int]:
@@ -231,7 +234,15 @@ def resolve(
     binv
         ``(m, m)`` the inverse of the basis matrix (`invert()`); updated in place.
     value, y
-        ``(n + m,)`` and ``(m,)``, written: the variables' values and the row duals.
+        ``(n + m,)`` and ``(m,)``: the variables' values and the row duals, written; kept
+        by the caller between re-solves of one basis.
+    x_b, d
+        ``(m,)`` and ``(n + m,)``: the basic variables' values and the reduced costs, kept
+        by the caller between re-solves (only the values of nonbasic variables whose bounds
+        moved are then sent through the inverse: ``m`` flops each).
+    fresh
+        Whether ``value``, ``y``, ``x_b`` and ``d`` are to be computed afresh (the first
+        re-solve after `invert()`), rather than carried over from the last re-solve.
     tol
         The primal and dual feasibility tolerance (HiGHS': 1e-9).
     cap
@@ -252,24 +263,34 @@ def resolve(
     for j in range(nv):  # nonbasic values at their (new) bounds
         if not isbasic[j]:
             if at_upper[j] and upper[j] < np.inf:
-                value[j] = upper[j]
+                v = upper[j]
             elif lower[j] > -np.inf:
-                value[j] = lower[j]
+                v = lower[j]
                 at_upper[j] = False
             elif upper[j] < np.inf:
-                value[j] = upper[j]
+                v = upper[j]
                 at_upper[j] = True
             else:
-                value[j] = 0.0
-    x_b = np.empty(m)
-    _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
-    d = np.zeros(nv)  # reduced costs of the nonbasic variables
-    for j in range(nv):
-        if not isbasic[j]:
-            c = cost[j] if j < n else 0.0
-            d[j] = c - _dot(indptr, indices, data, n, j, y)
-            if not _dual_ok(d[j], lower[j], upper[j], at_upper[j], tol):
-                return NUMERICS, 0
+                v = 0.0
+            if not fresh and v != value[j]:  # x_B -= B^{-1} a_j (v - old)
+                step = v - value[j]
+                if j >= n:
+                    for p in range(m):
+                        x_b[p] += step * binv[p, j - n]
+                else:
+                    for t in range(indptr[j], indptr[j + 1]):
+                        k, a = indices[t], data[t]
+                        for p in range(m):
+                            x_b[p] -= step * a * binv[p, k]
+            value[j] = v
+    if fresh:
+        _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+        for j in range(nv):
+            if not isbasic[j]:
+                c = cost[j] if j < n else 0.0
+                d[j] = c - _dot(indptr, indices, data, n, j, y)
+                if not _dual_ok(d[j], lower[j], upper[j], at_upper[j], tol):
+                    return NUMERICS, 0
     alpha_r = np.zeros(nv)
     col = np.zeros(m)
     it = 0
@@ -370,19 +391,60 @@ def resolve(
                 for c in range(m):
                     binv[p, c] -= g * binv[r, c]
         it += 1
-    # Verified afresh from the inverse: primal and dual feasible within tol.
-    _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+    # Verified: the basic values within their bounds and [A | -I] (x, r) = 0 to round-off (a
+    # residual check, nnz flops), else recomputed afresh from the inverse once; then the row
+    # duals afresh (B^{-T} c_B) and every reduced cost feasible within tol.
+    for p in range(m):
+        value[basic[p]] = x_b[p]
+    if not _primal_ok(indptr, indices, data, basic, value, lower, upper, tol):
+        _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+        for p in range(m):
+            value[basic[p]] = x_b[p]
+        if not _primal_ok(indptr, indices, data, basic, value, lower, upper, tol):
+            return NUMERICS, it
+    y[:] = 0.0
     for p in range(m):
         j = basic[p]
-        if x_b[p] < lower[j] - tol or x_b[p] > upper[j] + tol:
-            return NUMERICS, it
-        value[j] = x_b[p]
+        cb = cost[j] if j < n else 0.0
+        if cb != 0.0:
+            for i in range(m):
+                y[i] += cb * binv[p, i]
     for j in range(nv):
-        if not isbasic[j]:
-            c = cost[j] if j < n else 0.0
-            if not _dual_ok(c - _dot(indptr, indices, data, n, j, y), lower[j], upper[j], at_upper[j], tol):
+        c = cost[j] if j < n else 0.0
+        dj = c - _dot(indptr, indices, data, n, j, y)
+        if isbasic[j]:
+            if abs(dj) > tol:
                 return NUMERICS, it
+            d[j] = 0.0
+        else:
+            if not _dual_ok(dj, lower[j], upper[j], at_upper[j], tol):
+                return NUMERICS, it
+            d[j] = dj
     return OPTIMAL, it
+
+
+@numba.njit(cache=True)
+def _primal_ok(indptr, indices, data, basic, value, lower, upper, tol):  # type: ignore[no-untyped-def]
+    """Whether the basic values are within their bounds (``tol``) and the rows' residuals
+    ``|A x - r|`` within ``tol`` of the magnitudes they are computed from."""
+    n = indptr.shape[0] - 1
+    m = basic.shape[0]
+    for p in range(m):
+        j = basic[p]
+        if value[j] < lower[j] - tol or value[j] > upper[j] + tol:
+            return False
+    res = np.zeros(m)
+    mag = np.zeros(m)
+    for j in range(n):
+        v = value[j]
+        if v != 0.0:
+            for t in range(indptr[j], indptr[j + 1]):
+                res[indices[t]] += data[t] * v
+                mag[indices[t]] += abs(data[t] * v)
+    for i in range(m):
+        if abs(res[i] - value[n + i]) > tol * max(1.0, mag[i]):
+            return False
+    return True
 
 
 @numba.njit(cache=True)

@@ -80,6 +80,9 @@ class WarmRows:
             raise ValueError("singular basis")
         self._value = np.empty(n + m)
         self._y = np.empty(m)
+        self._x_b = np.empty(m)
+        self._d = np.empty(n + m)
+        self._fresh = True  # the first re-solve computes the values and duals afresh
         self.iterations = 0  #: dual simplex iterations of the last `solve()`
 
     def solve(self, row_lower: NDArray[np.float64], row_upper: NDArray[np.float64]) -> LPSolution | None:
@@ -99,12 +102,16 @@ class WarmRows:
             self._binv,
             self._value,
             self._y,
+            self._x_b,
+            self._d,
+            self._fresh,
             FEASIBILITY_TOL,
             self._jit.CAP,
         )
         if status != self._jit.OPTIMAL:
             self._binv = None
             return None
+        self._fresh = False
         n = len(self._cost)
         x = self._value[:n]
         g = self._g
