@@ -6,7 +6,7 @@ Problem 2's LPs of one RVDS vertex differ only in the right-hand side of the bal
 previous one they take 0-12 dual simplex iterations, while a HiGHS ``run()`` costs ~160 us
 of per-call set-up (its model checks, its solver initialisation, its KKT check) whatever
 the iterations. Here the basis matrix is inverted once (Gauss-Jordan with partial pivoting,
-dense, a few hundred rows) and kept with its basis across the re-solves, each a few
+dense, a few hundred rows: [`basis_jit`][mjtvm.lp.basis_jit]) and kept with its basis across the re-solves, each a few
 textbook dual simplex iterations (Koberstein 2005, Algorithm 2, with Harris' two-pass ratio
 test and exact dual steepest-edge pricing, which the dense inverse gives for free).
 
@@ -30,7 +30,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["CAP", "INFEASIBLE", "ITERATIONS", "NUMERICS", "OPTIMAL", "SINGULAR", "invert", "resolve"]
+from mjtvm.lp.basis_jit import column_dot, values_and_duals
+
+__all__ = ["CAP", "INFEASIBLE", "ITERATIONS", "NUMERICS", "OPTIMAL", "SINGULAR", "resolve"]
 
 OPTIMAL = 0
 """Status: optimal, verified primal and dual feasible from a fresh solve with the inverse."""
@@ -46,155 +48,6 @@ NUMERICS = 4
 
 CAP = 50  #: dual simplex iterations per re-solve at most
 _PIVOT_TOL = 1e-9  # a pivot row entry smaller than this (relative to the row's largest) cannot enter
-_SINGULAR_TOL = 1e-11  # Gauss-Jordan pivot below this times the column's largest: singular
-
-
-@numba.njit(cache=True)
-def invert(
-    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, basic: np.ndarray, binv: np.ndarray
-) -> bool:
-    """Write ``B^{-1}`` into ``binv`` (``(m, m)``), ``B`` the columns ``basic`` of
-    ``[A | -I]`` (``A`` in CSC arrays ``indptr, indices, data``; ``basic[p] >= n`` is row
-    ``basic[p] - n``'s activity). Row ``p`` of the inverse belongs to ``basic[p]``.
-    Returns ``False`` where ``B`` is singular (a pivot at most ``_SINGULAR_TOL`` times its
-    column's largest entry).
-
-    Only the block ``M = A[R, C]`` needs eliminating (``C`` the basic columns, ``R`` the rows
-    whose activity is nonbasic, as many): with ``z_C = M^{-1} v_R``, the basic activity of
-    row ``i`` is ``A[i, C] z_C - v_i``. Gauss-Jordan with partial pivoting on ``M`` (most
-    of a basis is row activities: 123 of 175 on the 22-joint hand's LPs)."""
-    m = binv.shape[0]
-    n = indptr.shape[0] - 1
-    row_basic = np.zeros(m, dtype=np.bool_)
-    k = 0
-    for p in range(m):
-        if basic[p] >= n:
-            row_basic[basic[p] - n] = True
-        else:
-            k += 1
-    rpos = np.full(m, -1, dtype=np.int64)  # row i in R: its index in M
-    rows = np.empty(k, dtype=np.int64)
-    c = 0
-    for i in range(m):
-        if not row_basic[i]:
-            if c >= k:
-                return False
-            rpos[i] = c
-            rows[c] = i
-            c += 1
-    if c != k:
-        return False
-    mm = np.zeros((k, k))
-    cols = np.empty(k, dtype=np.int64)  # M's column c: the basic column at position cols[c]
-    c = 0
-    for p in range(m):
-        j = basic[p]
-        if j < n:
-            cols[c] = p
-            for t in range(indptr[j], indptr[j + 1]):
-                q = rpos[indices[t]]
-                if q >= 0:
-                    mm[q, c] = data[t]
-            c += 1
-    inv = np.zeros((k, k))
-    for i in range(k):
-        inv[i, i] = 1.0
-    pivot_row = np.empty(k, dtype=np.int64)
-    used = np.zeros(k, dtype=np.bool_)
-    for p in range(k):
-        best, arg, big = 0.0, -1, 0.0
-        for i in range(k):
-            v = abs(mm[i, p])
-            if v > big:
-                big = v
-            if not used[i] and v > best:
-                best, arg = v, i
-        if arg < 0 or best <= _SINGULAR_TOL * big:
-            return False
-        used[arg] = True
-        pivot_row[p] = arg
-        f = 1.0 / mm[arg, p]
-        for q in range(p, k):
-            mm[arg, q] *= f
-        for q in range(k):
-            inv[arg, q] *= f
-        for i in range(k):
-            g = mm[i, p]
-            if i != arg and g != 0.0:
-                for q in range(p, k):
-                    if mm[arg, q] != 0.0:
-                        mm[i, q] -= g * mm[arg, q]
-                for q in range(k):
-                    if inv[arg, q] != 0.0:
-                        inv[i, q] -= g * inv[arg, q]
-    # M's column c was reduced to e_{pivot_row[c]}: M^{-1}'s row c is inv's row pivot_row[c].
-    binv[:, :] = 0.0
-    slack_pos = np.full(m, -1, dtype=np.int64)
-    for p in range(m):
-        if basic[p] >= n:
-            slack_pos[basic[p] - n] = p
-            binv[p, basic[p] - n] = -1.0
-    for c in range(k):
-        p = cols[c]
-        minv_row = inv[pivot_row[c]]
-        for q in range(k):
-            binv[p, rows[q]] = minv_row[q]
-        j = basic[p]
-        for t in range(indptr[j], indptr[j + 1]):
-            sp = slack_pos[indices[t]]
-            a = data[t]
-            if sp >= 0 and a != 0.0:
-                for q in range(k):
-                    binv[sp, rows[q]] += a * minv_row[q]
-    return True
-
-
-@numba.njit(cache=True)
-def _column(indptr, indices, data, n, j, v, out):  # type: ignore[no-untyped-def]
-    """``out += v * (column j of [A | -I])``."""
-    if j >= n:
-        out[j - n] -= v
-    else:
-        for t in range(indptr[j], indptr[j + 1]):
-            out[indices[t]] += v * data[t]
-
-
-@numba.njit(cache=True)
-def _dot(indptr, indices, data, n, j, y):  # type: ignore[no-untyped-def]
-    """``(column j of [A | -I]) . y``."""
-    if j >= n:
-        return -y[j - n]
-    s = 0.0
-    for t in range(indptr[j], indptr[j + 1]):
-        s += data[t] * y[indices[t]]
-    return s
-
-
-@numba.njit(cache=True)
-def _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y):  # type: ignore[no-untyped-def]
-    """``x_B = -B^{-1} N x_N`` (``value`` holds the nonbasic values; its basic entries are
-    ignored) and ``y = B^{-T} c_B``, from the inverse."""
-    m = binv.shape[0]
-    n = indptr.shape[0] - 1
-    isbasic = np.zeros(n + m, dtype=np.bool_)
-    for p in range(m):
-        isbasic[basic[p]] = True
-    rhs = np.zeros(m)
-    for j in range(n + m):
-        if not isbasic[j] and value[j] != 0.0:
-            _column(indptr, indices, data, n, j, -value[j], rhs)
-    for p in range(m):
-        s = 0.0
-        for i in range(m):
-            s += binv[p, i] * rhs[i]
-        x_b[p] = s
-    y[:] = 0.0
-    for p in range(m):
-        j = basic[p]
-        cb = cost[j] if j < n else 0.0
-        if cb != 0.0:
-            for i in range(m):
-                y[i] += cb * binv[p, i]
 
 
 @numba.njit(cache=True)
@@ -232,7 +85,8 @@ def resolve(
         ``(n + m,)`` bool: a nonbasic variable is at its upper bound (else at its lower bound,
         at 0 where it has none; ignored for basic ones); updated in place.
     binv
-        ``(m, m)`` the inverse of the basis matrix (`invert()`); updated in place.
+        ``(m, m)`` the inverse of the basis matrix
+        ([`invert()`][mjtvm.lp.basis_jit.invert]); updated in place.
     value, y
         ``(n + m,)`` and ``(m,)``: the variables' values and the row duals, written; kept
         by the caller between re-solves of one basis.
@@ -242,7 +96,7 @@ def resolve(
         moved are then sent through the inverse: ``m`` flops each).
     fresh
         Whether ``value``, ``y``, ``x_b`` and ``d`` are to be computed afresh (the first
-        re-solve after `invert()`), rather than carried over from the last re-solve.
+        re-solve after [`invert()`][mjtvm.lp.basis_jit.invert]), rather than carried over from the last re-solve.
     tol
         The primal and dual feasibility tolerance (HiGHS': 1e-9).
     cap
@@ -284,11 +138,11 @@ def resolve(
                             x_b[p] -= step * a * binv[p, k]
             value[j] = v
     if fresh:
-        _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+        values_and_duals(indptr, indices, data, cost, basic, value, binv, x_b, y)
         for j in range(nv):
             if not isbasic[j]:
                 c = cost[j] if j < n else 0.0
-                d[j] = c - _dot(indptr, indices, data, n, j, y)
+                d[j] = c - column_dot(indptr, indices, data, n, j, y)
                 if not _dual_ok(d[j], lower[j], upper[j], at_upper[j], tol):
                     return NUMERICS, 0
     alpha_r = np.zeros(nv)
@@ -325,7 +179,7 @@ def resolve(
             if isbasic[j] or lower[j] == upper[j]:
                 alpha_r[j] = 0.0
             else:
-                a = _dot(indptr, indices, data, n, j, binv[r])
+                a = column_dot(indptr, indices, data, n, j, binv[r])
                 alpha_r[j] = a
                 if abs(a) > big:
                     big = abs(a)
@@ -397,7 +251,7 @@ def resolve(
     for p in range(m):
         value[basic[p]] = x_b[p]
     if not _primal_ok(indptr, indices, data, basic, value, lower, upper, tol):
-        _fresh(indptr, indices, data, cost, basic, value, binv, x_b, y)
+        values_and_duals(indptr, indices, data, cost, basic, value, binv, x_b, y)
         for p in range(m):
             value[basic[p]] = x_b[p]
         if not _primal_ok(indptr, indices, data, basic, value, lower, upper, tol):
@@ -411,7 +265,7 @@ def resolve(
                 y[i] += cb * binv[p, i]
     for j in range(nv):
         c = cost[j] if j < n else 0.0
-        dj = c - _dot(indptr, indices, data, n, j, y)
+        dj = c - column_dot(indptr, indices, data, n, j, y)
         if isbasic[j]:
             if abs(dj) > tol:
                 return NUMERICS, it

@@ -60,6 +60,8 @@ class WarmRows:
         row_lower: NDArray[np.float64],
         row_upper: NDArray[np.float64],
     ) -> None:
+        from mjtvm.lp.basis_jit import invert  # numba imports: jit is the compiled module
+
         held = session.held()
         self._jit = jit
         a = held.a
@@ -76,7 +78,7 @@ class WarmRows:
             ~np.isfinite(lower_of) | (np.abs(held.value - upper_of) < np.abs(held.value - lower_of))
         )
         self._binv: NDArray[np.float64] | None = np.empty((m, m))
-        if not jit.invert(*self._a, self._basic, self._binv):
+        if not invert(*self._a, self._basic, self._binv):
             raise ValueError("singular basis")
         self._value = np.empty(n + m)
         self._y = np.empty(m)
