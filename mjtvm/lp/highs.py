@@ -10,23 +10,22 @@ call raises [`SolverError`][mjtvm.errors.SolverError]. A ``Highs`` is constructe
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError, SolverError
-from mjtvm.lp.csc import Csc, as_csc
-from mjtvm.lp.highspy_start import highspy_module, new_highs
+from mjtvm.lp.csc import as_csc
+from mjtvm.lp.held import HeldLP, basic_variables, merge_columns
+from mjtvm.lp.highspy_start import acquire_highs, give_back, highspy_module, new_highs
 from mjtvm.lp.lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from mjtvm.lp.scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
-__all__ = ["HeldLP", "HighsSession", "new_highs", "observe_runs"]
+__all__ = ["HighsSession", "new_highs", "observe_runs"]
 
 #: Callbacks told the wall time (s) of every HiGHS ``run`` of every session (observe_runs).
 _RUN_OBSERVERS: list[Callable[[float], None]] = []
@@ -60,59 +59,6 @@ _TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 #: HiGHS' default, ``threads = 0``): HiGHS then refuses every ``run`` with ``threads = 1``
 #: (kError), and ``threads = 0`` takes the scheduler as it is (see `HighsSession._run()`).
 _THREADS = [1]
-
-
-_IDLE: list[Any] = []  # Highs instances given back by finished sessions (release), this process's
-_IDLE_PID = [os.getpid()]
-_IDLE_MAX = 4
-
-
-def _acquire_highs():  # type: ignore[no-untyped-def]
-    """An idle ``Highs`` given back by [`HighsSession.release()`][mjtvm.lp.highs.HighsSession.release], else [`new_highs()`][mjtvm.lp.highspy_start.new_highs].
-
-    Constructing a ``Highs`` costs ~50 us, 2 % of a Problem 2 state; a reused one gets a new
-    model (``passModel`` discards the old model, basis and solution) and the session's options,
-    so its solves are the same, bit for bit (tested). Instances are never shared across a
-    fork: the list is emptied when the process id changes."""
-    if _IDLE_PID[0] != os.getpid():
-        _IDLE.clear()
-        _IDLE_PID[0] = os.getpid()
-    try:
-        return _IDLE.pop()
-    except IndexError:
-        return new_highs()
-
-
-@dataclass(frozen=True, eq=False)
-class HeldLP:
-    """The equilibrated LP a [`HighsSession`][mjtvm.lp.highs.HighsSession] holds and its last basis ([`HighsSession.held()`][mjtvm.lp.highs.HighsSession.held]).
-
-    Attributes
-    ----------
-    a
-        ``(m, n)`` the matrix.
-    cost
-        ``(n,)`` the costs.
-    col_lower, col_upper
-        ``(n,)`` the column bounds (``+-inf`` where none).
-    basic
-        ``(m,)`` the basic variables: ``j < n`` column ``j``, ``n + i`` row ``i``'s activity.
-    value
-        ``(n + m,)`` the columns' values, then the row activities, of the last solve.
-    col_scale, row_scale, cost_scale
-        The factors: ``x = col_scale * x_s``, row bounds ``row_scale * bounds``, row duals
-        ``y = row_scale * y_s / cost_scale`` (as [`HighsSession.solve()`][mjtvm.lp.highs.HighsSession.solve] unscales).
-    """
-
-    a: Csc
-    cost: NDArray[np.float64]
-    col_lower: NDArray[np.float64]
-    col_upper: NDArray[np.float64]
-    basic: NDArray[np.int64]
-    value: NDArray[np.float64]
-    col_scale: NDArray[np.float64]
-    row_scale: NDArray[np.float64]
-    cost_scale: float
 
 
 class HighsSession:
@@ -152,7 +98,7 @@ class HighsSession:
         finished session gave back (`release()`). ``options`` (names of
         ``_TUNABLE_DEFAULTS`` only) are this session's, kept through `solve()`'s retries."""
         self = cls.__new__(cls)
-        self._load(scaled, scaling, cost, col_lower, col_upper, _acquire_highs(), options or {})
+        self._load(scaled, scaling, cost, col_lower, col_upper, acquire_highs(), options or {})
         return self
 
     def _load(
@@ -241,8 +187,8 @@ class HighsSession:
         unusable afterwards). Only for a session without `set_option()` (the options given
         at construction are set again by every session) whose last call returned normally."""
         h, self.highs = self.highs, None
-        if h is not None and len(_IDLE) < _IDLE_MAX and _IDLE_PID[0] == os.getpid():
-            _IDLE.append(h)
+        if h is not None:
+            give_back(h)
 
     def _check(self, status: Any, what: str) -> None:
         """kOk and kWarning pass (a warning is HiGHS informing, e.g. of a dropped tiny
@@ -326,35 +272,17 @@ class HighsSession:
         """The equilibrated LP HiGHS holds now (every change sent included), with the basis
         and the primal values of its last solve: a warm start for another solver of the
         same LP ([`WarmRows`][mjtvm.lp.warm.WarmRows]). Call after an optimal `solve()`."""
-        a = as_csc(self._held)
-        indptr, indices, data = a.indptr, a.indices, a.data
-        for col, (rows, v) in sorted(self._written.items()):  # merge the writes, column by column
-            lo, hi = int(indptr[col]), int(indptr[col + 1])
-            r_all = np.concatenate([indices[lo:hi], np.asarray(rows, dtype=indices.dtype)])
-            v_all = np.concatenate([data[lo:hi], v])
-            # the last occurrence of a row wins (the write); zeros are not stored
-            order = np.lexsort((np.arange(len(r_all)), r_all))
-            r_s, v_s = r_all[order], v_all[order]
-            last = np.append(r_s[1:] != r_s[:-1], True)
-            keep = last & (v_s != 0.0)
-            r_new, v_new = r_s[keep], v_s[keep]
-            indices = np.concatenate([indices[:lo], r_new, indices[hi:]])
-            data = np.concatenate([data[:lo], v_new, data[hi:]])
-            indptr = indptr.copy()
-            indptr[col + 1 :] += len(r_new) - (hi - lo)
         status, basic = self.highs.getBasicVariables()
         self._check(status, "getBasicVariables")
-        basic = np.asarray(basic, dtype=np.int64)
-        basic = np.where(basic >= 0, basic, a.shape[1] - 1 - basic)  # HiGHS: row i is -(1 + i)
         sol = self.highs.getSolution()
         with np.errstate(invalid="ignore"):  # inf / positive stays inf
             lower, upper = self._col_lower / self._col, self._col_upper / self._col
         return HeldLP(
-            Csc(data, indices.astype(np.int32), indptr.astype(np.int32), a.shape),
+            merge_columns(as_csc(self._held), self._written),
             self._sent_cost.copy(),
             lower,
             upper,
-            basic,
+            basic_variables(basic, self.num_col),
             np.concatenate([np.asarray(sol.col_value), np.asarray(sol.row_value)]),
             self._col.copy(),
             self.scaling.row,
