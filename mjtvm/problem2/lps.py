@@ -12,7 +12,7 @@ state alone ([`physical_sizes()`][mjtvm.problem2.sizes.physical_sizes]).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -33,16 +33,16 @@ from mjtvm.lp.solvers import (
     cost_scale,
     equilibrate,
     fallback,
-    solve_clarabel,
 )
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.assembly import BoxForm, assemble
 from mjtvm.problem2.sizes import physical_sizes
+from mjtvm.problem2.verdict import Check, Verdict, other_ways
 
 if TYPE_CHECKING:
     from mjtvm.lp.warm import WarmRows
 
-__all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs", "Verdict"]
+__all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs"]
 
 ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
 #: HiGHS options of Problem 2's sessions: dual edge weights Devex (1) rather than HiGHS'
@@ -387,44 +387,19 @@ class StateLPs:
         r: NDArray[np.float64],
         alpha_max: float,
         settled: Settled,
-        cert: tuple[bool, Certificate | None] | None,
+        cert: Check,
     ) -> Verdict:
         """The verdict of pair (w, r) from its settled LP and the check of its answer
-        (`certified()`'s second half: the other ways where the check failed)."""
-        first = settled.solution
+        (`certified()`'s second half: the other ways where the check failed,
+        [`other_ways()`][mjtvm.problem2.verdict.other_ways])."""
         if cert is not None and cert[0]:
             return Verdict(settled, cert[1], True)
-        tried = [f"{settled.solver}: {_describe(first, cert)}"]
         lp, _ = self.lp(w, r, alpha_max=alpha_max)
-        ones = Scaling(np.ones(lp.A.shape[0]), np.ones(lp.A.shape[1]), 1.0)
-        ways = (
-            ("highs (cold)", "highs", lambda: HighsSession(lp).solve(duals=True)),
-            ("clarabel", "clarabel", lambda: solve_clarabel(lp)),
-            ("highs (own scaling)", "highs", lambda: HighsSession(lp, scaling=ones).solve(duals=True)),
-        )
-        for name, solver, run in ways:
-            try:
-                other = run()
-            except SolverError as e:
-                tried.append(f"{name}: {e.status}")
-                continue
-            c2 = self.check(w, r, alpha_max, other)
-            if first.status == "unbounded" and other.status == "unbounded":
-                return Verdict(settled, None, True)  # confirmed by a second solve
-            if c2 is not None and c2[0]:
-                note = f"{settled.solver}'s answer ({first.status}) not certified ({_describe(first, cert)}); certified by {name}: {other.status}"
-                return Verdict(Settled(other, solver, _join(settled.note, note)), c2[1], True)
-            tried.append(f"{name}: {_describe(other, c2)}")
-        note = "not certified: " + "; ".join(tried)
-        return Verdict(
-            Settled(first, settled.solver, _join(settled.note, note)),
-            None if cert is None else cert[1],
-            False,
-        )
+        return other_ways(settled, cert, lp, lambda sol: self.check(w, r, alpha_max, sol))
 
     def check(
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
-    ) -> tuple[bool, Certificate | None] | None:
+    ) -> Check:
         """``(certified, certificate)`` of an optimal or infeasible ``sol``; ``None`` for an
         unbounded one (no certificate)."""
         if sol.status == "optimal":
@@ -433,27 +408,3 @@ class StateLPs:
         if sol.status == "infeasible":
             return self.proves_infeasible(w, r, alpha_max, sol), None
         return None
-
-
-def _describe(sol: LPSolution, check: tuple[bool, Certificate | None] | None) -> str:
-    """What a failed check of ``sol`` found, in a few words."""
-    if sol.status == "optimal" and check is not None and check[1] is not None:
-        return check[1].describe()
-    if sol.status == "infeasible":
-        return "infeasible without Farkas multipliers that prove it"
-    return f"{sol.status} (not certified by itself)"
-
-
-def _join(a: str | None, b: str) -> str:
-    return b if a is None else f"{a}; {b}"
-
-
-@dataclass(frozen=True, eq=False)
-class Verdict:
-    """A settled LP, the certificate of its optimal answer (``None`` otherwise), and whether
-    the answer is certified (optimal: its certificate holds; infeasible: Farkas multipliers
-    prove it; unbounded: a second solve agrees)."""
-
-    settled: Settled
-    certificate: Certificate | None
-    certified: bool

@@ -29,7 +29,7 @@ from mjtvm.lp.solvers import (
 from mjtvm.model.friction import FrictionReport, interval_corners, nominal_state
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.assembly import Assembly, BoxForm
-from mjtvm.problem2.lps import StateLPs, Verdict
+from mjtvm.problem2.lps import StateLPs
 from mjtvm.problem2.result import Diagnosis
 from mjtvm.problem2.result import (  # re-exported: the result types lived here
     PairStatus as PairStatus,
@@ -49,6 +49,7 @@ from mjtvm.problem2.result import (
 from mjtvm.problem2.result import (
     finite_or_none as finite_or_none,
 )
+from mjtvm.problem2.verdict import Verdict
 
 __all__ = ["tvmmp"]
 
