@@ -156,7 +156,7 @@ def rank_row(
             )
         state = with_limit_horizon(grasp.state(), limit_horizon)
         row = replace(row, contacts=len(state.contacts))
-        result = tvmmp(state, witnesses=verify, diagnose=True)
+        result = tvmmp(state, witnesses=verify, diagnose=True, compiled=True)  # a batch: numba's re-solves
     except NoContactError as e:
         return _failed(
             replace(

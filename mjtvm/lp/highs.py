@@ -10,7 +10,6 @@ call raises [`SolverError`][mjtvm.errors.SolverError]. A ``Highs`` is constructe
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -20,7 +19,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError, SolverError
-from mjtvm.lp.highspy_start import highspy_module, new_highs
+from mjtvm.lp.csc import as_csc
+from mjtvm.lp.held import HeldLP, basic_variables, merge_columns
+from mjtvm.lp.highspy_start import acquire_highs, give_back, highspy_module, new_highs
 from mjtvm.lp.lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from mjtvm.lp.scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
@@ -60,27 +61,6 @@ _TUNABLE_DEFAULTS: dict[str, object] = {"simplex_dual_edge_weight_strategy": -1}
 _THREADS = [1]
 
 
-_IDLE: list[Any] = []  # Highs instances given back by finished sessions (release), this process's
-_IDLE_PID = [os.getpid()]
-_IDLE_MAX = 4
-
-
-def _acquire_highs():  # type: ignore[no-untyped-def]
-    """An idle ``Highs`` given back by [`HighsSession.release()`][mjtvm.lp.highs.HighsSession.release], else [`new_highs()`][mjtvm.lp.highspy_start.new_highs].
-
-    Constructing a ``Highs`` costs ~50 us, 2 % of a Problem 2 state; a reused one gets a new
-    model (``passModel`` discards the old model, basis and solution) and the session's options,
-    so its solves are the same, bit for bit (tested). Instances are never shared across a
-    fork: the list is emptied when the process id changes."""
-    if _IDLE_PID[0] != os.getpid():
-        _IDLE.clear()
-        _IDLE_PID[0] = os.getpid()
-    try:
-        return _IDLE.pop()
-    except IndexError:
-        return new_highs()
-
-
 class HighsSession:
     r"""A HiGHS instance holding one equilibrated LP, re-solved after small modifications.
 
@@ -118,7 +98,7 @@ class HighsSession:
         finished session gave back (`release()`). ``options`` (names of
         ``_TUNABLE_DEFAULTS`` only) are this session's, kept through `solve()`'s retries."""
         self = cls.__new__(cls)
-        self._load(scaled, scaling, cost, col_lower, col_upper, _acquire_highs(), options or {})
+        self._load(scaled, scaling, cost, col_lower, col_upper, acquire_highs(), options or {})
         return self
 
     def _load(
@@ -186,6 +166,8 @@ class HighsSession:
             np.zeros(n, dtype=np.int32),  # every column continuous (HiGHS reads n entries: never empty)
         )
         self._check(status, "passModel")
+        self._held = slp.A  # the matrix HiGHS holds (held()), with set_column's writes:
+        self._written: dict[int, tuple[list[int], NDArray[np.float64]]] = {}
         self._sent_cost = np.array(slp.c, dtype=float)  # the scaled costs HiGHS holds
         # Largest scaled magnitude per row: the reference of set_column's round-off drop.
         self._row_max = np.zeros(a.shape[0])
@@ -205,8 +187,8 @@ class HighsSession:
         unusable afterwards). Only for a session without `set_option()` (the options given
         at construction are set again by every session) whose last call returned normally."""
         h, self.highs = self.highs, None
-        if h is not None and len(_IDLE) < _IDLE_MAX and _IDLE_PID[0] == os.getpid():
-            _IDLE.append(h)
+        if h is not None:
+            give_back(h)
 
     def _check(self, status: Any, what: str) -> None:
         """kOk and kWarning pass (a warning is HiGHS informing, e.g. of a dropped tiny
@@ -280,10 +262,32 @@ class HighsSession:
         kept_mag = mag[kept]
         if kept_mag.size:  # _check_magnitudes, from what is known here: the largest is big
             self._check_range(float(kept_mag.min()), big, "changeCoeff")
+        self._written[col] = (row_list, v)
         change, error = self.highs.changeCoeff, self._error
         for r, x in zip(row_list, v.tolist()):
             if change(r, col, x) == error:
                 raise SolverError("highs", "changeCoeff: kError")
+
+    def held(self) -> HeldLP:
+        """The equilibrated LP HiGHS holds now (every change sent included), with the basis
+        and the primal values of its last solve: a warm start for another solver of the
+        same LP ([`WarmRows`][mjtvm.lp.warm.WarmRows]). Call after an optimal `solve()`."""
+        status, basic = self.highs.getBasicVariables()
+        self._check(status, "getBasicVariables")
+        sol = self.highs.getSolution()
+        with np.errstate(invalid="ignore"):  # inf / positive stays inf
+            lower, upper = self._col_lower / self._col, self._col_upper / self._col
+        return HeldLP(
+            merge_columns(as_csc(self._held), self._written),
+            self._sent_cost.copy(),
+            lower,
+            upper,
+            basic_variables(basic, self.num_col),
+            np.concatenate([np.asarray(sol.col_value), np.asarray(sol.row_value)]),
+            self._col.copy(),
+            self.scaling.row,
+            self.scaling.cost,
+        )
 
     def start_basis(self, basic_cols: NDArray[np.int64], nonbasic_rows: NDArray[np.int64]) -> None:
         """Start the next solve from the basis of the slacks with ``basic_cols`` swapped in
@@ -312,7 +316,9 @@ class HighsSession:
         """Change the bounds of some rows."""
         f = self.scaling.row[rows]
         lo, up = f * np.asarray(lower, dtype=float), f * np.asarray(upper, dtype=float)
-        if not math.isfinite(float(lo.sum() + up.sum())):  # rare: a free row's side (or a huge sum)
+        with np.errstate(invalid="ignore"):  # -inf + inf: nan, not finite either
+            finite = math.isfinite(float(lo.sum() + up.sum()))
+        if not finite:  # rare: a free row's side (or a huge sum)
             inf = self._hs.kHighsInf
             lo = np.where(np.isfinite(lo), lo, -inf)
             up = np.where(np.isfinite(up), up, inf)

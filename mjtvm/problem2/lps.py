@@ -12,19 +12,20 @@ state alone ([`physical_sizes()`][mjtvm.problem2.sizes.physical_sizes]).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import SolverError
 from mjtvm.lp.certificate import Certificate, Certifier
+from mjtvm.lp.lp import LPSolution
 from mjtvm.lp.roundoff import drop_cancellation, drop_data_roundoff
 from mjtvm.lp.scaling import ScaledMatrix
 from mjtvm.lp.solvers import (
     HighsSession,
     LinearProgram,
-    LPSolution,
     Scaling,
     Settled,
     clarabel_checked,
@@ -32,13 +33,16 @@ from mjtvm.lp.solvers import (
     cost_scale,
     equilibrate,
     fallback,
-    solve_clarabel,
 )
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.assembly import BoxForm, assemble
 from mjtvm.problem2.sizes import physical_sizes
+from mjtvm.problem2.verdict import Check, Verdict, other_ways
 
-__all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs", "Verdict"]
+if TYPE_CHECKING:
+    from mjtvm.lp.warm import WarmRows
+
+__all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs"]
 
 ZERO_ALPHA = 1e-9  # alpha moving no equilibrated row by more than this is an exact 0 (solver tolerance 1e-9)
 #: HiGHS options of Problem 2's sessions: dual edge weights Devex (1) rather than HiGHS'
@@ -63,8 +67,18 @@ class StateLPs:
     vertex (its largest entry ``A_twist r_l`` brought to 1, `column_factor()`).
     """
 
-    def __init__(self, state: GraspState, box: BoxForm, solver: str) -> None:
+    def __init__(self, state: GraspState, box: BoxForm, solver: str, *, compiled: bool = False) -> None:
         self.state, self.solver, self.box = state, solver, box
+        # The compiled re-solves of the LPs that differ from HiGHS' last only in the balance
+        # rows' bounds (mjtvm.lp.warm; numba, imported here on the batch paths only).
+        self._jit = None
+        if compiled and solver == "highs":
+            from mjtvm.lp.warm import kernels
+
+            self._jit = kernels()
+        self._warm: WarmRows | None = None  # the re-solver of HiGHS' last (r, alpha_max)
+        self._last_optimal = False  # whether HiGHS' last solve was optimal (its basis serves)
+        self._last_w = np.zeros(0)  # the w of HiGHS' last solve
         self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
         n = asm.num_variables
         self.alpha_col = n
@@ -205,6 +219,10 @@ class StateLPs:
         if self.solver != "highs":
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return clarabel_checked(lp, scaling=s)
+        if self._jit is not None and self.session is not None:
+            sol = self._warm_solve(w, r, alpha_max)
+            if sol is not None:
+                return Settled(sol, "highs")
         try:
             if self.session is None:
                 self.session = self._session(w, r, alpha_max)
@@ -219,11 +237,42 @@ class StateLPs:
                 if alpha_max != self._last[2]:
                     ses.set_col_bounds(self.alpha_col, 0.0, alpha_max)
             self._last = (w.tobytes(), r.tobytes(), alpha_max)
-            return Settled(self.session.solve(duals=True), "highs")
+            self._last_w = w
+            self._warm = None  # HiGHS' basis moved: a re-solver starts from it
+            sol = self.session.solve(duals=True)
+            self._last_optimal = sol.status == "optimal"
+            return Settled(sol, "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
+            self._warm = None
             lp, s = self.lp(w, r, alpha_max=alpha_max)
             return fallback(lp, e, scaling=s)
+
+    def _warm_solve(
+        self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float
+    ) -> LPSolution | None:
+        """The LP of (w, r) re-solved by the compiled dual simplex ([`WarmRows`][mjtvm.lp.warm.WarmRows]) when it
+        differs from the session's last only in the balance rows' bounds, from the basis of
+        the last re-solve (else HiGHS' last); ``None`` when it does not or the kernel gave up
+        (then HiGHS solves it, from its own basis). The answer is certified as HiGHS' are."""
+        if r.tobytes() != self._last[1] or alpha_max != self._last[2] or w.tobytes() == self._last[0]:
+            return None
+        assert self.session is not None and self._jit is not None  # solve() asks only then
+        if self._warm is None:
+            if not self._last_optimal:  # no optimal basis to start from
+                return None
+            from mjtvm.lp.warm import WarmRows
+
+            lower, upper, _ = self._bounds(self._last_w, alpha_max)
+            try:
+                self._warm = WarmRows(self.session, self._jit, lower, upper)
+            except ValueError:  # a basis the kernel calls singular: HiGHS solves this LP
+                return None
+        lower, upper, _ = self._bounds(w, alpha_max)
+        sol = self._warm.solve(lower, upper)
+        if sol is None:  # the kernel gave up: HiGHS solves this LP, its basis serves the next
+            self._warm = None
+        return sol
 
     def pair_matrix(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(m, n + 1)`` the unscaled ``[A | A_twist r]`` of the pair (nothing dropped but the
@@ -338,44 +387,19 @@ class StateLPs:
         r: NDArray[np.float64],
         alpha_max: float,
         settled: Settled,
-        cert: tuple[bool, Certificate | None] | None,
+        cert: Check,
     ) -> Verdict:
         """The verdict of pair (w, r) from its settled LP and the check of its answer
-        (`certified()`'s second half: the other ways where the check failed)."""
-        first = settled.solution
+        (`certified()`'s second half: the other ways where the check failed,
+        [`other_ways()`][mjtvm.problem2.verdict.other_ways])."""
         if cert is not None and cert[0]:
             return Verdict(settled, cert[1], True)
-        tried = [f"{settled.solver}: {_describe(first, cert)}"]
         lp, _ = self.lp(w, r, alpha_max=alpha_max)
-        ones = Scaling(np.ones(lp.A.shape[0]), np.ones(lp.A.shape[1]), 1.0)
-        ways = (
-            ("highs (cold)", "highs", lambda: HighsSession(lp).solve(duals=True)),
-            ("clarabel", "clarabel", lambda: solve_clarabel(lp)),
-            ("highs (own scaling)", "highs", lambda: HighsSession(lp, scaling=ones).solve(duals=True)),
-        )
-        for name, solver, run in ways:
-            try:
-                other = run()
-            except SolverError as e:
-                tried.append(f"{name}: {e.status}")
-                continue
-            c2 = self.check(w, r, alpha_max, other)
-            if first.status == "unbounded" and other.status == "unbounded":
-                return Verdict(settled, None, True)  # confirmed by a second solve
-            if c2 is not None and c2[0]:
-                note = f"{settled.solver}'s answer ({first.status}) not certified ({_describe(first, cert)}); certified by {name}: {other.status}"
-                return Verdict(Settled(other, solver, _join(settled.note, note)), c2[1], True)
-            tried.append(f"{name}: {_describe(other, c2)}")
-        note = "not certified: " + "; ".join(tried)
-        return Verdict(
-            Settled(first, settled.solver, _join(settled.note, note)),
-            None if cert is None else cert[1],
-            False,
-        )
+        return other_ways(settled, cert, lp, lambda sol: self.check(w, r, alpha_max, sol))
 
     def check(
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float, sol: LPSolution
-    ) -> tuple[bool, Certificate | None] | None:
+    ) -> Check:
         """``(certified, certificate)`` of an optimal or infeasible ``sol``; ``None`` for an
         unbounded one (no certificate)."""
         if sol.status == "optimal":
@@ -384,27 +408,3 @@ class StateLPs:
         if sol.status == "infeasible":
             return self.proves_infeasible(w, r, alpha_max, sol), None
         return None
-
-
-def _describe(sol: LPSolution, check: tuple[bool, Certificate | None] | None) -> str:
-    """What a failed check of ``sol`` found, in a few words."""
-    if sol.status == "optimal" and check is not None and check[1] is not None:
-        return check[1].describe()
-    if sol.status == "infeasible":
-        return "infeasible without Farkas multipliers that prove it"
-    return f"{sol.status} (not certified by itself)"
-
-
-def _join(a: str | None, b: str) -> str:
-    return b if a is None else f"{a}; {b}"
-
-
-@dataclass(frozen=True, eq=False)
-class Verdict:
-    """A settled LP, the certificate of its optimal answer (``None`` otherwise), and whether
-    the answer is certified (optimal: its certificate holds; infeasible: Farkas multipliers
-    prove it; unbounded: a second solve agrees)."""
-
-    settled: Settled
-    certificate: Certificate | None
-    certified: bool

@@ -29,7 +29,7 @@ from mjtvm.lp.solvers import (
 from mjtvm.model.friction import FrictionReport, interval_corners, nominal_state
 from mjtvm.model.state import GraspState
 from mjtvm.problem2.assembly import Assembly, BoxForm
-from mjtvm.problem2.lps import StateLPs, Verdict
+from mjtvm.problem2.lps import StateLPs
 from mjtvm.problem2.result import Diagnosis
 from mjtvm.problem2.result import (  # re-exported: the result types lived here
     PairStatus as PairStatus,
@@ -49,6 +49,7 @@ from mjtvm.problem2.result import (
 from mjtvm.problem2.result import (
     finite_or_none as finite_or_none,
 )
+from mjtvm.problem2.verdict import Verdict
 
 __all__ = ["tvmmp"]
 
@@ -308,6 +309,7 @@ def tvmmp(
     box: BoxForm = "eliminated",
     witnesses: bool = True,
     diagnose: bool = False,
+    compiled: bool = False,
 ) -> TvmmpResult:
     r"""Solve Problem 2 (eq. 31-35) for one grasp state.
 
@@ -324,6 +326,11 @@ def tvmmp(
     diagnose
         Whether to say why an alpha is 0 or a pair infeasible ([`diagnosis`][mjtvm.problem2.diagnosis],
         a few LPs per such pair; nothing when every alpha is > 0): the result's ``diagnosis``.
+    compiled
+        Whether the LPs that differ from HiGHS' last only in the balance rows' bounds (a new
+        REFS vertex, the same RVDS vertex) are re-solved by the compiled dual simplex of
+        [`warm`][mjtvm.lp.warm] (numba, imported on first use: for batches; where numba does
+        not import, HiGHS solves them). Every answer is certified the same way either way.
 
     Returns
     -------
@@ -341,7 +348,7 @@ def tvmmp(
     if solver not in SOLVERS:
         raise ParamError("solver", f"expected one of {SOLVERS}, got {solver!r}", solver)
     t0 = time.perf_counter()
-    problem = StateLPs(state, box, solver)
+    problem = StateLPs(state, box, solver, compiled=compiled)
     t1 = time.perf_counter()
     pairs = _solve_pairs(problem, state, witnesses)
     if problem.session is not None:  # the pairs are settled: its HiGHS instance serves the next state
@@ -356,7 +363,7 @@ def tvmmp(
         found = diagnose_pairs(state, pairs.alpha, pairs.status, box=box, solver=solver)
     report = None
     if state.friction_margin > 0.0 or any(c.mu_range is not None for c in state.contacts):
-        report = _friction_report(state, solver, box)
+        report = _friction_report(state, solver, box, compiled)
     return TvmmpResult(
         alpha=pairs.alpha,
         status=tuple(tuple(s) for s in pairs.status),
@@ -377,21 +384,21 @@ def tvmmp(
     )
 
 
-def _friction_report(state: GraspState, solver: str, box: BoxForm) -> FrictionReport:
+def _friction_report(state: GraspState, solver: str, box: BoxForm, compiled: bool) -> FrictionReport:
     """The TVMMP at margin 0 (when the margin is not) and the worst TVMMP over the friction
     intervals, the least over the corners of [`interval_corners()`][mjtvm.model.friction.interval_corners]
     (exact by its quasi-concavity argument; each corner's LPs certified as any state's)."""
     certified = True
     nominal = None
     if state.friction_margin > 0.0:
-        res = tvmmp(nominal_state(state), solver=solver, box=box, witnesses=False)
+        res = tvmmp(nominal_state(state), solver=solver, box=box, witnesses=False, compiled=compiled)
         nominal, certified = res.tvmmp, not res.uncertified()
     corners = interval_corners(state)
     worst: float | None = None
     worst_mu: tuple[tuple[str, float], ...] = ()
     feasible = True
     for corner in corners:
-        res = tvmmp(corner, solver=solver, box=box, witnesses=False)
+        res = tvmmp(corner, solver=solver, box=box, witnesses=False, compiled=compiled)
         certified = certified and not res.uncertified()
         if not res.feasible:
             feasible, worst = False, None

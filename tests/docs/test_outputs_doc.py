@@ -121,6 +121,7 @@ def test_every_table_is_parsed() -> None:
         "bench.json:peers.agreement",
         "bench.json:floor",
         "bench.json:floor.state",
+        "bench.json:floor.compiled",
         "bench.json:rank",
         "show",  # tested in tests/cli/test_show.py
         "show-contacts",
@@ -400,8 +401,11 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     assert_documented("bench.json:peers.agreement", finger["vs_lp"])
     assert_documented("bench.json:rank", report["rank"])
     assert_documented("bench.json:floor", report["floor"])
-    for entry in report["floor"]["states"].values():
-        assert_documented("bench.json:floor.state", entry)
+    states = report["floor"]["states"]
+    assert "dataset-36-compiled" in states
+    for name, entry in states.items():
+        table = "bench.json:floor.compiled" if name.endswith("-compiled") else "bench.json:floor.state"
+        assert_documented(table, entry)
     for entry in report["hands"].values():
         assert_documented("bench.json:hands", entry)
         assert_documented("bench.json:stats", entry["load"])

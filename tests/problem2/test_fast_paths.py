@@ -17,7 +17,7 @@ import scipy.sparse as sp
 
 from mjtvm import ParamError, tvmmp
 from mjtvm.formats.state_file import load_state
-from mjtvm.lp import highs
+from mjtvm.lp import highs, highspy_start
 from mjtvm.lp.rows import Coo
 from mjtvm.lp.scaling import scale_lp
 from mjtvm.paper_hand.scenario import load_scenario
@@ -89,9 +89,9 @@ def test_first_lp_equals_scale_lp(states):
 
 
 def test_a_reused_highs_instance_solves_bit_for_bit(states, monkeypatch):
-    monkeypatch.setattr(highs, "_IDLE", [])
+    monkeypatch.setattr(highspy_start, "_IDLE", [])
     fresh = {name: tvmmp(state) for name, state in states.items()}
-    assert highs._IDLE  # the sessions gave their instances back
+    assert highspy_start._IDLE  # the sessions gave their instances back
     for name in reversed(list(states)):  # every state now on another state's instance
         again = tvmmp(states[name])
         np.testing.assert_array_equal(again.alpha, fresh[name].alpha)
@@ -107,10 +107,10 @@ def test_a_reused_highs_instance_solves_bit_for_bit(states, monkeypatch):
 def test_the_idle_instances_stay_in_their_process(monkeypatch):
     import highspy
 
-    monkeypatch.setattr(highs, "_IDLE", ["an instance of the parent"])
-    monkeypatch.setattr(highs, "_IDLE_PID", [-1])  # as after a fork
-    assert isinstance(highs._acquire_highs(), highspy.Highs)
-    assert highs._IDLE == []
+    monkeypatch.setattr(highspy_start, "_IDLE", ["an instance of the parent"])
+    monkeypatch.setattr(highspy_start, "_IDLE_PID", [-1])  # as after a fork
+    assert isinstance(highspy_start.acquire_highs(), highspy.Highs)
+    assert highspy_start._IDLE == []
 
 
 def test_the_tuned_highs_options_are_highs_defaults_elsewhere():

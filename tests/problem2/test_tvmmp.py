@@ -360,7 +360,8 @@ def test_a_pair_found_infeasible_after_the_lps_drops_its_k(monkeypatch):
     (as when HiGHS says so at once), and its later LPs, solved already, are not reported."""
     from mjtvm.lp.lp import LPSolution
     from mjtvm.lp.solvers import Settled
-    from mjtvm.problem2.lps import StateLPs, Verdict
+    from mjtvm.problem2.lps import StateLPs
+    from mjtvm.problem2.verdict import Verdict
 
     state = random_state(3, fingers=3, joints_per_finger=3, num_refs=2, num_rvds=3)
     real = StateLPs.conclude
