@@ -408,7 +408,7 @@ def bench_verify(*, grasps: int = VERIFY_GRASPS) -> dict[str, Any]:
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         if rc != 0 or len(fields) != 4 or int(fields[0]) != 0:
             return {"error": err}
-        rows = json.loads((Path(tmp) / "out" / "rank.json").read_text())["rows"]
+        rows = json.loads((Path(tmp) / "out" / "rank.json").read_text())
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     gps = grasps / cpu
     return {
