@@ -36,8 +36,9 @@ What differs here, and why:
   contact solref 2 ms, the benchmark's 5 ms), friction mu of the grasp file, and the object's
   mass is the grasp's (``mg / g``), not the benchmark's fixed 0.1 kg. The step was chosen by a
   rule fixed before the comparison (``docs/physics-check.md``, "The integrator and time step of
-  ``rank --verify``"): on 166 Shadow, Allegro and LEAP grasps the verdicts are the Euler
-  0.25 ms step's, at a quarter of the CPU time; at 2 and 4 ms they are not.
+  ``rank --verify``"): on 201 Shadow, Allegro and LEAP grasps every hold verdict is that of
+  the 0.25 ms step (Euler, or the LEAP file's implicitfast), at 3.6-3.9 times less CPU time; at
+  2 and 4 ms a third of the Shadow's verdicts change.
 * **The start**: the rollouts' settle (30 ms at the grasp's configuration, no force) stands in
   for the benchmark's pregrasp -> grasp -> squeeze closing; the reference pose is the object's
   at the start, as the benchmark's ``pre_obj_qpos``.
