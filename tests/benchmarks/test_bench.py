@@ -168,7 +168,9 @@ def test_rank_verify_row_has_its_target() -> None:
     for verify, expected in (({"met": False}, False), ({"met": None}, None), ({"met": True}, True)):
         targets = bench_suite._targets({"cases": {}, "rank": {**rank, "verify": verify}})
         assert targets["rank_verify"] is expected and targets["rank_jobs"] is True
-    assert "rank_verify" not in bench_suite._targets({"cases": {}, "rank": {**rank, "verify": {"error": "x"}}})
+    assert "rank_verify" not in bench_suite._targets(
+        {"cases": {}, "rank": {**rank, "verify": {"error": "x"}}}
+    )
     assert "rank_verify" not in bench_suite._targets({"cases": {}, "rank": rank})  # a report from before
 
 
