@@ -23,6 +23,10 @@ Measured on the shipped Shadow example ([`RANK_GRASP`][benchmarks.rank.RANK_GRAS
   [`RSS_GRASPS`][benchmarks.rank.RSS_GRASPS] grasps (the example's grasps repeated, each with its own
   object scale, the case that compiled one model per grasp), its own peak resident set
   (``VmHWM``: ``ru_maxrss`` would carry the parent's over fork and exec);
+* **the simulation** (`bench_verify()`): ``mjtvm rank --verify`` as a process on the example's
+  first [`VERIFY_GRASPS`][benchmarks.rank.VERIFY_GRASPS] grasps (``--quick``: `VERIFY_GRASPS_QUICK`), in
+  grasps per CPU-second of the whole process (``RUSAGE_CHILDREN``: its start and imports
+  included) and of its ``main()`` alone;
 * **a Dask cluster** (`bench_dask()`): the largest of those datasets again with ``--cluster`` on a
   local cluster of [`DASK_WORKERS`][benchmarks.rank.DASK_WORKERS] worker processes, every file
   compared byte for byte with the one-process run's.
@@ -55,6 +59,8 @@ __all__ = [
     "RANK_GRASP_22",
     "RSS_GRASPS",
     "TARGETS",
+    "VERIFY_GRASPS",
+    "VERIFY_GRASPS_QUICK",
     "bench_rank",
     "bench_throughput",
     "bench_throughput_22",
@@ -74,14 +80,20 @@ TARGETS = {
     "p2_over_highs": 1.5,
     "fingers_32_over_16": 2.5,
     "rank_speedup_2": 1.8,
+    "rank_verify": 5.0,
 }
 """Grasps per CPU-second with and without the classic measures (at least), Problem 2 over its
 HiGHS ``run()`` time (at most), the per-LP time of 32 fingers over 16 (at most), the wall
-speed-up of 2 processes (at least)."""
+speed-up of 2 processes (at least), grasps per CPU-second of ``rank --verify`` (at least:
+issue 35)."""
 CORE_SHARE_MIN = 0.8
 """A row whose processes got less of a core than this is ``loaded`` (never reported as met)."""
 JOBS_COPIES = 4
 """How many times the 36-grasp dataset is repeated for the 2-process row."""
+VERIFY_GRASPS = 36
+"""Grasps of the ``rank --verify`` row: the whole example (29 of them simulated)."""
+VERIFY_GRASPS_QUICK = 8
+"""Grasps of the ``rank --verify`` row with ``--quick``."""
 RSS_GRASPS = (400, 4000, 40000)
 """Dataset sizes of the peak-memory rows."""
 
@@ -381,15 +393,45 @@ def bench_memory(
     return out
 
 
+def bench_verify(*, grasps: int = VERIFY_GRASPS) -> dict[str, Any]:
+    """``mjtvm rank --verify`` as a process on the example's first ``grasps`` grasps (module
+    docstring): ``grasps``, ``simulated`` (rows with a hold verdict), ``cpu_s`` (the child
+    process's whole CPU time, ``RUSAGE_CHILDREN``), ``main_cpu_s`` (its ``main()`` alone),
+    ``wall_s``, ``grasps_per_cpu_s`` (over ``cpu_s``), the target, core share and verdict, or
+    ``error``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = write_dataset(Path(tmp) / "verify.npz", grasps)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        w = time.perf_counter()
+        rc, fields, err = _rank_child(ds, Path(tmp) / "out", "--verify")
+        wall = time.perf_counter() - w
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        if rc != 0 or len(fields) != 4 or int(fields[0]) != 0:
+            return {"error": err}
+        rows = json.loads((Path(tmp) / "out" / "rank.json").read_text())
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    gps = grasps / cpu
+    return {
+        "grasps": grasps,
+        "simulated": sum(r.get("sim_hold") is not None for r in rows),
+        "cpu_s": cpu,
+        "main_cpu_s": float(fields[2]),
+        "wall_s": wall,
+        "grasps_per_cpu_s": gps,
+        **_verdict(gps, TARGETS["rank_verify"], cpu / wall, at_least=True),
+    }
+
+
 def bench_rank(
     *,
     repeats: int = 3,
     sizes: Sequence[int] = RSS_GRASPS,
     grasps_22: int = GRASPS_22,
+    verify_grasps: int = VERIFY_GRASPS,
     say: Callable[[str], None] = lambda _: None,
 ) -> dict[str, Any]:
     """Every row of this module (module docstring), as ``report["rank"]``; ``grasps_22`` grasps
-    in the 22-joint rows."""
+    in the 22-joint rows, ``verify_grasps`` in the ``rank --verify`` row."""
     say("rank: throughput with and without the classic measures")
     out: dict[str, Any] = {
         "grasp": RANK_GRASP,
@@ -404,6 +446,8 @@ def bench_rank(
     out["fingers"] = bench_fingers(repeats=max(3, repeats))
     say("rank: 2 processes")
     out["jobs"] = bench_jobs()
+    say(f"rank --verify: {verify_grasps} grasps")
+    out["verify"] = bench_verify(grasps=verify_grasps)
     out["memory"] = bench_memory(sizes=sizes, say=say)
     return out
 

@@ -236,7 +236,7 @@ def _verdict(r: dict[str, Any]) -> str:
 
 def rank_rows(report: dict[str, Any]) -> list[str]:
     """``mjtvm rank`` ([`benchmarks.rank`][benchmarks.rank]): CPU time per grasp, Problem 2 over HiGHS on
-    the batch, 16 against 32 fingers, 2 processes, peak memory; each with its core share."""
+    the batch, 16 against 32 fingers, 2 processes, ``--verify``, peak memory; each with its core share."""
     rk = report.get("rank")
     if not rk:
         return []
@@ -305,6 +305,21 @@ def rank_rows(report: dict[str, Any]) -> list[str]:
             _verdict(j),
         )
     )
+    v = rk.get("verify")  # absent from reports before issue 35's row
+    if v is not None and "error" in v:
+        lines.append(f"{'rank --verify':<44} {'error: ' + v['error']:>24}")
+    elif v is not None:
+        lines.append(
+            _row(
+                f"rank --verify: {v['grasps_per_cpu_s']:.2f} grasps/CPU-s",
+                v["cpu_s"] / v["grasps"],
+                f"wall {_ms(v['wall_s'] / v['grasps'])}",
+                f"{v['core_share']:.2f}",
+                None,
+                f">= {v['target']:.0f}/s",
+                _verdict(v),
+            )
+        )
     mem = rk["memory"]
     for n, r in mem["sizes"].items():
         text = "error: " + r["error"] if "error" in r else f"peak RSS {r['peak_rss_mib']:.0f} MiB"

@@ -281,10 +281,12 @@ def run_suite(
 
         report["floor"] = bench_floor(repeats=max(10, repeats // 2), say=say)
     if rank:
-        from benchmarks.rank import RSS_GRASPS, bench_rank
+        from benchmarks.rank import RSS_GRASPS, VERIFY_GRASPS, VERIFY_GRASPS_QUICK, bench_rank
 
         sizes = rank_sizes if rank_sizes is not None else RSS_GRASPS[:2] if quick else RSS_GRASPS
-        report["rank"] = bench_rank(repeats=3, sizes=sizes, say=say)
+        report["rank"] = bench_rank(
+            repeats=3, sizes=sizes, verify_grasps=VERIFY_GRASPS_QUICK if quick else VERIFY_GRASPS, say=say
+        )
     report["targets"] = _targets(report)
     report["total_wall_s"] = time.perf_counter() - t_start
     return report
@@ -320,4 +322,6 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
             out["rank_22_classic"] = rk["throughput_22"]["classic"]["met"]
             out["rank_22_none"] = rk["throughput_22"]["none"]["met"]
         out.update({f"rank_{k}": rk[k]["met"] for k in ("p2_floor", "fingers", "jobs")})
+        if "met" in rk.get("verify", {}):
+            out["rank_verify"] = rk["verify"]["met"]
     return out

@@ -314,6 +314,15 @@ def _rank(r: dict[str, Any]) -> list[str]:
         f"{_t(j[k]['wall_s'])} ({_t(j['1']['wall_s'])} on 1)",
         f"{j['core_share']:.2f}", f">= x{j['target']:g}", _verdict(j),
     ])  # fmt: skip
+    v = rk.get("verify")  # absent from reports before issue 35's row
+    if v is not None and "error" in v:
+        rows.append(["`mjtvm rank --verify`", f"failed: {v['error']}", "-", "-", "-", "-"])
+    elif v is not None:
+        rows.append([
+            f"`mjtvm rank --verify` as a process ({v['grasps']} grasps, {v['simulated']} simulated)",
+            f"{v['grasps_per_cpu_s']:.3g} grasps/CPU-s ({_t(v['cpu_s'] / v['grasps'])} CPU per grasp)",
+            _t(v["wall_s"] / v["grasps"]), f"{v['core_share']:.2f}", f">= {v['target']:g}", _verdict(v),
+        ])  # fmt: skip
     memory = rk["memory"]
     separate = r.get("rank_memory")
     if separate is not None:  # the memory rows of a run of their own (benchmarks.rank.main)

@@ -161,6 +161,19 @@ def test_case2_problem2_has_its_own_target():
     assert bench_suite.TARGETS_S["case2_p2_state"] == 1.5e-3
 
 
+def test_rank_verify_row_has_its_target() -> None:
+    """``rank_verify`` is the row's ``met`` (``None`` when loaded) and absent when its run failed."""
+    met = {"met": True}
+    rank = {"throughput": {"classic": met, "none": met}, "p2_floor": met, "fingers": met, "jobs": met}
+    for verify, expected in (({"met": False}, False), ({"met": None}, None), ({"met": True}, True)):
+        targets = bench_suite._targets({"cases": {}, "rank": {**rank, "verify": verify}})
+        assert targets["rank_verify"] is expected and targets["rank_jobs"] is True
+    assert "rank_verify" not in bench_suite._targets(
+        {"cases": {}, "rank": {**rank, "verify": {"error": "x"}}}
+    )
+    assert "rank_verify" not in bench_suite._targets({"cases": {}, "rank": rank})  # a report from before
+
+
 def test_random_state_per_finger_joints() -> None:
     """Per-finger joint counts: each contact's Jacobian lives in its finger's columns only, and
     equal counts give the state of the single count (same draws, same names)."""

@@ -17,7 +17,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def rank_report() -> dict[str, Any]:
-    return bench_rank.bench_rank(repeats=1, sizes=(8, 16), grasps_22=4)  # 22 joints: ~0.3 s a grasp
+    # 22 joints: ~0.3 s a grasp; --verify: ~0.5 s a simulated grasp
+    return bench_rank.bench_rank(repeats=1, sizes=(8, 16), grasps_22=4, verify_grasps=4)
 
 
 def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) -> None:
@@ -48,6 +49,14 @@ def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) ->
     assert (
         rank_report["jobs"]["rows_identical"] and rank_report["jobs"]["grasps"] == 36 * bench_rank.JOBS_COPIES
     )
+    v = rank_report["verify"]  # rank --verify as a process: the example's first 4 grasps
+    assert "error" not in v, v
+    assert v["grasps"] == 4 and 0 < v["simulated"] <= 4 and v["main_cpu_s"] <= v["cpu_s"]
+    assert v["grasps_per_cpu_s"] == pytest.approx(4 / v["cpu_s"])
+    assert v["core_share"] == pytest.approx(v["cpu_s"] / v["wall_s"])
+    assert v["target"] == bench_rank.TARGETS["rank_verify"] == 5.0
+    assert v["loaded"] == (v["core_share"] < bench_rank.CORE_SHARE_MIN)
+    assert (v["met"] is None) if v["loaded"] else v["met"] == (v["grasps_per_cpu_s"] >= 5.0)
     sizes = rank_report["memory"]["sizes"]
     assert set(sizes) == {"8", "16"} and all(
         s["exit"] == 0 and s["peak_rss_mib"] > 50 for s in sizes.values()
@@ -67,21 +76,23 @@ def test_a_loaded_row_is_never_met() -> None:
 
 def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> None:
     lines = rank_rows({"rank": rank_report})
-    assert sum("grasps/CPU-s" in line for line in lines) == 4
+    assert sum("grasps/CPU-s" in line for line in lines) == 5  # 13 and 22 joints x 2, --verify
     assert sum("rank memory, " in line for line in lines) == 2
     spec = importlib.util.spec_from_file_location("bench_page", ROOT / "tools" / "bench_page.py")
     assert spec is not None and spec.loader is not None
     bench_page = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_page)
     table = bench_page._rank({"rank": rank_report})
-    # head, the rows (13 joints, 22 joints with HiGHS's ceiling, the rest), memory, Dask
-    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 3 + 2 + 1
+    # head, the rows (13 joints, 22 joints with HiGHS's ceiling, the rest, --verify), memory, Dask
+    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 3 + 1 + 2 + 1
+    (verify,) = [row for row in table if "`mjtvm rank --verify` as a process" in row]
+    assert f"{rank_report['verify']['grasps_per_cpu_s']:.3g} grasps/CPU-s" in verify
     assert sum("22-joint Shadow hand, 36 LPs" in row for row in table) == 2
     (ceiling,) = [row for row in table if "the ceiling of any code around it" in row]
     none = rank_report["throughput_22"]["none"]
     assert f"{none['highs_ceiling_grasps_per_s']:.3g} grasps/s" in ceiling
     assert none["highs_ceiling_grasps_per_s"] == pytest.approx(1e3 / none["highs_run_ms_per_grasp"])
-    old = {k: v for k, v in rank_report.items() if k != "throughput_22"}  # a report from before
+    old = {k: v for k, v in rank_report.items() if k not in ("throughput_22", "verify")}  # from before
     assert len([row for row in bench_page._rank({"rank": old}) if row.startswith("| ")]) == 1 + 2 + 3 + 2 + 1
     loaded = {**rank_report, "throughput": {**rank_report["throughput"]}}
     loaded["throughput"]["classic"] = {**loaded["throughput"]["classic"], "loaded": True, "met": None}

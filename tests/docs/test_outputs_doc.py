@@ -369,7 +369,9 @@ def test_bench_json(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(
         rank_bench,
         "bench_rank",
-        lambda **kw: real_rank(repeats=1, sizes=kw["sizes"], grasps_22=4, say=kw.get("say", print)),
+        lambda **kw: real_rank(
+            repeats=1, sizes=kw["sizes"], grasps_22=4, verify_grasps=2, say=kw.get("say", print)
+        ),
     )
     report = suite.run_suite(scale=False, progress=False, rank_sizes=(8,))
     report["notes"] = []  # added by the command (benchmarks.__main__) before writing
