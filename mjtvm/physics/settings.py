@@ -34,6 +34,11 @@ class SimSettings:
     ``armature_scale`` scales the actuators' rotor inertia and ``inertial_ff`` adds the
     computed inertial and Coriolis torques of the tracked setpoints to the feedforward:
     both are ablations of the quasi-static assumption, off by default.
+
+    ``servo`` (1/s): the position loop on the held configuration during the settle only
+    ([`Servo`][mjtvm.physics.squeeze.Servo], speed setpoints ``servo (l_0 - l)``); 0, the
+    default: setpoints 0 (a damper). Off during the startup and the window, so the loop
+    produces no speed the rollout measures (``docs/physics-check.md``, "The squeeze hold").
     """
 
     timestep: float = 2.5e-4
@@ -53,6 +58,7 @@ class SimSettings:
     slip_floor: float = 1e-5
     lost_gap: float = 5e-4
     edge_tol: float = 0.01
+    servo: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -68,6 +74,7 @@ class SimSettings:
             "edge_tol",
             "impratio",
             "armature_scale",
+            "servo",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0) or (name in ("timestep", "window") and value == 0):
