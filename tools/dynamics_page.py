@@ -7,7 +7,8 @@ Usage::
 
 The report is a ``validate-dynamics.json`` of schema ``validate-dynamics/1`` (default
 ``benchmarks/results/validate-dynamics.json``, written by
-``python tools/validate_dynamics.py --out DIR``). The tables go between the page's two marker
+``python tools/validate_dynamics.py --out DIR``, its rows of some hands replaced by
+``--merge REPORT``: listed under ``merged``, each with its own command and CPU time). The tables go between the page's two marker
 comments (:data:`BEGIN`, :data:`END`); the rest of the page is written by hand.
 ``tests/docs/test_dynamics_page.py`` checks that the committed page equals this output.
 """
@@ -90,22 +91,29 @@ def render(report: dict[str, Any]) -> str:
     """
     if report.get("schema") != SCHEMA:
         raise ValueError(f"not a {SCHEMA} report: schema {report.get('schema')!r}")
-    share = report["core_share"]
-    if report.get("cpu_s") is None:  # several processes: their CPU time was not measured
-        cpu = f"{report['wall_s'] / 60:.1f} min wall (the workers' CPU time not measured)."
+    runs = [_run_line(report)]
+    for entry in report.get("merged", []):  # hands rerun alone (validate_dynamics.py --merge)
+        runs += ["", f"The rows of {', '.join(entry['hands'])} from " + _run_line(entry)]
+    lines = [BEGIN, "", *runs, "", table(report["results"]).rstrip("\n"), "", *_details(report["results"])]
+    return "\n".join([*lines, "", END])
+
+
+def _run_line(run: dict[str, Any]) -> str:
+    """One run of the validation: its command, date, states, processes and CPU time."""
+    share = run["core_share"]
+    if run.get("cpu_s") is None:  # several processes: their CPU time was not measured
+        cpu = f"{run['wall_s'] / 60:.1f} min wall (the workers' CPU time not measured)."
     else:
         cpu = (
-            f"{report['cpu_s'] / 60:.1f} min of CPU in {report['wall_s'] / 60:.1f} min wall (core share "
+            f"{run['cpu_s'] / 60:.1f} min of CPU in {run['wall_s'] / 60:.1f} min wall (core share "
             f"{share:.2f}" + ("" if share >= 0.8 else ": other jobs shared the machine") + ")."
         )
-    run = (
-        f"`{report['command']}` ({report['date']}): {report['states']} states per lift, "
-        + ("every state" if report["stride"] == 1 else f"every {report['stride']}-th state and the last")
-        + f" checked, {report['jobs']} process{'es' if report['jobs'] > 1 else ''}; "
+    return (
+        f"`{run['command']}` ({run['date']}): {run['states']} states per lift, "
+        + ("every state" if run["stride"] == 1 else f"every {run['stride']}-th state and the last")
+        + f" checked, {run['jobs']} process{'es' if run['jobs'] > 1 else ''}; "
         + cpu
     )
-    lines = [BEGIN, "", run, "", table(report["results"]).rstrip("\n"), "", *_details(report["results"])]
-    return "\n".join([*lines, "", END])
 
 
 def main(argv: list[str] | None = None) -> int:

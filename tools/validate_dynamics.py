@@ -9,9 +9,12 @@ first violation, grouped), and whether the targets hold: median in [0.9, 1.1], a
 failing. Nothing is tuned here: the settings are the rollout's defaults (SimSettings).
 
 Usage: ``python tools/validate_dynamics.py [--states 30] [--stride 1] [--jobs 1]
-[--out results/validate-dynamics] [--hands case2,allegro-ik,robotiq_2f85-sphere]``. Writes
-``OUT/dyn-<hand>.csv`` (verify's columns, docs/outputs.md), ``OUT/validate-dynamics.md`` and
+[--out results/validate-dynamics] [--hands case2,allegro-ik,robotiq_2f85-sphere] [--merge REPORT]``.
+Writes ``OUT/dyn-<hand>.csv`` (verify's columns, docs/outputs.md), ``OUT/validate-dynamics.md`` and
 ``OUT/validate-dynamics.json`` (the report ``tools/dynamics_page.py`` renders into docs/dynamics.md).
+With ``--merge REPORT`` (e.g. ``benchmarks/results/validate-dynamics.json``) only ``--hands`` run:
+their rows replace or join REPORT's, the run is listed under the report's ``merged`` with its
+own command and CPU time, and REPORT itself is rewritten (one report, not a copy beside it).
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ def cause(reason: str) -> str:
         (r"^twist magnitude", "twist magnitude"),
         (r"^twist direction", "twist direction"),
         (r"^object moves", "object moves at rest"),
+        (r" past its range's speed", "speed edge"),
     ):
         if re.search(pattern, reason):
             return label
@@ -128,23 +132,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument(
         "--hands", default=",".join(DEFAULT_HANDS), help=f"comma-separated, among {sorted(HANDS)}"
     )
+    ap.add_argument(
+        "--merge",
+        type=Path,
+        default=None,
+        metavar="REPORT",
+        help="replace (or add) the rows of --hands in this validate-dynamics.json and rewrite it; "
+        "its other hands are not rerun",
+    )
     args = ap.parse_args(argv)
     hands = [h for h in args.hands.split(",") if h]
     unknown = [h for h in hands if h not in HANDS]
     if unknown:
         print(f"hands: expected names among {sorted(HANDS)}, got {unknown}", file=sys.stderr)
         return 2
+    base = None
+    if args.merge is not None:  # read before any work: a bad report is refused at once
+        try:
+            base = json.loads(args.merge.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as e:
+            print(f"--merge: cannot read a report from {args.merge}: {e}", file=sys.stderr)
+            return 2
+        if not isinstance(base, dict) or base.get("schema") != SCHEMA:
+            print(f"--merge: {args.merge} is not a {SCHEMA} report", file=sys.stderr)
+            return 2
     try:
         results = validate(hands, args.states, args.stride, args.jobs, args.out)
     except MjtvmError as e:  # bad input (states, stride, jobs, out): one line, exit 2
         print(f"error: {' '.join(str(e).split())}", file=sys.stderr)
         return 2
     rows = [{"hand": h, "run": r, **s} for (h, r), s in results.items()]
-    text = table(rows)
-    print(text)
-    (args.out / "validate-dynamics.md").write_text(text, encoding="utf-8")
-    report = {
-        "schema": SCHEMA,
+    run = {
         "command": "python tools/validate_dynamics.py "
         + " ".join(argv if argv is not None else sys.argv[1:]),
         "states": args.states,
@@ -152,12 +170,32 @@ def main(argv: Sequence[str] | None = None) -> int:
         "jobs": args.jobs,
         "date": time.strftime("%Y-%m-%d"),
         **_clock,
-        "results": rows,
     }
-    tmp = args.out / "validate-dynamics.json.tmp"
+    if base is None:
+        report, target = {"schema": SCHEMA, **run, "results": rows}, args.out / "validate-dynamics.json"
+    else:
+        report, target = merged(base, rows, {"hands": hands, **run}), args.merge
+    text = table(report["results"])
+    print(text)
+    (args.out / "validate-dynamics.md").write_text(text, encoding="utf-8")
+    tmp = target.with_name(target.name + ".tmp")
     tmp.write_text(json.dumps(report, indent=1, allow_nan=True) + "\n", encoding="utf-8")
-    os.replace(tmp, args.out / "validate-dynamics.json")
+    os.replace(tmp, target)
     return 0
+
+
+def merged(base: dict[str, Any], rows: Sequence[dict[str, Any]], run: dict[str, Any]) -> dict[str, Any]:
+    """``base`` with the rows of ``run["hands"]`` replaced by ``rows`` (in `HANDS`' order, then
+    the run's), and ``run`` listed under ``merged`` in place of an earlier run of the same hands."""
+    hands = set(run["hands"])
+    kept = [r for r in base["results"] if r["hand"] not in hands]
+    order = list(HANDS)
+    results = sorted(
+        [*kept, *rows],
+        key=lambda r: (order.index(r["hand"]) if r["hand"] in order else len(order), r["hand"]),
+    )  # a stable sort: each hand's runs stay in their order
+    earlier = [m for m in base.get("merged", []) if not set(m["hands"]) <= hands]
+    return {**base, "results": results, "merged": [*earlier, run]}
 
 
 def validate(

@@ -115,6 +115,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "checked further; docs/physics-check.md#the-hold-test)",
     )
     computed_default(hold, "a rollout's length, settle + startup + window (37 ms)")
+    p.add_argument(
+        "--hold-drive",
+        default="auto",
+        choices=("auto", "least", "squeeze"),
+        help="what holds each state in the hold test and the rollouts: the witness's least forces, "
+        "the squeeze with a position loop in the settle, or `auto`: the squeeze only where the least "
+        "forces do not hold (docs/physics-check.md#the-squeeze-hold)",
+    )
     launch = p.add_argument(
         "--launch",
         type=number(0.0, MAX_LAUNCH, strict=True, unit="metres"),
@@ -179,6 +187,7 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
 _ROLLOUT_ONLY = {
     "--launch": lambda a: a.launch is not None,
     "--hold": lambda a: a.hold is not None,
+    "--hold-drive": lambda a: a.hold_drive != "auto",
     "--dynamics": lambda a: a.dynamics,
     "--slide-check": lambda a: a.slide_check,
     "--preload": lambda a: a.preload != 0.0,
@@ -285,6 +294,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
             launch_distance=args.launch,
             friction_margin=args.friction_margin,
             limit_horizon=args.limit_horizon,
+            hold_drive=args.hold_drive,
             jobs=args.jobs,
             start_method=args.start_method,
             out=None,

@@ -37,7 +37,8 @@ from mjtvm.lift.trajectory import Lift, scripted_lift
 from mjtvm.model.friction import cone_margin
 from mjtvm.physics.bisection import alpha_sim, bisect
 from mjtvm.physics.check import contact_types, motor_model, pair_check
-from mjtvm.physics.hold import hold_row, state_hold
+from mjtvm.physics.hold import hold_row
+from mjtvm.physics.hold_drive import HOLD_DRIVES, check_hold
 from mjtvm.physics.simulate import SimSettings, sim_model
 
 __all__ = [
@@ -130,11 +131,14 @@ def verify_state(
     launch_distance: float | None = None,
     friction_margin: float | None = None,
     limit_horizon: float | None = None,
+    hold_drive: str = "auto",
 ) -> list[dict[str, Any]]:
     r"""Rows (one per non-zero RVDS vertex) of state ``index`` for ``run`` (one of [`RUNS`][mjtvm.jobs.verify.RUNS]).
 
     First the hold test ([`hold_test()`][mjtvm.physics.hold.hold_test], ``hold_time`` s, default a
     rollout's length): a state that does not hold at rest gets its verdict and no rollout.
+    ``hold_drive``: ``auto``, ``least`` or ``squeeze`` ([`check_hold()`][mjtvm.physics.hold_drive.check_hold]):
+    the drive that holds the state in the hold test and in every rollout (the row's ``hold_drive``).
     ``launch_distance`` (m): also the launch from rest of every pair
     ([`launch()`][mjtvm.physics.launch.launch]).
 
@@ -167,14 +171,21 @@ def verify_state(
     if isinstance(res, MjtvmError):
         return [{**base, "l": -1, "status": f"solver: {res}", **lp}]
     rows = []
-    hold = state_hold(
-        model, lift.qpos[index], state, res, settings=settings, object_body=ob, duration=hold_time
+    hold, used = check_hold(
+        model,
+        lift.qpos[index],
+        state,
+        res,
+        hold_drive=hold_drive,  # type: ignore[arg-type]
+        settings=settings,
+        object_body=ob,
+        duration=hold_time,
     )
     for l in range(len(state.rvds if state.rvds is not None else [])):
         status = res.status[0][l]
         row: dict[str, Any] = {**base, "l": l, "status": status, **lp, "reason": pair_reason(res, l)}
         if status == "optimal" and hold is not None:
-            row.update(hold_row(hold), alpha_lp=float(res.alpha[0, l]))
+            row.update(hold_row(hold), hold_drive=used, alpha_lp=float(res.alpha[0, l]))
         if status == "optimal" and (hold is None or hold.held):
             row.update(
                 pair_check(
@@ -189,6 +200,7 @@ def verify_state(
                     check_s=check_s,
                     dynamics=dynamics,
                     launch_distance=launch_distance,
+                    squeeze=used == "squeeze",
                 )
             )
         rows.append(row)
@@ -218,6 +230,7 @@ def verify_lift(
     launch_distance: float | None = None,
     friction_margin: float | None = None,
     limit_horizon: float | None = None,
+    hold_drive: str = "auto",
     jobs: int = 1,
     start_method: str = "forkserver",
     out: str | Path | None = "results",
@@ -237,7 +250,7 @@ def verify_lift(
         Check every ``stride``-th state (the last state is always included).
     runs
         Subset of [`RUNS`][mjtvm.jobs.verify.RUNS].
-    dynamics, preload, hold_time, launch_distance, friction_margin, limit_horizon
+    dynamics, preload, hold_time, launch_distance, friction_margin, limit_horizon, hold_drive
         As in [`verify_state()`][mjtvm.jobs.verify.verify_state].
     jobs, start_method
         Worker processes (1: in this process) and their start method.
@@ -246,6 +259,8 @@ def verify_lift(
     """
     if stride < 1 or jobs < 1 or any(r not in RUNS for r in runs):
         raise StateError("verify", f"expected stride >= 1, jobs >= 1, runs among {RUNS}")
+    if hold_drive not in HOLD_DRIVES:
+        raise StateError("hold_drive", f"expected one of {HOLD_DRIVES}, got {hold_drive!r}")
     if start_method not in ("forkserver", "spawn"):
         raise StateError("start_method", f"expected 'forkserver' or 'spawn', got {start_method!r}")
     if out is not None:  # before any work
@@ -268,6 +283,7 @@ def verify_lift(
         "launch_distance": launch_distance,
         "friction_margin": friction_margin,
         "limit_horizon": limit_horizon,
+        "hold_drive": hold_drive,
     }
     if jobs > 1:  # refuse a grasp without motor data here, not in every worker
         motor_model(lift.scenario)

@@ -16,7 +16,7 @@ from mjtvm.errors import StateError
 from mjtvm.model.state import GraspState
 from mjtvm.physics.settings import SimSettings
 from mjtvm.physics.simulate import rollout
-from mjtvm.physics.witness import WitnessKind, witness_drive
+from mjtvm.physics.witness import Drive, WitnessKind, witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
 
 _F64 = NDArray[np.float64]
@@ -101,11 +101,15 @@ def alpha_sim(
     bracket: tuple[float, float] = (0.0, 2.0),
     tol: float = 0.01,
     object_body: str = "object",
+    drive: Callable[[float], Drive] | None = None,
 ) -> tuple[float, float, Bisection]:
     r"""alpha_sim of pair (k, l): $s^* \alpha_{kl}$, s* by [`bisect()`][mjtvm.physics.bisection.bisect] on rollouts.
 
     ``model`` from `sim_model()`; ``result``: the state's
-    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult] (solved here when omitted). Returns
+    [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult] (solved here when omitted). ``drive``:
+    the drive at speed factor s (default the witness's,
+    [`witness_drive()`][mjtvm.physics.witness.witness_drive]; the squeeze's:
+    [`squeezed_drive()`][mjtvm.physics.hold_drive.squeezed_drive]). Returns
     ``(alpha_sim, alpha_kl, bisection)``.
 
     Raises
@@ -119,8 +123,12 @@ def alpha_sim(
     alpha, vertex = float(res.alpha[k, l]), res.witnesses[k][l]
 
     def passes(s: float) -> bool:
-        drive = witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex)
-        return rollout(model, qpos, drive, settings=settings, object_body=object_body).passed
+        at = (
+            witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex)
+            if drive is None
+            else drive(s)
+        )
+        return rollout(model, qpos, at, settings=settings, object_body=object_body).passed
 
     b = bisect(passes, *bracket, tol=tol)
     return b.value * alpha, alpha, b

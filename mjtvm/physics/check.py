@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -26,9 +27,11 @@ from mjtvm.model.state import GraspState
 from mjtvm.physics.bisection import alpha_sim, monotone_flips
 from mjtvm.physics.dynamic import dynamic_pair
 from mjtvm.physics.feedforward import alpha_sim_ff
+from mjtvm.physics.hold_drive import squeezed_drive
 from mjtvm.physics.launch import launch_row
 from mjtvm.physics.motors import actuator_model, attach_dcmotors, grasp_source, require_motors, same_model
 from mjtvm.physics.simulate import SimSettings, inertial_demand, rollout
+from mjtvm.physics.squeeze import SERVO_GAIN
 from mjtvm.physics.verdict import ratio_cause, verdict
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import TvmmpResult
@@ -130,6 +133,7 @@ def pair_check(
     check_s: float,
     dynamics: bool,
     launch_distance: float | None,
+    squeeze: bool = False,
 ) -> dict[str, Any]:
     """The rollouts of pair (0, l), an optimal pair of ``res``: the columns of its check row.
 
@@ -150,6 +154,11 @@ def pair_check(
         Also the dynamic alpha and its check ([`dynamic_row()`][mjtvm.physics.check.dynamic_row]).
     launch_distance
         m: also the launch from rest ([`launch_row()`][mjtvm.physics.launch.launch_row]); ``None``: none.
+    squeeze
+        Every rollout drives the witness with the squeeze
+        ([`squeezed_drive()`][mjtvm.physics.hold_drive.squeezed_drive]) and settles with the
+        position loop (``SimSettings.servo`` = `SERVO_GAIN`): the hold drive ``squeeze``
+        ([`mjtvm.physics.hold_drive`][mjtvm.physics.hold_drive]).
 
     Returns
     -------
@@ -163,6 +172,13 @@ def pair_check(
         the ratio's ``cause`` ([`ratio_cause()`][mjtvm.physics.verdict.ratio_cause]).
     """
     ob = object_body
+    alpha = float(res.alpha[0, l])
+    # The witness drive of pair (0, l) at a scale of alpha: in the bisection, past it, at the
+    # check's scale, and at alpha itself for the inertial demand.
+    make = squeezed_drive if squeeze else witness_drive
+    drive = partial(make, state, 0, l, alpha, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
+    if squeeze:
+        settings = replace(settings or SimSettings(), servo=SERVO_GAIN)
     a_sim, alpha, b = alpha_sim(
         model,
         qpos,
@@ -173,11 +189,9 @@ def pair_check(
         settings=settings,
         witness=witness,  # type: ignore[arg-type]
         object_body=ob,
+        drive=drive if squeeze else None,
     )
     top = min(b.value + 0.01, 2.0)
-    # The witness drive of pair (0, l) at a scale of alpha: past the bisection, at the
-    # check's scale, and at alpha itself for the inertial demand.
-    drive = partial(witness_drive, state, 0, l, alpha, witness=witness, vertex=res.witnesses[0][l])  # type: ignore[arg-type]
     fail = rollout(model, qpos, drive(top), settings=settings, object_body=ob)
     chk = rollout(model, qpos, drive(check_s), settings=settings, object_body=ob)
     flips = monotone_flips(
@@ -209,7 +223,11 @@ def pair_check(
     if launch_distance is not None:
         row.update(launch_row(model, qpos, one, launch_distance, settings, ob))
     if dynamics:
-        row.update(dynamic_row(model, qpos, state, l, res, alpha, a_sim, witness, settings, ob, check_s))
+        row.update(
+            dynamic_row(
+                model, qpos, state, l, res, alpha, a_sim, witness, settings, ob, check_s, squeeze=squeeze
+            )
+        )
     row["cause"] = ratio_cause(
         row["ratio"],
         row["verdict"],
@@ -234,9 +252,13 @@ def dynamic_row(
     settings: SimSettings | None,
     ob: str,
     check_s: float,
+    *,
+    squeeze: bool = False,
 ) -> dict[str, Any]:
     """The dynamic alpha of pair (0, l), its limit, alpha_sim / alpha_dyn and the check at
-    ``check_s`` alpha_dyn (a rollout of the same drive at speed factor check_s alpha_dyn / alpha_kl).
+    ``check_s`` alpha_dyn (a rollout of the same drive at speed factor check_s alpha_dyn / alpha_kl;
+    ``squeeze``: the squeeze's, as in [`pair_check()`][mjtvm.physics.check.pair_check], whose
+    ``settings`` then have the loop).
 
     Parameters
     ----------
@@ -280,7 +302,7 @@ def dynamic_row(
         chk = rollout(
             model,
             qpos,
-            witness_drive(
+            (squeezed_drive if squeeze else witness_drive)(
                 state,
                 0,
                 l,
@@ -293,7 +315,13 @@ def dynamic_row(
             object_body=ob,
         )
         out.update(pass_check_dyn=chk.passed, check_dyn_reason=chk.reason)
-    out.update(_feedforward_columns(model, qpos, state, l, alpha, a, settings, ob))
+    if (
+        squeeze and state.transmission is None
+    ):  # the second drive has no squeeze: its least forces do not hold
+        why = "not with the squeeze hold drive (its least forces do not hold the state)"
+        out.update(alpha_sim_ff=math.nan, ratio_dyn_ff=math.nan, ff_verdict=why)
+    else:
+        out.update(_feedforward_columns(model, qpos, state, l, alpha, a, settings, ob))
     return out
 
 

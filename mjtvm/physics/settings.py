@@ -47,6 +47,11 @@ class SimSettings:
     the model's own (``mjtvm verify``'s protocol: the hands' files leave MuJoCo's default,
     Euler). ``mjtvm rank --verify``'s hold test runs
     [`HOLD_SETTINGS`][mjtvm.physics.disturb.HOLD_SETTINGS] (implicitfast at 1 ms).
+
+    ``servo`` (1/s): the position loop on the held configuration during the settle only
+    ([`Servo`][mjtvm.physics.squeeze.Servo], speed setpoints ``servo (l_0 - l)``); 0, the
+    default: setpoints 0 (a damper). Off during the startup and the window, so the loop
+    produces no speed the rollout measures (``docs/physics-check.md``, "The squeeze hold").
     """
 
     timestep: float = 2.5e-4
@@ -67,6 +72,7 @@ class SimSettings:
     lost_gap: float = 5e-4
     edge_tol: float = 0.01
     integrator: Literal["euler", "implicitfast", "implicit", "rk4"] | None = None
+    servo: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -82,6 +88,7 @@ class SimSettings:
             "edge_tol",
             "impratio",
             "armature_scale",
+            "servo",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0) or (name in ("timestep", "window") and value == 0):

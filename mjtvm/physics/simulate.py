@@ -63,6 +63,7 @@ from mjtvm.errors import ParamError
 from mjtvm.physics.inertia import inertial_demand, inertial_feedforward
 from mjtvm.physics.rig import Nearest, Rig, finger_contacts, twist_errors
 from mjtvm.physics.settings import SimSettings, sim_model
+from mjtvm.physics.squeeze import Servo
 from mjtvm.physics.witness import Drive
 
 __all__ = [
@@ -161,11 +162,11 @@ def settle(
     m: mujoco.MjModel, qpos: _F64, rig: Rig, drive: Drive, st: SimSettings
 ) -> tuple[mujoco.MjData, float]:
     """Step 3: the configuration ``qpos`` held by the drive's feed-forward torques for the settle
-    time; returns the data and how far the object drifted (m)."""
+    time (with ``st.servo`` > 0 the position loop on ``qpos`` too); returns the data and how
+    far the object drifted (m)."""
     d = held(m, qpos, rig, drive)
     p0 = d.xpos[rig.ob].copy()
-    if st.steps(st.settle):
-        mujoco.mj_step(m, d, nstep=st.steps(st.settle))
+    Servo(m, d, rig.acts, rig.cadr, st.servo).step(st.steps(st.settle))
     return d, float(np.linalg.norm(d.xpos[rig.ob] - p0))
 
 

@@ -91,6 +91,7 @@ def squeeze_witness(
     *,
     margin: float = FRICTION_MARGINS[0],
     assembly: Assembly | None = None,
+    motion: tuple[_F64, _F64, _F64] | None = None,
 ) -> dict[str, Any]:
     r"""The squeeze at rest of REFS ``k`` (module docstring): two LPs over eq. (31) at alpha = 0.
 
@@ -98,6 +99,15 @@ def squeeze_witness(
     (``(L, d)`` on the object), ``least`` (N: the first LP's least normal force over the
     finger contacts) and ``total`` (N: the second's sum of their normal forces). ``assembly``:
     ``assemble(state, horizon=True)`` when the caller has it already.
+
+    ``motion``: the squeeze at a given motion instead of at rest, ``(qd, rho, offset)``: the
+    ``(M,)`` joint speeds and slip speeds fixed to a witness's, and ``(m,)`` the alpha
+    column times alpha (the twist's and the horizon rows' coefficients,
+    [`central_witness()`][mjtvm.physics.witness.central_witness]) moved to the row bounds. The
+    rows on the motion alone (kinematics, joint limits, travel horizon) are the witness's,
+    satisfied by it: they are left out, so the LPs choose forces and torques only, the torques
+    within the operation ranges at the given speeds
+    ([`squeezed_drive()`][mjtvm.physics.hold_drive.squeezed_drive]).
 
     Raises
     ------
@@ -108,9 +118,13 @@ def squeeze_witness(
     n = asm.num_variables
     lo, hi = asm.statics_bounds(state.refs[k])
     cl, cu = asm.col_lower.copy(), asm.col_upper.copy()
-    for name in ("qd", "rho"):  # at rest: the torques of the ranges at zero speed
-        cl[asm.blocks[name]] = 0.0
-        cu[asm.blocks[name]] = 0.0
+    given = (np.zeros(state.num_joints), np.zeros(asm.blocks["rho"].stop - asm.blocks["rho"].start))
+    if motion is not None:
+        given = (np.asarray(motion[0], float), np.asarray(motion[1], float))
+        lo, hi = lo - motion[2], hi - motion[2]
+    for name, value in zip(("qd", "rho"), given, strict=True):  # at rest: the ranges' torques at 0 speed
+        cl[asm.blocks[name]] = value
+        cu[asm.blocks[name]] = value
     lam0 = asm.blocks["lam[0]"].start
     normal_rows, margin_rows = [], []
     for c, g, s in zip(state.contacts, asm.generators, asm.generator_slices, strict=True):
@@ -128,6 +142,10 @@ def squeeze_witness(
     if not normal_rows:
         raise SolverError("highs", f"REFS {k}: no finger contact to squeeze with")
     a = sp.hstack([asm.A.tocsr(), sp.csr_matrix((asm.A.shape[0], 1))], format="csr")
+    if motion is not None:  # the rows on the fixed motion alone: the witness's (docstring)
+        free = np.r_[cl != cu, True]
+        on_free = np.asarray(abs(a[:, np.flatnonzero(free)]).sum(axis=1)).ravel() > 0
+        lo, hi = np.where(on_free, lo, -np.inf), np.where(on_free, hi, np.inf)
     eq = np.isfinite(lo) & (lo == hi)
     up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
     nr = np.array(normal_rows)
@@ -174,10 +192,16 @@ def squeeze_witness(
     }
 
 
-def squeeze_at_rest(state: GraspState, k: int = 0, *, assembly: Assembly | None = None) -> dict[str, Any]:
+def squeeze_at_rest(
+    state: GraspState,
+    k: int = 0,
+    *,
+    assembly: Assembly | None = None,
+    motion: tuple[_F64, _F64, _F64] | None = None,
+) -> dict[str, Any]:
     """[`squeeze_witness()`][mjtvm.physics.squeeze.squeeze_witness] at the first margin of
     `FRICTION_MARGINS` the state allows, with ``margin`` in the result (one ``assembly`` for
-    every margin tried).
+    every margin tried; ``motion`` as there: at a witness's motion rather than at rest).
 
     Raises
     ------
@@ -187,11 +211,11 @@ def squeeze_at_rest(state: GraspState, k: int = 0, *, assembly: Assembly | None 
     asm = assemble(state, horizon=True) if assembly is None else assembly
     for m in FRICTION_MARGINS[:-1]:
         try:
-            return {**squeeze_witness(state, k, margin=m, assembly=asm), "margin": m}
+            return {**squeeze_witness(state, k, margin=m, assembly=asm, motion=motion), "margin": m}
         except SolverError:
             continue
     last = FRICTION_MARGINS[-1]
-    return {**squeeze_witness(state, k, margin=last, assembly=asm), "margin": last}
+    return {**squeeze_witness(state, k, margin=last, assembly=asm, motion=motion), "margin": last}
 
 
 def _lp(c: _F64, a_ub: Any, b_ub: _F64, a_eq: Any, b_eq: _F64, bounds: list[Any], k: int) -> _F64:

@@ -632,6 +632,11 @@ def test_stdout_closed_after_the_first_byte_exits_141(unbuffered):
             "error: --gears: replaces the rollouts, which --dynamics is an option of: give one of them, not both "
             "(try 'mjtvm verify --help')\n",
         ),
+        (
+            ["verify", "--gears", "10", "--hold-drive", "squeeze"],
+            "error: --gears: replaces the rollouts, which --hold-drive is an option of: give one of them, "
+            "not both (try 'mjtvm verify --help')\n",
+        ),
         (["--version", "x"], "error: --version: takes no other arguments, got 'x' (try 'mjtvm --help')\n"),
     ],
 )

@@ -75,3 +75,34 @@ def test_the_second_drive_column_and_a_report_from_before_it() -> None:
     }
     old = _dynamics_page().render({**report, "results": [before]})
     assert "| **1.006** (0.973-1.065) | - |" in old
+
+
+def _validate_dynamics() -> ModuleType:
+    spec = importlib.util.spec_from_file_location(
+        "validate_dynamics", ROOT / "tools" / "validate_dynamics.py"
+    )
+    module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+    spec.loader.exec_module(module)  # type: ignore[union-attr]
+    return module
+
+
+def test_a_merged_run_replaces_its_hands_rows_and_is_listed() -> None:
+    """``validate_dynamics.py --merge``: the rerun hand's rows replace the report's (in the tool's
+    order of hands), the other hands' rows stay as they were, and the page names both runs."""
+    vd, report = _validate_dynamics(), _report()
+    first = {k: v for k, v in report.items() if k not in ("merged", "results")}
+    base = {**first, "results": [r for r in report["results"] if r["hand"] != "shadow_hand_coupled-sphere"]}
+    row = {**base["results"][0], "hand": "shadow_hand_coupled-sphere", "median": 0.5}
+    run = {"hands": ["shadow_hand_coupled-sphere"], **{k: first[k] for k in ("states", "stride", "jobs")}}
+    run.update(command="python tools/validate_dynamics.py --merge X", date="2026-12-04", wall_s=60.0)
+    run.update(cpu_s=30.0, core_share=0.5)
+    once = vd.merged(base, [row], run)
+    assert [r["hand"] for r in once["results"]][-1] == "shadow_hand_coupled-sphere"
+    assert once["results"][:-1] == base["results"] and once["merged"] == [run]
+    again = vd.merged(once, [{**row, "median": 0.9}], {**run, "date": "2026-12-05"})
+    assert [r["median"] for r in again["results"] if r["hand"] == row["hand"]] == [0.9]
+    assert len(again["merged"]) == 1 and again["merged"][0]["date"] == "2026-12-05"
+    text = _dynamics_page().render(again)
+    assert "The rows of shadow_hand_coupled-sphere from `python tools/validate_dynamics.py --merge X`" in text
+    assert "0.5 min of CPU in 1.0 min wall (core share 0.50: other jobs shared the machine)" in text
+    assert vd.cause("rh_A_THJ5 1.0 % past its range's speed at t = 2.50 ms") == "speed edge"

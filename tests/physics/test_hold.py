@@ -78,12 +78,13 @@ def _verify(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_verify_says_in_one_line_that_the_grasp_does_not_hold(tmp_path: Any) -> None:
-    """The coupled Shadow grasp: the LP holds it, but at state 0 the first finger, on its
-    friction cone in the witness, slides and the object leaves its contacts within a rollout's
-    time (docs/physics-check.md)."""
+    """The coupled Shadow grasp held by the least forces (``--hold-drive least``): the LP holds
+    it, but at state 0 the first finger, on its friction cone in the witness, slides and the
+    object leaves its contacts within a rollout's time (docs/physics-check.md)."""
     proc = _verify(
-        "--grasp", "shadow_hand_coupled-sphere", "--states", "2", "--contacts", "L", "--out", str(tmp_path)
-    )
+        "--grasp", "shadow_hand_coupled-sphere", "--states", "2", "--contacts", "L",
+        "--hold-drive", "least", "--out", str(tmp_path),
+    )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     lines = [x for x in proc.stderr.splitlines() if "does not hold" in x]
     assert len(lines) >= 1, proc.stderr
@@ -94,6 +95,22 @@ def test_verify_says_in_one_line_that_the_grasp_does_not_hold(tmp_path: Any) -> 
     rows = verify_rows(tmp_path / "verify.csv")
     assert {r["held"] for r in rows if r["state"] == "0"} == {"False"}
     assert all(r["alpha_sim"] == "" for r in rows if r["state"] == "0")
+
+
+def test_verify_holds_the_coupled_shadow_with_the_squeeze(tmp_path: Any) -> None:
+    """The same state under ``--hold-drive auto`` (the default): the least forces let go, the
+    squeeze and its position loop hold it (docs/physics-check.md#the-squeeze-hold), and every
+    pair gets a ratio."""
+    proc = _verify(
+        "--grasp", "shadow_hand_coupled-sphere", "--states", "2", "--stride", "2", "--contacts", "L",
+        "--out", str(tmp_path),
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "does not hold" not in proc.stderr
+    rows = [r for r in verify_rows(tmp_path / "verify.csv") if r["state"] == "0"]
+    assert rows and {(r["hold_drive"], r["held"]) for r in rows} == {("squeeze", "True")}
+    assert all(float(r["hold_reach"]) < 5e-4 for r in rows)
+    assert all(0.5 < float(r["ratio"]) < 1.1 for r in rows), [r["ratio"] for r in rows]
 
 
 def test_verify_refuses_the_sum_tendon_shadow_for_the_lps_reason(tmp_path: Any) -> None:
@@ -113,7 +130,7 @@ def test_verify_on_a_holding_grasp_prints_no_hold_line(tmp_path: Any) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "does not hold" not in proc.stderr and "not_held 0" in proc.stdout
     rows = verify_rows(tmp_path / "verify.csv")
-    assert all(r["held"] == "True" for r in rows)
+    assert all(r["held"] == "True" and r["hold_drive"] == "least" for r in rows)  # auto: as before
     assert all(float(r["hold_drift"]) < 1e-4 for r in rows)
     assert np.all([float(r["alpha_sim"]) > 0 for r in rows])
 
