@@ -211,7 +211,7 @@ def inputs_digest(
 ) -> str:
     """A digest of what the rows depend on: mjtvm's version, the grasp file, its model's files,
     the dataset files, the object files they name (``objects``: `DatasetScan.objects`), a ``limit_horizon`` other than the grasp
-    file's, ``refuse_penetration``, ``measures``, and ``verify`` with its ``hold_time``. ``--resume`` keeps a row only if its
+    file's, ``refuse_penetration``, ``measures``, and ``verify`` with its ``hold_time`` and the simulation's protocol (`grasp_sim.protocol()`). ``--resume`` keeps a row only if its
     ``inputs`` equals this (``--sort`` orders the files, not the rows: not in it)."""
     from mjtvm import __version__
 
@@ -225,7 +225,9 @@ def inputs_digest(
         h.update(b"com_frame\n")
     h.update(f"refuse_penetration {bool(refuse_penetration)}\nmeasures {measures}\n".encode())
     if verify:  # not verified: the digest of earlier versions
-        h.update(f"verify hold_time {hold_time!r}\n".encode())
+        from mjtvm.physics.grasp_sim import protocol
+
+        h.update(f"verify hold_time {hold_time!r}\n{protocol()}\n".encode())
     h.update(json.dumps(dict(batch.doc), sort_keys=True, default=str).encode())
     objects = sorted(set(objects))
     files = model_files(batch.model_path) + dataset_files(datasets)

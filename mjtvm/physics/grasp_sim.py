@@ -56,6 +56,7 @@ __all__ = [
     "faster_drive",
     "grasp_sim",
     "motorized_model",
+    "protocol",
     "speed_key",
 ]
 
@@ -79,6 +80,27 @@ SIM_COLUMNS = (
     "sim_failure",
 )
 """The columns [`grasp_sim()`][mjtvm.physics.grasp_sim.grasp_sim] fills, in order."""
+
+
+def protocol() -> str:
+    """The simulation protocol of [`grasp_sim()`][mjtvm.physics.grasp_sim.grasp_sim] as text:
+    the speed test's and the hold test's settings and the constants that decide a verdict
+    (the push, its checks and thresholds, the squeeze's share and loop gain, the speed
+    factors). A run's rows hold only for the protocol that made them: ``rank --resume`` keeps a
+    verified row only if this text has not changed (``inputs_digest``)."""
+    from mjtvm.physics import disturb, squeeze
+
+    constants = {
+        "speed": SimSettings(),
+        "hold": HOLD_SETTINGS,
+        "push": (disturb.DISTURB_ACCEL, DISTURB_DURATION, disturb.DISTURB_CHECK_EVERY),
+        "thresholds": (disturb.DISTURB_TRANSLATION, disturb.DISTURB_ANGLE),
+        "directions": disturb.DIRECTIONS,
+        "squeeze": (squeeze.SQUEEZE_SHARE, squeeze.FRICTION_MARGINS, squeeze.TORSIONAL_FRICTION),
+        "servo_gain": squeeze.SERVO_GAIN,
+        "speed_factors": SPEED_FACTORS,
+    }
+    return "\n".join(f"{k} {v!r}" for k, v in constants.items())
 
 
 def faster_drive(at_one: Drive, state: GraspState, l: int, alpha: float, s: float) -> Drive:

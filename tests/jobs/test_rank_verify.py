@@ -118,6 +118,26 @@ def test_resume_keeps_verified_rows_and_refuses_the_other_kind(
     assert len(err) == 1 and "are of a run without --verify" in err[0]
 
 
+def test_resume_digest_follows_the_simulation_protocol(
+    dataset: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A verified row holds for the protocol that made it: a changed hold-test threshold or
+    step changes the digest ``--resume`` matches; a plain run's digest does not see it."""
+    from mjtvm.jobs.rank_inputs import inputs_digest
+    from mjtvm.physics import disturb, grasp_sim
+    from mjtvm.physics.settings import SimSettings
+
+    verified = inputs_digest(GRASP, [str(dataset)], verify=True)
+    plain = inputs_digest(GRASP, [str(dataset)])
+    monkeypatch.setattr(disturb, "DISTURB_ANGLE", 20.0)
+    assert inputs_digest(GRASP, [str(dataset)], verify=True) != verified
+    assert inputs_digest(GRASP, [str(dataset)]) == plain
+    monkeypatch.undo()
+    assert inputs_digest(GRASP, [str(dataset)], verify=True) == verified
+    monkeypatch.setattr(grasp_sim, "HOLD_SETTINGS", SimSettings(timestep=2.5e-4))
+    assert inputs_digest(GRASP, [str(dataset)], verify=True) != verified
+
+
 def test_push_time_without_verify_is_refused(
     dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
