@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import threading
 from collections import OrderedDict
 from collections.abc import Mapping
 from importlib import resources
@@ -101,6 +102,8 @@ _READ_FIELDS = (
     "dof_frictionloss",
 )
 
+_LOCK = threading.Lock()
+
 _Found = tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]
 
 
@@ -114,10 +117,11 @@ def _recalled(memo: RangesMemo | None, key: tuple[Any, ...], ranges: Mapping[str
     object only, not another at a reused id."""
     if memo is None:
         return None
-    hit = memo.get(key)
-    if hit is None or hit[0] is not ranges:
-        return None
-    memo.move_to_end(key)
+    with _LOCK:  # a Dask worker's threads share one batch, and so its memo
+        hit = memo.get(key)
+        if hit is None or hit[0] is not ranges:
+            return None
+        memo.move_to_end(key)
     return dict(hit[1]), dict(hit[2])
 
 
@@ -125,9 +129,10 @@ def _remember(
     memo: RangesMemo | None, key: tuple[Any, ...], ranges: Mapping[str, Any], found: _Found
 ) -> _Found:
     if memo is not None:
-        memo[key] = (ranges, dict(found[0]), dict(found[1]))
-        while len(memo) > MEMO_SIZE:
-            memo.popitem(last=False)
+        with _LOCK:
+            memo[key] = (ranges, dict(found[0]), dict(found[1]))
+            while len(memo) > MEMO_SIZE:
+                memo.popitem(last=False)
     return found
 
 
