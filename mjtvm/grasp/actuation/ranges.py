@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import threading
+from collections import OrderedDict
 from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
@@ -40,7 +42,7 @@ from mjtvm.grasp.document.checks import GraspError, key_of
 from mjtvm.model.bounds import MAX_FILE_BYTES
 from mjtvm.model.operation_range import OperationRange
 
-__all__ = ["actuator_ranges", "joint_ranges", "range_entry", "shipped_datasheets"]
+__all__ = ["MEMO_SIZE", "RangesMemo", "actuator_ranges", "joint_ranges", "range_entry", "shipped_datasheets"]
 
 _DATASHEET_KEYS = (
     "no_load_speed_rpm",
@@ -58,6 +60,80 @@ _HINT = (
     'add [ranges."{j}"] (or a glob pattern, or "*") with one of: dcmotor = true, '
     'datasheet = "maxon_re25_20w" (+ gear_ratio), actuator = true + speed_limit, polygon = [...]'
 )
+
+
+#: Results a [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo] keeps, the last used: a
+#: hand whose moments vary with the configuration (a spatial tendon) misses every time, and
+#: the memo must not grow with the dataset.
+MEMO_SIZE = 8
+
+RangesMemo = OrderedDict[tuple[Any, ...], Any]
+"""A memo of [`joint_ranges()`][mjtvm.grasp.actuation.ranges.joint_ranges] and
+[`actuator_ranges()`][mjtvm.grasp.actuation.ranges.actuator_ranges] (``memo=``): an empty
+``OrderedDict`` the caller keeps across the grasps of one document (``BatchModels``)."""
+
+# Every model field the ranges are read from (here, in operation_range_from_actuator and in
+# the names behind model.joint(name) and model.actuator(name)): a memo's key holds their
+# bytes, so a model that differs in any of them is read anew. The configuration is not among
+# them: the ranges depend on it only through the moment, which is part of the key too.
+_READ_FIELDS = (
+    "names",
+    "name_actuatoradr",
+    "name_jntadr",
+    "actuator_trntype",
+    "actuator_trnid",
+    "actuator_gear",
+    "actuator_forcelimited",
+    "actuator_forcerange",
+    "actuator_gaintype",
+    "actuator_gainprm",
+    "actuator_biasprm",
+    "actuator_damping",
+    "actuator_dampingpoly",
+    "actuator_ctrlspec",
+    "actuator_ctrladr",
+    "actuator_ctrlnum",
+    "actuator_ctrllimited",
+    "actuator_ctrlrange",
+    "jnt_actfrclimited",
+    "jnt_actfrcrange",
+    "jnt_dofadr",
+    "dof_damping",
+    "dof_frictionloss",
+)
+
+_LOCK = threading.Lock()
+
+_Found = tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]
+
+
+def _memo_key(model: mujoco.MjModel, ranges: Mapping[str, Any], *parts: Any) -> tuple[Any, ...]:
+    fields = (getattr(model, f) for f in _READ_FIELDS)
+    return (id(ranges), *parts, *(v if isinstance(v, bytes) else v.tobytes() for v in fields))
+
+
+def _recalled(memo: RangesMemo | None, key: tuple[Any, ...], ranges: Mapping[str, Any]) -> _Found | None:
+    """The memo's result for ``key`` (copies of its dicts), or None: the same ``ranges``
+    object only, not another at a reused id."""
+    if memo is None:
+        return None
+    with _LOCK:  # a Dask worker's threads share one batch, and so its memo
+        hit = memo.get(key)
+        if hit is None or hit[0] is not ranges:
+            return None
+        memo.move_to_end(key)
+    return dict(hit[1]), dict(hit[2])
+
+
+def _remember(
+    memo: RangesMemo | None, key: tuple[Any, ...], ranges: Mapping[str, Any], found: _Found
+) -> _Found:
+    if memo is not None:
+        with _LOCK:
+            memo[key] = (ranges, dict(found[0]), dict(found[1]))
+            while len(memo) > MEMO_SIZE:
+                memo.popitem(last=False)
+    return found
 
 
 def range_entry(ranges: Mapping[str, Mapping[str, Any]], joint: str) -> tuple[str, Mapping[str, Any]] | None:
@@ -203,6 +279,7 @@ def joint_ranges(
     base: Path | None,
     file: str,
     losses: bool = True,
+    memo: RangesMemo | None = None,
 ) -> tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]:
     r"""Operation range and motor of each joint (module docstring).
 
@@ -226,7 +303,29 @@ def joint_ranges(
     GraspError
         A joint without an entry (the message says how to give one), or an entry that
         does not fit the model (named by its key).
+
+    ``memo``: a [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo] the caller keeps; the
+    result is then computed once per ``ranges`` object, joints, ``base``, ``file``, ``losses``
+    and model fields it reads (a datasheet file is read once per memo).
     """
+    key = _memo_key(model, ranges, "joint", tuple(joints), base, file, losses)
+    found = _recalled(memo, key, ranges)
+    if found is None:
+        found = _remember(
+            memo, key, ranges, _joint_ranges(model, joints, ranges, base=base, file=file, losses=losses)
+        )
+    return found
+
+
+def _joint_ranges(
+    model: mujoco.MjModel,
+    joints: tuple[str, ...],
+    ranges: Mapping[str, Mapping[str, Any]],
+    *,
+    base: Path | None,
+    file: str,
+    losses: bool,
+) -> _Found:
     out: dict[str, OperationRange] = {}
     motors: dict[str, DCMotor | str | None] = {}
     for joint in joints:
@@ -306,6 +405,7 @@ def actuator_ranges(
     base: Path | None,
     file: str,
     losses: bool = True,
+    memo: RangesMemo | None = None,
 ) -> tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]:
     r"""Operation range and motor of each actuator of a transmission (``docs/grasp-format.md``).
 
@@ -333,7 +433,39 @@ def actuator_ranges(
     GraspError
         An actuator without an entry (the message says how to give one), an ``actuator``
         entry naming another actuator, or an entry that does not fit the model.
+
+    ``memo``: as [`joint_ranges()`][mjtvm.grasp.actuation.ranges.joint_ranges]'s, the
+    ``moment`` (its bytes) and ``dofs`` part of the key: the ranges depend on the
+    configuration only through the moment (constant for joint and fixed-tendon
+    transmissions, not for a spatial tendon's moment arms).
     """
+    moment = np.asarray(moment)
+    key = _memo_key(
+        model, ranges, "actuator", tuple(actuators), moment.dtype.str, moment.shape, moment.tobytes(),
+        tuple(int(d) for d in dofs), base, file, losses,
+    )  # fmt: skip
+    found = _recalled(memo, key, ranges)
+    if found is None:
+        found = _remember(
+            memo,
+            key,
+            ranges,
+            _actuator_ranges(model, actuators, moment, dofs, ranges, base=base, file=file, losses=losses),
+        )
+    return found
+
+
+def _actuator_ranges(
+    model: mujoco.MjModel,
+    actuators: tuple[str, ...],
+    moment: np.ndarray,
+    dofs: tuple[int, ...],
+    ranges: Mapping[str, Mapping[str, Any]],
+    *,
+    base: Path | None,
+    file: str,
+    losses: bool,
+) -> _Found:
     out: dict[str, OperationRange] = {}
     motors: dict[str, DCMotor | str | None] = {}
     hint = _HINT.replace("dcmotor = true, ", "dcmotor = true (joint actuators), ")

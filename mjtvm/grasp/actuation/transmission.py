@@ -171,8 +171,11 @@ def actuator_moments(
     ids = [int(a) for a in np.flatnonzero(np.any(dense[:, cols] != 0.0, axis=1))]
     outside = np.ones(model.nv, dtype=bool)
     outside[cols] = False
+    # Every row's entries above 1e-12 of its largest, at once: a row per actuator in Python
+    # was most of the transmission's time on the 22-joint Shadow hand.
+    beyond = np.any(_significant(dense)[:, outside], axis=1)
     for a in ids:
-        if np.any(outside[np.abs(dense[a]) > 1e-12 * float(np.max(np.abs(dense[a]), initial=0.0))]):
+        if beyond[a]:
             extra = _outside(dense[a], cols)
             raise ModelError(
                 f"actuator {_name(model, _OBJ.mjOBJ_ACTUATOR, a, 'actuator')!r}",
@@ -181,6 +184,12 @@ def actuator_moments(
     return ids, _rows_without_round_off(
         dense[np.asarray(ids, dtype=int)][:, cols].reshape(len(ids), len(cols))
     )
+
+
+def _significant(m: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Where each row of ``m`` exceeds 1e-12 of its largest magnitude (`_outside()`'s test, per row)."""
+    magnitude = np.abs(m)
+    return magnitude > 1e-12 * np.max(magnitude, axis=1, initial=0.0, keepdims=True)
 
 
 def _rows_without_round_off(m: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -211,31 +220,34 @@ def equality_rows(
     if nefc == 0:
         return [], np.zeros((0, len(cols))), np.zeros(0)
     efc = dense_efc_jacobian(model, data)
+    eq = np.flatnonzero(data.efc_type[:nefc] == int(mujoco.mjtConstraint.mjCNSTR_EQUALITY))
+    full = _rows_without_round_off(efc[eq])  # a shared ancestor's ~1e-17 column is no coupling
+    touched = np.any(full[:, cols] != 0.0, axis=1)
+    outside = np.ones(model.nv, dtype=bool)
+    outside[cols] = False
+    beyond = np.any(_significant(full)[:, outside], axis=1)
     names, rows, residuals = [], [], []
     seen: dict[int, int] = {}
-    for r in range(nefc):
-        if int(data.efc_type[r]) != int(mujoco.mjtConstraint.mjCNSTR_EQUALITY):
-            continue
+    for i, r in enumerate(eq):
         e = int(data.efc_id[r])
         k = seen.get(e, 0)
         seen[e] = k + 1
-        row = without_round_off(efc[r])  # a shared ancestor's ~1e-17 column is no coupling
-        if not np.any(row[cols] != 0.0):
+        if not touched[i]:
             continue
         label = _name(model, _OBJ.mjOBJ_EQUALITY, e, "equality")
-        if extra := _outside(row, cols):
+        if beyond[i]:
             raise ModelError(
                 f"equality {label!r}",
-                f"constrains state joints together with {_dof_names(model, extra)}: "
+                f"constrains state joints together with {_dof_names(model, _outside(full[i], cols))}: "
                 "add them to the state's joints",
             )
         axes = _ROW_AXES.get(int(model.eq_type[e]))
         names.append(f"{label}/{axes[k]}" if axes else label)
-        rows.append(row[cols])
+        rows.append(i)
         residuals.append(float(data.efc_pos[r]))
-    kept = [i for i, row in enumerate(rows) if np.any(without_round_off(row) != 0.0)]
-    jac = np.array([without_round_off(rows[i]) for i in kept]).reshape(len(kept), len(cols))
-    return [names[i] for i in kept], jac, np.array([residuals[i] for i in kept])
+    restricted = _rows_without_round_off(full[rows][:, cols].reshape(len(rows), len(cols)))
+    kept = [int(i) for i in np.flatnonzero(np.any(restricted != 0.0, axis=1))]
+    return [names[i] for i in kept], restricted[kept], np.array([residuals[i] for i in kept])
 
 
 def model_transmission(
@@ -296,20 +308,17 @@ def coupled_joints(model: mujoco.MjModel, data: mujoco.MjData, joint_ids: Sequen
     scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
     equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
     efc = dense_efc_jacobian(model, data)
-    rows = [
-        without_round_off(row)
-        for row in (
-            *dense_moment(model, data),
-            *(efc[r] for r in range(len(efc)) if int(data.efc_type[r]) == equality),
-        )
-    ]
+    rows = _rows_without_round_off(
+        np.vstack([dense_moment(model, data), efc[np.flatnonzero(data.efc_type[: len(efc)] == equality)]])
+    )
+    # Each row's dofs, once: the growth below revisits every row on each pass.
+    touched = [{int(d) for d in np.flatnonzero(row)} for row in rows]
     chosen = {int(j) for j in joint_ids}
     grown = True
     while grown:
         grown = False
         dofs = {int(model.jnt_dofadr[j]) for j in chosen}
-        for row in rows:
-            nz = {int(d) for d in np.flatnonzero(row)}
+        for nz in touched:
             if not nz & dofs:
                 continue
             for d in nz - dofs:

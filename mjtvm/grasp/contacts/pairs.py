@@ -16,13 +16,16 @@ Frames and units: world frame, SI. Normals point into the object.
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["GeomPair", "candidate_pairs", "near_pairs", "pair_distance"]
+__all__ = ["PAIRS_MEMO_SIZE", "GeomPair", "candidate_pairs", "near_pairs", "pair_distance"]
 
 #: m: below this |distance| the segment between the witness points has no direction.
 _TOUCHING = 1e-12
@@ -70,9 +73,54 @@ def _filtered(model: mujoco.MjModel, b1: int, b2: int) -> bool:
     )
 
 
+#: Models whose candidate pairs are kept (the last ones asked for): a dataset compiles its
+#: grasp file's model per object scale, every one with the same pairs.
+PAIRS_MEMO_SIZE = 4
+
+_PAIRS: OrderedDict[tuple[Any, ...], tuple[tuple[int, int], ...]] = OrderedDict()
+_PAIRS_LOCK = threading.Lock()
+
+# Every field the pairs are read from (the filter below): the memo's key holds their bytes.
+_PAIR_FIELDS = (
+    "geom_bodyid",
+    "geom_contype",
+    "geom_conaffinity",
+    "exclude_signature",
+    "body_weldid",
+    "body_parentid",
+    "pair_geom1",
+    "pair_geom2",
+)
+
+
 def candidate_pairs(model: mujoco.MjModel, object_bodies: set[int]) -> list[tuple[int, int]]:
     """``(geom, object_geom)`` of every pair MuJoCo may collide between the object (the bodies
-    ``object_bodies``) and the rest of the model, ordered by geom id then object geom id."""
+    ``object_bodies``) and the rest of the model, ordered by geom id then object geom id.
+
+    They depend on the model's structure alone (which geoms collide, which bodies are welded
+    or parent and child): kept for the last [`PAIRS_MEMO_SIZE`][mjtvm.grasp.contacts.pairs.PAIRS_MEMO_SIZE]
+    models, keyed on the bytes of every field read, so a model that differs in any of them
+    (or edited in place) is read anew."""
+    parent_filter = bool(model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_FILTERPARENT))
+    key = (
+        tuple(sorted(object_bodies)),
+        parent_filter,
+        *(getattr(model, f).tobytes() for f in _PAIR_FIELDS),
+    )
+    with _PAIRS_LOCK:
+        hit = _PAIRS.get(key)
+        if hit is not None:
+            _PAIRS.move_to_end(key)
+            return list(hit)
+    found = _candidate_pairs(model, object_bodies)
+    with _PAIRS_LOCK:
+        _PAIRS[key] = tuple(found)
+        while len(_PAIRS) > PAIRS_MEMO_SIZE:
+            _PAIRS.popitem(last=False)
+    return found
+
+
+def _candidate_pairs(model: mujoco.MjModel, object_bodies: set[int]) -> list[tuple[int, int]]:
     excluded = {int(s) for s in model.exclude_signature}
     obj = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) in object_bodies]
     pairs = set()

@@ -31,6 +31,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from mjtvm.grasp.actuation.ranges import RangesMemo
 from mjtvm.grasp.document.checks import GraspError
 from mjtvm.grasp.document.dataset import ROOT_SIZE, DatasetGrasp
 from mjtvm.grasp.document.document import read_grasp_document
@@ -194,6 +195,7 @@ class BatchModels:
         self._com: dict[tuple[str | None, float], np.ndarray] = {}
         self._com_models: OrderedDict[tuple[str | None, float], mujoco.MjModel] = OrderedDict()
         self._dropped = 0  # models dropped from the caches (TRIM_EVERY)
+        self._ranges: RangesMemo = RangesMemo()  # the grasps' operation ranges (grasp_from_model)
 
     @classmethod
     def from_file(cls, source: str | Path) -> BatchModels:
@@ -338,7 +340,7 @@ class BatchModels:
         doc = {**self.doc, "configuration": config, "object": obj}
         if max_penetration is not None:
             doc["max_penetration"] = float(max_penetration)
-        return grasp_from_model(doc, self.path, model, self.model_path)
+        return grasp_from_model(doc, self.path, model, self.model_path, memo=self._ranges)
 
     def _com_model(self, entry: DatasetGrasp, model: mujoco.MjModel) -> mujoco.MjModel:
         """The entry's model with the object's frame at its centre of mass (compiled once)."""

@@ -35,7 +35,7 @@ import mujoco
 import numpy as np
 
 from mjtvm.errors import ModelError
-from mjtvm.grasp.actuation.ranges import actuator_ranges, joint_ranges
+from mjtvm.grasp.actuation.ranges import RangesMemo, actuator_ranges, joint_ranges
 from mjtvm.grasp.actuation.transmission import (
     ModelTransmission,
     check_closed,
@@ -209,9 +209,11 @@ def _drive(
     joints: tuple[str, ...],
     path: Path | None,
     file: str,
+    memo: RangesMemo | None = None,
 ) -> tuple[ModelTransmission | None, dict[str, Any], dict[str, Any]]:
     """The transmission (``None`` for the paper's independent joints) and the operation ranges
-    and motors: per joint without a transmission, per actuator with one."""
+    and motors: per joint without a transmission, per actuator with one (``memo``: the
+    caller's [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo])."""
     ids = [int(model.joint(n).id) for n in joints]
     losses = doc["joint_losses"] == "fold"
     base = path.parent if path else None
@@ -228,7 +230,9 @@ def _drive(
             f"{e}; or configure it by IK, which keeps the equalities closed",
         ) from e
     if is_independent(model, transmission, ids):
-        ranges, motors = joint_ranges(model, joints, doc["ranges"], base=base, file=file, losses=losses)
+        ranges, motors = joint_ranges(
+            model, joints, doc["ranges"], base=base, file=file, losses=losses, memo=memo
+        )
         return None, ranges, motors
     if not transmission.actuator_names:
         raise GraspError(file, "joints", "no actuator drives any of the joints")
@@ -242,6 +246,7 @@ def _drive(
         base=base,
         file=file,
         losses=losses,
+        memo=memo,
     )
     if not losses:  # "ignore": the motors' ranges as they are, no damping in the balance either
         transmission = replace(transmission, joint_damping=np.zeros(len(joints)))
@@ -273,7 +278,12 @@ def load_grasp(source: str | Path | Mapping[str, Any], *, hand: str = "default")
 
 
 def grasp_from_model(
-    doc: Mapping[str, Any], path: Path | None, model: mujoco.MjModel, model_path: Path
+    doc: Mapping[str, Any],
+    path: Path | None,
+    model: mujoco.MjModel,
+    model_path: Path,
+    *,
+    memo: RangesMemo | None = None,
 ) -> Grasp:
     r"""The grasp of a normalised document (`read_grasp_document()`)
     on a compiled model: what [`load_grasp()`][mjtvm.grasp.resolve.file.load_grasp] does after compiling the model.
@@ -282,7 +292,10 @@ def grasp_from_model(
     dataset on it, each from the file's document with its own ``configuration`` and ``object``
     pose. ``model`` is the document's model ([`build_spec()`][mjtvm.grasp.resolve.model.build_spec]
     compiled, possibly edited); a mocap base's pose is written into it
-    ([`hold_mocap_poses()`][mjtvm.grasp.resolve.base.hold_mocap_poses]).
+    ([`hold_mocap_poses()`][mjtvm.grasp.resolve.base.hold_mocap_poses]). ``memo``: a
+    [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo] kept across the grasps of one
+    document, so that the operation ranges, which depend on the configuration only through
+    the actuators' moments, are read once per distinct moment and model fields.
 
     Raises
     ------
@@ -385,7 +398,7 @@ def grasp_from_model(
             mujoco.mj_id2name(model, _OBJ.mjOBJ_JOINT, j)
             for j in coupled_joints(model, data, [int(model.joint(n).id) for n in joints])
         )
-    transmission, ranges, motors = _drive(model, data, doc, joints, path, file)
+    transmission, ranges, motors = _drive(model, data, doc, joints, path, file, memo)
     rvds = None if doc["rvds"] is None else np.array(doc["rvds"], dtype=float)
     if rvds is not None:
         rvds.setflags(write=False)

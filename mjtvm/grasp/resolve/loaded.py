@@ -340,6 +340,9 @@ class Grasp:
             if c.name.split("#")[0] not in ignored
         )
         kept = with_mu_ranges(kept, self.mu_ranges)
+        unchanged = len(kept) == len(state.contacts) and all(a is b for a, b in zip(kept, state.contacts))
+        if unchanged and self.friction_margin == state.friction_margin:
+            return state  # nothing dropped or replaced: the same state, not validated twice
         return state.with_(contacts=kept, friction_margin=self.friction_margin)
 
     def _touching(self) -> dict[str, float]:

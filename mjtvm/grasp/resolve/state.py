@@ -287,12 +287,13 @@ def joint_limits_of(
     """The limits of the state's joints: ``jnt_range`` of each joint with ``jnt_limited``
     (a coupled hand's joints each their own) and its position ``qpos``; ``None`` when no
     joint is limited."""
-    limited = [bool(model.jnt_limited[j]) for j in joint_ids]
-    if not any(limited):
+    ids = np.asarray(joint_ids, dtype=int)
+    limited = np.asarray(model.jnt_limited[ids], dtype=bool)
+    if not limited.any():
         return None
-    position = np.array([float(data.qpos[model.jnt_qposadr[j]]) for j in joint_ids])
-    lower = np.array([float(model.jnt_range[j, 0]) if f else -np.inf for j, f in zip(joint_ids, limited)])
-    upper = np.array([float(model.jnt_range[j, 1]) if f else np.inf for j, f in zip(joint_ids, limited)])
+    position = np.array(data.qpos[model.jnt_qposadr[ids]], dtype=float)
+    lower = np.where(limited, model.jnt_range[ids, 0], -np.inf)
+    upper = np.where(limited, model.jnt_range[ids, 1], np.inf)
     return JointLimits(position, lower, upper, options.tolerance, options.horizon)
 
 

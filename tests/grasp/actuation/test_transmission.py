@@ -224,3 +224,60 @@ def test_round_off_of_a_shared_ancestor_does_not_couple_it() -> None:
     mujoco.mj_forward(model, data)
     found = model_transmission(model, data, [model.joint("wrist").id])
     assert found.constraint_names == ()
+
+
+def _rows_one_by_one(
+    model: mujoco.MjModel, data: mujoco.MjData, dofs: list[int]
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """The equality rows on ``dofs``, read one efc row at a time (the reference the vectorised
+    `equality_rows()` must equal entry for entry)."""
+    from mjtvm.grasp.actuation.transmission import dense_efc_jacobian
+    from mjtvm.grasp.contacts.touch import without_round_off
+
+    efc = dense_efc_jacobian(model, data)
+    names, rows, residuals, seen = [], [], [], {}
+    for r in range(int(data.nefc)):
+        if int(data.efc_type[r]) != int(mujoco.mjtConstraint.mjCNSTR_EQUALITY):
+            continue
+        e = int(data.efc_id[r])
+        k = seen[e] = seen.get(e, -1) + 1
+        row = without_round_off(efc[r])
+        if not np.any(row[dofs] != 0.0):
+            continue
+        axes = {
+            int(mujoco.mjtEq.mjEQ_CONNECT): "xyz",
+            int(mujoco.mjtEq.mjEQ_WELD): ["x", "y", "z", "rx", "ry", "rz"],
+        }
+        label = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e) or f"equality#{e}"
+        kind = axes.get(int(model.eq_type[e]))
+        names.append(f"{label}/{kind[k]}" if kind else label)
+        rows.append(without_round_off(row[dofs]))
+        residuals.append(float(data.efc_pos[r]))
+    return names, np.array(rows).reshape(len(rows), len(dofs)), np.array(residuals)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_equality_rows_and_moments_equal_a_row_by_row_reading(seed: int) -> None:
+    """The 2F-85's connect rows (x, y, z of each) and the five-finger Shadow hand's joint
+    couplings and sum tendons at random configurations: `model_transmission()` gives, bit for
+    bit, what reading MuJoCo one row at a time gives."""
+    from mjtvm.grasp.actuation.transmission import dense_moment
+    from mjtvm.grasp.contacts.touch import without_round_off
+
+    rng = np.random.default_rng(seed)
+    f85, f85_data, f85_ids = _f85()
+    shadow = mujoco.MjModel.from_xml_path(str(MODELS / "shadow_hand" / "shadow_right_coupled.xml"))
+    shadow_data = mujoco.MjData(shadow)
+    shadow_data.qpos[:] = rng.uniform(shadow.jnt_range[:, 0], shadow.jnt_range[:, 1])
+    mujoco.mj_forward(shadow, shadow_data)
+    for model, data, ids in ((f85, f85_data, f85_ids), (shadow, shadow_data, _joint_ids(shadow))):
+        dofs = [int(model.jnt_dofadr[j]) for j in ids]
+        t = model_transmission(model, data, ids)
+        names, rows, residuals = _rows_one_by_one(model, data, dofs)
+        assert t.constraint_names == tuple(names) and len(names) > 0
+        np.testing.assert_array_equal(t.constraint_jacobian, rows)
+        np.testing.assert_array_equal(t.constraint_residual, residuals)
+        dense = np.array([without_round_off(row) for row in dense_moment(model, data)])
+        driving = [a for a in range(model.nactuator) if np.any(dense[a, dofs] != 0.0)]
+        assert t.actuator_ids == tuple(driving)
+        np.testing.assert_array_equal(t.moment, [without_round_off(dense[a, dofs]) for a in driving])

@@ -131,3 +131,17 @@ def test_geoms_that_cannot_collide_are_not_contacts() -> None:
         model = mujoco.MjModel.from_xml_string(xml)
         assert candidate_pairs(model, {model.body("object").id}) == []
         assert detected_contacts(model, mujoco.MjData(model), object_body="object", tolerance=TOL) == []
+
+
+def test_candidate_pairs_are_read_anew_when_the_model_changes() -> None:
+    """The pairs are kept per model structure: a model compiled again from the same file gets
+    the same ones, and a collision flag edited in place or other object bodies are read anew."""
+    model = mujoco.MjModel.from_xml_string(_gap_xml(TWO_GEOMS))
+    ob = {model.body("object").id}
+    every = [(0, 2), (0, 3), (1, 2), (1, 3)]  # the hand's h, h2 (geoms 0, 1) x the object's o, o2
+    candidate_pairs(model, ob).clear()  # the caller's copy: the memo keeps its own
+    assert candidate_pairs(model, ob) == every
+    assert candidate_pairs(mujoco.MjModel.from_xml_string(_gap_xml(TWO_GEOMS)), ob) == every
+    model.geom_contype[1] = model.geom_conaffinity[1] = 0  # h2 made visual, in place
+    assert candidate_pairs(model, ob) == [(0, 2), (0, 3)]
+    assert candidate_pairs(model, {model.body("hand").id}) == [(2, 0), (3, 0)]  # the hand as object
