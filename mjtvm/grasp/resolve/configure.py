@@ -1,4 +1,5 @@
-r"""A grasp configuration by IK: finger geoms or sites brought onto the object's surface
+r"""A grasp document's configuration in a model's ``mjData``: its keyframe, joint values and
+poses, and by IK finger geoms or sites brought onto the object's surface
 (``configuration.ik`` of a grasp file, ``docs/grasp-format.md``).
 """
 
@@ -14,11 +15,12 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ModelError
 from mjtvm.grasp.document.checks import GraspError, key_of
+from mjtvm.grasp.resolve.base import hold_mocap_poses, set_base_pose, set_joint_values
 from mjtvm.grasp.resolve.ik import IkTarget, solve_ik
-from mjtvm.grasp.resolve.model import geom_labels, joint_id, names_of, object_geoms, suggest
+from mjtvm.grasp.resolve.model import geom_labels, joint_id, names_of, object_geoms, set_object_pose, suggest
 from mjtvm.grasp.resolve.state import geom_id, geom_label, precise_collision
 
-__all__ = ["POINT_TOLERANCE", "solve_configuration"]
+__all__ = ["POINT_TOLERANCE", "configured_data", "solve_configuration"]
 
 _OBJ = mujoco.mjtObj
 
@@ -90,6 +92,40 @@ def solve_configuration(
             ) from e
     with precise_collision(model):
         return _settle_targets(model, data, resolved, obj, bounds, ik, file)
+
+
+def configured_data(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str) -> mujoco.MjData:
+    """``mjData`` of ``model`` at the grasp document's configuration (its keyframe, then its
+    joint values, base pose and the object's pose, then its IK if any), after ``mj_forward``;
+    ``ob`` is the object body's id, ``file`` names the document in errors.
+
+    Raises
+    ------
+    GraspError
+        An unknown keyframe, joint or base; an IK that does not converge.
+    """
+    data, config = mujoco.MjData(model), doc["configuration"]
+    if "keyframe" in config:
+        key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, config["keyframe"])
+        if key < 0:
+            keys = names_of(model, mujoco.mjtObj.mjOBJ_KEY, model.nkey)
+            raise GraspError(
+                file,
+                "configuration.keyframe",
+                f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})",
+            )
+        mujoco.mj_resetDataKeyframe(model, data, key)
+    values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
+    where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
+    set_joint_values(model, data, values, file, where)
+    if "base" in config:
+        set_base_pose(model, data, config["base"], file)
+    hold_mocap_poses(model, data)
+    set_object_pose(model, data, ob, doc["object"], file)
+    mujoco.mj_forward(model, data)
+    if "ik" in config:
+        data = solve_configuration(model, data, config["ik"], ob, file)
+    return data
 
 
 def _settle_targets(

@@ -45,8 +45,7 @@ from mjtvm.grasp.actuation.transmission import (
 )
 from mjtvm.grasp.document.checks import GraspError, NoContactError, key_of
 from mjtvm.grasp.document.document import read_grasp_document
-from mjtvm.grasp.resolve.base import hold_mocap_poses, set_base_pose, set_joint_values
-from mjtvm.grasp.resolve.configure import solve_configuration
+from mjtvm.grasp.resolve.configure import configured_data
 from mjtvm.grasp.resolve.loaded import Grasp, document_refs
 from mjtvm.grasp.resolve.model import (
     build_spec,
@@ -55,7 +54,6 @@ from mjtvm.grasp.resolve.model import (
     load_model,
     names_of,
     object_geoms,
-    set_object_pose,
     suggest,
 )
 from mjtvm.grasp.resolve.rules import RuleMatch, expand_rules, nearest_distance, touching_geoms
@@ -109,32 +107,6 @@ def _resolve(source: str | Path | Mapping[str, Any]) -> str | Path | Mapping[str
             )
         return shipped[source]
     return source
-
-
-def _configure(model: mujoco.MjModel, doc: Mapping[str, Any], ob: int, file: str) -> mujoco.MjData:
-    """``mjData`` at the configuration (keyframe, joint values or IK), after ``mj_forward``."""
-    data, config = mujoco.MjData(model), doc["configuration"]
-    if "keyframe" in config:
-        key = mujoco.mj_name2id(model, _OBJ.mjOBJ_KEY, config["keyframe"])
-        if key < 0:
-            keys = names_of(model, _OBJ.mjOBJ_KEY, model.nkey)
-            raise GraspError(
-                file,
-                "configuration.keyframe",
-                f"{config['keyframe']!r} is not a keyframe of the model (has: {', '.join(keys) or 'none'})",
-            )
-        mujoco.mj_resetDataKeyframe(model, data, key)
-    values = config.get("qpos") or (config["ik"]["start"] if "ik" in config else {})
-    where = "configuration.qpos" if "qpos" in config else "configuration.ik.start"
-    set_joint_values(model, data, values, file, where)
-    if "base" in config:
-        set_base_pose(model, data, config["base"], file)
-    hold_mocap_poses(model, data)
-    set_object_pose(model, data, ob, doc["object"], file)
-    mujoco.mj_forward(model, data)
-    if "ik" in config:
-        data = solve_configuration(model, data, config["ik"], ob, file)
-    return data
 
 
 def _select(
@@ -314,7 +286,7 @@ def grasp_from_model(
         )
     if not object_geoms(model, ob):
         raise GraspError(file, "object.body", f"body {doc['object']['body']!r} has no geom")
-    data = _configure(model, doc, ob, file)
+    data = configured_data(model, doc, ob, file)
     types: dict[str, str] = {}
     selections, mu, slides, geoms, preloads = [], {}, {}, [], {}
     ranges_mu: dict[str, tuple[float, float]] = {}  # geom label -> its friction interval
