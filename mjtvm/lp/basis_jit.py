@@ -18,7 +18,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["add_column", "column_dot", "invert", "values_and_duals"]
+__all__ = ["add_column", "column_dot", "column_pivot", "invert", "replace_column", "values_and_duals"]
 
 _SINGULAR_TOL = 1e-11  # Gauss-Jordan pivot below this times the column's largest: singular
 
@@ -120,6 +120,62 @@ def invert(
             if sp >= 0 and a != 0.0:
                 for q in range(k):
                     binv[sp, rows[q]] += a * minv_row[q]
+    return True
+
+
+@numba.njit(cache=True)
+def column_pivot(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, j: int, p: int, binv: np.ndarray
+) -> float:
+    """``u_p / max |u|``, ``u = B^{-1} a_j`` (``a_j`` column ``j < n`` as the arrays hold it
+    now, ``p`` its position in the basis): the pivot of `replace_column()`, relative; 0 for
+    a zero column. Its sign is that of the new basis' row duals relative to the old ones
+    where the replaced column alone is costed (``y = c_j B^{-T} e_p``)."""
+    m = binv.shape[0]
+    big, u_p = 0.0, 0.0
+    for i in range(m):
+        s = 0.0
+        for t in range(indptr[j], indptr[j + 1]):
+            s += data[t] * binv[i, indices[t]]
+        if abs(s) > big:
+            big = abs(s)
+        if i == p:
+            u_p = s
+    return u_p / big if big > 0.0 else 0.0
+
+
+@numba.njit(cache=True)
+def replace_column(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, j: int, p: int, binv: np.ndarray
+) -> bool:
+    """Update ``binv`` (``(m, m)``, in place) for basic column ``j`` (``< n``, at position
+    ``p`` of the basis) whose entries changed to those ``indptr, indices, data`` now hold:
+    the new basis matrix is the old one with column ``p`` replaced, ``B' = B E`` with ``E``
+    the identity but column ``p``, ``u = B^{-1} a_j'``, so ``B'^{-1} = E^{-1} B^{-1}`` (one
+    Gauss-Jordan step on pivot ``u_p``, ``m^2`` flops instead of a fresh `invert()`).
+    Returns ``False``, ``binv`` unchanged, where ``u_p`` is at most ``_SINGULAR_TOL``
+    times ``u``'s largest entry (the new basis is singular to `invert()`'s criterion)."""
+    m = binv.shape[0]
+    u = np.zeros(m)
+    for t in range(indptr[j], indptr[j + 1]):
+        k, a = indices[t], data[t]
+        for i in range(m):
+            u[i] += a * binv[i, k]
+    big = 0.0
+    for i in range(m):
+        if abs(u[i]) > big:
+            big = abs(u[i])
+    pivot = u[p]
+    if not abs(pivot) > _SINGULAR_TOL * big:  # also a nan or a zero column
+        return False
+    f = 1.0 / pivot
+    for c in range(m):
+        binv[p, c] *= f
+    for i in range(m):
+        g = u[i]
+        if i != p and g != 0.0:
+            for c in range(m):
+                binv[i, c] -= g * binv[p, c]
     return True
 
 

@@ -12,15 +12,18 @@ the unscaled LP exactly as it certifies HiGHS'. Where the kernel gives up (modul
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mjtvm.lp.held import HeldColumn, merge_columns
 from mjtvm.lp.highs import HighsSession
 from mjtvm.lp.lp import FEASIBILITY_TOL, LPSolution
 
-__all__ = ["WarmRows", "kernels"]
+__all__ = ["WarmBasis", "WarmRows", "kernels"]
 
 
 def kernels() -> ModuleType | None:
@@ -31,6 +34,25 @@ def kernels() -> ModuleType | None:
     except ImportError:
         return None
     return dual_jit
+
+
+@dataclass(frozen=True, eq=False)
+class WarmBasis:
+    """A basis of [`WarmRows`][mjtvm.lp.warm.WarmRows] ([`WarmRows.basis()`][mjtvm.lp.warm.WarmRows.basis]).
+
+    Attributes
+    ----------
+    basic
+        ``(m,)`` the basic variables (``j < n`` a column, ``n + i`` row ``i``'s activity).
+    at_upper
+        ``(n + m,)`` bool: a nonbasic variable is at its upper bound.
+    binv
+        ``(m, m)`` the basis matrix's inverse (row ``p`` belongs to ``basic[p]``).
+    """
+
+    basic: NDArray[np.int64]
+    at_upper: NDArray[np.bool_]
+    binv: NDArray[np.float64]
 
 
 class WarmRows:
@@ -66,11 +88,12 @@ class WarmRows:
         self._jit = jit
         a = held.a
         m, n = a.shape
+        self._csc = a
         self._a = (a.indptr, a.indices, a.data)
         self._cost = held.cost
-        self._col_lower, self._col_upper = held.col_lower, held.col_upper
+        self._col_lower, self._col_upper = held.col_lower.copy(), held.col_upper.copy()
         self._basic = held.basic.copy()
-        self._row, self._col, self._g = held.row_scale, held.col_scale, held.cost_scale
+        self._row, self._col, self._g = held.row_scale, held.col_scale.copy(), held.cost_scale
         upper_of = np.concatenate([held.col_upper, self._row * row_upper])
         lower_of = np.concatenate([held.col_lower, self._row * row_lower])
         # A nonbasic variable sits at one bound; the nearer one (HiGHS puts it exactly there).
@@ -86,6 +109,54 @@ class WarmRows:
         self._d = np.empty(n + m)
         self._fresh = True  # the first re-solve computes the values and duals afresh
         self.iterations = 0  #: dual simplex iterations of the last `solve()`
+
+    def basis(self) -> WarmBasis:
+        """A copy of the current basis (optimal for the last `solve()`), for a later
+        `set_column()` to start from."""
+        assert self._binv is not None
+        return WarmBasis(self._basic.copy(), self._at_upper.copy(), self._binv.copy())
+
+    def set_column(self, column: HeldColumn, others: Sequence[WarmBasis] = ()) -> bool:
+        """Take the LP with one column as [`HighsSession.column_as_held()`][mjtvm.lp.highs.HighsSession.column_as_held]
+        gives it (the LP HiGHS would hold after ``set_column(rescale=True)``), and a basis
+        to re-solve it from: the current one, else the one of ``others`` (bases `basis()`
+        gave for earlier columns) with the largest relative pivot. A basic column's inverse
+        is updated (`replace_column()`); the next `solve()` computes the values and reduced
+        costs afresh and gives up unless the basis is dual feasible.
+
+        Where the column is the only costed one and basic, replacing it scales the row
+        duals (and so every reduced cost) by ``1 / u_p`` (`column_pivot()`): the basis stays
+        dual feasible exactly when ``u_p > 0``; the current basis is kept then, else the
+        best of ``others`` with ``u_p > 0``. Returns ``False`` (the object unusable) where
+        the chosen basis matrix is singular."""
+        from mjtvm.lp.basis_jit import column_pivot, replace_column
+
+        if self._binv is None:
+            return False
+        j = column.col
+        self._csc = merge_columns(self._csc, {j: (column.rows, column.values)})
+        self._a = (self._csc.indptr, self._csc.indices, self._csc.data)
+        pos = np.flatnonzero(self._basic == j)
+        if pos.size and column_pivot(*self._a, j, int(pos[0]), self._binv) <= 0.0:
+            best, best_pivot = None, 0.0
+            for b in others:
+                at = np.flatnonzero(b.basic == j)
+                if at.size:
+                    pivot = column_pivot(*self._a, j, int(at[0]), b.binv)
+                    if pivot > best_pivot:
+                        best, best_pivot = b, pivot
+            if best is not None:
+                self._basic, self._at_upper = best.basic.copy(), best.at_upper.copy()
+                self._binv = best.binv.copy()
+                pos = np.flatnonzero(self._basic == j)
+        if pos.size and not replace_column(*self._a, j, int(pos[0]), self._binv):
+            self._binv = None
+            return False
+        self._col[j] = column.factor
+        self._col_lower[j], self._col_upper[j] = column.col_lower, column.col_upper
+        self._cost, self._g = column.cost, column.cost_scale
+        self._fresh = True
+        return True
 
     def solve(self, row_lower: NDArray[np.float64], row_upper: NDArray[np.float64]) -> LPSolution | None:
         """The optimal solution for these (unscaled) row bounds, unscaled; ``None`` where the

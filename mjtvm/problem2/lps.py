@@ -40,7 +40,7 @@ from mjtvm.problem2.sizes import physical_sizes
 from mjtvm.problem2.verdict import Check, Verdict, other_ways
 
 if TYPE_CHECKING:
-    from mjtvm.lp.warm import WarmRows
+    from mjtvm.lp.warm import WarmBasis, WarmRows
 
 __all__ = ["P2_HIGHS_OPTIONS", "ZERO_ALPHA", "StateLPs"]
 
@@ -76,7 +76,12 @@ class StateLPs:
             from mjtvm.lp.warm import kernels
 
             self._jit = kernels()
-        self._warm: WarmRows | None = None  # the re-solver of HiGHS' last (r, alpha_max)
+        self._warm: WarmRows | None = None  # the re-solver from HiGHS' last basis (its alpha_max)
+        self._warm_r = b""  # the r whose alpha column the re-solver holds
+        # The re-solver's optimal bases at each change of r, each a start for a later r whose
+        # alpha column, swapped in, leaves it dual feasible (WarmRows.set_column).
+        self._bases: list[WarmBasis] = []
+        self._compiled: dict[int, LPSolution] = {}  # the re-solver's answers, by id()
         self._last_optimal = False  # whether HiGHS' last solve was optimal (its basis serves)
         self._last_w = np.zeros(0)  # the w of HiGHS' last solve
         self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
@@ -222,10 +227,16 @@ class StateLPs:
         if self._jit is not None and self.session is not None:
             sol = self._warm_solve(w, r, alpha_max)
             if sol is not None:
+                self._compiled[id(sol)] = sol
                 return Settled(sol, "highs")
+        return self._highs(w, r, alpha_max)
+
+    def _highs(self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float) -> Settled:
+        """`solve()` by the HiGHS session, warm from its last basis (Clarabel on failure)."""
         try:
             if self.session is None:
                 self.session = self._session(w, r, alpha_max)
+                self._bases = []  # another session's matrix (its round-off dropped afresh)
             else:
                 ses = self.session
                 # The column changes with l, the bounds with k (set_column re-sends alpha's
@@ -251,16 +262,19 @@ class StateLPs:
     def _warm_solve(
         self, w: NDArray[np.float64], r: NDArray[np.float64], alpha_max: float
     ) -> LPSolution | None:
-        """The LP of (w, r) re-solved by the compiled dual simplex ([`WarmRows`][mjtvm.lp.warm.WarmRows]) when it
-        differs from the session's last only in the balance rows' bounds, from the basis of
-        the last re-solve (else HiGHS' last); ``None`` when it does not or the kernel gave up
-        (then HiGHS solves it, from its own basis). The answer is certified as HiGHS' are."""
-        if r.tobytes() != self._last[1] or alpha_max != self._last[2] or w.tobytes() == self._last[0]:
+        """The LP of (w, r) re-solved by the compiled dual simplex ([`WarmRows`][mjtvm.lp.warm.WarmRows]) from the basis
+        of the last re-solve (else HiGHS' last), when it differs from the LP the kernel
+        holds in the balance rows' bounds and the alpha column (a new r: the column HiGHS
+        would hold, [`column_as_held()`][mjtvm.lp.highs.HighsSession.column_as_held]);
+        ``None`` when alpha's bounds differ, or the kernel gave up (then HiGHS solves it,
+        from its own basis). The answer is certified as HiGHS' are."""
+        if alpha_max != self._last[2]:
             return None
         assert self.session is not None and self._jit is not None  # solve() asks only then
+        key = r.tobytes()
         if self._warm is None:
-            if not self._last_optimal:  # no optimal basis to start from
-                return None
+            if not self._last_optimal or (key == self._last[1] and w.tobytes() == self._last[0]):
+                return None  # no optimal basis to start from, or HiGHS' own last LP
             from mjtvm.lp.warm import WarmRows
 
             lower, upper, _ = self._bounds(self._last_w, alpha_max)
@@ -268,6 +282,18 @@ class StateLPs:
                 self._warm = WarmRows(self.session, self._jit, lower, upper)
             except ValueError:  # a basis the kernel calls singular: HiGHS solves this LP
                 return None
+            self._warm_r = self._last[1]
+        if key != self._warm_r:
+            try:
+                column = self.session.column_as_held(self.alpha_col, self.kin, self.column(r))
+            except SolverError:  # HiGHS' set_column raises it too, and falls back
+                self._warm = None
+                return None
+            self._bases.append(self._warm.basis())  # optimal for the last LP, of the last r
+            if not self._warm.set_column(column, self._bases[:-1]):
+                self._warm = None
+                return None
+            self._warm_r = key
         lower, upper, _ = self._bounds(w, alpha_max)
         sol = self._warm.solve(lower, upper)
         if sol is None:  # the kernel gave up: HiGHS solves this LP, its basis serves the next
@@ -394,6 +420,16 @@ class StateLPs:
         [`other_ways()`][mjtvm.problem2.verdict.other_ways])."""
         if cert is not None and cert[0]:
             return Verdict(settled, cert[1], True)
+        if self._compiled.get(id(settled.solution)) is settled.solution:
+            # The compiled re-solve's answer stands only certified; else HiGHS solves the LP,
+            # as it would have without the re-solves (their tolerance is HiGHS', 1e-9 on the
+            # equilibrated rows: a degenerate vertex can sit within it and still miss the
+            # certificate's, as on case1-s with six test wrenches, 1.3e-8 against 1e-8).
+            del self._compiled[id(settled.solution)]
+            settled = self._highs(w, r, alpha_max)
+            cert = self.check(w, r, alpha_max, settled.solution)
+            if cert is not None and cert[0]:
+                return Verdict(settled, cert[1], True)
         lp, _ = self.lp(w, r, alpha_max=alpha_max)
         return other_ways(settled, cert, lp, lambda sol: self.check(w, r, alpha_max, sol))
 

@@ -73,11 +73,16 @@ def test_shipped_states(name):
 
 
 def test_dataset_hand_six_wrenches():
-    """36 LPs a grasp, 30 of them balance-row re-solves: HiGHS runs only the first LP of
-    each RVDS vertex (the kernel gives up on none of these 20 grasps)."""
+    """36 LPs a grasp, 30 of them balance-row re-solves and 5 a new alpha column: HiGHS runs
+    the first LP, and the first LP of an RVDS vertex only where no kept basis stays dual
+    feasible with the new column swapped in (never more than the 6 it ran before the column
+    changes were compiled; on these 20 grasps 46 runs in all, 26 of 100 column changes)."""
+    runs = []
     for seed in range(20):
         runs_h, runs_c = _same(dataset_state(seed, num_refs=6))
-        assert (runs_h, runs_c) == (36, 6), seed
+        assert runs_h == 36 and 1 <= runs_c <= 6, seed
+        runs.append(runs_c)
+    assert sum(runs) < 60  # most column changes re-solved by the kernel
 
 
 def test_single_solves_do_not_import_numba():
