@@ -19,7 +19,7 @@ from types import ModuleType
 import numpy as np
 from numpy.typing import NDArray
 
-from mjtvm.lp.held import HeldColumn, merge_columns
+from mjtvm.lp.held import HeldColumn
 from mjtvm.lp.highs import HighsSession
 from mjtvm.lp.lp import FEASIBILITY_TOL, LPSolution
 
@@ -88,7 +88,6 @@ class WarmRows:
         self._jit = jit
         a = held.a
         m, n = a.shape
-        self._csc = a
         self._a = (a.indptr, a.indices, a.data)
         self._cost = held.cost
         self._col_lower, self._col_upper = held.col_lower.copy(), held.col_upper.copy()
@@ -108,6 +107,7 @@ class WarmRows:
         self._x_b = np.empty(m)
         self._d = np.empty(n + m)
         self._fresh = True  # the first re-solve computes the values and duals afresh
+        self._capped: tuple[int, float] | None = None  # set_column's cap (column, scaled)
         self.iterations = 0  #: dual simplex iterations of the last `solve()`
 
     def basis(self) -> WarmBasis:
@@ -116,47 +116,66 @@ class WarmRows:
         assert self._binv is not None
         return WarmBasis(self._basic.copy(), self._at_upper.copy(), self._binv.copy())
 
-    def set_column(self, column: HeldColumn, others: Sequence[WarmBasis] = ()) -> bool:
+    def set_column(
+        self, column: HeldColumn, others: Sequence[WarmBasis] = (), *, cap: float = np.inf
+    ) -> bool:
         """Take the LP with one column as [`HighsSession.column_as_held()`][mjtvm.lp.highs.HighsSession.column_as_held]
         gives it (the LP HiGHS would hold after ``set_column(rescale=True)``), and a basis
-        to re-solve it from: the current one, else the one of ``others`` (bases `basis()`
-        gave for earlier columns) with the largest relative pivot. A basic column's inverse
-        is updated (`replace_column()`); the next `solve()` computes the values and reduced
-        costs afresh and gives up unless the basis is dual feasible.
+        to re-solve it from, dual feasible; the next `solve()` computes the values and
+        reduced costs afresh and gives up unless the basis is dual feasible.
 
         Where the column is the only costed one and basic, replacing it scales the row
         duals (and so every reduced cost) by ``1 / u_p`` (`column_pivot()`): the basis stays
-        dual feasible exactly when ``u_p > 0``; the current basis is kept then, else the
-        best of ``others`` with ``u_p > 0``. Returns ``False`` (the object unusable) where
-        the chosen basis matrix is singular."""
-        from mjtvm.lp.basis_jit import column_pivot, replace_column
+        dual feasible exactly when ``u_p > 0``. The current basis is kept then (its inverse
+        updated, `replace_column()`), else the latest of ``others`` (bases `basis()` gave
+        for earlier columns) with ``u_p > 0``. Where none has, and ``cap`` (unscaled, at
+        least the column's optimal value for the LP's answer to stand) is finite: the column
+        leaves the basis for the row activity whose swap is the best conditioned, and starts
+        nonbasic at ``cap``; every other reduced cost is then 0 and the column's is its cost
+        (< 0, at its upper bound: dual feasible). The next `solve()` takes ``cap`` as the
+        column's upper bound and gives up if the column ends there; ended basic (or at 0),
+        the basis is optimal for the LP without the cap too (the cap binds no basic
+        variable's bound and no reduced cost's sign). Returns ``False`` (the object unusable)
+        where the chosen basis matrix is singular or no start is found."""
+        from mjtvm.lp.basis_jit import replace_column, with_column
 
         if self._binv is None:
             return False
         j = column.col
-        self._csc = merge_columns(self._csc, {j: (column.rows, column.values)})
-        self._a = (self._csc.indptr, self._csc.indices, self._csc.data)
+        self._a = with_column(*self._a, len(self._row), j, column.rows, column.values)
+        n = len(self._cost)
+        self._capped = None
         pos = np.flatnonzero(self._basic == j)
-        if pos.size and column_pivot(*self._a, j, int(pos[0]), self._binv) <= 0.0:
-            best, best_pivot = None, 0.0
-            for b in others:
+        if pos.size and not self._swap_in(j, int(pos[0]), self._binv):
+            for b in reversed(others):  # the latest first
                 at = np.flatnonzero(b.basic == j)
-                if at.size:
-                    pivot = column_pivot(*self._a, j, int(at[0]), b.binv)
-                    if pivot > best_pivot:
-                        best, best_pivot = b, pivot
-            if best is not None:
-                self._basic, self._at_upper = best.basic.copy(), best.at_upper.copy()
-                self._binv = best.binv.copy()
-                pos = np.flatnonzero(self._basic == j)
-        if pos.size and not replace_column(*self._a, j, int(pos[0]), self._binv):
-            self._binv = None
-            return False
+                binv = b.binv.copy()
+                if at.size and self._swap_in(j, int(at[0]), binv):
+                    self._basic, self._at_upper, self._binv = b.basic.copy(), b.at_upper.copy(), binv
+                    break
+            else:
+                only = column.cost[j] < 0.0 and np.count_nonzero(column.cost) == 1
+                p = int(pos[0])
+                i = int(np.argmax(np.abs(self._binv[p])))  # a basic row's activity has 0 there
+                if not (only and np.isfinite(cap)) or not replace_column(*self._a, n + i, p, self._binv):
+                    self._binv = None
+                    return False
+                self._basic[p] = n + i
+                self._at_upper[j] = True
+                self._capped = (j, cap / column.factor)
         self._col[j] = column.factor
         self._col_lower[j], self._col_upper[j] = column.col_lower, column.col_upper
         self._cost, self._g = column.cost, column.cost_scale
         self._fresh = True
         return True
+
+    def _swap_in(self, j: int, p: int, binv: NDArray[np.float64]) -> bool:
+        """Whether column ``j``, at position ``p`` of the basis of ``binv``, has its new
+        entries swapped in with ``u_p > 0`` (`column_pivot()`; ``binv`` updated) rather
+        than ``u_p <= 0`` or a singular new basis (``binv`` unchanged)."""
+        from mjtvm.lp.basis_jit import column_pivot, replace_column
+
+        return column_pivot(*self._a, j, p, binv) > 0.0 and replace_column(*self._a, j, p, binv)
 
     def solve(self, row_lower: NDArray[np.float64], row_upper: NDArray[np.float64]) -> LPSolution | None:
         """The optimal solution for these (unscaled) row bounds, unscaled; ``None`` where the
@@ -165,6 +184,9 @@ class WarmRows:
             return None
         lower = np.concatenate([self._col_lower, self._row * row_lower])
         upper = np.concatenate([self._col_upper, self._row * row_upper])
+        capped, self._capped = self._capped, None
+        if capped is not None:  # set_column's start: the column at its cap, this solve only
+            upper[capped[0]] = min(upper[capped[0]], capped[1])
         status, self.iterations = self._jit.resolve(
             *self._a,
             self._cost,
@@ -181,7 +203,9 @@ class WarmRows:
             FEASIBILITY_TOL,
             self._jit.CAP,
         )
-        if status != self._jit.OPTIMAL:
+        if status != self._jit.OPTIMAL or (
+            capped is not None and self._at_upper[capped[0]] and capped[0] not in self._basic
+        ):  # not optimal, or the cap binds: the LP's optimum may lie beyond it
             self._binv = None
             return None
         self._fresh = False

@@ -82,6 +82,7 @@ class StateLPs:
         # alpha column, swapped in, leaves it dual feasible (WarmRows.set_column).
         self._bases: list[WarmBasis] = []
         self._compiled: dict[int, LPSolution] = {}  # the re-solver's answers, by id()
+        self._alpha_seen = 0.0  # the largest alpha of an optimal answer so far
         self._last_optimal = False  # whether HiGHS' last solve was optimal (its basis serves)
         self._last_w = np.zeros(0)  # the w of HiGHS' last solve
         self.asm = asm = assemble(state, copies=1, box=box, horizon=True)
@@ -252,6 +253,8 @@ class StateLPs:
             self._warm = None  # HiGHS' basis moved: a re-solver starts from it
             sol = self.session.solve(duals=True)
             self._last_optimal = sol.status == "optimal"
+            if sol.x is not None:
+                self._alpha_seen = max(self._alpha_seen, float(sol.x[-1]))
             return Settled(sol, "highs")
         except SolverError as e:
             self.session = None  # its basis may be what went wrong: the next LP starts afresh
@@ -290,7 +293,11 @@ class StateLPs:
                 self._warm = None
                 return None
             self._bases.append(self._warm.basis())  # optimal for the last LP, of the last r
-            if not self._warm.set_column(column, self._bases[:-1]):
+            # A start with alpha at twice the state's largest alpha so far, where no basis
+            # takes the column (alpha of one state's RVDS vertices, one size: r and -r, the
+            # axes); any cap above the optimum gives the same answer, one below gives up.
+            cap = 2.0 * self._alpha_seen if self._alpha_seen > 0.0 else np.inf
+            if not self._warm.set_column(column, self._bases[:-1], cap=cap):
                 self._warm = None
                 return None
             self._warm_r = key
@@ -298,6 +305,9 @@ class StateLPs:
         sol = self._warm.solve(lower, upper)
         if sol is None:  # the kernel gave up: HiGHS solves this LP, its basis serves the next
             self._warm = None
+        else:
+            assert sol.x is not None
+            self._alpha_seen = max(self._alpha_seen, float(sol.x[-1]))
         return sol
 
     def pair_matrix(self, r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

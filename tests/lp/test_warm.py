@@ -211,3 +211,32 @@ def test_changed_column_agrees_with_highs(seed):
         solved += 1
         _check(lp, lo, up, got, ref)
     assert solved >= 5
+
+
+def test_with_column_is_a_dense_write():
+    """`with_column()` (the kernel's) and `merge_columns()` (the session's) both give ``A``
+    with ``A[rows, j] = values`` written densely, zeros not stored, rows sorted: a column
+    that grows, one that shrinks to nothing, the first and the last column."""
+    from mjtvm.lp.basis_jit import with_column
+    from mjtvm.lp.csc import as_csc
+    from mjtvm.lp.held import merge_columns
+
+    rng = np.random.default_rng(5)
+    a = sp.random(9, 6, density=0.4, random_state=rng).tocsc()
+    held = as_csc(a)
+    cases = [
+        (0, np.array([8, 1, 4]), np.array([1.5, -2.0, 0.0])),
+        (5, np.arange(9), rng.normal(size=9)),
+        (2, np.arange(9), np.zeros(9)),
+        (3, np.array([2]), np.array([7.0])),
+    ]
+    for j, rows, values in cases:
+        dense = a.toarray()
+        dense[rows, j] = values
+        ptr, idx, data = with_column(held.indptr, held.indices, held.data, 9, j, rows, values)
+        merged = merge_columns(held, {j: (rows, values)})
+        for p, i, d in ((ptr, idx, data), (merged.indptr, merged.indices, merged.data)):
+            got = sp.csc_matrix((d, i, p), shape=(9, 6))
+            assert np.array_equal(got.toarray(), dense)
+            assert np.all(d != 0.0) and got.has_sorted_indices
+        assert idx.dtype == held.indices.dtype and ptr.dtype == held.indptr.dtype
