@@ -18,7 +18,15 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["add_column", "column_dot", "column_pivot", "invert", "replace_column", "values_and_duals", "with_column"]
+__all__ = [
+    "add_column",
+    "column_dot",
+    "column_pivot",
+    "invert",
+    "replace_column",
+    "values_and_duals",
+    "with_column",
+]
 
 _SINGULAR_TOL = 1e-11  # Gauss-Jordan pivot below this times the column's largest: singular
 

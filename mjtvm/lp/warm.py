@@ -1,12 +1,16 @@
-r"""Re-solves of an LP whose row bounds alone change, from the basis HiGHS left, in the
-compiled dual simplex of [`dual_jit`][mjtvm.lp.dual_jit] instead of another HiGHS ``run()``.
+r"""Re-solves of an LP whose row bounds change, and one of whose columns may change, from
+the basis HiGHS left, in the compiled dual simplex of [`dual_jit`][mjtvm.lp.dual_jit] instead
+of another HiGHS ``run()``.
 
 [`WarmRows`][mjtvm.lp.warm.WarmRows] takes the equilibrated LP a
 [`HighsSession`][mjtvm.lp.highs.HighsSession] holds and its basis after an optimal solve
 ([`HighsSession.held()`][mjtvm.lp.highs.HighsSession.held]), inverts the basis matrix once,
 and re-solves for new row bounds from its own last basis; the answer is unscaled as the
 session's are (``x = col * x_s``, ``y = row * y_s / g``), so that the caller certifies it on
-the unscaled LP exactly as it certifies HiGHS'. Where the kernel gives up (module
+the unscaled LP exactly as it certifies HiGHS'. A column replaced as HiGHS would hold it
+([`HighsSession.column_as_held()`][mjtvm.lp.highs.HighsSession.column_as_held]) is taken by
+[`WarmRows.set_column()`][mjtvm.lp.warm.WarmRows.set_column], from a dual feasible basis (its
+inverse updated by one pivot, not inverted again). Where the kernel gives up (module
 [`dual_jit`][mjtvm.lp.dual_jit]) `WarmRows.solve()` returns ``None`` and the caller asks HiGHS.
 """
 
@@ -57,7 +61,8 @@ class WarmBasis:
 
 class WarmRows:
     """The LP of ``session`` re-solved for new row bounds (same matrix, same costs, same
-    column bounds) by the compiled dual simplex, from the session's last basis.
+    column bounds, but for `set_column()`) by the compiled dual simplex, from the
+    session's last basis.
 
     Parameters
     ----------

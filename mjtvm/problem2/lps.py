@@ -3,7 +3,8 @@ r"""The LPs of Problem 2 for one grasp state (eq. 31-35), solved and certified.
 [`StateLPs`][mjtvm.problem2.lps.StateLPs] assembles a state's constraints once (`assemble()`)
 and equilibrates them once; the LP of a pair (k, l) differs from the others only in the
 column of ``alpha`` (``A_twist r_l``) and the right-hand side of the balance rows
-(``-w_k``), so one HiGHS session is modified and re-solved from its last basis. Every
+(``-w_k``), so one HiGHS session is modified and re-solved from its last basis (on the
+batch paths most of them by the compiled dual simplex instead, [`warm`][mjtvm.lp.warm]). Every
 answer is certified on the unscaled LP ([`certificate`][mjtvm.lp.certificate]) and solved again
 other ways when it is not ([`StateLPs.certified()`][mjtvm.problem2.lps.StateLPs.certified]). [`tvmmp()`][mjtvm.problem2.tvmmp.tvmmp]
 runs the pairs and reports them. The sizes the certificates measure against come from the

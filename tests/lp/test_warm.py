@@ -191,7 +191,7 @@ def test_changed_column_agrees_with_highs(seed):
     warm = WarmRows(ses, jit, lp.row_lower, lp.row_upper)
     rows = np.arange(m)
     solved = 0
-    for step in range(8):
+    for _ in range(8):
         j = int(rng.integers(0, n))
         old = lp.A[:, [j]].toarray().ravel()
         new = old * (1.0 + 0.05 * rng.normal(size=m))  # its non-zeros moved by ~5 %
