@@ -240,3 +240,38 @@ def test_with_column_is_a_dense_write():
             assert np.array_equal(got.toarray(), dense)
             assert np.all(d != 0.0) and got.has_sorted_indices
         assert idx.dtype == held.indices.dtype and ptr.dtype == held.indptr.dtype
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_negated_column_from_a_cap(seed):
+    """``max x_0`` (the only cost, x_0 >= 0) over boxed columns and equality rows; x_0's
+    column negated: its pivot in the old basis is -1, so neither the old basis nor (without
+    ``cap``) any start is dual feasible, and `set_column()` refuses. With ``cap`` an upper
+    bound of x_0 (twice the rows' bound), x_0 starts nonbasic at the cap and the re-solve
+    meets HiGHS' optimum of the new LP."""
+    rng = np.random.default_rng(300 + seed)
+    m, n = 6, 12
+    a = rng.normal(size=(m, n))
+    x0 = np.append(rng.uniform(0.1, 1.0), rng.uniform(-1, 1, n - 1))
+    x0[0] = 0.0  # feasible for either sign of x_0's column
+    b = a @ x0
+    lo, up = np.append(0.0, -np.ones(n - 1)), np.append(np.inf, np.ones(n - 1))
+    c = np.zeros(n)
+    c[0] = -1.0
+    lp = LinearProgram(c, sp.csc_matrix(a), b, b, lo, up)
+    ses = HighsSession(lp)
+    assert ses.solve(duals=True).status == "optimal"
+    rows = np.arange(m)
+    flipped = _with_column(lp, 0, -a[:, 0])
+    bound = np.min((np.abs(b) + np.abs(a[:, 1:]).sum(axis=1)) / np.abs(a[:, 0]))  # x_0 <= bound
+    for cap, works in ((np.inf, False), (2.0 * bound, True)):
+        warm = WarmRows(ses, jit, b, b)
+        assert 0 in warm.basis().basic  # x_0 > 0 at the first optimum: basic
+        ok = warm.set_column(ses.column_as_held(0, rows, -a[:, 0]), cap=cap)
+        assert ok == works
+        if ok:
+            got = warm.solve(b, b)
+            ref_ses = HighsSession(flipped)
+            ref = ref_ses.solve(duals=True)
+            assert got is not None and got.x[0] < 2.0 * bound
+            _check(flipped, b, b, got, ref)

@@ -95,3 +95,26 @@ def test_single_solves_do_not_import_numba():
     root = Path(__file__).resolve().parents[2]
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root, check=True)
     assert out.stdout.split() == ["36", "False"]
+
+
+def test_uncertified_kernel_answers_are_solved_by_highs(monkeypatch):
+    """A kernel answer the certificate refuses (here every one, its x scaled by 1.001: the
+    balance rows off by 1e-3) is solved by HiGHS instead, as if the kernel had given up:
+    no note, the alphas, statuses and limiting pair of HiGHS alone."""
+    from dataclasses import replace
+
+    from mjtvm.lp import warm
+
+    solve = warm.WarmRows.solve
+
+    def spoiled(self, lower, upper):  # type: ignore[no-untyped-def]
+        sol = solve(self, lower, upper)
+        return None if sol is None else replace(sol, x=1.001 * sol.x)
+
+    monkeypatch.setattr(warm.WarmRows, "solve", spoiled)
+    state = dataset_state(0, num_refs=6)
+    ref = tvmmp(state, witnesses=False)
+    got = tvmmp(state, witnesses=False, compiled=True)
+    assert got.status == ref.status and got.notes == ref.notes == ()
+    assert not got.uncertified() and got.limiting == ref.limiting
+    np.testing.assert_allclose(got.alpha, ref.alpha, rtol=1e-9, atol=1e-12)
