@@ -2,7 +2,7 @@ r"""Problem 2 against its solver's floor: how much of a state's time is HiGHS's 
 
 Per state, ``tvmmp(state, witnesses=False)`` (HiGHS, eliminated box, every answer certified)
 is timed, and within the same calls the time inside HiGHS ``run()``
-([`observe_runs()`][mjtvm.lp.highs.observe_runs]): the floor is HiGHS solving exactly these LPs from
+([`observe_runs()`][mjtvm.lp.highspy_start.observe_runs]): the floor is HiGHS solving exactly these LPs from
 exactly these bases, and the ratio ``total / run`` is what mjtvm's Python around the solver
 (assembly, equilibration, the HiGHS session, the certificates, the result) costs on top of it.
 The ratio of each call is computed on that call (both in the same run, so the machine's load

@@ -4,15 +4,15 @@ state differ only there).
 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from any
 call raises [`SolverError`][mjtvm.errors.SolverError]. A ``Highs`` is constructed by
-[`new_highs()`][mjtvm.lp.highspy_start.new_highs] (``mjtvm.lp.highspy_start``; importable from here).
+[`new_highs()`][mjtvm.lp.highspy_start.new_highs] (``mjtvm.lp.highspy_start``; importable from here, as
+[`observe_runs()`][mjtvm.lp.highspy_start.observe_runs] is).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -21,27 +21,11 @@ from numpy.typing import NDArray
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.lp.csc import as_csc
 from mjtvm.lp.held import HeldColumn, HeldLP, basic_variables, merge_columns
-from mjtvm.lp.highspy_start import acquire_highs, give_back, highspy_module, new_highs
+from mjtvm.lp.highspy_start import acquire_highs, give_back, highspy_module, new_highs, observe_runs, ran
 from mjtvm.lp.lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from mjtvm.lp.scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
 __all__ = ["HighsSession", "new_highs", "observe_runs"]
-
-#: Callbacks told the wall time (s) of every HiGHS ``run`` of every session (observe_runs).
-_RUN_OBSERVERS: list[Callable[[float], None]] = []
-
-
-@contextmanager
-def observe_runs(callback: Callable[[float], None]) -> Iterator[None]:
-    """Call ``callback(seconds)`` after every HiGHS ``run`` of every [`HighsSession`][mjtvm.lp.highs.HighsSession]
-    while the context is open: the one hook for a progress count (``mjtvm tvms``) and for the
-    benchmark's time inside HiGHS, instead of each patching ``highspy.Highs.run``."""
-    _RUN_OBSERVERS.append(callback)
-    try:
-        yield
-    finally:
-        _RUN_OBSERVERS.remove(callback)
-
 
 _HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
 _HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
@@ -406,10 +390,7 @@ class HighsSession:
                 else:
                     self._check(h.setOptionValue("threads", 1), "option threads restore")
         finally:
-            if _RUN_OBSERVERS:
-                spent = time.perf_counter() - t0
-                for observer in tuple(_RUN_OBSERVERS):
-                    observer(spent)
+            ran(t0)
         if status == self._hs.HighsStatus.kError:
             return ms.kSolveError
         return h.getModelStatus()

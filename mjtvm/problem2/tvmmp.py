@@ -162,7 +162,7 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
 
     An infeasible (or unbounded) answer is certified at once, since it decides which LPs
     follow; the optimal ones are certified together once every LP is solved
-    ([`certify_many()`][mjtvm.problem2.lps.StateLPs.certify_many]), and an answer whose certificate
+    ([`certify_many()`][mjtvm.problem2.certifying.StateCertificates.certify_many]), and an answer whose certificate
     fails is then solved again other ways ([`conclude()`][mjtvm.problem2.lps.StateLPs.conclude]).
     Should that find a pair infeasible, its k is infeasible as above and its later LPs,
     solved already, are dropped."""
