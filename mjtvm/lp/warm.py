@@ -142,7 +142,7 @@ class WarmRows:
         the basis is optimal for the LP without the cap too (the cap binds no basic
         variable's bound and no reduced cost's sign). Returns ``False`` (the object unusable)
         where the chosen basis matrix is singular or no start is found."""
-        from mjtvm.lp.basis_jit import replace_column, with_column
+        from mjtvm.lp.basis_jit import column_pivot, replace_column, with_column
 
         if self._binv is None:
             return False
@@ -154,8 +154,11 @@ class WarmRows:
         if pos.size and not self._swap_in(j, int(pos[0]), self._binv):
             for b in reversed(others):  # the latest first
                 at = np.flatnonzero(b.basic == j)
+                # `_swap_in()` on a copy of b's inverse, copied only once u_p > 0 (read only).
+                if not at.size or column_pivot(*self._a, j, int(at[0]), b.binv) <= 0.0:
+                    continue
                 binv = b.binv.copy()
-                if at.size and self._swap_in(j, int(at[0]), binv):
+                if replace_column(*self._a, j, int(at[0]), binv):
                     self._basic, self._at_upper, self._binv = b.basic.copy(), b.at_upper.copy(), binv
                     break
             else:
