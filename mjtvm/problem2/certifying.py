@@ -135,15 +135,16 @@ class StateCertificates:
         if not answers:
             return []
         cert = self._certifier(answers[0][1])
-        p, (m, n) = len(answers), cert.a.shape
-        lower, upper, cu = np.empty((p, m)), np.empty((p, m)), np.empty((p, n))
-        x, y, last, floor = np.empty((p, n)), np.empty((p, m)), np.zeros((p, m)), np.empty(p)
-        for i, (w, r, alpha_max, sol) in enumerate(answers):
-            lower[i], upper[i], cu[i] = self.bounds(w, alpha_max)
-            col, floor[i] = self._r_values(r)
-            last[i, self.kin] = col
-            assert sol.x is not None and sol.row_dual is not None
-            x[i], y[i] = sol.x, sol.row_dual
+        # Stacked from lists (one copy each): the answers' bounds, columns and solutions.
+        bounds = [self.bounds(w, alpha_max) for w, _, alpha_max, _ in answers]
+        lower, upper, cu = (np.array([b[i] for b in bounds]) for i in range(3))
+        of_r = [self._r_values(r) for _, r, _, _ in answers]
+        last = np.zeros((len(answers), cert.a.shape[0]))
+        last[:, self.kin] = np.array([col for col, _ in of_r])
+        floor = np.array([fl for _, fl in of_r])
+        assert all(sol.x is not None and sol.row_dual is not None for *_, sol in answers)
+        x = np.array([sol.x for *_, sol in answers])
+        y = np.array([sol.row_dual for *_, sol in answers])
         return cert.check_many(self.c, lower, upper, cu, x, y, last, floor=floor)
 
     def _certifier(self, r: NDArray[np.float64]) -> Certifier:

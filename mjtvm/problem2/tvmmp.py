@@ -255,14 +255,16 @@ def _record(
     out.certified[k][l] = verdict.certified
     if sol.status == "optimal" and sol.x is not None:
         # The witness within its bounds (the certificate checked the rows with it):
-        # alpha >= 0, lam >= 0 exactly, never a negative alpha.
-        x = clip(sol.x, problem.col_lower, problem.col_upper)
-        a = float(x[problem.alpha_col])
+        # alpha >= 0, lam >= 0 exactly, never a negative alpha (alpha's entry alone unless
+        # the witness is asked for: the same clip, one entry).
+        j = problem.alpha_col
+        a = float(np.minimum(np.maximum(sol.x[j], problem.col_lower[j]), problem.col_upper[j]))
         # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
         # there), so that the rounding to 0 does not depend on the unit system.
         a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
         out.alpha[k, l] = a
         if witnesses:
+            x = clip(sol.x, problem.col_lower, problem.col_upper)
             out.witnesses[k][l] = _witness(problem.asm, state, x, a, r)
 
 
