@@ -2,7 +2,7 @@ r"""Problem 2 against its solver's floor: how much of a state's time is HiGHS's 
 
 Per state, ``tvmmp(state, witnesses=False)`` (HiGHS, eliminated box, every answer certified)
 is timed, and within the same calls the time inside HiGHS ``run()``
-([`observe_runs()`][mjtvm.lp.highs.observe_runs]): the floor is HiGHS solving exactly these LPs from
+([`observe_runs()`][mjtvm.lp.highspy_start.observe_runs]): the floor is HiGHS solving exactly these LPs from
 exactly these bases, and the ratio ``total / run`` is what mjtvm's Python around the solver
 (assembly, equilibration, the HiGHS session, the certificates, the result) costs on top of it.
 The ratio of each call is computed on that call (both in the same run, so the machine's load
@@ -17,8 +17,8 @@ weight (6 LPs) and with six test wrenches (36 LPs) as REFS. Target: ratio at mos
 [`TARGET_RATIO`][benchmarks.floor.TARGET_RATIO].
 
 ``dataset-36-compiled``: the 36-LP state with ``tvmmp(..., compiled=True)`` (the batch paths'
-call: the 30 LPs that differ from HiGHS' last only in the balance rows' bounds are re-solved
-by the compiled dual simplex of [`warm`][mjtvm.lp.warm], 6 HiGHS runs instead of 36), each call
+call: the LPs after the first are re-solved by the compiled dual simplex of
+[`warm`][mjtvm.lp.warm] where it does not give up, 1 HiGHS run instead of 36), each call
 against the time inside HiGHS ``run()`` of a HiGHS-alone call of the same state right before
 it: the floor stays HiGHS solving all 36 LPs, so the ratio says what the whole call costs
 over what HiGHS alone would spend in ``run()``.

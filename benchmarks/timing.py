@@ -8,7 +8,7 @@ one REFS vertex and four RVDS vertices (eq. 37), so four LPs. Measured per state
 * ``tvmmp(state, witnesses=False)`` (HiGHS, eliminated box) and the same with
   ``box="literal"``: median wall time over many repeats after a warm-up;
 * where the time goes: the HiGHS ``run()`` calls are timed through
-  [`observe_runs()`][mjtvm.lp.highs.observe_runs] for the duration of one measurement, the rest of a call is
+  [`observe_runs()`][mjtvm.lp.highspy_start.observe_runs] for the duration of one measurement, the rest of a call is
   Python overhead, of which `assemble()` alone is timed too;
 * the baseline [`reference_tvmmp()`][oracles.reference.reference_tvmmp], which rebuilds a cvxpy problem
   for every pair, in the same run.
@@ -100,7 +100,7 @@ def _timed(fn: Callable[[], object], repeats: int, warmup: int) -> list[float]:
 
 @contextmanager
 def highs_run_timer() -> Iterator[list[float]]:
-    """Record the wall time of every HiGHS ``run`` ([`observe_runs()`][mjtvm.lp.highs.observe_runs])."""
+    """Record the wall time of every HiGHS ``run`` ([`observe_runs()`][mjtvm.lp.highspy_start.observe_runs])."""
     spent: list[float] = []
     with observe_runs(spent.append):
         yield spent

@@ -18,7 +18,15 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["add_column", "column_dot", "invert", "values_and_duals"]
+__all__ = [
+    "add_column",
+    "column_dot",
+    "column_pivot",
+    "invert",
+    "replace_column",
+    "values_and_duals",
+    "with_column",
+]
 
 _SINGULAR_TOL = 1e-11  # Gauss-Jordan pivot below this times the column's largest: singular
 
@@ -120,6 +128,104 @@ def invert(
             if sp >= 0 and a != 0.0:
                 for q in range(k):
                     binv[sp, rows[q]] += a * minv_row[q]
+    return True
+
+
+@numba.njit(cache=True)
+def column_pivot(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, j: int, p: int, binv: np.ndarray
+) -> float:
+    """``u_p = (B^{-1} a_j)_p`` (``a_j`` column ``j < n`` as the arrays hold it now, ``p`` its
+    position in the basis): the pivot of `replace_column()`, one row of the inverse (``nnz``
+    flops). Its sign is that of the new basis' row duals relative to the old ones where the
+    replaced column alone is costed (``y = c_j B^{-T} e_p``)."""
+    s = 0.0
+    for t in range(indptr[j], indptr[j + 1]):
+        s += data[t] * binv[p, indices[t]]
+    return s
+
+
+@numba.njit(cache=True)
+def with_column(
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    m: int,
+    j: int,
+    rows: np.ndarray,
+    values: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``A`` (CSC arrays, ``m`` rows) with ``A[rows, j] = values``, the column's other entries
+    kept: [`merge_columns()`][mjtvm.lp.held.merge_columns] for one column (rows sorted, zeros
+    not stored), new arrays of ``indptr``'s and ``indices``' dtypes."""
+    dense = np.zeros(m)
+    for t in range(indptr[j], indptr[j + 1]):
+        dense[indices[t]] = data[t]
+    for q in range(rows.shape[0]):
+        dense[rows[q]] = values[q]
+    k = 0
+    for i in range(m):
+        if dense[i] != 0.0:
+            k += 1
+    lo, hi = indptr[j], indptr[j + 1]
+    shift = k - (hi - lo)
+    nnz = indptr[-1] + shift
+    new_ptr = indptr.copy()
+    for c in range(j + 1, indptr.shape[0]):
+        new_ptr[c] += shift
+    new_idx = np.empty(nnz, dtype=indices.dtype)
+    new_data = np.empty(nnz)
+    new_idx[:lo] = indices[:lo]
+    new_data[:lo] = data[:lo]
+    t = lo
+    for i in range(m):
+        if dense[i] != 0.0:
+            new_idx[t] = i
+            new_data[t] = dense[i]
+            t += 1
+    new_idx[t:] = indices[hi:]
+    new_data[t:] = data[hi:]
+    return new_ptr, new_idx, new_data
+
+
+@numba.njit(cache=True)
+def replace_column(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, j: int, p: int, binv: np.ndarray
+) -> bool:
+    """Update ``binv`` (``(m, m)``, in place) for the basis whose column at position ``p`` is
+    now variable ``j`` of ``[A | -I]`` (a column ``j < n`` whose entries changed to those
+    ``indptr, indices, data`` hold, or another variable entering for the one at ``p``):
+    with ``u = B^{-1} a_j``, ``B' = B E`` (``E`` the identity but column ``p``, ``u``), so
+    ``B'^{-1} = E^{-1} B^{-1}``: one Gauss-Jordan step on pivot ``u_p``, ``m^2`` flops
+    instead of a fresh `invert()`. Returns ``False``, ``binv`` unchanged, where ``u_p`` is
+    at most ``_SINGULAR_TOL`` times ``u``'s largest entry (singular to `invert()`'s
+    criterion)."""
+    m = binv.shape[0]
+    n = indptr.shape[0] - 1
+    u = np.zeros(m)
+    if j >= n:  # row j - n's activity: the column -e_(j - n)
+        for i in range(m):
+            u[i] = -binv[i, j - n]
+    else:
+        for t in range(indptr[j], indptr[j + 1]):
+            k, a = indices[t], data[t]
+            for i in range(m):
+                u[i] += a * binv[i, k]
+    big = 0.0
+    for i in range(m):
+        if abs(u[i]) > big:
+            big = abs(u[i])
+    pivot = u[p]
+    if not abs(pivot) > _SINGULAR_TOL * big:  # also a nan or a zero column
+        return False
+    f = 1.0 / pivot
+    for c in range(m):
+        binv[p, c] *= f
+    for i in range(m):
+        g = u[i]
+        if i != p and g != 0.0:
+            for c in range(m):
+                binv[i, c] -= g * binv[p, c]
     return True
 
 

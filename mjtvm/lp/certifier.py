@@ -220,21 +220,6 @@ class Certifier:
         m, n = self.a.shape
         sparse = m * n > BATCH_ENTRIES and isinstance(self.a, np.ndarray)
         step = max(1, BATCH_ENTRIES // max(m * n, 1))
-        if not sparse and len(x) > step:  # in products that BLAS runs on one thread (BATCH_ENTRIES)
-            return [
-                cert
-                for i in range(0, len(x), step)
-                for cert in self.check_many(
-                    c,
-                    row_lower[i : i + step],
-                    row_upper[i : i + step],
-                    col_upper[i : i + step],
-                    x[i : i + step],
-                    y[i : i + step],
-                    last[i : i + step],
-                    floor=floor[i : i + step],
-                )
-            ]
         a0, abs0, terms0 = self.a[:, :-1], self.abs_a[:, :-1], self.abs_terms[:, :-1]
         abs_last = np.abs(last)
         if sparse:
@@ -262,16 +247,24 @@ class Certifier:
 
             return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, nz_products, nz_transposed)
 
+        # The products in blocks of ``step`` answers, which BLAS runs on one thread
+        # (BATCH_ENTRIES); the rest of the measures, row by row, on all P at once.
+        blocks = [slice(i, i + step) for i in range(0, len(x), step)]
+
         def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            # The shared columns, then each LP's last one.
-            return xc[:, :-1] @ a0.T + xc[:, -1:] * last, size[:, :-1] @ terms0.T + size[:, -1:] * abs_last
+            ax, terms = np.empty((len(xc), m)), np.empty((len(xc), m))
+            for b in blocks:  # the shared columns, then each LP's last one
+                ax[b] = xc[b, :-1] @ a0.T + xc[b, -1:] * last[b]
+                terms[b] = size[b, :-1] @ terms0.T + size[b, -1:] * abs_last[b]
+            return ax, terms
 
         def transposed(
             yy: NDArray[np.float64], abs_y: NDArray[np.float64]
         ) -> tuple[NDArray[np.float64], ...]:
             ya, abs_ya = np.empty((len(yy), n)), np.empty((len(yy), n))
-            ya[:, :-1], ya[:, -1] = yy @ a0, np.sum(yy * last, axis=1)
-            abs_ya[:, :-1], abs_ya[:, -1] = abs_y @ abs0, np.sum(abs_y * abs_last, axis=1)
+            for b in blocks:
+                ya[b, :-1], ya[b, -1] = yy[b] @ a0, np.sum(yy[b] * last[b], axis=1)
+                abs_ya[b, :-1], abs_ya[b, -1] = abs_y[b] @ abs0, np.sum(abs_y[b] * abs_last[b], axis=1)
             return ya, abs_ya
 
         return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, products, transposed)

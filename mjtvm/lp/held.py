@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from mjtvm.lp.csc import Csc
 
-__all__ = ["HeldLP", "basic_variables", "merge_columns"]
+__all__ = ["HeldColumn", "HeldLP", "basic_variables", "merge_columns"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,6 +51,38 @@ class HeldLP:
     value: NDArray[np.float64]
     col_scale: NDArray[np.float64]
     row_scale: NDArray[np.float64]
+    cost_scale: float
+
+
+@dataclass(frozen=True, eq=False)
+class HeldColumn:
+    """One column as [`HighsSession.set_column()`][mjtvm.lp.highs.HighsSession.set_column]
+    with ``rescale`` would leave it in the LP HiGHS holds
+    ([`HighsSession.column_as_held()`][mjtvm.lp.highs.HighsSession.column_as_held]).
+
+    Attributes
+    ----------
+    col
+        The column.
+    rows, values
+        ``(k,)`` its scaled entries on these rows (every non-zero among them; round-off 0).
+    factor
+        Its column factor (``x[col] = factor * x_s[col]``).
+    col_lower, col_upper
+        Its scaled bounds.
+    cost
+        ``(n,)`` every column's scaled cost under the cost factor below.
+    cost_scale
+        The cost factor the new column factor implies.
+    """
+
+    col: int
+    rows: NDArray[np.int64]
+    values: NDArray[np.float64]
+    factor: float
+    col_lower: float
+    col_upper: float
+    cost: NDArray[np.float64]
     cost_scale: float
 
 

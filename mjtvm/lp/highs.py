@@ -4,15 +4,15 @@ state differ only there).
 
 HiGHS statuses: ``kWarning`` (e.g. a dropped tiny value) is accepted, ``kError`` from any
 call raises [`SolverError`][mjtvm.errors.SolverError]. A ``Highs`` is constructed by
-[`new_highs()`][mjtvm.lp.highspy_start.new_highs] (``mjtvm.lp.highspy_start``; importable from here).
+[`new_highs()`][mjtvm.lp.highspy_start.new_highs] (``mjtvm.lp.highspy_start``; importable from here, as
+[`observe_runs()`][mjtvm.lp.highspy_start.observe_runs] is).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -20,28 +20,12 @@ from numpy.typing import NDArray
 
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.lp.csc import as_csc
-from mjtvm.lp.held import HeldLP, basic_variables, merge_columns
-from mjtvm.lp.highspy_start import acquire_highs, give_back, highspy_module, new_highs
+from mjtvm.lp.held import HeldColumn, HeldLP, basic_variables, merge_columns
+from mjtvm.lp.highspy_start import acquire_highs, give_back, highspy_module, new_highs, observe_runs, ran
 from mjtvm.lp.lp import DROP_REL, FEASIBILITY_TOL, LinearProgram, LPSolution
 from mjtvm.lp.scaling import Scaling, cost_scale, factor_of_largest, lp_scaling, scale_lp
 
 __all__ = ["HighsSession", "new_highs", "observe_runs"]
-
-#: Callbacks told the wall time (s) of every HiGHS ``run`` of every session (observe_runs).
-_RUN_OBSERVERS: list[Callable[[float], None]] = []
-
-
-@contextmanager
-def observe_runs(callback: Callable[[float], None]) -> Iterator[None]:
-    """Call ``callback(seconds)`` after every HiGHS ``run`` of every [`HighsSession`][mjtvm.lp.highs.HighsSession]
-    while the context is open: the one hook for a progress count (``mjtvm tvms``) and for the
-    benchmark's time inside HiGHS, instead of each patching ``highspy.Highs.run``."""
-    _RUN_OBSERVERS.append(callback)
-    try:
-        yield
-    finally:
-        _RUN_OBSERVERS.remove(callback)
-
 
 _HIGHS_SMALL = 1e-12  # HiGHS' smallest allowed small_matrix_value
 _HIGHS_LARGE = 1e15  # HiGHS' large_matrix_value: larger entries are a kError
@@ -233,6 +217,42 @@ class HighsSession:
         chosen again from ``values`` (and its bounds and cost re-scaled), so that a column
         1e15 times larger than the first one is as well conditioned.
         """
+        factor, row_list, v = self._scaled_column(col, rows, values, rescale)
+        if factor != self._col[col]:
+            self._col[col] = factor
+            self._push_col_bounds(col)
+            self._push_costs(np.array([col], dtype=np.int32))
+        self._written[col] = (row_list, v)
+        change, error = self.highs.changeCoeff, self._error
+        for r, x in zip(row_list, v.tolist()):
+            if change(r, col, x) == error:
+                raise SolverError("highs", "changeCoeff: kError")
+
+    def column_as_held(self, col: int, rows: NDArray[np.int64], values: NDArray[np.float64]) -> HeldColumn:
+        """What `set_column()` with ``rescale`` would leave HiGHS holding for this column (its
+        scaled entries, factor, bounds, and the costs under the cost factor it implies),
+        without sending anything: another solver of the held LP
+        ([`WarmRows.set_column()`][mjtvm.lp.warm.WarmRows.set_column]) takes the same LP."""
+        factor, row_list, v = self._scaled_column(col, rows, values, True)
+        col_scale = self._col.copy()
+        col_scale[col] = factor
+        g = cost_scale(self._cost, col_scale)
+        return HeldColumn(
+            col,
+            np.asarray(row_list, dtype=np.int64),
+            v,
+            factor,
+            float(self._col_lower[col] / factor),
+            float(self._col_upper[col] / factor),
+            g * col_scale * self._cost,  # as _push_costs sends them
+            g,
+        )
+
+    def _scaled_column(
+        self, col: int, rows: NDArray[np.int64], values: NDArray[np.float64], rescale: bool
+    ) -> tuple[float, list[int], NDArray[np.float64]]:
+        """`set_column()`'s column factor (the held one unless ``rescale``), rows and scaled
+        entries (round-off dropped as in ``scale_lp``); nothing is changed or sent."""
         rows = np.asarray(rows, dtype=np.int64)
         key = rows.tobytes()
         if key != self._rows_key:  # the same rows LP after LP (an alpha column, a ray's t column)
@@ -242,13 +262,9 @@ class HighsSession:
         v = row_scale * np.asarray(values, dtype=float)
         mag = np.abs(v)
         big = float(mag.max(initial=0.0))  # nan or inf where an entry is
-        if rescale:
-            factor = factor_of_largest(big) if big != 0.0 else 1.0
-            if factor != self._col[col]:
-                self._col[col] = factor
-                self._push_col_bounds(col)
-                self._push_costs(np.array([col], dtype=np.int32))
         f = float(self._col[col])
+        if rescale:
+            f = factor_of_largest(big) if big != 0.0 else 1.0
         v *= f
         mag *= f
         big *= f
@@ -262,11 +278,7 @@ class HighsSession:
         kept_mag = mag[kept]
         if kept_mag.size:  # _check_magnitudes, from what is known here: the largest is big
             self._check_range(float(kept_mag.min()), big, "changeCoeff")
-        self._written[col] = (row_list, v)
-        change, error = self.highs.changeCoeff, self._error
-        for r, x in zip(row_list, v.tolist()):
-            if change(r, col, x) == error:
-                raise SolverError("highs", "changeCoeff: kError")
+        return f, row_list, v
 
     def held(self) -> HeldLP:
         """The equilibrated LP HiGHS holds now (every change sent included), with the basis
@@ -378,10 +390,7 @@ class HighsSession:
                 else:
                     self._check(h.setOptionValue("threads", 1), "option threads restore")
         finally:
-            if _RUN_OBSERVERS:
-                spent = time.perf_counter() - t0
-                for observer in tuple(_RUN_OBSERVERS):
-                    observer(spent)
+            ran(t0)
         if status == self._hs.HighsStatus.kError:
             return ms.kSolveError
         return h.getModelStatus()

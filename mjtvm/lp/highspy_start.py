@@ -2,7 +2,8 @@ r"""Constructing a ``highspy.Highs``: highspy imported on first use, its banner 
 
 Every [`HighsSession`][mjtvm.lp.highs.HighsSession] gets its ``Highs`` from
 [`new_highs()`][mjtvm.lp.highspy_start.new_highs], or reuses one a finished session gave back
-([`give_back()`][mjtvm.lp.highspy_start.give_back], [`acquire_highs()`][mjtvm.lp.highspy_start.acquire_highs]).
+([`give_back()`][mjtvm.lp.highspy_start.give_back], [`acquire_highs()`][mjtvm.lp.highspy_start.acquire_highs]);
+every ``run`` is timed for [`observe_runs()`][mjtvm.lp.highspy_start.observe_runs]' callbacks.
 """
 
 from __future__ import annotations
@@ -10,9 +11,12 @@ from __future__ import annotations
 import os
 import sys
 import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["acquire_highs", "give_back", "highspy_module", "new_highs"]
+__all__ = ["acquire_highs", "give_back", "highspy_module", "new_highs", "observe_runs", "ran"]
 
 
 def highspy_module():  # type: ignore[no-untyped-def]
@@ -26,6 +30,31 @@ def highspy_module():  # type: ignore[no-untyped-def]
     import highspy
 
     return highspy
+
+
+#: Callbacks told the wall time (s) of every HiGHS ``run`` of every session (observe_runs).
+_RUN_OBSERVERS: list[Callable[[float], None]] = []
+
+
+@contextmanager
+def observe_runs(callback: Callable[[float], None]) -> Iterator[None]:
+    """Call ``callback(seconds)`` after every HiGHS ``run`` of every [`HighsSession`][mjtvm.lp.highs.HighsSession]
+    while the context is open: the one hook for a progress count (``mjtvm tvms``) and for the
+    benchmark's time inside HiGHS, instead of each patching ``highspy.Highs.run``."""
+    _RUN_OBSERVERS.append(callback)
+    try:
+        yield
+    finally:
+        _RUN_OBSERVERS.remove(callback)
+
+
+def ran(started: float) -> None:
+    """Tell the observers (`observe_runs()`) of a HiGHS ``run`` begun at ``started``
+    (``time.perf_counter()``) that it has ended."""
+    if _RUN_OBSERVERS:
+        spent = time.perf_counter() - started
+        for observer in tuple(_RUN_OBSERVERS):
+            observer(spent)
 
 
 _FD_LOCK = threading.Lock()

@@ -30,6 +30,7 @@ the plane the tangent is ``[-n_y, n_x]`` and the "pyramid" is the exact cone
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -252,6 +253,22 @@ def slide_unit(contact: Contact) -> NDArray[np.float64]:
     return s / np.linalg.norm(s)
 
 
+@lru_cache(maxsize=8)
+def _edge_angles(friction_edges: int) -> tuple[NDArray[np.float64], ...]:
+    """``cos``, ``sin`` of the pyramid's ``friction_edges`` edge angles and their magnitudes
+    (read only: every contact of every state with that count shares them)."""
+    theta = 2.0 * np.pi * np.arange(friction_edges) / friction_edges
+    cos, sin = np.cos(theta), np.sin(theta)
+    # cos(pi/2) = 6e-17 is an exact 0: left in, such round-off enters the LPs beside O(1)
+    # entries, where no scaling can tell it from data (|cos|, |sin| are 0 or >= sin(2 pi/256)).
+    cos[np.abs(cos) < 1e-12] = 0.0
+    sin[np.abs(sin) < 1e-12] = 0.0
+    out = (cos, sin, np.abs(cos), np.abs(sin))
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
 def force_generators(contact: Contact, friction_edges: int = 16) -> NDArray[np.float64]:
     r"""``(d, g)`` generators of the admissible contact forces on the object.
 
@@ -272,14 +289,9 @@ def force_generators(contact: Contact, friction_edges: int = 16) -> NDArray[np.f
     if contact.dim == 2:
         t = basis[0]
         return np.column_stack([n + mu * t, n - mu * t])
-    theta = 2.0 * np.pi * np.arange(friction_edges) / friction_edges
-    cos, sin = np.cos(theta), np.sin(theta)
-    # cos(pi/2) = 6e-17 is an exact 0: left in, such round-off enters the LPs beside O(1)
-    # entries, where no scaling can tell it from data (|cos|, |sin| are 0 or >= sin(2 pi/256)).
-    cos[np.abs(cos) < 1e-12] = 0.0
-    sin[np.abs(sin) < 1e-12] = 0.0
+    cos, sin, abs_cos, abs_sin = _edge_angles(friction_edges)
     edges = n[:, None] + mu * (np.outer(basis[0], cos) + np.outer(basis[1], sin))
     mag = np.abs(n)[:, None] + mu * (
-        np.outer(np.abs(basis[0]), np.abs(cos)) + np.outer(np.abs(basis[1]), np.abs(sin))
+        np.outer(np.abs(basis[0]), abs_cos) + np.outer(np.abs(basis[1]), abs_sin)
     )
     return drop_cancellation(np.asarray(edges), mag)

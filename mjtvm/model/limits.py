@@ -256,6 +256,10 @@ def travel_speed(state: _Travel, r: NDArray[np.float64]) -> float:
     arms = np.array([c.position for c in state.contacts], dtype=float) - state.object_position
     if d == 2:
         u = v + w[0] * np.column_stack([-arms[:, 1], arms[:, 0]])
-    else:
-        u = v + np.cross(w, arms)
+    else:  # w x arms, as np.cross forms it (a1 b2 - a2 b1, ...), without its overhead
+        u = np.empty_like(arms)
+        u[:, 0] = w[1] * arms[:, 2] - w[2] * arms[:, 1]
+        u[:, 1] = w[2] * arms[:, 0] - w[0] * arms[:, 2]
+        u[:, 2] = w[0] * arms[:, 1] - w[1] * arms[:, 0]
+        u += v
     return max(best, math.sqrt(float(np.max(np.einsum("ij,ij->i", u, u)))))

@@ -162,7 +162,7 @@ def _solve_pairs(problem: StateLPs, state: GraspState, witnesses: bool) -> _Pair
 
     An infeasible (or unbounded) answer is certified at once, since it decides which LPs
     follow; the optimal ones are certified together once every LP is solved
-    ([`certify_many()`][mjtvm.problem2.lps.StateLPs.certify_many]), and an answer whose certificate
+    ([`certify_many()`][mjtvm.problem2.certifying.StateCertificates.certify_many]), and an answer whose certificate
     fails is then solved again other ways ([`conclude()`][mjtvm.problem2.lps.StateLPs.conclude]).
     Should that find a pair infeasible, its k is infeasible as above and its later LPs,
     solved already, are dropped."""
@@ -255,14 +255,16 @@ def _record(
     out.certified[k][l] = verdict.certified
     if sol.status == "optimal" and sol.x is not None:
         # The witness within its bounds (the certificate checked the rows with it):
-        # alpha >= 0, lam >= 0 exactly, never a negative alpha.
-        x = clip(sol.x, problem.col_lower, problem.col_upper)
-        a = float(x[problem.alpha_col])
+        # alpha >= 0, lam >= 0 exactly, never a negative alpha (alpha's entry alone unless
+        # the witness is asked for: the same clip, one entry).
+        j = problem.alpha_col
+        a = float(np.minimum(np.maximum(sol.x[j], problem.col_lower[j]), problem.col_upper[j]))
         # ZERO_ALPHA applies in the equilibrated rows (the solver's tolerance is
         # there), so that the rounding to 0 does not depend on the unit system.
         a = 0.0 if abs(a) <= problem.zero_alpha(r) else a
         out.alpha[k, l] = a
         if witnesses:
+            x = clip(sol.x, problem.col_lower, problem.col_upper)
             out.witnesses[k][l] = _witness(problem.asm, state, x, a, r)
 
 

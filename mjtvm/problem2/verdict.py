@@ -2,7 +2,7 @@ r"""The verdict of one Problem 2 LP: its settled answer, certified on the unscal
 solved again other ways until an answer is ([`other_ways()`][mjtvm.problem2.verdict.other_ways]).
 
 [`StateLPs.conclude()`][mjtvm.problem2.lps.StateLPs.conclude] gives the LP as assembled and
-its check ([`StateLPs.check()`][mjtvm.problem2.lps.StateLPs.check]: the certificate of an
+its check ([`StateCertificates.check()`][mjtvm.problem2.certifying.StateCertificates.check]: the certificate of an
 optimal answer, the Farkas multipliers of an infeasible one); what is tried and in what
 order is decided here.
 """

@@ -73,11 +73,16 @@ def test_shipped_states(name):
 
 
 def test_dataset_hand_six_wrenches():
-    """36 LPs a grasp, 30 of them balance-row re-solves: HiGHS runs only the first LP of
-    each RVDS vertex (the kernel gives up on none of these 20 grasps)."""
+    """36 LPs a grasp, 30 of them balance-row re-solves and 5 a new alpha column: HiGHS runs
+    the first LP, and the first LP of an RVDS vertex only where no kept basis stays dual
+    feasible with the new column swapped in (never more than the 6 it ran before the column
+    changes were compiled; on these 20 grasps 46 runs in all, 26 of 100 column changes)."""
+    runs = []
     for seed in range(20):
         runs_h, runs_c = _same(dataset_state(seed, num_refs=6))
-        assert (runs_h, runs_c) == (36, 6), seed
+        assert runs_h == 36 and 1 <= runs_c <= 6, seed
+        runs.append(runs_c)
+    assert sum(runs) < 60  # most column changes re-solved by the kernel
 
 
 def test_single_solves_do_not_import_numba():
@@ -90,3 +95,26 @@ def test_single_solves_do_not_import_numba():
     root = Path(__file__).resolve().parents[2]
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root, check=True)
     assert out.stdout.split() == ["36", "False"]
+
+
+def test_uncertified_kernel_answers_are_solved_by_highs(monkeypatch):
+    """A kernel answer the certificate refuses (here every one, its x scaled by 1.001: the
+    balance rows off by 1e-3) is solved by HiGHS instead, as if the kernel had given up:
+    no note, the alphas, statuses and limiting pair of HiGHS alone."""
+    from dataclasses import replace
+
+    from mjtvm.lp import warm
+
+    solve = warm.WarmRows.solve
+
+    def spoiled(self, lower, upper):  # type: ignore[no-untyped-def]
+        sol = solve(self, lower, upper)
+        return None if sol is None else replace(sol, x=1.001 * sol.x)
+
+    monkeypatch.setattr(warm.WarmRows, "solve", spoiled)
+    state = dataset_state(0, num_refs=6)
+    ref = tvmmp(state, witnesses=False)
+    got = tvmmp(state, witnesses=False, compiled=True)
+    assert got.status == ref.status and got.notes == ref.notes == ()
+    assert not got.uncertified() and got.limiting == ref.limiting
+    np.testing.assert_allclose(got.alpha, ref.alpha, rtol=1e-9, atol=1e-12)
