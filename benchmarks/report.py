@@ -268,18 +268,21 @@ def rank_rows(report: dict[str, Any]) -> list[str]:
                 _verdict(r),
             )
         )
-    f = rk["p2_floor"]
-    lines.append(
-        _row(
-            f"rank batch P2 / HiGHS run ({f['states']} states, {f['lps']} LPs)",
-            f["wall_s"],
-            f"HiGHS run {_ms(f['highs_run_s'])}",
-            f"{f['ratio']:.2f}",
-            None,
-            f"<= x{f['target']}",
-            _verdict(f),
+    for key, hand in (("p2_floor", ""), ("p2_floor_22", "22-joint, ")):
+        f = rk.get(key)
+        if f is None:  # p2_floor_22: absent from reports before it
+            continue
+        lines.append(
+            _row(
+                f"rank batch P2 (compiled) / HiGHS-alone run ({hand}{f['states']} states, {f['lps']} LPs)",
+                f["wall_s"],
+                f"HiGHS run {_ms(f['highs_run_s'])}",
+                f"{f['ratio']:.2f}",
+                None,
+                f"<= x{f['target']}",
+                _verdict(f),
+            )
         )
-    )
     g = rk["fingers"]
     per = g["per_fingers"]
     lines.append(

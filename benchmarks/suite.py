@@ -322,6 +322,8 @@ def _targets(report: dict[str, Any]) -> dict[str, Any]:
             out["rank_22_classic"] = rk["throughput_22"]["classic"]["met"]
             out["rank_22_none"] = rk["throughput_22"]["none"]["met"]
         out.update({f"rank_{k}": rk[k]["met"] for k in ("p2_floor", "fingers", "jobs")})
+        if "p2_floor_22" in rk:
+            out["rank_p2_floor_22"] = rk["p2_floor_22"]["met"]
         if "met" in rk.get("verify", {}):
             out["rank_verify"] = rk["verify"]["met"]
     return out

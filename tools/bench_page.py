@@ -295,11 +295,23 @@ def _rank(r: dict[str, Any]) -> list[str]:
                 f"{ceiling:.3g} grasps/s ({_t(t22['none']['highs_run_ms_per_grasp'] / 1e3)} per grasp)",
                 "-", "-", "-", "-",
             ])  # fmt: skip
-    rows.append([
-        f"Problem 2 over HiGHS `run`, summed over the batch ({f['states']} states, {f['lps']} LPs)",
-        f"x{f['ratio']:.3g} ({_t(f['wall_s'])} / {_t(f['highs_run_s'])})",
-        _t(f["wall_s"]), f"{f['core_share']:.2f}", f"<= x{f['target']:g}", _verdict(f),
-    ])  # fmt: skip
+    for key, hand in (("p2_floor", ""), ("p2_floor_22", "22-joint Shadow hand, ")):
+        f = rk.get(key)
+        if f is None:  # p2_floor_22: absent from reports before it
+            continue
+        hp = f.get("highs_path")  # absent before the batch row ran rank's compiled path
+        what = "`rank`'s path (compiled re-solves)" if hp is not None else "HiGHS path"
+        rows.append([
+            f"Problem 2 on {what} over HiGHS-alone `run`, summed over the batch ({hand}{f['states']} states, {f['lps']} LPs)",
+            f"x{f['ratio']:.3g} ({_t(f['wall_s'])} / {_t(f['highs_run_s'])})",
+            _t(f["wall_s"]), f"{f['core_share']:.2f}", f"<= x{f['target']:g}", _verdict(f),
+        ])  # fmt: skip
+        if hp is not None:
+            rows.append([
+                "the same on HiGHS alone (`mjtvm solve`'s path), for comparison",
+                f"x{hp['ratio']:.3g} ({_t(hp['wall_s'])} / {_t(f['highs_run_s'])})",
+                _t(hp["wall_s"]), "-", "-", "-",
+            ])  # fmt: skip
     per = g["per_fingers"]
     rows.append([
         "Problem 2 per LP, 32 fingers over 16",

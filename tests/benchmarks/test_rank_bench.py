@@ -41,7 +41,14 @@ def test_rank_rows_carry_cpu_wall_and_core_share(rank_report: dict[str, Any]) ->
             r["core_share"] < bench_rank.CORE_SHARE_MIN
         )
     f = rank_report["p2_floor"]
-    assert f["states"] == 32 and f["lps"] >= f["states"] and f["highs_run_s"] < f["wall_s"]
+    assert f["states"] == 32 and f["lps"] >= f["states"]
+    # HiGHS alone runs every LP; the compiled pass fewer, and its whole call includes its runs
+    assert f["highs_runs"] >= f["lps"] and 1 <= f["highs_runs_compiled"] < f["highs_runs"]
+    assert 0 < f["highs_run_compiled_s"] < f["wall_s"] and f["highs_run_s"] < f["highs_path"]["wall_s"]
+    assert f["ratio"] == pytest.approx(f["wall_s"] / f["highs_run_s"], rel=0.5)
+    f22 = rank_report["p2_floor_22"]  # the 22-joint hand's batch: 36 LPs a grasp, 6 REFS vertices
+    assert f22["states"] == t22["grasps"] and f22["lps"] == 36 * f22["states"]
+    assert f22["highs_runs"] >= f22["lps"] and 1 <= f22["highs_runs_compiled"] < f22["lps"] // 6
     assert (
         rank_report["fingers"]["per_fingers"]["32"]["lps"]
         == rank_report["fingers"]["per_fingers"]["16"]["lps"]
@@ -83,8 +90,12 @@ def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> 
     bench_page = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench_page)
     table = bench_page._rank({"rank": rank_report})
-    # head, the rows (13 joints, 22 joints with HiGHS's ceiling, the rest, --verify), memory, Dask
-    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 3 + 1 + 2 + 1
+    # head, the rows (13 joints, 22 joints with HiGHS's ceiling, the two batches' P2 over HiGHS
+    # each with HiGHS alone beside it, 32 over 16 fingers, 2 jobs, --verify), memory, Dask
+    assert len([row for row in table if row.startswith("| ")]) == 1 + 2 + 3 + 2 * 2 + 2 + 1 + 2 + 1
+    floors = [row for row in table if "over HiGHS-alone `run`" in row]
+    assert len(floors) == 2 and "22-joint Shadow hand, 4 states, 144 LPs" in floors[1]
+    assert sum("the same on HiGHS alone" in row for row in table) == 2
     (verify,) = [row for row in table if "`mjtvm rank --verify` as a process" in row]
     assert f"{rank_report['verify']['grasps_per_cpu_s']:.3g} grasps/CPU-s" in verify
     assert sum("22-joint Shadow hand, 36 LPs" in row for row in table) == 2
@@ -92,7 +103,10 @@ def test_rows_and_page_render_every_measurement(rank_report: dict[str, Any]) -> 
     none = rank_report["throughput_22"]["none"]
     assert f"{none['highs_ceiling_grasps_per_s']:.3g} grasps/s" in ceiling
     assert none["highs_ceiling_grasps_per_s"] == pytest.approx(1e3 / none["highs_run_ms_per_grasp"])
-    old = {k: v for k, v in rank_report.items() if k not in ("throughput_22", "verify")}  # from before
+    old = {
+        k: v for k, v in rank_report.items() if k not in ("throughput_22", "verify", "p2_floor_22")
+    }  # from before
+    old["p2_floor"] = {k: v for k, v in old["p2_floor"].items() if k != "highs_path"}
     assert len([row for row in bench_page._rank({"rank": old}) if row.startswith("| ")]) == 1 + 2 + 3 + 2 + 1
     loaded = {**rank_report, "throughput": {**rank_report["throughput"]}}
     loaded["throughput"]["classic"] = {**loaded["throughput"]["classic"], "loaded": True, "met": None}
