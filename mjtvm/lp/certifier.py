@@ -67,6 +67,11 @@ class Certifier:
         ``max(|A_ij x_j|, row_cap_i)`` where ``|A_ij| col_ref_j`` exceeds it. Read from
         ``abs_a`` once, here: the entries it caps must not change later (Problem 2's last
         column, alpha, has ``col_ref`` 0 and is never capped).
+    pattern
+        ``(rows, cols)`` the entries of ``a``'s columns but the last that can be nonzero (a
+        sparse matrix's stored entries, each once): `check_many()` on a large dense ``a``
+        then takes its pattern from them instead of scanning every entry (the same sums:
+        an entry given but 0 adds 0).
     """
 
     def __init__(
@@ -79,9 +84,11 @@ class Certifier:
         row_groups: NDArray[np.int64] | None = None,
         dual_ref: NDArray[np.float64] | None = None,
         row_cap: NDArray[np.float64] | None = None,
+        pattern: tuple[NDArray[np.integer[Any]], NDArray[np.integer[Any]]] | None = None,
     ) -> None:
         self.a = a
         self._nonzero: NonzeroProducts | None = None  # built by the first large check_many
+        self._pattern = pattern
         self.dual_ref = col_ref if dual_ref is None else dual_ref
         self.abs_a = abs(a) if abs_a is None else abs_a
         self.col_lower = np.asarray(col_lower, dtype=float)
@@ -225,8 +232,12 @@ class Certifier:
         if sparse:
             # Above BATCH_ENTRIES even one answer's product ran on several OpenBLAS threads:
             # the same sums over the nonzeros only (the shared columns' pattern is fixed).
-            if self._nonzero is None:
-                self._nonzero = NonzeroProducts(abs0)
+            if self._nonzero is None:  # from the given entries where known: O(nnz), not O(m n)
+                self._nonzero = (
+                    NonzeroProducts(abs0)
+                    if self._pattern is None
+                    else NonzeroProducts.from_entries(abs0.shape, *self._pattern)
+                )
             nz = self._nonzero
 
             def nz_products(

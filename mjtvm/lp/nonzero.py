@@ -12,6 +12,8 @@ round-off).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -38,8 +40,25 @@ class NonzeroProducts:
     """
 
     def __init__(self, pattern: NDArray[np.float64]) -> None:
-        self.shape = pattern.shape
         rows, cols = np.nonzero(pattern)  # row-major order
+        self._index(pattern.shape, rows, cols)
+
+    @classmethod
+    def from_entries(
+        cls, shape: tuple[int, ...], rows: NDArray[np.integer[Any]], cols: NDArray[np.integer[Any]]
+    ) -> NonzeroProducts:
+        """The pattern of the entries at ``(rows, cols)``, each once, in any order: the same
+        object as the dense matrix's with nonzeros there, without reading ``m x k`` entries
+        (a sparse matrix's stored entries: O(nnz) instead of ``np.nonzero``'s O(m k))."""
+        r, c = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+        order = np.lexsort((c, r))  # row-major order, as np.nonzero's
+        obj = cls.__new__(cls)
+        obj._index(shape, r[order], c[order])
+        return obj
+
+    def _index(self, shape: tuple[int, ...], rows: NDArray[np.int64], cols: NDArray[np.int64]) -> None:
+        """The pattern from its entries in row-major order."""
+        self.shape = shape
         self.rows, self.cols = rows, cols
         self.row_starts, self.row_ids = _segments(rows)
         order = np.lexsort((rows, cols))  # column-major order

@@ -56,3 +56,23 @@ def test_check_many_above_batch_entries_matches_the_dense_path(monkeypatch) -> N
         for field in ("primal", "dual", "gap"):
             got, want = getattr(s, field), getattr(d, field)
             assert got == want or abs(got - want) <= 1e-12 * max(1.0, abs(want)), (field, got, want)
+
+
+def test_pattern_from_entries_is_the_dense_scan() -> None:
+    """`from_entries()` (a sparse matrix's stored entries, in column order, some of them 0)
+    gives the arrays `NonzeroProducts(dense)` gives where the entries are exactly the
+    nonzeros, and the same sums bit for bit where some given entries are 0."""
+    rng = np.random.default_rng(11)
+    a = _sparse_dense(rng, 60, 45, 0.08)
+    cols, rows = np.nonzero(a.T)  # column-major, as a CSC's stored entries
+    scan, given = NonzeroProducts(np.abs(a)), NonzeroProducts.from_entries(a.shape, rows, cols)
+    for name in ("rows", "cols", "row_starts", "row_ids", "t_rows", "t_cols", "col_starts", "col_ids"):
+        np.testing.assert_array_equal(getattr(given, name), getattr(scan, name), err_msg=name)
+    xs, ys = rng.standard_normal((4, 45)), rng.standard_normal((4, 60))
+    assert np.array_equal(given.right(a, xs), scan.right(a, xs))
+    assert np.array_equal(given.left(a, ys), scan.left(a, ys))
+    b = a.copy()
+    b[rows[::7], cols[::7]] = 0.0  # given entries that are 0: each adds 0 to its sum
+    stored = NonzeroProducts.from_entries(b.shape, rows, cols)
+    np.testing.assert_allclose(stored.right(b, xs), xs @ b.T, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(stored.left(b, ys), ys @ b, rtol=1e-13, atol=1e-13)

@@ -179,3 +179,54 @@ def test_start_basis_needs_as_many_columns_as_rows():
         session.start_basis(np.array([0]), np.array([], dtype=np.int64))
     session.start_basis(np.array([0]), np.array([0]))
     assert session.solve().objective == pytest.approx(-1.0)
+
+
+def test_large_state_certificates_take_the_pattern_from_the_sparse_matrix(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The 32-finger scaling hand's matrix is past BATCH_ENTRIES: its certificates' nonzero
+    products take their pattern from the assembly's stored entries (once per state); every
+    certificate and alpha is the same, bit for bit, as with the pattern scanned from the dense
+    matrix (the Certifier given no ``pattern``)."""
+    from benchmarks.scaling import scaling_hand
+    from mjtvm.lp import certifier, nonzero
+
+    state = scaling_hand(32)
+    calls: list[str] = []
+    certificates: list[object] = []
+    entries, scan, check_many = (
+        nonzero.NonzeroProducts.from_entries.__func__,  # type: ignore[attr-defined]
+        nonzero.NonzeroProducts.__init__,
+        certifier.Certifier.check_many,
+    )
+
+    def from_entries(cls, shape, rows, cols):  # type: ignore[no-untyped-def]
+        calls.append("entries")
+        return entries(cls, shape, rows, cols)
+
+    def init(self, pattern):  # type: ignore[no-untyped-def]
+        calls.append("scan")
+        scan(self, pattern)
+
+    def recorded(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        out = check_many(self, *args, **kwargs)
+        certificates.append(out)
+        return out
+
+    monkeypatch.setattr(nonzero.NonzeroProducts, "from_entries", classmethod(from_entries))
+    monkeypatch.setattr(nonzero.NonzeroProducts, "__init__", init)
+    monkeypatch.setattr(certifier.Certifier, "check_many", recorded)
+    given = tvmmp(state, witnesses=False)
+    assert calls == ["entries"]
+    with_entries, certificates[:] = list(certificates), []
+    init_cert = certifier.Certifier.__init__
+
+    def no_pattern(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        kwargs.pop("pattern", None)
+        init_cert(self, *args, **kwargs)
+
+    monkeypatch.setattr(certifier.Certifier, "__init__", no_pattern)
+    scanned = tvmmp(state, witnesses=False)
+    assert calls == ["entries", "scan"]
+    np.testing.assert_array_equal(given.alpha, scanned.alpha)
+    assert given.certified == scanned.certified and with_entries == certificates and certificates
