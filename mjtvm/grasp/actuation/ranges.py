@@ -48,7 +48,7 @@ _HINT = (
 )
 
 
-#: Results a [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo] keeps, the last used: a
+#: Results a `mjtvm.grasp.actuation.ranges.RangesMemo` keeps, the last used: a
 #: hand whose moments vary with the configuration (a spatial tendon) misses every time, and
 #: the memo must not grow with the dataset.
 MEMO_SIZE = 8
@@ -213,7 +213,7 @@ def joint_ranges(
         A joint without an entry (the message says how to give one), or an entry that
         does not fit the model (named by its key).
 
-    ``memo``: a [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo] the caller keeps; the
+    ``memo``: a `mjtvm.grasp.actuation.ranges.RangesMemo` the caller keeps; the
     result is then computed once per ``ranges`` object, joints, ``base``, ``file``, ``losses``
     and model fields it reads (a datasheet file is read once per memo).
     """

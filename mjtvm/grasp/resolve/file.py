@@ -185,7 +185,7 @@ def _drive(
 ) -> tuple[ModelTransmission | None, dict[str, Any], dict[str, Any]]:
     """The transmission (``None`` for the paper's independent joints) and the operation ranges
     and motors: per joint without a transmission, per actuator with one (``memo``: the
-    caller's [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo])."""
+    caller's `mjtvm.grasp.actuation.ranges.RangesMemo`)."""
     ids = [int(model.joint(n).id) for n in joints]
     losses = doc["joint_losses"] == "fold"
     base = path.parent if path else None
@@ -265,7 +265,7 @@ def grasp_from_model(
     pose. ``model`` is the document's model ([`build_spec()`][mjtvm.grasp.resolve.model.build_spec]
     compiled, possibly edited); a mocap base's pose is written into it
     ([`hold_mocap_poses()`][mjtvm.grasp.resolve.base.hold_mocap_poses]). ``memo``: a
-    [`RangesMemo`][mjtvm.grasp.actuation.ranges.RangesMemo] kept across the grasps of one
+    `mjtvm.grasp.actuation.ranges.RangesMemo` kept across the grasps of one
     document, so that the operation ranges, which depend on the configuration only through
     the actuators' moments, are read once per distinct moment and model fields.
 
