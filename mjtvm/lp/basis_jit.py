@@ -22,7 +22,9 @@ __all__ = [
     "add_column",
     "column_dot",
     "column_pivot",
+    "ftran",
     "invert",
+    "pivot_update",
     "replace_column",
     "values_and_duals",
     "with_column",
@@ -139,10 +141,7 @@ def column_pivot(
     position in the basis): the pivot of `replace_column()`, one row of the inverse (``nnz``
     flops). Its sign is that of the new basis' row duals relative to the old ones where the
     replaced column alone is costed (``y = c_j B^{-T} e_p``)."""
-    s = 0.0
-    for t in range(indptr[j], indptr[j + 1]):
-        s += data[t] * binv[p, indices[t]]
-    return s
+    return column_dot(indptr, indices, data, indptr.shape[0] - 1, j, binv[p])
 
 
 @numba.njit(cache=True)
@@ -201,24 +200,50 @@ def replace_column(
     at most ``_SINGULAR_TOL`` times ``u``'s largest entry (singular to `invert()`'s
     criterion)."""
     m = binv.shape[0]
-    n = indptr.shape[0] - 1
-    u = np.zeros(m)
-    if j >= n:  # row j - n's activity: the column -e_(j - n)
-        for i in range(m):
-            u[i] = -binv[i, j - n]
-    else:
-        for t in range(indptr[j], indptr[j + 1]):
-            k, a = indices[t], data[t]
-            for i in range(m):
-                u[i] += a * binv[i, k]
+    u = np.empty(m)
+    ftran(indptr, indices, data, indptr.shape[0] - 1, j, binv, u)
     big = 0.0
     for i in range(m):
         if abs(u[i]) > big:
             big = abs(u[i])
-    pivot = u[p]
-    if not abs(pivot) > _SINGULAR_TOL * big:  # also a nan or a zero column
+    if not abs(u[p]) > _SINGULAR_TOL * big:  # also a nan or a zero column
         return False
-    f = 1.0 / pivot
+    pivot_update(binv, u, p)
+    return True
+
+
+@numba.njit(cache=True)
+def ftran(
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    data: np.ndarray,
+    n: int,
+    j: int,
+    binv: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """``out = B^{-1} a_j`` (``(m,)``, written in place), ``a_j`` column ``j`` of ``[A | -I]``
+    (``n`` columns in ``A``): a row activity's is ``-B^{-1} e_(j - n)``."""
+    m = binv.shape[0]
+    out[:] = 0.0
+    if j >= n:
+        for i in range(m):
+            out[i] = -binv[i, j - n]
+    else:
+        for t in range(indptr[j], indptr[j + 1]):
+            v = data[t]
+            k = indices[t]
+            for i in range(m):
+                out[i] += v * binv[i, k]
+
+
+@numba.njit(cache=True)
+def pivot_update(binv: np.ndarray, u: np.ndarray, p: int) -> None:
+    """``binv`` (``(m, m)``, in place) for the basis whose column at position ``p`` is
+    replaced by the one with ``B^{-1} a = u``: one Gauss-Jordan step on the pivot ``u_p``
+    (the caller has checked it is nonzero)."""
+    m = binv.shape[0]
+    f = 1.0 / u[p]
     for c in range(m):
         binv[p, c] *= f
     for i in range(m):
@@ -226,7 +251,6 @@ def replace_column(
         if i != p and g != 0.0:
             for c in range(m):
                 binv[i, c] -= g * binv[p, c]
-    return True
 
 
 @numba.njit(cache=True)

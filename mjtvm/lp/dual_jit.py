@@ -30,7 +30,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from mjtvm.lp.basis_jit import column_dot, values_and_duals
+from mjtvm.lp.basis_jit import column_dot, ftran, pivot_update, values_and_duals
 
 __all__ = ["CAP", "INFEASIBLE", "ITERATIONS", "NUMERICS", "OPTIMAL", "SINGULAR", "resolve"]
 
@@ -208,16 +208,7 @@ def resolve(
             d[q] = 0.0
         theta_d = d[q] / alpha_r[q]
         # FTRAN: B^{-1} a_q.
-        col[:] = 0.0
-        if q >= n:
-            for i in range(m):
-                col[i] = -binv[i, q - n]
-        else:
-            for t in range(indptr[q], indptr[q + 1]):
-                v = data[t]
-                k = indices[t]
-                for i in range(m):
-                    col[i] += v * binv[i, k]
+        ftran(indptr, indices, data, n, q, binv, col)
         pivot = col[r]
         if abs(pivot) <= piv_tol or abs(pivot - alpha_r[q]) > 1e-7 * max(1.0, abs(pivot)):
             return NUMERICS, it
@@ -235,15 +226,7 @@ def resolve(
         isbasic[leave], isbasic[q] = False, True
         basic[r] = q
         x_b[r] = entering_value
-        # The inverse's update (one Gauss-Jordan step on the pivot column).
-        f = 1.0 / pivot
-        for c in range(m):
-            binv[r, c] *= f
-        for p in range(m):
-            g = col[p]
-            if p != r and g != 0.0:
-                for c in range(m):
-                    binv[p, c] -= g * binv[r, c]
+        pivot_update(binv, col, r)  # the inverse's update: one Gauss-Jordan step
         it += 1
     # Verified: the basic values within their bounds and [A | -I] (x, r) = 0 to round-off (a
     # residual check, nnz flops), else recomputed afresh from the inverse once; then the row
