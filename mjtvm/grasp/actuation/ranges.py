@@ -26,7 +26,7 @@ import fnmatch
 import json
 import threading
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -93,32 +93,30 @@ _LOCK = threading.Lock()
 _Found = tuple[dict[str, OperationRange], dict[str, DCMotor | str | None]]
 
 
-def _memo_key(model: mujoco.MjModel, ranges: Mapping[str, Any], *parts: Any) -> tuple[Any, ...]:
-    fields = (getattr(model, f) for f in _READ_FIELDS)
-    return (id(ranges), *parts, *(v if isinstance(v, bytes) else v.tobytes() for v in fields))
-
-
-def _recalled(memo: RangesMemo | None, key: tuple[Any, ...], ranges: Mapping[str, Any]) -> _Found | None:
-    """The memo's result for ``key`` (copies of its dicts), or None: the same ``ranges``
-    object only, not another at a reused id."""
+def _memoized(
+    memo: RangesMemo | None,
+    model: mujoco.MjModel,
+    ranges: Mapping[str, Any],
+    parts: tuple[Any, ...],
+    compute: Callable[[], _Found],
+) -> _Found:
+    """``compute()``, or the memo's result for the key of ``parts`` and the bytes of the model's
+    `_READ_FIELDS` (copies of its dicts): of the same ``ranges`` object only, not another at a
+    reused id. Without a memo nothing is keyed."""
     if memo is None:
-        return None
+        return compute()
+    fields = (getattr(model, f) for f in _READ_FIELDS)
+    key = (id(ranges), *parts, *(v if isinstance(v, bytes) else v.tobytes() for v in fields))
     with _LOCK:  # a Dask worker's threads share one batch, and so its memo
         hit = memo.get(key)
-        if hit is None or hit[0] is not ranges:
-            return None
-        memo.move_to_end(key)
-    return dict(hit[1]), dict(hit[2])
-
-
-def _remember(
-    memo: RangesMemo | None, key: tuple[Any, ...], ranges: Mapping[str, Any], found: _Found
-) -> _Found:
-    if memo is not None:
-        with _LOCK:
-            memo[key] = (ranges, dict(found[0]), dict(found[1]))
-            while len(memo) > MEMO_SIZE:
-                memo.popitem(last=False)
+        if hit is not None and hit[0] is ranges:
+            memo.move_to_end(key)
+            return dict(hit[1]), dict(hit[2])
+    found = compute()
+    with _LOCK:
+        memo[key] = (ranges, dict(found[0]), dict(found[1]))
+        while len(memo) > MEMO_SIZE:
+            memo.popitem(last=False)
     return found
 
 
@@ -217,13 +215,10 @@ def joint_ranges(
     result is then computed once per ``ranges`` object, joints, ``base``, ``file``, ``losses``
     and model fields it reads (a datasheet file is read once per memo).
     """
-    key = _memo_key(model, ranges, "joint", tuple(joints), base, file, losses)
-    found = _recalled(memo, key, ranges)
-    if found is None:
-        found = _remember(
-            memo, key, ranges, _joint_ranges(model, joints, ranges, base=base, file=file, losses=losses)
-        )
-    return found
+    return _memoized(
+        memo, model, ranges, ("joint", tuple(joints), base, file, losses),
+        lambda: _joint_ranges(model, joints, ranges, base=base, file=file, losses=losses),
+    )  # fmt: skip
 
 
 def _joint_ranges(
@@ -349,19 +344,14 @@ def actuator_ranges(
     transmissions, not for a spatial tendon's moment arms).
     """
     moment = np.asarray(moment)
-    key = _memo_key(
-        model, ranges, "actuator", tuple(actuators), moment.dtype.str, moment.shape, moment.tobytes(),
+    parts = (
+        "actuator", tuple(actuators), moment.dtype.str, moment.shape, moment.tobytes(),
         tuple(int(d) for d in dofs), base, file, losses,
     )  # fmt: skip
-    found = _recalled(memo, key, ranges)
-    if found is None:
-        found = _remember(
-            memo,
-            key,
-            ranges,
-            _actuator_ranges(model, actuators, moment, dofs, ranges, base=base, file=file, losses=losses),
-        )
-    return found
+    return _memoized(
+        memo, model, ranges, parts,
+        lambda: _actuator_ranges(model, actuators, moment, dofs, ranges, base=base, file=file, losses=losses),
+    )  # fmt: skip
 
 
 def _actuator_ranges(
