@@ -16,6 +16,7 @@ from typing import Any, TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from mjtvm.lp.csc import Csc
 from mjtvm.lp.nonzero import NonzeroProducts
 from mjtvm.lp.roundoff import drop_cancellation
 from mjtvm.lp.tolerances import DUAL_TOL, GAP_TOL, Certificate, finite_part
@@ -68,10 +69,10 @@ class Certifier:
         ``abs_a`` once, here: the entries it caps must not change later (Problem 2's last
         column, alpha, has ``col_ref`` 0 and is never capped).
     pattern
-        ``(rows, cols)`` the entries of ``a``'s columns but the last that can be nonzero (a
-        sparse matrix's stored entries, each once): `check_many()` on a large dense ``a``
-        then takes its pattern from them instead of scanning every entry (the same sums:
-        an entry given but 0 adds 0).
+        A sparse matrix whose stored entries (each once) cover the nonzeros of ``a``'s
+        columns but the last (Problem 2: the assembly's): `check_many()` on a large dense
+        ``a`` then takes its pattern from them instead of scanning every entry (the same
+        sums: an entry stored but 0 adds 0), read only there.
     """
 
     def __init__(
@@ -84,7 +85,7 @@ class Certifier:
         row_groups: NDArray[np.int64] | None = None,
         dual_ref: NDArray[np.float64] | None = None,
         row_cap: NDArray[np.float64] | None = None,
-        pattern: tuple[NDArray[np.integer[Any]], NDArray[np.integer[Any]]] | None = None,
+        pattern: Csc | None = None,
     ) -> None:
         self.a = a
         self._nonzero: NonzeroProducts | None = None  # built by the first large check_many
@@ -236,7 +237,9 @@ class Certifier:
                 self._nonzero = (
                     NonzeroProducts(abs0)
                     if self._pattern is None
-                    else NonzeroProducts.from_entries(abs0.shape, *self._pattern)
+                    else NonzeroProducts.from_entries(
+                        abs0.shape, self._pattern.indices, self._pattern.columns()
+                    )
                 )
             nz = self._nonzero
 

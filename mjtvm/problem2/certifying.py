@@ -160,7 +160,7 @@ class StateCertificates:
                 row_groups=self.asm.row_groups,
                 dual_ref=self.physical_sizes,
                 row_cap=self.row_cap,
-                pattern=(self.asm.csc.indices, self.asm.csc.columns()),  # pair_matrix's nonzeros
+                pattern=self.asm.csc,  # pair_matrix's nonzeros
             )
         return self._cert
 
