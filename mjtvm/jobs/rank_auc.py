@@ -16,7 +16,9 @@ Per measure ([`auc_scores()`][mjtvm.jobs.rank_auc.auc_scores]: ``tvmmp``, each d
 * **Confidence interval** ([`bootstrap_ci()`][mjtvm.jobs.rank_auc.bootstrap_ci]): the percentile
   bootstrap, `RESAMPLES` resamples of the grasps with replacement, seeded (`SEED`), the 2.5 and
   97.5 % quantiles of the resampled AUCs (resamples with one class only are dropped). NaN
-  when one class is empty.
+  when one class is empty. Each resample is a row of per-grasp counts, and all resamples'
+  AUCs of a measure are computed at once from the measure's sorted scores; every measure of
+  an outcome is resampled by the same draws (the seed restarts for each).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from mjtvm.errors import ParamError
 
 __all__ = [
     "AUC_COLUMNS",
@@ -66,16 +70,59 @@ AUC_COLUMNS = (
 _F64 = NDArray[np.float64]
 
 
-def _weighted_auc(scores: _F64, labels: NDArray[np.bool_], weights: _F64) -> float:
-    """AUC with per-grasp multiplicities ``weights`` (1 each: the plain statistic)."""
-    u, inv = np.unique(scores, return_inverse=True)
-    pos = np.bincount(inv, weights * labels, minlength=len(u))
-    neg = np.bincount(inv, weights * ~labels, minlength=len(u))
-    n1, n0 = pos.sum(), neg.sum()
-    if n1 == 0 or n0 == 0:
-        return math.nan
-    below = np.cumsum(neg) - neg  # negatives strictly below each score
-    return float((pos * (below + 0.5 * neg)).sum() / (n1 * n0))
+_BLOCK = 1 << 20
+"""At most this many (resample, grasp) counts are held at once: memory bounded for any dataset."""
+
+
+def _resample_counts(rng: np.random.Generator, n: int, resamples: int) -> NDArray[np.signedinteger[Any]]:
+    """The next ``resamples`` bootstrap resamples of ``n`` grasps as counts, shape (resamples, n).
+
+    One draw of shape (resamples, n) takes the same values from ``rng`` as ``resamples``
+    draws of ``n`` in turn (numpy's bounded integers read 32-bit halves from the bit
+    generator, which keeps the spare half between calls), so the resamples do not depend on
+    how they are split into blocks. int32 where every product of two counts fits (n^2 < 2^31):
+    half the memory traffic of int64.
+    """
+    idx = rng.integers(0, n, (resamples, n)) + np.arange(resamples)[:, None] * n
+    counts = np.bincount(idx.ravel(), minlength=resamples * n).reshape(resamples, n)
+    return counts.astype(np.int32) if n * n < 2**31 else counts
+
+
+def _aucs(scores: _F64, labels: NDArray[np.bool_], counts: NDArray[np.signedinteger[Any]]) -> _F64:
+    """The AUC under each row of per-grasp multiplicities ``counts`` (resamples, n), shape (resamples,).
+
+    Each positive grasp i (weight w_i) counts the negatives below its score and half those tied
+    with it: (C[lo_i] + C[hi_i]) / 2, C the cumulative counts of the negatives sorted by score,
+    lo_i and hi_i the sorted positions before and after the negatives tied with it. The sum is
+    kept doubled, in integers, so it is exact. NaN where a row counts one class only.
+    ``-inf`` is a score like any other; NaN scores sort above all and tie with each other.
+    """
+    pos_i, neg_i = np.flatnonzero(labels), np.flatnonzero(~labels)
+    neg_i = neg_i[np.argsort(scores[neg_i], kind="stable")]
+    lo = np.searchsorted(scores[neg_i], scores[pos_i], "left")
+    hi = np.searchsorted(scores[neg_i], scores[pos_i], "right")
+    c = np.zeros((len(counts), len(neg_i) + 1), dtype=counts.dtype)
+    np.cumsum(counts[:, neg_i], axis=1, out=c[:, 1:])
+    w = counts[:, pos_i]
+    twice = 2 * (w * c[:, lo]).sum(axis=1, dtype=np.int64)
+    tied = lo != hi
+    if tied.any():  # the half of the ties: only the columns that have some
+        twice += (w[:, tied] * (c[:, hi[tied]] - c[:, lo[tied]])).sum(axis=1, dtype=np.int64)
+    n1, n0 = w.sum(axis=1, dtype=np.int64), c[:, -1].astype(np.int64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = twice / (2.0 * n1 * n0)
+    out[(n1 == 0) | (n0 == 0)] = math.nan
+    return out
+
+
+def _pair(
+    scores: Sequence[float] | _F64, labels: Sequence[bool] | NDArray[np.bool_]
+) -> tuple[_F64, NDArray[np.bool_]]:
+    """The scores as floats and the labels as bools, one of each a grasp, shape (n,)."""
+    s, y = np.asarray(scores, dtype=float), np.asarray(labels, dtype=bool)
+    if s.ndim != 1 or s.shape != y.shape:
+        raise ParamError("labels", f"one score and one label a grasp, got shapes {s.shape} and {y.shape}")
+    return s, y
 
 
 def roc_auc(scores: Sequence[float] | _F64, labels: Sequence[bool] | NDArray[np.bool_]) -> float:
@@ -83,8 +130,40 @@ def roc_auc(scores: Sequence[float] | _F64, labels: Sequence[bool] | NDArray[np.
 
     ``-inf`` is a valid score (a missing value, lowest). NaN when one class is empty.
     """
-    s, y = np.asarray(scores, dtype=float), np.asarray(labels, dtype=bool)
-    return _weighted_auc(s, y, np.ones(len(s)))
+    s, y = _pair(scores, labels)
+    if not len(s):
+        return math.nan
+    return float(_aucs(s, y, np.ones((1, len(s)), dtype=np.int64))[0])
+
+
+def _bootstrap_cis(
+    scores: _F64, labels: NDArray[np.bool_], *, resamples: int, seed: int, level: float
+) -> list[tuple[float, float]]:
+    """[`bootstrap_ci()`][mjtvm.jobs.rank_auc.bootstrap_ci] of each row of ``scores`` (measures, n).
+
+    Every measure is resampled by the same draws (the seed restarts for each, as it would
+    one measure at a time), so the draws are made once and shared.
+    """
+    m, n = scores.shape
+    if n == 0 or labels.all() or not labels.any():
+        return [(math.nan, math.nan)] * m
+    rng = np.random.default_rng(seed)
+    values = np.empty((m, max(resamples, 0)))
+    block = max(1, _BLOCK // n)
+    for first in range(0, resamples, block):
+        counts = _resample_counts(rng, n, min(block, resamples - first))
+        for i in range(m):
+            values[i, first : first + len(counts)] = _aucs(scores[i], labels, counts)
+    tail = 50.0 * (1.0 - level)
+    out = []
+    for v in values:
+        v = v[~np.isnan(v)]
+        if not len(v):
+            out.append((math.nan, math.nan))
+            continue
+        low, high = np.percentile(v, [tail, 100.0 - tail])
+        out.append((float(low), float(high)))
+    return out
 
 
 def bootstrap_ci(
@@ -96,23 +175,8 @@ def bootstrap_ci(
     level: float = 0.95,
 ) -> tuple[float, float]:
     """The percentile bootstrap interval of [`roc_auc()`][mjtvm.jobs.rank_auc.roc_auc] (module docstring)."""
-    s, y = np.asarray(scores, dtype=float), np.asarray(labels, dtype=bool)
-    n = len(s)
-    if n == 0 or y.all() or not y.any():
-        return math.nan, math.nan
-    rng = np.random.default_rng(seed)
-    values = np.array(
-        [
-            _weighted_auc(s, y, np.bincount(rng.integers(0, n, n), minlength=n).astype(float))
-            for _ in range(resamples)
-        ]
-    )
-    values = values[~np.isnan(values)]
-    if not len(values):
-        return math.nan, math.nan
-    tail = 50.0 * (1.0 - level)
-    low, high = np.percentile(values, [tail, 100.0 - tail])
-    return float(low), float(high)
+    s, y = _pair(scores, labels)
+    return _bootstrap_cis(s[None, :], y, resamples=resamples, seed=seed, level=level)[0]
 
 
 def _number(value: Any) -> float:
@@ -166,9 +230,10 @@ def auc_table(
     for t in TARGETS:
         known = np.array([v is not None for v in labels[t]], dtype=bool)
         y = np.array([bool(v) for v in labels[t]], dtype=bool)[known]
-        for key in order:
-            s = np.asarray(scores[key], dtype=float)[known]
-            low, high = bootstrap_ci(s, y, resamples=resamples, seed=seed)
+        # (measures, grasps); the reshape gives no rows the shape (0, 0)
+        stack = np.array([scores[key] for key in order], dtype=float).reshape(len(order), n)[:, known]
+        cis = _bootstrap_cis(stack, y, resamples=resamples, seed=seed, level=0.95)
+        for key, s, (low, high) in zip(order, stack, cis, strict=True):
             out.append(
                 {
                     "measure": key,
