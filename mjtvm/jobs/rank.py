@@ -230,10 +230,24 @@ def _solve_chunk(
     ]
 
 
-def _batches(entries: Iterable[DatasetGrasp], size: int) -> Iterator[list[DatasetGrasp]]:
-    """Consecutive tasks of ``size`` grasps, read from ``entries`` as they are needed."""
+def _batches(
+    entries: Iterable[DatasetGrasp], size: int, *, total: int | None = None, jobs: int = 1
+) -> Iterator[list[DatasetGrasp]]:
+    """Consecutive tasks of ``size`` grasps, read from ``entries`` as they are needed.
+
+    With ``total`` (the number of ``entries``) the tasks shrink towards the end, each at most
+    ``ceil(remaining / (4 jobs))`` grasps (guided self-scheduling, Polychronopoulos and Kuck
+    1987): the last tasks are single grasps, so the workers finish within about one grasp of
+    each other instead of half a task."""
     it = iter(entries)
-    while task := list(islice(it, size)):
+    left = total
+    while True:
+        n = size if left is None else max(1, min(size, math.ceil(left / (4 * jobs))))
+        task = list(islice(it, n))
+        if not task:
+            return
+        if left is not None:
+            left -= len(task)
         yield task
 
 
@@ -300,7 +314,7 @@ def stream_rows(
         else:
             # Small tasks: a finished grasp reaches the checkpoint within a few grasps' time.
             size = TASK_GRASPS if total is None else max(1, min(TASK_GRASPS, math.ceil(total / (8 * jobs))))
-            _run_pool(grasp, _batches(entries, size), jobs, finished, opts)
+            _run_pool(grasp, _batches(entries, size, total=total, jobs=jobs), jobs, finished, opts)
     finally:
         bar.close()
 

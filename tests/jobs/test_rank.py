@@ -234,6 +234,33 @@ def test_object_file_per_grasp_and_two_processes(tmp_path: Path) -> None:
     assert two == a
 
 
+def test_pool_tasks_shrink_to_single_grasps_at_the_end(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Guided self-scheduling: the tasks keep every grasp once and in order, none larger than
+    # ceil(total / (8 jobs)) (a finished grasp reaches the checkpoint soon), and the last ones
+    # are single grasps so that the two workers end within about a grasp of each other.
+    from mjtvm.jobs.rank_inputs import read_datasets
+
+    entries = read_datasets(GRASP, [str(DATASET)]) * 4  # 144 grasps
+    sizes: list[int] = []
+    order: list[str] = []
+
+    def record(grasp: str, tasks: Any, jobs: int, finished: Any, opts: Any = ()) -> None:
+        for task in tasks:
+            sizes.append(len(task))
+            order.extend(e.id for e in task)
+
+    monkeypatch.setattr(mjtvm.jobs.rank, "_run_pool", record)
+    mjtvm.jobs.rank.stream_rows(GRASP, entries, lambda rows: None, total=len(entries), jobs=2, progress=False)
+    assert order == [e.id for e in entries]
+    assert max(sizes) == 9 == sizes[0]  # ceil(144 / 16)
+    assert sizes == sorted(sizes, reverse=True) and sizes[-4:] == [1, 1, 1, 1]
+    # each task at most a quarter of a worker's share of what is left
+    left = len(entries)
+    for n in sizes:
+        assert n <= max(1, -(-left // 8))
+        left -= n
+
+
 def test_generated_mesh_objects_rank_end_to_end(tmp_path: Path) -> None:
     # The generator's mesh mode (two convex pieces per object, one object file per grasp):
     # every grasp it closes by IK is evaluated with its three fingertip contacts on the mesh,
