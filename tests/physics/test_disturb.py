@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from pathlib import Path
 
@@ -144,3 +145,20 @@ def test_the_batched_pushes_are_a_fresh_reset_and_settle_per_direction(settings:
     assert outcomes == {True, False}
     with pytest.raises(ParamError, match="threads"):
         disturb_test(model, qpos, drive, duration=0.2, threads=0)
+
+
+def test_a_push_that_mujoco_stops_with_a_warning_does_not_hold(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # negative joint damping makes the implicit integrator's matrix singular: MuJoCo warns
+    # (mjWARN_INERTIA) and mujoco.rollout stops the rollout there, its state frozen near the
+    # start (the object moves < 1e-12 m): a frozen state is not a hold
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warning to MUJOCO_LOG.TXT in the cwd
+    model, qpos, state = pinch()
+    drive = squeeze_drive(state, tvmmp(state, witnesses=True))
+    assert drive is not None
+    assert disturb_test(model, qpos, drive, duration=0.4).held  # the same grasp, a sound model
+    broken = copy.deepcopy(model)
+    broken.dof_damping[:] = -1e12
+    r = disturb_test(broken, qpos, drive, duration=0.4)
+    assert r.directions == (False,) * 6 and max(r.translation) < 1e-12
