@@ -93,6 +93,7 @@ def protocol() -> str:
     constants = {
         "speed": SimSettings(),
         "hold": HOLD_SETTINGS,
+        "hold_run": disturb.HOLD_RUN,
         "push": (disturb.DISTURB_ACCEL, DISTURB_DURATION, disturb.DISTURB_CHECK_EVERY),
         "thresholds": (disturb.DISTURB_TRANSLATION, disturb.DISTURB_ANGLE),
         "directions": disturb.DIRECTIONS,

@@ -68,6 +68,7 @@ __all__ = [
     "squeeze_at_rest",
     "squeeze_drive",
     "squeeze_witness",
+    "with_position_loop",
     "with_torsion",
 ]
 
@@ -317,4 +318,42 @@ def with_torsion(model: mujoco.MjModel, torsional: float) -> mujoco.MjModel:
     point = out.geom_condim == 3
     out.geom_condim[point] = 4
     out.geom_friction[point, 1] = torsional
+    return out
+
+
+def with_position_loop(model: mujoco.MjModel, actuators: NDArray[np.int64], gain: float) -> mujoco.MjModel:
+    r"""A copy of ``model`` whose ``<dcmotor>`` s ``actuators`` run [`Servo`][mjtvm.physics.squeeze.Servo]'s
+    position loop in their own controller; ``model`` itself at ``gain`` 0.
+
+    MuJoCo's dcmotor controller commands ``tau = k_p (u_pos - l) + k_d (u_vel - l') + u_ff``,
+    a setpoint absent from ``input`` being 0 (our motors' ``input="vel ff"``, so
+    ``u_pos = 0``; ``k_p`` is ``actuator_gainprm[:, 4]``, ``k_d`` ``[:, 6]``, read by MuJoCo at
+    every step, so set in the compiled model: no recompile, the controls keep their layout).
+    Here ``k_p = gain k_d``. With the speed setpoint ``u_vel = 0`` and the feedforward
+    ``u_ff = tau_ff + k_p l_0`` the motor commands ``tau = k_d gain (l_0 - l) - k_d l' + tau_ff``,
+    the torque of `Servo` (speed setpoint ``gain (l_0 - l)``) through the same voltage clamp
+    and saturation, with ``l`` the length at the step's own state where `Servo` reads the
+    previous step's (an O(dt) difference: one step of the motion). The controls are then
+    constant, as ``mujoco.rollout`` steps them (``tau_ff`` the drive's feedforward).
+
+    Parameters
+    ----------
+    actuators
+        The driven ``<dcmotor>`` ids ([`Rig`][mjtvm.physics.rig.Rig]'s ``acts``); their
+        ``k_p`` is replaced.
+    gain
+        The loop's speed gain (1/s), `Servo`'s ``gain``.
+
+    Raises
+    ------
+    ParamError
+        ``gain`` negative or not finite.
+    """
+    if not (math.isfinite(gain) and gain >= 0):
+        raise ParamError("servo", f"expected a speed gain >= 0 (1/s), got {gain!r}", gain)
+    if gain == 0.0:
+        return model
+    out = copy.deepcopy(model)
+    acts = np.asarray(actuators, dtype=int)
+    out.actuator_gainprm[acts, 4] = gain * out.actuator_gainprm[acts, 6]
     return out

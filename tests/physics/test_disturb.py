@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -23,7 +25,13 @@ from mjtvm.physics.grasp_sim import dataset_sim_model
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.settings import SimSettings, with_integration
 from mjtvm.physics.simulate import held
-from mjtvm.physics.squeeze import SERVO_GAIN, TORSIONAL_FRICTION, Servo, squeeze_drive, with_torsion
+from mjtvm.physics.squeeze import (
+    SERVO_GAIN,
+    TORSIONAL_FRICTION,
+    squeeze_drive,
+    with_position_loop,
+    with_torsion,
+)
 from mjtvm.physics.witness import witness_drive
 from mjtvm.problem2.tvmmp import tvmmp
 from tests.physics.test_squeeze import pinch
@@ -75,23 +83,29 @@ def test_pushes_along_six_directions_with_the_benchmark_force() -> None:
 
 
 def _fresh_per_direction(model, qpos, drive, st, duration):  # type: ignore[no-untyped-def]
-    """The hold test as the benchmark runs it: a fresh reset and settle for every direction
-    (one `Servo` from the reset on: its ``l_0`` the held configuration's)."""
-    m = with_integration(with_torsion(model, TORSIONAL_FRICTION), st)
-    rig = Rig(m, drive, "object")
+    """The hold test as the benchmark runs it, one direction after the other: a fresh reset and
+    settle for every direction, ``mj_step`` on the native loop (`with_position_loop`, its
+    feedforward ``tau + k_p l_0``), the pose read at each check (``mj_kinematics``), the solver's
+    warm start dropped at each check after the first (as a new ``mujoco.rollout`` call starts)."""
+    base = with_integration(with_torsion(model, TORSIONAL_FRICTION), st)
+    rig = Rig(base, drive, "object")
+    m = with_position_loop(base, rig.acts, SERVO_GAIN)
     force = DISTURB_ACCEL * float(m.body_subtreemass[rig.ob])
     every = st.steps(DISTURB_CHECK_EVERY)
     moved, turned, ok = [], [], []
     for i in range(len(DIRECTIONS)):
         d = held(m, qpos, rig, drive)
         p0, r0 = d.xpos[rig.ob].copy(), d.xmat[rig.ob].reshape(3, 3).copy()
-        loop = Servo(m, d, rig.acts, rig.cadr, SERVO_GAIN)
-        loop.step(st.steps(st.settle))
+        d.ctrl[rig.cadr + 1] += SERVO_GAIN * rig.kd * d.actuator_length[rig.acts]
+        mujoco.mj_step(m, d, nstep=st.steps(st.settle))
         d.xfrc_applied[rig.ob, i // 2] = force * (1.0 if i % 2 else -1.0)
         worst_t = worst_r = 0.0
         passed = True
-        for _ in range(math.ceil(st.steps(duration) / every)):
-            loop.step(every)
+        for c in range(math.ceil(st.steps(duration) / every)):
+            if c > 0:
+                d.qacc_warmstart[:] = 0.0
+            mujoco.mj_step(m, d, nstep=every)
+            mujoco.mj_kinematics(m, d)
             rot = d.xmat[rig.ob].reshape(3, 3) @ r0.T
             t = float(np.linalg.norm(d.xpos[rig.ob] - p0))
             r = math.degrees(math.acos(max(-1.0, min(1.0, 0.5 * (float(np.trace(rot)) - 1.0)))))
@@ -106,7 +120,7 @@ def _fresh_per_direction(model, qpos, drive, st, duration):  # type: ignore[no-u
 
 
 @pytest.mark.parametrize("settings", [SimSettings(), HOLD_SETTINGS], ids=["euler-0.25ms", "hold"])
-def test_one_shared_settle_is_a_fresh_reset_and_settle_per_direction(settings: SimSettings) -> None:
+def test_the_batched_pushes_are_a_fresh_reset_and_settle_per_direction(settings: SimSettings) -> None:
     # the hand-built pinch (tests/physics/test_squeeze.py), held by its least forces (share 0)
     # and by the squeeze: pushes that hold and pushes that fail are both compared
     model, qpos, state = pinch()
@@ -119,5 +133,32 @@ def test_one_shared_settle_is_a_fresh_reset_and_settle_per_direction(settings: S
         ok, moved, turned = _fresh_per_direction(model, qpos, drive, settings, 0.6)
         # the same steps from the same state: equal to the last bit, direction by direction
         assert got.directions == ok and got.translation == moved and got.rotation == turned
+        # threads run the same rollouts (each from its own initial state)
+        assert disturb_test(model, qpos, drive, settings=settings, duration=0.6, threads=2) == got
+        # stopping early: the directions up to the first failure as without, then not run
+        early = disturb_test(model, qpos, drive, settings=settings, duration=0.6, stop_early=True)
+        f = ok.index(False) if False in ok else len(ok)
+        assert early.directions == ok[: f + 1] + (False,) * (len(ok) - f - 1)
+        assert early.translation[: f + 1] == moved[: f + 1]
+        assert all(math.isnan(x) for x in early.translation[f + 1 :] + early.rotation[f + 1 :])
         outcomes |= set(ok)
     assert outcomes == {True, False}
+    with pytest.raises(ParamError, match="threads"):
+        disturb_test(model, qpos, drive, duration=0.2, threads=0)
+
+
+def test_a_push_that_mujoco_stops_with_a_warning_does_not_hold(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # negative joint damping makes the implicit integrator's matrix singular: MuJoCo warns
+    # (mjWARN_INERTIA) and mujoco.rollout stops the rollout there, its state frozen near the
+    # start (the object moves < 1e-12 m): a frozen state is not a hold
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warning to MUJOCO_LOG.TXT in the cwd
+    model, qpos, state = pinch()
+    drive = squeeze_drive(state, tvmmp(state, witnesses=True))
+    assert drive is not None
+    assert disturb_test(model, qpos, drive, duration=0.4).held  # the same grasp, a sound model
+    broken = copy.deepcopy(model)
+    broken.dof_damping[:] = -1e12
+    r = disturb_test(broken, qpos, drive, duration=0.4)
+    assert r.directions == (False,) * 6 and max(r.translation) < 1e-12

@@ -32,7 +32,7 @@ from mjtvm.model.state import GraspState
 from mjtvm.physics.disturb import DIRECTIONS, disturb_test
 from mjtvm.physics.hold import hold_test, state_hold
 from mjtvm.physics.settings import sim_model
-from mjtvm.physics.squeeze import SERVO_GAIN, squeeze_drive, squeeze_witness
+from mjtvm.physics.squeeze import SERVO_GAIN, squeeze_drive, squeeze_witness, with_position_loop
 from mjtvm.problem2.tvmmp import tvmmp
 
 HALF, R_TIP, MASS, MU, G = 0.02, 0.005, 0.02, 0.6, 9.81
@@ -149,3 +149,39 @@ def test_state_hold_with_the_squeeze_holds_the_pinch(case: tuple) -> None:
     forces = [c.force_end for c in out.contacts]  # each finger presses with the squeeze's force
     tau = np.abs(squeeze_drive(state, res).torques)  # type: ignore[union-attr]
     assert forces == pytest.approx(tau, rel=0.02)
+
+
+def test_the_native_position_loop_commands_the_servos_torque(case: tuple) -> None:
+    # at one state (fingers off the held configuration, moving), the dcmotor controller with
+    # k_p = gain k_d, speed setpoint 0 and feedforward tau + k_p l_0 commands what `Servo`'s
+    # speed setpoint gain (l_0 - l) does: k_d gain (l_0 - l) - k_d l' + tau (no clamp reached)
+    model, qpos, _state, _res = case
+    acts = np.arange(model.nu // 2)
+    cadr = model.actuator_ctrladr[acts]
+    native = with_position_loop(model, acts, SERVO_GAIN)
+    kd = model.actuator_gainprm[acts, 6]
+    assert np.array_equal(native.actuator_gainprm[acts, 4], SERVO_GAIN * kd)
+    assert not np.any(model.actuator_gainprm[acts, 4])  # the model itself is not changed
+    assert with_position_loop(model, acts, 0.0) is model
+    d = mujoco.MjData(model)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(model, d)
+    l0 = d.actuator_length[acts].copy()
+    ff = np.array([2e-3, -1e-3])
+    d.qpos[model.jnt_qposadr[:2]] += [0.02, -0.01]
+    d.qvel[model.jnt_dofadr[:2]] = [0.3, 0.1]
+    mujoco.mj_forward(model, d)  # the lengths at this state
+    d.ctrl[cadr] = SERVO_GAIN * (l0 - d.actuator_length[acts])  # what Servo.step sets ...
+    d.ctrl[cadr + 1] = ff
+    mujoco.mj_forward(model, d)  # ... at this step's lengths
+    servo = d.actuator_force[acts].copy()
+    l, ldot = d.actuator_length[acts].copy(), d.actuator_velocity[acts].copy()
+    d.ctrl[cadr] = 0.0
+    d.ctrl[cadr + 1] = ff + native.actuator_gainprm[acts, 4] * l0
+    mujoco.mj_forward(native, d)
+    closed = kd * SERVO_GAIN * (l0 - l) - kd * ldot + ff
+    assert np.all(np.abs(closed) < model.actuator_forcerange[acts, 1])  # below the saturation
+    assert np.allclose(d.actuator_force[acts], closed, rtol=1e-12, atol=0.0)
+    assert np.allclose(servo, closed, rtol=1e-12, atol=0.0)
+    with pytest.raises(ParamError, match="servo"):
+        with_position_loop(model, acts, -1.0)
