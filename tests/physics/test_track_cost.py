@@ -1,21 +1,29 @@
 """The speed test's set-ups built once per rollout or grasp give the values of the per-call
 formulas they replace, to the bit, on a real state of the coupled Shadow hand (a transmission,
-equality constraints): the central witness's QP (`WitnessProblem`)."""
+equality constraints): the central witness's QP (`WitnessProblem`), the equality rows and
+their null space (`Rig`), the rig shared by a grasp's settles (`SettleCache`)."""
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 from typing import Any
 
 import clarabel
+import mujoco
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from mjtvm.errors import ParamError
+from mjtvm.grasp.actuation.transmission import dense_efc_jacobian
 from mjtvm.jobs.verify import cached_lift
 from mjtvm.lift.states import lift_state
 from mjtvm.model.state import GraspState
 from mjtvm.model.transmission import joint_speed_limits
+from mjtvm.physics.check import contact_types, motor_model
+from mjtvm.physics.rig import Rig
+from mjtvm.physics.simulate import SettleCache, SimSettings, rollout, settle, sim_model
 from mjtvm.physics.witness import WitnessProblem, central_witness, witness_drive
 from mjtvm.problem2.assembly import assemble
 from mjtvm.problem2.tvmmp import tvmmp
@@ -100,5 +108,97 @@ def test_witness_drive_with_a_shared_problem(coupled: tuple[GraspState, Any]) ->
         assert np.array_equal(getattr(a, name), getattr(b, name))
     assert a.slips.keys() == b.slips.keys()
     other = lift_state(cached_lift(COUPLED, 2), 1, variant="L", mu=0.6, mg=0.4905)
-    with pytest.raises(Exception, match="problem"):
+    with pytest.raises(ParamError, match="problem"):
         witness_drive(other, 0, 2, alpha, 0.8, problem=qp)
+
+
+@pytest.fixture(scope="module")
+def coupled_sim(coupled: tuple[GraspState, Any]) -> tuple[mujoco.MjModel, Any, Any]:
+    """The coupled hand's simulated model, the lift and a drive of direction 2 at 0.8 alpha."""
+    state, res = coupled
+    lift = cached_lift(COUPLED, 2)
+    model = sim_model(
+        motor_model(lift.scenario),
+        contact_types(state),
+        mu=0.6,
+        mg=0.4905,
+        object_body=lift.scenario.object_body,
+    )
+    return model, lift, witness_drive(state, 0, 2, float(res.alpha[0, 2]), 0.8)
+
+
+def _moving(model: mujoco.MjModel, lift: Any, drive: Any) -> tuple[Rig, mujoco.MjData]:
+    """A rig and data a few steps into a rollout (the joints moving, the fingers in contact)."""
+    rig = Rig(model, drive, lift.scenario.object_body)
+    d, _ = settle(model, lift.qpos[0], rig, drive, SimSettings())
+    d.qvel[rig.dofs] = drive.speeds
+    for _ in range(5):
+        mujoco.mj_step(model, d)
+    return rig, d
+
+
+@pytest.mark.parametrize("jacobian", ["dense", "sparse"])
+def test_equality_rows_are_the_dense_jacobians(coupled_sim: tuple[Any, ...], jacobian: str) -> None:
+    """`Rig.equality_rows` is the equality rows of the full ``efc_J`` (``dense_efc_jacobian``,
+    the old formula) over the drive's joints, with efc_J dense or sparse."""
+    model, lift, drive = coupled_sim
+    model = copy.deepcopy(model)
+    model.opt.jacobian = int(getattr(mujoco.mjtJacobian, f"mjJAC_{jacobian.upper()}"))
+    rig, d = _moving(model, lift, drive)
+    assert bool(mujoco.mj_isSparse(model)) == (jacobian == "sparse")
+    eq = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    rows = [r for r in range(int(d.nefc)) if int(d.efc_type[r]) == eq]
+    old = dense_efc_jacobian(model, d)[rows][:, rig.dofs]
+    assert len(rows) > 0 and int(d.nefc) > len(rows)  # equality rows among contacts
+    assert np.array_equal(rig.equality_rows(d), old)
+
+
+def test_null_space_is_the_svd_and_kept_while_unchanged(coupled_sim: tuple[Any, ...]) -> None:
+    """`Rig.null_space` is the SVD's row and null space of ``J_eq`` (rank at 1e-10 of the
+    largest singular value); the kept one serves an equal ``J_eq``, another is solved anew."""
+    model, lift, drive = coupled_sim
+    rig, d = _moving(model, lift, drive)
+    jeq = rig.equality_rows(d)
+    _u, sv, vt = np.linalg.svd(jeq)
+    rank = int(np.sum(sv > 1e-10 * sv.max()))
+    vr, null = rig.null_space(jeq)
+    assert np.array_equal(vr, vt[:rank]) and np.array_equal(null, vt[rank:].T)
+    assert rank == jeq.shape[0] and null.shape == (len(rig.dofs), len(rig.dofs) - rank)
+    again = rig.null_space(jeq.copy())
+    assert again[0] is vr
+    other = jeq.copy()
+    other[0, np.flatnonzero(other[0])[0]] *= 2.0
+    vt2 = np.linalg.svd(other)[2]
+    assert np.array_equal(rig.null_space(other)[1], vt2[rank:].T)
+    assert np.max(np.abs(jeq @ null)) < 1e-12
+
+
+def test_settle_cache_shares_the_rig_and_changes_no_rollout(
+    coupled: tuple[GraspState, Any], coupled_sim: tuple[Any, ...]
+) -> None:
+    """Drives of two directions (other torques: two settles) share one rig through the cache;
+    their rollouts are those without the cache, field by field."""
+    state, res = coupled
+    model, lift, _ = coupled_sim
+    drives = [witness_drive(state, 0, l, float(res.alpha[0, l]), 0.8) for l in (0, 2)]
+    assert not np.array_equal(drives[0].torques, drives[1].torques)
+    cache, body = SettleCache(), lift.scenario.object_body
+    shared = [rollout(model, lift.qpos[0], dr, object_body=body, settled=cache) for dr in drives]
+    alone = [rollout(model, lift.qpos[0], dr, object_body=body) for dr in drives]
+    assert len({id(v[0]) for v in cache._done.values()}) == 1 and len(cache._done) == 2
+    for a, b in zip(shared, alone, strict=True):
+        for name in (
+            "passed",
+            "reason",
+            "speed_error",
+            "angle_error",
+            "slip_ratio",
+            "gap",
+            "saturated",
+            "clamp_fraction",
+            "settle_drift",
+            "limit_margin",
+        ):
+            assert getattr(a, name) == getattr(b, name), name
+        for g in a.friction:
+            assert np.array_equal(a.friction[g][0], b.friction[g][0])
