@@ -46,6 +46,8 @@ class Rig:
         origin + ``geom_rbound``). For a sphere centred on its body: its radius.
     fingers
         Per drive contact: (label, geom id, body id, columns of the drive's joints moving it, type).
+    finger_dofs
+        Per drive contact: the model's dofs of those columns (``dofs[columns]``).
     coupled
         The drive has a transmission (`Drive.actuators`): ``acts`` are the actuators'
         ``<dcmotor>`` s (found by name), ``gear`` their ratio ``c`` to the state's moment rows
