@@ -46,7 +46,7 @@ from mjtvm.physics.motors import (
 from mjtvm.physics.settings import SimSettings, sim_model
 from mjtvm.physics.simulate import SettleCache, rollout
 from mjtvm.physics.squeeze import squeeze_drive
-from mjtvm.physics.witness import Drive, witness_drive
+from mjtvm.physics.witness import Drive, WitnessProblem, witness_drive
 from mjtvm.problem2.assembly import assemble
 
 __all__ = [
@@ -299,14 +299,16 @@ def grasp_sim(
     moving = [l for l in optimal if float(result.alpha[0, l]) > 0.0]
     out["sim_speed_dirs"] = len(moving)
     passes = {s: 0 for s in SPEED_FACTORS}
+    qp = WitnessProblem(state, 0, assembly=asm)  # one QP set-up for every direction and speed
+    settled = SettleCache()  # the settles by drive, and one rig for all
     for l in moving:
-        alpha, settled = float(result.alpha[0, l]), SettleCache()
+        alpha = float(result.alpha[0, l])
         at_one: Drive | None = None  # the central witness solved at alpha_l (s = 1)
         for s in SPEED_FACTORS:
             if s > 1.0 and at_one is not None:
                 drive = faster_drive(at_one, state, l, alpha, s)
             else:
-                drive = witness_drive(state, 0, l, alpha, s, witness="central", assembly=asm)
+                drive = witness_drive(state, 0, l, alpha, s, witness="central", problem=qp)
             if s == 1.0:
                 at_one = drive
             # Only passed and reason are kept: the first violation decides both (exact stop).

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mjtvm.errors import ModelError
-from mjtvm.grasp.actuation.transmission import dense_efc_jacobian, dense_moment
+from mjtvm.grasp.actuation.transmission import dense_moment
 from mjtvm.grasp.resolve.state import geom_id, model_id
 from mjtvm.physics.motors import dcmotor_of_actuator, dcmotor_of_joint
 from mjtvm.physics.witness import Drive
@@ -46,6 +46,8 @@ class Rig:
         origin + ``geom_rbound``). For a sphere centred on its body: its radius.
     fingers
         Per drive contact: (label, geom id, body id, columns of the drive's joints moving it, type).
+    finger_dofs
+        Per drive contact: the model's dofs of those columns (``dofs[columns]``).
     coupled
         The drive has a transmission (`Drive.actuators`): ``acts`` are the actuators'
         ``<dcmotor>`` s (found by name), ``gear`` their ratio ``c`` to the state's moment rows
@@ -93,6 +95,8 @@ class Rig:
         self.jac = np.zeros((3, m.nv))
         self.jac2 = np.zeros((3, m.nv))
         self.fromto = np.zeros(6)
+        self.finger_dofs = [self.dofs[f[3]] for f in self.fingers]  # each finger's columns' dofs
+        self._null: tuple[_F64, _F64, _F64] | None = None  # J_eq, its row space and null space
 
     def nearest(self, d: mujoco.MjData, g: int) -> Nearest:
         """Signed distance (m) from finger geom ``g`` to the nearest object geom, that geom, the
@@ -183,11 +187,29 @@ class Rig:
     def equality_rows(self, d: mujoco.MjData) -> _F64:
         """``(C, M)`` the equality constraints' rows of ``efc_J`` over the drive's joints at ``d``
         (those of its last forward pass: for a rollout step, the configuration one step before)."""
-        eq = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
-        rows = [r for r in range(int(d.nefc)) if int(d.efc_type[r]) == eq]
-        if not rows:
+        nefc, nv = int(d.nefc), self.m.nv
+        rows = np.flatnonzero(d.efc_type[:nefc] == int(mujoco.mjtConstraint.mjCNSTR_EQUALITY))
+        if not len(rows):
             return np.zeros((0, len(self.dofs)))
-        return dense_efc_jacobian(self.m, d)[rows][:, self.dofs]
+        if not mujoco.mj_isSparse(self.m):
+            return d.efc_J[: nefc * nv].reshape(nefc, nv)[rows][:, self.dofs]
+        # only the equality rows of the sparse efc_J, as mju_sparse2dense writes them
+        out = np.zeros((len(rows), nv))
+        for i, r in enumerate(rows):
+            adr, nnz = int(d.efc_J_rowadr[r]), int(d.efc_J_rownnz[r])
+            out[i, d.efc_J_colind[adr : adr + nnz]] = d.efc_J[adr : adr + nnz]
+        return out[:, self.dofs]
+
+    def null_space(self, jeq: _F64) -> tuple[_F64, _F64]:
+        """``(r, M)`` an orthonormal basis of the row space of ``jeq`` (``(C, M)``, `equality_rows()`)
+        and ``(M, M - r)`` one of its null space (SVD, rank at 1e-10 of the largest singular
+        value); kept while ``jeq`` is unchanged (a linear coupling's rows are constant)."""
+        if self._null is not None and np.array_equal(self._null[0], jeq):
+            return self._null[1], self._null[2]
+        _u, sv, vt = np.linalg.svd(jeq)
+        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)))
+        self._null = (jeq.copy(), vt[:rank], vt[rank:].T)
+        return self._null[1], self._null[2]
 
     def setpoints(self, d: mujoco.MjData, drive: Drive, near: Sequence[Nearest] | None = None) -> _F64:
         """Least-norm correction of the drive's speeds at the configuration ``d`` (step 5).
@@ -221,10 +243,12 @@ class Rig:
     def _coupled_setpoints(self, d: mujoco.MjData, drive: Drive, near: Sequence[Nearest]) -> _F64:
         q, c, v, w = drive.speeds.copy(), d.xpos[self.ob], drive.twist[:3], drive.twist[3:]
         rows, rhs = [], []
-        for (label, _g, body, cols, kind), (_dist, _og, p, _po, n) in zip(self.fingers, near, strict=True):
+        for (label, _g, body, cols, kind), fdofs, (_dist, _og, p, _po, n) in zip(
+            self.fingers, self.finger_dofs, near, strict=True
+        ):
             mujoco.mj_jac(self.m, d, self.jac, None, p, body)
             jm = np.zeros((3, len(q)))
-            jm[:, cols] = self.jac[:, self.dofs[cols]]
+            jm[:, cols] = self.jac[:, fdofs]
             want = v + cross(w, p - c)
             if kind == "L":
                 rows.append((n @ jm)[None, :])
@@ -239,10 +263,8 @@ class Rig:
         jeq = self.equality_rows(d)
         null = np.eye(len(q))
         if len(jeq):  # q onto the null space of J_eq (pinv(J) J = V_r V_r^T), and its basis
-            _u, sv, vt = np.linalg.svd(jeq)
-            rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0.0)), 1e-300)))
-            q -= vt[:rank].T @ (vt[:rank] @ q)
-            null = vt[rank:].T
+            vr, null = self.null_space(jeq)
+            q -= vr.T @ (vr @ q)
         if rows and null.shape[1]:
             a = np.vstack(rows)
             q += null @ np.linalg.lstsq(a @ null, np.concatenate(rhs) - a @ q, rcond=None)[0]

@@ -176,11 +176,15 @@ class SettleCache:
     Step 3 depends on the model, ``qpos``, the drive's feedforward (``Rig.hold_torques``) and
     the rig (its joints, actuators, moment rows and contacts), not on the speeds or the twist:
     the central witness at s >= 1 has the torques of s = 1 (``witness_drive``), so those
-    rollouts share one settle. Each use gets its own copy of the settled data.
+    rollouts share one settle. Each use gets its own copy of the settled data. The rig is
+    shared by every drive of the same joints, actuators, moment rows, contacts and ``qpos``
+    (the drives of every direction of a grasp): it holds indices, the motors' ratios at
+    ``qpos`` (`Rig.bind`) and scratch arrays that each step overwrites.
     """
 
     def __init__(self) -> None:
         self._done: dict[tuple[Any, ...], tuple[Rig, mujoco.MjData, float]] = {}
+        self._rigs: dict[tuple[Any, ...], Rig] = {}
 
     @staticmethod
     def _key(m: mujoco.MjModel, qpos: _F64, drive: Drive, object_body: str) -> tuple[Any, ...]:
@@ -202,7 +206,10 @@ class SettleCache:
         """The rig, a copy of the settled data and the settle drift of ``drive`` (settled on a miss)."""
         key = (*self._key(m, qpos, drive, object_body), st)
         if key not in self._done:
-            rig = Rig(m, drive, object_body)
+            rkey = key[:2] + key[3:-1]  # all but the torques and the settings
+            rig = self._rigs.get(rkey)
+            if rig is None:
+                rig = self._rigs[rkey] = Rig(m, drive, object_body)
             self._done[key] = (rig, *settle(m, qpos, rig, drive, st))
         rig, d, drift = self._done[key]
         return rig, copy.copy(d), drift

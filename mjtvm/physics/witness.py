@@ -22,7 +22,7 @@ from mjtvm.model.state import GraspState
 from mjtvm.model.transmission import joint_speed_limits
 from mjtvm.problem2.assembly import Assembly, assemble
 
-__all__ = ["Drive", "WitnessKind", "central_witness", "witness_drive"]
+__all__ = ["Drive", "WitnessKind", "WitnessProblem", "central_witness", "witness_drive"]
 
 WitnessKind = Literal["central", "vertex"]
 _F64 = NDArray[np.float64]
@@ -51,51 +51,123 @@ def central_witness(
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
-    asm = assemble(state, horizon=True) if assembly is None else assembly
-    w, r = state.refs[k], state.rvds[l]
-    n = asm.num_variables
-    # alpha's column: A_twist r, and -rate_j s(r) on the travel-horizon rows, as in Problem 2:
-    # at the fixed alpha they bound qd, so that the driven witness, like the LP's, reaches no
-    # joint limit within the horizon's travel.
-    col = np.asarray(asm.A_twist @ r, dtype=float).reshape(-1)
-    col[asm.horizon_rows] = asm.horizon_column(state, r)
-    a = sp.hstack([asm.A, sp.csc_matrix(col.reshape(-1, 1))], format="csr")
-    lo, hi = asm.statics_bounds(w)
-    cl, cu = np.append(asm.col_lower, alpha), np.append(asm.col_upper, alpha)
-    eq = np.isfinite(lo) & (lo == hi)
-    up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
-    ceq = cl == cu
-    cup, cdn = np.isfinite(cu) & ~ceq, np.isfinite(cl) & ~ceq
-    eye = sp.identity(n + 1, format="csr")
-    big = sp.vstack([a[eq], eye[ceq], a[up], -a[dn], eye[cup], -eye[cdn]], format="csc")
-    b = np.concatenate([hi[eq], cu[ceq], hi[up], -lo[dn], cu[cup], -cl[cdn]])
-    weight = np.zeros(n + 1)
-    w0 = np.array([rng.max_speed for rng in state.operation_ranges])
-    t = state.transmission
-    if t is not None:  # ranges per actuator, speeds per joint: each joint's fastest speed
-        w0 = joint_speed_limits(t.moment, w0)
-    weight[asm.blocks["qd"]] = 1.0 / w0**2
-    weight[asm.blocks["lam[0]"]] = 1.0 / max(float(np.linalg.norm(w)), 1e-3) ** 2
-    cones = [
-        clarabel.ZeroConeT(int(eq.sum() + ceq.sum())),
-        clarabel.NonnegativeConeT(int(up.sum() + dn.sum() + cup.sum() + cdn.sum())),
-    ]
-    opts = clarabel.DefaultSettings()
-    opts.verbose = False
-    res = clarabel.DefaultSolver(sp.diags(2 * weight).tocsc(), np.zeros(n + 1), big, b, cones, opts).solve()
-    status = str(res.status).split(".")[-1]
-    if status not in ("Solved", "AlmostSolved"):
-        raise SolverError("clarabel", status, (k, l))
-    x = np.array(res.x)
-    out = {
-        "speeds": x[asm.blocks["qd"]],
-        "torques": x[asm.blocks["tau[0]"]],
-        "forces": asm.forces(x),
-        "slip_speeds": x[asm.blocks["rho"]],
-    }
-    if t is not None:
-        out["actuator_speeds"] = t.moment @ out["speeds"]
-    return out
+    return WitnessProblem(state, k, assembly=assembly).solve(l, alpha)
+
+
+class WitnessProblem:
+    r"""The QP of [`central_witness()`][mjtvm.physics.witness.central_witness] for one state and
+    reference wrench ``k``, assembled once for every direction ``l`` and ``alpha``.
+
+    Only alpha's column (``A_twist r_l`` and the horizon rows' coefficients) and alpha's fixed
+    value depend on the direction and the speed: the rows of ``A``, their split into
+    equalities and inequalities (from the bounds at ``w_k``), the objective and the cones are
+    kept, and `solve()` appends the column to the kept matrix. The data Clarabel gets are
+    those of a fresh assembly entry for entry (same CSC arrays, same order), so the witness is
+    the same to the bit.
+
+    Parameters
+    ----------
+    state
+        The grasp state (with ``rvds``).
+    k
+        The reference wrench's index in ``state.refs``.
+    assembly
+        ``assemble(state, horizon=True)`` when already built (read, not changed).
+    """
+
+    def __init__(self, state: GraspState, k: int, *, assembly: Assembly | None = None) -> None:
+        if state.rvds is None:
+            raise ParamError("state", "the state has no RVDS (state.rvds is None)")
+        self.state, self.k = state, k
+        asm = self.asm = assemble(state, horizon=True) if assembly is None else assembly
+        w = state.refs[k]
+        n = self.n = asm.num_variables
+        lo, hi = asm.statics_bounds(w)
+        eq = np.isfinite(lo) & (lo == hi)
+        up, dn = np.isfinite(hi) & ~eq, np.isfinite(lo) & ~eq
+        cl, cu = asm.col_lower, asm.col_upper
+        ceq = cl == cu
+        cup, cdn = np.isfinite(cu) & ~ceq, np.isfinite(cl) & ~ceq
+        a = asm.A.tocsr()
+        eye = sp.identity(n, format="csr")
+        # alpha's own row (fixed to alpha, an equality) follows the variables' equality rows
+        last = sp.csr_matrix((1, n))
+        self.base = sp.vstack([a[eq], eye[ceq], last, a[up], -a[dn], eye[cup], -eye[cdn]], format="csc")
+        self.row_masks = (eq, up, dn)
+        self.alpha_row = int(eq.sum() + ceq.sum())  # alpha's row in the stacked system
+        self.b_parts = (
+            np.concatenate([hi[eq], cu[ceq]]),
+            np.concatenate([hi[up], -lo[dn], cu[cup], -cl[cdn]]),
+        )
+        weight = np.zeros(n + 1)
+        w0 = np.array([rng.max_speed for rng in state.operation_ranges])
+        t = state.transmission
+        if t is not None:  # ranges per actuator, speeds per joint: each joint's fastest speed
+            w0 = joint_speed_limits(t.moment, w0)
+        weight[asm.blocks["qd"]] = 1.0 / w0**2
+        weight[asm.blocks["lam[0]"]] = 1.0 / max(float(np.linalg.norm(w)), 1e-3) ** 2
+        self.objective = sp.diags(2 * weight).tocsc()
+        n_eq = int(eq.sum() + ceq.sum()) + 1
+        self.cone_sizes = (n_eq, int(up.sum() + dn.sum() + cup.sum() + cdn.sum()))
+
+    def matrix(self, l: int) -> sp.csc_matrix:
+        """``(rows, n + 1)`` the stacked constraint matrix of direction ``l`` (alpha's column last)."""
+        asm, state, (eq, up, dn) = self.asm, self.state, self.row_masks
+        assert state.rvds is not None
+        r = state.rvds[l]
+        # alpha's column: A_twist r, and -rate_j s(r) on the travel-horizon rows, as in Problem 2:
+        # at the fixed alpha they bound qd, so that the driven witness, like the LP's, reaches no
+        # joint limit within the horizon's travel.
+        col = np.asarray(asm.A_twist @ r, dtype=float).reshape(-1)
+        col[asm.horizon_rows] = asm.horizon_column(state, r)
+        base, n_eq = self.base, int(eq.sum())
+        stacked = np.zeros(base.shape[0])  # the variables' own bound rows hold no alpha
+        head = np.concatenate([col[eq], np.zeros(self.alpha_row - n_eq), [1.0], col[up], -col[dn]])
+        stacked[: len(head)] = head
+        rows = np.flatnonzero(stacked)  # a zero coefficient is no entry (scipy drops it)
+        return sp.csc_matrix(
+            (
+                np.concatenate([base.data, stacked[rows]]),
+                np.concatenate([base.indices, rows.astype(base.indices.dtype)]),
+                np.append(base.indptr, base.indptr[-1] + len(rows)).astype(base.indptr.dtype),
+            ),
+            shape=(base.shape[0], self.n + 1),
+        )
+
+    def vector(self, alpha: float) -> _F64:
+        """The stacked right-hand side with alpha's row at ``alpha``."""
+        return np.concatenate([self.b_parts[0], [alpha], self.b_parts[1]])
+
+    def solve(self, l: int, alpha: float) -> dict[str, _F64]:
+        """[`central_witness()`][mjtvm.physics.witness.central_witness] of direction ``l`` at ``alpha``.
+
+        Raises
+        ------
+        SolverError
+            The QP is not solved (e.g. ``alpha`` above $\alpha_{kl}$).
+        """
+        asm = self.asm
+        cones = [clarabel.ZeroConeT(self.cone_sizes[0]), clarabel.NonnegativeConeT(self.cone_sizes[1])]
+        opts = clarabel.DefaultSettings()
+        opts.verbose = False
+        q = np.zeros(self.n + 1)
+        res = clarabel.DefaultSolver(
+            self.objective, q, self.matrix(l), self.vector(alpha), cones, opts
+        ).solve()
+        status = str(res.status).split(".")[-1]
+        if status not in ("Solved", "AlmostSolved"):
+            raise SolverError("clarabel", status, (self.k, l))
+        x = np.array(res.x)
+        out = {
+            "speeds": x[asm.blocks["qd"]],
+            "torques": x[asm.blocks["tau[0]"]],
+            "forces": asm.forces(x),
+            "slip_speeds": x[asm.blocks["rho"]],
+        }
+        t = self.state.transmission
+        if t is not None:
+            out["actuator_speeds"] = t.moment @ out["speeds"]
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -165,17 +237,28 @@ def witness_drive(
     witness: WitnessKind = "central",
     vertex: Any = None,
     assembly: Assembly | None = None,
+    problem: WitnessProblem | None = None,
 ) -> Drive:
     r"""The drive of pair (k, l) at speed factor ``s`` (module docstring, step 2).
 
     ``vertex``: the [`Witness`][mjtvm.problem2.tvmmp.Witness] of the pair, required for ``"vertex"``.
     ``assembly``: the state's, for [`central_witness()`][mjtvm.physics.witness.central_witness].
+    ``problem``: the state's [`WitnessProblem`][mjtvm.physics.witness.WitnessProblem] of ``k``
+    when already built (the drives of several directions and speeds share it).
+
+    Raises
+    ------
+    ParamError
+        A ``problem`` of another state or reference wrench.
     """
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     if witness == "central":
         frac = min(s, 1.0)
-        sol = central_witness(state, k, l, alpha * frac * (1.0 - 1e-7), assembly=assembly)
+        if problem is not None and (problem.state is not state or problem.k != k):
+            raise ParamError("problem", f"expected the WitnessProblem of this state and k = {k}")
+        qp = WitnessProblem(state, k, assembly=assembly) if problem is None else problem
+        sol = qp.solve(l, alpha * frac * (1.0 - 1e-7))
         gain = s / frac if frac > 0 else 0.0
         speeds, torques, rho = sol["speeds"] * gain, sol["torques"], sol["slip_speeds"] * gain
     elif witness == "vertex":
