@@ -86,6 +86,13 @@ def _speed(run: dict[str, Any]) -> str:
     )
 
 
+def _on(machine: dict[str, Any] | None) -> str:
+    """``", on CPU (N cores)"``: the machine of the CPU times (reports before it was kept: "")."""
+    if not machine:
+        return ""
+    return f", on {machine['cpu']} ({machine['usable_cpus']} usable cores)"
+
+
 def render(report: dict[str, Any]) -> str:
     """The generated part of the page, markers included, from a ``validate-datasets/1`` report.
 
@@ -100,7 +107,7 @@ def render(report: dict[str, Any]) -> str:
     lines = [
         BEGIN,
         "",
-        f"`{report['command']}` ({report['date']}). Each run, its two commands:",
+        f"`{report['command']}` ({report['date']}{_on(report.get('machine'))}). Each run, its two commands:",
         "",
     ]
     for r in runs:

@@ -107,6 +107,15 @@ def validate(label: str, grasps: int, jobs: int, out: Path) -> dict[str, Any]:
     }
 
 
+def _machine() -> dict[str, Any]:
+    """The CPU model and core counts of ``mjtvm bench``'s report (rates differ by machine)."""
+    sys.path.insert(0, str(ROOT))
+    from benchmarks.timing import machine_info
+
+    m = machine_info()
+    return {k: m[k] for k in ("cpu", "logical_cpus", "usable_cpus")}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", default=",".join(DEFAULT_RUNS), help=f"comma list of {', '.join(RUNS)}")
@@ -125,6 +134,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "schema": SCHEMA,
         "command": shlex.join(["python", "tools/validate_datasets.py", *(argv or sys.argv[1:])]),
         "date": datetime.date.today().isoformat(),
+        "machine": _machine(),
         "runs": runs,
     }
     path = out / "validate-datasets.json"

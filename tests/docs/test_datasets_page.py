@@ -81,6 +81,13 @@ def test_the_speed_target_is_met_only_on_a_quiet_core() -> None:
     assert "target 5: not measured (core share below 0.8)" in loaded
 
 
+def test_the_machine_is_named_beside_the_cpu_times() -> None:
+    render = _tool("datasets_page").render
+    machine = {"cpu": "AMD EPYC", "logical_cpus": 2, "usable_cpus": 2}
+    assert "(2026-12-03, on AMD EPYC (2 usable cores)). Each run" in render({**_report(), "machine": machine})
+    assert "(2026-12-03). Each run" in render(_report())  # a report from before the machine was kept
+
+
 def test_check_fails_on_a_stale_page(tmp_path: Path) -> None:
     dp = _tool("datasets_page")
     report = tmp_path / "report.json"
