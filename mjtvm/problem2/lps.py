@@ -114,6 +114,10 @@ class StateLPs(StateCertificates):
             s = replace(s, row=row)
         self.row_scale, self.col_scale = s.row, s.col
         self._scaled_a = ScaledMatrix(asm.csc, s)
+        if self._jit is not None:  # numba imports: the certificates' products too
+            from mjtvm.lp import products_jit
+
+            self.products_jit = products_jit
         self.session: HighsSession | None = None
         # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
         self._last: tuple[bytes, bytes, float] = (b"", b"", np.nan)  # as bytes: cheaper to compare
