@@ -14,6 +14,7 @@ state alone ([`physical_sizes()`][mjtvm.problem2.sizes.physical_sizes]).
 from __future__ import annotations
 
 from dataclasses import replace
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -91,7 +92,10 @@ class StateLPs(StateCertificates):
         rhs = np.fmax(
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
-        s = equilibrate(asm.csc, rhs=rhs)
+        passes: ModuleType | None = None
+        if self._jit is not None:  # numba imports: its equilibration passes too (the same factors)
+            from mjtvm.lp import scaling_jit as passes
+        s = equilibrate(asm.csc, rhs=rhs, jit=passes)
         # The twist columns are scaled after the rows, each so that its largest entry is 1:
         # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
