@@ -11,6 +11,7 @@ at once ([`check_many()`][mjtvm.lp.certifier.Certifier.check_many]), by the meas
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from types import ModuleType
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -73,6 +74,11 @@ class Certifier:
         columns but the last (Problem 2: the assembly's): `check_many()` on a large dense
         ``a`` then takes its pattern from them instead of scanning every entry (the same
         sums: an entry stored but 0 adds 0), read only there.
+    jit
+        [`products_jit`][mjtvm.lp.products_jit] (the batch paths): with ``pattern`` and a
+        dense ``a``, `check_many()`'s products of the shared columns are sums over
+        ``pattern``'s entries in numba, at any size (a few percent of the dense products'
+        multiply-adds; equal to round-off).
     """
 
     def __init__(
@@ -86,8 +92,11 @@ class Certifier:
         dual_ref: NDArray[np.float64] | None = None,
         row_cap: NDArray[np.float64] | None = None,
         pattern: Csc | None = None,
+        jit: ModuleType | None = None,
     ) -> None:
         self.a = a
+        self._jit = jit
+        self._pattern_cols: NDArray[np.int64] | None = None  # pattern's entries' columns
         self._nonzero: NonzeroProducts | None = None  # built by the first large check_many
         self._pattern = pattern
         self.dual_ref = col_ref if dual_ref is None else dual_ref
@@ -230,6 +239,8 @@ class Certifier:
         step = max(1, BATCH_ENTRIES // max(m * n, 1))
         a0, abs0, terms0 = self.a[:, :-1], self.abs_a[:, :-1], self.abs_terms[:, :-1]
         abs_last = np.abs(last)
+        if self._jit is not None and self._pattern is not None and isinstance(self.a, np.ndarray):
+            return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, *self._jit_products(last))
         if sparse:
             # Above BATCH_ENTRIES even one answer's product ran on several OpenBLAS threads:
             # the same sums over the nonzeros only (the shared columns' pattern is fixed).
@@ -282,6 +293,40 @@ class Certifier:
             return ya, abs_ya
 
         return self._measure(c, row_lower, row_upper, col_upper, x, y, floor, products, transposed)
+
+    def _jit_products(self, last: NDArray[np.float64]) -> tuple[_Products, _Products]:
+        """`check_many()`'s ``products`` and ``transposed`` for the LPs of last columns
+        ``last`` (``(P, m)``): the shared columns' sums over ``pattern``'s entries
+        ([`products_jit`][mjtvm.lp.products_jit]), then each LP's last column."""
+        assert self._jit is not None and self._pattern is not None
+        jit, pat = self._jit, self._pattern
+        m, n = self.a.shape
+        assert pat.shape == (m, n - 1)  # the shared columns
+        if self._pattern_cols is None:
+            self._pattern_cols = pat.columns()
+        at = (pat.indices, self._pattern_cols)
+        # The shared columns' values read now, as the dense products read them.
+        v_a, v_abs, v_terms = self.a[at], self.abs_a[at], self.abs_terms[at]
+        abs_last = np.abs(last)
+
+        def products(xc: NDArray[np.float64], size: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+            ax, terms = np.empty((len(xc), m)), np.empty((len(xc), m))
+            jit.right(pat.indptr, pat.indices, v_a, xc, ax)
+            jit.right(pat.indptr, pat.indices, v_terms, size, terms)
+            ax += xc[:, -1:] * last
+            terms += size[:, -1:] * abs_last
+            return ax, terms
+
+        def transposed(
+            yy: NDArray[np.float64], abs_y: NDArray[np.float64]
+        ) -> tuple[NDArray[np.float64], ...]:
+            ya, abs_ya = np.empty((len(yy), n)), np.empty((len(yy), n))
+            jit.left(pat.indptr, pat.indices, v_a, yy, ya)
+            jit.left(pat.indptr, pat.indices, v_abs, abs_y, abs_ya)
+            ya[:, -1], abs_ya[:, -1] = np.sum(yy * last, axis=1), np.sum(abs_y * abs_last, axis=1)
+            return ya, abs_ya
+
+        return products, transposed
 
     def _measure(
         self,

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from types import ModuleType
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -67,7 +68,11 @@ def pow2(x: NDArray[np.float64] | float) -> Any:
 
 
 def equilibrate(
-    a: Csc | sp.spmatrix, *, rhs: NDArray[np.float64] | None = None, passes: int = _PASSES
+    a: Csc | sp.spmatrix,
+    *,
+    rhs: NDArray[np.float64] | None = None,
+    passes: int = _PASSES,
+    jit: ModuleType | None = None,
 ) -> Scaling:
     r"""Row and column powers of 2 bringing the entries of ``|[A | rhs]|`` close to 1.
 
@@ -87,6 +92,9 @@ def equilibrate(
         ``(m, n)`` constraint matrix.
     rhs
         ``(m,)`` magnitudes of the right-hand sides, or ``None``.
+    jit
+        [`scaling_jit`][mjtvm.lp.scaling_jit] (the batch paths): the same passes in numba,
+        the same factors bit for bit.
 
     Returns
     -------
@@ -95,8 +103,8 @@ def equilibrate(
     """
     n = a.shape[1]
     e = _log_entries(a, rhs)
-    rho, kappa = _mean_of_logs(e)
-    rho, kappa = _ruiz_passes(e, rho, kappa, passes)
+    rho, kappa = _mean_of_logs(e, jit)
+    rho, kappa = _ruiz_passes(e, rho, kappa, passes, jit)
     # Powers of 2: the scaling is exact. Clipped at 2^+-400 (a subnormal 1e-300 beside 1 in
     # a fuzzed state drove factors past 2^1024, i.e. inf): what is still out of HiGHS' range
     # after that is reported by the session (_check_magnitudes), never silently dropped.
@@ -146,7 +154,9 @@ def _log_entries(a: Csc | sp.spmatrix, rhs: NDArray[np.float64] | None) -> _LogE
     return _LogEntries(rows, cols, np.log2(vals), m, n, r_counts, c_counts)
 
 
-def _mean_of_logs(e: _LogEntries) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _mean_of_logs(
+    e: _LogEntries, jit: ModuleType | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``_MEAN_PASSES`` alternating passes setting each row's, then each column's, log2
     factor to minus the mean of its logs (Curtis and Reid's least squares).
 
@@ -154,6 +164,9 @@ def _mean_of_logs(e: _LogEntries) -> tuple[NDArray[np.float64], NDArray[np.float
     variable of coefficient 1 is itself ~1e-12 (torque rows in units of 1e-12 N m) is a
     Ruiz fixed point; the mean balances them first."""
     rows, cols, logs, m, n = e.rows, e.cols, e.logs, e.m, e.n
+    if jit is not None:
+        rho, kappa = jit.mean_of_logs(rows, cols, logs, e.r_counts, e.c_counts, _MEAN_PASSES)
+        return rho, kappa
     rho, kappa = np.zeros(m), np.zeros(n + 1)
     r_cnt, c_cnt = np.maximum(e.r_counts, 1), np.maximum(e.c_counts, 1)
     for _ in range(_MEAN_PASSES):
@@ -164,7 +177,11 @@ def _mean_of_logs(e: _LogEntries) -> tuple[NDArray[np.float64], NDArray[np.float
 
 
 def _ruiz_passes(
-    e: _LogEntries, rho: NDArray[np.float64], kappa: NDArray[np.float64], passes: int
+    e: _LogEntries,
+    rho: NDArray[np.float64],
+    kappa: NDArray[np.float64],
+    passes: int,
+    jit: ModuleType | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Ruiz passes from ``(rho, kappa)`` (log2): divide every row, then every column, by
     the square root of its largest magnitude, until the factors move by less than a quarter
@@ -180,6 +197,9 @@ def _ruiz_passes(
     r_idx, r_logs, c_idx = e.cols[order], logs[order], e.rows
     r_indptr = np.concatenate([[0], np.cumsum(e.r_counts)])
     c_indptr = np.concatenate([[0], np.cumsum(e.c_counts)])
+    if jit is not None:
+        rho, kappa = jit.ruiz_passes(r_indptr, r_idx, r_logs, c_indptr, c_idx, logs, rho, kappa, passes)
+        return rho, kappa
     r_has, c_has = e.r_counts > 0, e.c_counts > 0
     r_starts, c_starts = r_indptr[:-1][r_has], c_indptr[:-1][c_has]
     for _ in range(passes):

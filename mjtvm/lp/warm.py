@@ -95,11 +95,14 @@ class WarmRows:
         m, n = a.shape
         self._a = (a.indptr, a.indices, a.data)
         self._cost = held.cost
-        self._col_lower, self._col_upper = held.col_lower.copy(), held.col_upper.copy()
         self._basic = held.basic.copy()
         self._row, self._col, self._g = held.row_scale, held.col_scale.copy(), held.cost_scale
         upper_of = np.concatenate([held.col_upper, self._row * row_upper])
         lower_of = np.concatenate([held.col_lower, self._row * row_lower])
+        # The kernel's bounds, the columns' then the rows' (scaled): kept and overwritten in
+        # place by each solve (its rows) and set_column (its column), not built per solve.
+        self._lower, self._upper = lower_of, upper_of
+        self._n = n
         # A nonbasic variable sits at one bound; the nearer one (HiGHS puts it exactly there).
         self._at_upper = np.isfinite(upper_of) & (
             ~np.isfinite(lower_of) | (np.abs(held.value - upper_of) < np.abs(held.value - lower_of))
@@ -172,7 +175,7 @@ class WarmRows:
                 self._at_upper[j] = True
                 self._capped = (j, cap / column.factor)
         self._col[j] = column.factor
-        self._col_lower[j], self._col_upper[j] = column.col_lower, column.col_upper
+        self._lower[j], self._upper[j] = column.col_lower, column.col_upper
         self._cost, self._g = column.cost, column.cost_scale
         self._fresh = True
         return True
@@ -190,11 +193,14 @@ class WarmRows:
         kernel gave up (then the object is unusable: its basis may be half-updated)."""
         if self._binv is None:
             return None
-        lower = np.concatenate([self._col_lower, self._row * row_lower])
-        upper = np.concatenate([self._col_upper, self._row * row_upper])
+        n, lower, upper = self._n, self._lower, self._upper
+        np.multiply(self._row, row_lower, out=lower[n:])
+        np.multiply(self._row, row_upper, out=upper[n:])
         capped, self._capped = self._capped, None
+        held_upper = 0.0
         if capped is not None:  # set_column's start: the column at its cap, this solve only
-            upper[capped[0]] = min(upper[capped[0]], capped[1])
+            held_upper = upper[capped[0]]
+            upper[capped[0]] = min(held_upper, capped[1])
         status, self.iterations = self._jit.resolve(
             *self._a,
             self._cost,
@@ -211,13 +217,16 @@ class WarmRows:
             FEASIBILITY_TOL,
             self._jit.CAP,
         )
+        if capped is not None:
+            upper[capped[0]] = held_upper
         if status != self._jit.OPTIMAL or (
             capped is not None and self._at_upper[capped[0]] and capped[0] not in self._basic
         ):  # not optimal, or the cap binds: the LP's optimum may lie beyond it
             self._binv = None
             return None
         self._fresh = False
-        n = len(self._cost)
         x = self._value[:n]
         g = self._g
-        return LPSolution("optimal", self._col * x, float(self._cost @ x) / g, self._row * self._y / g)
+        y = np.multiply(self._row, self._y)
+        y /= g
+        return LPSolution("optimal", self._col * x, float(self._cost @ x) / g, y)

@@ -10,6 +10,8 @@ solves the LPs on it.
 
 from __future__ import annotations
 
+from types import ModuleType
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -35,6 +37,9 @@ class StateCertificates:
     """
 
     twist_scale: NDArray[np.float64]
+    #: [`products_jit`][mjtvm.lp.products_jit] for the certificates' products (the batch
+    #: paths: [`StateLPs`][mjtvm.problem2.lps.StateLPs] with ``compiled``), else None.
+    products_jit: ModuleType | None = None
 
     def __init__(self, state: GraspState, asm: Assembly, twist: NDArray[np.float64]) -> None:
         """``twist`` ``(m, D)``: ``asm.twist_csc`` dense."""
@@ -161,6 +166,7 @@ class StateCertificates:
                 dual_ref=self.physical_sizes,
                 row_cap=self.row_cap,
                 pattern=self.asm.csc,  # pair_matrix's nonzeros
+                jit=self.products_jit,
             )
         return self._cert
 

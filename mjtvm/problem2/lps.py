@@ -14,6 +14,7 @@ state alone ([`physical_sizes()`][mjtvm.problem2.sizes.physical_sizes]).
 from __future__ import annotations
 
 from dataclasses import replace
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -91,7 +92,10 @@ class StateLPs(StateCertificates):
         rhs = np.fmax(
             np.where(np.isfinite(lower), np.abs(lower), 0.0), np.where(np.isfinite(upper), np.abs(upper), 0.0)
         )
-        s = equilibrate(asm.csc, rhs=rhs)
+        passes: ModuleType | None = None
+        if self._jit is not None:  # numba imports: its equilibration passes too (the same factors)
+            from mjtvm.lp import scaling_jit as passes
+        s = equilibrate(asm.csc, rhs=rhs, jit=passes)
         # The twist columns are scaled after the rows, each so that its largest entry is 1:
         # the kinematic rows are homogeneous (J qd = G^T rdot), their scale comes from the
         # J qd side, whose speeds the operation ranges pin; equilibrated together, a twist
@@ -114,6 +118,10 @@ class StateLPs(StateCertificates):
             s = replace(s, row=row)
         self.row_scale, self.col_scale = s.row, s.col
         self._scaled_a = ScaledMatrix(asm.csc, s)
+        if self._jit is not None:  # numba imports: the certificates' products too
+            from mjtvm.lp import products_jit
+
+            self.products_jit = products_jit
         self.session: HighsSession | None = None
         # The (w, r, alpha_max) the session holds: only what changed is sent to HiGHS.
         self._last: tuple[bytes, bytes, float] = (b"", b"", np.nan)  # as bytes: cheaper to compare
