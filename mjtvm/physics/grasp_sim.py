@@ -282,8 +282,9 @@ def grasp_sim(
     if not optimal:
         out["sim_failure"] = "no optimal pair: no witness to drive"
         return out
-    asm = assemble(state, horizon=True)  # one assembly for every witness of the speed test
-    rest = squeeze_drive(state, result, assembly=asm)  # not None: a pair is optimal
+    asm = assemble(state, horizon=True)  # one assembly for every witness of both tests
+    qp = WitnessProblem(state, 0, assembly=asm)  # one QP set-up for every direction and speed
+    rest = squeeze_drive(state, result, assembly=asm, problem=qp)  # not None: a pair is optimal
     assert rest is not None
     duration = DISTURB_DURATION if hold_duration is None else hold_duration
     hold: DisturbResult = disturb_test(
@@ -299,7 +300,6 @@ def grasp_sim(
     moving = [l for l in optimal if float(result.alpha[0, l]) > 0.0]
     out["sim_speed_dirs"] = len(moving)
     passes = {s: 0 for s in SPEED_FACTORS}
-    qp = WitnessProblem(state, 0, assembly=asm)  # one QP set-up for every direction and speed
     settled = SettleCache()  # the settles by drive, and one rig for all
     for l in moving:
         alpha = float(result.alpha[0, l])

@@ -56,7 +56,7 @@ from scipy.optimize import linprog
 
 from mjtvm.errors import ParamError, SolverError
 from mjtvm.model.state import GraspState
-from mjtvm.physics.witness import Drive, witness_drive
+from mjtvm.physics.witness import Drive, WitnessProblem, witness_drive
 from mjtvm.problem2.assembly import Assembly, assemble
 
 __all__ = [
@@ -228,13 +228,20 @@ def _lp(c: _F64, a_ub: Any, b_ub: _F64, a_eq: Any, b_eq: _F64, bounds: list[Any]
 
 
 def squeeze_drive(
-    state: GraspState, result: Any, *, share: float = SQUEEZE_SHARE, assembly: Assembly | None = None
+    state: GraspState,
+    result: Any,
+    *,
+    share: float = SQUEEZE_SHARE,
+    assembly: Assembly | None = None,
+    problem: WitnessProblem | None = None,
 ) -> Drive | None:
     """The hold test's drive of a grasp state: speeds 0, the central witness at alpha = 0 with
     ``share`` of the squeeze (module docstring) added to its torques; ``None`` when no pair of
     ``result`` (the state's [`TvmmpResult`][mjtvm.problem2.tvmmp.TvmmpResult]) has a witness.
     ``assembly``: ``assemble(state, horizon=True)``, shared by the witness and the squeeze's
-    LPs (built here when not given).
+    LPs (built here when not given). ``problem``: the state's
+    [`WitnessProblem`][mjtvm.physics.witness.WitnessProblem] of REFS 0 when already built (the
+    speed test's witnesses share it).
 
     Raises
     ------
@@ -248,7 +255,9 @@ def squeeze_drive(
         return None
     l = optimal[0]
     asm = assemble(state, horizon=True) if assembly is None else assembly
-    rest = witness_drive(state, 0, l, float(result.alpha[0, l]), 0.0, witness="central", assembly=asm)
+    rest = witness_drive(
+        state, 0, l, float(result.alpha[0, l]), 0.0, witness="central", assembly=asm, problem=problem
+    )
     if share == 0.0:
         return rest
     tau_w = rest.torques  # the central witness at alpha = 0

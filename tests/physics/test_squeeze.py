@@ -185,3 +185,21 @@ def test_the_native_position_loop_commands_the_servos_torque(case: tuple) -> Non
     assert np.allclose(servo, closed, rtol=1e-12, atol=0.0)
     with pytest.raises(ParamError, match="servo"):
         with_position_loop(model, acts, -1.0)
+
+
+def test_a_shared_witness_problem_gives_the_same_drive(case: tuple) -> None:
+    # grasp_sim's hold drive shares the speed test's QP set-up: the same drive to the bit;
+    # a problem of another reference wrench is refused.
+    from mjtvm.errors import ParamError
+    from mjtvm.physics.witness import WitnessProblem
+
+    _m, _q, state, res = case
+    alone = squeeze_drive(state, res)
+    shared = squeeze_drive(state, res, problem=WitnessProblem(state, 0))
+    assert alone is not None and shared is not None
+    assert np.array_equal(alone.torques, shared.torques) and np.array_equal(alone.speeds, shared.speeds)
+    assert np.array_equal(alone.twist, shared.twist)
+    other = WitnessProblem(state, 0)
+    other.k = 1
+    with pytest.raises(ParamError, match="WitnessProblem of this state and k = 0"):
+        squeeze_drive(state, res, problem=other)
