@@ -42,7 +42,7 @@ from mjtvm.physics.hold import HoldResult, hold_test, state_hold
 from mjtvm.physics.settings import SimSettings
 from mjtvm.physics.simulate import rollout
 from mjtvm.physics.squeeze import SERVO_GAIN, SQUEEZE_SHARE, squeeze_at_rest, squeeze_drive
-from mjtvm.physics.witness import Drive, WitnessKind, central_witness, witness_drive
+from mjtvm.physics.witness import Drive, WitnessKind, WitnessProblem, alpha_column, witness_drive
 from mjtvm.problem2.assembly import Assembly, assemble
 
 __all__ = ["HOLD_DRIVES", "HoldDrive", "check_hold", "squeezed_drive"]
@@ -82,18 +82,16 @@ def squeezed_drive(
         The witness or a squeeze LP is not solved.
     """
     asm = assemble(state, horizon=True) if assembly is None else assembly
-    base = witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex, assembly=asm)
     if witness == "central":
+        qp = WitnessProblem(state, k, assembly=asm)
+        base = witness_drive(state, k, l, alpha, s, witness=witness, assembly=asm, problem=qp)
         a = alpha * min(s, 1.0) * (1.0 - 1e-7)  # witness_drive's
-        sol = central_witness(state, k, l, a, assembly=asm)
+        sol = qp.solve(l, a)  # the drive's own solution, kept by qp: not solved again
         qd, rho = sol["speeds"], sol["slip_speeds"]
     else:
+        base = witness_drive(state, k, l, alpha, s, witness=witness, vertex=vertex, assembly=asm)
         a, qd, rho = alpha, vertex.speeds, vertex.slip_speeds
-    if state.rvds is None:
-        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
-    r = np.asarray(state.rvds[l], dtype=np.float64)
-    col = np.asarray(asm.A_twist @ r, dtype=float).reshape(-1)
-    col[asm.horizon_rows] = asm.horizon_column(state, r)
+    col = alpha_column(state, asm, l)
     tau_sq = squeeze_at_rest(state, k, assembly=asm, motion=(qd, rho, a * col))["torques"]
     tau = base.torques + share * (tau_sq - base.torques)
     return dataclasses.replace(base, torques=np.asarray(tau, dtype=float))

@@ -22,7 +22,7 @@ from mjtvm.model.state import GraspState
 from mjtvm.model.transmission import joint_speed_limits
 from mjtvm.problem2.assembly import Assembly, assemble
 
-__all__ = ["Drive", "WitnessKind", "WitnessProblem", "central_witness", "witness_drive"]
+__all__ = ["Drive", "WitnessKind", "WitnessProblem", "alpha_column", "central_witness", "witness_drive"]
 
 WitnessKind = Literal["central", "vertex"]
 _F64 = NDArray[np.float64]
@@ -52,6 +52,25 @@ def central_witness(
     if state.rvds is None:
         raise ParamError("state", "the state has no RVDS (state.rvds is None)")
     return WitnessProblem(state, k, assembly=assembly).solve(l, alpha)
+
+
+def alpha_column(state: GraspState, asm: Assembly, l: int) -> _F64:
+    """``(rows of asm.A,)`` alpha's column of direction ``l``: ``A_twist r_l``, and
+    ``-rate_j s(r)`` on the travel-horizon rows, as in Problem 2: at a fixed alpha they bound
+    qd, so that the driven witness, like the LP's, reaches no joint limit within the horizon's
+    travel.
+
+    Raises
+    ------
+    ParamError
+        The state has no RVDS.
+    """
+    if state.rvds is None:
+        raise ParamError("state", "the state has no RVDS (state.rvds is None)")
+    r = np.asarray(state.rvds[l], dtype=np.float64)
+    col = np.asarray(asm.A_twist @ r, dtype=float).reshape(-1)
+    col[asm.horizon_rows] = asm.horizon_column(state, r)
+    return col
 
 
 class WitnessProblem:
@@ -109,17 +128,12 @@ class WitnessProblem:
         self.objective = sp.diags(2 * weight).tocsc()
         n_eq = int(eq.sum() + ceq.sum()) + 1
         self.cone_sizes = (n_eq, int(up.sum() + dn.sum() + cup.sum() + cdn.sum()))
+        self._last: tuple[tuple[int, float], dict[str, _F64]] | None = None  # solve()'s last answer
 
     def matrix(self, l: int) -> sp.csc_matrix:
         """``(rows, n + 1)`` the stacked constraint matrix of direction ``l`` (alpha's column last)."""
-        asm, state, (eq, up, dn) = self.asm, self.state, self.row_masks
-        assert state.rvds is not None
-        r = state.rvds[l]
-        # alpha's column: A_twist r, and -rate_j s(r) on the travel-horizon rows, as in Problem 2:
-        # at the fixed alpha they bound qd, so that the driven witness, like the LP's, reaches no
-        # joint limit within the horizon's travel.
-        col = np.asarray(asm.A_twist @ r, dtype=float).reshape(-1)
-        col[asm.horizon_rows] = asm.horizon_column(state, r)
+        eq, up, dn = self.row_masks
+        col = alpha_column(self.state, self.asm, l)
         base, n_eq = self.base, int(eq.sum())
         stacked = np.zeros(base.shape[0])  # the variables' own bound rows hold no alpha
         head = np.concatenate([col[eq], np.zeros(self.alpha_row - n_eq), [1.0], col[up], -col[dn]])
@@ -141,11 +155,17 @@ class WitnessProblem:
     def solve(self, l: int, alpha: float) -> dict[str, _F64]:
         """[`central_witness()`][mjtvm.physics.witness.central_witness] of direction ``l`` at ``alpha``.
 
+        The last answer is kept: asked again for the same ``(l, alpha)`` (a drive and its
+        squeeze, [`squeezed_drive()`][mjtvm.physics.hold_drive.squeezed_drive]) it is returned
+        without a second solve (its arrays are not to be changed in place).
+
         Raises
         ------
         SolverError
             The QP is not solved (e.g. ``alpha`` above $\alpha_{kl}$).
         """
+        if self._last is not None and self._last[0] == (l, alpha):
+            return self._last[1]
         asm = self.asm
         cones = [clarabel.ZeroConeT(self.cone_sizes[0]), clarabel.NonnegativeConeT(self.cone_sizes[1])]
         opts = clarabel.DefaultSettings()
@@ -167,6 +187,7 @@ class WitnessProblem:
         t = self.state.transmission
         if t is not None:
             out["actuator_speeds"] = t.moment @ out["speeds"]
+        self._last = ((l, alpha), out)
         return out
 
 

@@ -24,7 +24,7 @@ from mjtvm.model.transmission import joint_speed_limits
 from mjtvm.physics.check import contact_types, motor_model
 from mjtvm.physics.rig import Rig
 from mjtvm.physics.simulate import SettleCache, SimSettings, rollout, settle, sim_model
-from mjtvm.physics.witness import WitnessProblem, central_witness, witness_drive
+from mjtvm.physics.witness import WitnessProblem, alpha_column, central_witness, witness_drive
 from mjtvm.problem2.assembly import assemble
 from mjtvm.problem2.tvmmp import tvmmp
 
@@ -110,6 +110,27 @@ def test_witness_drive_with_a_shared_problem(coupled: tuple[GraspState, Any]) ->
     other = lift_state(cached_lift(COUPLED, 2), 1, variant="L", mu=0.6, mg=0.4905)
     with pytest.raises(ParamError, match="problem"):
         witness_drive(other, 0, 2, alpha, 0.8, problem=qp)
+
+
+def test_the_last_answer_is_kept_and_alphas_column_is_the_lps(coupled: tuple[GraspState, Any]) -> None:
+    """Asked again for the same (l, alpha) (squeezed_drive after its drive) the problem returns
+    its last answer unsolved; another alpha is solved afresh, as a new problem solves it. Alpha's
+    column is A_twist r_l with the horizon rows of Problem 2 (the per-call assembly's)."""
+    state, res = coupled
+    assert state.rvds is not None
+    qp = WitnessProblem(state, 0)
+    alpha = float(res.alpha[0, 2]) * 0.8
+    first = qp.solve(2, alpha)
+    assert qp.solve(2, alpha) is first
+    other = qp.solve(2, 0.5 * alpha)
+    assert other is not first
+    fresh = WitnessProblem(state, 0).solve(2, 0.5 * alpha)
+    for key in fresh:
+        assert np.array_equal(fresh[key], other[key]), key
+    asm = qp.asm
+    want = np.asarray(asm.A_twist @ state.rvds[2], dtype=float).reshape(-1)
+    want[asm.horizon_rows] = asm.horizon_column(state, np.asarray(state.rvds[2]))
+    assert np.array_equal(alpha_column(state, asm, 2), want)
 
 
 @pytest.fixture(scope="module")
